@@ -1,0 +1,20 @@
+# porepipe workflow: the Snakefile only includes rule files and names the final targets.
+# Scenes come from config/config.yaml (key `scenes`) or from `--config scene=PATH` (what `porepipe run` passes).
+from pathlib import Path
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+
+
+for _rule_file in sorted(Path(workflow.basedir, "workflow", "rules").glob("*.smk")):
+    if _rule_file.name != "common.smk":
+
+        include: str(_rule_file)
+
+
+rule all:
+    input:
+        all_targets(),
+    default_target: True

@@ -1,0 +1,236 @@
+"""The HDF5 cache: one file per rule output, written atomically, with its cost attached.
+
+Layout of a result file
+-----------------------
+- root attributes: ``stage``, ``scene``, ``scene_hash``, ``porepipe_version``, ``created``, ``wall_s``, ``cpu_s``,
+  ``peak_mb``, ``threads`` and whatever the stage adds;
+- root group: at most one xarray Dataset of tables and curves (netCDF4 layout, so
+  ``xarray.open_dataset(path, engine="h5netcdf")`` reads it); further Datasets go into named groups;
+- ``/volumes/<name>``: chunked, compressed 3-D arrays with ``voxel_um``, ``origin_um`` and ``periodic`` attributes;
+- ``/arrays/<name>``: other plain arrays.
+
+The file is written under a hidden temporary name in the target directory and renamed only when complete, so a
+killed job never leaves a file that Snakemake or :func:`read_attrs` would take as finished.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import hashlib
+import json
+import os
+import resource
+import time
+from pathlib import Path
+from typing import Any, Iterator, Sequence
+
+import h5py
+import numpy as np
+import xarray as xr
+
+from porepipe import __version__
+from porepipe._shared.errors import PorepipeError
+
+VOLUME_GROUP = "volumes"
+ARRAY_GROUP = "arrays"
+#: Edge of a volume chunk in voxels (64^3 bytes = 256 KiB for uint8).
+CHUNK_EDGE = 64
+
+
+def hash_of(obj: Any) -> str:
+    """Stable short hash of a JSON-serialisable object (e.g. the scene part a result depends on)."""
+    text = json.dumps(obj, sort_keys=True, default=str, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _volume_attrs(voxel_um: float, origin_um: Sequence[float], periodic: Sequence[bool]) -> dict:
+    voxel_um = float(voxel_um)
+    if not np.isfinite(voxel_um) or voxel_um <= 0:
+        raise PorepipeError(f"voxel_um must be a positive number, got {voxel_um}")
+    origin = [float(o) for o in origin_um]
+    per = [int(bool(p)) for p in periodic]
+    if len(origin) != 3 or len(per) != 3:
+        raise PorepipeError(f"origin_um and periodic need 3 entries, got {origin_um!r} and {periodic!r}")
+    return {"voxel_um": voxel_um, "origin_um": np.asarray(origin), "periodic": np.asarray(per, dtype=np.int8)}
+
+
+class ResultWriter:
+    """Context manager that writes one result file atomically and records its cost.
+
+    Parameters
+    ----------
+    path : path-like
+        Final file name. Its directory is created.
+    stage : str
+        Name of the stage that writes it.
+    scene : str
+        Scene name.
+    scene_hash : str
+        Hash of the scene part this result depends on (see :func:`hash_of`).
+    threads : int, optional
+        Thread count the stage used.
+
+    Examples
+    --------
+    >>> with ResultWriter("out.h5", stage="segment", scene="mini", scene_hash="abc") as w:  # doctest: +SKIP
+    ...     w.write_volume("pore", pore, voxel_um=2.0)
+    ...     w.attrs["threshold"] = 108
+    """
+
+    def __init__(self, path, *, stage: str, scene: str = "", scene_hash: str = "", threads: int | None = None):
+        self.path = Path(path)
+        self.tmp_path = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        self.attrs: dict[str, Any] = {
+            "stage": stage,
+            "scene": scene,
+            "scene_hash": scene_hash,
+            "porepipe_version": __version__,
+            "threads": int(threads) if threads is not None else 0,
+        }
+        self._tables: list[tuple[xr.Dataset, str | None]] = []
+        self._h5: h5py.File | None = None
+
+    # -- context -------------------------------------------------------------------------------------------------
+    def __enter__(self) -> "ResultWriter":
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._t0 = time.perf_counter()
+        self._c0 = time.process_time()
+        self._h5 = h5py.File(self.tmp_path, "w")
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        try:
+            if exc_type is None:
+                self._finish()
+        finally:
+            if self._h5 is not None:
+                self._h5.close()
+                self._h5 = None
+            if exc_type is not None or not self.path.exists():
+                self.tmp_path.unlink(missing_ok=True)
+        return False
+
+    def _finish(self) -> None:
+        self._h5.close()
+        self._h5 = None
+        for ds, group in self._tables:
+            ds.to_netcdf(self.tmp_path, engine="h5netcdf", mode="a", group=group)
+        with h5py.File(self.tmp_path, "a") as f:
+            self.attrs["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+            self.attrs["wall_s"] = time.perf_counter() - self._t0
+            self.attrs["cpu_s"] = time.process_time() - self._c0
+            self.attrs["peak_mb"] = _peak_mb()
+            for key, value in self.attrs.items():
+                f.attrs[key] = value
+        os.replace(self.tmp_path, self.path)
+
+    # -- writers ---------------------------------------------------------------------------------------------------
+    @property
+    def h5(self) -> h5py.File:
+        if self._h5 is None:
+            raise RuntimeError("ResultWriter is not open; use it in a with-statement")
+        return self._h5
+
+    def create_volume(self, name: str, shape: Sequence[int], dtype, *, voxel_um: float,
+                      origin_um: Sequence[float] = (0.0, 0.0, 0.0), periodic: Sequence[bool] = (True, True, True),
+                      attrs: dict | None = None) -> h5py.Dataset:
+        """Create an empty chunked, compressed volume to be filled slab by slab; returns the h5py dataset."""
+        shape = tuple(int(s) for s in shape)
+        if len(shape) != 3 or min(shape) < 1:
+            raise PorepipeError(f"volume {name!r} needs a 3-D shape with positive sizes, got {shape}")
+        chunks = tuple(min(s, CHUNK_EDGE) for s in shape)
+        dset = self.h5.require_group(VOLUME_GROUP).create_dataset(
+            name, shape=shape, dtype=dtype, chunks=chunks, compression="gzip", compression_opts=1, shuffle=True)
+        for key, value in {**_volume_attrs(voxel_um, origin_um, periodic), **(attrs or {})}.items():
+            dset.attrs[key] = value
+        return dset
+
+    def write_volume(self, name: str, data: np.ndarray, **kwargs) -> h5py.Dataset:
+        """Write a whole in-memory volume; keyword arguments as for :meth:`create_volume`."""
+        dset = self.create_volume(name, data.shape, data.dtype, **kwargs)
+        dset[...] = data
+        return dset
+
+    def write_array(self, name: str, data: np.ndarray, attrs: dict | None = None) -> h5py.Dataset:
+        """Write a plain array under ``/arrays``."""
+        dset = self.h5.require_group(ARRAY_GROUP).create_dataset(name, data=np.asarray(data))
+        for key, value in (attrs or {}).items():
+            dset.attrs[key] = value
+        return dset
+
+    def write_table(self, ds: xr.Dataset, group: str | None = None) -> None:
+        """Queue an xarray Dataset for the root group (``group=None``) or a named group; written on completion."""
+        if any(g == group for _, g in self._tables):
+            raise RuntimeError(f"a table for group {group!r} was already written; merge the Datasets first")
+        self._tables.append((ds, group))
+
+
+# -- readers -----------------------------------------------------------------------------------------------------------
+def _check_file(path) -> Path:
+    path = Path(path)
+    if not path.is_file():
+        raise PorepipeError(f"result file {path} does not exist")
+    return path
+
+
+def _decode(value):
+    if isinstance(value, bytes):
+        return value.decode()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def read_attrs(path) -> dict:
+    """Root attributes of a result file (the provenance and cost record)."""
+    path = _check_file(path)
+    try:
+        with h5py.File(path, "r") as f:
+            attrs = {k: _decode(v) for k, v in f.attrs.items()}
+    except OSError as err:
+        raise PorepipeError(f"{path} is not a readable HDF5 file: {err}") from err
+    if "stage" not in attrs:
+        raise PorepipeError(f"{path} is not a porepipe result (no 'stage' attribute)")
+    return attrs
+
+
+@contextlib.contextmanager
+def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
+    """Open ``/volumes/<name>`` of a result file for chunked reading."""
+    path = _check_file(path)
+    with h5py.File(path, "r") as f:
+        group = f.get(VOLUME_GROUP)
+        if group is None or name not in group:
+            have = sorted(group.keys()) if group is not None else []
+            raise PorepipeError(f"{path} has no volume {name!r} (volumes present: {have or 'none'})")
+        yield group[name]
+
+
+def read_volume(path, name: str) -> tuple[np.ndarray, dict]:
+    """Read a whole volume and its attributes (``voxel_um``, ``origin_um``, ``periodic`` …)."""
+    with open_volume(path, name) as dset:
+        return dset[...], {k: _decode(v) for k, v in dset.attrs.items()}
+
+
+def read_array(path, name: str) -> np.ndarray:
+    """Read ``/arrays/<name>``."""
+    path = _check_file(path)
+    with h5py.File(path, "r") as f:
+        group = f.get(ARRAY_GROUP)
+        if group is None or name not in group:
+            raise PorepipeError(f"{path} has no array {name!r}")
+        return group[name][...]
+
+
+def read_table(path, group: str | None = None) -> xr.Dataset:
+    """Load the xarray Dataset of the root group (or of ``group``) into memory."""
+    path = _check_file(path)
+    with xr.open_dataset(path, engine="h5netcdf", group=group) as ds:
+        return ds.load()

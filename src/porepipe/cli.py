@@ -1,0 +1,84 @@
+"""The ``porepipe`` command: one subcommand per stage, plus ``validate`` and ``run``."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from porepipe import __version__
+from porepipe._registry import stage_cli_modules
+from porepipe._shared.errors import PorepipeError
+from porepipe.scene import SceneError, load_scene
+
+#: the repository root holding the Snakefile (src layout: <root>/src/porepipe/cli.py)
+REPO_ROOT = Path(__file__).resolve().parents[2]
+
+
+def _validate(args) -> int:
+    failed = 0
+    for path in args.scene:
+        try:
+            scene = load_scene(path)
+        except SceneError as err:
+            failed += 1
+            print(err, file=sys.stderr)
+            continue
+        print(f"{path}: ok (scene {scene.name!r}, analyses {[a.value for a in scene.analyses]})")
+    return 2 if failed else 0
+
+
+def snakemake_command(scene_path, cores: int, dry_run: bool = False, extra: list[str] | None = None) -> list[str]:
+    """The Snakemake invocation that runs one scene from the current directory."""
+    snakefile = REPO_ROOT / "Snakefile"
+    if not snakefile.is_file():
+        raise PorepipeError(f"Snakefile not found at {snakefile}; install porepipe from its repository (pip install -e .)")
+    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(snakefile), "--directory", os.getcwd(),
+           "--cores", str(cores), "--config", f"scene={Path(scene_path).resolve()}",
+           "--rerun-incomplete", "--printshellcmds", "--show-failed-logs"]
+    if dry_run:
+        cmd.append("--dry-run")
+    return cmd + (extra or [])
+
+
+def _run(args) -> int:
+    scene = load_scene(args.scene)  # fail fast, with every problem listed
+    result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, args.snakemake_args))
+    if result.returncode == 0 and not args.dry_run:
+        print(f"porepipe: results of scene {scene.name!r} are in {Path('results', scene.name).resolve()}")
+    return result.returncode
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="porepipe", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"porepipe {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("validate", help="check scene files; list every problem")
+    p.add_argument("scene", nargs="+")
+    p.set_defaults(func=_validate)
+    p = sub.add_parser("run", help="run the whole workflow of a scene with Snakemake")
+    p.add_argument("scene")
+    p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
+    p.add_argument("-n", "--dry-run", action="store_true", help="list the jobs only")
+    p.add_argument("snakemake_args", nargs=argparse.REMAINDER, help="after --: passed to snakemake")
+    p.set_defaults(func=_run)
+    for module in stage_cli_modules():
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if getattr(args, "snakemake_args", None) and args.snakemake_args[0] == "--":
+        args.snakemake_args = args.snakemake_args[1:]
+    try:
+        return int(args.func(args) or 0)
+    except PorepipeError as err:
+        print(f"porepipe {args.command}: error: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,196 @@
+"""Grey-value estimators of porosity and specific surface from grey histograms alone (Zauner 2020, §7.2–7.3).
+
+All functions take the grey histogram M(g, a), g = 0..216 (g = number of the 216 sample points in the matrix).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import xarray as xr
+
+from porepipe._shared.errors import PorepipeError
+
+G_MAX = 216
+SQRT3 = np.sqrt(3.0)
+#: inscribed-sphere bound applies for 10 <= g <= 205 (ψ between √3(√3−1)³/16 ≈ 0.042468 and 1 minus that)
+S_MIN_G_RANGE = (10, 205)
+
+
+def _check_hist(hist) -> np.ndarray:
+    hist = np.asarray(hist, dtype=np.int64)
+    if hist.shape != (G_MAX + 1,):
+        raise PorepipeError(f"grey histogram needs 217 bins (g = 0..216), got shape {hist.shape}")
+    if hist.min() < 0 or hist.sum() == 0:
+        raise PorepipeError("grey histogram needs non-negative counts and at least one voxel")
+    return hist
+
+
+def porosity_at_threshold(hist, g_th: int) -> float:
+    """φ(g_th, a) = (1/N) Σ_{g <= g_th} M(g, a): porosity when pore means g <= g_th (§7.2)."""
+    hist = _check_hist(hist)
+    return float(hist[: g_th + 1].sum() / hist.sum())
+
+
+def porosity_bounds(hist) -> tuple[float, float]:
+    """(φ(0, a), φ(215, a)): the lower and upper bounds of the true porosity for a continuum model (§7.2)."""
+    return porosity_at_threshold(hist, 0), porosity_at_threshold(hist, G_MAX - 1)
+
+
+def two_point_line(a_coarse: float, phi_coarse: float, a_fine: float, phi_fine: float) -> tuple[float, float]:
+    """Slope k and intercept ϕ of the line φ(a) = ϕ + k·a through two resolutions (Eq. 7.2.1)."""
+    if not a_coarse > a_fine > 0:
+        raise PorepipeError(f"two-point extrapolation needs a_coarse > a_fine > 0, got {a_coarse}, {a_fine}")
+    k = (phi_coarse - phi_fine) / (a_coarse - a_fine)
+    return k, phi_fine - k * a_fine
+
+
+@dataclasses.dataclass(frozen=True)
+class PorosityLimit:
+    """The a → 0 porosity from the regression of φ* on φ** (§7.2)."""
+
+    phi: float            # intercept at φ** = 0
+    phi_err: float        # its standard error (regression) or the spread estimate, see ``error_method``
+    slope: float
+    phi_star: np.ndarray
+    phi_2star: np.ndarray
+    error_method: str
+
+
+def regress_porosity_limit(phi0_lines, phi215_lines) -> PorosityLimit:
+    """Regress φ* = (ϕ_0 + ϕ_215)/2 linearly on φ** = ϕ_215 − ϕ_0 and return the intercept (φ** → 0).
+
+    Parameters
+    ----------
+    phi0_lines, phi215_lines : (P,) array_like
+        Intercepts ϕ_0(c), ϕ_215(c) of the two-point lines of the lower and upper bound, one per pair c.
+
+    Notes
+    -----
+    Zauner (2020) §7.2, Table 7.2: with the four pairs c = 8, 4, 2, 1 a0 the intercept is 0.134313. With three or
+    more pairs the error is the intercept's standard error from the residuals; with two pairs the line is exact and
+    the error is taken as |φ*_finest − intercept| (the last step of the extrapolation), which is stated.
+    """
+    p0 = np.asarray(phi0_lines, dtype=np.float64)
+    p1 = np.asarray(phi215_lines, dtype=np.float64)
+    if p0.shape != p1.shape or p0.ndim != 1:
+        raise PorepipeError(f"need matching 1-D arrays of intercepts, got shapes {p0.shape} and {p1.shape}")
+    if p0.size < 2:
+        raise PorepipeError(f"the φ*/φ** regression needs at least 2 resolution pairs (3 resolutions), got {p0.size}")
+    star = 0.5 * (p0 + p1)
+    star2 = p1 - p0
+    if np.ptp(star2) == 0:
+        raise PorepipeError("all bound widths φ** are equal: the regression has no lever arm")
+    design = np.column_stack([np.ones_like(star2), star2])
+    coef, *_ = np.linalg.lstsq(design, star, rcond=None)
+    if p0.size > 2:
+        resid = star - design @ coef
+        sigma2 = resid @ resid / (p0.size - 2)
+        cov = sigma2 * np.linalg.inv(design.T @ design)
+        err, method = float(np.sqrt(cov[0, 0])), "standard error of the regression intercept"
+    else:
+        finest = int(np.argmin(star2))
+        err, method = float(abs(star[finest] - coef[0])), "two pairs only: |phi*_finest - intercept|"
+    return PorosityLimit(float(coef[0]), err, float(coef[1]), star, star2, method)
+
+
+# -- specific surface (§7.3) --------------------------------------------------------------------------------------------
+def cap_base_area(psi, radius):
+    """Base area of the spherical cap holding a fraction ``psi`` of a ball's volume (m = 2 root of §7.3)."""
+    psi = np.clip(np.asarray(psi, dtype=np.float64), 0.0, 1.0)
+    h = radius * (1.0 + 2.0 * np.cos((np.arccos(1.0 - 2.0 * psi) + 4.0 * np.pi) / 3.0))
+    return np.pi * h * (2.0 * radius - h)
+
+
+def corner_cut(fraction, a: float = 1.0):
+    """Plane ⟂ to the cube's space diagonal that cuts off ``fraction`` (≤ ½) of a cube of edge ``a``.
+
+    Returns (d, area): the plane's distance from the corner and the area of the cut (triangle for
+    fraction ≤ 1/6, hexagon up to ½), Eqs. 7.3.4–7.3.7.
+    """
+    frac = np.asarray(fraction, dtype=np.float64)
+    if np.any((frac < 0) | (frac > 0.5)):
+        raise PorepipeError("corner_cut takes a cut-off fraction in [0, 1/2]")
+    tri = frac <= 1.0 / 6.0
+    psi = 1.0 - frac
+    d_tri = (2.0 * frac / SQRT3) ** (1.0 / 3.0)
+    arg = np.clip(2.0 * (2.0 * psi - 1.0) / SQRT3, -1.0, 1.0)
+    d_hex = SQRT3 / 2.0 - np.cos((np.arccos(arg) + np.pi) / 3.0)
+    d = np.where(tri, d_tri, d_hex)
+    area = np.where(tri, 1.5 * SQRT3 * d**2, 0.5 * SQRT3 * (3.0 * d**2 - 3.0 * (SQRT3 * d - 1.0) ** 2))
+    return d * a, area * a * a
+
+
+def surface_per_grey(a: float) -> dict[str, np.ndarray]:
+    """S_min(g, a), S_mf(g, a), S_max(g, a) for g = 0..216 in 1/length (the unit of ``a``), Eqs. 7.3.1–7.3.8.
+
+    Mixed voxels only (g = 1..215); the mean-field value uses the cut-off fraction min(g, 216 − g)/216.
+    """
+    g = np.arange(G_MAX + 1, dtype=np.float64)
+    psi = 1.0 - g / G_MAX
+    mixed = (g >= 1) & (g <= G_MAX - 1)
+    s_max = np.where(mixed, cap_base_area(psi, SQRT3 * a / 2.0) / a**3, 0.0)
+    lo, hi = S_MIN_G_RANGE
+    s_min = np.where((g >= lo) & (g <= hi), cap_base_area(psi, a / 2.0) / a**3, 0.0)
+    frac = np.minimum(g, G_MAX - g) / G_MAX
+    s_mf = np.where(mixed, corner_cut(frac, a)[1] / a**3, 0.0)
+    return {"S_min": s_min, "S_mf": s_mf, "S_max": s_max}
+
+
+def surface_estimates(hist, a: float) -> dict[str, float]:
+    """S_b(a) = (1/N) Σ_{g=1}^{215} M(g, a) S_b(g, a) for b in min, mf, max (Eq. 7.3.3)."""
+    hist = _check_hist(hist)
+    per_g = surface_per_grey(a)
+    return {name: float(hist @ values / hist.sum()) for name, values in per_g.items()}
+
+
+# -- all estimators over a resolution series ----------------------------------------------------------------------------
+def estimate_from_histograms(voxel_um, hists) -> xr.Dataset:
+    """Every grey-value estimator for a series of resolutions.
+
+    Parameters
+    ----------
+    voxel_um : (R,) array_like
+        Voxel sizes a in µm (any order).
+    hists : (R, 217) array_like
+        Grey histograms M(g, a).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``a_um``: phi_lower = φ(0, a), phi_upper = φ(215, a), S_min/S_mf/S_max [µm⁻¹]; over ``pair`` (each
+        consecutive coarse/fine pair): the two-point lines; scalars phi_limit, phi_limit_err when ≥ 3 resolutions.
+    """
+    a = np.asarray(voxel_um, dtype=np.float64)
+    hists = np.asarray(hists, dtype=np.int64)
+    if hists.shape != (a.size, G_MAX + 1):
+        raise PorepipeError(f"need one 217-bin histogram per resolution: {a.size} resolutions, shape {hists.shape}")
+    order = np.argsort(-a)
+    a, hists = a[order], hists[order]
+    bounds = np.array([porosity_bounds(h) for h in hists])
+    surf = [surface_estimates(h, ai) for h, ai in zip(hists, a)]
+    ds = xr.Dataset(
+        {
+            "phi_lower": ("a_um", bounds[:, 0], {"long_name": "phi(0, a): pore iff g = 0"}),
+            "phi_upper": ("a_um", bounds[:, 1], {"long_name": "phi(215, a): pore iff g <= 215"}),
+            "grey_histogram": (("a_um", "g"), hists, {"long_name": "M(g, a)"}),
+            **{k: ("a_um", [s[k] for s in surf], {"units": "1/um"}) for k in ("S_min", "S_mf", "S_max")},
+        },
+        coords={"a_um": a, "g": np.arange(G_MAX + 1)},
+        attrs={"source": "Zauner (2020) sections 7.2-7.3"},
+    )
+    if a.size >= 2:
+        lines = np.array([two_point_line(a[i], bounds[i, 0], a[i + 1], bounds[i + 1, 0])
+                          + two_point_line(a[i], bounds[i, 1], a[i + 1], bounds[i + 1, 1])
+                          for i in range(a.size - 1)])  # (pair, [k0, phi0, k215, phi215])
+        ds = ds.assign_coords(pair_coarse_um=("pair", a[:-1]), pair_fine_um=("pair", a[1:]))
+        for col, name in enumerate(("k_0", "phi_0", "k_215", "phi_215")):
+            ds[name] = ("pair", lines[:, col], {"units": "1/um" if name.startswith("k") else "1"})
+    if a.size >= 3:
+        lim = regress_porosity_limit(ds["phi_0"].values, ds["phi_215"].values)
+        ds["phi_star"] = ("pair", lim.phi_star)
+        ds["phi_2star"] = ("pair", lim.phi_2star)
+        ds["phi_limit"] = ((), lim.phi, {"error_method": lim.error_method})
+        ds["phi_limit_err"] = ((), lim.phi_err)
+    return ds

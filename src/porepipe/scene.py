@@ -1,0 +1,219 @@
+"""The scene: one YAML file that says what to build and what to measure.
+
+``load_scene(path)`` validates the whole file and raises :class:`SceneError` listing *every* problem at once, each
+naming the key, the bad value and what is allowed. Lengths are in micrometres throughout (keys end in ``_um``).
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
+
+from porepipe._registry import stage_settings
+from porepipe._shared.errors import PorepipeError
+
+#: relative tolerance when checking that a resolution divides the box
+_DIVIDES_RTOL = 1e-9
+
+
+class Analysis(str, enum.Enum):
+    """Measurements a scene can ask for; only these enter the workflow DAG."""
+
+    segment = "segment"            # binary pore/matrix volumes at every resolution
+    estimate = "estimate"          # grey-value estimators of porosity and specific surface (§7.2, §7.3)
+    minkowski = "minkowski"        # φ, S_V, K_V, T_V of the segmented volume
+    lpt = "lpt"                    # local porosity theory
+    permeability = "permeability"  # lattice-Boltzmann permeability
+
+
+class SegmentationMethod(str, enum.Enum):
+    otsu = "otsu"
+    fixed = "fixed"
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+PositiveUm = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+
+class Domain(_Strict):
+    """The box [0, size_um) in x, y, z."""
+
+    size_um: tuple[PositiveUm, PositiveUm, PositiveUm] = Field(description="box edge lengths x, y, z in µm")
+    periodic: bool = Field(True, description="spheres wrap across opposite faces")
+
+
+class Spheres(_Strict):
+    """Where the spheres (the matrix) come from; exactly one of the four keys."""
+
+    pack: bool = Field(False, description="use the packing stage's output (needs a `packing:` section)")
+    hdf5: Path | None = Field(None, description="packing.h5 written by `porepipe pack` (path relative to the scene)")
+    xyzr: Path | None = Field(None, description="text file, one sphere per line: x y z r in µm (PackDEM format)")
+    inline: list[tuple[float, float, float, float]] | None = Field(None, description="[[x, y, z, r], ...] in µm")
+
+    @model_validator(mode="after")
+    def _exactly_one(self):
+        given = [k for k in ("hdf5", "xyzr", "inline") if getattr(self, k) is not None] + (["pack"] if self.pack else [])
+        if len(given) != 1:
+            raise ValueError(f"give exactly one of pack: true, hdf5, xyzr, inline (got {given or 'none'})")
+        return self
+
+    @field_validator("inline")
+    @classmethod
+    def _radii_positive(cls, spheres):
+        for i, (x, y, z, r) in enumerate(spheres or []):
+            if not all(math.isfinite(v) for v in (x, y, z, r)):
+                raise ValueError(f"sphere {i} = {[x, y, z, r]} has a non-finite value")
+            if r <= 0:
+                raise ValueError(f"sphere {i} has radius {r}; allowed: r > 0")
+        return spheres
+
+
+class Segmentation(_Strict):
+    """Pore if grey value g <= threshold (the thesis's convention, §4.7.2)."""
+
+    method: SegmentationMethod = SegmentationMethod.otsu
+    threshold: int | None = Field(None, ge=0, le=215, description="g_th for method fixed (0..215)")
+
+    @model_validator(mode="after")
+    def _threshold_for_fixed(self):
+        if self.method is SegmentationMethod.fixed and self.threshold is None:
+            raise ValueError("method fixed needs `threshold` (an integer 0..215)")
+        if self.method is SegmentationMethod.otsu and self.threshold is not None:
+            raise ValueError("`threshold` is only used with method fixed; remove it or set method: fixed")
+        return self
+
+
+class SceneBase(_Strict):
+    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="scene name = results folder")
+    seed: int = Field(0, ge=0, description="root of every random stream of the scene")
+    domain: Domain
+    spheres: Spheres
+    resolutions_um: list[PositiveUm] = Field(min_length=1, description="voxel sizes a in µm, coarse to fine")
+    segmentation: Segmentation = Segmentation()
+    analyses: list[Analysis] = Field(default_factory=lambda: [Analysis.estimate])
+
+    @field_validator("resolutions_um")
+    @classmethod
+    def _distinct(cls, values):
+        if len(set(values)) != len(values):
+            raise ValueError(f"resolutions must be distinct, got {values}")
+        return values
+
+
+def _scene_model() -> type[BaseModel]:
+    fields: dict[str, Any] = {key: (model, model()) for key, model in stage_settings().items()}
+    return create_model("Scene", __base__=SceneBase, **fields)
+
+
+Scene = _scene_model()
+
+
+class SceneError(PorepipeError):
+    """A scene file with one or more problems; ``problems`` lists them, one line each."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.problems = problems
+        super().__init__(f"{source}: {len(problems)} problem(s)\n" + "\n".join(f"  - {p}" for p in problems))
+
+
+def _loc(loc: tuple) -> str:
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text or "(top level)"
+
+
+def _get(raw: dict, loc: tuple):
+    value = raw
+    for part in loc:
+        try:
+            value = value[part]
+        except (KeyError, IndexError, TypeError):
+            return "(missing)"
+    return value
+
+
+def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
+    problems = []
+    for e in err.errors():
+        loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p.startswith("function-")))
+        msg = e["msg"].removeprefix("Value error, ")
+        if e["type"] == "extra_forbidden":
+            msg = "unknown key (misspelt?)"
+        elif e["type"] == "enum":
+            msg = f"{msg}"
+        problems.append(f"{_loc(loc)} = {_get(raw, loc)!r}: {msg}")
+    return problems
+
+
+def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
+    """Checks across keys, done on the raw dict so they are reported together with the field errors."""
+    problems = []
+    size = _get(raw, ("domain", "size_um"))
+    res = raw.get("resolutions_um")
+    if isinstance(size, (list, tuple)) and isinstance(res, list):
+        for i, a in enumerate(res):
+            for axis, edge in enumerate(size):
+                if not all(isinstance(v, (int, float)) and v > 0 for v in (a, edge)):
+                    continue
+                n = edge / a
+                if abs(n - round(n)) > _DIVIDES_RTOL * max(1.0, n):
+                    problems.append(
+                        f"resolutions_um[{i}] = {a!r}: does not divide domain.size_um[{axis}] = {edge!r} "
+                        f"({n:.6g} voxels); allowed: a resolution that gives a whole number of voxels per edge")
+    spheres = raw.get("spheres")
+    if isinstance(spheres, dict):
+        for key in ("hdf5", "xyzr"):
+            if isinstance(spheres.get(key), str) and not (base_dir / spheres[key]).is_file():
+                problems.append(f"spheres.{key} = {spheres[key]!r}: file not found (looked in {base_dir})")
+        if spheres.get("pack") is True and "packing" not in raw:
+            problems.append("spheres.pack = True: needs a `packing:` section that says how to pack")
+    return problems
+
+
+def parse_scene(raw: Any, base_dir: Path | str = ".", source: str = "scene") -> BaseModel:
+    """Validate a scene given as a dict; raise :class:`SceneError` with every problem found."""
+    base_dir = Path(base_dir)
+    if not isinstance(raw, dict):
+        raise SceneError(source, [f"the scene must be a mapping of keys to values, got {type(raw).__name__}"])
+    problems = _cross_problems(raw, base_dir)
+    scene = None
+    try:
+        scene = Scene.model_validate(raw)
+    except ValidationError as err:
+        problems = _pydantic_problems(raw, err) + problems
+    if problems:
+        raise SceneError(source, problems)
+    return _resolve_paths(scene, base_dir)
+
+
+def _resolve_paths(scene, base_dir: Path):
+    sph = scene.spheres
+    update = {k: (base_dir / getattr(sph, k)).resolve() for k in ("hdf5", "xyzr") if getattr(sph, k) is not None}
+    return scene.model_copy(update={"spheres": sph.model_copy(update=update)}) if update else scene
+
+
+def load_scene(path) -> BaseModel:
+    """Read and validate a scene YAML file."""
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(str(path), [f"scene file {path} does not exist"])
+    try:
+        raw = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as err:
+        raise SceneError(str(path), [f"not valid YAML: {err}"]) from err
+    return parse_scene(raw, path.parent, str(path))
+
+
+def scene_part(scene, *keys: str) -> dict:
+    """The JSON-able parts of the scene a result depends on (for its hash)."""
+    dumped = scene.model_dump(mode="json")
+    return {k: dumped.get(k) for k in keys}

@@ -1,0 +1,14 @@
+rule estimate:
+    input:
+        lambda wildcards: per_resolution(scene_of(wildcards), "voxelize/grey_a{a}.h5"),
+    output:
+        "results/{scene}/estimate/estimate.h5",
+    log:
+        "results/{scene}/logs/estimate.log",
+    benchmark:
+        "results/{scene}/cost/estimate.tsv"
+    shell:
+        "porepipe estimate {input} -o {output} > {log} 2>&1"
+
+
+ANALYSIS_TARGETS["estimate"] = lambda scene: [results(scene, "estimate", "estimate.h5")]
