@@ -1,0 +1,287 @@
+"""Numba kernels of the lpt stage (arrays in, preallocated arrays out; no checks, no I/O).
+
+Two kernels carry the stage:
+
+- :func:`_box_sum_histogram` moves a box (a measurement cell) over every position of a grid and sums one or
+  more uint8 fields inside it. It is separable and incremental: each x-slice gets its 2-D (y, z) box sums once
+  (sliding windows along z, then y), and the 3-D sum follows by adding the slice that enters the box and
+  subtracting the one that leaves it. Cost O(N) per cell size, memory one ring of ``wx + batch`` slices.
+- :func:`_percolation_cells` decides for many cells whether pore voxels join two opposite faces: a depth-first
+  search from one face that always tries the step towards the far face first, and stops as soon as it gets there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from porepipe._shared.numba_config import FASTMATH
+
+#: Λ bits in the output of :func:`_percolation_cells`: x, y, z, all three, at least one.
+BIT_X, BIT_Y, BIT_Z, BIT_ALL, BIT_ANY = 1, 2, 4, 8, 16
+
+#: what :func:`_percolation_cells` may skip: nothing, the rest after a failing axis, the rest after a spanning axis
+STOP_NEVER, STOP_ON_FAIL, STOP_ON_SUCCESS = 0, 1, 2
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _bin_of(k, k_max, n_bins):
+    """Histogram bin of the box sum k in 0..k_max.
+
+    Exact (bin = k) when ``n_bins == k_max + 1``; otherwise k = 0 and k = k_max keep bins 0 and n_bins-1, and
+    k = 1..k_max-1 fall evenly into bins 1..n_bins-2.
+    """
+    if n_bins == k_max + 1:
+        return k
+    if k <= 0:
+        return 0
+    if k >= k_max:
+        return n_bins - 1
+    return 1 + ((k - 1) * (n_bins - 2)) // (k_max - 1)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _fill_slice(field, x, wy, wz, my, mz, tmp, out):
+    """2-D box sums of the slice ``field[x]``: out[y0, z0] = sum of field[x, y0:y0+wy, z0:z0+wz] (indices wrap).
+
+    ``tmp`` is scratch of shape (my + wy - 1, mz). Wrapping needs at most one turn because wy, wz <= the edge.
+    """
+    ny = field.shape[1]
+    nz = field.shape[2]
+    for yy in range(my + wy - 1):
+        y = yy if yy < ny else yy - ny
+        row = field[x, y]
+        s = np.int64(0)
+        for z in range(wz):
+            s += np.int64(row[z])
+        tmp[yy, 0] = s
+        for z0 in range(1, mz):
+            za = z0 + wz - 1
+            if za >= nz:
+                za -= nz
+            s += np.int64(row[za]) - np.int64(row[z0 - 1])
+            tmp[yy, z0] = s
+    for z0 in range(mz):
+        s = np.int64(0)
+        for yy in range(wy):
+            s += tmp[yy, z0]
+        out[0, z0] = s
+    for y0 in range(1, my):
+        for z0 in range(mz):
+            out[y0, z0] = np.int64(out[y0 - 1, z0]) + tmp[y0 + wy - 1, z0] - tmp[y0 - 1, z0]
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum, ksq, rec_stride, rec):
+    """Histogram (and optionally record) the box sums of ``fields`` at all grid positions.
+
+    Parameters
+    ----------
+    fields : (nf, nx, ny, nz) uint8 ndarray
+        Fields to sum; the box sum at a position is the total over all fields.
+    wins : (nf, 3) int64 ndarray
+        Box edge per field and axis (each 1..n along that axis).
+    npos : (3,) int64 ndarray
+        Number of box origins per axis, starting at 0; origins beyond ``n - w`` wrap around (periodic).
+    ring : (nf, n_ring, my, mz) uint16 or uint32 ndarray
+        Scratch for 2-D slice sums; ``n_ring - max(wins[:, 0])`` slices are computed per parallel batch.
+    hist_stride : int
+        Histogram the origins that are multiples of it on every axis; 0 = no histogram.
+    k_max : int
+        Largest possible box sum (sets the binning, see :func:`_bin_of`).
+    hist, ksum : (nt, n_bins) int64 ndarray
+        Per-thread-block counts and sums of k per bin (added to).
+    ksq : (nt,) float64 ndarray
+        Per-thread-block sum of k² (added to).
+    rec_stride : int
+        Record the box sums at origins that are multiples of it into ``rec``; 0 = do not record.
+    rec : (ceil(mx/rs), ceil(my/rs), ceil(mz/rs)) int64 ndarray
+        Recorded box sums.
+    """
+    nf = fields.shape[0]
+    nx = fields.shape[1]
+    mx = npos[0]
+    my = npos[1]
+    mz = npos[2]
+    n_ring = ring.shape[1]
+    wx_max = 0
+    for f in range(nf):
+        wx_max = max(wx_max, wins[f, 0])
+    batch = n_ring - wx_max
+    n_slices = mx + wx_max - 1
+    nt = hist.shape[0]
+    n_bins = hist.shape[1]
+    acc = np.zeros((my, mz), np.int64)
+    filled = 0
+    for x0 in range(mx):
+        need = x0 + wx_max
+        if need > filled:
+            hi = min(max(filled + batch, need), n_slices)
+            lo = filled
+            for task in prange((hi - lo) * nf):
+                f = task % nf
+                s = lo + task // nf
+                x = s if s < nx else s - nx
+                tmp = np.empty((my + wins[f, 1] - 1, mz), np.int64)
+                _fill_slice(fields[f], x, wins[f, 1], wins[f, 2], my, mz, tmp, ring[f, s % n_ring])
+            filled = hi
+        do_hist = hist_stride > 0 and x0 % hist_stride == 0
+        do_rec = rec_stride > 0 and x0 % rec_stride == 0
+        for t in prange(nt):
+            for y0 in range(t * my // nt, (t + 1) * my // nt):
+                row = acc[y0]
+                for f in range(nf):
+                    wx = wins[f, 0]
+                    if x0 == 0:
+                        for s in range(wx):
+                            slab = ring[f, s % n_ring, y0]
+                            for z0 in range(mz):
+                                row[z0] += np.int64(slab[z0])
+                    else:
+                        add = ring[f, (x0 + wx - 1) % n_ring, y0]
+                        sub = ring[f, (x0 - 1) % n_ring, y0]
+                        for z0 in range(mz):
+                            row[z0] += np.int64(add[z0]) - np.int64(sub[z0])
+                if do_hist and y0 % hist_stride == 0:
+                    for z0 in range(0, mz, hist_stride):
+                        k = row[z0]
+                        j = _bin_of(k, k_max, n_bins)
+                        hist[t, j] += 1
+                        ksum[t, j] += k
+                        ksq[t] += float(k) * float(k)
+                if do_rec and y0 % rec_stride == 0:
+                    for z0 in range(0, mz, rec_stride):
+                        rec[x0 // rec_stride, y0 // rec_stride, z0 // rec_stride] = row[z0]
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _spans(pore, xi, yi, zi, size, axis, offs, stamp, gen, si, sj, sk):
+    """True if pore voxels of the cell join its faces ``axis = 0`` and ``axis = size - 1``.
+
+    The cell is ``pore[xi[i], yi[j], zi[k]]`` for i, j, k in 0..size-1. Depth-first search from all pore voxels of
+    the near face; ``offs`` lists the neighbour steps with the step towards the far face last, so it is taken
+    first. ``stamp[v] == gen`` marks visited voxels (v = (i*size + j)*size + k); si/sj/sk is the stack.
+    """
+    far = size - 1
+    any_far = False
+    for a in range(size):
+        for b in range(size):
+            if axis == 0:
+                hit = pore[xi[far], yi[a], zi[b]]
+            elif axis == 1:
+                hit = pore[xi[a], yi[far], zi[b]]
+            else:
+                hit = pore[xi[a], yi[b], zi[far]]
+            if hit != 0:
+                any_far = True
+                break
+        if any_far:
+            break
+    if not any_far:
+        return False
+    top = 0
+    for a in range(size):
+        for b in range(size):
+            if axis == 0:
+                i, j, k = 0, a, b
+            elif axis == 1:
+                i, j, k = a, 0, b
+            else:
+                i, j, k = a, b, 0
+            if pore[xi[i], yi[j], zi[k]] != 0:
+                if far == 0:
+                    return True
+                stamp[(i * size + j) * size + k] = gen
+                si[top] = i
+                sj[top] = j
+                sk[top] = k
+                top += 1
+    n_nb = offs.shape[0]
+    while top > 0:
+        top -= 1
+        i = si[top]
+        j = sj[top]
+        k = sk[top]
+        for n in range(n_nb):
+            ni = i + offs[n, 0]
+            nj = j + offs[n, 1]
+            nk = k + offs[n, 2]
+            if ni < 0 or nj < 0 or nk < 0 or ni > far or nj > far or nk > far:
+                continue
+            v = (ni * size + nj) * size + nk
+            if stamp[v] == gen or pore[xi[ni], yi[nj], zi[nk]] == 0:
+                continue
+            if (axis == 0 and ni == far) or (axis == 1 and nj == far) or (axis == 2 and nk == far):
+                return True
+            stamp[v] = gen
+            si[top] = ni
+            sj[top] = nj
+            sk[top] = nk
+            top += 1
+    return False
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def _percolation_cells(pore, origins, counts, size, offs_by_axis, want, stop, n_chunks, out):
+    """Local percolation indicators of many cells.
+
+    Parameters
+    ----------
+    pore : (nx, ny, nz) uint8 ndarray
+        1 = pore.
+    origins : (n, 3) int64 ndarray
+        Cell origins; cell voxels are ``(origin + 0..size-1) mod shape`` on each axis.
+    counts : (n,) int64 ndarray
+        Pore voxels in each cell (from the box sums); settles empty, full and too-sparse cells without a search.
+    size : int
+        Cell edge L in voxels.
+    offs_by_axis : (3, n_nb, 3) int64 ndarray
+        Neighbour steps per search axis, the step towards the far face last.
+    want : int
+        Bit mask of the axes to search (BIT_X | BIT_Y | BIT_Z).
+    stop : int
+        STOP_NEVER, STOP_ON_FAIL (enough for Λ_3 alone) or STOP_ON_SUCCESS (enough for Λ_c alone).
+    n_chunks : int
+        Work items for the threads (each takes every n_chunks-th cell, which balances uneven search costs).
+    out : (n,) uint8 ndarray
+        Λ bits (BIT_X ... BIT_ANY); BIT_ALL and BIT_ANY refer to the searched axes.
+    """
+    n = origins.shape[0]
+    nx, ny, nz = pore.shape
+    full = size * size * size
+    for c in prange(n_chunks):
+        stamp = np.zeros(full, np.uint32)
+        si = np.empty(full, np.int32)
+        sj = np.empty(full, np.int32)
+        sk = np.empty(full, np.int32)
+        xi = np.empty(size, np.int64)
+        yi = np.empty(size, np.int64)
+        zi = np.empty(size, np.int64)
+        gen = np.uint32(0)
+        for cell in range(c, n, n_chunks):
+            k = counts[cell]
+            bits = 0
+            if k >= full:
+                bits = want & 7
+            elif k >= size:  # a path between opposite faces needs at least `size` pore voxels
+                for a in range(size):
+                    xi[a] = (origins[cell, 0] + a) % nx
+                    yi[a] = (origins[cell, 1] + a) % ny
+                    zi[a] = (origins[cell, 2] + a) % nz
+                for axis in range(3):
+                    if (want >> axis) & 1 == 0:
+                        continue
+                    if gen == np.uint32(0xFFFFFFFF):
+                        stamp[:] = 0
+                        gen = np.uint32(0)
+                    gen += np.uint32(1)
+                    ok = _spans(pore, xi, yi, zi, size, axis, offs_by_axis[axis], stamp, gen, si, sj, sk)
+                    if ok:
+                        bits |= 1 << axis
+                    if (stop == STOP_ON_FAIL and not ok) or (stop == STOP_ON_SUCCESS and ok):
+                        break
+            if bits != 0 and bits == (want & 7):
+                bits |= BIT_ALL
+            if bits & 7 != 0:
+                bits |= BIT_ANY
+            out[cell] = bits
