@@ -1,0 +1,20 @@
+"""Minkowski functionals (φ, S_V, K_V, T_V, χ) of voxel volumes from the 2x2x2 configuration histogram."""
+
+from porepipe.minkowski._api import (
+    configuration_histogram,
+    configuration_histogram_slabs,
+    iter_slabs,
+    matrix_histogram,
+    minkowski_from_histogram,
+    minkowski_functionals,
+    minkowski_functions_of_threshold,
+    n_cells,
+    specific_surface_from_histogram,
+    threshold_histograms,
+)
+from porepipe.minkowski._weights import Adjacency
+
+__all__ = ["Adjacency", "configuration_histogram", "configuration_histogram_slabs", "iter_slabs",
+           "matrix_histogram", "minkowski_from_histogram", "minkowski_functionals",
+           "minkowski_functions_of_threshold", "n_cells", "specific_surface_from_histogram",
+           "threshold_histograms"]
