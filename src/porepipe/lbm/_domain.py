@@ -1,0 +1,165 @@
+"""The simulation domain: sparse pore-node lattice and the two set-ups (periodic body force, thesis chambers).
+
+Internally the flow is always along axis 0; callers move the sample's flow axis there first
+(D3Q19 and the three collision operators are invariant under axis permutations). Nodes are numbered in C order,
+so each layer across the flow is a contiguous node range and the force zone is one range ``[force_lo, force_hi)``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+
+import numpy as np
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.lbm._kernels import _gather_table, _node_ids
+from porepipe.lbm._percolation import flow_paths
+
+#: beyond this many populations the gather index needs 64 bits
+_INT32_LIMIT = 2**31 - 1
+
+
+@dataclasses.dataclass
+class Lattice:
+    """Sparse D3Q19 lattice of the pore nodes of one domain (flow along axis 0).
+
+    Attributes
+    ----------
+    pore : (L0, L1, L2) bool ndarray
+        Fluid nodes actually simulated.
+    periodic : tuple of 3 bool
+        Which axes wrap; a non-periodic face is a halfway bounce-back wall.
+    gather : (18, N) int32 or int64 ndarray
+        Pull source (flat population index) of q = 1..18 for every node; bounce-back is encoded.
+    layer_start : (L0 + 1,) int64 ndarray
+        Nodes of layer ℓ are ``layer_start[ℓ]:layer_start[ℓ + 1]``.
+    force_layers, sample_layers : (int, int)
+        Half-open layer ranges of the force zone F and the sample S.
+    window : (L1, L2) bool ndarray or None
+        Part of the cross-section that belongs to S (None = all of it).
+    """
+
+    pore: np.ndarray
+    periodic: tuple[bool, bool, bool]
+    gather: np.ndarray
+    layer_start: np.ndarray
+    force_layers: tuple[int, int]
+    sample_layers: tuple[int, int]
+    window: np.ndarray | None = None
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.gather.shape[1])
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return tuple(int(s) for s in self.pore.shape)
+
+    @property
+    def force_nodes(self) -> tuple[int, int]:
+        lo, hi = self.force_layers
+        return int(self.layer_start[lo]), int(self.layer_start[hi])
+
+    @property
+    def body_force_everywhere(self) -> bool:
+        return self.force_layers == (0, self.shape[0])
+
+    @property
+    def n_wall_links(self) -> int:
+        """Number of bounce-back links (populations whose pull source is their own node)."""
+        n = self.n_nodes
+        return int(np.count_nonzero(self.gather % n == np.arange(n)))
+
+    def node_window(self) -> np.ndarray:
+        """(N,) bool: node lies in the sample's lateral window."""
+        if self.window is None:
+            return np.ones(self.n_nodes, dtype=bool)
+        return np.broadcast_to(self.window, self.pore.shape)[self.pore]
+
+    def key(self) -> str:
+        """Hash of the geometry (for checkpoints)."""
+        h = hashlib.sha256(np.packbits(self.pore).tobytes())
+        h.update(repr((self.shape, self.periodic, self.force_layers, self.sample_layers)).encode())
+        if self.window is not None:
+            h.update(np.packbits(self.window).tobytes())
+        return h.hexdigest()[:16]
+
+
+def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, window=None) -> Lattice:
+    """Number the pore nodes and build the pull/bounce-back gather table.
+
+    Parameters
+    ----------
+    pore : (L0, L1, L2) bool ndarray
+        Fluid nodes; flow along axis 0.
+    periodic : 3 bools
+        Wrapping axes (non-periodic faces are walls halfway outside the last node).
+    force_layers, sample_layers : (int, int)
+        Half-open layer ranges of the force zone and of the sample.
+    window : (L1, L2) bool ndarray, optional
+        Lateral part of the sample used for averages.
+    """
+    pore = np.ascontiguousarray(pore, dtype=bool)
+    if pore.ndim != 3 or min(pore.shape) < 1:
+        raise PorepipeError(f"pore volume must be 3-D with positive sizes, got shape {pore.shape}")
+    ids = np.empty(pore.size, dtype=np.int64)
+    n = int(_node_ids(pore.reshape(-1), ids))
+    index_dtype = np.int32 if 19 * n <= _INT32_LIMIT else np.int64
+    gather = np.empty((18, n), dtype=index_dtype)
+    if n:
+        _gather_table(ids.reshape(pore.shape), np.array(pore.shape, dtype=np.int64),
+                      np.array([bool(p) for p in periodic]), n, gather)
+    counts = np.count_nonzero(pore.reshape(pore.shape[0], -1), axis=1)
+    layer_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return Lattice(pore, tuple(bool(p) for p in periodic), gather, layer_start,
+                   (int(force_layers[0]), int(force_layers[1])), (int(sample_layers[0]), int(sample_layers[1])),
+                   window)
+
+
+@dataclasses.dataclass
+class Prepared:
+    """A set-up ready to run, or the reason it need not run."""
+
+    lattice: Lattice | None
+    sample_voxels: int  # |S|, solid included (denominator of the superficial velocity)
+    sample_area: int  # voxels in one cross-section of S
+    n_spanning: int
+    pruned_nodes: int
+    reason: str = ""
+
+
+def _prune(sample: np.ndarray, lateral_periodic: bool, wrap: bool, enabled: bool):
+    keep, n_span = flow_paths(sample, lateral_periodic, wrap)
+    if not enabled:
+        keep = sample
+    return keep, n_span, int(np.count_nonzero(sample)) - int(np.count_nonzero(keep))
+
+
+def periodic_setup(sample: np.ndarray, *, mirror: bool, lateral_periodic: bool, prune: bool) -> Prepared:
+    """Body force on every node, periodic along the flow (optionally sample + its mirror image)."""
+    domain = np.concatenate([sample, sample[::-1]], axis=0) if mirror else sample
+    keep, n_span, pruned = _prune(domain, lateral_periodic, True, prune)
+    area = domain.shape[1] * domain.shape[2]
+    if n_span == 0:
+        return Prepared(None, domain.size, area, 0, 0,
+                        reason="no pore path connects the inlet face to the outlet face: κ = 0")
+    lat = build_lattice(keep, (True, lateral_periodic, lateral_periodic), (0, domain.shape[0]),
+                        (0, domain.shape[0]))
+    return Prepared(lat, domain.size, area, n_span, pruned)
+
+
+def chamber_setup(sample: np.ndarray, *, inlet_layers: int, outlet_layers: int, force_layers: int,
+                  lateral_periodic: bool, prune: bool) -> Prepared:
+    """Thesis §6.1.4: open inlet chamber (force zone in its first layers), sample, open outlet chamber."""
+    keep, n_span, pruned = _prune(sample, lateral_periodic, False, prune)
+    area = sample.shape[1] * sample.shape[2]
+    if n_span == 0:
+        return Prepared(None, sample.size, area, 0, 0,
+                        reason="no pore path connects the inlet face to the outlet face: κ = 0")
+    cross = sample.shape[1:]
+    domain = np.concatenate([np.ones((inlet_layers, *cross), bool), keep,
+                             np.ones((outlet_layers, *cross), bool)], axis=0)
+    lat = build_lattice(domain, (True, lateral_periodic, lateral_periodic), (0, force_layers),
+                        (inlet_layers, inlet_layers + sample.shape[0]))
+    return Prepared(lat, sample.size, area, n_span, pruned)

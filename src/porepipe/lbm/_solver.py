@@ -1,0 +1,200 @@
+"""Time stepping with convergence control, stability guards, progress and checkpoint/resume."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.progress import Progress
+from porepipe._shared.store import hash_of
+from porepipe.lbm import _kernels as K
+from porepipe.lbm._darcy import Sampler, estimate_key, estimates
+from porepipe.lbm._domain import Lattice
+from porepipe.lbm._lattice import CS2, dhumieres_matrix, mrt_rates, trt_minus_tau, viscosity
+from porepipe.lbm._settings import Collision, Settings
+
+#: τ̂ − ½ below this is refused (ν̂ → 0: the scheme loses stability and the wall position runs away).
+TAU_MIN_GAP = 5e-3
+#: velocity changes are taken relative to max(|v|, this × max |v|): stagnant nodes do not dominate Eq. 6.1.30.
+VELOCITY_FLOOR = 1e-3
+#: keys of the settings that change the numbers (checkpoints must match them).
+_PHYSICS_KEYS = ("collision", "tau", "tau_bulk", "magic", "mrt_magic", "body_force", "precision")
+
+
+class StabilityError(PorepipeError):
+    """The run became unstable; the message names the step and the parameter to change."""
+
+
+@dataclasses.dataclass
+class Run:
+    """Outcome of :func:`solve`."""
+
+    converged: bool
+    steps: int
+    history: dict[str, np.ndarray]
+    fields: np.ndarray  # (4, N): δρ, u0, u1, u2 of the last check
+    estimates: dict[str, float]
+    kappa_key: str
+    mlups: float
+    step_wall_s: float
+    total_mass: float
+
+    @property
+    def kappa(self) -> float:
+        return self.estimates[self.kappa_key]
+
+
+def check_tau(settings: Settings) -> None:
+    """Refuse τ̂ too close to ½ before anything runs."""
+    if settings.tau - 0.5 < TAU_MIN_GAP:
+        raise StabilityError(f"tau={settings.tau} is within {TAU_MIN_GAP} of 1/2 (viscosity → 0, unstable): "
+                             f"increase `tau` to at least {0.5 + TAU_MIN_GAP}")
+    if settings.collision is Collision.mrt and settings.tau_bulk - 0.5 < TAU_MIN_GAP:
+        raise StabilityError(f"tau_bulk={settings.tau_bulk} is within {TAU_MIN_GAP} of 1/2: increase `tau_bulk`")
+
+
+def make_stepper(settings: Settings, lat: Lattice):
+    """``step(src, dst, fields, store, n_steps)`` for the chosen operator (the kernel is picked once, here)."""
+    lo, hi = lat.force_nodes
+    force = np.array([settings.body_force, 0.0, 0.0])
+    tau = settings.tau
+    if settings.collision is Collision.bgk:
+        def step(src, dst, fields, store, n):
+            K._step_bgk(src, dst, lat.gather, lo, hi, force, fields, store, n, 1.0 / tau)
+    elif settings.collision is Collision.trt:
+        omega_minus = 1.0 / trt_minus_tau(tau, settings.magic)
+
+        def step(src, dst, fields, store, n):
+            K._step_trt(src, dst, lat.gather, lo, hi, force, fields, store, n, 1.0 / tau, omega_minus)
+    else:
+        m = dhumieres_matrix()
+        scaled = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
+
+        def step(src, dst, fields, store, n):
+            K._step_mrt(src, dst, lat.gather, lo, hi, force, fields, store, n, scaled)
+    return step
+
+
+def _checkpoint_key(lat: Lattice, settings: Settings) -> str:
+    return hash_of({"lattice": lat.key(), **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}})
+
+
+def _save_checkpoint(path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with h5py.File(tmp, "w") as f:
+        f.attrs["key"] = key
+        f.attrs["step"] = step
+        f.create_dataset("populations", data=pops)
+        f.create_dataset("fields", data=fields)
+        for name, values in history.items():
+            f.create_dataset(f"history/{name}", data=np.asarray(values))
+    os.replace(tmp, path)
+
+
+def _load_checkpoint(path: Path, key: str, pops: np.ndarray):
+    """(step, fields, history) from a matching checkpoint, or None."""
+    if path is None or not path.is_file():
+        return None
+    with h5py.File(path, "r") as f:
+        if f.attrs.get("key") != key or f["populations"].shape != pops.shape:
+            return None
+        pops[...] = f["populations"][...]
+        history = {name: list(f[f"history/{name}"][...]) for name in f["history"]} if "history" in f else {}
+        return int(f.attrs["step"]), f["fields"][...], history
+
+
+def _guard(fields: np.ndarray, step: int, settings: Settings) -> float:
+    """Raise on NaN/Inf or a Mach number above the limit; return the Mach number."""
+    finite, u2 = K._finite_and_max_speed2(fields)
+    if not finite:
+        raise StabilityError(f"non-finite density or velocity at step {step}: the run is unstable; increase `tau` "
+                             f"(now {settings.tau}) or reduce `body_force` (now {settings.body_force})")
+    mach = math.sqrt(u2 / CS2)
+    if mach > settings.mach_max:
+        raise StabilityError(f"Mach number {mach:.3g} > mach_max={settings.mach_max} at step {step}: reduce "
+                             f"`body_force` (now {settings.body_force}) or increase `tau` (now {settings.tau})")
+    return mach
+
+
+def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str = "lbm",
+          checkpoint: Path | None = None, progress: bool = True) -> Run:
+    """Run the lattice to a steady state and evaluate κ̂.
+
+    Converged when, over one window of ``window_steps``, the largest relative change of the flow velocity and of
+    the density over the sample's pore nodes (thesis Eq. 6.1.30) and the relative change of κ̂ are all below their
+    tolerances. Raises :class:`StabilityError` on NaN/Inf or Mach > ``mach_max``.
+    """
+    check_tau(settings)
+    dtype = np.dtype(settings.precision.value)
+    n = lat.n_nodes
+    src = np.zeros(19 * n, dtype=dtype)  # zero-centred: equilibrium at rest, ρ = 1
+    dst = np.zeros_like(src)
+    fields = np.zeros((4, n))
+    step = make_stepper(settings, lat)
+    sampler = Sampler.of(lat)
+    nu = viscosity(settings.tau)
+    key_name = estimate_key(lat.body_force_everywhere, settings.gradient, settings.velocity)
+    ckey = _checkpoint_key(lat, settings)
+    history: dict[str, list] = {k: [] for k in ("step", "kappa", "delta_v", "delta_rho", "delta_kappa", "mach")}
+    done = 0
+    resumed = _load_checkpoint(checkpoint, ckey, src)
+    if resumed is not None:
+        done, fields, old_history = resumed
+        history.update({k: list(v) for k, v in old_history.items() if k in history})
+    start = done
+    reporter = Progress(label, settings.max_steps) if progress else None
+    window = settings.window_steps
+    prev_fields = fields.copy() if done else None
+    prev_kappa = history["kappa"][-1] if history["kappa"] else float("nan")
+    est = {}
+    converged = False
+    step_wall = 0.0
+    last_ckpt = time.perf_counter()
+    while done < settings.max_steps:
+        n_run = min(window, settings.max_steps - done)
+        t0 = time.perf_counter()
+        step(src, dst, fields, True, n_run)
+        step_wall += time.perf_counter() - t0
+        if n_run % 2 == 1:
+            src, dst = dst, src
+        done += n_run
+        mach = _guard(fields, done, settings)
+        est = estimates(lat, sampler, fields, nu=nu, body_force=settings.body_force, sample_voxels=sample_voxels,
+                        sample_area=sample_area, trim_layers=settings.trim_layers)
+        kappa = est[key_name]
+        if not math.isfinite(kappa):
+            raise StabilityError(f"κ̂ estimate {key_name} is not finite at step {done} (no pressure drop across "
+                                 f"the sample?): check the set-up or raise `body_force` (now {settings.body_force})")
+        dv, drho, dk = (float("inf"),) * 3
+        if prev_fields is not None:
+            sel = sampler.sample_nodes
+            u_new, u_old = fields[1, sel], prev_fields[1, sel]
+            floor = VELOCITY_FLOOR * float(np.max(np.abs(u_new))) if u_new.size else 0.0
+            dv = K._max_rel_change(u_new, u_old, max(floor, 1e-300))
+            drho = K._max_rel_change(1.0 + fields[0, sel], 1.0 + prev_fields[0, sel], 1e-300)
+            dk = abs(kappa - prev_kappa) / abs(kappa) if kappa != 0 else float("inf")
+        for name, value in zip(history, (done, kappa, dv, drho, dk, mach)):
+            history[name].append(value)
+        if reporter is not None:
+            reporter.update(done, f"κ̂={kappa:.6g} δv={dv:.2e} δρ={drho:.2e} δκ={dk:.2e}")
+        prev_fields, prev_kappa = fields.copy(), kappa
+        if dv < settings.tolerance_velocity and drho < settings.tolerance_density and dk < settings.tolerance_kappa:
+            converged = True
+            break
+        if checkpoint is not None and time.perf_counter() - last_ckpt > settings.checkpoint_every_s:
+            _save_checkpoint(checkpoint, ckey, done, src, fields, history)
+            last_ckpt = time.perf_counter()
+    if not converged and checkpoint is not None:
+        _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
+    mlups = n * (done - start) / max(step_wall, 1e-12) / 1e6
+    mass = float(n + np.sum(src, dtype=np.float64))
+    return Run(converged, done, {k: np.asarray(v, dtype=np.float64) for k, v in history.items()}, fields, est,
+               key_name, mlups, step_wall, mass)
+
