@@ -2,7 +2,10 @@
 # Scenes come from config/config.yaml (key `scenes`) or from `--config scene=PATH` (what `porepipe run` passes).
 from pathlib import Path
 
-configfile: "config/config.yaml"
+import yaml
+
+if not config.get("scene") and not config.get("scenes"):
+    config.update(yaml.safe_load(Path(workflow.basedir, "config", "config.yaml").read_text()))
 
 
 include: "workflow/rules/common.smk"

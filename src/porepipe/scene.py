@@ -161,14 +161,14 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
     res = raw.get("resolutions_um")
     if isinstance(size, (list, tuple)) and isinstance(res, list):
         for i, a in enumerate(res):
-            for axis, edge in enumerate(size):
-                if not all(isinstance(v, (int, float)) and v > 0 for v in (a, edge)):
-                    continue
-                n = edge / a
-                if abs(n - round(n)) > _DIVIDES_RTOL * max(1.0, n):
-                    problems.append(
-                        f"resolutions_um[{i}] = {a!r}: does not divide domain.size_um[{axis}] = {edge!r} "
-                        f"({n:.6g} voxels); allowed: a resolution that gives a whole number of voxels per edge")
+            if not isinstance(a, (int, float)) or a <= 0:
+                continue
+            bad = [f"{edge!r} ({edge / a:.6g} voxels)" for edge in size
+                   if isinstance(edge, (int, float)) and edge > 0
+                   and abs(edge / a - round(edge / a)) > _DIVIDES_RTOL * max(1.0, edge / a)]
+            if bad:
+                problems.append(f"resolutions_um[{i}] = {a!r}: does not divide the box edge(s) {', '.join(bad)} of "
+                                "domain.size_um; allowed: a voxel size giving a whole number of voxels per edge")
     spheres = raw.get("spheres")
     if isinstance(spheres, dict):
         for key in ("hdf5", "xyzr"):

@@ -7,6 +7,8 @@ from porepipe.estimate._api import (
     estimate_from_histograms,
     porosity_at_threshold,
     porosity_bounds,
+    porosity_mean_grey,
+    richardson_limit,
     regress_porosity_limit,
     surface_estimates,
     surface_per_grey,
@@ -14,4 +16,4 @@ from porepipe.estimate._api import (
 )
 
 __all__ = ["PorosityLimit", "cap_base_area", "corner_cut", "estimate_from_histograms", "porosity_at_threshold",
-           "porosity_bounds", "regress_porosity_limit", "surface_estimates", "surface_per_grey", "two_point_line"]
+           "porosity_bounds", "porosity_mean_grey", "richardson_limit", "regress_porosity_limit", "surface_estimates", "surface_per_grey", "two_point_line"]

@@ -38,6 +38,32 @@ def porosity_bounds(hist) -> tuple[float, float]:
     return porosity_at_threshold(hist, 0), porosity_at_threshold(hist, G_MAX - 1)
 
 
+def porosity_mean_grey(hist) -> float:
+    """φ̄ = 1 − Σ_g g M(g) / (216 N): the mean voxel porosity ψ_i ≈ 1 − g_i/216 of Eq. 7.1.1.
+
+    It is the fraction of all sample points (a lattice of spacing a/6) that lie in the pore space, so it converges
+    much faster than the bounds; it needs no threshold.
+    """
+    hist = _check_hist(hist)
+    return float(1.0 - (hist * np.arange(G_MAX + 1)).sum() / (G_MAX * hist.sum()))
+
+
+def richardson_limit(a, q) -> tuple[float, float]:
+    """Limit a → 0 of q(a) = q∞ + c1·a + c2·a² through the three finest resolutions, and an error estimate.
+
+    The error is the change from the two-point (linear) limit of the two finest resolutions to the three-point
+    limit — the usual estimate of the size of the next neglected term. Needs ≥ 3 resolutions.
+    """
+    a = np.asarray(a, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
+    if a.size < 3:
+        raise PorepipeError(f"a three-point limit needs 3 resolutions, got {a.size}")
+    idx = np.argsort(a)[:3]
+    coef = np.polyfit(a[idx], q[idx], 2)
+    linear = np.polyfit(a[idx[:2]], q[idx[:2]], 1)
+    return float(coef[-1]), float(abs(coef[-1] - linear[-1]))
+
+
 def two_point_line(a_coarse: float, phi_coarse: float, a_fine: float, phi_fine: float) -> tuple[float, float]:
     """Slope k and intercept ϕ of the line φ(a) = ϕ + k·a through two resolutions (Eq. 7.2.1)."""
     if not a_coarse > a_fine > 0:
@@ -160,7 +186,9 @@ def estimate_from_histograms(voxel_um, hists) -> xr.Dataset:
     -------
     xarray.Dataset
         Over ``a_um``: phi_lower = φ(0, a), phi_upper = φ(215, a), S_min/S_mf/S_max [µm⁻¹]; over ``pair`` (each
-        consecutive coarse/fine pair): the two-point lines; scalars phi_limit, phi_limit_err when ≥ 3 resolutions.
+        consecutive coarse/fine pair): the two-point lines; with ≥ 3 resolutions the thesis's regression
+        (phi_regression ± phi_regression_err, with a ``supported`` flag) and phi_limit ± phi_limit_err from
+        three-point limits of both bounds.
     """
     a = np.asarray(voxel_um, dtype=np.float64)
     hists = np.asarray(hists, dtype=np.int64)
@@ -169,11 +197,13 @@ def estimate_from_histograms(voxel_um, hists) -> xr.Dataset:
     order = np.argsort(-a)
     a, hists = a[order], hists[order]
     bounds = np.array([porosity_bounds(h) for h in hists])
+    mean_grey = np.array([porosity_mean_grey(h) for h in hists])
     surf = [surface_estimates(h, ai) for h, ai in zip(hists, a)]
     ds = xr.Dataset(
         {
             "phi_lower": ("a_um", bounds[:, 0], {"long_name": "phi(0, a): pore iff g = 0"}),
             "phi_upper": ("a_um", bounds[:, 1], {"long_name": "phi(215, a): pore iff g <= 215"}),
+            "phi_mean_grey": ("a_um", mean_grey, {"long_name": "1 - mean(g)/216 (Eq. 7.1.1)"}),
             "grey_histogram": (("a_um", "g"), hists, {"long_name": "M(g, a)"}),
             **{k: ("a_um", [s[k] for s in surf], {"units": "1/um"}) for k in ("S_min", "S_mf", "S_max")},
         },
@@ -188,9 +218,26 @@ def estimate_from_histograms(voxel_um, hists) -> xr.Dataset:
         for col, name in enumerate(("k_0", "phi_0", "k_215", "phi_215")):
             ds[name] = ("pair", lines[:, col], {"units": "1/um" if name.startswith("k") else "1"})
     if a.size >= 3:
-        lim = regress_porosity_limit(ds["phi_0"].values, ds["phi_215"].values)
-        ds["phi_star"] = ("pair", lim.phi_star)
-        ds["phi_2star"] = ("pair", lim.phi_2star)
-        ds["phi_limit"] = ((), lim.phi, {"error_method": lim.error_method})
-        ds["phi_limit_err"] = ((), lim.phi_err)
+        ds = _add_limits(ds, a, bounds)
+    return ds
+
+
+def _add_limits(ds: xr.Dataset, a: np.ndarray, bounds: np.ndarray) -> xr.Dataset:
+    """The a → 0 porosity: the thesis's φ*/φ** regression, and three-point limits of both bounds."""
+    lim = regress_porosity_limit(ds["phi_0"].values, ds["phi_215"].values)
+    width = lim.phi_2star
+    # the regression needs bound widths that shrink towards 0 (as in Table 7.2); otherwise it extrapolates noise
+    supported = bool(np.all(width > 0) and np.all(np.diff(width) < 0))
+    ds["phi_star"] = ("pair", lim.phi_star)
+    ds["phi_2star"] = ("pair", width)
+    ds["phi_regression"] = ((), lim.phi, {"error_method": lim.error_method, "supported": int(supported),
+                                          "why": "" if supported else "bound widths phi** do not shrink "
+                                          "monotonically to 0: the regression has no reliable lever arm"})
+    ds["phi_regression_err"] = ((), lim.phi_err)
+    lower, lower_err = richardson_limit(a, bounds[:, 0])
+    upper, upper_err = richardson_limit(a, bounds[:, 1])
+    ds["phi_limit"] = ((), 0.5 * (lower + upper),
+                       {"method": "midpoint of the three-point (quadratic in a) limits of phi(0,a) and phi(215,a)"})
+    ds["phi_limit_err"] = ((), max(0.5 * abs(upper - lower), lower_err, upper_err),
+                           {"method": "max(half gap of the two limits, change from linear to quadratic limit)"})
     return ds

@@ -1,0 +1,83 @@
+"""`porepipe validate` on broken scenes: one clear message per fault, naming key, value and what is allowed."""
+
+import textwrap
+
+import pytest
+
+from porepipe.cli import main
+
+GOOD = """
+name: ok
+domain: {size_um: [100, 100, 100], periodic: true}
+spheres: {inline: [[10, 10, 10, 5]]}
+resolutions_um: [4, 2]
+"""
+
+BROKEN = {
+    "negative radius": ("spheres: {inline: [[10, 10, 10, -5]]}", ["spheres.inline", "radius -5", "r > 0"]),
+    "zero box edge": ("domain: {size_um: [100, 0, 100]}", ["domain.size_um[1]", "greater than 0"]),
+    "resolution not dividing": ("resolutions_um: [3, 2]", ["resolutions_um[0] = 3", "does not divide", "33.3333"]),
+    "negative resolution": ("resolutions_um: [-1]", ["resolutions_um[0]", "greater than 0"]),
+    "unknown analysis": ("analyses: [segment, porosimetry]", ["analyses[1] = 'porosimetry'", "'minkowski'"]),
+    "missing xyzr file": ("spheres: {xyzr: nowhere.xyzr}", ["spheres.xyzr = 'nowhere.xyzr'", "file not found"]),
+    "two sphere sources": ("spheres: {inline: [[1, 1, 1, 1]], xyzr: a.xyzr}", ["exactly one of"]),
+    "misspelt key": ("resolution_um: [2]", ["resolution_um", "unknown key"]),
+    "fixed without threshold": ("segmentation: {method: fixed}", ["segmentation", "needs `threshold`"]),
+    "threshold out of range": ("segmentation: {method: fixed, threshold: 216}", ["segmentation.threshold = 216",
+                                                                               "less than or equal to 215"]),
+    "bad name": ("name: 'two words'", ["name = 'two words'", "pattern"]),
+    "unknown segmentation method": ("segmentation: {method: kmeans}", ["segmentation.method = 'kmeans'", "'otsu'"]),
+    "duplicate resolutions": ("resolutions_um: [2, 2]", ["resolutions_um", "distinct"]),
+    "pack without packing section": ("spheres: {pack: true}", ["spheres.pack", "packing:"]),
+}
+
+
+def _scene(tmp_path, override: str):
+    import yaml
+
+    data = yaml.safe_load(GOOD)
+    data.update(yaml.safe_load(override))
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump(data))
+    (tmp_path / "a.xyzr").write_text("1 1 1 1\n")
+    return path
+
+
+def test_good_scene_validates(tmp_path, capsys):
+    assert main(["validate", str(_scene(tmp_path, "{}"))]) == 0
+    assert "ok" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("case", sorted(BROKEN))
+def test_each_fault_gives_one_clear_message(case, tmp_path, capsys):
+    override, fragments = BROKEN[case]
+    assert main(["validate", str(_scene(tmp_path, override))]) == 2
+    err = capsys.readouterr().err
+    assert "1 problem(s)" in err, err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+
+
+def test_all_faults_reported_at_once(tmp_path, capsys):
+    path = tmp_path / "scene.yaml"
+    path.write_text(textwrap.dedent("""
+        name: bad
+        domain: {size_um: [100, 100, 100]}
+        spheres: {inline: [[10, 10, 10, -5]]}
+        resolutions_um: [3]
+        analyses: [nonsense]
+        colour: blue
+    """))
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "4 problem(s)" in err
+    for fragment in ("radius -5", "does not divide", "nonsense", "colour"):
+        assert fragment in err
+
+
+def test_not_yaml_and_missing_file(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: [unclosed")
+    assert main(["validate", str(bad), str(tmp_path / "absent.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "not valid YAML" in err and "absent.yaml does not exist" in err

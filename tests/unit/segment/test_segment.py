@@ -1,0 +1,40 @@
+import numpy as np
+import pytest
+from skimage.filters import threshold_otsu
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.scene import SegmentationMethod
+from porepipe.segment import choose_threshold, otsu_threshold, segment
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_otsu_matches_scikit_image_on_histograms(seed):
+    rng = np.random.default_rng(seed)
+    hist = rng.integers(0, 1000, 217) * (rng.random(217) < 0.6)
+    assert otsu_threshold(hist) == threshold_otsu(hist=(hist, np.arange(217)))
+
+
+def test_otsu_splits_a_bimodal_volume_between_the_modes():
+    rng = np.random.default_rng(1)
+    grey = np.concatenate([rng.integers(0, 30, 5000), rng.integers(180, 217, 5000)]).astype(np.uint8)
+    t = choose_threshold(np.bincount(grey, minlength=217), SegmentationMethod.otsu).value
+    assert 29 <= t < 180
+    assert segment(grey, t).sum() == 5000  # pore = the dark half
+
+
+@pytest.mark.parametrize("value,phase", [(0, "pore"), (216, "matrix"), (100, "pore"), (150, "matrix")])
+def test_single_grey_value_says_which_phase(value, phase):
+    hist = np.zeros(217, dtype=np.int64)
+    hist[value] = 1000
+    decision = choose_threshold(hist, SegmentationMethod.otsu)
+    assert f"whole volume is {phase}" in decision.note
+    assert bool(segment(np.array([value], np.uint8), decision.value)[0]) == (phase == "pore")
+
+
+def test_fixed_threshold_range_is_checked():
+    hist = np.ones(217, dtype=np.int64)
+    assert choose_threshold(hist, SegmentationMethod.fixed, 0).value == 0
+    with pytest.raises(PorepipeError, match="0..215"):
+        choose_threshold(hist, SegmentationMethod.fixed, 216)
+    with pytest.raises(PorepipeError, match="217 bins"):
+        choose_threshold(np.ones(10), SegmentationMethod.otsu)
