@@ -11,14 +11,21 @@ import importlib.util
 
 #: (package, scene key) in workflow order; scene key None = the stage has no scene section.
 STAGES: list[tuple[str, str | None]] = [
+    ("porepipe.acquire", "acquire"),
     ("porepipe.packing", "packing"),
+    ("porepipe.decorate", "decoration"),
     ("porepipe.voxelize", "voxelize"),
     ("porepipe.segment", None),
     ("porepipe.estimate", None),
     ("porepipe.minkowski", "minkowski"),
     ("porepipe.lpt", "lpt"),
     ("porepipe.lbm", "permeability"),
+    ("porepipe.sweep", "sweep"),
+    ("porepipe.report", "report"),
 ]
+
+#: scene sections whose presence switches a stage on (default: absent); all others default to their Settings()
+OPTIONAL_SECTIONS = {"acquire", "packing", "decoration"}
 
 
 def _optional_module(name: str):

@@ -14,7 +14,7 @@ from typing import Annotated, Any
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
 
-from porepipe._registry import stage_settings
+from porepipe._registry import OPTIONAL_SECTIONS, stage_settings
 from porepipe._shared.errors import PorepipeError
 
 #: relative tolerance when checking that a resolution divides the box
@@ -29,6 +29,7 @@ class Analysis(str, enum.Enum):
     minkowski = "minkowski"        # φ, S_V, K_V, T_V of the segmented volume
     lpt = "lpt"                    # local porosity theory
     permeability = "permeability"  # lattice-Boltzmann permeability
+    report = "report"              # resolution sweep, extrapolation and the accuracy-versus-cost report
 
 
 class SegmentationMethod(str, enum.Enum):
@@ -94,11 +95,20 @@ class Segmentation(_Strict):
 class SceneBase(_Strict):
     name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="scene name = results folder")
     seed: int = Field(0, ge=0, description="root of every random stream of the scene")
-    domain: Domain
-    spheres: Spheres
+    domain: Domain | None = Field(None, description="the box; required unless the scene starts from an image")
+    spheres: Spheres | None = Field(None, description="the matrix; required unless the scene starts from an image")
     resolutions_um: list[PositiveUm] = Field(min_length=1, description="voxel sizes a in µm, coarse to fine")
     segmentation: Segmentation = Segmentation()
     analyses: list[Analysis] = Field(default_factory=lambda: [Analysis.estimate])
+
+    @model_validator(mode="after")
+    def _model_source(self):
+        if getattr(self, "acquire", None) is None:
+            missing = [k for k in ("domain", "spheres") if getattr(self, k) is None]
+            if missing:
+                raise ValueError(f"missing {' and '.join(missing)}: a scene needs `domain` and `spheres` unless it "
+                                 "starts from an image (`acquire:` section)")
+        return self
 
     @field_validator("resolutions_um")
     @classmethod
@@ -109,7 +119,10 @@ class SceneBase(_Strict):
 
 
 def _scene_model() -> type[BaseModel]:
-    fields: dict[str, Any] = {key: (model, model()) for key, model in stage_settings().items()}
+    fields: dict[str, Any] = {
+        key: ((model | None, None) if key in OPTIONAL_SECTIONS else (model, model()))
+        for key, model in stage_settings().items()
+    }
     return create_model("Scene", __base__=SceneBase, **fields)
 
 
@@ -197,6 +210,8 @@ def parse_scene(raw: Any, base_dir: Path | str = ".", source: str = "scene") -> 
 
 def _resolve_paths(scene, base_dir: Path):
     sph = scene.spheres
+    if sph is None:
+        return scene
     update = {k: (base_dir / getattr(sph, k)).resolve() for k in ("hdf5", "xyzr") if getattr(sph, k) is not None}
     return scene.model_copy(update={"spheres": sph.model_copy(update=update)}) if update else scene
 
