@@ -1,0 +1,172 @@
+"""Analytic references and the thesis's calibration geometries (§6.1.5), shared by tests and benchmarks.
+
+Lengths in lattice units (voxels). Walls are halfway bounce-back just outside the fluid nodes, so a duct of
+B fluid nodes has its walls at ±B/2, as with the thesis's explicit one-node wall layer.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from porepipe.lbm._domain import Lattice, build_lattice
+from porepipe.lbm._lattice import viscosity
+from porepipe.lbm._settings import Settings
+from porepipe.lbm._solver import Run, solve
+
+#: terms of the Fourier series (thesis: M = 200; M > 50 needed at the walls)
+SERIES_TERMS = 200
+
+
+def square_duct_kappa(b: float, terms: int = SERIES_TERMS) -> float:
+    """κ̂^TH of a square duct of side B (thesis Eq. 6.1.37), relative to the duct's cross-section."""
+    n = np.arange(terms + 1)
+    k = 2 * n + 1
+    return b * b / 4 * (1 / 3 - 64 / np.pi**5 * np.sum(np.tanh(k * np.pi / 2) / k**5))
+
+
+def square_duct_velocity(b: float, x1: np.ndarray, x2: np.ndarray, drive: float,
+                         terms: int = SERIES_TERMS) -> np.ndarray:
+    """Velocity in a square duct of side B (thesis Eq. 6.1.27, Wieghardt); ``drive`` = −(∇p)_3 / η̂ (+ b/ν̂)."""
+    n = np.arange(terms + 1)[:, None]
+    k = 2 * n + 1
+    x1 = np.asarray(x1, dtype=np.float64).ravel()[None, :]
+    x2 = np.asarray(x2, dtype=np.float64).ravel()[None, :]
+    # cosh(k π x1/B)/cosh(k π/2) written with exponentials that cannot overflow for |x1| <= B/2
+    ratio = (np.exp(k * np.pi * (np.abs(x1) / b - 0.5)) + np.exp(-k * np.pi * (np.abs(x1) / b + 0.5))) / \
+        (1 + np.exp(-k * np.pi))
+    series = np.sum((-1.0) ** n * ratio * np.cos(k * np.pi * x2 / b) / k**3, axis=0)
+    return drive / 2 * (b * b / 4 - x2[0] ** 2 - 8 * b * b / np.pi**3 * series)
+
+
+def circle_duct_kappa(b: float) -> float:
+    """κ̂ = B²/32 of a circular duct of diameter B (Hagen-Poiseuille, relative to its area)."""
+    return b * b / 32
+
+
+def triangle_duct_kappa(b: float) -> float:
+    """κ̂ = √3 A/60 = B²/80 of an equilateral-triangular duct of side B (relative to its area)."""
+    return b * b / 80
+
+
+def slit_kappa(h: float) -> float:
+    """κ̂ = h²/12 of plane Poiseuille flow between walls h apart (relative to the gap)."""
+    return h * h / 12
+
+
+@dataclasses.dataclass
+class Case:
+    """A calibration geometry: lattice plus the normalisation of its superficial velocity."""
+
+    lattice: Lattice
+    sample_voxels: int
+    sample_area: int
+    fluid_area: int  # fluid nodes of one cross-section (to turn superficial into duct velocity)
+    cross: np.ndarray  # (L1, L2) fluid cross-section
+
+
+def _extrude(cross: np.ndarray, length: int, lateral_periodic: bool, force_layers, sample_layers,
+             window=None) -> Case:
+    pore = np.broadcast_to(cross, (length, *cross.shape)).copy()
+    lat = build_lattice(pore, (True, lateral_periodic, lateral_periodic), force_layers, sample_layers, window)
+    win = cross if window is None else window
+    n_s = sample_layers[1] - sample_layers[0]
+    area = int(np.count_nonzero(win)) if window is not None else cross.size
+    return Case(lat, n_s * area, area, int(np.count_nonzero(cross & win)), cross)
+
+
+def square_duct(b: int, *, thesis_chambers: bool, length: int = 2) -> Case:
+    """Square duct of B × B fluid nodes with walls on the lateral faces.
+
+    ``thesis_chambers``: the thesis's Eq. 6.1.26 set-up, L3 = 4B, force in the first 2 layers, sample layers
+    4 … L3 − 3 (1-based), L_I = L_O = 3. Otherwise a periodic duct of ``length`` layers with force everywhere.
+    """
+    cross = np.ones((b, b), dtype=bool)
+    if thesis_chambers:
+        l3 = 4 * b
+        return _extrude(cross, l3, False, (0, 2), (3, l3 - 3))
+    return _extrude(cross, length, False, (0, length), (0, length))
+
+
+def slit(h: int, length: int = 2, width: int = 2) -> Case:
+    """Plane channel: h fluid nodes between two walls (axis 2), periodic along the flow and axis 1."""
+    pore = np.ones((length, width, h), dtype=bool)
+    lat = build_lattice(pore, (True, True, False), (0, length), (0, length))
+    return Case(lat, pore.size, width * h, width * h, pore[0])
+
+
+def circle_cross(b: float) -> np.ndarray:
+    """Voxelised disc of diameter ``b`` (voxel centres inside), padded by one solid voxel."""
+    n = int(np.ceil(b)) + 2
+    c = (np.arange(n) + 0.5) - n / 2
+    return (c[:, None] ** 2 + c[None, :] ** 2) < (b / 2) ** 2
+
+
+def triangle_cross(b: float) -> np.ndarray:
+    """Voxelised equilateral triangle of side ``b`` (voxel centres inside), padded by solid voxels."""
+    height = np.sqrt(3) / 2 * b
+    n = int(np.ceil(max(b, height))) + 2
+    x = (np.arange(n) + 0.5)[:, None] - n / 2
+    y = (np.arange(n) + 0.5)[None, :] - (n - height) / 2
+    return (y > 0) & (np.sqrt(3) * (b / 2 - np.abs(x)) > y)
+
+
+def duct(cross: np.ndarray, length: int = 2) -> Case:
+    """Periodic duct of the given fluid cross-section (solid elsewhere), force everywhere."""
+    return _extrude(cross, length, False, (0, length), (0, length))
+
+
+def pressure_method_case(b: int = 7, width: int = 40, inlet: int = 20, sample: int = 40, outlet: int = 20,
+                         force: tuple[int, int] = (5, 15)) -> Case:
+    """Thesis Eq. 6.1.41: B × B channel through a solid slab between two open chambers (Table 6.3).
+
+    Defaults are the thesis's 40 × 40 × 80 box, S = the channel nodes, F = layers 6 … 15 (1-based).
+    """
+    pore = np.ones((inlet + sample + outlet, width, width), dtype=bool)
+    lo = (width - b) // 2
+    channel = np.zeros((width, width), dtype=bool)
+    channel[lo:lo + b, lo:lo + b] = True
+    pore[inlet:inlet + sample] = channel
+    lat = build_lattice(pore, (True, True, True), force, (inlet, inlet + sample), window=channel)
+    return Case(lat, sample * b * b, b * b, b * b, channel)
+
+
+def run_case(case: Case, settings: Settings, progress: bool = False) -> Run:
+    """Solve a calibration case to convergence (or the step limit)."""
+    return solve(case.lattice, settings, sample_voxels=case.sample_voxels, sample_area=case.sample_area,
+                 progress=progress)
+
+
+def duct_kappa(case: Case, run: Run) -> float:
+    """κ̂ relative to the duct's fluid cross-section (superficial κ̂ × sample area / fluid area)."""
+    return run.kappa * case.sample_area / case.fluid_area
+
+
+def mid_section_velocity_error(case: Case, run: Run, settings: Settings, b: int) -> tuple[float, float]:
+    """(⟨|ε_v|⟩, ⟨|e_v|⟩) on the middle cross-section of a square duct (thesis Eqs. 6.1.31-32, Table 6.2).
+
+    The analytic profile is driven by the measured pressure gradient (method 3) for the chamber set-up, by the
+    body force for the periodic one.
+    """
+    lat = case.lattice
+    nu = viscosity(settings.tau)
+    layer = lat.shape[0] // 2
+    nodes = slice(lat.layer_start[layer], lat.layer_start[layer + 1])
+    u = run.fields[1, nodes].reshape(b, b)
+    if lat.body_force_everywhere:
+        drive = settings.body_force / nu
+    else:
+        kappa_duct = run.kappa  # κ̂ = ν ρ̄ U / (−∇p): the drive −∇p/η follows from U and κ̂
+        u_mean = float(np.mean(run.fields[1][_sample_nodes(lat)]))
+        drive = u_mean / kappa_duct
+    x = np.arange(b) - (b - 1) / 2
+    x1, x2 = np.meshgrid(x, x, indexing="ij")
+    ref = square_duct_velocity(b, x1, x2, drive).reshape(b, b)
+    err = u - ref
+    return float(np.mean(np.abs(err / ref))), float(np.mean(np.abs(err)))
+
+
+def _sample_nodes(lat: Lattice) -> np.ndarray:
+    s0, s1 = lat.sample_layers
+    return np.arange(lat.layer_start[s0], lat.layer_start[s1])

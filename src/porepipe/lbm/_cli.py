@@ -1,0 +1,109 @@
+"""``porepipe permeability``: LBM permeability of a binary volume along one or more axes."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.numba_config import set_threads
+from porepipe._shared.store import hash_of, read_attrs, read_volume
+from porepipe.lbm._api import permeability
+from porepipe.lbm._io import write_result
+from porepipe.lbm._settings import Axis, Collision, Gradient, Lateral, Precision, Settings, Setup, Velocity
+
+#: CLI flag -> settings key for the options that override the scene
+_OVERRIDES = ("collision", "tau", "tau_bulk", "magic", "setup", "mirror", "lateral", "precision", "body_force",
+              "gradient", "velocity", "max_steps", "window_steps", "tolerance_velocity", "tolerance_density",
+              "tolerance_kappa", "write_fields", "write_vti", "accept_unconverged")
+
+
+def _settings(args) -> Settings:
+    base = {}
+    if args.scene:
+        from porepipe.scene import load_scene
+
+        base = load_scene(args.scene).permeability.model_dump()
+    for key in _OVERRIDES:
+        value = getattr(args, key, None)
+        if value is not None:
+            base[key] = value
+    try:
+        return Settings(**base)
+    except ValueError as err:
+        raise PorepipeError(f"permeability settings: {err}") from err
+
+
+def _output_path(args, binary: Path, axis: Axis) -> Path:
+    if args.out:
+        return Path(args.out)
+    match = re.search(r"_a([0-9.]+?)\.h5$", binary.name)
+    tag = match.group(1) if match else binary.stem
+    return Path(args.out_dir or binary.parent) / f"perm_a{tag}_{axis.value}.h5"
+
+
+def run_file(binary, args) -> list[Path]:
+    """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis."""
+    binary = Path(binary)
+    settings = _settings(args)
+    axes = tuple(Axis(a) for a in args.axis) if args.axis else settings.axes
+    if args.out and len(axes) != 1:
+        raise PorepipeError(f"--out names one file but {len(axes)} axes were asked for; use --out-dir")
+    threads = set_threads(args.threads)
+    pore, vattrs = read_volume(binary, "pore")
+    src = read_attrs(binary)
+    voxel_um = float(vattrs.get("voxel_um", 1.0))
+    written = []
+    for axis in axes:
+        out = _output_path(args, binary, axis)
+        result = permeability(pore.astype(bool), axis, settings, voxel_um,
+                              checkpoint=out.with_name(f".{out.name}.checkpoint.h5"))
+        part = {"binary": src.get("scene_hash", ""), "axis": axis.value, "settings": settings.model_dump(mode="json")}
+        write_result(out, result, scene=src.get("scene", ""), scene_hash=hash_of(part), threads=threads,
+                     origin_um=tuple(np.asarray(vattrs.get("origin_um", (0.0, 0.0, 0.0)), dtype=float)))
+        print(f"axis {axis.value}: kappa = {result.kappa_lu:.6g} voxel^2 = {result.kappa_m2:.6g} m^2 = "
+              f"{result.kappa_mD:.6g} mD ({result.method}, {result.reason}, {result.steps} steps, "
+              f"{result.mlups:.1f} MLUPS) -> {out}")
+        written.append(out)
+    return written
+
+
+def main(args) -> int:
+    run_file(args.binary, args)
+    return 0
+
+
+def _bool(text: str) -> bool:
+    if text.lower() in ("1", "true", "yes", "on"):
+        return True
+    if text.lower() in ("0", "false", "no", "off"):
+        return False
+    raise PorepipeError(f"expected true/false, got {text!r}")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("permeability", help="lattice-Boltzmann permeability of a binary volume")
+    p.add_argument("binary", help="binary_a{a}.h5 (volume 'pore', 1 = pore)")
+    p.add_argument("--axis", action="append", choices=[a.value for a in Axis],
+                   help="flow axis (repeatable); default: the scene's `axes`")
+    p.add_argument("-o", "--out", help="output file (one axis); default perm_a{a}_{axis}.h5 beside the input")
+    p.add_argument("--out-dir", help="directory for perm_a{a}_{axis}.h5 files")
+    p.add_argument("--scene", help="scene YAML whose `permeability` section gives the defaults")
+    p.add_argument("--threads", type=int, default=None)
+    p.add_argument("--collision", choices=[c.value for c in Collision])
+    p.add_argument("--setup", choices=[s.value for s in Setup])
+    p.add_argument("--lateral", choices=[s.value for s in Lateral])
+    p.add_argument("--precision", choices=[s.value for s in Precision])
+    p.add_argument("--gradient", choices=[s.value for s in Gradient])
+    p.add_argument("--velocity", choices=[s.value for s in Velocity])
+    p.add_argument("--mirror", type=_bool)
+    p.add_argument("--write-fields", dest="write_fields", type=_bool)
+    p.add_argument("--write-vti", dest="write_vti", type=_bool)
+    p.add_argument("--accept-unconverged", dest="accept_unconverged", type=_bool)
+    for name, kind in (("tau", float), ("tau-bulk", float), ("magic", float), ("body-force", float),
+                       ("max-steps", int), ("window-steps", int), ("tolerance-velocity", float),
+                       ("tolerance-density", float), ("tolerance-kappa", float)):
+        p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
+    p.set_defaults(func=main)
