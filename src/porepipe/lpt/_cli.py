@@ -51,7 +51,7 @@ def lpt_file(binary_path, out, settings: Settings, *, subsample_um: float | None
     src = read_attrs(binary_path)
     pore, voxel_um, periodic, note = read_binary(binary_path, subsample_um)
     sizes, _ = cell_sizes(settings, voxel_um, pore.shape)
-    progress = Progress("lpt", total=len(sizes))
+    progress = Progress("lpt", total=sum(s <= min(pore.shape) for s in sizes))
     ds = local_porosity_analysis(pore, voxel_um=voxel_um, periodic=periodic, settings=settings,
                                  skip_too_large=subsample_um is not None, progress=progress)
     ds.attrs["sample"] = note
