@@ -1,0 +1,449 @@
+"""The DEM packing engine (the thesis's PackDEM, Zauner 2020, ch. 5): public API.
+
+Decisions the thesis leaves open (documented here once, used everywhere):
+
+- **Boundary:** every axis is periodic by default (the scene's ``domain.periodic``); a closed axis has reflecting
+  walls that keep the sphere *centres* in [0, L] (spheres may protrude, as centres define Ω in §5.1).
+- **sigma_max of an unlike pair:** the pair law uses sigma* = min(sigma_max,t_i, sigma_max,t_j) in dx_min and
+  dx_eq. The printed sigma_max,t_i makes f_ij != -f_ji; the minimum keeps Newton's third law and puts the
+  equilibrium overlap sigma*/2 inside the admissible window of *both* spheres. Convergence of sphere i still uses
+  its own sigma_max,t_i (§5.1).
+- **Force law (§5.2, printed formulas garbled):** V = V^H for dx <= dx_eq, V^LJ beyond, with
+  V^H = (1 - V_min) sqrt(k)/2 (1 - dx/dx_eq)^2 + V_min, V^LJ = k [(b/dx)^16 - (b/dx)^8], b = 2^(-1/8) dx_eq,
+  V_min = -k/4; f = -dV/dx; no force beyond cutoff * dx_eq. k_ij = (k_t_i + k_t_j)/2.
+- **Integrator (§5.3):** v^s = C-/C+ v^{s-1} + (f^{s-1} + f^s) dt / (2 m C+), x^s = x^{s-1} + C- v^s dt +
+  f^s dt^2/(2m) with C± = 1 ± dt Xi/2 (the printed extra dt on v^{s-1} dropped); f^s is evaluated at x^{s-1}.
+  Xi > 2/dt is refused.
+- **Stochastic forces (§5.4.2):** uniform in the *symmetric* cube [-f_max, f_max]^3 (the printed [0, f_max]^3
+  would drift and contradict the isotropy claimed), with f_max = 2 m step_size r_i / dt^2 so that the direct
+  displacement per step and axis is at most step_size * r_i.
+- **Adaptive radii (§5.4.3):** active while (N_c^s - N_c^{s-1}) / N_c^s < t_rc, i.e. while fewer than a fraction
+  t_rc of the converged spheres are new (§5.6.2's paraphrase; the printed numerator has the opposite sign).
+  Radii stay within [r_min, r_max] of their type.
+- **Overlap bookkeeping:** sigma_ij is evaluated for every partner in the neighbour list (which contains all
+  pairs with dx <= cutoff (r_i + r_j)); switched-off type pairs (``interactions_off``) neither push nor count.
+  A sphere with no partner in reach has max sigma = -inf.
+- **Converged output:** the step that finds every sphere converged does not move them: the packing written is
+  exactly the configuration that was tested.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+
+import numpy as np
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.progress import Progress
+from porepipe.packing import _kernels as K
+from porepipe.packing._neighbours import build_neighbours, check_box
+from porepipe.packing._settings import Effect, Ramp, Settings, Stage
+from porepipe.packing._setup import place_type, radius_bounds
+
+#: bit of each effect in the per-step ``effects`` history column
+EFFECT_BITS = {e: 1 << i for i, e in enumerate(Effect)}
+HISTORY_KEYS = ("stage", "step", "n_spheres", "converged", "max_overlap", "mean_overlap", "kinetic_energy",
+                "max_displacement_um", "effects", "rebuilt")
+_HISTORY_INT = {"stage", "step", "n_spheres", "converged", "effects", "rebuilt"}
+
+
+@dataclasses.dataclass
+class Packing:
+    """A sphere packing and how it was made.
+
+    Attributes
+    ----------
+    centres_um : (N, 3) float64
+    radii_um : (N,) float64
+    types : (N,) int32
+        Index into ``type_names``.
+    max_overlap : (N,) float64
+        max_j sigma_ij at the final configuration (-inf: no partner in reach).
+    converged : (N,) uint8
+        0 < max_overlap <= sigma_max of the sphere's type.
+    """
+
+    centres_um: np.ndarray
+    radii_um: np.ndarray
+    types: np.ndarray
+    max_overlap: np.ndarray
+    converged: np.ndarray
+    type_names: list[str]
+    box_um: np.ndarray
+    periodic: np.ndarray
+    history: dict[str, np.ndarray]
+    stage_converged: list[bool]
+    stage_steps: list[int]
+    snapshots: list[dict]
+
+    @property
+    def all_converged(self) -> bool:
+        return bool(self.stage_converged) and self.stage_converged[-1]
+
+
+@dataclasses.dataclass
+class State:
+    """Everything a run needs to continue bit-identically (what a checkpoint stores)."""
+
+    x: np.ndarray
+    v: np.ndarray
+    f: np.ndarray
+    r: np.ndarray
+    types: np.ndarray
+    frozen: np.ndarray
+    x_build: np.ndarray
+    r_build: np.ndarray
+    since_build: int
+    stage: int            # index of the stage in progress
+    step: int             # last completed stage-local step (0: stage not started, spheres not inserted)
+    nconv_prev: int
+    need_rebuild: bool
+    history: dict[str, list]
+    stage_converged: list[bool]
+    stage_steps: list[int]
+    snapshots: list[dict]
+
+    @classmethod
+    def empty(cls) -> "State":
+        z3 = np.zeros((0, 3))
+        return cls(x=z3, v=z3.copy(), f=z3.copy(), r=np.zeros(0), types=np.zeros(0, dtype=np.int64),
+                   frozen=np.zeros(0, dtype=np.uint8), x_build=z3.copy(), r_build=np.zeros(0), since_build=0,
+                   stage=0, step=0, nconv_prev=0, need_rebuild=True, history={k: [] for k in HISTORY_KEYS},
+                   stage_converged=[], stage_steps=[], snapshots=[])
+
+
+def schedule_value(sched, step: int, default: float) -> float:
+    """Value of a constant or a linear ramp (5.4.1) at stage step ``step``.
+
+    k^s = k^0 for s < S^0; k^{s-1} + dk for S^0 <= s < S^1, i.e. k^0 + (s - S^0 + 1) dk; k^1 for s >= S^1.
+    """
+    if sched is None:
+        return default
+    if not isinstance(sched, Ramp):
+        return float(sched)
+    if step < sched.from_step:
+        return sched.start
+    if step >= sched.to_step:
+        return sched.end
+    dk = (sched.end - sched.start) / (sched.to_step - sched.from_step)
+    return sched.start + (step - sched.from_step + 1) * dk
+
+
+def check_damping(damping: np.ndarray, dt: float, where: str) -> None:
+    """Refuse Xi > 2/dt: C- would turn negative and the damping would reverse the motion (§5.3)."""
+    bad = np.flatnonzero(damping > 2.0 / dt * (1.0 + 1e-12))
+    if bad.size:
+        raise PorepipeError(f"{where}: damping Xi = {damping[bad[0]]} of type {int(bad[0])} exceeds 2/dt = {2.0 / dt}"
+                            "; lower the damping or the time step")
+
+
+class _Tables:
+    """Per-type constants of one stage."""
+
+    def __init__(self, settings: Settings, stage: Stage, base_dir: Path):
+        names = [t.name for t in settings.types]
+        nt = len(names)
+        self.names = names
+        self.sig = np.array([t.max_overlap for t in settings.types], dtype=np.float64)
+        bounds = [radius_bounds(t.radius_um, base_dir) for t in settings.types]
+        self.rmin = np.array([b[0] for b in bounds])
+        self.rmax = np.array([b[1] for b in bounds])
+        self.type_frozen = np.array([n in stage.frozen_types for n in names], dtype=np.uint8)
+        self.pair_on = np.ones((nt, nt), dtype=np.uint8)
+        for a, b in stage.interactions_off:
+            self.pair_on[names.index(a), names.index(b)] = 0
+            self.pair_on[names.index(b), names.index(a)] = 0
+        self.fmax = np.zeros(nt)
+        if stage.stochastic_forces is not None:
+            sf = stage.stochastic_forces
+            chosen = names if sf.types is None else sf.types
+            for n in chosen:
+                self.fmax[names.index(n)] = 2.0 * settings.mass * sf.step_size / stage.dt**2
+        self.adapt = np.zeros(nt, dtype=np.uint8)
+        self.dr = np.zeros(nt)
+        if stage.adaptive_radii is not None:
+            for n in stage.adaptive_radii.types:
+                t = names.index(n)
+                self.adapt[t] = 1
+                self.dr[t] = (self.rmax[t] - self.rmin[t]) * stage.adaptive_radii.rate
+
+    def k_and_damping(self, stage: Stage, step: int) -> tuple[np.ndarray, np.ndarray]:
+        k = np.array([schedule_value(stage.k.get(n), step, 1.0) for n in self.names])
+        xi = np.array([schedule_value(stage.damping.get(n), step, 1.0) for n in self.names])
+        return k, xi
+
+
+def _seed_stream(seed: int, *keys: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence([int(seed), *keys]))
+
+
+def _counter_seed(seed: int, stage: int) -> int:
+    return int(np.random.SeedSequence([int(seed), 1_000_003, stage]).generate_state(1, dtype=np.uint64)[0] >> 1)
+
+
+def _keep(state: State, mask: np.ndarray) -> None:
+    for name in ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build"):
+        setattr(state, name, getattr(state, name)[mask])
+    state.need_rebuild = True
+
+
+def _start_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, seed: int, base_dir: Path) -> None:
+    """Remove and insert types at the start of a stage."""
+    names = [t.name for t in settings.types]
+    if stage.remove_types:
+        gone = np.isin(state.types, [names.index(n) for n in stage.remove_types])
+        _keep(state, ~gone)
+    for name in stage.insert:
+        t = names.index(name)
+        centres, radii = place_type(t, settings.types[t], settings, box, _seed_stream(seed, state.stage, t), base_dir)
+        n = radii.size
+        state.x = np.concatenate([state.x, centres])
+        state.v = np.concatenate([state.v, np.tile(np.asarray(settings.initial_velocity, float), (n, 1))])
+        state.f = np.concatenate([state.f, np.zeros((n, 3))])
+        state.r = np.concatenate([state.r, radii])
+        state.types = np.concatenate([state.types, np.full(n, t, dtype=np.int64)])
+        state.frozen = np.concatenate([state.frozen, np.zeros(n, dtype=np.uint8)])
+        state.x_build = np.concatenate([state.x_build, centres])
+        state.r_build = np.concatenate([state.r_build, radii])
+    state.need_rebuild = True
+    state.nconv_prev = 0
+    state.since_build = 0
+
+
+def _record(state: State, **row) -> None:
+    for key in HISTORY_KEYS:
+        state.history[key].append(row[key])
+
+
+def _guard(stats, state: State, tables: _Tables, stage: Stage, stage_idx: int, step: int, box, settings) -> None:
+    """Stop a run that has gone unstable, naming the step, the sphere and the likely parameter at fault."""
+    nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
+    where = f"packing stage {stage_idx} ({stage.name!r}) step {step}"
+    if bad >= 0 or not np.isfinite(ke):
+        i = int(bad if bad >= 0 else darg)
+        t = tables.names[int(state.types[i])] if i >= 0 else "?"
+        raise PorepipeError(f"{where}: non-finite position or velocity of sphere {i} (type {t!r}); the time step "
+                            f"dt = {stage.dt} is too large for the interaction constant k[{t}] or the damping")
+    limit = settings.max_step_fraction * float(box.min())
+    if dmax > limit:
+        i = int(darg)
+        t = tables.names[int(state.types[i])]
+        raise PorepipeError(
+            f"{where}: runaway sphere {i} (type {t!r}, r = {state.r[i]:.4g} µm) moved {dmax:.4g} µm in one step "
+            f"(limit max_step_fraction * box = {limit:.4g} µm, kinetic energy {ke:.4g}); likely cause: dt = {stage.dt} "
+            f"too large for k[{t}] = {stage.k.get(t, 1.0)} (or a too-strong stochastic force / overlap at start)")
+
+
+def _effect_bits(effects, adapting: bool, locking: bool) -> int:
+    bits = 0
+    for e in effects:
+        if e is Effect.adaptive_radii and not adapting:
+            continue
+        if e is Effect.freezing and not locking:
+            continue
+        bits |= EFFECT_BITS[e]
+    return bits
+
+
+def _finish_stage(state: State, stage: Stage, tables: _Tables, box, periodic, conv: np.ndarray) -> None:
+    """Delete unconverged spheres of the chosen types, then evaluate the overlaps of the configuration kept."""
+    if stage.delete_unconverged and conv.size:
+        doomed = np.isin(state.types, [tables.names.index(n) for n in stage.delete_unconverged]) & (conv == 0)
+        _keep(state, ~doomed)
+    sig, conv = sphere_overlaps(state.x, state.r, state.types, box, periodic, tables.sig, tables.pair_on)
+    state.stage_converged.append(bool(conv.all()))
+    state.stage_steps.append(state.step)
+    state.snapshots.append({"name": stage.name, "centres_um": state.x.copy(), "radii_um": state.r.copy(),
+                            "types": state.types.astype(np.int32), "max_overlap": sig.copy(),
+                            "converged": conv.copy()})
+    state.stage += 1
+    state.step = 0
+    state.need_rebuild = True
+
+
+def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, periodic: np.ndarray, seed: int,
+               base_dir: Path, checkpoint, progress: bool) -> None:
+    """Run one stage from ``state.step`` until convergence or the step limit."""
+    stage_idx = state.stage
+    tables = _Tables(settings, stage, base_dir)
+    effects = stage.effects(tuple(bool(p) for p in periodic))
+    freeze = bool(effects & {Effect.freezing, Effect.frozen_types})
+    kernel = K.make_step_kernel(freeze, Effect.stochastic_forces in effects, Effect.walls in effects)
+    for s in (0, stage.steps):
+        check_damping(tables.k_and_damping(stage, s)[1], stage.dt, f"packing stage {stage_idx} ({stage.name!r})")
+    if state.step == 0:
+        _start_stage(state, settings, stage, box, seed, base_dir)
+        state.frozen[:] = tables.type_frozen[state.types]
+    n = state.r.size
+    if n and not np.isfinite(state.x).all():
+        raise PorepipeError(f"packing stage {stage_idx} ({stage.name!r}): non-finite sphere centres at the start")
+    cseed = _counter_seed(seed, stage_idx)
+    x_new = np.empty_like(state.x)
+    f_new = np.empty_like(state.f)
+    sig = np.full(n, -np.inf)
+    conv = np.zeros(n, dtype=np.uint8)
+    nbr = None
+    prog = Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s) if progress else None
+    converged = n == 0
+    while not converged and state.step < stage.steps:
+        s = state.step + 1
+        if nbr is None or state.need_rebuild:
+            if state.need_rebuild:
+                state.x_build = state.x.copy()
+                state.r_build = state.r.copy()
+                state.since_build = 0
+            skin = settings.skin_rel * float(state.r_build.min())
+            check_box(state.r_build, box, periodic, settings.cutoff, skin)
+            nbr = build_neighbours(state.x_build, state.r_build, state.types, box, periodic, tables.pair_on,
+                                   settings.cutoff, skin)
+            rebuilt = int(state.need_rebuild)
+            state.need_rebuild = False
+        else:
+            rebuilt = 0
+        k_t, xi_t = tables.k_and_damping(stage, s)
+        cm = 1.0 - 0.5 * stage.dt * xi_t
+        cp = 1.0 + 0.5 * stage.dt * xi_t
+        kernel(state.x, x_new, state.v, state.f, f_new, state.r, state.types, state.frozen, nbr[0], nbr[1], box,
+               periodic, k_t, tables.sig, cm, cp, tables.fmax, settings.cutoff, stage.dt, settings.mass, cseed, s,
+               sig, conv)
+        stats = K._step_stats(state.x, x_new, state.x_build, state.r, state.r_build, state.v, sig, conv, box,
+                              periodic, settings.cutoff, settings.mass)
+        nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
+        _guard(stats, state, tables, stage, stage_idx, s, box, settings)
+        converged = nconv == n
+        adapting = locking = False
+        if not converged:
+            state.x, x_new = x_new, state.x
+            state.f, f_new = f_new, state.f
+            if stage.adaptive_radii is not None:
+                ar = stage.adaptive_radii
+                growth = (nconv - state.nconv_prev) / max(nconv, 1)
+                adapting = (ar.from_step < s < ar.to_step and s < stage.steps - ar.quiet_steps
+                            and growth < ar.trigger)
+                if adapting:
+                    K._adapt_radii(state.r, state.types, sig, tables.sig, tables.adapt, tables.dr, tables.rmin,
+                                   tables.rmax)
+            if freeze:
+                locking = stage.freezing is not None and s > stage.freezing.lock_step
+                K._update_frozen(state.frozen, conv, state.types, tables.type_frozen, locking)
+            state.since_build += 1
+            if settings.rebuild_interval > 0:
+                state.need_rebuild = state.since_build >= settings.rebuild_interval
+            else:
+                stale_now = stale if not adapting else _staleness(state, box, periodic, settings.cutoff)
+                state.need_rebuild = stale_now > 0.5 * settings.skin_rel * float(state.r_build.min())
+        state.nconv_prev = int(nconv)
+        state.step = s
+        _record(state, stage=stage_idx, step=s, n_spheres=n, converged=int(nconv), max_overlap=float(smax),
+                mean_overlap=float(ssum / scnt) if scnt else float("nan"), kinetic_energy=float(ke),
+                max_displacement_um=float(dmax) if not converged else 0.0,
+                effects=_effect_bits(effects, adapting, locking), rebuilt=rebuilt)
+        if prog is not None:
+            prog.update(s, f"converged {nconv}/{n}, max sigma {smax:.4g}, E_kin {ke:.4g}", force=converged)
+        if checkpoint is not None and settings.checkpoint_every and s % settings.checkpoint_every == 0:
+            checkpoint(state)
+    _finish_stage(state, stage, tables, box, periodic, conv)
+
+
+def _staleness(state: State, box, periodic, cutoff) -> float:
+    d = state.x - state.x_build
+    per = np.asarray(periodic, bool)
+    d[:, per] -= box[per] * np.floor(d[:, per] / box[per] + 0.5)
+    return float(np.max(np.sqrt((d * d).sum(1)) + cutoff * np.maximum(0.0, state.r - state.r_build), initial=0.0))
+
+
+def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t, pair_on=None, cutoff=1.0):
+    """Per-sphere max_j sigma_ij and the convergence flag 0 < max sigma <= sigma_max,t (§5.1), via the cell lists.
+
+    Parameters
+    ----------
+    centres_um : (N, 3) float64
+    radii_um : (N,) float64
+    types : (N,) int
+    box_um : (3,) float64
+    periodic : (3,) bool
+    max_overlap_t : (T,) float64
+        sigma_max per type.
+    pair_on : (T, T) uint8, optional
+        Type pairs that interact (default: all).
+    """
+    x = np.ascontiguousarray(centres_um, dtype=np.float64)
+    r = np.ascontiguousarray(radii_um, dtype=np.float64)
+    types = np.ascontiguousarray(types, dtype=np.int64)
+    nt = len(max_overlap_t)
+    pair_on = np.ones((nt, nt), dtype=np.uint8) if pair_on is None else pair_on
+    n = r.size
+    sig = np.full(n, -np.inf)
+    conv = np.zeros(n, dtype=np.uint8)
+    if n == 0:
+        return sig, conv
+    box = np.asarray(box_um, dtype=np.float64)
+    per = np.asarray(periodic, dtype=np.bool_)
+    start, idx = build_neighbours(x, r, types, box, per, pair_on, 1.0, 0.0)
+    kernel = K.make_step_kernel(True, False, not per.all())
+    frozen = np.ones(n, dtype=np.uint8)
+    zeros = np.zeros((n, 3))
+    ones = np.ones(nt)
+    kernel(x, np.empty_like(x), zeros.copy(), zeros.copy(), zeros.copy(), r, types, frozen, start, idx, box, per,
+           ones, np.asarray(max_overlap_t, dtype=np.float64), ones, ones, np.zeros(nt), float(cutoff), 1.0, 1.0, 0,
+           0, sig, conv)
+    return sig, conv
+
+
+def _as_box(box_um, periodic) -> tuple[np.ndarray, np.ndarray]:
+    box = np.asarray(box_um, dtype=np.float64).reshape(-1)
+    if box.shape != (3,) or not np.all(np.isfinite(box)) or np.any(box <= 0):
+        raise PorepipeError(f"packing box_um must be 3 positive edge lengths in µm, got {box_um!r}")
+    per = np.broadcast_to(np.asarray(periodic, dtype=np.bool_), (3,)).copy()
+    return box, per
+
+
+def pack_spheres(settings: Settings, box_um, periodic=True, seed: int = 0, *, base_dir: Path | str = ".",
+                 checkpoint_path: Path | str | None = None, resume: bool = False, progress: bool = False) -> Packing:
+    """Run the staged DEM protocol of ``settings`` in the box and return the packing.
+
+    Parameters
+    ----------
+    settings : Settings
+        The scene's ``packing`` section.
+    box_um : (3,) float
+        Box edges in µm; the box is [0, L_x) x [0, L_y) x [0, L_z).
+    periodic : bool or (3,) bool
+        Periodic axes (default all); closed axes get reflecting walls.
+    seed : int
+        Root of the random streams (placement, radii, stochastic forces).
+    base_dir : path
+        Directory that relative file names in ``settings`` refer to.
+    checkpoint_path : path, optional
+        Where checkpoints are written every ``settings.checkpoint_every`` steps.
+    resume : bool
+        Continue from ``checkpoint_path`` if it exists (bit-identical to an uninterrupted run).
+    progress : bool
+        Print progress lines to stderr.
+
+    Returns
+    -------
+    Packing
+    """
+    from porepipe.packing._io import load_checkpoint, save_checkpoint
+
+    box, per = _as_box(box_um, periodic)
+    if not settings.types or not settings.stages:
+        raise PorepipeError("packing needs at least one entry in `types` and one in `stages`")
+    base_dir = Path(base_dir)
+    state = State.empty()
+    if resume and checkpoint_path is not None and Path(checkpoint_path).is_file():
+        state = load_checkpoint(checkpoint_path)
+    saver = (lambda st: save_checkpoint(checkpoint_path, st)) if checkpoint_path is not None else None
+    while state.stage < len(settings.stages):
+        _run_stage(state, settings, settings.stages[state.stage], box, per, seed, base_dir, saver, progress)
+    last = state.snapshots[-1]
+    history = {k: np.asarray(v, dtype=np.int64 if k in _HISTORY_INT else np.float64)
+               for k, v in state.history.items()}
+    return Packing(centres_um=state.x.copy(), radii_um=state.r.copy(), types=state.types.astype(np.int32),
+                   max_overlap=last["max_overlap"], converged=last["converged"],
+                   type_names=[t.name for t in settings.types], box_um=box, periodic=per, history=history,
+                   stage_converged=list(state.stage_converged), stage_steps=list(state.stage_steps),
+                   snapshots=state.snapshots)

@@ -1,0 +1,430 @@
+"""numba kernels of the DEM packing: pair law, neighbour lists, the damped Störmer-Verlet step, reductions.
+
+Only ``_``-prefixed kernels and the kernel factory live here: arrays in, preallocated arrays out, no validation.
+Axis order (x, y, z); lengths in µm; sphere indices and counters are int64.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from porepipe._shared.numba_config import FASTMATH
+
+#: exponents of the generalised Lennard-Jones branch (5.2.2); the closed forms below assume m = 2n = 16
+LJ_M = 16
+LJ_N = 8
+#: number of fixed blocks of the reductions: results do not depend on the thread count
+_NBLOCK = 64
+_NEG_INF = -np.inf
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# pair law (§5.2)
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _pair_dxeq(r_i, r_j, sigma_pair):
+    """Equilibrium distance dx_eq = r_i + r_j - sigma/2 * (r_i + r_j - |r_i - r_j|)."""
+    rsum = r_i + r_j
+    return rsum - 0.5 * sigma_pair * (rsum - abs(r_i - r_j))
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _pair_force(dx, dxeq, k):
+    """Radial pair force f(dx) (positive = repulsive) of the harmonic core + (16, 8) Lennard-Jones tail.
+
+    f = sqrt(k) (1 + k/4) / dx_eq * (1 - dx/dx_eq)              for dx <= dx_eq,
+    f = 4 k / dx * u^8 (u^8 - 1),  u = dx_eq / dx               for dx >  dx_eq,
+    which is k [m b^m / dx^(m+1) - n b^n / dx^(n+1)] with b^8 = dx_eq^8 / 2.
+    """
+    if dx <= dxeq:
+        return math.sqrt(k) * (1.0 + 0.25 * k) / dxeq * (1.0 - dx / dxeq)
+    u = dxeq / dx
+    u2 = u * u
+    u4 = u2 * u2
+    u8 = u4 * u4
+    return 4.0 * k / dx * u8 * (u8 - 1.0)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _pair_potential(dx, dxeq, k):
+    """Pair potential V(dx) whose negative derivative is :func:`_pair_force` (continuous at dx_eq, V(dx_eq) = -k/4)."""
+    vmin = -0.25 * k
+    if dx <= dxeq:
+        t = 1.0 - dx / dxeq
+        return 0.5 * (1.0 - vmin) * math.sqrt(k) * t * t + vmin
+    u = dxeq / dx
+    u2 = u * u
+    u4 = u2 * u2
+    u8 = u4 * u4
+    return k * (0.25 * u8 * u8 - 0.5 * u8)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _splitmix(z):
+    """SplitMix64 finaliser on a uint64 (counter-based random numbers: same value for any thread count)."""
+    z = (z + np.uint64(0x9E3779B97F4A7C15))
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _uniform(seed, a, b, c):
+    """Uniform double in [0, 1) from the counter (seed, a, b, c)."""
+    z = _splitmix(np.uint64(seed) ^ _splitmix(np.uint64(a) ^ _splitmix(np.uint64(b) ^ _splitmix(np.uint64(c)))))
+    return (z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _tie_axis(i, j, axis):
+    """Component ``axis`` of the push direction on i from j when their centres coincide.
+
+    A unit vector drawn from the unordered pair, with the sign flipped for the other partner, so that
+    f_ij = -f_ji holds exactly (Newton's third law) even at dx = 0.
+    """
+    a = min(i, j)
+    b = max(i, j)
+    ux = _uniform(0x5EED, a, b, 0) - 0.5
+    uy = _uniform(0x5EED, a, b, 1) - 0.5
+    uz = _uniform(0x5EED, a, b, 2) - 0.5
+    norm = math.sqrt(ux * ux + uy * uy + uz * uz) + 1e-300
+    sign = 1.0 if i < j else -1.0
+    comp = ux if axis == 0 else (uy if axis == 1 else uz)
+    return sign * comp / norm
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _min_image(d, length, periodic):
+    if periodic:
+        return d - length * math.floor(d / length + 0.5)
+    return d
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# neighbour search: hierarchical cell grids (one per radius class), half list, then the full list by transposition
+@njit(cache=True, fastmath=FASTMATH)
+def _assign_cells(x, cls, side, ncell, cell_off, cell_of):
+    """Global cell id of every sphere in the grid of its radius class."""
+    for i in prange(x.shape[0]):
+        c = cls[i]
+        lin = np.int64(0)
+        for a in range(3):
+            q = np.int64(math.floor(x[i, a] / side[c, a]))
+            q = min(max(q, np.int64(0)), ncell[c, a] - 1)
+            lin = lin * ncell[c, a] + q
+        cell_of[i] = cell_off[c] + lin
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _counting_sort(keys, nkeys, start, items):
+    """Stable counting sort of 0..N-1 by key: start (nkeys+1,) offsets, items (N,) indices."""
+    start[:] = 0
+    for i in range(keys.size):
+        start[keys[i] + 1] += 1
+    for k in range(nkeys):
+        start[k + 1] += start[k]
+    fill = start[:-1].copy()
+    for i in range(keys.size):
+        items[fill[keys[i]]] = i
+        fill[keys[i]] += 1
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _axis_range(xa, reach, side, n, periodic):
+    """Cell range [lo, hi] to scan along one axis; the whole axis if the range would wrap onto itself."""
+    lo = np.int64(math.floor((xa - reach) / side))
+    hi = np.int64(math.floor((xa + reach) / side))
+    if hi - lo + 1 >= n:
+        return np.int64(0), n - 1
+    if not periodic:
+        lo = max(lo, np.int64(0))
+        hi = min(hi, n - 1)
+    return lo, hi
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic,
+               pair_on, cut, skin, out, write):
+    """Partners j of sphere i in the half list: classes >= cls[i], and j > i inside the own class.
+
+    Counts them, and writes them to ``out`` when ``write`` is set.
+    """
+    ci = cls[i]
+    ti = types[i]
+    cnt = np.int64(0)
+    for c in range(ci, ncls):
+        if side[c, 0] <= 0.0:
+            continue  # empty class
+        reach = cut * (r[i] + side[c, 3]) + skin
+        lo0, hi0 = _axis_range(x[i, 0], reach, side[c, 0], ncell[c, 0], periodic[0])
+        lo1, hi1 = _axis_range(x[i, 1], reach, side[c, 1], ncell[c, 1], periodic[1])
+        lo2, hi2 = _axis_range(x[i, 2], reach, side[c, 2], ncell[c, 2], periodic[2])
+        for q0 in range(lo0, hi0 + 1):
+            w0 = q0 % ncell[c, 0]
+            for q1 in range(lo1, hi1 + 1):
+                w1 = q1 % ncell[c, 1]
+                for q2 in range(lo2, hi2 + 1):
+                    w2 = q2 % ncell[c, 2]
+                    cell = cell_off[c] + (w0 * ncell[c, 1] + w1) * ncell[c, 2] + w2
+                    for p in range(cell_start[cell], cell_start[cell + 1]):
+                        j = cell_items[p]
+                        if c == ci and j <= i:
+                            continue
+                        if not pair_on[ti, types[j]]:
+                            continue
+                        d2 = 0.0
+                        for a in range(3):
+                            d = _min_image(x[i, a] - x[j, a], box[a], periodic[a])
+                            d2 += d * d
+                        lim = cut * (r[i] + r[j]) + skin
+                        if d2 <= lim * lim:
+                            if write:
+                                out[cnt] = j
+                            cnt += 1
+    return cnt
+
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _half_counts(x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic, pair_on,
+                 cut, skin, counts):
+    dummy = np.empty(0, dtype=np.int64)
+    for i in prange(x.shape[0]):
+        counts[i] = _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box,
+                               periodic, pair_on, cut, skin, dummy, False)
+
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _half_fill(x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic, pair_on,
+               cut, skin, half_start, half_idx):
+    for i in prange(x.shape[0]):
+        _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic,
+                   pair_on, cut, skin, half_idx[half_start[i]:half_start[i + 1]], True)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _full_from_half(half_start, half_idx, nbr_start, nbr_idx):
+    """Full (symmetric) CSR list from the half list: own half entries first, then the transposed ones (serial,
+    so the order, and with it every force sum, is the same for any thread count)."""
+    n = half_start.size - 1
+    deg = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        deg[i] += half_start[i + 1] - half_start[i]
+        for p in range(half_start[i], half_start[i + 1]):
+            deg[half_idx[p]] += 1
+    nbr_start[0] = 0
+    for i in range(n):
+        nbr_start[i + 1] = nbr_start[i] + deg[i]
+    fill = nbr_start[:-1].copy()
+    for i in range(n):
+        for p in range(half_start[i], half_start[i + 1]):
+            nbr_idx[fill[i]] = half_idx[p]
+            fill[i] += 1
+    for i in range(n):
+        for p in range(half_start[i], half_start[i + 1]):
+            j = half_idx[p]
+            nbr_idx[fill[j]] = i
+            fill[j] += 1
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# the step: forces at x^{s-1}, damped velocity-Störmer-Verlet update (§5.3), per-sphere overlap and convergence
+_STEP_CACHE: dict = {}
+
+
+def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
+    """Return the step kernel compiled with exactly the requested optional effects.
+
+    The flags are closure constants, so numba removes the code of a switched-off effect entirely; each flag
+    combination is compiled (and cached on disk) once.
+
+    Parameters
+    ----------
+    freeze : bool
+        Skip force computation and propagation of spheres with ``frozen[i]`` set (§5.4.4, frozen types).
+    stochastic : bool
+        Add uniform random forces in [-f_max, f_max]^3 to spheres that feel no pair force and are not converged.
+    walls : bool
+        Some axes are closed by reflecting walls (centres stay in [0, L]); otherwise every axis is periodic.
+    """
+    key = (bool(freeze), bool(stochastic), bool(walls))
+    if key in _STEP_CACHE:
+        return _STEP_CACHE[key]
+    FREEZE, STOCH, WALLS = key
+
+    @njit(cache=True, fastmath=FASTMATH, parallel=True)
+    def _step(x_old, x_new, v, f_prev, f_new, r, types, frozen, nbr_start, nbr_idx, box, periodic, k_t, sig_t,
+              cm_t, cp_t, fmax_t, cut, dt, mass, seed, step, sig_max, conv):
+        n = x_old.shape[0]
+        half_dt2_m = 0.5 * dt * dt / mass
+        for i in prange(n):
+            ti = types[i]
+            ri = r[i]
+            is_frozen = False
+            if FREEZE:
+                is_frozen = frozen[i] != 0
+            fx = 0.0
+            fy = 0.0
+            fz = 0.0
+            smax = _NEG_INF
+            nforce = 0
+            for p in range(nbr_start[i], nbr_start[i + 1]):
+                j = nbr_idx[p]
+                tj = types[j]
+                rj = r[j]
+                if WALLS:
+                    dx0 = _min_image(x_old[i, 0] - x_old[j, 0], box[0], periodic[0])
+                    dx1 = _min_image(x_old[i, 1] - x_old[j, 1], box[1], periodic[1])
+                    dx2 = _min_image(x_old[i, 2] - x_old[j, 2], box[2], periodic[2])
+                else:
+                    dx0 = _min_image(x_old[i, 0] - x_old[j, 0], box[0], True)
+                    dx1 = _min_image(x_old[i, 1] - x_old[j, 1], box[1], True)
+                    dx2 = _min_image(x_old[i, 2] - x_old[j, 2], box[2], True)
+                dist = math.sqrt(dx0 * dx0 + dx1 * dx1 + dx2 * dx2)
+                rsum = ri + rj
+                rmin2 = rsum - abs(ri - rj)
+                sig = (rsum - dist) / rmin2
+                if sig > smax:
+                    smax = sig
+                if FREEZE:
+                    if is_frozen:
+                        continue
+                dxeq = rsum - 0.5 * min(sig_t[ti], sig_t[tj]) * rmin2
+                if dist > cut * dxeq:
+                    continue
+                nforce += 1
+                f = _pair_force(dist, dxeq, 0.5 * (k_t[ti] + k_t[tj]))
+                if dist > 0.0:
+                    g = f / dist
+                    fx += g * dx0
+                    fy += g * dx1
+                    fz += g * dx2
+                else:
+                    fx += f * _tie_axis(i, j, 0)
+                    fy += f * _tie_axis(i, j, 1)
+                    fz += f * _tie_axis(i, j, 2)
+            sig_max[i] = smax
+            ok = smax > 0.0 and smax <= sig_t[ti]
+            conv[i] = 1 if ok else 0
+            if FREEZE:
+                if is_frozen:
+                    for a in range(3):
+                        x_new[i, a] = x_old[i, a]
+                        v[i, a] = 0.0
+                        f_new[i, a] = 0.0
+                    continue
+            if STOCH:
+                if nforce == 0 and not ok and fmax_t[ti] > 0.0:
+                    fm = fmax_t[ti] * ri
+                    fx += fm * (2.0 * _uniform(seed, step, i, 0) - 1.0)
+                    fy += fm * (2.0 * _uniform(seed, step, i, 1) - 1.0)
+                    fz += fm * (2.0 * _uniform(seed, step, i, 2) - 1.0)
+            f_new[i, 0] = fx
+            f_new[i, 1] = fy
+            f_new[i, 2] = fz
+            cm = cm_t[ti]
+            cp = cp_t[ti]
+            for a in range(3):
+                va = cm / cp * v[i, a] + (f_prev[i, a] + f_new[i, a]) * dt / (2.0 * mass * cp)
+                xa = x_old[i, a] + cm * va * dt + f_new[i, a] * half_dt2_m
+                if WALLS:
+                    if periodic[a]:
+                        xa -= box[a] * math.floor(xa / box[a])
+                    else:
+                        if xa < 0.0:
+                            xa = -xa
+                            va = -va
+                        if xa > box[a]:
+                            xa = 2.0 * box[a] - xa
+                            va = -va
+                        xa = min(max(xa, 0.0), box[a])
+                else:
+                    xa -= box[a] * math.floor(xa / box[a])
+                    if xa >= box[a]:
+                        xa = 0.0
+                v[i, a] = va
+                x_new[i, a] = xa
+
+    _STEP_CACHE[key] = _step
+    return _step
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# reductions and small per-sphere updates
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _step_stats(x_old, x_new, x_build, r, r_build, v, sig_max, conv, box, periodic, cut, mass):
+    """Per-step reductions in fixed blocks (independent of the thread count).
+
+    Returns (converged count, kinetic energy, max overlap, sum of finite overlaps, count of finite overlaps,
+    largest step displacement, its sphere, list-staleness = max_i |x_i - x_build,i| + cut * max(0, r_i - r_build,i),
+    first sphere with a non-finite position or -1).
+    """
+    n = x_old.shape[0]
+    nconv = np.zeros(_NBLOCK, dtype=np.int64)
+    ke = np.zeros(_NBLOCK)
+    smax = np.full(_NBLOCK, _NEG_INF)
+    ssum = np.zeros(_NBLOCK)
+    scnt = np.zeros(_NBLOCK, dtype=np.int64)
+    dmax = np.zeros(_NBLOCK)
+    darg = np.full(_NBLOCK, -1, dtype=np.int64)
+    stale = np.zeros(_NBLOCK)
+    bad = np.full(_NBLOCK, -1, dtype=np.int64)
+    chunk = (n + _NBLOCK - 1) // _NBLOCK
+    for b in prange(_NBLOCK):
+        for i in range(b * chunk, min(n, (b + 1) * chunk)):
+            nconv[b] += conv[i]
+            ke[b] += 0.5 * mass * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
+            s = sig_max[i]
+            if s > smax[b]:
+                smax[b] = s
+            if s > _NEG_INF:
+                ssum[b] += s
+                scnt[b] += 1
+            d2 = 0.0
+            e2 = 0.0
+            for a in range(3):
+                d = _min_image(x_new[i, a] - x_old[i, a], box[a], periodic[a])
+                d2 += d * d
+                e = _min_image(x_new[i, a] - x_build[i, a], box[a], periodic[a])
+                e2 += e * e
+            if not (math.isfinite(d2) and math.isfinite(ke[b])) and bad[b] < 0:
+                bad[b] = i
+            if d2 > dmax[b]:
+                dmax[b] = d2
+                darg[b] = i
+            st = math.sqrt(e2) + cut * max(0.0, r[i] - r_build[i])
+            if st > stale[b]:
+                stale[b] = st
+    out_bad = np.int64(-1)
+    for b in range(_NBLOCK):
+        if bad[b] >= 0:
+            out_bad = bad[b]
+            break
+    best = np.int64(0)
+    for b in range(_NBLOCK):
+        if dmax[b] > dmax[best]:
+            best = b
+    return (nconv.sum(), ke.sum(), smax.max(), ssum.sum(), scnt.sum(), math.sqrt(dmax[best]), darg[best],
+            stale.max(), out_bad)
+
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _adapt_radii(r, types, sig_max, sig_t, adapt_t, dr_t, rmin_t, rmax_t):
+    """§5.4.3: grow isolated spheres (max sigma < 0), shrink over-overlapping ones (max sigma > sigma_max)."""
+    for i in prange(r.size):
+        t = types[i]
+        if not adapt_t[t]:
+            continue
+        s = sig_max[i]
+        if s < 0.0:
+            r[i] = min(r[i] + dr_t[t], rmax_t[t])
+        elif s > sig_t[t]:
+            r[i] = max(r[i] - dr_t[t], rmin_t[t])
+
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _update_frozen(frozen, conv, types, type_frozen, lock):
+    """Frozen = permanently frozen type, or (after s_lock) converged; unconverged spheres unfreeze."""
+    for i in prange(frozen.size):
+        frozen[i] = 1 if (type_frozen[types[i]] or (lock and conv[i] != 0)) else 0

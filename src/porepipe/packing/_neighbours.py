@@ -1,0 +1,94 @@
+"""Neighbour (Verlet) lists from hierarchical cell grids: one grid per radius class, so a radius ratio of 100 : 1
+costs O(N) and not all-pairs work.
+
+Spheres are sorted into radius classes ``floor(log2(r / r_min))``. Each class has its own cell grid whose cells
+are about half its interaction reach. A sphere looks for partners only in its own class (partners with a larger
+index) and in the classes of *larger* spheres, scanning the cells within its own reach
+``cutoff * (r_i + R_max,class) + skin``. Each unordered pair is found once (the half list); the full list used by
+the force kernel is its symmetric completion, so the force on each sphere is a gather without write races.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.packing import _kernels as K
+
+#: cells per class grid at most this many times its members (+ a constant), bounding memory for sparse classes
+_MAX_CELLS_PER_SPHERE = 8
+
+
+def check_box(radii_um: np.ndarray, box_um: np.ndarray, periodic: np.ndarray, cutoff: float, skin_um: float) -> None:
+    """Raise if the box is too small for the largest spheres (the minimum-image convention would break)."""
+    if radii_um.size == 0:
+        return
+    top = np.partition(radii_um, radii_um.size - 2)[-2:] if radii_um.size > 1 else radii_um.copy()
+    rmax = float(top[-1])
+    reach = cutoff * float(top.sum() if top.size == 2 else 2 * top[0]) + skin_um
+    for axis in range(3):
+        if box_um[axis] < 2.0 * rmax:
+            raise PorepipeError(
+                f"box edge {axis} ({'xyz'[axis]}) = {box_um[axis]} µm is smaller than 2 R_max = {2 * rmax} µm: a "
+                "sphere would overlap its own periodic image; enlarge domain.size_um or reduce the radii")
+        if periodic[axis] and box_um[axis] <= 2.0 * reach:
+            raise PorepipeError(
+                f"box edge {axis} ({'xyz'[axis]}) = {box_um[axis]} µm is too small for the interaction reach "
+                f"cutoff * (r_1 + r_2) + skin = {reach:.6g} µm of the two largest spheres (needs more than twice "
+                "that with periodic faces); enlarge domain.size_um, lower packing.cutoff or the largest radii")
+
+
+def _class_grids(x, r, box, cutoff, skin):
+    cls = np.floor(np.log2(r / r.min())).astype(np.int64)
+    np.maximum(cls, 0, out=cls)
+    ncls = int(cls.max()) + 1
+    side = np.zeros((ncls, 4))          # cell edge x, y, z; column 3 = R_max of the class (0: empty class)
+    ncell = np.ones((ncls, 3), dtype=np.int64)
+    members = np.bincount(cls, minlength=ncls)
+    rmax_c = np.zeros(ncls)
+    np.maximum.at(rmax_c, cls, r)
+    for c in range(ncls):
+        if members[c] == 0:
+            continue
+        target = 0.5 * (2.0 * cutoff * rmax_c[c] + skin)
+        target = max(target, (np.prod(box) / (_MAX_CELLS_PER_SPHERE * members[c] + 64)) ** (1.0 / 3.0))
+        ncell[c] = np.maximum(1, np.floor(box / target)).astype(np.int64)
+        side[c, :3] = box / ncell[c]
+        side[c, 3] = rmax_c[c]
+    cell_off = np.zeros(ncls + 1, dtype=np.int64)
+    cell_off[1:] = np.cumsum(np.prod(ncell, axis=1))
+    return cls, ncls, side, ncell, cell_off
+
+
+def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um):
+    """Full CSR neighbour list: partners j of i with |x_i - x_j| <= cutoff * (r_i + r_j) + skin (minimum image).
+
+    Returns
+    -------
+    start : (N + 1,) int64
+        Offsets; the partners of i are ``idx[start[i]:start[i + 1]]``.
+    idx : (E,) int64
+        Partner indices, each unordered pair listed from both ends.
+    """
+    n = x_um.shape[0]
+    if n == 0:
+        return np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    cls, ncls, side, ncell, cell_off = _class_grids(x_um, r_um, box_um, cutoff, skin_um)
+    cell_of = np.empty(n, dtype=np.int64)
+    K._assign_cells(x_um, cls, side, ncell, cell_off, cell_of)
+    cell_start = np.empty(cell_off[-1] + 1, dtype=np.int64)
+    cell_items = np.empty(n, dtype=np.int64)
+    K._counting_sort(cell_of, cell_off[-1], cell_start, cell_items)
+    per = np.asarray(periodic, dtype=np.bool_)
+    args = (x_um, r_um, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box_um, per, pair_on,
+            float(cutoff), float(skin_um))
+    counts = np.empty(n, dtype=np.int64)
+    K._half_counts(*args, counts)
+    half_start = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(counts, out=half_start[1:])
+    half_idx = np.empty(half_start[-1], dtype=np.int64)
+    K._half_fill(*args, half_start, half_idx)
+    start = np.empty(n + 1, dtype=np.int64)
+    idx = np.empty(2 * half_idx.size, dtype=np.int64)
+    K._full_from_half(half_start, half_idx, start, idx)
+    return start, idx

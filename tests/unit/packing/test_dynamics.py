@@ -1,0 +1,131 @@
+"""Step kernel: Newton's third law, pair relaxation to dx_eq, damping (§5.3), neighbour lists vs all pairs."""
+
+import numpy as np
+import pytest
+from naive_packing import neighbour_pairs
+
+from porepipe.packing import _kernels as K
+from porepipe.packing._kernels import _pair_dxeq
+from porepipe.packing._neighbours import build_neighbours
+
+
+class Run:
+    """A bare driver of the step kernel (list built once with a generous skin)."""
+
+    def __init__(self, x, r, types, box, k_t, sig_t, xi_t, dt, periodic=True, skin=None, cut=1.3):
+        self.x = np.array(x, float)
+        self.r = np.array(r, float)
+        self.types = np.array(types, np.int64)
+        self.box = np.array(box, float)
+        self.per = np.broadcast_to(np.asarray(periodic, bool), (3,)).copy()
+        n, nt = len(self.r), len(k_t)
+        self.v = np.zeros((n, 3))
+        self.f = np.zeros((n, 3))
+        self.k, self.sig = np.array(k_t, float), np.array(sig_t, float)
+        xi = np.array(xi_t, float)
+        self.cm, self.cp = 1 - 0.5 * dt * xi, 1 + 0.5 * dt * xi
+        self.dt, self.cut = dt, cut
+        skin = self.r.max() * 2 if skin is None else skin
+        self.nbr = build_neighbours(self.x, self.r, self.types, self.box, self.per, np.ones((nt, nt), np.uint8),
+                                    cut, skin)
+        self.kernel = K.make_step_kernel(False, False, not self.per.all())
+        self.sigmax = np.zeros(n)
+        self.conv = np.zeros(n, np.uint8)
+        self.s = 0
+
+    def step(self):
+        self.s += 1
+        xn, fn = np.empty_like(self.x), np.empty_like(self.f)
+        self.kernel(self.x, xn, self.v, self.f, fn, self.r, self.types, np.zeros(len(self.r), np.uint8),
+                    self.nbr[0], self.nbr[1], self.box, self.per, self.k, self.sig, self.cm, self.cp,
+                    np.zeros(len(self.k)), self.cut, self.dt, 1.0, 0, self.s, self.sigmax, self.conv)
+        self.x, self.f = xn, fn
+
+    def kinetic(self):
+        return 0.5 * (self.v**2).sum()
+
+
+def _random_spheres(rng, n, box, rmin, rmax):
+    return rng.random((n, 3)) * box, rmin + (rmax - rmin) * rng.random(n)
+
+
+def test_newtons_third_law_sum_of_forces_vanishes():
+    rng = np.random.default_rng(11)
+    box = np.array([40.0, 40.0, 40.0])
+    x, r = _random_spheres(rng, 120, box, 1.0, 5.0)
+    x[1] = x[0]  # coincident centres exercise the tie-break direction
+    types = rng.integers(0, 2, 120)
+    run = Run(x, r, types, box, [50.0, 5.0], [0.3, 0.2], [1.0, 1.0], 0.01)
+    run.step()
+    total = run.f.sum(axis=0)
+    # each pair force is computed from bitwise-identical inputs at both ends, so only the summation order
+    # differs: the residual is round-off, below 1e-12 of the summed magnitudes
+    assert np.abs(total).max() <= 1e-12 * np.abs(run.f).sum()
+    assert np.abs(run.f).sum() > 0
+
+
+@pytest.mark.parametrize("ta,tb", [(0, 0), (0, 1), (1, 1)])
+def test_two_spheres_relax_to_equilibrium_distance(ta, tb):
+    radii = [30.0, 10.0]
+    sig_t = [0.2, 0.4]
+    r = [radii[ta], radii[tb]]
+    dxeq = _pair_dxeq(r[0], r[1], min(sig_t[ta], sig_t[tb]))
+    x = [[100.0, 100.0, 100.0], [100.0 + 0.97 * dxeq, 100.0, 100.0]]
+    run = Run(x, r, [ta, tb], [400.0, 400.0, 400.0], [200.0, 60.0], sig_t, [0.3, 0.3], 0.2)
+    for _ in range(2000):
+        run.step()
+    dist = np.linalg.norm(run.x[1] - run.x[0])
+    # the damped pair converges geometrically; after 2000 steps (>= 40 e-foldings) the distance is at dx_eq to round-off level
+    assert dist == pytest.approx(dxeq, rel=1e-9)
+    assert run.kinetic() < 1e-16
+
+
+def test_damping_decay_of_free_spheres_in_a_closed_box():
+    # spheres far apart (no partners) in a box closed by walls: v^s = (C-/C+) v^{s-1} exactly, so the kinetic
+    # energy decays monotonically by (C-/C+)^2 per step, wall reflections included
+    rng = np.random.default_rng(3)
+    box = [300.0, 300.0, 300.0]
+    x = np.array([[50, 50, 50], [250, 50, 50], [50, 250, 250], [250, 250, 50]], float)
+    dt, xi = 0.5, 0.3
+    run = Run(x, [1.0] * 4, [0] * 4, box, [10.0], [0.3], [xi], dt, periodic=False, skin=1.0)
+    run.v[:] = rng.normal(0, 40.0, (4, 3))
+    ratio = ((1 - 0.5 * dt * xi) / (1 + 0.5 * dt * xi)) ** 2
+    ke = [run.kinetic()]
+    for _ in range(60):
+        run.step()
+        ke.append(run.kinetic())
+        assert np.all((run.x >= 0) & (run.x <= 300))
+    ke = np.array(ke)
+    np.testing.assert_allclose(ke[1:] / ke[:-1], ratio, rtol=1e-12)
+
+
+def test_damped_interacting_pair_energy_peaks_decrease():
+    # an attracting pair in a closed box oscillates about dx_eq; with damping every kinetic-energy peak is lower
+    run = Run([[40.0, 50, 50], [61.0, 50, 50]], [10.0, 10.0], [0, 0], [100.0] * 3, [30.0], [0.3], [0.4], 0.1,
+              periodic=False)
+    ke = []
+    for _ in range(400):
+        run.step()
+        ke.append(run.kinetic())
+    ke = np.array(ke)
+    peaks = ke[1:-1][(ke[1:-1] > ke[:-2]) & (ke[1:-1] >= ke[2:])]
+    assert peaks.size >= 3
+    assert np.all(np.diff(peaks) < 0)
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_neighbour_list_equals_all_pairs_reference(periodic):
+    rng = np.random.default_rng(5)
+    box = np.array([120.0, 90.0, 150.0])
+    # radius ratio 100 : 1 puts the spheres into 7 radius classes with their own grids
+    r = np.concatenate([rng.uniform(0.3, 0.6, 400), rng.uniform(2, 8, 60), rng.uniform(20, 30, 4)])
+    x = rng.random((r.size, 3)) * box
+    per = np.full(3, periodic)
+    start, idx = build_neighbours(x, r, np.zeros(r.size, np.int64), box, per, np.ones((1, 1), np.uint8), 1.3, 0.2)
+    got = set()
+    for i in range(r.size):
+        js = idx[start[i]:start[i + 1]]
+        assert len(set(js.tolist())) == js.size, "duplicate partner"
+        got |= {(min(i, j), max(i, j)) for j in js.tolist()}
+    assert got == neighbour_pairs(x, r, box, per, 1.3, 0.2)
+    assert idx.size == 2 * len(got)
