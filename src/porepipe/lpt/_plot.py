@@ -10,6 +10,8 @@ from matplotlib.figure import Figure  # no pyplot: no global state, Agg canvas
 
 #: at most this many cell sizes per panel (evenly chosen), so the curves stay readable
 MAX_CURVES = 7
+#: λ(φ, L) is drawn only for bins with at least this many cells (the data file keeps all bins and their counts)
+MIN_LAMBDA_CELLS = 10
 
 
 def _pick(n: int) -> np.ndarray:
@@ -51,9 +53,10 @@ def plot_lambda(ds: xr.Dataset, path, alpha: str | None = None) -> Path:
     ax = fig.add_subplot()
     for i in _pick(ds.sizes["L"]):
         d = ds.isel(L=i).sel(alpha=alpha)
-        _curve(ax, d.phi.values, d["lambda"].values, f"L = {float(d.L_um):g} µm ({int(d.L)} vx)")
+        lam = np.where(d.lambda_cells.values >= MIN_LAMBDA_CELLS, d["lambda"].values, np.nan)
+        _curve(ax, d.phi.values, lam, f"L = {float(d.L_um):g} µm ({int(d.L)} vx)")
     ax.set(xlabel="local porosity φ", ylabel=f"λ_{alpha}(φ, L)", xlim=(0, 1), ylim=(-0.02, 1.02),
-           title="local percolation probability")
+           title=f"local percolation probability (bins with >= {MIN_LAMBDA_CELLS} cells)")
     ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
