@@ -1,0 +1,1 @@
+"""The accuracy-versus-cost report: HTML + PNG figures and tables of a scene's sweep."""

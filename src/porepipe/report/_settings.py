@@ -1,0 +1,39 @@
+"""Scene section ``report:``: what the accuracy-versus-cost report shows (HTML + PNG)."""
+
+from __future__ import annotations
+
+import enum
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class ThesisTable(str, enum.Enum):
+    """Tables of Zauner (2020) the report can put side by side with the scene's numbers."""
+
+    t5_1 = "5.1"
+    t5_2 = "5.2"
+    t6_2 = "6.2"
+    t6_3 = "6.3"
+    t6_4 = "6.4"
+    t7_2 = "7.2"
+    t7_3 = "7.3"
+
+
+class Settings(BaseModel):
+    """Contents of ``results/<scene>/report/index.html``."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    quantities: list[str] = Field(default_factory=list, description="sweep quantities to plot against resolution; "
+                                  "empty: all that vary with resolution (up to max_quantities)")
+    max_quantities: int = Field(12, ge=1, description="cap on quantity-versus-resolution figures when "
+                                "`quantities` is empty")
+    thesis_tables: list[ThesisTable] = Field(
+        default_factory=lambda: [ThesisTable.t6_4, ThesisTable.t7_2],
+        description="thesis tables to reproduce; 6.4 and 7.2 check the extrapolation arithmetic on the thesis's own "
+        "numbers, the others compare the scene's values where the scene reproduces the thesis model")
+    thesis_model: str | None = Field(None, description="row label of the thesis model the scene reproduces "
+                                     "(e.g. 'PP' or 'FP' for Tables 5.1/5.2)")
+    slices: bool = Field(True, description="cross-sections of grey and binary volumes at each resolution (Fig. 7.3)")
+    slice_axis: int = Field(2, ge=0, le=2, description="axis normal to the cross-section (0 = x, 1 = y, 2 = z)")
+    dpi: int = Field(80, ge=30, le=300, description="PNG resolution")
