@@ -12,7 +12,8 @@ from porepipe._shared.numba_config import FASTMATH
 
 SUB = 6                  # sample points per voxel edge
 N_SAMPLES = SUB ** 3     # 216
-_WORDS = 4               # 216 bits in four uint64 words
+_ROWS_PER_WORD = 10      # 36 rows of 6 sample points, 10 rows (60 bits) per uint64 word
+_WORDS = 4               # ceil(36 / 10) words per voxel
 #: relative margin on squared distances for the whole-voxel shortcuts; far above rounding (1e-16), far below
 #: any geometric scale, so a voxel whose sample hull is within it of the sphere surface is sampled point by point.
 _MARGIN = 1e-9
@@ -51,8 +52,9 @@ def _hull_gap(c, voxel, h):
 def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, skip_rows):
     """OR into ``mask[j, k]`` the sample points of voxel (i, j, k) inside the ball (cx, cy, cz, r2).
 
-    ``dx2``/``dy2``/``dz2`` are scratch buffers of length 6. With ``skip_rows`` a row of 6 points along z whose
-    (x, y) distance alone exceeds r is skipped; without it (brute force) all 216 points are tested.
+    Bit layout: row q = 6·sx + sy (6 points along z) occupies bits 6·(q mod 10) .. +5 of word q // 10, so a row
+    never straddles two words. ``dx2``/``dy2``/``dz2`` are scratch buffers of length 6. With ``skip_rows`` a row
+    whose (x, y) distance alone exceeds r is skipped; without it (brute force) all 216 points are tested.
     """
     for s in range(SUB):
         dx = _sample_coord(i, s, h) - cx
@@ -61,17 +63,21 @@ def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, skip_rows):
         dx2[s] = dx * dx
         dy2[s] = dy * dy
         dz2[s] = dz * dz
-    bit = 0
+    words = np.zeros(_WORDS, dtype=np.uint64)
     for sx in range(SUB):
         for sy in range(SUB):
             dxy = dx2[sx] + dy2[sy]
             if skip_rows and dxy > r2:
-                bit += SUB
                 continue
+            row = 0
             for sz in range(SUB):
                 if dxy + dz2[sz] <= r2:
-                    mask[j, k, bit >> 6] |= np.uint64(1) << np.uint64(bit & 63)
-                bit += 1
+                    row |= 1 << sz
+            if row:
+                q = SUB * sx + sy
+                words[q // _ROWS_PER_WORD] |= np.uint64(row) << np.uint64(SUB * (q % _ROWS_PER_WORD))
+    for w in range(_WORDS):
+        mask[j, k, w] |= words[w]
 
 
 @njit(cache=True, fastmath=FASTMATH)
