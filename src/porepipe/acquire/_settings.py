@@ -83,7 +83,7 @@ class Segmentation(_Strict):
     pore_phases: list[str] = Field(default_factory=lambda: ["pore"], description="phases that count as pore space")
     thresholds: list[float] | None = Field(None, description="method thresholds: class k is t_{k-1} < g <= t_k")
     bins: int = Field(256, ge=2, le=65536, description="histogram bins for float or 16-bit images")
-    invert: bool = Field(False, description="the pore is BRIGHT in this image (e.g. resin-filled SEM)")
+    invert: bool = Field(False, description="phases are listed brightest first (pore BRIGHT, e.g. resin-filled SEM)")
 
     @model_validator(mode="after")
     def _consistent(self):

@@ -1,0 +1,172 @@
+"""Public API of the acquisition stage: image -> prepared grey volume -> phases -> statistics Dataset(s) -> files."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.store import ResultWriter, read_attrs, read_volume
+from porepipe.acquire import _stats
+from porepipe.acquire._io import Image, read_image, require_spacing
+from porepipe.acquire._prepare import Phases, denoise, load_region, resample_cubic, segment_phases
+from porepipe.acquire._settings import Settings
+
+#: names of the volumes in statistics.h5
+PHASES_VOLUME = "phases"
+
+
+@dataclasses.dataclass
+class Prepared:
+    """A cropped, filtered, cubic-voxel grey volume ready for segmentation."""
+
+    grey: np.ndarray
+    voxel_um: float
+    source: str
+    is_2d: bool
+    spacing_um: tuple[float, float, float]
+
+
+def open_image(settings: Settings, base_dir: Path | str = ".", image_path=None) -> Image:
+    """Open the image a settings section names (``image_path`` overrides ``settings.image``)."""
+    path = image_path if image_path is not None else settings.image
+    if path is None:
+        raise PorepipeError("acquire.image: no image given (set acquire.image in the scene or pass IMAGE)")
+    path = Path(path)
+    path = path if path.is_absolute() else Path(base_dir) / path
+    return read_image(path, settings.format, raw=settings.raw, dataset=settings.dataset,
+                      voxel_um=settings.voxel_um, section_um=settings.section_um)
+
+
+def prepare(image: Image, settings: Settings) -> Prepared:
+    """Crop, check finiteness, resample to cubic voxels (if asked and anisotropic) and denoise."""
+    spacing = require_spacing(image)
+    grey = load_region(image, settings.crop)
+    if image.is_2d:
+        if not np.isclose(spacing[0], spacing[1], rtol=1e-9):
+            raise PorepipeError(f"section {image.source}: pixels {spacing[:2]} µm are not square")
+        voxel = spacing[0]
+    elif not np.allclose(spacing, spacing[0], rtol=1e-9):
+        if not settings.resample_cubic:
+            raise PorepipeError(f"image {image.source} has anisotropic voxels {spacing} µm; set "
+                                "acquire.resample_cubic: true (the stages need cubic voxels)")
+        grey, voxel = resample_cubic(grey, spacing)
+    else:
+        voxel = spacing[0]
+    grey = denoise(grey, settings.denoise, settings.denoise_size)
+    return Prepared(grey, float(voxel), image.source, image.is_2d, spacing)
+
+
+def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_2d: bool = False,
+                     lpt_settings=None, permeability_settings=None) -> dict[str | None, xr.Dataset]:
+    """Every statistic of a segmented image, as Datasets keyed by HDF5 group (None = root).
+
+    Root: phase fractions, porosity, thresholds and histogram, S_V/K_V/T_V (3-D), percolation (3-D), two-point
+    correlation and chord lengths per axis, grains (3-D). Groups ``lpt`` and ``permeability`` when asked for.
+    """
+    stats = settings.statistics
+    pore = phases.pore()
+    fractions = _stats.volume_fractions(phases.labels, phases.names)
+    porosity = float(pore.mean(dtype=np.float64))
+    shape = pore.shape
+    max_lag = int(round(stats.max_lag_um / voxel_um)) if stats.max_lag_um else max(1, max(shape) // 4)
+    parts = [
+        xr.Dataset({"volume_fraction": fractions,
+                    "porosity": ((), porosity, {"units": "1", "long_name": "volume fraction of the pore phases"}),
+                    "threshold": ("threshold_index", phases.thresholds, {"long_name": "class k: t_{k-1} < g <= t_k"}),
+                    "grey_count": ("grey_bin", phases.histogram.counts, {"long_name": "grey histogram"}),
+                    "grey_value": ("grey_bin", phases.histogram.centres)}),
+        xr.Dataset({"two_point": _stats.two_point_correlation(pore, voxel_um, max_lag)}),
+        _stats.chord_lengths(pore, voxel_um),
+    ]
+    skipped = []
+    if is_2d:
+        skipped = ["minkowski", "percolation", "grains", "lpt", "permeability"]
+    else:
+        mk = _stats.minkowski_numbers(pore, voxel_um, settings.periodic)
+        parts.append(xr.Dataset({k: ((), v) for k, v in mk.items()}))
+        parts.append(_stats.percolation(pore))
+        if stats.grains:
+            parts.append(_stats.grain_statistics(_grain_mask(phases, stats.grain_phase), voxel_um,
+                                                 _min_distance(stats.grain_min_distance_um, voxel_um),
+                                                 settings.periodic))
+    root = xr.merge(parts, combine_attrs="drop_conflicts")
+    root.attrs.update(voxel_um=voxel_um, shape=np.asarray(shape, np.int64), method=phases.method.value,
+                      phases=list(phases.names), pore_phases=[phases.names[i] for i in phases.pore_index],
+                      is_2d=int(is_2d), skipped_2d=",".join(skipped))
+    out: dict[str | None, xr.Dataset] = {None: root}
+    if not is_2d and stats.lpt:
+        from porepipe.lpt import local_porosity_analysis
+
+        out["lpt"] = local_porosity_analysis(pore, voxel_um=voxel_um, periodic=(settings.periodic,) * 3,
+                                             settings=lpt_settings, skip_too_large=True)
+    if not is_2d and stats.permeability:
+        from porepipe.lbm import permeability
+
+        out["permeability"] = permeability(pore, settings=permeability_settings, voxel_um=voxel_um,
+                                           progress=False).to_dataset()
+    return out
+
+
+def _grain_mask(phases: Phases, grain_phase: str | None) -> np.ndarray:
+    if grain_phase is None:
+        return phases.pore() == 0
+    if grain_phase not in phases.names:
+        raise PorepipeError(f"acquire.statistics.grain_phase = {grain_phase!r} is not one of {phases.names}")
+    return phases.labels == phases.names.index(grain_phase)
+
+
+def _min_distance(min_distance_um: float | None, voxel_um: float) -> int:
+    return 2 if min_distance_um is None else max(1, int(round(min_distance_um / voxel_um)))
+
+
+def acquire(settings: Settings, out, *, base_dir: Path | str = ".", image_path=None, scene_name: str = "",
+            scene_hash: str = "", lpt_settings=None, permeability_settings=None) -> dict[str | None, xr.Dataset]:
+    """Read, prepare, segment and measure an image; write ``statistics.h5`` (with the phase volume) to ``out``."""
+    image = open_image(settings, base_dir, image_path)
+    with ResultWriter(out, stage="acquire", scene=scene_name, scene_hash=scene_hash) as w:
+        prep = prepare(image, settings)
+        phases = segment_phases(prep.grey, settings.segmentation)
+        tables = image_statistics(phases, prep.voxel_um, settings, is_2d=prep.is_2d, lpt_settings=lpt_settings,
+                                  permeability_settings=permeability_settings)
+        w.write_volume(PHASES_VOLUME, phases.labels, voxel_um=prep.voxel_um, periodic=(settings.periodic,) * 3,
+                       attrs={"phases": ",".join(phases.names), "pore_index": np.asarray(phases.pore_index),
+                              "thresholds": phases.thresholds, "method": phases.method.value})
+        for group, ds in tables.items():
+            w.write_table(ds, group)
+        w.attrs.update(source=prep.source, voxel_um=prep.voxel_um, spacing_um=np.asarray(prep.spacing_um),
+                       porosity=float(tables[None].porosity), is_2d=int(prep.is_2d))
+    return tables
+
+
+def write_binary(statistics_path, out, a_um: float | None = None) -> float:
+    """Write ``binary_a{a}.h5`` (volume ``pore``) from the phase volume of ``statistics.h5``; returns its porosity.
+
+    ``a_um`` must be the image's voxel size (the binary is the image itself, at its own resolution).
+    """
+    attrs = read_attrs(statistics_path)
+    if int(attrs.get("is_2d", 0)):
+        raise PorepipeError(f"{statistics_path} comes from a 2-D section; binary volumes (minkowski, lpt, "
+                            "permeability) need a 3-D image or a stack of serial sections")
+    labels, vattrs = read_volume(statistics_path, PHASES_VOLUME)
+    voxel = float(vattrs["voxel_um"])
+    if a_um is not None and not np.isclose(a_um, voxel, rtol=1e-6):
+        raise PorepipeError(f"resolution a = {a_um} µm requested, but the image {attrs.get('source')} has voxels of "
+                            f"{voxel} µm; set the scene's resolutions_um to [{voxel:g}]")
+    lut = np.zeros(len(str(vattrs["phases"]).split(",")), np.uint8)
+    lut[np.atleast_1d(vattrs["pore_index"]).astype(np.int64)] = 1
+    pore = lut[labels]
+    thresholds = np.atleast_1d(np.asarray(vattrs["thresholds"], dtype=np.float64))
+    porosity = float(pore.mean(dtype=np.float64))
+    with ResultWriter(out, stage="acquire", scene=attrs.get("scene", ""), scene_hash=attrs.get("scene_hash", "")) as w:
+        w.write_volume("pore", pore, voxel_um=voxel, origin_um=vattrs.get("origin_um", (0.0, 0.0, 0.0)),
+                       periodic=vattrs.get("periodic", (0, 0, 0)),
+                       attrs={"threshold": float(thresholds[0]), "method": str(vattrs["method"]),
+                              "meaning": "1 = pore, 0 = matrix (segmented image)"})
+        w.write_table(xr.Dataset({"porosity": ((), porosity)}, attrs={"threshold": float(thresholds[0])}))
+        w.attrs.update(threshold=float(thresholds[0]), method=str(vattrs["method"]), voxel_um=voxel,
+                       porosity=porosity, source=str(attrs.get("source", "")))
+    return porosity
