@@ -1,0 +1,228 @@
+"""Numba kernels: grey values (6³ sample points per voxel in the matrix) of a union of spheres and convex polyhedra.
+
+Sample point k (0..5) of voxel i along an axis sits at ``(6*i + k + 0.5) * (a/6)`` (the foundation's
+:func:`porepipe.voxelize._kernels._sample_coord`). A point p is in polyhedral grain g (centre c) when
+``(n0*dx + n1*dy) + n2*dz <= d`` for every plane (n, d) of g, with dx = p_x - c_x etc., in exactly this order of
+operations; in a sphere when ``(dx*dx + dy*dy) + dz*dz <= r*r`` (as in the foundation).
+
+Boundary-only classification of a voxel against a plane: over the 6 sample coordinates of an axis, the products
+n0*dx take their extremes at the first and last sample point (IEEE rounding is monotone), and so does the rounded sum;
+so max_p f(p) over the voxel's 216 points is bounded by the same sum of the per-axis maxima. A voxel with this bound
+<= d - margin for every plane is wholly inside, one with the minimum > d + margin for some plane wholly outside; all
+others are sampled point by point, with the same expression as brute force: the grey values are bit-identical.
+"""
+
+import numpy as np
+from numba import njit, prange
+
+from porepipe._shared.numba_config import FASTMATH
+from porepipe.voxelize._kernels import (
+    _MARGIN,
+    _ROWS_PER_WORD,
+    _WORDS,
+    FULL,
+    N_SAMPLES,
+    PARTIAL,
+    SUB,
+    UNTOUCHED,
+    _axis_range,
+    _hull_gap,
+    _popcount64,
+    _sample_coord,
+)
+
+KIND_SPHERE = 0
+KIND_POLYHEDRON = 1
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _or_row(words, sx, sy, row):
+    if row:
+        q = SUB * sx + sy
+        words[q // _ROWS_PER_WORD] |= np.uint64(row) << np.uint64(SUB * (q % _ROWS_PER_WORD))
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _sphere_points(words, i, j, k, cx, cy, cz, r2, h, skip_rows, scratch):
+    """OR into ``words`` the sample points of voxel (i, j, k) inside the ball (c, r²)."""
+    for s in range(SUB):
+        dx = _sample_coord(i, s, h) - cx
+        dy = _sample_coord(j, s, h) - cy
+        dz = _sample_coord(k, s, h) - cz
+        scratch[0, s] = dx * dx
+        scratch[1, s] = dy * dy
+        scratch[2, s] = dz * dz
+    for sx in range(SUB):
+        for sy in range(SUB):
+            dxy = scratch[0, sx] + scratch[1, sy]
+            if skip_rows and dxy > r2:
+                continue
+            row = 0
+            for sz in range(SUB):
+                if dxy + scratch[2, sz] <= r2:
+                    row |= 1 << sz
+            _or_row(words, sx, sy, row)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _poly_points(words, i, j, k, cx, cy, cz, planes, p0, p1, h, partial):
+    """OR into ``words`` the sample points of voxel (i, j, k) inside the polyhedron planes[p0:p1] about c."""
+    for sx in range(SUB):
+        dx = _sample_coord(i, sx, h) - cx
+        for sy in range(SUB):
+            dy = _sample_coord(j, sy, h) - cy
+            for p in range(p0, p1):
+                partial[p - p0] = planes[p, 0] * dx + planes[p, 1] * dy
+            row = 0
+            for sz in range(SUB):
+                dz = _sample_coord(k, sz, h) - cz
+                inside = True
+                for p in range(p0, p1):
+                    if partial[p - p0] + planes[p, 2] * dz > planes[p, 3]:
+                        inside = False
+                        break
+                if inside:
+                    row |= 1 << sz
+            _or_row(words, sx, sy, row)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _extremes(n, lo, hi):
+    """(min, max) of n*lo and n*hi."""
+    a = n * lo
+    b = n * hi
+    return (a, b) if a <= b else (b, a)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _classify_poly(i, j, k, cx, cy, cz, planes, p0, p1, h, margin):
+    """UNTOUCHED if the voxel's sample hull is outside some plane, FULL if inside all, else PARTIAL."""
+    dxl = _sample_coord(i, 0, h) - cx
+    dxh = _sample_coord(i, SUB - 1, h) - cx
+    dyl = _sample_coord(j, 0, h) - cy
+    dyh = _sample_coord(j, SUB - 1, h) - cy
+    dzl = _sample_coord(k, 0, h) - cz
+    dzh = _sample_coord(k, SUB - 1, h) - cz
+    full = True
+    for p in range(p0, p1):
+        xl, xh = _extremes(planes[p, 0], dxl, dxh)
+        yl, yh = _extremes(planes[p, 1], dyl, dyh)
+        zl, zh = _extremes(planes[p, 2], dzl, dzh)
+        if (xl + yl) + zl > planes[p, 3] + margin:
+            return UNTOUCHED
+        if (xh + yh) + zh > planes[p, 3] - margin:
+            full = False
+    return FULL if full else PARTIAL
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _classify_sphere(i, j, k, cx, cy, cz, r2, h):
+    nx_, fx_ = _hull_gap(cx, i, h)
+    ny_, fy_ = _hull_gap(cy, j, h)
+    nz_, fz_ = _hull_gap(cz, k, h)
+    if nx_ * nx_ + ny_ * ny_ + nz_ * nz_ > r2 * (1.0 + _MARGIN):
+        return UNTOUCHED
+    if fx_ * fx_ + fy_ * fy_ + fz_ * fz_ <= r2 * (1.0 - _MARGIN):
+        return FULL
+    return PARTIAL
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes, h, ny, nz,
+                 boundary_only, status, mask, scratch, partial, words, out):
+    """Grey values of voxel plane x = i into ``out`` (ny, nz); the other arrays are this thread's buffers."""
+    status[:, :] = UNTOUCHED
+    plane_lo = _sample_coord(i, 0, h)
+    plane_hi = _sample_coord(i, SUB - 1, h)
+    first = np.searchsorted(xmin_sorted, plane_lo - 2.0 * hx_max, side="left")
+    last = np.searchsorted(xmin_sorted, plane_hi, side="right")
+    for q in range(first, last):
+        s = order[q]
+        cx, cy, cz = img_pos[s, 0], img_pos[s, 1], img_pos[s, 2]
+        if cx + img_pos[s, 3] < plane_lo:
+            continue
+        g = img_grain[s]
+        r = radius[g]
+        r2 = r * r
+        p0, p1 = plane_ptr[g], plane_ptr[g + 1]
+        margin = _MARGIN * (r + SUB * h)
+        j0, j1 = _axis_range(cy, img_pos[s, 4], h, ny)
+        k0, k1 = _axis_range(cz, img_pos[s, 5], h, nz)
+        for j in range(j0, j1):
+            for k in range(k0, k1):
+                if status[j, k] == FULL:
+                    continue
+                if boundary_only:
+                    if kind[g] == KIND_SPHERE:
+                        cls = _classify_sphere(i, j, k, cx, cy, cz, r2, h)
+                    else:
+                        cls = _classify_poly(i, j, k, cx, cy, cz, planes, p0, p1, h, margin)
+                    if cls == UNTOUCHED:
+                        continue
+                    if cls == FULL:
+                        status[j, k] = FULL
+                        continue
+                if status[j, k] == UNTOUCHED:
+                    for w in range(_WORDS):
+                        mask[j, k, w] = 0
+                    status[j, k] = PARTIAL
+                for w in range(_WORDS):
+                    words[w] = 0
+                if kind[g] == KIND_SPHERE:
+                    _sphere_points(words, i, j, k, cx, cy, cz, r2, h, boundary_only, scratch)
+                else:
+                    _poly_points(words, i, j, k, cx, cy, cz, planes, p0, p1, h, partial)
+                for w in range(_WORDS):
+                    mask[j, k, w] |= words[w]
+    for j in range(ny):
+        for k in range(nz):
+            st = status[j, k]
+            if st == FULL:
+                out[j, k] = N_SAMPLES
+            elif st == PARTIAL:
+                count = 0
+                for w in range(_WORDS):
+                    count += _popcount64(mask[j, k, w])
+                out[j, k] = count
+            else:
+                out[j, k] = 0
+
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _voxelize_grains_slab(i0, i1, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes,
+                          max_planes, h, ny, nz, boundary_only, out):
+    """Grey values of planes i0..i1-1 into ``out`` (i1 - i0, ny, nz), parallel over planes."""
+    nplanes = i1 - i0
+    nthreads = min(nplanes, 64)
+    per = (nplanes + nthreads - 1) // nthreads
+    for t in prange(nthreads):
+        status = np.empty((ny, nz), dtype=np.uint8)
+        mask = np.empty((ny, nz, _WORDS), dtype=np.uint64)
+        scratch = np.empty((3, SUB))
+        partial = np.empty(max(max_planes, 1))
+        words = np.empty(_WORDS, dtype=np.uint64)
+        for p in range(t * per, min((t + 1) * per, nplanes)):
+            _grain_plane(i0 + p, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes,
+                         h, ny, nz, boundary_only, status, mask, scratch, partial, words, out[p])
+
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _points_inside(points, centre, kind, radius, plane_ptr, planes, grain_ids, out):
+    """out[q] = number of the grains ``grain_ids`` (centre[t] for grain_ids[t], no periodic wrap) containing points[q]."""
+    for q in prange(points.shape[0]):
+        out[q] = 0
+        for t in range(grain_ids.shape[0]):
+            g = grain_ids[t]
+            dx = points[q, 0] - centre[t, 0]
+            dy = points[q, 1] - centre[t, 1]
+            dz = points[q, 2] - centre[t, 2]
+            if kind[g] == KIND_SPHERE:
+                inside = (dx * dx + dy * dy) + dz * dz <= radius[g] * radius[g]
+            else:
+                inside = True
+                for p in range(plane_ptr[g], plane_ptr[g + 1]):
+                    if (planes[p, 0] * dx + planes[p, 1] * dy) + planes[p, 2] * dz > planes[p, 3]:
+                        inside = False
+                        break
+            if inside:
+                out[q] += 1
