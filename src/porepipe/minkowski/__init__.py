@@ -10,11 +10,13 @@ from porepipe.minkowski._api import (
     minkowski_functions_of_threshold,
     n_cells,
     specific_surface_from_histogram,
+    threshold_dataset,
     threshold_histograms,
+    threshold_histograms_slabs,
 )
 from porepipe.minkowski._weights import Adjacency
 
 __all__ = ["Adjacency", "configuration_histogram", "configuration_histogram_slabs", "iter_slabs",
            "matrix_histogram", "minkowski_from_histogram", "minkowski_functionals",
            "minkowski_functions_of_threshold", "n_cells", "specific_surface_from_histogram",
-           "threshold_histograms"]
+           "threshold_dataset", "threshold_histograms", "threshold_histograms_slabs"]

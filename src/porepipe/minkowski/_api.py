@@ -358,6 +358,26 @@ def _accumulate(diff: np.ndarray, cells: int) -> np.ndarray:
     return hist
 
 
+def threshold_histograms_slabs(slabs: Iterable, periodic=True, n_levels: int = 256):
+    """:func:`threshold_histograms` of a grey volume given as consecutive x-slabs; returns (histograms, shape)."""
+    diff, shape = _stream(slabs, periodic, _kernels._threshold_histograms, (n_levels, _weights.N_CODES), "grey")
+    return _accumulate(diff, n_cells(shape, periodic)), shape
+
+
+def threshold_dataset(histograms, voxel_um, periodic=True, adjacency: Adjacency | str = Adjacency.pore6_matrix26,
+                      thresholds: Sequence[int] | None = None) -> xr.Dataset:
+    """Dataset of :func:`minkowski_from_histogram` over a leading dimension ``g_th`` from (n_levels, 256) histograms."""
+    hists = _check_histogram(histograms)
+    chosen = np.arange(len(hists)) if thresholds is None else np.asarray(thresholds, dtype=np.int64)
+    if np.any(chosen < 0) or np.any(chosen >= len(hists)):
+        raise PorepipeError(f"thresholds must lie in 0..{len(hists) - 1}, got {list(chosen)}")
+    frames = [minkowski_from_histogram(hists[t], voxel_um, adjacency, periodic) for t in chosen]
+    ds = xr.concat(frames, dim=xr.DataArray(chosen, dims="g_th", name="g_th"),
+                   data_vars="all", coords="minimal", compat="override", combine_attrs="override")
+    ds["g_th"].attrs["long_name"] = "threshold: pore = grey <= g_th"
+    return ds
+
+
 def minkowski_functions_of_threshold(grey, voxel_um, periodic=True,
                                      adjacency: Adjacency | str = Adjacency.pore6_matrix26,
                                      thresholds: Sequence[int] | None = None) -> xr.Dataset:
@@ -375,15 +395,11 @@ def minkowski_functions_of_threshold(grey, voxel_um, periodic=True,
     Returns
     -------
     xarray.Dataset
-        The variables of :func:`minkowski_from_histogram` with a leading dimension ``g_th``; matrix values
-        follow from the pore ones by the phase identities.
+        The variables of :func:`minkowski_from_histogram` with a leading dimension ``g_th``.
     """
     vol = _as_grey(grey)
     levels = int(vol.max()) + 1 if thresholds is None else int(max(thresholds)) + 1
-    hists = threshold_histograms(vol, periodic, n_levels=max(levels, 1))
-    chosen = np.arange(levels) if thresholds is None else np.asarray(thresholds, dtype=np.int64)
-    if np.any(chosen < 0) or np.any(chosen > 255):
-        raise PorepipeError(f"thresholds must lie in 0..255 for a uint8 grey volume, got {list(chosen)}")
-    frames = [minkowski_from_histogram(hists[t], voxel_um, adjacency, periodic) for t in chosen]
-    return xr.concat(frames, dim=xr.DataArray(chosen, dims="g_th", name="g_th"),
-                     data_vars="all", coords="minimal", compat="override", combine_attrs="override")
+    if levels > 256 or (thresholds is not None and min(thresholds) < 0):
+        raise PorepipeError(f"thresholds must lie in 0..255 for a uint8 grey volume, got {list(thresholds)}")
+    return threshold_dataset(threshold_histograms(vol, periodic, n_levels=levels), voxel_um, periodic, adjacency,
+                             thresholds)
