@@ -1,0 +1,66 @@
+"""Public API of the sweep: gather results, extrapolate every quantity, write ``sweep.h5``."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from porepipe.sweep._fit import Limit, fit_power
+from porepipe.sweep._gather import FULL, gather
+from porepipe.sweep._settings import Exponent
+
+#: fit forms stored in sweep.h5: the scene's power law, and the thesis's linear form (7.2.1, Table 6.4)
+FORMS = ("power", "linear")
+_P = {Exponent.free: None, Exponent.linear: 1.0, Exponent.quadratic: 2.0}
+_LIMIT_FIELDS = ("q_inf", "err", "err_fit", "err_loo", "c", "p", "n")
+
+
+def exponent_value(exponent: Exponent | str) -> float | None:
+    """p of a scene's ``sweep.exponent`` (None = fitted)."""
+    return _P[Exponent(exponent)]
+
+
+def limit_of(a_um, values, exponent: float | None, confidence: float = 0.95) -> Limit:
+    """Extrapolate one quantity over the resolutions where it is finite."""
+    a_um = np.asarray(a_um, dtype=np.float64)
+    values = np.asarray(values, dtype=np.float64)
+    keep = np.isfinite(values)
+    return fit_power(a_um[keep], values[keep], exponent=exponent, confidence=confidence)
+
+
+def add_limits(ds: xr.Dataset, exponent: Exponent | str = Exponent.free, confidence: float = 0.95) -> xr.Dataset:
+    """Add q∞ and its verdict over (form, quantity, sample_um): ``q_inf``, ``err``, ``status``, ``why`` …"""
+    p_of = {"power": exponent_value(exponent), "linear": 1.0}
+    shape = (len(FORMS), ds.sizes["quantity"], ds.sizes["sample_um"])
+    num = {k: np.full(shape, np.nan) for k in _LIMIT_FIELDS}
+    status = np.full(shape, "", dtype=object)
+    why = np.full(shape, "", dtype=object)
+    for f, form in enumerate(FORMS):
+        for i in range(shape[1]):
+            for j in range(shape[2]):
+                lim = limit_of(ds.a_um.values, ds.value.values[i, :, j], p_of[form], confidence)
+                for k in _LIMIT_FIELDS:
+                    num[k][f, i, j] = getattr(lim, k)
+                status[f, i, j], why[f, i, j] = lim.status.value, lim.why
+    dims = ("form", "quantity", "sample_um")
+    out = ds.assign_coords(form=np.array(FORMS, dtype=object))
+    for k, arr in num.items():
+        out[k] = (dims, arr)
+    out["status"] = (dims, status)
+    out["why"] = (dims, why)
+    out["err"].attrs["description"] = f"half-width of the {confidence:.0%} interval of q_inf (max of fit and LOO)"
+    out.attrs.update(confidence=confidence, exponent=Exponent(exponent).value,
+                     forms="power: q = q_inf + c*a^p (p from the scene); linear: p = 1 (thesis 7.2.1, Table 6.4)")
+    return out
+
+
+def build_sweep(result_paths, volume_paths=(), cost_dir=None, exponent: Exponent | str = Exponent.free,
+                confidence: float = 0.95) -> xr.Dataset:
+    """Gather results into quantity × a × sample and extrapolate each quantity to a → 0."""
+    return add_limits(gather(result_paths, volume_paths, cost_dir), exponent, confidence)
+
+
+def limit_from_sweep(ds: xr.Dataset, quantity: str, form: str = "power", sample_um: float = FULL) -> dict:
+    """One quantity's limit record from a sweep Dataset (for the adaptive driver and the report)."""
+    sel = ds.sel(quantity=quantity, form=form, sample_um=sample_um)
+    return {k: (sel[k].item() if k in ("status", "why") else float(sel[k])) for k in (*_LIMIT_FIELDS, "status", "why")}

@@ -1,0 +1,64 @@
+"""``porepipe sweep`` (gather + extrapolate, or ``--adaptive SCENE``) and ``porepipe subsample`` (corner crop)."""
+
+from __future__ import annotations
+
+import sys
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.store import ResultWriter, hash_of
+from porepipe.sweep._adaptive import Outcome, run_adaptive
+from porepipe.sweep._api import build_sweep
+from porepipe.sweep._crop import crop_corner
+from porepipe.sweep._settings import Exponent
+
+
+def _sweep(args) -> int:
+    if args.adaptive:
+        if len(args.inputs) != 1:
+            raise PorepipeError(f"sweep --adaptive takes one scene file, got {args.inputs}")
+        dec = run_adaptive(args.inputs[0], cores=args.cores)
+        print(f"adaptive sweep stopped: {dec.outcome.value}: {dec.message}")
+        return 0 if dec.outcome is Outcome.target_met else 3
+    if not args.inputs or not args.out:
+        raise PorepipeError("sweep needs result files and -o OUT (or --adaptive SCENE)")
+    exponent, confidence = Exponent(args.exponent), args.confidence
+    scene_name = ""
+    if args.scene:
+        from porepipe.scene import load_scene
+
+        scene = load_scene(args.scene)
+        exponent, confidence, scene_name = scene.sweep.exponent, scene.sweep.confidence, scene.name
+    ds = build_sweep(args.inputs, args.volumes, args.cost_dir, exponent, confidence)
+    part = {"inputs": sorted(args.inputs), "exponent": Exponent(exponent).value, "confidence": confidence}
+    with ResultWriter(args.out, stage="sweep", scene=scene_name, scene_hash=hash_of(part)) as w:
+        w.write_table(ds)
+    ok = int((ds.status == "ok").sum())
+    print(f"sweep: {ds.sizes['quantity']} quantities x {ds.sizes['a_um']} resolutions x {ds.sizes['sample_um']} "
+          f"samples; {ok} supported limits; written {args.out}", file=sys.stderr)
+    return 0
+
+
+def _subsample(args) -> int:
+    shape = crop_corner(args.binary, args.edge_um, args.out)
+    print(f"subsample: corner cube {shape} written to {args.out}", file=sys.stderr)
+    return 0
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("sweep", help="gather results over resolutions and sample sizes into sweep.h5 and "
+                              "extrapolate to a -> 0; or --adaptive SCENE: refine until a target error is met")
+    p.add_argument("inputs", nargs="*", help="result files (*_a{a}*.h5, estimate.h5); with --adaptive: the scene")
+    p.add_argument("-o", "--out", help="output sweep.h5")
+    p.add_argument("--volumes", nargs="*", default=[], help="grey/binary volume files (upstream cost, voxel counts)")
+    p.add_argument("--cost-dir", help="directory of Snakemake benchmark TSVs (results/<scene>/cost)")
+    p.add_argument("--scene", help="scene file: takes sweep.exponent and sweep.confidence from it")
+    p.add_argument("--exponent", default="free", choices=[e.value for e in Exponent])
+    p.add_argument("--confidence", type=float, default=0.95)
+    p.add_argument("--adaptive", action="store_true", help="run the scene's adaptive refinement (sweep.adaptive)")
+    p.add_argument("--cores", type=int, default=1, help="with --adaptive: cores for each workflow run")
+    p.set_defaults(func=_sweep)
+    p = subparsers.add_parser("subsample", help="cut the corner cube of edge L µm from a binary volume")
+    p.add_argument("binary", help="binary_a{a}.h5")
+    p.add_argument("--edge-um", type=float, required=True)
+    p.add_argument("-o", "--out", required=True, help="binary_a{a}_L{L}.h5")
+    p.set_defaults(func=_subsample)
