@@ -140,8 +140,9 @@ def mean_curvature_integral(hull: ConvexHull) -> float:
                 continue
             edge = np.delete(simplex, corner)
             length = np.linalg.norm(hull.points[edge[0]] - hull.points[edge[1]])
-            cos = float(np.clip(normals[s] @ normals[nb], -1.0, 1.0))
-            total += length * np.arccos(cos)
+            # atan2 stays accurate for the near-zero angles of coplanar triangle pairs (arccos would give ~1e-8)
+            angle = np.arctan2(np.linalg.norm(np.cross(normals[s], normals[nb])), normals[s] @ normals[nb])
+            total += length * angle
     return 0.5 * total
 
 

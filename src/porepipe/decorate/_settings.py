@@ -13,6 +13,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from porepipe.voxelize._api import VoxelizeMethod
+
 PosFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 NonNegFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 
@@ -119,8 +121,8 @@ class Settings(BaseModel):
         default_factory=list, description="rules, first match wins; spheres no rule matches draw a family uniformly")
     scale: ScaleRule = Field(ScaleRule.equal_volume, description="equal_volume, circumscribed or inscribed")
     orientation: Orientation = Field(default_factory=Orientation, description="orientation sampling")
-    method: str = Field("boundary", pattern="^(boundary|brute)$",
-                        description="voxelisation: boundary (fast) or brute; identical grey values")
+    method: VoxelizeMethod = Field(VoxelizeMethod.boundary,
+                                   description="voxelisation: boundary (fast) or brute; identical grey values")
     slab_planes: int = Field(32, ge=1, description="voxel planes per slab held in memory at once")
 
     @model_validator(mode="after")
