@@ -33,6 +33,7 @@ import dataclasses
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
@@ -248,11 +249,20 @@ def _effect_bits(effects, adapting: bool, locking: bool) -> int:
 
 
 def _finish_stage(state: State, stage: Stage, tables: _Tables, box, periodic, conv: np.ndarray) -> None:
-    """Delete unconverged spheres of the chosen types, then evaluate the overlaps of the configuration kept."""
-    if stage.delete_unconverged and conv.size:
-        doomed = np.isin(state.types, [tables.names.index(n) for n in stage.delete_unconverged]) & (conv == 0)
-        _keep(state, ~doomed)
+    """Delete unconverged spheres of the chosen types, then evaluate the overlaps of the configuration kept.
+
+    Deletion is repeated until no deletable sphere is unconverged, since removing a sphere can leave a former
+    partner isolated.
+    """
     sig, conv = sphere_overlaps(state.x, state.r, state.types, box, periodic, tables.sig, tables.pair_on)
+    if stage.delete_unconverged:
+        deletable = np.array([n in stage.delete_unconverged for n in tables.names])
+        while True:
+            doomed = deletable[state.types] & (conv == 0)
+            if not doomed.any():
+                break
+            _keep(state, ~doomed)
+            sig, conv = sphere_overlaps(state.x, state.r, state.types, box, periodic, tables.sig, tables.pair_on)
     state.stage_converged.append(bool(conv.all()))
     state.stage_steps.append(state.step)
     state.snapshots.append({"name": stage.name, "centres_um": state.x.copy(), "radii_um": state.r.copy(),
@@ -277,6 +287,19 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
         _start_stage(state, settings, stage, box, seed, base_dir)
         state.frozen[:] = tables.type_frozen[state.types]
     n = state.r.size
+    threads = numba.get_num_threads()
+    if n < settings.parallel_min_spheres:
+        numba.set_num_threads(1)
+    try:
+        _integrate(state, settings, stage, tables, effects, freeze, kernel, box, periodic, seed, checkpoint, progress)
+    finally:
+        numba.set_num_threads(threads)
+
+
+def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, periodic, seed, checkpoint, progress):
+    """The step loop of one stage."""
+    stage_idx = state.stage
+    n = state.r.size
     if n and not np.isfinite(state.x).all():
         raise PorepipeError(f"packing stage {stage_idx} ({stage.name!r}): non-finite sphere centres at the start")
     cseed = _counter_seed(seed, stage_idx)
@@ -284,6 +307,7 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
     f_new = np.empty_like(state.f)
     sig = np.full(n, -np.inf)
     conv = np.zeros(n, dtype=np.uint8)
+    aux = np.zeros((n, 3))
     nbr = None
     prog = Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s) if progress else None
     converged = n == 0
@@ -307,9 +331,8 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
         cp = 1.0 + 0.5 * stage.dt * xi_t
         kernel(state.x, x_new, state.v, state.f, f_new, state.r, state.types, state.frozen, nbr[0], nbr[1], box,
                periodic, k_t, tables.sig, cm, cp, tables.fmax, settings.cutoff, stage.dt, settings.mass, cseed, s,
-               sig, conv)
-        stats = K._step_stats(state.x, x_new, state.x_build, state.r, state.r_build, state.v, sig, conv, box,
-                              periodic, settings.cutoff, settings.mass)
+               state.x_build, state.r_build, sig, conv, aux)
+        stats = _step_stats(sig, conv, aux)
         nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
         _guard(stats, state, tables, stage, stage_idx, s, box, settings)
         converged = nconv == n
@@ -323,11 +346,10 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
                 adapting = (ar.from_step < s < ar.to_step and s < stage.steps - ar.quiet_steps
                             and growth < ar.trigger)
                 if adapting:
-                    K._adapt_radii(state.r, state.types, sig, tables.sig, tables.adapt, tables.dr, tables.rmin,
-                                   tables.rmax)
+                    _adapt_radii(state.r, state.types, sig, tables)
             if freeze:
                 locking = stage.freezing is not None and s > stage.freezing.lock_step
-                K._update_frozen(state.frozen, conv, state.types, tables.type_frozen, locking)
+                state.frozen[:] = tables.type_frozen[state.types] | (conv if locking else 0)
             state.since_build += 1
             if settings.rebuild_interval > 0:
                 state.need_rebuild = state.since_build >= settings.rebuild_interval
@@ -345,6 +367,31 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
         if checkpoint is not None and settings.checkpoint_every and s % settings.checkpoint_every == 0:
             checkpoint(state)
     _finish_stage(state, stage, tables, box, periodic, conv)
+
+
+def _step_stats(sig: np.ndarray, conv: np.ndarray, aux: np.ndarray) -> tuple:
+    """Reductions of one step: (converged count, kinetic energy, max sigma, sum and count of finite sigma,
+    largest step displacement and its sphere, list staleness, first non-finite sphere or -1).
+
+    NumPy reductions over the per-sphere arrays: the same values for any thread count.
+    """
+    if sig.size == 0:
+        return 0, 0.0, -np.inf, 0.0, 0, 0.0, -1, 0.0, -1
+    finite_sig = sig > -np.inf
+    ok = np.isfinite(aux).all(axis=1)
+    bad = -1 if ok.all() else int(np.argmin(ok))
+    darg = int(np.argmax(aux[:, 1]))
+    return (int(conv.sum()), float(aux[:, 0].sum()), float(sig.max()), float(sig[finite_sig].sum()),
+            int(finite_sig.sum()), float(aux[darg, 1]), darg, float(aux[:, 2].max()), bad)
+
+
+def _adapt_radii(r: np.ndarray, types: np.ndarray, sig: np.ndarray, tables) -> None:
+    """§5.4.3: grow isolated spheres (max sigma < 0), shrink over-overlapping ones (max sigma > sigma_max)."""
+    on = tables.adapt[types].astype(bool)
+    grow = on & (sig < 0.0)
+    shrink = on & (sig > tables.sig[types])
+    r[grow] = np.minimum(r[grow] + tables.dr[types[grow]], tables.rmax[types[grow]])
+    r[shrink] = np.maximum(r[shrink] - tables.dr[types[shrink]], tables.rmin[types[shrink]])
 
 
 def _staleness(state: State, box, periodic, cutoff) -> float:
@@ -388,7 +435,7 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     ones = np.ones(nt)
     kernel(x, np.empty_like(x), zeros.copy(), zeros.copy(), zeros.copy(), r, types, frozen, start, idx, box, per,
            ones, np.asarray(max_overlap_t, dtype=np.float64), ones, ones, np.zeros(nt), float(cutoff), 1.0, 1.0, 0,
-           0, sig, conv)
+           0, x, r, sig, conv, np.empty((n, 3)))
     return sig, conv
 
 

@@ -16,8 +16,6 @@ from porepipe._shared.numba_config import FASTMATH
 #: exponents of the generalised Lennard-Jones branch (5.2.2); the closed forms below assume m = 2n = 16
 LJ_M = 16
 LJ_N = 8
-#: number of fixed blocks of the reductions: results do not depend on the thread count
-_NBLOCK = 64
 _NEG_INF = -np.inf
 
 
@@ -229,6 +227,22 @@ def _full_from_half(half_start, half_idx, nbr_start, nbr_idx):
 
 
 # ---------------------------------------------------------------------------------------------------------------------
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _sphere_aux(i, x_old, x_new, v, x_build, r, r_build, box, periodic, cut, mass, aux):
+    """Per-sphere diagnostics: kinetic energy, step displacement, list staleness |x - x_build| + cut (r - r_build)+."""
+    d2 = 0.0
+    e2 = 0.0
+    for a in range(3):
+        d = _min_image(x_new[i, a] - x_old[i, a], box[a], periodic[a])
+        d2 += d * d
+        e = _min_image(x_new[i, a] - x_build[i, a], box[a], periodic[a])
+        e2 += e * e
+    aux[i, 0] = 0.5 * mass * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
+    aux[i, 1] = math.sqrt(d2)
+    aux[i, 2] = math.sqrt(e2) + cut * max(0.0, r[i] - r_build[i])
+
+
+# ---------------------------------------------------------------------------------------------------------------------
 # the step: forces at x^{s-1}, damped velocity-Störmer-Verlet update (§5.3), per-sphere overlap and convergence
 _STEP_CACHE: dict = {}
 
@@ -255,7 +269,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
     def _step(x_old, x_new, v, f_prev, f_new, r, types, frozen, nbr_start, nbr_idx, box, periodic, k_t, sig_t,
-              cm_t, cp_t, fmax_t, cut, dt, mass, seed, step, sig_max, conv):
+              cm_t, cp_t, fmax_t, cut, dt, mass, seed, step, x_build, r_build, sig_max, conv, aux):
         n = x_old.shape[0]
         half_dt2_m = 0.5 * dt * dt / mass
         for i in prange(n):
@@ -313,6 +327,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                         x_new[i, a] = x_old[i, a]
                         v[i, a] = 0.0
                         f_new[i, a] = 0.0
+                    _sphere_aux(i, x_old, x_new, v, x_build, r, r_build, box, periodic, cut, mass, aux)
                     continue
             if STOCH:
                 if nforce == 0 and not ok and fmax_t[ti] > 0.0:
@@ -345,86 +360,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                         xa = 0.0
                 v[i, a] = va
                 x_new[i, a] = xa
+            _sphere_aux(i, x_old, x_new, v, x_build, r, r_build, box, periodic, cut, mass, aux)
 
     _STEP_CACHE[key] = _step
     return _step
-
-
-# ---------------------------------------------------------------------------------------------------------------------
-# reductions and small per-sphere updates
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _step_stats(x_old, x_new, x_build, r, r_build, v, sig_max, conv, box, periodic, cut, mass):
-    """Per-step reductions in fixed blocks (independent of the thread count).
-
-    Returns (converged count, kinetic energy, max overlap, sum of finite overlaps, count of finite overlaps,
-    largest step displacement, its sphere, list-staleness = max_i |x_i - x_build,i| + cut * max(0, r_i - r_build,i),
-    first sphere with a non-finite position or -1).
-    """
-    n = x_old.shape[0]
-    nconv = np.zeros(_NBLOCK, dtype=np.int64)
-    ke = np.zeros(_NBLOCK)
-    smax = np.full(_NBLOCK, _NEG_INF)
-    ssum = np.zeros(_NBLOCK)
-    scnt = np.zeros(_NBLOCK, dtype=np.int64)
-    dmax = np.zeros(_NBLOCK)
-    darg = np.full(_NBLOCK, -1, dtype=np.int64)
-    stale = np.zeros(_NBLOCK)
-    bad = np.full(_NBLOCK, -1, dtype=np.int64)
-    chunk = (n + _NBLOCK - 1) // _NBLOCK
-    for b in prange(_NBLOCK):
-        for i in range(b * chunk, min(n, (b + 1) * chunk)):
-            nconv[b] += conv[i]
-            ke[b] += 0.5 * mass * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
-            s = sig_max[i]
-            if s > smax[b]:
-                smax[b] = s
-            if s > _NEG_INF:
-                ssum[b] += s
-                scnt[b] += 1
-            d2 = 0.0
-            e2 = 0.0
-            for a in range(3):
-                d = _min_image(x_new[i, a] - x_old[i, a], box[a], periodic[a])
-                d2 += d * d
-                e = _min_image(x_new[i, a] - x_build[i, a], box[a], periodic[a])
-                e2 += e * e
-            if not (math.isfinite(d2) and math.isfinite(ke[b])) and bad[b] < 0:
-                bad[b] = i
-            if d2 > dmax[b]:
-                dmax[b] = d2
-                darg[b] = i
-            st = math.sqrt(e2) + cut * max(0.0, r[i] - r_build[i])
-            if st > stale[b]:
-                stale[b] = st
-    out_bad = np.int64(-1)
-    for b in range(_NBLOCK):
-        if bad[b] >= 0:
-            out_bad = bad[b]
-            break
-    best = np.int64(0)
-    for b in range(_NBLOCK):
-        if dmax[b] > dmax[best]:
-            best = b
-    return (nconv.sum(), ke.sum(), smax.max(), ssum.sum(), scnt.sum(), math.sqrt(dmax[best]), darg[best],
-            stale.max(), out_bad)
-
-
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _adapt_radii(r, types, sig_max, sig_t, adapt_t, dr_t, rmin_t, rmax_t):
-    """§5.4.3: grow isolated spheres (max sigma < 0), shrink over-overlapping ones (max sigma > sigma_max)."""
-    for i in prange(r.size):
-        t = types[i]
-        if not adapt_t[t]:
-            continue
-        s = sig_max[i]
-        if s < 0.0:
-            r[i] = min(r[i] + dr_t[t], rmax_t[t])
-        elif s > sig_t[t]:
-            r[i] = max(r[i] - dr_t[t], rmin_t[t])
-
-
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _update_frozen(frozen, conv, types, type_frozen, lock):
-    """Frozen = permanently frozen type, or (after s_lock) converged; unconverged spheres unfreeze."""
-    for i in prange(frozen.size):
-        frozen[i] = 1 if (type_frozen[types[i]] or (lock and conv[i] != 0)) else 0

@@ -216,6 +216,9 @@ class Settings(_Strict):
         0.25, gt=0, le=0.5, description="stability guard: a sphere moving more than this fraction of the smallest box "
         "edge in one step stops the run")
     checkpoint_every: int = Field(0, ge=0, description="write a checkpoint every n steps (0: never)")
+    parallel_min_spheres: int = Field(
+        20000, ge=0, description="stages with fewer spheres run on one thread (thread start-up costs more than it "
+        "saves; results are identical for any thread count)")
     progress_every_s: PosFloat = Field(10.0, description="seconds between progress lines")
 
     @model_validator(mode="after")

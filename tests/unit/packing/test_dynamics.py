@@ -38,7 +38,8 @@ class Run:
         xn, fn = np.empty_like(self.x), np.empty_like(self.f)
         self.kernel(self.x, xn, self.v, self.f, fn, self.r, self.types, np.zeros(len(self.r), np.uint8),
                     self.nbr[0], self.nbr[1], self.box, self.per, self.k, self.sig, self.cm, self.cp,
-                    np.zeros(len(self.k)), self.cut, self.dt, 1.0, 0, self.s, self.sigmax, self.conv)
+                    np.zeros(len(self.k)), self.cut, self.dt, 1.0, 0, self.s, self.x, self.r, self.sigmax, self.conv,
+                    np.empty((len(self.r), 3)))
         self.x, self.f = xn, fn
 
     def kinetic(self):
