@@ -16,10 +16,12 @@ from porepipe.lbm._settings import Gradient, Velocity
 
 @dataclasses.dataclass
 class Sampler:
-    """Precomputed per-node layer index and sample-window weights of one lattice."""
+    """Precomputed per-node layer index and sample membership of one lattice.
+
+    Slice averages run over whole slices (C(ℓ) ∩ P); only the sample average ⟨v⟩_S uses the lateral window.
+    """
 
     layer: np.ndarray  # (N,) int64 layer of each node
-    in_window: np.ndarray  # (N,) float64, 1 if the node is in the sample's lateral window
     sample_nodes: np.ndarray  # (N,) bool: node in S
     n_layers: int
 
@@ -29,15 +31,15 @@ class Sampler:
         layer = np.repeat(np.arange(lat.shape[0], dtype=np.int64), counts)
         win = lat.node_window()
         s0, s1 = lat.sample_layers
-        return cls(layer, win.astype(np.float64), win & (layer >= s0) & (layer < s1), lat.shape[0])
+        return cls(layer, win & (layer >= s0) & (layer < s1), lat.shape[0])
 
     def layer_sums(self, values: np.ndarray) -> np.ndarray:
-        """Σ over the window nodes of every layer."""
-        return np.bincount(self.layer, weights=values * self.in_window, minlength=self.n_layers)
+        """Σ over the pore nodes of every layer, C(ℓ) ∩ P (thesis Eq. 6.1.24)."""
+        return np.bincount(self.layer, weights=values, minlength=self.n_layers)
 
     def layer_means(self, values: np.ndarray) -> np.ndarray:
-        """Mean over the window pore nodes of every layer (NaN where a layer has none)."""
-        count = np.bincount(self.layer, weights=self.in_window, minlength=self.n_layers)
+        """Mean over the pore nodes of every layer, ⟨·⟩_{C(ℓ)∩P} (NaN where a layer has none)."""
+        count = np.bincount(self.layer, minlength=self.n_layers)
         with np.errstate(invalid="ignore", divide="ignore"):
             return self.layer_sums(values) / count
 

@@ -22,8 +22,8 @@ _W = W.copy()
 _OPP = OPPOSITE.copy()
 _M = dhumieres_matrix()
 _M_NORM2 = (_M * _M).sum(axis=1)
-#: nodes per work block of the parallel loop (one scratch buffer per block).
-_BLOCK = 2048
+#: nodes per work block of the parallel loop (scratch of 19 x _BLOCK float64 stays in L1/L2).
+_BLOCK = 256
 
 
 # -- geometry -------------------------------------------------------------------------------------------------------
@@ -80,114 +80,138 @@ def _gather_table(ids, shape, periodic, n_nodes, gather_out):
                         gather_out[q - 1, n] = _OPP[q] * n_nodes + n
 
 
-# -- per-node helpers ---------------------------------------------------------------------------------------------------
+# -- block helpers: a block of up to _BLOCK nodes is processed population by population, so every inner loop
+#    runs over contiguous nodes and vectorises; scratch arrays are allocated once per block of the prange.
 @njit(cache=True, fastmath=FASTMATH)
-def _load(src, gather, n, n_nodes, f):
-    """Pull the 19 populations arriving at node ``n`` into ``f`` (float64)."""
-    f[0] = src[n]
+def _gather_block(src, gather, n0, cnt, fb):
+    """Pull the populations arriving at nodes n0 … n0+cnt-1 into ``fb`` (19, _BLOCK) float64."""
+    for i in range(cnt):
+        fb[0, i] = src[n0 + i]
     for q in range(1, 19):
-        f[q] = src[gather[q - 1, n]]
+        row = gather[q - 1]
+        for i in range(cnt):
+            fb[q, i] = src[row[n0 + i]]
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _moments(f):
-    """Density deviation δρ = Σ f̃ and momentum j = Σ f̃ c of one node."""
-    d = 0.0
-    jx = 0.0
-    jy = 0.0
-    jz = 0.0
+def _moments_block(fb, cnt, n0, force_lo, force_hi, mom):
+    """Per node: mom = (δρ, j_x, j_y, j_z, ρ, 1/ρ, j², force on/off) of the gathered populations."""
+    for i in range(cnt):
+        mom[0, i] = 0.0
+        mom[1, i] = 0.0
+        mom[2, i] = 0.0
+        mom[3, i] = 0.0
     for q in range(19):
-        d += f[q]
-        jx += f[q] * _CX[q]
-        jy += f[q] * _CY[q]
-        jz += f[q] * _CZ[q]
-    return d, jx, jy, jz
+        cx, cy, cz = _CX[q], _CY[q], _CZ[q]
+        for i in range(cnt):
+            v = fb[q, i]
+            mom[0, i] += v
+            mom[1, i] += cx * v
+            mom[2, i] += cy * v
+            mom[3, i] += cz * v
+    for i in range(cnt):
+        rho = 1.0 + mom[0, i]
+        mom[4, i] = rho
+        mom[5, i] = 1.0 / rho
+        mom[6, i] = mom[1, i] * mom[1, i] + mom[2, i] * mom[2, i] + mom[3, i] * mom[3, i]
+        n = n0 + i
+        mom[7, i] = 1.0 * ((n >= force_lo) & (n < force_hi))
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _equilibrium(q, d, jx, jy, jz, inv_rho, jj):
-    """Zero-centred equilibrium f̃^eq_q = w_q [δρ + 3 c·j + 9/2 (c·j)²/ρ − 3/2 j²/ρ] (thesis Eq. 6.1.11)."""
-    cj = _CX[q] * jx + _CY[q] * jy + _CZ[q] * jz
-    return _W[q] * (d + 3.0 * cj + (4.5 * cj * cj - 1.5 * jj) * inv_rho)
+def _feq(q, i, mom):
+    """Zero-centred equilibrium f̃^eq_q = w_q [δρ + 3 c·j + (9/2 (c·j)² − 3/2 j²)/ρ] (thesis Eq. 6.1.11)."""
+    cj = _CX[q] * mom[1, i] + _CY[q] * mom[2, i] + _CZ[q] * mom[3, i]
+    return _W[q] * (mom[0, i] + 3.0 * cj + (4.5 * cj * cj - 1.5 * mom[6, i]) * mom[5, i])
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _force_term(q, rho, bx, by, bz):
-    """Body-force source φ_q = 3 w_q ρ (b·c_q) (thesis Eq. 6.1.20, h0 = h2 = 0)."""
-    return 3.0 * _W[q] * rho * (_CX[q] * bx + _CY[q] * by + _CZ[q] * bz)
+def _force_coefficient(q, force):
+    """3 w_q (b·c_q): the body-force source is φ_q = this × ρ (thesis Eq. 6.1.20, h0 = h2 = 0)."""
+    return 3.0 * _W[q] * (_CX[q] * force[0] + _CY[q] * force[1] + _CZ[q] * force[2])
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _store(dst, n, n_nodes, f, fields, store, d, jx, jy, jz, bx, by, bz):
+def _store_block(dst, n0, cnt, n_nodes, fb, mom, fields, store, force):
     """Write the post-collision populations; optionally δρ and the velocity u = (j + ρb/2)/ρ."""
     for q in range(19):
-        dst[q * n_nodes + n] = f[q]
+        off = q * n_nodes + n0
+        for i in range(cnt):
+            dst[off + i] = fb[q, i]
     if store:
-        rho = 1.0 + d
-        fields[0, n] = d
-        fields[1, n] = jx / rho + 0.5 * bx
-        fields[2, n] = jy / rho + 0.5 * by
-        fields[3, n] = jz / rho + 0.5 * bz
+        for i in range(cnt):
+            on = 0.5 * mom[7, i]
+            fields[0, n0 + i] = mom[0, i]
+            fields[1, n0 + i] = mom[1, i] * mom[5, i] + on * force[0]
+            fields[2, n0 + i] = mom[2, i] * mom[5, i] + on * force[1]
+            fields[3, n0 + i] = mom[3, i] * mom[5, i] + on * force[2]
 
 
-# -- collision operators (in place on the float64 scratch f) -------------------------------------------------------
+# -- collision operators on a block (in place on the float64 scratch fb) -------------------------------------------
 @njit(cache=True, fastmath=FASTMATH)
-def _collide_bgk(f, d, jx, jy, jz, bx, by, bz, omega):
-    rho = 1.0 + d
-    inv_rho = 1.0 / rho
-    jj = jx * jx + jy * jy + jz * jz
+def _collide_bgk(fb, cnt, mom, force, omega):
     for q in range(19):
-        feq = _equilibrium(q, d, jx, jy, jz, inv_rho, jj)
-        f[q] += omega * (feq - f[q]) + _force_term(q, rho, bx, by, bz)
+        fq = _force_coefficient(q, force)
+        for i in range(cnt):
+            fb[q, i] += omega * (_feq(q, i, mom) - fb[q, i]) + fq * mom[4, i] * mom[7, i]
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _collide_trt(f, d, jx, jy, jz, bx, by, bz, omega_plus, omega_minus):
-    rho = 1.0 + d
-    inv_rho = 1.0 / rho
-    jj = jx * jx + jy * jy + jz * jz
-    f[0] += omega_plus * (_equilibrium(0, d, jx, jy, jz, inv_rho, jj) - f[0])
+def _collide_trt(fb, cnt, mom, force, omega_plus, omega_minus):
+    for i in range(cnt):
+        fb[0, i] += omega_plus * (_feq(0, i, mom) - fb[0, i])
+    half_p = 0.5 * omega_plus
+    half_m = 0.5 * omega_minus
     for p in range(1, 19, 2):
         r = p + 1
-        e_p = _equilibrium(p, d, jx, jy, jz, inv_rho, jj)
-        e_r = _equilibrium(r, d, jx, jy, jz, inv_rho, jj)
-        sym = 0.5 * omega_plus * (e_p + e_r - f[p] - f[r])
-        anti = 0.5 * omega_minus * (e_p - e_r - f[p] + f[r])
-        f[p] += sym + anti + _force_term(p, rho, bx, by, bz)
-        f[r] += sym - anti + _force_term(r, rho, bx, by, bz)
+        fp = _force_coefficient(p, force)
+        fr = _force_coefficient(r, force)
+        for i in range(cnt):
+            e_p = _feq(p, i, mom)
+            e_r = _feq(r, i, mom)
+            sym = half_p * (e_p + e_r - fb[p, i] - fb[r, i])
+            anti = half_m * (e_p - e_r - fb[p, i] + fb[r, i])
+            rho_on = mom[4, i] * mom[7, i]
+            fb[p, i] += sym + anti + fp * rho_on
+            fb[r, i] += sym - anti + fr * rho_on
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _collide_mrt(f, d, jx, jy, jz, bx, by, bz, rates_scaled, m):
+def _collide_mrt(fb, cnt, mom, force, rates_scaled, mb):
     """d'Humières MRT: f ← f − M⁻¹ Š M (f − f^eq) + φ, with M⁻¹ = Mᵀ diag(1/|M_k|²) (rows orthogonal).
 
-    ``rates_scaled[k] = s_k / |M_k|²``; ``m`` is a 19-element scratch for the moments.
+    ``rates_scaled[k] = s_k / |M_k|²``; ``mb`` (19, _BLOCK) is scratch for the moments.
     """
-    rho = 1.0 + d
-    inv_rho = 1.0 / rho
-    jj = jx * jx + jy * jy + jz * jz
     for q in range(19):
-        f[q] -= _equilibrium(q, d, jx, jy, jz, inv_rho, jj)
+        for i in range(cnt):
+            fb[q, i] -= _feq(q, i, mom)
     for k in range(19):
-        acc = 0.0
+        for i in range(cnt):
+            mb[k, i] = 0.0
+        if rates_scaled[k] == 0.0:
+            continue
         for q in range(19):
-            acc += _M[k, q] * f[q]
-        m[k] = acc * rates_scaled[k]
+            mkq = _M[k, q]
+            if mkq == 0.0:
+                continue
+            for i in range(cnt):
+                mb[k, i] += mkq * fb[q, i]
+        s = rates_scaled[k]
+        for i in range(cnt):
+            mb[k, i] *= s
     for q in range(19):
-        acc = 0.0
+        fq = _force_coefficient(q, force)
         for k in range(19):
-            acc += _M[k, q] * m[k]
-        f[q] += _equilibrium(q, d, jx, jy, jz, inv_rho, jj) - acc + _force_term(q, rho, bx, by, bz)
+            mkq = _M[k, q]
+            if mkq == 0.0 or rates_scaled[k] == 0.0:
+                continue
+            for i in range(cnt):
+                fb[q, i] -= mkq * mb[k, i]
+        for i in range(cnt):
+            fb[q, i] += _feq(q, i, mom) + fq * mom[4, i] * mom[7, i]
 
 
 # -- step kernels: one per operator ---------------------------------------------------------------------------------
-@njit(cache=True, fastmath=FASTMATH)
-def _node_force(n, force_lo, force_hi, force):
-    """Body force of node ``n``: ``force`` inside the node range [force_lo, force_hi), else zero (no branch)."""
-    on = 1.0 * ((n >= force_lo) & (n < force_hi))
-    return on * force[0], on * force[1], on * force[2]
-
-
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _step_bgk(src, dst, gather, force_lo, force_hi, force, fields, store, n_steps, omega):
     """``n_steps`` BGK steps, alternating src -> dst -> src; fields of the last step if ``store``."""
@@ -197,13 +221,14 @@ def _step_bgk(src, dst, gather, force_lo, force_hi, force, fields, store, n_step
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
         keep = store and s == n_steps - 1
         for blk in prange(n_blocks):
-            f = np.empty(19)
-            for n in range(blk * _BLOCK, min(n_nodes, (blk + 1) * _BLOCK)):
-                _load(a, gather, n, n_nodes, f)
-                d, jx, jy, jz = _moments(f)
-                bx, by, bz = _node_force(n, force_lo, force_hi, force)
-                _collide_bgk(f, d, jx, jy, jz, bx, by, bz, omega)
-                _store(b, n, n_nodes, f, fields, keep, d, jx, jy, jz, bx, by, bz)
+            fb = np.empty((19, _BLOCK))
+            mom = np.empty((8, _BLOCK))
+            n0 = blk * _BLOCK
+            cnt = min(n_nodes, n0 + _BLOCK) - n0
+            _gather_block(a, gather, n0, cnt, fb)
+            _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
+            _collide_bgk(fb, cnt, mom, force, omega)
+            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -215,13 +240,14 @@ def _step_trt(src, dst, gather, force_lo, force_hi, force, fields, store, n_step
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
         keep = store and s == n_steps - 1
         for blk in prange(n_blocks):
-            f = np.empty(19)
-            for n in range(blk * _BLOCK, min(n_nodes, (blk + 1) * _BLOCK)):
-                _load(a, gather, n, n_nodes, f)
-                d, jx, jy, jz = _moments(f)
-                bx, by, bz = _node_force(n, force_lo, force_hi, force)
-                _collide_trt(f, d, jx, jy, jz, bx, by, bz, omega_plus, omega_minus)
-                _store(b, n, n_nodes, f, fields, keep, d, jx, jy, jz, bx, by, bz)
+            fb = np.empty((19, _BLOCK))
+            mom = np.empty((8, _BLOCK))
+            n0 = blk * _BLOCK
+            cnt = min(n_nodes, n0 + _BLOCK) - n0
+            _gather_block(a, gather, n0, cnt, fb)
+            _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
+            _collide_trt(fb, cnt, mom, force, omega_plus, omega_minus)
+            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -233,14 +259,15 @@ def _step_mrt(src, dst, gather, force_lo, force_hi, force, fields, store, n_step
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
         keep = store and s == n_steps - 1
         for blk in prange(n_blocks):
-            f = np.empty(19)
-            m = np.empty(19)
-            for n in range(blk * _BLOCK, min(n_nodes, (blk + 1) * _BLOCK)):
-                _load(a, gather, n, n_nodes, f)
-                d, jx, jy, jz = _moments(f)
-                bx, by, bz = _node_force(n, force_lo, force_hi, force)
-                _collide_mrt(f, d, jx, jy, jz, bx, by, bz, rates_scaled, m)
-                _store(b, n, n_nodes, f, fields, keep, d, jx, jy, jz, bx, by, bz)
+            fb = np.empty((19, _BLOCK))
+            mom = np.empty((8, _BLOCK))
+            mb = np.empty((19, _BLOCK))
+            n0 = blk * _BLOCK
+            cnt = min(n_nodes, n0 + _BLOCK) - n0
+            _gather_block(a, gather, n0, cnt, fb)
+            _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
+            _collide_mrt(fb, cnt, mom, force, rates_scaled, mb)
+            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force)
 
 
 # -- reductions ---------------------------------------------------------------------------------------------------------

@@ -181,9 +181,6 @@ def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: 
         est = estimates(lat, sampler, fields, nu=nu, body_force=settings.body_force, sample_voxels=sample_voxels,
                         sample_area=sample_area, trim_layers=settings.trim_layers)
         kappa = est[key_name]
-        if not math.isfinite(kappa):
-            raise StabilityError(f"κ̂ estimate {key_name} is not finite at step {done} (no pressure drop across "
-                                 f"the sample?): check the set-up or raise `body_force` (now {settings.body_force})")
         dv, drho, dk = (float("inf"),) * 3
         if prev_fields is not None and n_run == window:  # Eq. 6.1.30 compares over a full window dt
             sel = sampler.sample_nodes
@@ -191,7 +188,7 @@ def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: 
             floor = VELOCITY_FLOOR * float(np.max(np.abs(u_new))) if u_new.size else 0.0
             dv = K._max_rel_change(u_new, u_old, max(floor, 1e-300))
             drho = K._max_rel_change(1.0 + fields[0, sel], 1.0 + prev_fields[0, sel], 1e-300)
-            dk = abs(kappa - prev_kappa) / abs(kappa) if kappa != 0 else float("inf")
+            dk = abs(kappa - prev_kappa) / abs(kappa) if kappa != 0 and math.isfinite(kappa) else float("inf")
         for name, value in zip(history, (done, kappa, dv, drho, dk, mach)):
             history[name].append(value)
         if reporter is not None:
@@ -203,6 +200,9 @@ def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: 
         if checkpoint is not None and time.perf_counter() - last_ckpt > settings.checkpoint_every_s:
             _save_checkpoint(checkpoint, ckey, done, src, fields, history)
             last_ckpt = time.perf_counter()
+    if converged and not math.isfinite(est[key_name]):
+        raise StabilityError(f"κ̂ estimate {key_name} is not finite at step {done} (no pressure drop across the "
+                             f"sample?): check the set-up or raise `body_force` (now {settings.body_force})")
     if not converged and checkpoint is not None:
         _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
     mlups = n * (done - start) / max(step_wall, 1e-12) / 1e6
