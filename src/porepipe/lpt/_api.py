@@ -332,8 +332,10 @@ def percolation_bits(pore, size: int, origins: np.ndarray, counts: np.ndarray | 
     out = np.zeros(origins.shape[0], np.uint8)
     if origins.shape[0]:
         n_chunks = min(origins.shape[0], 16 * numba.get_num_threads())
-        K._percolation_cells(pore, origins, counts, int(size), neighbour_steps(connectivity), want, stop, n_chunks,
-                             out)
+        steps = neighbour_steps(connectivity)
+        padded = int(size) + 2
+        lin = np.ascontiguousarray((steps[..., 0] * padded + steps[..., 1]) * padded + steps[..., 2])
+        K._percolation_cells(pore, origins, counts, int(size), steps, lin, want, stop, n_chunks, out)
     return out
 
 

@@ -154,24 +154,34 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
                         rec[x0 // rec_stride, y0 // rec_stride, z0 // rec_stride] = row[z0]
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _spans(pore, xi, yi, zi, size, axis, offs, stamp, gen, si, sj, sk):
-    """True if pore voxels of the cell join its faces ``axis = 0`` and ``axis = size - 1``.
+#: bits of a packed stack entry: (i << 2*_SHIFT) | (j << _SHIFT) | k, for padded cell coordinates < 2**_SHIFT
+_SHIFT = 16
+_MASK = (1 << _SHIFT) - 1
+#: stamp of the padding layer around a cell: larger than any search generation, so always "visited"
+_WALL = np.uint32(0xFFFFFFFF)
 
-    The cell is ``pore[xi[i], yi[j], zi[k]]`` for i, j, k in 0..size-1. Depth-first search from all pore voxels of
-    the near face; ``offs`` lists the neighbour steps with the step towards the far face last, so it is taken
-    first. ``stamp[v] == gen`` marks visited voxels (v = (i*size + j)*size + k); si/sj/sk is the stack.
+
+@njit(cache=True, fastmath=FASTMATH)
+def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack):
+    """True if pore voxels of the cell join its faces perpendicular to ``axis``.
+
+    Cell coordinates are padded: 1..size inside, 0 and size+1 the padding layer, whose ``stamp`` is _WALL, so no
+    bounds checks are needed. The voxel at padded (i, j, k) is ``flat[xoff[i] + yoff[j] + zoff[k]]``. Depth-first
+    search from all pore voxels of the face at coordinate 1 to the face at ``size``; ``steps`` (and their linear
+    offsets ``lin`` in the padded cell) list the straight step towards the far face last, so it is tried first.
+    ``stamp[v] >= gen`` marks visited voxels; ``stack`` holds packed coordinates.
     """
-    far = size - 1
+    p = size + 2
+    far = size
     any_far = False
-    for a in range(size):
-        for b in range(size):
+    for a in range(1, size + 1):
+        for b in range(1, size + 1):
             if axis == 0:
-                hit = pore[xi[far], yi[a], zi[b]]
+                hit = flat[xoff[far] + yoff[a] + zoff[b]]
             elif axis == 1:
-                hit = pore[xi[a], yi[far], zi[b]]
+                hit = flat[xoff[a] + yoff[far] + zoff[b]]
             else:
-                hit = pore[xi[a], yi[b], zi[far]]
+                hit = flat[xoff[a] + yoff[b] + zoff[far]]
             if hit != 0:
                 any_far = True
                 break
@@ -179,55 +189,53 @@ def _spans(pore, xi, yi, zi, size, axis, offs, stamp, gen, si, sj, sk):
             break
     if not any_far:
         return False
+    if size == 1:
+        return True
     top = 0
-    for a in range(size):
-        for b in range(size):
+    for a in range(1, size + 1):
+        for b in range(1, size + 1):
             if axis == 0:
-                i, j, k = 0, a, b
+                i, j, k = 1, a, b
             elif axis == 1:
-                i, j, k = a, 0, b
+                i, j, k = a, 1, b
             else:
-                i, j, k = a, b, 0
-            if pore[xi[i], yi[j], zi[k]] != 0:
-                if far == 0:
-                    return True
-                stamp[(i * size + j) * size + k] = gen
-                si[top] = i
-                sj[top] = j
-                sk[top] = k
+                i, j, k = a, b, 1
+            if flat[xoff[i] + yoff[j] + zoff[k]] != 0:
+                stamp[(i * p + j) * p + k] = gen
+                stack[top] = (i << (2 * _SHIFT)) | (j << _SHIFT) | k
                 top += 1
-    n_nb = offs.shape[0]
+    n_nb = steps.shape[0]
     while top > 0:
         top -= 1
-        i = si[top]
-        j = sj[top]
-        k = sk[top]
+        code = stack[top]
+        i = code >> (2 * _SHIFT)
+        j = (code >> _SHIFT) & _MASK
+        k = code & _MASK
+        v = (i * p + j) * p + k
         for n in range(n_nb):
-            ni = i + offs[n, 0]
-            nj = j + offs[n, 1]
-            nk = k + offs[n, 2]
-            if ni < 0 or nj < 0 or nk < 0 or ni > far or nj > far or nk > far:
+            w = v + lin[n]
+            if stamp[w] >= gen:
                 continue
-            v = (ni * size + nj) * size + nk
-            if stamp[v] == gen or pore[xi[ni], yi[nj], zi[nk]] == 0:
+            ni = i + steps[n, 0]
+            nj = j + steps[n, 1]
+            nk = k + steps[n, 2]
+            if flat[xoff[ni] + yoff[nj] + zoff[nk]] == 0:
                 continue
             if (axis == 0 and ni == far) or (axis == 1 and nj == far) or (axis == 2 and nk == far):
                 return True
-            stamp[v] = gen
-            si[top] = ni
-            sj[top] = nj
-            sk[top] = nk
+            stamp[w] = gen
+            stack[top] = (ni << (2 * _SHIFT)) | (nj << _SHIFT) | nk
             top += 1
     return False
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _percolation_cells(pore, origins, counts, size, offs_by_axis, want, stop, n_chunks, out):
+def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, want, stop, n_chunks, out):
     """Local percolation indicators of many cells.
 
     Parameters
     ----------
-    pore : (nx, ny, nz) uint8 ndarray
+    pore : (nx, ny, nz) uint8 ndarray, C-contiguous
         1 = pore.
     origins : (n, 3) int64 ndarray
         Cell origins; cell voxels are ``(origin + 0..size-1) mod shape`` on each axis.
@@ -237,6 +245,8 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, want, stop, n_
         Cell edge L in voxels.
     offs_by_axis : (3, n_nb, 3) int64 ndarray
         Neighbour steps per search axis, the step towards the far face last.
+    lin_by_axis : (3, n_nb) int64 ndarray
+        The same steps as offsets of the linear index in the padded cell ((size+2)³, x slowest).
     want : int
         Bit mask of the axes to search (BIT_X | BIT_Y | BIT_Z).
     stop : int
@@ -248,15 +258,20 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, want, stop, n_
     """
     n = origins.shape[0]
     nx, ny, nz = pore.shape
+    flat = pore.reshape(nx * ny * nz)
     full = size * size * size
+    p = size + 2
     for c in prange(n_chunks):
-        stamp = np.zeros(full, np.uint32)
-        si = np.empty(full, np.int32)
-        sj = np.empty(full, np.int32)
-        sk = np.empty(full, np.int32)
-        xi = np.empty(size, np.int64)
-        yi = np.empty(size, np.int64)
-        zi = np.empty(size, np.int64)
+        stamp = np.zeros(p * p * p, np.uint32)
+        for i in range(p):
+            for j in range(p):
+                for k in range(p):
+                    if i == 0 or j == 0 or k == 0 or i == p - 1 or j == p - 1 or k == p - 1:
+                        stamp[(i * p + j) * p + k] = _WALL
+        stack = np.empty(full, np.int64)
+        xoff = np.zeros(p, np.int64)
+        yoff = np.zeros(p, np.int64)
+        zoff = np.zeros(p, np.int64)
         gen = np.uint32(0)
         for cell in range(c, n, n_chunks):
             k = counts[cell]
@@ -265,17 +280,20 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, want, stop, n_
                 bits = want & 7
             elif k >= size:  # a path between opposite faces needs at least `size` pore voxels
                 for a in range(size):
-                    xi[a] = (origins[cell, 0] + a) % nx
-                    yi[a] = (origins[cell, 1] + a) % ny
-                    zi[a] = (origins[cell, 2] + a) % nz
+                    xoff[a + 1] = ((origins[cell, 0] + a) % nx) * (ny * nz)
+                    yoff[a + 1] = ((origins[cell, 1] + a) % ny) * nz
+                    zoff[a + 1] = (origins[cell, 2] + a) % nz
                 for axis in range(3):
                     if (want >> axis) & 1 == 0:
                         continue
-                    if gen == np.uint32(0xFFFFFFFF):
-                        stamp[:] = 0
+                    if gen == _WALL - np.uint32(1):  # generations exhausted: clear the inside marks
+                        for v in range(p * p * p):
+                            if stamp[v] != _WALL:
+                                stamp[v] = 0
                         gen = np.uint32(0)
                     gen += np.uint32(1)
-                    ok = _spans(pore, xi, yi, zi, size, axis, offs_by_axis[axis], stamp, gen, si, sj, sk)
+                    ok = _spans(flat, xoff, yoff, zoff, size, axis, offs_by_axis[axis], lin_by_axis[axis], stamp,
+                                gen, stack)
                     if ok:
                         bits |= 1 << axis
                     if (stop == STOP_ON_FAIL and not ok) or (stop == STOP_ON_SUCCESS and ok):
