@@ -91,6 +91,18 @@ def _normalise(name, normals, offsets) -> tuple[np.ndarray, np.ndarray]:
     return normals / length[:, None], offsets / length
 
 
+def check_bounded(name: str, normals: np.ndarray) -> None:
+    """{n·x <= d} is bounded iff the origin lies strictly inside the convex hull of the unit normals."""
+    try:
+        hull = ConvexHull(normals)
+        inside = hull.equations[:, 3].max() < -1e-9
+    except QhullError:
+        inside = False   # coplanar normals: a prism or slab, open along their common perpendicular
+    if not inside:
+        raise PorepipeError(f"grain type {name!r}: the planes do not bound a polyhedron (unbounded); add planes whose "
+                            "normals surround the origin")
+
+
 def chebyshev_ball(name: str, normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float]:
     """Centre and radius of the largest ball in {n·x <= d} (linear programme); PorepipeError if unbounded or empty."""
     a_ub = np.column_stack([normals, np.ones(len(offsets))])
@@ -185,6 +197,7 @@ def polyhedron(name: str, normals, offsets, centre: bool = True) -> GrainType:
         The planes do not bound a polyhedron (unbounded), leave no interior (empty or flat), or contain NaN/Inf.
     """
     normals, offsets = _normalise(name, normals, offsets)
+    check_bounded(name, normals)
     interior, _ = chebyshev_ball(name, normals, offsets)
     verts = _vertices(name, normals, offsets, interior)
     if centre:
