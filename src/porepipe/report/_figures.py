@@ -1,0 +1,161 @@
+"""PNG figures of the report (matplotlib's Agg canvas, no pyplot state, no display), each with its data as CSV."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
+
+from porepipe._shared.store import open_volume
+from porepipe.report._analysis import cost_per_digit, pareto_front, reference_limit
+from porepipe.sweep import FULL
+
+COLUMNS = 3
+
+
+def _figure(n_panels: int, width_in: float = 3.4, height_in: float = 2.7):
+    rows = max(1, -(-n_panels // COLUMNS))
+    cols = min(COLUMNS, max(1, n_panels))
+    fig = Figure(figsize=(width_in * cols, height_in * rows), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    for ax in axes[n_panels:]:
+        ax.set_visible(False)
+    return fig, axes
+
+
+def write_csv(path: Path, rows: list[dict]) -> Path:
+    """Write ``rows`` (dicts with the same keys) as CSV."""
+    with open(path, "w", newline="") as fh:
+        if rows:
+            writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+    return path
+
+
+def _sample_label(s: float) -> str:
+    return "whole sample" if s == FULL else f"L = {s:g} um"
+
+
+def quantities_figure(ds: xr.Dataset, quantities, path: Path, dpi: int) -> list[dict]:
+    """Every quantity against resolution, per sample size, with the fitted curve and the limit at a = 0."""
+    fig, axes = _figure(len(quantities))
+    rows = []
+    a_max = float(ds.a_um.max())
+    for ax, q in zip(axes, quantities):
+        for s in ds.sample_um.values:
+            v = ds.value.sel(quantity=q, sample_um=s).values
+            keep = np.isfinite(v)
+            if not keep.any():
+                continue
+            ax.plot(ds.a_um.values[keep], v[keep], "o", label=_sample_label(s))
+            rows += [{"quantity": q, "sample_um": s, "a_um": a, "value": x}
+                     for a, x in zip(ds.a_um.values[keep], v[keep])]
+        ref = reference_limit(ds, q)
+        if ref is not None:
+            sel = ds.sel(quantity=q, form=ref.form, sample_um=FULL)
+            grid = np.linspace(0.0, a_max, 100)
+            ax.plot(grid, ref.value + float(sel.c) * grid ** float(sel.p), "-", lw=1,
+                    label=f"fit p = {float(sel.p):.2g}")
+            ax.errorbar([0.0], [ref.value], yerr=[ref.err], fmt="s", color="k", capsize=3,
+                        label=f"limit {ref.value:.5g}")
+            rows.append({"quantity": q, "sample_um": FULL, "a_um": 0.0, "value": ref.value})
+            ax.set_title(q, fontsize=8)
+        else:
+            why = str(ds.why.sel(quantity=q, form="linear", sample_um=FULL).item())
+            ax.set_title(f"{q}\nno limit: {why[:45]}", fontsize=7)
+        ax.set_xlabel("voxel size a [um]")
+        ax.set_xlim(left=-0.03 * a_max)
+        ax.legend(fontsize=6)
+    fig.savefig(path, dpi=dpi)
+    return rows
+
+
+def error_cost_figure(rows: list[dict], path: Path, dpi: int) -> list[dict]:
+    """Relative error against total cost, log–log, one point per run, the Pareto front of each quantity marked.
+
+    Returns one summary row per quantity with the cost factor of one more correct digit.
+    """
+    fig, axes = _figure(1, 6.0, 4.2)
+    ax = axes[0]
+    summary = []
+    for q in dict.fromkeys(r["quantity"] for r in rows):
+        mine = [r for r in rows if r["quantity"] == q]
+        cost = np.array([r["cost_s"] for r in mine])
+        err = np.array([r["rel_err"] for r in mine])
+        (line,) = ax.loglog(cost, err, "o", ms=4, alpha=0.7, label=q)
+        front = pareto_front(cost, err)
+        ax.loglog(cost[front], err[front], "-", color=line.get_color(), lw=1.2)
+        ax.loglog(cost[front], err[front], "o", mfc="none", mec="k", ms=7)
+        summary.append({"quantity": q, "front_runs": int(front.size),
+                        "cost_factor_per_digit": cost_per_digit(cost[front], err[front])})
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("cost of the run incl. voxelize + segment [wall s]")
+    ax.set_ylabel("|q(a) - q_inf| / |q_inf|")
+    ax.set_title("error against cost (ringed: Pareto front)", fontsize=9)
+    if rows:
+        ax.legend(fontsize=6)
+    fig.savefig(path, dpi=dpi)
+    return summary
+
+
+def _mid_slice(path, name: str, axis: int) -> np.ndarray:
+    with open_volume(path, name) as dset:
+        index = [slice(None)] * 3
+        index[axis] = dset.shape[axis] // 2
+        return dset[tuple(index)]
+
+
+def sections_figure(grey_paths: dict, binary_paths: dict, axis: int, path: Path, dpi: int) -> list[dict]:
+    """Mid cross-sections of the grey and binary volumes at each resolution (as the thesis's Fig. 7.3)."""
+    a_list = sorted(set(grey_paths) | set(binary_paths), reverse=True)
+    kinds = [(k, p) for k, p in (("grey", grey_paths), ("pore", binary_paths)) if p]
+    fig = Figure(figsize=(2.6 * len(a_list), 2.6 * len(kinds)), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(kinds), len(a_list), squeeze=False)
+    rows = []
+    for r, (name, paths) in enumerate(kinds):
+        for c, a in enumerate(a_list):
+            ax = axes[r, c]
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if a not in paths:
+                ax.set_visible(False)
+                continue
+            img = _mid_slice(paths[a], name, axis)
+            cmap, vmax = ("gray", 216) if name == "grey" else ("binary", 1)  # matrix white in both rows
+            ax.imshow(img.T, origin="lower", cmap=cmap, vmin=0, vmax=vmax, interpolation="nearest")
+            ax.set_title(f"{'grey g (white = matrix)' if name == 'grey' else 'binary (black = pore)'}, a = {a:g} um", fontsize=7)
+            rows.append({"volume": name, "a_um": a, "file": str(paths[a]), "axis": axis,
+                         "index": "middle", "pore_or_mean": float(img.mean())})
+    fig.savefig(path, dpi=dpi)
+    return rows
+
+
+def lpt_figure(lpt_paths: dict, path: Path, dpi: int) -> list[dict]:
+    """Local percolation p_3(L) and the mean/variance of μ(φ, L) against L at each resolution (thesis Fig. 7.7)."""
+    fig, axes = _figure(2)
+    rows = []
+    for a, file in sorted(lpt_paths.items(), reverse=True):
+        with xr.open_dataset(file, engine="h5netcdf") as ds:
+            L_um = ds.L_um.values
+            alphas = [str(x) for x in ds.alpha.values]
+            alpha = "3" if "3" in alphas else alphas[0]
+            p = ds.p.values[:, alphas.index(alpha)]
+            var = ds.phi_var.values
+        axes[0].plot(L_um, p, "o-", ms=3, label=f"a = {a:g} um")
+        axes[1].plot(L_um, var, "o-", ms=3, label=f"a = {a:g} um")
+        rows += [{"a_um": a, "L_um": l, "alpha": alpha, "p": x, "phi_var": v} for l, x, v in zip(L_um, p, var)]
+    axes[0].set(xlabel="cell edge L [um]", ylabel="p_alpha(L)", xscale="log", title="local percolation")
+    axes[1].set(xlabel="cell edge L [um]", ylabel="var of mu(phi, L)", xscale="log", yscale="log",
+                title="local porosity spread")
+    for ax in axes[:2]:
+        ax.legend(fontsize=6)
+    fig.savefig(path, dpi=dpi)
+    return rows
