@@ -149,7 +149,8 @@ def chord_lengths(pore: np.ndarray, voxel_um: float) -> xr.Dataset:
 
 # -- grains ---------------------------------------------------------------------------------------------------------
 def _trim_peaks(peaks: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """Keep the highest distance peaks; drop every peak inside the inscribed sphere of a higher kept one."""
+    """Keep the highest distance peaks; drop a peak inside the inscribed sphere of a higher kept one, or a peak whose
+    inscribed sphere overlaps that of a kept one at least twice as large (a bump on a grain, not a grain)."""
     from scipy.spatial import cKDTree
 
     order = np.argsort(-radius, kind="stable")
@@ -157,8 +158,10 @@ def _trim_peaks(peaks: np.ndarray, radius: np.ndarray) -> np.ndarray:
     alive = np.ones(len(peaks), bool)
     for p in order:
         if alive[p]:
-            near = tree.query_ball_point(peaks[p], r=max(float(radius[p]), 1.0))
-            alive[near] = False
+            near = np.asarray(tree.query_ball_point(peaks[p], r=max(2.0 * float(radius[p]), 1.0)), dtype=np.int64)
+            d = np.linalg.norm(peaks[near] - peaks[p], axis=1)
+            drop = (d < max(float(radius[p]), 1.0)) | ((d < radius[p] + radius[near]) & (radius[near] < 0.5 * radius[p]))
+            alive[near[drop]] = False
             alive[p] = True
     return peaks[alive]
 
@@ -213,6 +216,13 @@ def _touching_boundary(labels: np.ndarray, n_labels: int) -> np.ndarray:
     return touch[1:]
 
 
+def _touching_lower_faces(labels: np.ndarray, n_labels: int) -> np.ndarray:
+    touch = np.zeros(n_labels + 1, bool)
+    for ax in range(3):
+        touch[np.unique(np.take(labels, 0, axis=ax))] = True
+    return touch[1:]
+
+
 def grain_statistics(solid: np.ndarray, voxel_um: float, min_distance: int = 2, periodic: bool = False) -> xr.Dataset:
     """Grain count per mm³, equivalent and inscribed radii, elongation and orientation of watershed grains.
 
@@ -225,6 +235,7 @@ def grain_statistics(solid: np.ndarray, voxel_um: float, min_distance: int = 2, 
     n = int(labels.max())
     shapes = grain_shapes(labels, n)
     cut = np.zeros(n, bool) if periodic else _touching_boundary(labels, n)
+    counted = np.ones(n, bool) if periodic else ~_touching_lower_faces(labels, n)
     del labels
     vol_um3 = shapes["volume_vox"] * voxel_um**3
     ev = shapes["moments"]
@@ -235,13 +246,17 @@ def grain_statistics(solid: np.ndarray, voxel_um: float, min_distance: int = 2, 
         {"grain_volume_um3": ("grain", vol_um3, {"units": "µm^3"}),
          "equivalent_radius_um": ("grain", np.cbrt(3.0 * vol_um3 / (4.0 * np.pi)),
                                   {"units": "µm", "long_name": "radius of the ball of the grain's volume"}),
-         "inscribed_radius_um": ("grain", np.maximum(peak_dist - 0.5, 0.0) * voxel_um,
-                                 {"units": "µm", "long_name": "distance transform at the grain's marker minus half a "
-                                  "voxel: radius of the sphere the grain grew from (overlapping-sphere model)"}),
+         "inscribed_radius_um": ("grain", (peak_dist + 0.5) * voxel_um,
+                                 {"units": "µm", "long_name": "distance transform at the grain's marker + half a voxel "
+                                  "(the marker voxel centre lies on average 0.48 voxel from the sphere centre): "
+                                  "radius of the sphere the grain grew from (overlapping-sphere model)"}),
          "elongation": ("grain", elong, {"units": "1", "long_name": "1 - sqrt(lambda_min / lambda_max)"}),
          "orientation": (("grain", "xyz"), shapes["axes"][:, :, 2], {"long_name": "unit vector of the long axis"}),
          "centroid_um": (("grain", "xyz"), shapes["centroid_vox"] * voxel_um, {"units": "µm"}),
          "cut": ("grain", cut.astype(np.int8), {"long_name": "1 if the grain touches the image boundary"}),
-         "grains_per_mm3": ((), n / box_mm3, {"units": "mm^-3", "long_name": "grain number density"})},
+         "counted": ("grain", counted.astype(np.int8), {"long_name": "1 if the grain counts for the number density "
+                                                       "(touches none of the faces x=0, y=0, z=0: unbiased counting "
+                                                       "frame, Gundersen 1977)"}),
+         "grains_per_mm3": ((), counted.sum() / box_mm3, {"units": "mm^-3", "long_name": "grain number density"})},
         coords={"grain": np.arange(1, n + 1), "xyz": list(AXES)})
 

@@ -1,0 +1,187 @@
+"""Calibration: image statistics -> a model scene (packing + decoration) that the user can edit and run.
+
+The packer needs a sphere count, a radius distribution from the families it supports (packing.RadiusDist: uniform,
+truncated exponential, discrete), and a maximum overlap; the decoration needs grain families with elongation ranges.
+From the statistics: count = grain number density x model box volume; radii = radii of the spheres the grains grew
+from (distance-transform peaks, grains cut by the image boundary left out); elongation classes = quantile classes of
+the grains' inertia-tensor elongation. The target porosity is recorded with the scene so the comparison can check it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+import yaml
+from scipy import optimize, stats
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.acquire._settings import Calibration, Family
+
+#: smallest number of uncut grains for which the radius fit uses only uncut grains
+_MIN_UNCUT = 10
+#: a parametric family is accepted if its Kolmogorov-Smirnov p-value exceeds this; else the discrete table is used
+_KS_ACCEPT_P = 0.01
+
+
+@dataclasses.dataclass
+class RadiusFit:
+    """Fitted radius distribution: the packer's ``radius_um`` block, the KS statistic of every candidate."""
+
+    spec: dict
+    family: Family
+    ks: dict[str, float]
+    pvalue: dict[str, float]
+
+
+def _truncexp_cdf(r, lo, hi, alpha):
+    r = np.clip(r, lo, hi)
+    if alpha <= 0:
+        return (r - lo) / (hi - lo)
+    return -np.expm1(-alpha * (r - lo)) / -np.expm1(-alpha * (hi - lo))
+
+
+def _truncexp_mean(alpha, lo, hi):
+    w = hi - lo
+    return lo + 1.0 / alpha - w * np.exp(-alpha * w) / -np.expm1(-alpha * w)
+
+
+def fit_exponential_alpha(radii: np.ndarray, lo: float, hi: float) -> float:
+    """Maximum-likelihood alpha of P(r) ∝ exp(-alpha r) on [lo, hi] (mean matching); 0 if the data do not decay."""
+    mean = float(np.mean(radii))
+    if mean >= 0.5 * (lo + hi) or hi <= lo:
+        return 0.0  # the packer allows alpha >= 0 only; a non-decaying sample is best fitted by alpha = 0
+    f = lambda a: _truncexp_mean(a, lo, hi) - mean  # noqa: E731  (decreasing in a)
+    top = 1.0 / max(mean - lo, 1e-12 * (hi - lo))
+    while f(top) > 0:
+        top *= 2
+    return float(optimize.brentq(f, 1e-12 / (hi - lo), top, xtol=1e-14, rtol=1e-12))
+
+
+def fit_radius_distribution(radii_um, families: list[Family], discrete_bins: int = 12) -> RadiusFit:
+    """Fit the radius sample with each family; the best-KS parametric family wins if acceptable, else discrete."""
+    r = np.asarray(radii_um, dtype=np.float64)
+    r = r[np.isfinite(r) & (r > 0)]
+    if r.size < 2:
+        raise PorepipeError(f"calibration needs at least 2 grain radii, got {r.size}: the image has (almost) no "
+                            "grains; check the segmentation (acquire.segmentation) or the grain phase")
+    lo, hi = float(r.min()), float(r.max())
+    if hi <= lo:
+        return RadiusFit({"dist": "uniform", "min_um": lo, "max_um": lo}, Family.uniform, {}, {})
+    specs, ks, pval = {}, {}, {}
+    if Family.uniform in families:
+        specs[Family.uniform] = {"dist": "uniform", "min_um": lo, "max_um": hi}
+        res = stats.kstest(r, lambda x: _truncexp_cdf(x, lo, hi, 0.0))
+        ks["uniform"], pval["uniform"] = float(res.statistic), float(res.pvalue)
+    if Family.exponential in families:
+        alpha = fit_exponential_alpha(r, lo, hi)
+        specs[Family.exponential] = {"dist": "exponential", "min_um": lo, "max_um": hi, "alpha_per_um": alpha}
+        res = stats.kstest(r, lambda x: _truncexp_cdf(x, lo, hi, alpha))
+        ks["exponential"], pval["exponential"] = float(res.statistic), float(res.pvalue)
+    parametric = sorted((k for k in specs), key=lambda f: ks[f.value])
+    if parametric and (pval[parametric[0].value] > _KS_ACCEPT_P or Family.discrete not in families):
+        best = parametric[0]
+        return RadiusFit(specs[best], best, ks, pval)
+    if Family.discrete not in families:
+        raise PorepipeError(f"acquire.calibration.families = {[f.value for f in families]}: none is usable")
+    counts, edges = np.histogram(r, bins=discrete_bins, range=(lo, hi))
+    keep = counts > 0
+    probs = counts[keep] / counts.sum()
+    probs[-1] = 1.0 - probs[:-1].sum()
+    spec = {"dist": "discrete", "values_um": [float(v) for v in 0.5 * (edges[:-1] + edges[1:])[keep]],
+            "probabilities": [float(p) for p in probs]}
+    return RadiusFit(spec, Family.discrete, ks, pval)
+
+
+def grain_radii(stats_ds: xr.Dataset) -> np.ndarray:
+    """Radii of the spheres the grains grew from; uncut grains only when there are enough of them."""
+    if "inscribed_radius_um" not in stats_ds or stats_ds.sizes.get("grain", 0) == 0:
+        raise PorepipeError("the statistics have no grains (image all pore, or acquire.statistics.grains: false); "
+                            "cannot calibrate a packing")
+    r = stats_ds.inscribed_radius_um.values
+    uncut = stats_ds.cut.values == 0
+    return r[uncut] if uncut.sum() >= _MIN_UNCUT else r
+
+
+def elongation_classes(stats_ds: xr.Dataset, n_classes: int) -> list[dict]:
+    """Quantile classes of grain elongation: [{elongation: [lo, hi], probability}] (uncut grains)."""
+    e = stats_ds.elongation.values[stats_ds.cut.values == 0]
+    e = e if e.size else stats_ds.elongation.values
+    edges = np.unique(np.quantile(e, np.linspace(0, 1, n_classes + 1)))
+    if edges.size < 2:
+        return [{"elongation": [float(edges[0]), float(edges[0])], "probability": 1.0}]
+    counts, _ = np.histogram(e, bins=edges)
+    probs = counts / counts.sum()
+    return [{"elongation": [float(a), float(b)], "probability": float(p)}
+            for a, b, p in zip(edges[:-1], edges[1:], probs) if p > 0]
+
+
+def _decoration(classes: list[dict]) -> dict | None:
+    """A decoration section with one random-polyhedron family per elongation class (if the stage is installed)."""
+    try:
+        from porepipe.decorate._settings import Settings as DecorationSettings
+    except ImportError:
+        return None
+    families = [{"name": f"elong{i}", "generator": "random", "count": 8, "facets": 36,
+                 "elongation": [min(c["elongation"][0], 0.9), min(c["elongation"][1], 0.9)]}
+                for i, c in enumerate(classes)]
+    probs = {f["name"]: c["probability"] for f, c in zip(families, classes)}
+    total = sum(probs.values())
+    probs = {k: v / total for k, v in probs.items()}
+    section = {"families": families, "assign": [{"probabilities": probs}], "scale": "inscribed"}
+    DecorationSettings.model_validate(section)
+    return section
+
+
+def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: str, seed: int = 0) -> dict:
+    """The model scene (a plain dict, ready for YAML) calibrated to the image statistics."""
+    voxel = float(stats_ds.attrs["voxel_um"])
+    shape = np.asarray(stats_ds.attrs["shape"], dtype=np.float64)
+    a = float(calibration.resolution_um or voxel)
+    box = [float(b) for b in (calibration.box_um or tuple(shape * voxel))]
+    box = [max(a, round(b / a) * a) for b in box]  # whole voxels per edge at the model resolution
+    fit = fit_radius_distribution(grain_radii(stats_ds), calibration.families, calibration.discrete_bins)
+    density = float(stats_ds.grains_per_mm3)
+    count = int(round(density * np.prod(box) * 1e-9))
+    if count < 1:
+        raise PorepipeError(f"grain density {density:.4g} /mm³ gives no sphere in the model box {box} µm")
+    stage = {"name": "calibrated", "insert": ["grain"], "steps": calibration.steps, "dt": 0.25,
+             "k": {"grain": 400.0}, "damping": {"grain": 4.0}, "freezing": {"lock_step": 10},
+             "stochastic_forces": {"step_size": 0.05}}
+    scene = {
+        "name": name, "seed": int(seed),
+        "domain": {"size_um": box, "periodic": True},
+        "spheres": {"pack": True},
+        "packing": {"types": [{"name": "grain", "count": count, "radius_um": fit.spec,
+                               "max_overlap": calibration.max_overlap}], "stages": [stage]},
+        "resolutions_um": [a],
+        "segmentation": {"method": "otsu"},
+        "analyses": ["segment", "minkowski", "lpt"],
+    }
+    classes = elongation_classes(stats_ds, calibration.elongation_classes)
+    deco = _decoration(classes)
+    if deco is not None:
+        scene["decoration"] = deco
+    scene["_calibration"] = {
+        "target_porosity": float(stats_ds.porosity), "grains_per_mm3": density,
+        "radius_family": fit.family.value, "ks_statistic": fit.ks, "ks_pvalue": fit.pvalue,
+        "elongation_classes": classes, "source_voxel_um": voxel,
+        "S_V_per_mm": float(stats_ds.S_V_per_mm) if "S_V_per_mm" in stats_ds else None}
+    return scene
+
+
+def write_scene_yaml(scene: dict, path) -> Path:
+    """Write the calibrated scene; the calibration record goes into a comment block the scene loader ignores."""
+    scene = dict(scene)
+    record = scene.pop("_calibration", {})
+    header = ["# Calibrated by `porepipe acquire-calibrate` from image statistics (Zauner 2020 §4.7 item 1).",
+              "# Edit freely, then run it with `porepipe run <this file>`. What it was fitted to:"]
+    header += [f"#   {line}" for line in yaml.safe_dump(record, sort_keys=False).splitlines()]
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text("\n".join(header) + "\n" + yaml.safe_dump(scene, sort_keys=False))
+    tmp.replace(path)
+    return path
