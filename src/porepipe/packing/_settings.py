@@ -80,7 +80,7 @@ class SphereType(_Strict):
     count: int | None = Field(None, ge=0, description="number of spheres N_t")
     number_density_per_um3: NonNegFloat | None = Field(
         None, description="rho_t in spheres per µm³ of the type's region (alternative to count)")
-    radius_um: RadiusSpec = Field(default_factory=RadiusSpec, description="initial radius distribution")
+    radius_um: RadiusSpec = Field(description="initial radius distribution")
     max_overlap: float = Field(0.3, gt=0, le=1, description="sigma_max of the type (§5.1)")
 
     @model_validator(mode="after")
