@@ -162,14 +162,15 @@ _WALL = np.uint32(0xFFFFFFFF)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack):
+def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack, parent, extent):
     """True if pore voxels of the cell join its faces perpendicular to ``axis``.
 
     Cell coordinates are padded: 1..size inside, 0 and size+1 the padding layer, whose ``stamp`` is _WALL, so no
     bounds checks are needed. The voxel at padded (i, j, k) is ``flat[xoff[i] + yoff[j] + zoff[k]]``. Depth-first
     search from all pore voxels of the face at coordinate 1 to the face at ``size``; ``steps`` (and their linear
     offsets ``lin`` in the padded cell) list the straight step towards the far face last, so it is tried first.
-    ``stamp[v] >= gen`` marks visited voxels; ``stack`` holds packed coordinates.
+    ``stamp[v] >= gen`` marks visited voxels; ``stack`` holds packed coordinates. On success the path found is
+    traced back through ``parent`` and its smallest and largest padded z coordinate go to ``extent[0:2]``.
     """
     p = size + 2
     far = size
@@ -190,6 +191,8 @@ def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack):
     if not any_far:
         return False
     if size == 1:
+        extent[0] = 1
+        extent[1] = 1
         return True
     top = 0
     for a in range(1, size + 1):
@@ -202,6 +205,7 @@ def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack):
                 i, j, k = a, b, 1
             if flat[xoff[i] + yoff[j] + zoff[k]] != 0:
                 stamp[(i * p + j) * p + k] = gen
+                parent[(i * p + j) * p + k] = -1
                 stack[top] = (i << (2 * _SHIFT)) | (j << _SHIFT) | k
                 top += 1
     n_nb = steps.shape[0]
@@ -222,8 +226,19 @@ def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack):
             if flat[xoff[ni] + yoff[nj] + zoff[nk]] == 0:
                 continue
             if (axis == 0 and ni == far) or (axis == 1 and nj == far) or (axis == 2 and nk == far):
+                lo = nk
+                hi = nk
+                u = v
+                while u >= 0:
+                    uk = u % p
+                    lo = min(lo, uk)
+                    hi = max(hi, uk)
+                    u = parent[u]
+                extent[0] = lo
+                extent[1] = hi
                 return True
             stamp[w] = gen
+            parent[w] = v
             stack[top] = (ni << (2 * _SHIFT)) | (nj << _SHIFT) | nk
             top += 1
     return False
@@ -252,7 +267,9 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
     stop : int
         STOP_NEVER, STOP_ON_FAIL (enough for Λ_3 alone) or STOP_ON_SUCCESS (enough for Λ_c alone).
     n_chunks : int
-        Work items for the threads (each takes every n_chunks-th cell, which balances uneven search costs).
+        Work items for the threads, each a contiguous block of cells. Within a block, a cell whose x and y origin
+        equal those of an earlier cell skips the x (y) search when the x- (y-) spanning path found there lies
+        inside its z range: origins in C order (z fastest) make that frequent.
     out : (n,) uint8 ndarray
         Λ bits (BIT_X ... BIT_ANY); BIT_ALL and BIT_ANY refer to the searched axes.
     """
@@ -269,31 +286,50 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                     if i == 0 or j == 0 or k == 0 or i == p - 1 or j == p - 1 or k == p - 1:
                         stamp[(i * p + j) * p + k] = _WALL
         stack = np.empty(full, np.int64)
+        parent = np.empty(p * p * p, np.int64)
+        extent = np.zeros(2, np.int64)
+        # per axis x, y: volume z range (unwrapped) of the last spanning path found, and the cell's x, y origin
+        path_lo = np.full(2, -1, np.int64)
+        path_hi = np.full(2, -1, np.int64)
+        path_x = np.full(2, -1, np.int64)
+        path_y = np.full(2, -1, np.int64)
         xoff = np.zeros(p, np.int64)
         yoff = np.zeros(p, np.int64)
         zoff = np.zeros(p, np.int64)
         gen = np.uint32(0)
-        for cell in range(c, n, n_chunks):
+        for cell in range(c * n // n_chunks, (c + 1) * n // n_chunks):
             k = counts[cell]
+            ox = origins[cell, 0]
+            oy = origins[cell, 1]
+            oz = origins[cell, 2]
             bits = 0
             if k >= full:
                 bits = want & 7
             elif k >= size:  # a path between opposite faces needs at least `size` pore voxels
                 for a in range(size):
-                    xoff[a + 1] = ((origins[cell, 0] + a) % nx) * (ny * nz)
-                    yoff[a + 1] = ((origins[cell, 1] + a) % ny) * nz
-                    zoff[a + 1] = (origins[cell, 2] + a) % nz
+                    xoff[a + 1] = ((ox + a) % nx) * (ny * nz)
+                    yoff[a + 1] = ((oy + a) % ny) * nz
+                    zoff[a + 1] = (oz + a) % nz
                 for axis in range(3):
                     if (want >> axis) & 1 == 0:
                         continue
-                    if gen == _WALL - np.uint32(1):  # generations exhausted: clear the inside marks
-                        for v in range(p * p * p):
-                            if stamp[v] != _WALL:
-                                stamp[v] = 0
-                        gen = np.uint32(0)
-                    gen += np.uint32(1)
-                    ok = _spans(flat, xoff, yoff, zoff, size, axis, offs_by_axis[axis], lin_by_axis[axis], stamp,
-                                gen, stack)
+                    if axis < 2 and path_x[axis] == ox and path_y[axis] == oy and path_lo[axis] >= oz \
+                            and path_hi[axis] <= oz + size - 1:
+                        ok = True  # the path of an earlier cell with the same x, y range lies inside this one
+                    else:
+                        if gen == _WALL - np.uint32(1):  # generations exhausted: clear the inside marks
+                            for v in range(p * p * p):
+                                if stamp[v] != _WALL:
+                                    stamp[v] = 0
+                            gen = np.uint32(0)
+                        gen += np.uint32(1)
+                        ok = _spans(flat, xoff, yoff, zoff, size, axis, offs_by_axis[axis], lin_by_axis[axis],
+                                    stamp, gen, stack, parent, extent)
+                        if ok and axis < 2:
+                            path_x[axis] = ox
+                            path_y[axis] = oy
+                            path_lo[axis] = oz + extent[0] - 1
+                            path_hi[axis] = oz + extent[1] - 1
                     if ok:
                         bits |= 1 << axis
                     if (stop == STOP_ON_FAIL and not ok) or (stop == STOP_ON_SUCCESS and ok):
