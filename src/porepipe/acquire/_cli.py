@@ -79,12 +79,16 @@ def _binary(args) -> int:
 def _calibrate(args) -> int:
     from porepipe._shared.store import read_table
     from porepipe.acquire._calibrate import calibrated_scene, write_scene_yaml
+    from porepipe.acquire._model import match_porosity
 
     scene = _scene(args.scene)
     settings = scene.acquire if scene is not None and scene.acquire is not None else Settings()
     name = args.name or (f"{scene.name}-model" if scene else "calibrated-model")
     model = calibrated_scene(read_table(args.statistics), settings.calibration, name=name,
                              seed=scene.seed if scene else 0)
+    history = match_porosity(model, model["_calibration"]["target_porosity"],
+                             settings.calibration.porosity_iterations, Path(args.out).parent)
+    model["_calibration"]["porosity_matching"] = [{"count": n, "porosity": phi} for n, phi in history]
     write_scene_yaml(model, args.out)
     print(f"calibrated scene {name!r} -> {args.out}")
     return 0

@@ -32,6 +32,43 @@ def model_phases(grey: np.ndarray) -> Phases:
                   ["pore", "matrix"], [0], Method.otsu)
 
 
+def model_grey(scene, base_dir: Path | str = "."):
+    """Pack and voxelise a model scene at its finest resolution: (grey, packing, voxel_um)."""
+    from porepipe.packing import pack_spheres
+    from porepipe.voxelize import voxelize
+
+    if getattr(scene, "packing", None) is None or scene.domain is None:
+        raise PorepipeError(f"scene {scene.name!r} has no packing/domain section to run as a model")
+    a = float(scene.resolutions_um[-1])
+    box = np.asarray(scene.domain.size_um, dtype=np.float64)
+    per = bool(scene.domain.periodic)
+    packing = pack_spheres(scene.packing, box, per, seed=scene.seed, base_dir=base_dir)
+    return voxelize(packing.centres_um, packing.radii_um, box, a, per), packing, a
+
+
+def match_porosity(scene_dict: dict, target: float, iterations: int, base_dir: Path | str = ".") -> list[tuple]:
+    """Adjust the sphere count of a calibrated scene (in place) towards a target porosity.
+
+    Each iteration packs and voxelises the model and sets n <- n ln(φ_target) / ln(φ_model), the update that is
+    exact for a Boolean model of overlapping spheres (φ = exp(-n v̄ / V)). Returns [(count, porosity), ...].
+    """
+    from porepipe.scene import parse_scene
+
+    history = []
+    if not 0.0 < target < 1.0:
+        return history
+    for _ in range(iterations):
+        scene = parse_scene({k: v for k, v in scene_dict.items() if not k.startswith("_")}, base_dir)
+        grey, _, _ = model_grey(scene, base_dir)
+        phi = float(model_phases(grey).pore().mean(dtype=np.float64))
+        ptype = scene_dict["packing"]["types"][0]
+        history.append((int(ptype["count"]), phi))
+        if not 0.0 < phi < 1.0:
+            break
+        ptype["count"] = max(1, int(round(ptype["count"] * np.log(target) / np.log(phi))))
+    return history
+
+
 def run_model(scene, acquire_settings: Settings, out, *, base_dir: Path | str = ".", lpt_settings=None,
               permeability_settings=None) -> dict[str | None, xr.Dataset]:
     """Pack, voxelise and measure a (calibrated) model scene; write ``model_statistics.h5``.
@@ -45,24 +82,16 @@ def run_model(scene, acquire_settings: Settings, out, *, base_dir: Path | str = 
     out : path
         Output file.
     """
-    from porepipe.packing import pack_spheres
-    from porepipe.voxelize import voxelize
-
-    if getattr(scene, "packing", None) is None or scene.domain is None:
-        raise PorepipeError(f"scene {scene.name!r} has no packing/domain section to run as a model")
-    a = float(scene.resolutions_um[-1])
-    box = np.asarray(scene.domain.size_um, dtype=np.float64)
-    per = bool(scene.domain.periodic)
-    settings = acquire_settings.model_copy(update={"periodic": per})
+    # measured like the image (same boundary treatment), so that model and experiment are compared like for like
+    settings = acquire_settings
     with ResultWriter(out, stage="acquire-model", scene=scene.name,
                       scene_hash=hash_of(scene.model_dump(mode="json"))) as w:
-        packing = pack_spheres(scene.packing, box, per, seed=scene.seed, base_dir=base_dir)
-        grey = voxelize(packing.centres_um, packing.radii_um, box, a, per)
+        grey, packing, a = model_grey(scene, base_dir)
         phases = model_phases(grey)
         del grey
         tables = image_statistics(phases, a, settings, lpt_settings=lpt_settings,
                                   permeability_settings=permeability_settings)
-        w.write_volume(PHASES_VOLUME, phases.labels, voxel_um=a, periodic=(per,) * 3,
+        w.write_volume(PHASES_VOLUME, phases.labels, voxel_um=a, periodic=(settings.periodic,) * 3,
                        attrs={"phases": "pore,matrix", "pore_index": np.array([0]), "thresholds": phases.thresholds,
                               "method": "otsu"})
         w.write_array("sphere_radii_um", packing.radii_um)

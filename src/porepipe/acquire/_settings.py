@@ -134,6 +134,8 @@ class Calibration(_Strict):
     resolution_um: PosFloat | None = Field(None, description="model voxel size (default: the image's)")
     elongation_classes: int = Field(4, ge=1, le=32, description="elongation classes for the decoration")
     steps: int = Field(400, ge=1, description="DEM step limit of the calibrated packing")
+    porosity_iterations: int = Field(
+        2, ge=0, le=10, description="pack-and-measure rounds that adjust the sphere count to the image's porosity")
 
 
 class Settings(_Strict):
