@@ -30,17 +30,16 @@ def test_dry_run_lists_only_the_rules_the_analyses_need(tmp_path):
     rules = _planned_rules(MINI, tmp_path)
     scene = yaml.safe_load(MINI.read_text())
     n_res = len(scene["resolutions_um"])
-    assert rules == {"all": 1, "voxelize": n_res, "segment": n_res, "estimate": 1}, rules
+    assert rules == {"all": 1, "pack": 1, "voxelize": n_res, "segment": n_res, "estimate": 1, "minkowski": n_res}, rules
 
 
 def test_dry_run_without_segmentation_has_no_segment_jobs(tmp_path):
     scene = yaml.safe_load(MINI.read_text())
     scene["analyses"] = ["estimate"]
-    scene["spheres"]["xyzr"] = str(MINI.parent / scene["spheres"]["xyzr"])
     path = tmp_path / "only-estimate.yaml"
     path.write_text(yaml.safe_dump(scene))
     rules = _planned_rules(path, tmp_path)
-    assert rules == {"all": 1, "voxelize": len(scene["resolutions_um"]), "estimate": 1}, rules
+    assert rules == {"all": 1, "pack": 1, "voxelize": len(scene["resolutions_um"]), "estimate": 1}, rules
 
 
 def test_mini_scene_runs_end_to_end(tmp_path):
@@ -59,5 +58,7 @@ def test_mini_scene_runs_end_to_end(tmp_path):
     with xr.open_dataset(res / "estimate" / "estimate.h5", engine="h5netcdf") as ds:
         assert ds.phi_lower.values.min() <= float(ds.phi_limit) <= ds.phi_upper.values.max()
     assert read_attrs(res / "estimate" / "estimate.h5")["stage"] == "estimate"
+    with xr.open_dataset(res / "minkowski" / "minkowski_a1.h5", engine="h5netcdf") as mk:
+        assert abs(float(mk.phi_pore) - pore.mean()) < 1e-12  # same volume, same porosity
     leftovers = [p for p in res.rglob("*") if p.name.startswith(".")]
     assert not leftovers, leftovers

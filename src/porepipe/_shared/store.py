@@ -232,5 +232,5 @@ def read_array(path, name: str) -> np.ndarray:
 def read_table(path, group: str | None = None) -> xr.Dataset:
     """Load the xarray Dataset of the root group (or of ``group``) into memory."""
     path = _check_file(path)
-    with xr.open_dataset(path, engine="h5netcdf", group=group) as ds:
+    with xr.open_dataset(path, engine="h5netcdf", group=group, phony_dims="sort") as ds:
         return ds.load()
