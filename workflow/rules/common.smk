@@ -60,3 +60,14 @@ def all_targets():
                 raise ValueError(f"scene {scene.name!r}: no workflow rule produces analysis {analysis.value!r}")
             out += ANALYSIS_TARGETS[analysis.value](scene)
     return out
+
+
+#: analysis name -> function(scene, edge_um) -> that analysis's outputs on the corner sub-samples
+#: results/{scene}/segment/binary_a{a}_L{edge}.h5 (scene key sweep.sample_um); engines that accept sub-samples
+#: register here, and the sweep gathers them with the sample size as a dimension.
+SUBSAMPLE_TARGETS = {}
+
+
+def per_subsample(scene, pattern, edge_um):
+    """`pattern` with a = every resolution and L = the sub-sample edge, e.g. 'minkowski/minkowski_a{a}_L{L}.h5'."""
+    return [results(scene, pattern.format(a=res_tag(a), L=res_tag(edge_um))) for a in scene.resolutions_um]

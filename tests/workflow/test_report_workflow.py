@@ -1,0 +1,99 @@
+"""A mini-like scene with `report` in its analyses: the workflow's final target is the report page.
+
+One workflow run (module fixture) of a small scene with inline spheres (no packing, no data files) in a temporary
+directory; the tests read its output.
+"""
+
+import csv
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").is_file() else None)
+#: CPU-second budget of the report rule on the mini scene (the issue asks for < 15 s; wall time on the shared CI
+#: machine varies with load, the job's CPU time does not)
+REPORT_CPU_S = 15.0
+
+
+def _porepipe(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True)
+
+
+def small_scene(analyses):
+    """60 random spheres (r 3..5 µm) in a periodic 40 µm box at a = 4, 2, 1 µm."""
+    rng = np.random.default_rng(8)
+    spheres = np.column_stack([rng.uniform(0, 40, (60, 3)), rng.uniform(3, 5, 60)]).round(3).tolist()
+    return {"name": "small", "seed": 1, "domain": {"size_um": [40, 40, 40], "periodic": True},
+            "spheres": {"inline": spheres}, "resolutions_um": [4, 2, 1], "analyses": analyses}
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    cwd = tmp_path_factory.mktemp("report-workflow")
+    scene = small_scene(["segment", "estimate", "report"])
+    path = cwd / "small.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    out = _porepipe("run", str(path), "--cores", "2", cwd=cwd)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return cwd / "results" / scene["name"], scene
+
+
+def test_dry_run_ends_in_the_report(tmp_path):
+    scene = small_scene(["estimate", "report"])
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(scene))
+    out = _porepipe("run", str(tmp_path / "s.yaml"), "--cores", "1", "-n", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr + out.stdout
+    rules = dict(re.findall(r"^(\w+)\s+(\d+)\s*$", out.stdout, flags=re.M))
+    n = str(len(scene["resolutions_um"]))
+    # estimate-only scene: no segmentation jobs; one sweep and one report job
+    assert rules == {"all": "1", "voxelize": n, "estimate": "1", "sweep": "1", "report": "1", "total": rules["total"]}
+
+
+def test_sweep_holds_every_resolution_with_costs(run):
+    res, scene = run
+    with xr.open_dataset(res / "sweep" / "sweep.h5", engine="h5netcdf") as ds:
+        assert sorted(ds.a_um.values.tolist()) == sorted(scene["resolutions_um"])
+        assert "estimate.phi_lower" in ds.quantity.values
+        assert (ds.wall_s.values[ds.value.notnull().values] >= 0).all()
+        assert ds.upstream_wall_s.notnull().all()  # voxelize + segment cost at every resolution
+        assert (ds.bench_s.notnull()).any()  # Snakemake's benchmark records were found
+        assert (ds.status == "ok").any()
+
+
+def test_report_has_the_required_parts(run):
+    res, _ = run
+    page = (res / "report" / "index.html").read_text()
+    for png in ("quantities.png", "error_cost.png", "sections.png"):
+        assert f"src='{png}'" in page and (res / "report" / png).stat().st_size > 1000
+    assert "<table>" in page and "Table 6.4" in page
+    assert re.search(r"<td>\S+ ± \S+ \(p = ", page)  # at least one supported limit printed with its error
+    assert "porepipe version" in page and "threads of the runs" in page and "host" in page
+    links = re.findall(r"(?:src|href)='([^']+)'", page)
+    assert all((res / "report" / link).is_file() for link in links) and "http" not in page.lower()
+
+
+def test_report_rule_is_fast(run):
+    res, _ = run
+    with open(res / "cost" / "report.tsv", newline="") as fh:
+        row = next(csv.DictReader(fh, delimiter="\t"))
+    assert float(row["cpu_time"]) < REPORT_CPU_S, row
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="headless Chromium is not installed here (Debian package `chromium`); "
+                    "CI does not install it, so the browser check runs only where it is present")
+def test_report_opens_in_headless_chromium(run, tmp_path):
+    res, _ = run
+    page = res / "report" / "index.html"
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", f"--user-data-dir={tmp_path}",
+           "--enable-logging=stderr", "--v=0", "--dump-dom", page.as_uri()]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "Error against cost" in out.stdout and "<img" in out.stdout
+    assert "Uncaught" not in out.stderr and "ERR_FILE_NOT_FOUND" not in out.stderr
