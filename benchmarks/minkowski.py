@@ -46,7 +46,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=512)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--smoke", action="store_true", help="64^3, one repeat (CI)")
     args = parser.parse_args()
+    if args.smoke:
+        args.n, args.repeat = 64, 1
     rng = np.random.default_rng(0)
     # a porous-medium-like volume: smoothed noise thresholded at porosity 0.2 (pure cells dominate, as in rock)
     small = rng.random((args.n // 8,) * 3)
