@@ -66,7 +66,9 @@ def test_mixed_periodicity_wraps_only_periodic_axes():
     (lambda p: local_porosity_histogram(p * 2, 2), "only 0 and 1"),
     (lambda p: local_porosity_histogram(p[0], 2), "3-D"),
     (lambda p: local_porosity_histogram(p, 2, stride=0), "stride"),
+    (lambda p: local_porosity_histogram(np.ones((260, 260, 260), np.uint8), 256), "give max_bins"),
     (lambda p: percolation_bits(p, 3, np.zeros((2, 3)), np.zeros(3)), "one entry per origin"),
+    (lambda p: percolation_bits(p, 3, np.array([[0, 10, 0]])), "must lie in the volume"),
     (lambda p: local_porosity_analysis(p, voxel_um=2.0, settings=Settings(cell_um=[0.9])), "half a voxel"),
     (lambda p: local_porosity_analysis(p, voxel_um=0.0), "voxel_um"),
 ])

@@ -23,8 +23,10 @@ from porepipe._shared.errors import PorepipeError
 from porepipe.lpt import _kernels as K
 from porepipe.lpt._settings import Connectivity, Direction, Placement, Settings
 
-#: slices per parallel batch of 2-D box sums (more = fewer parallel launches, more ring memory)
-_BATCH = 8
+#: cell origins along x per parallel batch (more = fewer parallel launches, more ring memory)
+_BATCH = 16
+#: largest histogram kept per thread without binning (2^24 bins = 128 MiB of int64 counts and as much for sums)
+_MAX_EXACT_BINS = 1 << 24
 _DIRECTION_BITS = {Direction.x: K.BIT_X, Direction.y: K.BIT_Y, Direction.z: K.BIT_Z,
                    Direction.all3: K.BIT_ALL, Direction.any: K.BIT_ANY}
 SURFACE_METHOD = (
@@ -159,12 +161,15 @@ def _box_histogram(fields: np.ndarray, wins: np.ndarray, grid: CellGrid, stride:
                    record_stride: int = 0) -> BoxHistogram:
     """Run :func:`_box_sum_histogram` on C-contiguous uint8 ``fields`` (nf, nx, ny, nz) with windows ``wins``."""
     k_max = int(sum(int(np.prod(w)) for w in wins))
+    if max_bins is None and k_max + 1 > _MAX_EXACT_BINS:
+        raise PorepipeError(f"an exact histogram would need {k_max + 1} bins (cell of {k_max} voxels or faces); "
+                            f"give max_bins (at most {_MAX_EXACT_BINS}) to bin it")
     n_bins = k_max + 1 if max_bins is None or k_max + 1 <= max_bins else int(max_bins)
     if n_bins < 3 and n_bins != k_max + 1:
         raise PorepipeError(f"max_bins must be at least 3, got {max_bins}")
     mx, my, mz = grid.npos
     ring_dtype = np.uint16 if max(int(w[1] * w[2]) for w in wins) <= np.iinfo(np.uint16).max else np.uint32
-    ring = np.empty((fields.shape[0], int(wins[:, 0].max()) + _BATCH, my, mz), ring_dtype)
+    ring = np.empty((fields.shape[0], int(wins[:, 0].max()) + _BATCH + 1, my, mz), ring_dtype)
     nt = numba.get_num_threads()
     hist = np.zeros((nt, n_bins), np.int64)
     ksum = np.zeros((nt, n_bins), np.int64)
@@ -323,6 +328,9 @@ def percolation_bits(pore, size: int, origins: np.ndarray, counts: np.ndarray | 
     pore = _as_pore(pore)
     cell_grid(pore.shape, size)
     origins = np.ascontiguousarray(np.asarray(origins, dtype=np.int64).reshape(-1, 3))
+    if origins.size and ((origins < 0).any() or (origins >= np.array(pore.shape)).any()):
+        raise PorepipeError(f"cell origins must lie in the volume of shape {pore.shape} (0 <= origin < edge); "
+                            f"got values from {origins.min(axis=0).tolist()} to {origins.max(axis=0).tolist()}")
     if counts is None:
         counts = np.array([_cell(pore, o, size).sum(dtype=np.int64) for o in origins], np.int64)
     counts = np.ascontiguousarray(np.asarray(counts, dtype=np.int64))

@@ -84,7 +84,9 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
     npos : (3,) int64 ndarray
         Number of box origins per axis, starting at 0; origins beyond ``n - w`` wrap around (periodic).
     ring : (nf, n_ring, my, mz) uint16 or uint32 ndarray
-        Scratch for 2-D slice sums; ``n_ring - max(wins[:, 0])`` slices are computed per parallel batch.
+        Scratch for 2-D slice sums. The origins advance along x in batches of ``n_ring - max(wins[:, 0]) - 1``:
+        one parallel pass computes the batch's new slices, one more moves the box over the batch (threads own
+        rows), so there are two parallel launches per batch rather than per origin.
     hist_stride : int
         Histogram the origins that are multiples of it on every axis; 0 = no histogram.
     k_max : int
@@ -107,51 +109,51 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
     wx_max = 0
     for f in range(nf):
         wx_max = max(wx_max, wins[f, 0])
-    batch = n_ring - wx_max
-    n_slices = mx + wx_max - 1
+    batch = n_ring - wx_max - 1
     nt = hist.shape[0]
     n_bins = hist.shape[1]
     acc = np.zeros((my, mz), np.int64)
     filled = 0
-    for x0 in range(mx):
-        need = x0 + wx_max
-        if need > filled:
-            hi = min(max(filled + batch, need), n_slices)
-            lo = filled
-            for task in prange((hi - lo) * nf):
-                f = task % nf
-                s = lo + task // nf
-                x = s if s < nx else s - nx
-                tmp = np.empty((my + wins[f, 1] - 1, mz), np.int64)
-                _fill_slice(fields[f], x, wins[f, 1], wins[f, 2], my, mz, tmp, ring[f, s % n_ring])
-            filled = hi
-        do_hist = hist_stride > 0 and x0 % hist_stride == 0
-        do_rec = rec_stride > 0 and x0 % rec_stride == 0
+    x0a = 0
+    while x0a < mx:
+        # origins x0a..x0b-1 need slices up to x0b + wx_max - 2; the ring still holds slice x0a - 1
+        x0b = min(x0a + batch, mx)
+        hi = x0b + wx_max - 1
+        lo = filled
+        for task in prange((hi - lo) * nf):
+            f = task % nf
+            s = lo + task // nf
+            x = s if s < nx else s - nx
+            tmp = np.empty((my + wins[f, 1] - 1, mz), np.int64)
+            _fill_slice(fields[f], x, wins[f, 1], wins[f, 2], my, mz, tmp, ring[f, s % n_ring])
+        filled = hi
         for t in prange(nt):
             for y0 in range(t * my // nt, (t + 1) * my // nt):
                 row = acc[y0]
-                for f in range(nf):
-                    wx = wins[f, 0]
-                    if x0 == 0:
-                        for s in range(wx):
-                            slab = ring[f, s % n_ring, y0]
+                for x0 in range(x0a, x0b):
+                    for f in range(nf):
+                        wx = wins[f, 0]
+                        if x0 == 0:
+                            for s in range(wx):
+                                slab = ring[f, s % n_ring, y0]
+                                for z0 in range(mz):
+                                    row[z0] += np.int64(slab[z0])
+                        else:
+                            add = ring[f, (x0 + wx - 1) % n_ring, y0]
+                            sub = ring[f, (x0 - 1) % n_ring, y0]
                             for z0 in range(mz):
-                                row[z0] += np.int64(slab[z0])
-                    else:
-                        add = ring[f, (x0 + wx - 1) % n_ring, y0]
-                        sub = ring[f, (x0 - 1) % n_ring, y0]
-                        for z0 in range(mz):
-                            row[z0] += np.int64(add[z0]) - np.int64(sub[z0])
-                if do_hist and y0 % hist_stride == 0:
-                    for z0 in range(0, mz, hist_stride):
-                        k = row[z0]
-                        j = _bin_of(k, k_max, n_bins)
-                        hist[t, j] += 1
-                        ksum[t, j] += k
-                        ksq[t] += float(k) * float(k)
-                if do_rec and y0 % rec_stride == 0:
-                    for z0 in range(0, mz, rec_stride):
-                        rec[x0 // rec_stride, y0 // rec_stride, z0 // rec_stride] = row[z0]
+                                row[z0] += np.int64(add[z0]) - np.int64(sub[z0])
+                    if hist_stride > 0 and x0 % hist_stride == 0 and y0 % hist_stride == 0:
+                        for z0 in range(0, mz, hist_stride):
+                            k = row[z0]
+                            j = _bin_of(k, k_max, n_bins)
+                            hist[t, j] += 1
+                            ksum[t, j] += k
+                            ksq[t] += float(k) * float(k)
+                    if rec_stride > 0 and x0 % rec_stride == 0 and y0 % rec_stride == 0:
+                        for z0 in range(0, mz, rec_stride):
+                            rec[x0 // rec_stride, y0 // rec_stride, z0 // rec_stride] = row[z0]
+        x0a = x0b
 
 
 #: bits of a packed stack entry: (i << 2*_SHIFT) | (j << _SHIFT) | k, for padded cell coordinates < 2**_SHIFT
@@ -162,7 +164,7 @@ _WALL = np.uint32(0xFFFFFFFF)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack, parent, extent):
+def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack, parent, box):
     """True if pore voxels of the cell join its faces perpendicular to ``axis``.
 
     Cell coordinates are padded: 1..size inside, 0 and size+1 the padding layer, whose ``stamp`` is _WALL, so no
@@ -170,7 +172,7 @@ def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack, pa
     search from all pore voxels of the face at coordinate 1 to the face at ``size``; ``steps`` (and their linear
     offsets ``lin`` in the padded cell) list the straight step towards the far face last, so it is tried first.
     ``stamp[v] >= gen`` marks visited voxels; ``stack`` holds packed coordinates. On success the path found is
-    traced back through ``parent`` and its smallest and largest padded z coordinate go to ``extent[0:2]``.
+    traced back through ``parent`` and its bounding box in padded coordinates goes to ``box`` (lo x, y, z, hi x, y, z).
     """
     p = size + 2
     far = size
@@ -191,8 +193,7 @@ def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack, pa
     if not any_far:
         return False
     if size == 1:
-        extent[0] = 1
-        extent[1] = 1
+        box[:] = 1
         return True
     top = 0
     for a in range(1, size + 1):
@@ -226,22 +227,44 @@ def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack, pa
             if flat[xoff[ni] + yoff[nj] + zoff[nk]] == 0:
                 continue
             if (axis == 0 and ni == far) or (axis == 1 and nj == far) or (axis == 2 and nk == far):
-                lo = nk
-                hi = nk
+                box[0] = ni
+                box[1] = nj
+                box[2] = nk
+                box[3] = ni
+                box[4] = nj
+                box[5] = nk
                 u = v
                 while u >= 0:
-                    uk = u % p
-                    lo = min(lo, uk)
-                    hi = max(hi, uk)
+                    c0 = u // (p * p)
+                    c1 = (u // p) % p
+                    c2 = u % p
+                    box[0] = min(box[0], c0)
+                    box[1] = min(box[1], c1)
+                    box[2] = min(box[2], c2)
+                    box[3] = max(box[3], c0)
+                    box[4] = max(box[4], c1)
+                    box[5] = max(box[5], c2)
                     u = parent[u]
-                extent[0] = lo
-                extent[1] = hi
                 return True
             stamp[w] = gen
             parent[w] = v
             stack[top] = (ni << (2 * _SHIFT)) | (nj << _SHIFT) | nk
             top += 1
     return False
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _path_fits(record, origin, size, axis):
+    """True if the spanning path of ``record`` (see _percolation_cells) also spans the cell at ``origin``.
+
+    It must have been found in a cell with the same range along ``axis`` and lie inside this cell on the others.
+    """
+    if record[0] < 0 or record[0] != origin[axis]:
+        return False
+    for d in range(3):
+        if d != axis and (record[1 + d] < origin[d] or record[4 + d] > origin[d] + size - 1):
+            return False
+    return True
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -267,9 +290,10 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
     stop : int
         STOP_NEVER, STOP_ON_FAIL (enough for Λ_3 alone) or STOP_ON_SUCCESS (enough for Λ_c alone).
     n_chunks : int
-        Work items for the threads, each a contiguous block of cells. Within a block, a cell whose x and y origin
-        equal those of an earlier cell skips the x (y) search when the x- (y-) spanning path found there lies
-        inside its z range: origins in C order (z fastest) make that frequent.
+        Work items for the threads, each a contiguous block of cells. Within a block a cell skips the search
+        along an axis when a spanning path found earlier (the last one, or the last one at the same z origin)
+        came from a cell with the same range along that axis and lies inside this cell: with origins in C order
+        (z fastest) the neighbour along z serves x and y, the neighbour along y serves x and z.
     out : (n,) uint8 ndarray
         Λ bits (BIT_X ... BIT_ANY); BIT_ALL and BIT_ANY refer to the searched axes.
     """
@@ -287,35 +311,36 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                         stamp[(i * p + j) * p + k] = _WALL
         stack = np.empty(full, np.int64)
         parent = np.empty(p * p * p, np.int64)
-        extent = np.zeros(2, np.int64)
-        # per axis x, y: volume z range (unwrapped) of the last spanning path found, and the cell's x, y origin
-        path_lo = np.full(2, -1, np.int64)
-        path_hi = np.full(2, -1, np.int64)
-        path_x = np.full(2, -1, np.int64)
-        path_y = np.full(2, -1, np.int64)
+        box = np.zeros(6, np.int64)
+        origin = np.zeros(3, np.int64)
+        # spanning paths kept for reuse, per axis: the last one, and the last one per z origin. A record is the
+        # cell origin along the axis and the path's bounding box (volume coordinates, unwrapped)
+        last = np.full((3, 7), -1, np.int64)
+        by_z = np.full((3, nz, 7), -1, np.int64)
         xoff = np.zeros(p, np.int64)
         yoff = np.zeros(p, np.int64)
         zoff = np.zeros(p, np.int64)
         gen = np.uint32(0)
         for cell in range(c * n // n_chunks, (c + 1) * n // n_chunks):
             k = counts[cell]
-            ox = origins[cell, 0]
-            oy = origins[cell, 1]
-            oz = origins[cell, 2]
+            for d in range(3):
+                origin[d] = origins[cell, d]
             bits = 0
             if k >= full:
                 bits = want & 7
             elif k >= size:  # a path between opposite faces needs at least `size` pore voxels
                 for a in range(size):
-                    xoff[a + 1] = ((ox + a) % nx) * (ny * nz)
-                    yoff[a + 1] = ((oy + a) % ny) * nz
-                    zoff[a + 1] = (oz + a) % nz
+                    xoff[a + 1] = ((origin[0] + a) % nx) * (ny * nz)
+                    yoff[a + 1] = ((origin[1] + a) % ny) * nz
+                    zoff[a + 1] = (origin[2] + a) % nz
                 for axis in range(3):
                     if (want >> axis) & 1 == 0:
                         continue
-                    if axis < 2 and path_x[axis] == ox and path_y[axis] == oy and path_lo[axis] >= oz \
-                            and path_hi[axis] <= oz + size - 1:
-                        ok = True  # the path of an earlier cell with the same x, y range lies inside this one
+                    if _path_fits(last[axis], origin, size, axis):
+                        ok = True
+                    elif _path_fits(by_z[axis, origin[2]], origin, size, axis):
+                        ok = True
+                        last[axis, :] = by_z[axis, origin[2]]
                     else:
                         if gen == _WALL - np.uint32(1):  # generations exhausted: clear the inside marks
                             for v in range(p * p * p):
@@ -324,12 +349,13 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                             gen = np.uint32(0)
                         gen += np.uint32(1)
                         ok = _spans(flat, xoff, yoff, zoff, size, axis, offs_by_axis[axis], lin_by_axis[axis],
-                                    stamp, gen, stack, parent, extent)
-                        if ok and axis < 2:
-                            path_x[axis] = ox
-                            path_y[axis] = oy
-                            path_lo[axis] = oz + extent[0] - 1
-                            path_hi[axis] = oz + extent[1] - 1
+                                    stamp, gen, stack, parent, box)
+                        if ok:
+                            last[axis, 0] = origin[axis]
+                            for d in range(3):
+                                last[axis, 1 + d] = origin[d] + box[d] - 1
+                                last[axis, 4 + d] = origin[d] + box[3 + d] - 1
+                            by_z[axis, origin[2], :] = last[axis]
                     if ok:
                         bits |= 1 << axis
                     if (stop == STOP_ON_FAIL and not ok) or (stop == STOP_ON_SUCCESS and ok):
