@@ -177,6 +177,10 @@ def fit_power(a, q, exponent: float | None = None, sigma=None, confidence: float
     permeability (§6.2, Table 6.4); the power law generalises both.
     """
     x, y, s = _check(a, q, sigma)
+    # fit in units of the largest |q| and the largest a, so extreme magnitudes neither overflow nor underflow
+    q_scale = float(np.abs(y).max(initial=0.0)) or 1.0
+    x_scale = float(x.max(initial=0.0)) or 1.0
+    x, y, s = x / x_scale, y / q_scale, (None if s is None else s / q_scale)
     n, k = x.size, (2 if exponent is not None else 3)
     w = np.ones_like(x) if s is None else 1.0 / s
     nan = float("nan")
@@ -184,8 +188,9 @@ def fit_power(a, q, exponent: float | None = None, sigma=None, confidence: float
     def result(q_inf, err_fit, err_loo, c, p, status, why):
         finite = [e for e in (err_fit, err_loo) if np.isfinite(e)]
         err = max(finite) if finite else nan
-        return Limit(float(q_inf), float(err), float(err_fit), float(err_loo), float(c), float(p), n,
-                     status, why, form, confidence)
+        return Limit(float(q_inf) * q_scale, float(err) * q_scale, float(err_fit) * q_scale,
+                     float(err_loo) * q_scale, float(c) * q_scale / x_scale**p, float(p), n, status, why, form,
+                     confidence)
 
     if n < k:
         return result(nan, nan, nan, nan, exponent or nan, Status.too_few_points,

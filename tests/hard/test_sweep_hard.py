@@ -1,0 +1,65 @@
+"""Degenerate and extreme inputs to the sweep: finite answers or a clear PorepipeError, never NaN as a number."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.store import ResultWriter
+from porepipe.sweep import Status, build_sweep, decide, fit_power, limit_of, predict_cost
+
+
+def test_converged_constant_data_give_the_value_with_zero_error():
+    lim = fit_power([4.0, 2.0, 1.0, 0.5], [0.3] * 4)
+    assert lim.status is Status.ok and lim.q_inf == pytest.approx(0.3, abs=1e-15) and lim.err == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e300])
+def test_extreme_magnitudes_stay_finite(scale):
+    a = np.array([8.0, 4.0, 2.0, 1.0, 0.5])
+    lim = fit_power(a, scale * (1.0 + 0.1 * a), exponent=1.0)
+    assert lim.q_inf / scale == pytest.approx(1.0, rel=1e-9) and np.isfinite(lim.err)
+
+
+def test_tiny_voxel_sizes():
+    a = np.array([8e-9, 4e-9, 2e-9, 1e-9])
+    lim = fit_power(a, 2.0 + 1e7 * a**1.3)
+    assert lim.q_inf == pytest.approx(2.0, abs=1e-6) and lim.p == pytest.approx(1.3, rel=1e-4)
+
+
+def test_missing_runs_are_dropped_not_fitted():
+    lim = limit_of([4.0, 2.0, 1.0, 0.5], [1.4, np.nan, 1.1, 1.05], exponent=1.0)
+    assert lim.n == 3 and np.isfinite(lim.q_inf)
+    assert limit_of([4.0, 2.0], [np.nan, np.nan], None).status is Status.too_few_points
+
+
+def test_zero_cost_runs_fall_back_to_the_voxel_scaling():
+    assert predict_cost([2.0, 1.0], [0.0, 0.0], 0.5) == 0.0
+    dec = decide([4.0, 2.0, 1.0], [1.3, 1.1, 1.0], [0.0, 0.0, 0.0], target_rel_err=1e-9, budget=1.0)
+    assert dec.outcome.value == "refine" and dec.next_a == 0.5
+
+
+@pytest.mark.parametrize("cost", [[1.0, np.nan], [1.0, -2.0], [1.0]])
+def test_bad_costs_are_rejected(cost):
+    with pytest.raises(PorepipeError, match="cost"):
+        decide([2.0, 1.0], [1.0, 1.1], cost, target_rel_err=0.1, budget=10.0)
+
+
+def test_a_file_that_is_not_a_result_is_named(tmp_path):
+    bad = tmp_path / "junk_a1.h5"
+    bad.write_bytes(b"not hdf5")
+    with pytest.raises(PorepipeError, match="junk_a1.h5"):
+        build_sweep([bad])
+    with pytest.raises(PorepipeError, match="does not exist"):
+        build_sweep([tmp_path / "missing_a1.h5"])
+
+
+def test_infinite_quantity_is_not_extrapolated(tmp_path):
+    paths = []
+    for a, v in ((2.0, np.inf), (1.0, 3.0), (0.5, 2.0), (0.25, 1.5)):
+        with ResultWriter(tmp_path / f"e_a{a:g}.h5", stage="e") as w:
+            w.write_table(xr.Dataset({"k": ((), v)}))
+        paths.append(tmp_path / f"e_a{a:g}.h5")
+    ds = build_sweep(paths)
+    sel = ds.sel(quantity="e.k", form="linear", sample_um=np.inf)
+    assert int(sel.n) == 3 and np.isfinite(float(sel.q_inf))
