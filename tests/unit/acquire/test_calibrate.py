@@ -1,0 +1,84 @@
+"""Radius-distribution fits against samples of known law; the calibrated scene validates; comparison identities."""
+
+import numpy as np
+import pytest
+import yaml
+
+from porepipe.acquire._api import acquire
+from porepipe.acquire._calibrate import calibrated_scene, fit_exponential_alpha, fit_radius_distribution, write_scene_yaml
+from porepipe.acquire._compare import comparison_markdown, write_comparison
+from porepipe.acquire._settings import Calibration, Family, Settings
+from porepipe.scene import load_scene
+
+ALL = [Family.uniform, Family.exponential, Family.discrete]
+
+
+def _truncexp(rng, n, lo, hi, alpha):
+    u = rng.random(n)  # inverse CDF, written here independently of the packer's sampler
+    return lo - np.log(1 - u * (1 - np.exp(-alpha * (hi - lo)))) / alpha
+
+
+def test_exponential_alpha_recovered():
+    rng = np.random.default_rng(0)
+    r = _truncexp(rng, 20000, 10.0, 50.0, 0.08)
+    # MLE standard error for 20000 draws is ~1 %; bound 4 %
+    assert fit_exponential_alpha(r, 10.0, 50.0) == pytest.approx(0.08, rel=0.04)
+    fit = fit_radius_distribution(r, ALL)
+    assert fit.family is Family.exponential and fit.spec["alpha_per_um"] == pytest.approx(0.08, rel=0.04)
+
+
+def test_uniform_sample_picks_uniform_or_flat_exponential():
+    r = np.random.default_rng(1).uniform(20, 30, 3000)
+    fit = fit_radius_distribution(r, ALL)
+    assert fit.family in (Family.uniform, Family.exponential)
+    assert fit.spec.get("alpha_per_um", 0.0) < 0.02  # flat: alpha ~ 0
+    assert fit.spec["min_um"] == pytest.approx(20, abs=0.05) and fit.spec["max_um"] == pytest.approx(30, abs=0.05)
+
+
+def test_bimodal_sample_falls_back_to_discrete():
+    rng = np.random.default_rng(2)
+    r = np.concatenate([rng.normal(10, 0.5, 500), rng.normal(30, 0.5, 500)])
+    fit = fit_radius_distribution(r, ALL, discrete_bins=10)
+    assert fit.family is Family.discrete
+    assert sum(fit.spec["probabilities"]) == pytest.approx(1.0, abs=1e-12)
+    assert fit.spec["values_um"][0] < 12 and fit.spec["values_um"][-1] > 28
+
+
+@pytest.fixture(scope="module")
+def statistics(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("cal")
+    rng = np.random.default_rng(5)
+    n = 48
+    grid = (np.indices((n, n, n)) + 0.5).reshape(3, -1).T
+    solid = np.zeros(n**3, bool)
+    for _ in range(40):
+        c, r = rng.uniform(0, n, 3), rng.uniform(4, 7)
+        solid |= ((grid - c) ** 2).sum(axis=1) <= r * r
+    np.save(tmp / "img.npy", np.where(solid.reshape(n, n, n), 200, 40).astype(np.uint8))
+    settings = Settings.model_validate({"image": str(tmp / "img.npy"), "voxel_um": 2.0, "statistics": {"lpt": True}})
+    acquire(settings, tmp / "statistics.h5")
+    return tmp
+
+
+def test_calibrated_scene_is_a_valid_packing_scene(statistics):
+    from porepipe._shared.store import read_table
+
+    ds = read_table(statistics / "statistics.h5")
+    scene = calibrated_scene(ds, Calibration(), name="m", seed=3)
+    path = write_scene_yaml(scene, statistics / "model.yaml")
+    loaded = load_scene(path)  # the packer's and (if installed) the decoration's settings accept it
+    assert loaded.spheres.pack and loaded.packing.types[0].count == round(float(ds.grains_per_mm3) * 96**3 * 1e-9)
+    assert loaded.domain.size_um == (96.0, 96.0, 96.0) and loaded.resolutions_um == [2.0]
+    assert "target_porosity" in path.read_text()  # the calibration record, as a comment
+    assert "_calibration" not in yaml.safe_load(path.read_text())
+
+
+def test_comparison_of_an_image_with_itself(statistics, tmp_path):
+    s = statistics / "statistics.h5"
+    ds = write_comparison(s, s, tmp_path / "cmp.h5")
+    finite = np.isfinite(ds.experiment.values)
+    np.testing.assert_array_equal(ds.difference.values[finite], 0.0)
+    assert {"porosity", "S_V_per_mm", "K_V_per_mm2", "T_V_per_mm3"} <= set(ds.quantity.values)
+    np.testing.assert_array_equal(ds.p3_difference.values, 0.0)  # LPT overlays on common L
+    assert (tmp_path / "cmp.png").stat().st_size > 10_000
+    assert comparison_markdown(ds).count("\n") == ds.sizes["quantity"] + 1

@@ -1,0 +1,74 @@
+"""Calibration closes the loop: a synthetic "experiment" made by our own packer (known radius distribution,
+count, overlap) is imaged, measured, calibrated, re-packed and re-measured; the model agrees with the experiment.
+
+Tolerances: the model is a *different realisation* (other sphere positions and radii drawn from the fitted law) of
+a box holding only ~150 spheres, so porosity and S_V fluctuate by a few per cent between realisations with identical
+parameters (measured: 1-2 % for φ, 3-5 % for S_V across seeds); the bounds below are about twice that.
+"""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from porepipe.acquire._api import image_statistics
+from porepipe.acquire._calibrate import calibrated_scene
+from porepipe.acquire._model import match_porosity, run_model
+from porepipe.acquire._prepare import segment_phases
+from porepipe.acquire._settings import Calibration, Settings
+from porepipe.packing import Settings as PackingSettings
+from porepipe.packing import pack_spheres
+from porepipe.scene import parse_scene
+from porepipe.voxelize import voxelize
+
+BOX_UM = [600.0, 600.0, 600.0]
+VOXEL_UM = 6.0
+LO, HI, ALPHA = 40.0, 80.0, 0.05
+
+
+def _experiment():
+    stage = {"name": "one", "insert": ["a"], "steps": 600, "dt": 0.25, "k": {"a": 400}, "damping": {"a": 4},
+             "freezing": {"lock_step": 10}, "stochastic_forces": {"step_size": 0.05}}
+    settings = PackingSettings.model_validate({"types": [{"name": "a", "count": 150, "max_overlap": 0.3, "radius_um": {
+        "dist": "exponential", "min_um": LO, "max_um": HI, "alpha_per_um": ALPHA}}], "stages": [stage]})
+    packing = pack_spheres(settings, BOX_UM, True, seed=4)
+    grey = voxelize(packing.centres_um, packing.radii_um, BOX_UM, VOXEL_UM, True)
+    return packing, grey
+
+
+@pytest.fixture(scope="module")
+def loop(tmp_path_factory):
+    packing, grey = _experiment()
+    acquire = Settings(calibration=Calibration(max_overlap=0.3, steps=600, porosity_iterations=2))
+    phases = segment_phases(grey, acquire.segmentation)  # the image: grey 0..216 read as an 8-bit scan
+    exp = image_statistics(phases, VOXEL_UM, acquire)[None]
+    scene = calibrated_scene(exp, acquire.calibration, name="loop-model", seed=9)
+    match_porosity(scene, float(exp.porosity), acquire.calibration.porosity_iterations)
+    model_scene = parse_scene({k: v for k, v in scene.items() if not k.startswith("_")})
+    out = tmp_path_factory.mktemp("loop") / "model_statistics.h5"
+    model = run_model(model_scene, acquire, out)[None]
+    return packing, exp, scene, model
+
+
+def test_radius_distribution_recovered(loop):
+    packing, exp, scene, model = loop
+    spec = scene["packing"]["types"][0]["radius_um"]
+    # fitted support within one voxel of the true [40, 80] µm: the radius estimate carries ±0.5 voxel digitisation
+    assert spec["min_um"] == pytest.approx(LO, abs=VOXEL_UM)
+    assert spec["max_um"] == pytest.approx(HI, abs=VOXEL_UM)
+    # the measured grain radii are a sample of the true law: two-sample KS against the packed radii at 0.1 %
+    assert stats.ks_2samp(exp.inscribed_radius_um.values[exp.cut.values == 0], packing.radii_um).pvalue > 1e-3
+
+
+def test_model_matches_experiment(loop):
+    packing, exp, scene, model = loop
+    assert float(model.porosity) == pytest.approx(float(exp.porosity), rel=0.04)
+    assert float(model.S_V_per_mm) == pytest.approx(float(exp.S_V_per_mm), rel=0.10)
+    # grain radii of model and experiment measured the same way come from one law: two-sample KS at 0.1 %
+    assert stats.ks_2samp(model.equivalent_radius_um.values, exp.equivalent_radius_um.values).pvalue > 1e-3
+
+
+def test_sphere_count_recovered(loop):
+    packing, exp, scene, model = loop
+    # counting frame + watershed: within 15 % of the 150 packed spheres (boundary grains and merged necks)
+    count = float(exp.grains_per_mm3) * np.prod(BOX_UM) * 1e-9
+    assert count == pytest.approx(150, rel=0.15)
