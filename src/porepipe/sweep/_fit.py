@@ -103,20 +103,31 @@ def _check(x, q, sigma):
 
 
 def _linear(x, q, w, p):
-    """Weighted least squares of q = q∞ + c·x^p; returns (q∞, c, weighted SSE)."""
-    design = np.column_stack([np.ones_like(x), x**p]) * w[:, None]
-    coef, *_ = np.linalg.lstsq(design, q * w, rcond=None)
-    resid = q * w - design @ coef
-    return coef[0], coef[1], float(resid @ resid)
+    """Weighted least squares of q = q∞ + c·x^p for one p or an array of p (closed-form 2×2 normal equations).
+
+    Returns (q∞, c, weighted SSE), each of the shape of ``p``. Callers pass x scaled to max 1 and q to max |q| 1,
+    so the sums are well conditioned.
+    """
+    p = np.asarray(p, dtype=np.float64)
+    z = x ** p[..., None]
+    ww = w * w
+    sw, sz, szz = ww.sum(), (ww * z).sum(-1), (ww * z * z).sum(-1)
+    sy, szy = (ww * q).sum(), (ww * z * q).sum(-1)
+    det = sw * szz - sz * sz
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(det > 0, (sw * szy - sz * sy) / det, 0.0)
+    q_inf = (sy - c * sz) / sw
+    resid = q - q_inf[..., None] - c[..., None] * z
+    return q_inf, c, (ww * resid * resid).sum(-1)
 
 
 def _best_p(x, q, w):
     """Exponent minimising the SSE (variable projection): log grid, then a bounded scalar search."""
     grid = np.geomspace(*P_BOUNDS, 61)
-    sse = np.array([_linear(x, q, w, p)[2] for p in grid])
+    sse = _linear(x, q, w, grid)[2]
     i = int(np.argmin(sse))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    res = optimize.minimize_scalar(lambda p: _linear(x, q, w, p)[2], bounds=(lo, hi), method="bounded",
+    res = optimize.minimize_scalar(lambda p: float(_linear(x, q, w, p)[2]), bounds=(lo, hi), method="bounded",
                                    options={"xatol": 1e-10})
     return float(res.x) if res.fun <= sse[i] else float(grid[i])
 
@@ -124,7 +135,7 @@ def _best_p(x, q, w):
 def _fit(x, q, w, p_fixed):
     p = p_fixed if p_fixed is not None else _best_p(x, q, w)
     q_inf, c, sse = _linear(x, q, w, p)
-    return q_inf, c, p, sse
+    return float(q_inf), float(c), p, float(sse)
 
 
 def _fit_error(x, w, c, p, sse, dof, known_sigma, confidence, p_free):
