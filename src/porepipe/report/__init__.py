@@ -1,16 +1,16 @@
 """The accuracy-versus-cost report: HTML + PNG figures and tables of a scene's sweep."""
 
-from porepipe.report._analysis import (
-    Reference,
-    cost_per_digit,
-    error_cost_table,
-    pareto_front,
-    reference_limit,
-    runs_of,
-    varying_quantities,
-)
-from porepipe.report._api import build_report
-from porepipe.report._thesis import Table, thesis_tables
+import importlib
 
-__all__ = ["Reference", "Table", "build_report", "cost_per_digit", "error_cost_table", "pareto_front",
-           "reference_limit", "runs_of", "thesis_tables", "varying_quantities"]
+#: public name -> submodule; loaded on first use, so importing the CLI does not import matplotlib
+_PUBLIC = {"Reference": "_analysis", "cost_per_digit": "_analysis", "error_cost_table": "_analysis",
+           "pareto_front": "_analysis", "reference_limit": "_analysis", "runs_of": "_analysis",
+           "varying_quantities": "_analysis", "build_report": "_api", "Table": "_thesis", "thesis_tables": "_thesis"}
+
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name):
+    if name not in _PUBLIC:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{_PUBLIC[name]}"), name)

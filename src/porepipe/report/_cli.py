@@ -6,7 +6,6 @@ import sys
 from pathlib import Path
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.report._api import build_report
 
 
 def _existing(scene, pattern: str) -> list[str]:
@@ -15,6 +14,7 @@ def _existing(scene, pattern: str) -> list[str]:
 
 
 def main(args) -> int:
+    from porepipe.report._api import build_report  # matplotlib only when a report is built
     from porepipe.scene import load_scene
 
     scene = load_scene(args.scene)

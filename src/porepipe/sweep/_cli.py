@@ -11,6 +11,8 @@ from porepipe.sweep._api import build_sweep
 from porepipe.sweep._crop import crop_corner
 from porepipe.sweep._settings import Exponent
 
+# (scipy, used by the fits, is imported only when a fit runs: this module is imported by every `porepipe` command)
+
 
 def _sweep(args) -> int:
     if args.adaptive:

@@ -10,7 +10,6 @@ import dataclasses
 import enum
 
 import numpy as np
-from scipy import optimize, stats
 
 from porepipe._shared.errors import PorepipeError
 
@@ -123,6 +122,8 @@ def _linear(x, q, w, p):
 
 def _best_p(x, q, w):
     """Exponent minimising the SSE (variable projection): log grid, then a bounded scalar search."""
+    from scipy import optimize  # imported here: every `porepipe` command imports this package
+
     grid = np.geomspace(*P_BOUNDS, 61)
     sse = _linear(x, q, w, grid)[2]
     i = int(np.argmin(sse))
@@ -139,6 +140,8 @@ def _fit(x, q, w, p_fixed):
 
 
 def _fit_error(x, w, c, p, sse, dof, known_sigma, confidence, p_free):
+    from scipy import stats
+
     cols = [np.ones_like(x), x**p] + ([c * x**p * np.log(x)] if p_free else [])
     jac = np.column_stack(cols) * w[:, None]
     try:
@@ -149,6 +152,12 @@ def _fit_error(x, w, c, p, sse, dof, known_sigma, confidence, p_free):
         return float(stats.norm.ppf(0.5 + confidence / 2) * np.sqrt(max(cov[0, 0], 0.0)))
     scale = sse / dof
     return float(stats.t.ppf(0.5 + confidence / 2, dof) * np.sqrt(max(cov[0, 0] * scale, 0.0)))
+
+
+def _chi2_sf(value: float, dof: int) -> float:
+    from scipy import stats
+
+    return float(stats.chi2.sf(value, dof))
 
 
 def _monotonic(x, q, sigma):
@@ -219,7 +228,7 @@ def fit_power(a, q, exponent: float | None = None, sigma=None, confidence: float
     ss_tot = float(((y - np.average(y, weights=w**2)) ** 2 * w**2).sum())
     if not _monotonic(x, y, s):
         status, why = Status.non_monotonic, "the values do not change monotonically with resolution"
-    elif s is not None and stats.chi2.sf(sse, n - k) < MIN_CHI2_PVALUE:
+    elif s is not None and _chi2_sf(sse, n - k) < MIN_CHI2_PVALUE:
         status, why = Status.poor_fit, f"chi^2 = {sse:.3g} for {n - k} degrees of freedom: the form does not fit"
     elif ss_tot > 0 and 1.0 - sse / ss_tot < MIN_R2:
         status, why = Status.poor_fit, "the fit residual is as large as the spread of the data"
