@@ -23,7 +23,7 @@ REPORT_CPU_S = 15.0
 
 
 def _porepipe(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True)
+    return subprocess.run([sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True, check=False)
 
 
 def small_scene(analyses):
@@ -50,7 +50,7 @@ def test_dry_run_ends_in_the_report(tmp_path):
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(scene))
     out = _porepipe("run", str(tmp_path / "s.yaml"), "--cores", "1", "-n", cwd=tmp_path)
     assert out.returncode == 0, out.stderr + out.stdout
-    rules = dict(re.findall(r"^(\w+)\s+(\d+)\s*$", out.stdout, flags=re.M))
+    rules = dict(re.findall(r"^(\w+)\s+(\d+)\s*$", out.stdout, flags=re.MULTILINE))
     n = str(len(scene["resolutions_um"]))
     # estimate-only scene: no segmentation jobs; one sweep and one report job
     assert rules == {"all": "1", "voxelize": n, "estimate": "1", "sweep": "1", "report": "1", "total": rules["total"]}
@@ -93,7 +93,7 @@ def test_report_opens_in_headless_chromium(run, tmp_path):
     page = res / "report" / "index.html"
     cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", f"--user-data-dir={tmp_path}",
            "--enable-logging=stderr", "--v=0", "--dump-dom", page.as_uri()]
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
     assert out.returncode == 0, out.stderr[-2000:]
     assert "Error against cost" in out.stdout and "<img" in out.stdout
     assert "Uncaught" not in out.stderr and "ERR_FILE_NOT_FOUND" not in out.stderr

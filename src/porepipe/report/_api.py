@@ -18,7 +18,7 @@ from porepipe import __version__
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures
-from porepipe.report._analysis import error_cost_table, reference_limit, varying_quantities
+from porepipe.report._analysis import error_cost_table, varying_quantities
 from porepipe.report._settings import Settings
 from porepipe.report._thesis import Table, thesis_tables
 from porepipe.sweep import FULL, parse_name
@@ -66,7 +66,7 @@ def _machine(ds: xr.Dataset) -> str:
     rows = [["porepipe version", __version__], ["host", platform.node()], ["platform", platform.platform()],
             ["processor", platform.processor() or platform.machine()], ["CPU cores seen", os.cpu_count()],
             ["threads of the runs", ", ".join(map(str, threads)) or "not recorded"],
-            ["report written", _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")]]
+            ["report written", _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")]]
     return _table_html(["", ""], rows, 2)
 
 
@@ -101,17 +101,17 @@ def build_report(sweep_path, out_html, *, settings: Settings | None = None, grey
     out_dir.mkdir(parents=True, exist_ok=True)
     scene_name = scene_name or str(read_attrs(sweep_path).get("scene", ""))
     parts = [f"<h1>porepipe report: scene {html.escape(scene_name)}</h1>",
-             "<p>Accuracy against cost: every quantity at every resolution, extrapolated to a → 0; the error of each "
+             ("<p>Accuracy against cost: every quantity at every resolution, extrapolated to a → 0; the error of each "
              f"run against the limit and what it cost. Error bars are {ds.attrs.get('confidence', 0.95):.0%} "
-             "intervals (max of fit covariance and leave-one-resolution-out).</p>",
+             "intervals (max of fit covariance and leave-one-resolution-out).</p>"),
              "<h2>Machine</h2>", _machine(ds)]
     quantities = varying_quantities(ds, settings.quantities, settings.max_quantities)
     if quantities:
         rows = _figures.quantities_figure(ds, quantities, out_dir / "quantities.png", settings.dpi)
         _figures.write_csv(out_dir / "quantities.csv", rows)
         parts += ["<h2>Quantities against resolution</h2>", "<img src='quantities.png' alt='quantities'>",
-                  "<p class=note>Data: <a href='quantities.csv'>quantities.csv</a>; black square: the limit a → 0 "
-                  "with its error bar (only where the data support one).</p>"]
+                  ("<p class=note>Data: <a href='quantities.csv'>quantities.csv</a>; black square: the limit a → 0 "
+                  "with its error bar (only where the data support one).</p>")]
     limits = _limits_rows(ds)
     _figures.write_csv(out_dir / "limits.csv", [dict(zip(["quantity", "sample_um", "n", "finest", "power", "linear"],
                                                           r)) for r in limits])
@@ -125,9 +125,9 @@ def build_report(sweep_path, out_html, *, settings: Settings | None = None, grey
     parts += ["<h2>Error against cost</h2>", "<img src='error_cost.png' alt='error against cost'>",
               _table_html(["quantity", "runs on the Pareto front", "cost factor per extra digit"],
                           [[r["quantity"], r["front_runs"], r["cost_factor_per_digit"]] for r in summary], 1),
-              "<p class=note>One point per run; cost = the run's wall time plus the voxelisation and segmentation "
+              ("<p class=note>One point per run; cost = the run's wall time plus the voxelisation and segmentation "
               "of the volume it measured; error relative to the supported limit. Data: "
-              "<a href='error_cost.csv'>error_cost.csv</a></p>"]
+              "<a href='error_cost.csv'>error_cost.csv</a></p>")]
     if not err_rows:
         parts.append("<p>No quantity has a supported limit yet, so no errors can be shown: add resolutions.</p>")
     parts.append("<h2>Thesis tables</h2>")
@@ -138,8 +138,8 @@ def build_report(sweep_path, out_html, *, settings: Settings | None = None, grey
                                         settings.dpi)
         _figures.write_csv(out_dir / "sections.csv", rows)
         parts += ["<h2>Cross-sections</h2>", "<img src='sections.png' alt='cross-sections'>",
-                  f"<p class=note>Middle section normal to axis {'xyz'[settings.slice_axis]}. Data: "
-                  "<a href='sections.csv'>sections.csv</a></p>"]
+                  (f"<p class=note>Middle section normal to axis {'xyz'[settings.slice_axis]}. Data: "
+                  "<a href='sections.csv'>sections.csv</a></p>")]
     lpt_by_a = _by_resolution(lpt)
     if lpt_by_a:
         rows = _figures.lpt_figure(lpt_by_a, out_dir / "lpt.png", settings.dpi)

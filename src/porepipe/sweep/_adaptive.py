@@ -182,6 +182,6 @@ def run_adaptive(scene_path, cores: int = 1, runner=None) -> Decision:
 def _porepipe_run(cores: int):
     def run(scene_copy: Path, target: str) -> None:
         cmd = [sys.executable, "-m", "porepipe.cli", "run", str(scene_copy), "--cores", str(cores), "--", target]
-        if subprocess.run(cmd).returncode != 0:
+        if subprocess.run(cmd, check=False).returncode != 0:
             raise PorepipeError(f"the workflow failed for {scene_copy} (command: {' '.join(cmd)})")
     return run

@@ -17,7 +17,7 @@ def corner_voxels(edge_um: float, voxel_um: float, shape) -> int:
     if not edge_um > 0 or abs(n - round(n)) > _WHOLE_RTOL * max(1.0, n):
         raise PorepipeError(f"sub-sample edge {edge_um} µm is not a whole number of voxels of {voxel_um} µm "
                             f"({n:.6g}); pick sweep.sample_um as multiples of every resolution")
-    n = int(round(n))
+    n = round(n)
     if n > min(shape):
         raise PorepipeError(f"sub-sample edge {edge_um} µm = {n} voxels exceeds the volume shape {tuple(shape)}")
     return n

@@ -150,7 +150,7 @@ def _add_result(table: _Table, path: Path, bench: dict) -> None:
         ds = read_table(path)
     except (OSError, ValueError) as err:
         raise PorepipeError(f"{path}: no readable root table ({err})") from err
-    prefix, a, sample, tag = parse_name(path.stem)
+    _, a, sample, tag = parse_name(path.stem)
     group = stage + (f"_{tag}" if tag else "")
     sample_key = "" if sample == FULL else f"s{sample:g}"
     rec = bench.get((stage, a, sample, tag)) or bench.get((stage, a, FULL, "_".join(filter(None, [sample_key, tag]))))

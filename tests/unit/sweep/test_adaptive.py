@@ -7,8 +7,7 @@ import pytest
 import yaml
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.sweep import Outcome, decide, fit_power, predict_cost
-from porepipe.sweep import _adaptive
+from porepipe.sweep import Outcome, _adaptive, decide, fit_power, predict_cost
 
 
 def synthetic(a):
@@ -35,7 +34,7 @@ def loop(target, budget, cost_of=lambda a: (16.0 / a) ** 3, start=(16.0, 8.0, 4.
 def test_stops_exactly_when_the_target_is_met():
     target = 0.003
     history = loop(target, budget=1e12)
-    final_a, final = history[-1]
+    final = history[-1][1]
     assert final.outcome is Outcome.target_met
     assert len(history) >= 3  # the case needs refinement: the first rounds miss the target
     # independent check with the fit itself: every earlier round missed the target, the last one meets it
@@ -69,7 +68,8 @@ def test_max_rounds_stops_the_loop():
     assert history[-1][1].outcome is Outcome.max_rounds and len(history) == 3
 
 
-@pytest.mark.parametrize("kwargs", [dict(target_rel_err=0.0, budget=1.0), dict(target_rel_err=0.1, budget=-1.0)])
+@pytest.mark.parametrize("kwargs", [{"target_rel_err": 0.0, "budget": 1.0},
+                                    {"target_rel_err": 0.1, "budget": -1.0}])
 def test_bad_settings_are_rejected(kwargs):
     with pytest.raises(PorepipeError):
         decide([2.0, 1.0], [1.0, 1.1], [1.0, 1.0], **kwargs)
