@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import json
+import time
 from pathlib import Path
 
 import numpy as np
@@ -68,6 +70,14 @@ def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_
     correlation and chord lengths per axis, grains (3-D). Groups ``lpt`` and ``permeability`` when asked for.
     """
     stats = settings.statistics
+    timing: dict[str, float] = {}
+
+    def timed(name, fn, *args):
+        t0 = time.perf_counter()
+        result = fn(*args)
+        timing[name] = round(time.perf_counter() - t0, 3)
+        return result
+
     pore = phases.pore()
     fractions = _stats.volume_fractions(phases.labels, phases.names)
     porosity = float(pore.mean(dtype=np.float64))
@@ -79,24 +89,23 @@ def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_
                     "threshold": ("threshold_index", phases.thresholds, {"long_name": "class k: t_{k-1} < g <= t_k"}),
                     "grey_count": ("grey_bin", phases.histogram.counts, {"long_name": "grey histogram"}),
                     "grey_value": ("grey_bin", phases.histogram.centres)}),
-        xr.Dataset({"two_point": _stats.two_point_correlation(pore, voxel_um, max_lag)}),
-        _stats.chord_lengths(pore, voxel_um),
+        xr.Dataset({"two_point": timed("two_point", _stats.two_point_correlation, pore, voxel_um, max_lag)}),
+        timed("chords", _stats.chord_lengths, pore, voxel_um),
     ]
     skipped = []
     if is_2d:
         skipped = ["minkowski", "percolation", "grains", "lpt", "permeability"]
     else:
-        mk = _stats.minkowski_numbers(pore, voxel_um, settings.periodic)
+        mk = timed("minkowski", _stats.minkowski_numbers, pore, voxel_um, settings.periodic)
         parts.append(xr.Dataset({k: ((), v) for k, v in mk.items()}))
-        parts.append(_stats.percolation(pore))
+        parts.append(timed("percolation", _stats.percolation, pore))
         if stats.grains:
-            parts.append(_stats.grain_statistics(_grain_mask(phases, stats.grain_phase), voxel_um,
-                                                 _min_distance(stats.grain_min_distance_um, voxel_um),
-                                                 settings.periodic))
+            parts.append(timed("grains", _stats.grain_statistics, _grain_mask(phases, stats.grain_phase), voxel_um,
+                               _min_distance(stats.grain_min_distance_um, voxel_um), settings.periodic))
     root = xr.merge(parts, combine_attrs="drop_conflicts")
     root.attrs.update(voxel_um=voxel_um, shape=np.asarray(shape, np.int64), method=phases.method.value,
                       phases=list(phases.names), pore_phases=[phases.names[i] for i in phases.pore_index],
-                      is_2d=int(is_2d), skipped_2d=",".join(skipped))
+                      is_2d=int(is_2d), skipped_2d=",".join(skipped), timing_s=json.dumps(timing))
     out: dict[str | None, xr.Dataset] = {None: root}
     if not is_2d and stats.lpt:
         from porepipe.lpt import local_porosity_analysis
@@ -128,8 +137,11 @@ def acquire(settings: Settings, out, *, base_dir: Path | str = ".", image_path=N
     """Read, prepare, segment and measure an image; write ``statistics.h5`` (with the phase volume) to ``out``."""
     image = open_image(settings, base_dir, image_path)
     with ResultWriter(out, stage="acquire", scene=scene_name, scene_hash=scene_hash) as w:
+        t0 = time.perf_counter()
         prep = prepare(image, settings)
+        t1 = time.perf_counter()
         phases = segment_phases(prep.grey, settings.segmentation)
+        t2 = time.perf_counter()
         tables = image_statistics(phases, prep.voxel_um, settings, is_2d=prep.is_2d, lpt_settings=lpt_settings,
                                   permeability_settings=permeability_settings)
         w.write_volume(PHASES_VOLUME, phases.labels, voxel_um=prep.voxel_um, periodic=(settings.periodic,) * 3,
@@ -138,7 +150,8 @@ def acquire(settings: Settings, out, *, base_dir: Path | str = ".", image_path=N
         for group, ds in tables.items():
             w.write_table(ds, group)
         w.attrs.update(source=prep.source, voxel_um=prep.voxel_um, spacing_um=np.asarray(prep.spacing_um),
-                       porosity=float(tables[None].porosity), is_2d=int(prep.is_2d))
+                       porosity=float(tables[None].porosity), is_2d=int(prep.is_2d),
+                       timing_read_prepare_s=t1 - t0, timing_segment_s=t2 - t1)
     return tables
 
 

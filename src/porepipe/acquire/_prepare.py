@@ -58,16 +58,23 @@ def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
     if method is Denoise.median:
         footprint = (size, size, 1) if grey.shape[2] == 1 else (size, size, size)
         return ndimage.median_filter(grey, size=footprint, mode="reflect")
-    from skimage.restoration import denoise_nl_means, estimate_sigma
+    from skimage.restoration import denoise_nl_means
 
     work = grey.astype(np.float32)
     squeeze = work.shape[2] == 1
     work = work[:, :, 0] if squeeze else work
-    sigma = float(estimate_sigma(work))
+    sigma = _noise_sigma(work)
     out = denoise_nl_means(work, h=0.8 * sigma, sigma=sigma, fast_mode=True, patch_size=3, patch_distance=5)
     out = out[:, :, None] if squeeze else out
     return out.astype(grey.dtype) if grey.dtype.kind == "f" else np.clip(np.rint(out), *_int_range(grey.dtype)).astype(
         grey.dtype)
+
+
+def _noise_sigma(work: np.ndarray) -> float:
+    """Robust noise level: MAD of neighbour differences along x, / sqrt(2) (differences double the variance)."""
+    d = np.diff(work, axis=0).ravel()
+    mad = np.median(np.abs(d - np.median(d)))
+    return max(float(1.4826 * mad / np.sqrt(2.0)), 1e-6)
 
 
 def _int_range(dtype) -> tuple[int, int]:
@@ -163,8 +170,13 @@ def segment_phases(grey: np.ndarray, seg: Segmentation) -> Phases:
     thresholds = choose_thresholds(hist, seg)
     n = len(seg.phases)
     labels = np.zeros(grey.shape, np.uint8)
-    # class k: t_{k-1} < g <= t_k (pore if g <= g_th); slab-wise so no int64 copy of the volume is made
-    for i in range(grey.shape[0]):
+    # class k: t_{k-1} < g <= t_k (pore if g <= g_th)
+    if grey.dtype in (np.uint8, np.uint16):  # one lookup table for every possible grey value
+        k = np.searchsorted(thresholds, np.arange(np.iinfo(grey.dtype).max + 1), side="left").astype(np.uint8)
+        np.take((n - 1 - k) if seg.invert else k, grey, out=labels)
+        return Phases(labels, thresholds, hist, list(seg.phases), [seg.phases.index(p) for p in seg.pore_phases],
+                      seg.method)
+    for i in range(grey.shape[0]):  # slab-wise so no int64 copy of the volume is made
         k = np.searchsorted(thresholds, grey[i], side="left").astype(np.uint8)
         labels[i] = (n - 1 - k) if seg.invert else k
     pore_index = [seg.phases.index(p) for p in seg.pore_phases]

@@ -89,3 +89,11 @@ def test_float_image_histogram_thresholds_in_grey_units():
     # Otsu's between-class variance is flat across the empty gap; any threshold in it is a maximiser
     assert grey[grey < 0.5].max() <= ph.thresholds[0] < grey[grey > 0.5].min()
     np.testing.assert_array_equal(ph.pore(), (grey < 0.5).astype(np.uint8))
+
+
+def test_non_local_means_reduces_noise_of_a_flat_section():
+    rng = np.random.default_rng(8)
+    grey = np.clip(100 + rng.normal(0, 10, (32, 32, 1)), 0, 255).astype(np.uint8)
+    out = denoise(grey, Denoise.nl_means)
+    assert out.dtype == np.uint8 and out.shape == grey.shape
+    assert out.std() < 0.5 * grey.std()  # NLM on pure noise averages many similar patches: std drops well below half
