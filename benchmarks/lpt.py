@@ -1,7 +1,7 @@
 """Benchmark of the lpt stage: μ(φ, L) for all positions and λ_α(φ, L) on a stride grid, on a 512³ volume.
 
 Usage: python benchmarks/lpt.py [--n 512] [--sizes 16 32 64 128] [--lambda-cells 100000] [--threads 1 2]
-       [--json out.json]
+       [--json out.json] [--smoke]
 
 The volume is a thresholded Gaussian random field (correlation length ~ 3 voxels, porosity 0.2), a stand-in for a
 sandstone image. Prints cells per second and wall time per L and thread count, a peer comparison for the
@@ -62,8 +62,11 @@ def main() -> None:
     parser.add_argument("--lambda-cells", type=int, default=100_000,
                         help="percolation cells per L up to L = 64; for larger L scaled by (64/L)^3 (same voxel work)")
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--json", default="benchmarks/lpt.json")
+    parser.add_argument("--json", help="also write the rows as JSON to this file")
+    parser.add_argument("--smoke", action="store_true", help="64^3, L = 8 and 16, 2000 cells, 1 thread (CI)")
     args = parser.parse_args()
+    if args.smoke:
+        args.n, args.sizes, args.lambda_cells, args.threads = 64, [8, 16], 2000, [1]
 
     t0 = time.perf_counter()
     pore = make_volume(args.n)
@@ -96,7 +99,7 @@ def main() -> None:
                   f"{t_lam:7.2f} s {len(origins) / t_lam:9.0f} cells/s  p_3 = {row['p3']:.3f}", flush=True)
         print(f"threads {threads}  total: mu {mu_total:.2f} s for {len(args.sizes)} sizes (target < 10 s), "
               f"lambda_3 {lam_total:.2f} s")
-    size = 64 if 64 in args.sizes else args.sizes[0]
+    size = 64 if 64 in args.sizes else args.sizes[-1]
     grid = cell_grid(pore.shape, size)
     origins = grid.origins(auto_stride(grid, max(1, int(args.lambda_cells * min(1.0, (64 / size) ** 3)))))
     peer = peer_label_rate(pore, size, origins[:: max(1, len(origins) // 2000)])
@@ -105,8 +108,9 @@ def main() -> None:
           + ", ".join(f"{r['lambda_cells_per_s']:.0f} cells/s ({r['threads']} thr)" for r in ours))
     record = dict(n=args.n, porosity=float(pore.mean()), machine=platform.platform(), note="shared loaded machine",
                   rows=rows, peer_scipy_label_cells_per_s=peer, peer_L=size)
-    with open(args.json, "w") as f:
-        json.dump(record, f, indent=1)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(record, f, indent=1)
     print("\n| threads | L | mu cells | mu s | Mcells/s | lambda stride | lambda cells | lambda_3 s | cells/s |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:

@@ -11,6 +11,7 @@ from porepipe._shared.store import ResultWriter, read_table
 from porepipe.cli import main as cli_main
 from porepipe.lpt import Settings, local_porosity_analysis, local_porosity_histogram, percolation_bits
 from porepipe.lpt._cli import cubic_voxel_um
+from porepipe.sweep._crop import crop_corner
 
 FLOAT_VARS = ["mu", "phi_mean", "phi_var", "p", "mu_sv", "sv_mean_per_um"]
 
@@ -29,6 +30,7 @@ def test_uniform_volumes(fill):
         assert (d.cells_phi1 if fill else d.cells_phi0) == d.cells_total
         np.testing.assert_array_equal(d.p, float(fill))
     assert ds.attrs["L_star"] == 0  # μ(φ0) or μ(1) never vanishes: L* is not reached
+    assert np.isnan(ds.attrs["L_star_um"])  # "no value" for the sweep, which fits only finite values
     for name in FLOAT_VARS:
         assert np.isfinite(ds[name]).all(), name
     np.testing.assert_array_equal(ds.sv_mean_per_um, 0.0)  # no interface anywhere
@@ -134,3 +136,10 @@ def test_cli_writes_dataset_and_plots(tmp_path):
     assert ds.attrs["wrap"].tolist() == [0, 0, 0] and "corner cube" in ds.attrs["sample"]
     assert ds.pore_voxels.sel(L=1).sum() == pore[:8, :8, :8].sum()
     assert cli_main(["lpt", str(src), "-o", str(rev), "--subsample-um", "100"]) == 2
+    # the workflow's sample-size sweep: a file from `porepipe subsample` is recognised as a sub-sample
+    part = tmp_path / "binary_a2_L16.h5"
+    crop_corner(src, 16.0, part)
+    assert cli_main(["lpt", str(part), "-o", str(tmp_path / "lpt_a2_L16.h5"), "--cell-um", "2", "8", "20",
+                     "--no-plots"]) == 0
+    ds = read_table(tmp_path / "lpt_a2_L16.h5")
+    assert ds.L.values.tolist() == [1, 4] and "corner cube of 16 µm" in ds.attrs["sample"]

@@ -553,8 +553,9 @@ def _dataset(per: list[_PerSize], pore: np.ndarray, voxel_um: float, periodic, w
             "phi_bar": float(pore.sum(dtype=np.int64) / pore.size),
             "pore_voxels": int(pore.sum(dtype=np.int64)),
             "L_star": int(L_star),
-            "L_star_um": float(L_star * voxel_um),
-            "L_star_note": "smallest computed L with mu(0,L) = mu(1,L) = 0 (eq. 4.6.4); 0 = none of the computed L",
+            "L_star_um": float(L_star * voxel_um) if L_star else float("nan"),
+            "L_star_note": "smallest computed L with mu(0,L) = mu(1,L) = 0 (eq. 4.6.4); L_star = 0 and L_star_um = "
+                           "NaN: none of the computed L qualifies",
             "cell_um_to_voxels": str(mapping) if mapping else "",
             "skipped_cell_voxels": np.array(skipped, np.int64),
             "settings": settings.model_dump_json(),

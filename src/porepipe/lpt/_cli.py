@@ -28,13 +28,20 @@ def cubic_voxel_um(voxel_um, path) -> float:
 
 
 def read_binary(path, subsample_um: float | None = None) -> tuple[np.ndarray, float, tuple[bool, bool, bool], str]:
-    """Pore volume, voxel edge, periodicity and a note; optionally only the corner cube of edge ``subsample_um``."""
+    """Pore volume, voxel edge, periodicity and a note; optionally only the corner cube of edge ``subsample_um``.
+
+    A file written by ``porepipe subsample`` (root attribute ``sample_um``) is itself a corner sub-sample.
+    """
+    root = read_attrs(path)
     with open_volume(path, "pore") as dset:
         attrs = dict(dset.attrs)
         voxel_um = cubic_voxel_um(attrs.get("voxel_um"), path)
         periodic = tuple(bool(p) for p in np.broadcast_to(np.asarray(attrs.get("periodic", 0)), (3,)))
         if subsample_um is None:
-            return dset[...], voxel_um, periodic, "whole sample"
+            note = "whole sample"
+            if "sample_um" in root:
+                note = f"sub-sample: corner cube of {float(root['sample_um']):g} µm edge from {root.get('source', '?')}"
+            return dset[...], voxel_um, periodic, note
         edge = int(np.floor(subsample_um / voxel_um + 0.5))
         if not 1 <= edge <= min(dset.shape):
             raise PorepipeError(f"--subsample-um {subsample_um} is {edge} voxels of {voxel_um} µm; allowed 1 .. "
@@ -50,10 +57,11 @@ def lpt_file(binary_path, out, settings: Settings, *, subsample_um: float | None
     threads = set_threads(threads)
     src = read_attrs(binary_path)
     pore, voxel_um, periodic, note = read_binary(binary_path, subsample_um)
+    is_part = subsample_um is not None or "sample_um" in src  # a sub-sample leaves out the cells that do not fit
     sizes, _ = cell_sizes(settings, voxel_um, pore.shape)
     progress = Progress("lpt", total=sum(s <= min(pore.shape) for s in sizes))
     ds = local_porosity_analysis(pore, voxel_um=voxel_um, periodic=periodic, settings=settings,
-                                 skip_too_large=subsample_um is not None, progress=progress)
+                                 skip_too_large=is_part, progress=progress)
     ds.attrs["sample"] = note
     part = {"binary": src.get("scene_hash", ""), "lpt": settings.model_dump(mode="json"), "subsample_um": subsample_um}
     with ResultWriter(out, stage="lpt", scene=src.get("scene", ""), scene_hash=hash_of(part), threads=threads) as w:
@@ -111,6 +119,7 @@ def register(subparsers) -> None:
     p.add_argument("--surface", action=argparse.BooleanOptionalAction, default=None, help="local S_V distribution")
     p.add_argument("--surface-bins", type=int)
     p.add_argument("--plots", action=argparse.BooleanOptionalAction, default=None, help="write PNG plots")
-    p.add_argument("--subsample-um", type=float, help="analyse only the corner cube of this edge (REV sweep)")
+    p.add_argument("--subsample-um", type=float, help="analyse only the corner cube of this edge (cells larger than "
+                   "it are left out; the workflow's sample-size sweep uses `porepipe subsample` files instead)")
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=main)

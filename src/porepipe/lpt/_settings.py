@@ -66,9 +66,6 @@ class Settings(BaseModel):
         "are binned into max_bins-2 bins (φ = 0 and φ = 1 keep their own bins)")
     surface: bool = Field(True, description="also compute the local specific-surface distribution μ(S_V, L)")
     surface_bins: int = Field(201, ge=3, description="bins of μ(S_V, L) (S_V = 0 and the maximum keep their own)")
-    rev_sample_um: list[PositiveUm] = Field(
-        default_factory=list, description="sample-size (REV) sweep: cubic sub-samples of these edges, cut at the "
-        "origin corner (§4.6.1); each gives its own lpt_a{a}_s{s}.h5")
     plots: bool = Field(True, description="write PNG plots of μ(φ,L), λ_α(φ,L), p_α(L) next to the data file")
 
     @field_validator("directions")
@@ -84,7 +81,7 @@ class Settings(BaseModel):
     def _one_kind_of_cell(self):
         if self.cell_um and self.cell_voxels:
             raise ValueError("give cell_um or cell_voxels, not both")
-        for name in ("cell_um", "cell_voxels", "rev_sample_um"):
+        for name in ("cell_um", "cell_voxels"):
             values = getattr(self, name)
             if len(set(values)) != len(values):
                 raise ValueError(f"{name} must be distinct, got {values}")
