@@ -9,7 +9,7 @@ import pytest
 from porepipe.lbm import Settings
 from porepipe.lbm import _calibration as cal
 from porepipe.lbm._domain import build_lattice
-from porepipe.lbm._solver import make_stepper
+from porepipe.lbm._solver import _threads_for, make_stepper
 
 #: Table 6.2: ⟨|ε_v|⟩ on the middle cross-section, BGK τ̂ = 0.857, thesis set-up (6.1.26)
 TABLE_6_2 = {4: 0.064099, 8: 0.021840, 16: 0.007241}
@@ -28,10 +28,10 @@ def test_duct_velocity_series_is_zero_on_the_walls_and_integrates_to_kappa():
     # on the walls the M = 200 series converges slowly (terms ~ 1/k³): residual ~1e-5 of the peak 1e1 (6.1.28)
     assert np.abs(cal.square_duct_velocity(b, x, np.full_like(x, b / 2), 1.0)).max() < 1e-5
     assert np.abs(cal.square_duct_velocity(b, np.full_like(x, b / 2), x, 1.0)).max() < 1e-5
-    xm = (np.arange(400) + 0.5) / 400 * b - b / 2  # midpoint rule, 400² points: error ~1e-6 relative
+    xm = (np.arange(160) + 0.5) / 160 * b - b / 2  # midpoint rule, 160² points: error ~1e-5 relative
     x1, x2 = np.meshgrid(xm, xm, indexing="ij")
     mean = cal.square_duct_velocity(b, x1, x2, 1.0).mean()
-    assert mean == pytest.approx(cal.square_duct_kappa(b), rel=1e-5)
+    assert mean == pytest.approx(cal.square_duct_kappa(b), rel=1e-4)
 
 
 @pytest.mark.parametrize("b", [4, 8, 16])
@@ -125,7 +125,8 @@ def test_mass_is_conserved_to_round_off_in_the_periodic_set_up():
     src = np.zeros(19 * lat.n_nodes)
     dst = np.zeros_like(src)
     step = make_stepper(Settings(collision="mrt", body_force=1e-5), lat)
-    step(src, dst, np.zeros((4, lat.n_nodes)), False, 2000)
+    with _threads_for(lat.n_nodes):  # small lattice: serial, as the solver runs it
+        step(src, dst, np.zeros((4, lat.n_nodes)), False, 2000)
     assert abs(np.sum(src)) < 1e-12 * lat.n_nodes  # zero-centred: Σ f̃ = total mass − N
 
 
@@ -137,8 +138,9 @@ def test_zero_body_force_gives_zero_flow():
     dst = np.zeros_like(src)
     fields = np.zeros((4, lat.n_nodes))
     step = make_stepper(Settings(collision="trt"), lat)
-    step(src, dst, fields, True, 100)
-    assert np.count_nonzero(src) == 0 and np.count_nonzero(fields) == 0
-    src[: lat.n_nodes] = 1e-3 * np.random.default_rng(9).standard_normal(lat.n_nodes)  # rest population kick
-    step(src, dst, fields, True, 3000)
+    with _threads_for(lat.n_nodes):
+        step(src, dst, fields, True, 100)
+        assert np.count_nonzero(src) == 0 and np.count_nonzero(fields) == 0
+        src[: lat.n_nodes] = 1e-3 * np.random.default_rng(9).standard_normal(lat.n_nodes)  # rest population kick
+        step(src, dst, fields, True, 3000)
     assert np.abs(fields[1:]).max() < 1e-9  # acoustic/viscous decay from 1e-3 over 3000 steps

@@ -86,8 +86,8 @@ class PermeabilityResult:
 
 def _check_pore(pore: np.ndarray) -> np.ndarray:
     pore = np.asarray(pore)
-    if pore.ndim != 3 or min(pore.shape) < 2:
-        raise PorepipeError(f"pore volume must be 3-D with at least 2 voxels per axis, got shape {pore.shape}")
+    if pore.ndim != 3 or min(pore.shape) < 1:
+        raise PorepipeError(f"pore volume must be 3-D with at least 1 voxel per axis, got shape {pore.shape}")
     if pore.dtype != bool:
         values = np.unique(pore)
         if not np.all(np.isin(values, (0, 1))):

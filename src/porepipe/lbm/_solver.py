@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import os
@@ -9,6 +10,7 @@ import time
 from pathlib import Path
 
 import h5py
+import numba
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
@@ -24,6 +26,8 @@ from porepipe.lbm._settings import Collision, Settings
 TAU_MIN_GAP = 5e-3
 #: velocity changes are taken relative to max(|v|, this × max |v|): stagnant nodes do not dominate Eq. 6.1.30.
 VELOCITY_FLOOR = 1e-3
+#: below this many pore nodes per thread a parallel step costs more in thread wake-ups than it saves.
+NODES_PER_THREAD = 32_768
 #: keys of the settings that change the numbers (checkpoints must match them).
 _PHYSICS_KEYS = ("collision", "tau", "tau_bulk", "magic", "mrt_magic", "body_force", "precision")
 
@@ -135,8 +139,27 @@ def _next_check(done: int, window: int) -> int:
     return (done // window + 1) * window
 
 
+@contextlib.contextmanager
+def _threads_for(n_nodes: int):
+    """Use at most one thread per NODES_PER_THREAD nodes while stepping (tiny lattices run serially)."""
+    before = numba.get_num_threads()
+    numba.set_num_threads(max(1, min(before, n_nodes // NODES_PER_THREAD)))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
+
+
 def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str = "lbm",
           checkpoint: Path | None = None, progress: bool = True) -> Run:
+    """Run the lattice to a steady state and evaluate κ̂ (see :func:`_solve`)."""
+    with _threads_for(lat.n_nodes):
+        return _solve(lat, settings, sample_voxels=sample_voxels, sample_area=sample_area, label=label,
+                      checkpoint=checkpoint, progress=progress)
+
+
+def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str,
+           checkpoint: Path | None, progress: bool) -> Run:
     """Run the lattice to a steady state and evaluate κ̂.
 
     Converged when, over one window of ``window_steps``, the largest relative change of the flow velocity and of
