@@ -97,3 +97,17 @@ def test_report_opens_in_headless_chromium(run, tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     assert "Error against cost" in out.stdout and "<img" in out.stdout
     assert "Uncaught" not in out.stderr and "ERR_FILE_NOT_FOUND" not in out.stderr
+
+
+def test_subsample_rule_cuts_the_corner(run):
+    res, _ = run
+    cwd = res.parent.parent
+    target = "results/small/segment/binary_a2_L20.h5"
+    out = _porepipe("run", str(cwd / "small.yaml"), "--cores", "1", "--", target, cwd=cwd)
+    assert out.returncode == 0, out.stderr[-3000:]
+    from porepipe._shared.store import read_volume
+
+    cube, attrs = read_volume(cwd / target, "pore")
+    full, _ = read_volume(res / "segment" / "binary_a2.h5", "pore")
+    np.testing.assert_array_equal(cube, full[:10, :10, :10])
+    assert attrs["periodic"] == [0, 0, 0]
