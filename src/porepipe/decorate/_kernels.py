@@ -65,20 +65,22 @@ def _sphere_points(words, i, j, k, cx, cy, cz, r2, h, skip_rows, scratch):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _poly_points(words, i, j, k, cx, cy, cz, planes, p0, p1, h, partial):
-    """OR into ``words`` the sample points of voxel (i, j, k) inside the polyhedron planes[p0:p1] about c."""
+def _poly_points(words, i, j, k, cx, cy, cz, planes, active, n_active, h, partial):
+    """OR into ``words`` the sample points of voxel (i, j, k) inside every plane ``planes[active[:n_active]]`` about c."""
     for sx in range(SUB):
         dx = _sample_coord(i, sx, h) - cx
         for sy in range(SUB):
             dy = _sample_coord(j, sy, h) - cy
-            for p in range(p0, p1):
-                partial[p - p0] = planes[p, 0] * dx + planes[p, 1] * dy
+            for t in range(n_active):
+                p = active[t]
+                partial[t] = planes[p, 0] * dx + planes[p, 1] * dy
             row = 0
             for sz in range(SUB):
                 dz = _sample_coord(k, sz, h) - cz
                 inside = True
-                for p in range(p0, p1):
-                    if partial[p - p0] + planes[p, 2] * dz > planes[p, 3]:
+                for t in range(n_active):
+                    p = active[t]
+                    if partial[t] + planes[p, 2] * dz > planes[p, 3]:
                         inside = False
                         break
                 if inside:
@@ -95,24 +97,36 @@ def _extremes(n, lo, hi):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _classify_poly(i, j, k, cx, cy, cz, planes, p0, p1, h, margin):
-    """UNTOUCHED if the voxel's sample hull is outside some plane, FULL if inside all, else PARTIAL."""
+def _xy_bounds(i, j, cx, cy, planes, p0, p1, h, xy):
+    """Per plane t = p - p0 of the grain: xy[t, 0] = min, xy[t, 1] = max of (n0*dx + n1*dy) bound over the sample hull
+    of column (i, j), summed in the kernels' order."""
     dxl = _sample_coord(i, 0, h) - cx
     dxh = _sample_coord(i, SUB - 1, h) - cx
     dyl = _sample_coord(j, 0, h) - cy
     dyh = _sample_coord(j, SUB - 1, h) - cy
-    dzl = _sample_coord(k, 0, h) - cz
-    dzh = _sample_coord(k, SUB - 1, h) - cz
-    full = True
     for p in range(p0, p1):
         xl, xh = _extremes(planes[p, 0], dxl, dxh)
         yl, yh = _extremes(planes[p, 1], dyl, dyh)
+        xy[p - p0, 0] = xl + yl
+        xy[p - p0, 1] = xh + yh
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _classify_poly(k, cz, planes, p0, p1, h, margin, xy, active):
+    """(UNTOUCHED, 0) if the voxel's sample hull is outside some plane, (FULL, 0) if inside all, else (PARTIAL, m)
+    with ``active[:m]`` the planes the hull crosses: every sample point satisfies the others, so only these are
+    tested point by point. ``xy`` comes from :func:`_xy_bounds` for the voxel's column."""
+    dzl = _sample_coord(k, 0, h) - cz
+    dzh = _sample_coord(k, SUB - 1, h) - cz
+    m = 0
+    for p in range(p0, p1):
         zl, zh = _extremes(planes[p, 2], dzl, dzh)
-        if (xl + yl) + zl > planes[p, 3] + margin:
-            return UNTOUCHED
-        if (xh + yh) + zh > planes[p, 3] - margin:
-            full = False
-    return FULL if full else PARTIAL
+        if xy[p - p0, 0] + zl > planes[p, 3] + margin:
+            return UNTOUCHED, 0
+        if xy[p - p0, 1] + zh > planes[p, 3] - margin:
+            active[m] = p
+            m += 1
+    return (FULL, 0) if m == 0 else (PARTIAL, m)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -129,7 +143,7 @@ def _classify_sphere(i, j, k, cx, cy, cz, r2, h):
 
 @njit(cache=True, fastmath=FASTMATH)
 def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes, h, ny, nz,
-                 boundary_only, status, mask, scratch, partial, words, out):
+                 boundary_only, status, mask, scratch, partial, active, xy, words, out):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); the other arrays are this thread's buffers."""
     status[:, :] = UNTOUCHED
     plane_lo = _sample_coord(i, 0, h)
@@ -149,14 +163,17 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
         j0, j1 = _axis_range(cy, img_pos[s, 4], h, ny)
         k0, k1 = _axis_range(cz, img_pos[s, 5], h, nz)
         for j in range(j0, j1):
+            if boundary_only and kind[g] == KIND_POLYHEDRON:
+                _xy_bounds(i, j, cx, cy, planes, p0, p1, h, xy)
             for k in range(k0, k1):
                 if status[j, k] == FULL:
                     continue
+                n_active = p1 - p0
                 if boundary_only:
                     if kind[g] == KIND_SPHERE:
                         cls = _classify_sphere(i, j, k, cx, cy, cz, r2, h)
                     else:
-                        cls = _classify_poly(i, j, k, cx, cy, cz, planes, p0, p1, h, margin)
+                        cls, n_active = _classify_poly(k, cz, planes, p0, p1, h, margin, xy, active)
                     if cls == UNTOUCHED:
                         continue
                     if cls == FULL:
@@ -171,7 +188,10 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
                 if kind[g] == KIND_SPHERE:
                     _sphere_points(words, i, j, k, cx, cy, cz, r2, h, boundary_only, scratch)
                 else:
-                    _poly_points(words, i, j, k, cx, cy, cz, planes, p0, p1, h, partial)
+                    if not boundary_only:
+                        for t in range(n_active):
+                            active[t] = p0 + t
+                    _poly_points(words, i, j, k, cx, cy, cz, planes, active, n_active, h, partial)
                 for w in range(_WORDS):
                     mask[j, k, w] |= words[w]
     for j in range(ny):
@@ -200,10 +220,12 @@ def _voxelize_grains_slab(i0, i1, img_pos, img_grain, order, xmin_sorted, hx_max
         mask = np.empty((ny, nz, _WORDS), dtype=np.uint64)
         scratch = np.empty((3, SUB))
         partial = np.empty(max(max_planes, 1))
+        active = np.empty(max(max_planes, 1), dtype=np.int64)
+        xy = np.empty((max(max_planes, 1), 2))
         words = np.empty(_WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             _grain_plane(i0 + p, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes,
-                         h, ny, nz, boundary_only, status, mask, scratch, partial, words, out[p])
+                         h, ny, nz, boundary_only, status, mask, scratch, partial, active, xy, words, out[p])
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
