@@ -43,7 +43,7 @@ def peer_label_rate(pore: np.ndarray, size: int, origins: np.ndarray, budget_s: 
     t0 = time.perf_counter()
     done = 0
     for o in origins:
-        cell = pore[o[0]:o[0] + size, o[1]:o[1] + size, o[2]:o[2] + size]
+        cell = pore[o[0] : o[0] + size, o[1] : o[1] + size, o[2] : o[2] + size]
         labels, _ = ndimage.label(cell)
         for axis in range(3):
             near, far = np.take(labels, 0, axis=axis), np.take(labels, -1, axis=axis)
@@ -56,11 +56,17 @@ def peer_label_rate(pore: np.ndarray, size: int, origins: np.ndarray, budget_s: 
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--n", type=int, default=512)
     parser.add_argument("--sizes", type=int, nargs="+", default=[16, 32, 64, 128])
-    parser.add_argument("--lambda-cells", type=int, default=100_000,
-                        help="percolation cells per L up to L = 64; for larger L scaled by (64/L)^3 (same voxel work)")
+    parser.add_argument(
+        "--lambda-cells",
+        type=int,
+        default=100_000,
+        help="percolation cells per L up to L = 64; for larger L scaled by (64/L)^3 (same voxel work)",
+    )
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--json", help="also write the rows as JSON to this file")
     parser.add_argument("--smoke", action="store_true", help="64^3, L = 8 and 16, 2000 cells, 1 thread (CI)")
@@ -70,9 +76,11 @@ def main() -> None:
 
     t0 = time.perf_counter()
     pore = make_volume(args.n)
-    print(f"volume {args.n}^3, porosity {pore.mean():.4f}, built in {time.perf_counter() - t0:.1f} s; "
-          f"numba {numba.__version__}, {numba.config.NUMBA_NUM_THREADS} hardware threads; "
-          "NOTE: shared, loaded machine -> timings are noisy upper bounds")
+    print(
+        f"volume {args.n}^3, porosity {pore.mean():.4f}, built in {time.perf_counter() - t0:.1f} s; "
+        f"numba {numba.__version__}, {numba.config.NUMBA_NUM_THREADS} hardware threads; "
+        "NOTE: shared, loaded machine -> timings are noisy upper bounds"
+    )
     warm_up()
     rows = []
     for threads in args.threads:
@@ -90,32 +98,59 @@ def main() -> None:
             t_lam = time.perf_counter() - t
             mu_total += t_mu
             lam_total += t_lam
-            row = dict(threads=threads, L=size, mu_cells=h.n_cells, mu_s=t_mu, mu_cells_per_s=h.n_cells / t_mu,
-                       lambda_stride=stride, lambda_cells=len(origins), lambda_s=t_lam,
-                       lambda_cells_per_s=len(origins) / t_lam, p3=float(((bits & 8) > 0).mean()))
+            row = {
+                "threads": threads,
+                "L": size,
+                "mu_cells": h.n_cells,
+                "mu_s": t_mu,
+                "mu_cells_per_s": h.n_cells / t_mu,
+                "lambda_stride": stride,
+                "lambda_cells": len(origins),
+                "lambda_s": t_lam,
+                "lambda_cells_per_s": len(origins) / t_lam,
+                "p3": float(((bits & 8) > 0).mean()),
+            }
             rows.append(row)
-            print(f"threads {threads}  L {size:4d}  mu: {h.n_cells:11d} cells (stride 1) {t_mu:7.2f} s "
-                  f"{h.n_cells / t_mu / 1e6:7.1f} Mcells/s | lambda_3: {len(origins):7d} cells (stride {stride}) "
-                  f"{t_lam:7.2f} s {len(origins) / t_lam:9.0f} cells/s  p_3 = {row['p3']:.3f}", flush=True)
-        print(f"threads {threads}  total: mu {mu_total:.2f} s for {len(args.sizes)} sizes (target < 10 s), "
-              f"lambda_3 {lam_total:.2f} s")
+            print(
+                f"threads {threads}  L {size:4d}  mu: {h.n_cells:11d} cells (stride 1) {t_mu:7.2f} s "
+                f"{h.n_cells / t_mu / 1e6:7.1f} Mcells/s | lambda_3: {len(origins):7d} cells (stride {stride}) "
+                f"{t_lam:7.2f} s {len(origins) / t_lam:9.0f} cells/s  p_3 = {row['p3']:.3f}",
+                flush=True,
+            )
+        print(
+            f"threads {threads}  total: mu {mu_total:.2f} s for {len(args.sizes)} sizes (target < 10 s), "
+            f"lambda_3 {lam_total:.2f} s"
+        )
     size = 64 if 64 in args.sizes else args.sizes[-1]
     grid = cell_grid(pore.shape, size)
     origins = grid.origins(auto_stride(grid, max(1, int(args.lambda_cells * min(1.0, (64 / size) ** 3)))))
     peer = peer_label_rate(pore, size, origins[:: max(1, len(origins) // 2000)])
     ours = [r for r in rows if r["L"] == size]
-    print(f"peer: scipy.ndimage.label + face check, L = {size}: {peer:.0f} cells/s (1 thread) vs ours "
-          + ", ".join(f"{r['lambda_cells_per_s']:.0f} cells/s ({r['threads']} thr)" for r in ours))
-    record = dict(n=args.n, porosity=float(pore.mean()), machine=platform.platform(), note="shared loaded machine",
-                  rows=rows, peer_scipy_label_cells_per_s=peer, peer_L=size)
+    print(
+        f"peer: scipy.ndimage.label + face check, L = {size}: {peer:.0f} cells/s (1 thread) vs ours "
+        + ", ".join(f"{r['lambda_cells_per_s']:.0f} cells/s ({r['threads']} thr)" for r in ours)
+    )
+    record = {
+        "n": args.n,
+        "porosity": float(pore.mean()),
+        "machine": platform.platform(),
+        "note": "shared loaded machine",
+        "rows": rows,
+        "peer_scipy_label_cells_per_s": peer,
+        "peer_L": size,
+    }
     if args.json:
         with open(args.json, "w") as f:
             json.dump(record, f, indent=1)
-    print("\n| threads | L | mu cells | mu s | Mcells/s | lambda stride | lambda cells | lambda_3 s | cells/s |")
+    print(
+        "\n| threads | L | mu cells | mu s | Mcells/s | lambda stride | lambda cells | lambda_3 s | cells/s |"
+    )
     print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r['threads']} | {r['L']} | {r['mu_cells']} | {r['mu_s']:.2f} | {r['mu_cells_per_s'] / 1e6:.1f} | "
-              f"{r['lambda_stride']} | {r['lambda_cells']} | {r['lambda_s']:.2f} | {r['lambda_cells_per_s']:.0f} |")
+        print(
+            f"| {r['threads']} | {r['L']} | {r['mu_cells']} | {r['mu_s']:.2f} | {r['mu_cells_per_s'] / 1e6:.1f} | "
+            f"{r['lambda_stride']} | {r['lambda_cells']} | {r['lambda_s']:.2f} | {r['lambda_cells_per_s']:.0f} |"
+        )
 
 
 if __name__ == "__main__":

@@ -56,33 +56,49 @@ def test_mixed_periodicity_wraps_only_periodic_axes():
     ds = analyse(pore, [4], periodic=(True, False, True))
     assert ds.cells_total.item() == 10 * 7 * 10
     assert "y: fully inside" in ds.placement.item() and "x: periodic wrap" in ds.placement.item()
-    inside = local_porosity_analysis(pore, periodic=(True, True, True),
-                                     settings=Settings(cell_voxels=[4], placement="inside"))
+    inside = local_porosity_analysis(
+        pore, periodic=(True, True, True), settings=Settings(cell_voxels=[4], placement="inside")
+    )
     assert inside.cells_total.item() == 7**3
 
 
-@pytest.mark.parametrize("call,match", [
-    (lambda p: local_porosity_histogram(p, 11), "exceeds the sample"),
-    (lambda p: local_porosity_histogram(p, 0), "at least 1"),
-    (lambda p: local_porosity_histogram(p.astype(np.float32), 2), "uint8"),
-    (lambda p: local_porosity_histogram(p * 2, 2), "only 0 and 1"),
-    (lambda p: local_porosity_histogram(p[0], 2), "3-D"),
-    (lambda p: local_porosity_histogram(p, 2, stride=0), "stride"),
-    (lambda p: local_porosity_histogram(np.ones((260, 260, 260), np.uint8), 256), "give max_bins"),
-    (lambda p: percolation_bits(p, 3, np.zeros((2, 3)), np.zeros(3)), "one entry per origin"),
-    (lambda p: percolation_bits(p, 3, np.array([[0, 10, 0]])), "must lie in the volume"),
-    (lambda p: local_porosity_analysis(p, voxel_um=2.0, settings=Settings(cell_um=[0.9])), "half a voxel"),
-    (lambda p: local_porosity_analysis(p, voxel_um=0.0), "voxel_um"),
-])
+@pytest.mark.parametrize(
+    "call,match",
+    [
+        (lambda p: local_porosity_histogram(p, 11), "exceeds the sample"),
+        (lambda p: local_porosity_histogram(p, 0), "at least 1"),
+        (lambda p: local_porosity_histogram(p.astype(np.float32), 2), "uint8"),
+        (lambda p: local_porosity_histogram(p * 2, 2), "only 0 and 1"),
+        (lambda p: local_porosity_histogram(p[0], 2), "3-D"),
+        (lambda p: local_porosity_histogram(p, 2, stride=0), "stride"),
+        (lambda p: local_porosity_histogram(np.ones((260, 260, 260), np.uint8), 256), "give max_bins"),
+        (lambda p: percolation_bits(p, 3, np.zeros((2, 3)), np.zeros(3)), "one entry per origin"),
+        (lambda p: percolation_bits(p, 3, np.array([[0, 10, 0]])), "must lie in the volume"),
+        (
+            lambda p: local_porosity_analysis(p, voxel_um=2.0, settings=Settings(cell_um=[0.9])),
+            "half a voxel",
+        ),
+        (lambda p: local_porosity_analysis(p, voxel_um=0.0), "voxel_um"),
+    ],
+)
 def test_bad_input_names_the_problem(call, match):
     pore = np.ones((10, 10, 10), np.uint8)
     with pytest.raises(PorepipeError, match=match):
         call(pore)
 
 
-@pytest.mark.parametrize("kwargs", [dict(cell_um=[1.0], cell_voxels=[1]), dict(directions=["x", "x"]),
-                                    dict(directions=[]), dict(connectivity=18), dict(mu_stride=0),
-                                    dict(directions=["w"]), dict(cell_voxel=[2])])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"cell_um": [1.0], "cell_voxels": [1]},
+        {"directions": ["x", "x"]},
+        {"directions": []},
+        {"connectivity": 18},
+        {"mu_stride": 0},
+        {"directions": ["w"]},
+        {"cell_voxel": [2]},
+    ],
+)
 def test_bad_settings_are_refused(kwargs):
     with pytest.raises(pydantic.ValidationError):
         Settings(**kwargs)
@@ -90,7 +106,9 @@ def test_bad_settings_are_refused(kwargs):
 
 def test_bool_volume_and_cell_um_rounding():
     pore = np.random.default_rng(3).random((16, 16, 16)) < 0.3
-    ds = local_porosity_analysis(pore, voxel_um=2.5, settings=Settings(cell_um=[5.0, 6.2, 20.0], surface=False))
+    ds = local_porosity_analysis(
+        pore, voxel_um=2.5, settings=Settings(cell_um=[5.0, 6.2, 20.0], surface=False)
+    )
     assert ds.L.values.tolist() == [2, 8]  # 6.2/2.5 = 2.48 rounds to 2 as 5.0 does; both are merged
     np.testing.assert_allclose(ds.L_um, [5.0, 20.0])
     assert "'6.2': 2" in ds.attrs["cell_um_to_voxels"]
@@ -118,8 +136,25 @@ def test_cli_writes_dataset_and_plots(tmp_path):
     src = tmp_path / "binary_a2.h5"
     write_binary(src, pore, voxel_um=2.0)
     out = tmp_path / "lpt_a2.h5"
-    assert cli_main(["lpt", str(src), "-o", str(out), "--cell-um", "2", "8", "20", "--lambda-stride", "2",
-                     "--threads", "1"]) == 0
+    assert (
+        cli_main(
+            [
+                "lpt",
+                str(src),
+                "-o",
+                str(out),
+                "--cell-um",
+                "2",
+                "8",
+                "20",
+                "--lambda-stride",
+                "2",
+                "--threads",
+                "1",
+            ]
+        )
+        == 0
+    )
     ds = read_table(out)
     assert ds.L.values.tolist() == [1, 4, 10] and ds.attrs["voxel_um"] == 2.0
     assert ds.pore_voxels.sum("bin").values.tolist() == [int(pore.sum()) * L**3 for L in (1, 4, 10)]
@@ -129,8 +164,25 @@ def test_cli_writes_dataset_and_plots(tmp_path):
         assert (tmp_path / f"lpt_a2_{kind}.png").stat().st_size > 1000
     # REV sub-sample: corner cube, not periodic, cells larger than it left out and said so
     rev = tmp_path / "lpt_a2_s16.h5"
-    assert cli_main(["lpt", str(src), "-o", str(rev), "--cell-um", "2", "8", "20", "--subsample-um", "16",
-                     "--no-plots", "--no-surface"]) == 0
+    assert (
+        cli_main(
+            [
+                "lpt",
+                str(src),
+                "-o",
+                str(rev),
+                "--cell-um",
+                "2",
+                "8",
+                "20",
+                "--subsample-um",
+                "16",
+                "--no-plots",
+                "--no-surface",
+            ]
+        )
+        == 0
+    )
     ds = read_table(rev)
     assert ds.L.values.tolist() == [1, 4] and np.atleast_1d(ds.attrs["skipped_cell_voxels"]).tolist() == [10]
     assert ds.attrs["wrap"].tolist() == [0, 0, 0] and "corner cube" in ds.attrs["sample"]
@@ -139,7 +191,21 @@ def test_cli_writes_dataset_and_plots(tmp_path):
     # the workflow's sample-size sweep: a file from `porepipe subsample` is recognised as a sub-sample
     part = tmp_path / "binary_a2_L16.h5"
     crop_corner(src, 16.0, part)
-    assert cli_main(["lpt", str(part), "-o", str(tmp_path / "lpt_a2_L16.h5"), "--cell-um", "2", "8", "20",
-                     "--no-plots"]) == 0
+    assert (
+        cli_main(
+            [
+                "lpt",
+                str(part),
+                "-o",
+                str(tmp_path / "lpt_a2_L16.h5"),
+                "--cell-um",
+                "2",
+                "8",
+                "20",
+                "--no-plots",
+            ]
+        )
+        == 0
+    )
     ds = read_table(tmp_path / "lpt_a2_L16.h5")
     assert ds.L.values.tolist() == [1, 4] and "corner cube of 16 µm" in ds.attrs["sample"]

@@ -43,7 +43,9 @@ def test_closed_pockets_never_percolate(connectivity):
         np.testing.assert_allclose(ds.p.sel(L=2, alpha=alpha), count / 125, rtol=1e-14)
 
 
-SITE_PC_6 = 0.3116  # site percolation threshold, simple cubic lattice, 6 neighbours (e.g. Wang et al. 2013: 0.311608)
+SITE_PC_6 = (
+    0.3116  # site percolation threshold, simple cubic lattice, 6 neighbours (e.g. Wang et al. 2013: 0.311608)
+)
 
 
 @pytest.mark.slow

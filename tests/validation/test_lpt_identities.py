@@ -61,8 +61,9 @@ def test_variance_of_uncorrelated_voxels(size):
     phi = 0.3
     n = 96
     pore = random_pore((n, n, n), phi, 10 + size)
-    ds = local_porosity_analysis(pore, periodic=PERIODIC,
-                                 settings=Settings(cell_voxels=[size], surface=False, lambda_max_cells=1))
+    ds = local_porosity_analysis(
+        pore, periodic=PERIODIC, settings=Settings(cell_voxels=[size], surface=False, lambda_max_cells=1)
+    )
     # Var φ(L) = φ(1-φ)/L³ for independent voxels. The sample variance of ~ (n/L)³ independent cells has a relative
     # standard error sqrt(2/(n/L)³); allow 4 of them (plus the sample's own φ̄ fluctuation, far smaller).
     rtol = 4 * np.sqrt(2 / (n / size) ** 3)
@@ -79,7 +80,9 @@ def test_direction_ordering(random_ds):
         assert (ds.percolating.sel(alpha=axis) >= ds.percolating.sel(alpha="3")).all()
         assert (ds.p.sel(alpha="c") >= ds.p.sel(alpha=axis)).all()
         assert (ds.p.sel(alpha=axis) >= ds.p.sel(alpha="3")).all()
-    assert np.isfinite(lam.where(defined)).sum() == 5 * int(defined.sum())  # λ defined exactly where cells exist
+    assert np.isfinite(lam.where(defined)).sum() == 5 * int(
+        defined.sum()
+    )  # λ defined exactly where cells exist
     assert np.isnan(lam.where(~defined, 0.0)).sum() == 5 * int((~defined).sum())
 
 

@@ -13,7 +13,7 @@ Conventions
 from __future__ import annotations
 
 import dataclasses
-from typing import Sequence
+from collections.abc import Sequence
 
 import numba
 import numpy as np
@@ -27,12 +27,18 @@ from porepipe.lpt._settings import Connectivity, Direction, Placement, Settings
 _BATCH = 16
 #: largest histogram kept per thread without binning (2^24 bins = 128 MiB of int64 counts and as much for sums)
 _MAX_EXACT_BINS = 1 << 24
-_DIRECTION_BITS = {Direction.x: K.BIT_X, Direction.y: K.BIT_Y, Direction.z: K.BIT_Z,
-                   Direction.all3: K.BIT_ALL, Direction.any: K.BIT_ANY}
+_DIRECTION_BITS = {
+    Direction.x: K.BIT_X,
+    Direction.y: K.BIT_Y,
+    Direction.z: K.BIT_Z,
+    Direction.all3: K.BIT_ALL,
+    Direction.any: K.BIT_ANY,
+}
 SURFACE_METHOD = (
     "face counting: F = number of voxel faces between a pore and a matrix voxel with both voxels in the cell; "
     "S_V = (2/3) F / (L^3 a), the stereological intercept estimator averaged over x, y, z (exact on average "
-    "for isotropic interfaces; an axis-aligned plane gives 2/3 of its true area)")
+    "for isotropic interfaces; an axis-aligned plane gives 2/3 of its true area)"
+)
 
 
 # -- cell grids -----------------------------------------------------------------------------------------------------
@@ -87,8 +93,9 @@ def cell_grid(shape: Sequence[int], size: int, wrap: Sequence[bool] = (False, Fa
     if size < 1:
         raise PorepipeError(f"cell edge L must be at least 1 voxel, got {size}")
     if size > min(shape):
-        raise PorepipeError(f"cell edge L = {size} voxels exceeds the sample (shape {shape}); "
-                            f"allowed: 1 <= L <= {min(shape)}")
+        raise PorepipeError(
+            f"cell edge L = {size} voxels exceeds the sample (shape {shape}); allowed: 1 <= L <= {min(shape)}"
+        )
     return CellGrid(size, shape, tuple(bool(w) for w in wrap))
 
 
@@ -157,17 +164,25 @@ def bins_of(k: np.ndarray, k_max: int, n_bins: int) -> np.ndarray:
     return np.where(k <= 0, 0, np.where(k >= k_max, n_bins - 1, inner))
 
 
-def _box_histogram(fields: np.ndarray, wins: np.ndarray, grid: CellGrid, stride: int, max_bins: int | None,
-                   record_stride: int = 0) -> BoxHistogram:
+def _box_histogram(
+    fields: np.ndarray,
+    wins: np.ndarray,
+    grid: CellGrid,
+    stride: int,
+    max_bins: int | None,
+    record_stride: int = 0,
+) -> BoxHistogram:
     """Run :func:`_box_sum_histogram` on C-contiguous uint8 ``fields`` (nf, nx, ny, nz) with windows ``wins``."""
     k_max = int(sum(int(np.prod(w)) for w in wins))
     if max_bins is None and k_max + 1 > _MAX_EXACT_BINS:
-        raise PorepipeError(f"an exact histogram would need {k_max + 1} bins (cell of {k_max} voxels or faces); "
-                            f"give max_bins (at most {_MAX_EXACT_BINS}) to bin it")
+        raise PorepipeError(
+            f"an exact histogram would need {k_max + 1} bins (cell of {k_max} voxels or faces); "
+            f"give max_bins (at most {_MAX_EXACT_BINS}) to bin it"
+        )
     n_bins = k_max + 1 if max_bins is None or k_max + 1 <= max_bins else int(max_bins)
     if n_bins < 3 and n_bins != k_max + 1:
         raise PorepipeError(f"max_bins must be at least 3, got {max_bins}")
-    mx, my, mz = grid.npos
+    _, my, mz = grid.npos
     ring_dtype = np.uint16 if max(int(w[1] * w[2]) for w in wins) <= np.iinfo(np.uint16).max else np.uint32
     ring = np.empty((fields.shape[0], int(wins[:, 0].max()) + _BATCH + 1, my, mz), ring_dtype)
     nt = numba.get_num_threads()
@@ -178,11 +193,30 @@ def _box_histogram(fields: np.ndarray, wins: np.ndarray, grid: CellGrid, stride:
         rec = np.zeros(tuple(-(-m // record_stride) for m in grid.npos), np.int64)
     else:
         rec = np.zeros((1, 1, 1), np.int64)
-    K._box_sum_histogram(fields, np.ascontiguousarray(wins, dtype=np.int64), np.asarray(grid.npos, np.int64), ring,
-                         int(stride), k_max, hist, ksum, ksq, int(record_stride), rec)
+    K._box_sum_histogram(
+        fields,
+        np.ascontiguousarray(wins, dtype=np.int64),
+        np.asarray(grid.npos, np.int64),
+        ring,
+        int(stride),
+        k_max,
+        hist,
+        ksum,
+        ksq,
+        int(record_stride),
+        rec,
+    )
     k_lo, k_hi = bin_ranges(k_max, n_bins)
-    return BoxHistogram(hist.sum(axis=0), ksum.sum(axis=0), float(ksq.sum()), k_lo, k_hi, k_max,
-                        n_bins == k_max + 1, rec.ravel() if record_stride > 0 else None)
+    return BoxHistogram(
+        hist.sum(axis=0),
+        ksum.sum(axis=0),
+        float(ksq.sum()),
+        k_lo,
+        k_hi,
+        k_max,
+        n_bins == k_max + 1,
+        rec.ravel() if record_stride > 0 else None,
+    )
 
 
 def _as_pore(pore) -> np.ndarray:
@@ -198,8 +232,15 @@ def _as_pore(pore) -> np.ndarray:
     return np.ascontiguousarray(pore)
 
 
-def local_porosity_histogram(pore, size: int, *, wrap: Sequence[bool] = (False, False, False), stride: int = 1,
-                             max_bins: int | None = None, record_stride: int = 0) -> BoxHistogram:
+def local_porosity_histogram(
+    pore,
+    size: int,
+    *,
+    wrap: Sequence[bool] = (False, False, False),
+    stride: int = 1,
+    max_bins: int | None = None,
+    record_stride: int = 0,
+) -> BoxHistogram:
     """Histogram of the pore-voxel count k of every cell of edge ``size`` (local porosity φ = k / size³).
 
     Parameters
@@ -250,8 +291,14 @@ def interface_fields(pore, wrap: Sequence[bool]) -> np.ndarray:
     return faces
 
 
-def local_surface_histogram(pore, size: int, *, wrap: Sequence[bool] = (False, False, False), stride: int = 1,
-                            max_bins: int | None = None) -> BoxHistogram:
+def local_surface_histogram(
+    pore,
+    size: int,
+    *,
+    wrap: Sequence[bool] = (False, False, False),
+    stride: int = 1,
+    max_bins: int | None = None,
+) -> BoxHistogram:
     """Histogram of the interface-face count F of every cell (local S_V = (2/3) F / (L³ a); see SURFACE_METHOD).
 
     Parameters as for :func:`local_porosity_histogram`; k here is F, 0 <= F <= 3 L² (L - 1).
@@ -260,8 +307,9 @@ def local_surface_histogram(pore, size: int, *, wrap: Sequence[bool] = (False, F
     grid = cell_grid(pore.shape, size, wrap)
     if size == 1:  # a single voxel has no inner face
         counts = np.array([grid.count(stride)], np.int64)
-        return BoxHistogram(counts, np.zeros(1, np.int64), 0.0, np.zeros(1, np.int64), np.zeros(1, np.int64), 0,
-                            True, None)
+        return BoxHistogram(
+            counts, np.zeros(1, np.int64), 0.0, np.zeros(1, np.int64), np.zeros(1, np.int64), 0, True, None
+        )
     wins = np.array([[size - 1, size, size], [size, size - 1, size], [size, size, size - 1]], np.int64)
     return _box_histogram(interface_fields(pore, grid.wrap), wins, grid, stride, max_bins)
 
@@ -270,8 +318,10 @@ def local_surface_histogram(pore, size: int, *, wrap: Sequence[bool] = (False, F
 def neighbour_steps(connectivity: Connectivity) -> np.ndarray:
     """(3, n_nb, 3) int64 neighbour steps per search axis, ordered so the straight step to the far face is last."""
     connectivity = Connectivity(connectivity)
-    steps = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
-                      if (i, j, k) != (0, 0, 0)], np.int64)
+    steps = np.array(
+        [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1) if (i, j, k) != (0, 0, 0)],
+        np.int64,
+    )
     if connectivity is Connectivity.face:
         steps = steps[np.abs(steps).sum(axis=1) == 1]
     out = []
@@ -294,9 +344,15 @@ def _search_plan(directions: Sequence[Direction]) -> tuple[int, int]:
     return sum(_DIRECTION_BITS[d] for d in directions), K.STOP_NEVER
 
 
-def percolation_bits(pore, size: int, origins: np.ndarray, counts: np.ndarray | None = None, *,
-                     connectivity: Connectivity = Connectivity.face,
-                     directions: Sequence[Direction] = tuple(Direction)) -> np.ndarray:
+def percolation_bits(
+    pore,
+    size: int,
+    origins: np.ndarray,
+    counts: np.ndarray | None = None,
+    *,
+    connectivity: Connectivity = Connectivity.face,
+    directions: Sequence[Direction] = tuple(Direction),
+) -> np.ndarray:
     """Local percolation indicators Λ_α of cells of edge ``size`` at ``origins`` (thesis §4.6, Table 4.1).
 
     Parameters
@@ -329,13 +385,17 @@ def percolation_bits(pore, size: int, origins: np.ndarray, counts: np.ndarray | 
     cell_grid(pore.shape, size)
     origins = np.ascontiguousarray(np.asarray(origins, dtype=np.int64).reshape(-1, 3))
     if origins.size and ((origins < 0).any() or (origins >= np.array(pore.shape)).any()):
-        raise PorepipeError(f"cell origins must lie in the volume of shape {pore.shape} (0 <= origin < edge); "
-                            f"got values from {origins.min(axis=0).tolist()} to {origins.max(axis=0).tolist()}")
+        raise PorepipeError(
+            f"cell origins must lie in the volume of shape {pore.shape} (0 <= origin < edge); "
+            f"got values from {origins.min(axis=0).tolist()} to {origins.max(axis=0).tolist()}"
+        )
     if counts is None:
         counts = np.array([_cell(pore, o, size).sum(dtype=np.int64) for o in origins], np.int64)
     counts = np.ascontiguousarray(np.asarray(counts, dtype=np.int64))
     if counts.shape != (origins.shape[0],):
-        raise PorepipeError(f"counts needs one entry per origin: {counts.shape} vs {origins.shape[0]} origins")
+        raise PorepipeError(
+            f"counts needs one entry per origin: {counts.shape} vs {origins.shape[0]} origins"
+        )
     want, stop = _search_plan(directions)
     out = np.zeros(origins.shape[0], np.uint8)
     if origins.shape[0]:
@@ -367,8 +427,10 @@ def cell_sizes(settings: Settings, voxel_um: float, shape: Sequence[int]) -> tup
         for um in settings.cell_um:
             size = int(np.floor(um / voxel_um + 0.5))
             if size < 1:
-                raise PorepipeError(f"lpt.cell_um {um} is less than half a voxel (voxel_um = {voxel_um}); "
-                                    f"allowed: cell_um >= {voxel_um / 2}")
+                raise PorepipeError(
+                    f"lpt.cell_um {um} is less than half a voxel (voxel_um = {voxel_um}); "
+                    f"allowed: cell_um >= {voxel_um / 2}"
+                )
             mapping[f"{um:g}"] = size
         return sorted(set(mapping.values())), mapping
     sizes = [1]
@@ -394,26 +456,42 @@ class _PerSize:
 def _one_size(pore: np.ndarray, size: int, wrap: Sequence[bool], settings: Settings) -> _PerSize:
     grid = cell_grid(pore.shape, size, wrap)
     lam_stride = settings.lambda_stride or auto_stride(grid, settings.lambda_max_cells)
-    mu = local_porosity_histogram(pore, size, wrap=wrap, stride=settings.mu_stride, max_bins=settings.max_bins,
-                                  record_stride=lam_stride)
-    bits = percolation_bits(pore, size, grid.origins(lam_stride), mu.records, connectivity=settings.connectivity,
-                            directions=settings.directions)
+    mu = local_porosity_histogram(
+        pore, size, wrap=wrap, stride=settings.mu_stride, max_bins=settings.max_bins, record_stride=lam_stride
+    )
+    bits = percolation_bits(
+        pore,
+        size,
+        grid.origins(lam_stride),
+        mu.records,
+        connectivity=settings.connectivity,
+        directions=settings.directions,
+    )
     n_bins = mu.counts.size
     bins = bins_of(mu.records, mu.k_max, n_bins)
     lam_cells = np.bincount(bins, minlength=n_bins).astype(np.int64)
-    lam_perc = np.stack([np.bincount(bins, weights=(bits & _DIRECTION_BITS[d]) > 0, minlength=n_bins)
-                         for d in settings.directions], axis=1).astype(np.int64)
+    lam_perc = np.stack(
+        [
+            np.bincount(bins, weights=(bits & _DIRECTION_BITS[d]) > 0, minlength=n_bins)
+            for d in settings.directions
+        ],
+        axis=1,
+    ).astype(np.int64)
     surface = None
     if settings.surface:
-        surface = local_surface_histogram(pore, size, wrap=wrap, stride=settings.mu_stride,
-                                          max_bins=settings.surface_bins)
-    return _PerSize(size, mu, lam_cells, lam_perc, lam_stride, int(bins.size), surface,
-                    grid.describe(settings.mu_stride))
+        surface = local_surface_histogram(
+            pore, size, wrap=wrap, stride=settings.mu_stride, max_bins=settings.surface_bins
+        )
+    return _PerSize(
+        size, mu, lam_cells, lam_perc, lam_stride, int(bins.size), surface, grid.describe(settings.mu_stride)
+    )
 
 
 def _pad(rows: list[np.ndarray], fill) -> np.ndarray:
     width = max(r.shape[0] for r in rows)
-    out = np.full((len(rows), width) + rows[0].shape[1:], fill, dtype=np.result_type(rows[0].dtype, type(fill)))
+    out = np.full(
+        (len(rows), width) + rows[0].shape[1:], fill, dtype=np.result_type(rows[0].dtype, type(fill))
+    )
     for i, r in enumerate(rows):
         out[i, : r.shape[0]] = r
     return out
@@ -434,9 +512,15 @@ def characteristic_length(sizes: Sequence[int], n_phi0: Sequence[int], n_phi1: S
     return 0
 
 
-def local_porosity_analysis(pore, *, voxel_um: float = 1.0, periodic: Sequence[bool] = (False, False, False),
-                            settings: Settings | None = None, skip_too_large: bool = False,
-                            progress=None) -> xr.Dataset:
+def local_porosity_analysis(
+    pore,
+    *,
+    voxel_um: float = 1.0,
+    periodic: Sequence[bool] = (False, False, False),
+    settings: Settings | None = None,
+    skip_too_large: bool = False,
+    progress=None,
+) -> xr.Dataset:
     """μ(φ, L), μ(S_V, L), λ_α(φ, L) and p_α(L) of a binary volume for every cell size of ``settings``.
 
     Parameters
@@ -471,7 +555,9 @@ def local_porosity_analysis(pore, *, voxel_um: float = 1.0, periodic: Sequence[b
     if skipped and skip_too_large:
         sizes = [s for s in sizes if s <= min(pore.shape)]
     if not sizes:
-        raise PorepipeError(f"no lpt cell size fits the sample of shape {pore.shape} (sizes {skipped} voxels)")
+        raise PorepipeError(
+            f"no lpt cell size fits the sample of shape {pore.shape} (sizes {skipped} voxels)"
+        )
     per = []
     for i, size in enumerate(sizes):
         per.append(_one_size(pore, size, wrap, settings))
@@ -480,8 +566,16 @@ def local_porosity_analysis(pore, *, voxel_um: float = 1.0, periodic: Sequence[b
     return _dataset(per, pore, voxel_um, periodic, wrap, settings, mapping, skipped if skip_too_large else [])
 
 
-def _dataset(per: list[_PerSize], pore: np.ndarray, voxel_um: float, periodic, wrap, settings: Settings,
-             mapping: dict, skipped: list[int]) -> xr.Dataset:
+def _dataset(
+    per: list[_PerSize],
+    pore: np.ndarray,
+    voxel_um: float,
+    periodic,
+    wrap,
+    settings: Settings,
+    mapping: dict,
+    skipped: list[int],
+) -> xr.Dataset:
     sizes = np.array([p.size for p in per], np.int64)
     vol = sizes.astype(np.float64) ** 3
     alphas = [d.value for d in settings.directions]
@@ -502,45 +596,100 @@ def _dataset(per: list[_PerSize], pore: np.ndarray, voxel_um: float, periodic, w
     dims_b, dims_ba = ("L", "bin"), ("L", "bin", "alpha")
     ds = xr.Dataset(
         {
-            "phi": (dims_b, 0.5 * (k_lo + k_hi) / vol[:, None],
-                    {"description": "local porosity of the bin (centre; exact k/L^3 for exact bins); NaN = no bin"}),
+            "phi": (
+                dims_b,
+                0.5 * (k_lo + k_hi) / vol[:, None],
+                {
+                    "description": "local porosity of the bin (centre; exact k/L^3 for exact bins); NaN = no bin"
+                },
+            ),
             "phi_lo": (dims_b, k_lo / vol[:, None], {"description": "smallest porosity k/L^3 in the bin"}),
             "phi_hi": (dims_b, k_hi / vol[:, None], {"description": "largest porosity k/L^3 in the bin"}),
             "cells": (dims_b, cells, {"description": "cells (placement for mu) with porosity in the bin"}),
             "pore_voxels": (dims_b, k_sum, {"description": "pore voxels summed over the cells of the bin"}),
-            "mu": (dims_b, cells / n_cells[:, None],
-                   {"description": "local porosity distribution mu(phi, L) as probability per bin (sums to 1)"}),
-            "mu_density": (dims_b, _ratio(cells / n_cells[:, None], (k_hi - k_lo + 1) / vol[:, None]),
-                           {"description": "mu as a density in phi: probability / bin width (bin width = number of "
-                            "porosity values in the bin / L^3); NaN = no bin"}),
+            "mu": (
+                dims_b,
+                cells / n_cells[:, None],
+                {"description": "local porosity distribution mu(phi, L) as probability per bin (sums to 1)"},
+            ),
+            "mu_density": (
+                dims_b,
+                _ratio(cells / n_cells[:, None], (k_hi - k_lo + 1) / vol[:, None]),
+                {
+                    "description": "mu as a density in phi: probability / bin width (bin width = number of "
+                    "porosity values in the bin / L^3); NaN = no bin"
+                },
+            ),
             "cells_total": ("L", n_cells, {"description": "cells behind mu"}),
-            "cells_phi0": ("L", n_phi0, {"description": "cells with phi = 0 (all matrix): mu(0, L) * cells_total"}),
-            "cells_phi1": ("L", n_phi1, {"description": "cells with phi = 1 (all pore): mu(1, L) * cells_total"}),
-            "phi_mean": ("L", phi_mean, {"description": "mean local porosity sum_phi phi mu(phi, L) (exact)"}),
+            "cells_phi0": (
+                "L",
+                n_phi0,
+                {"description": "cells with phi = 0 (all matrix): mu(0, L) * cells_total"},
+            ),
+            "cells_phi1": (
+                "L",
+                n_phi1,
+                {"description": "cells with phi = 1 (all pore): mu(1, L) * cells_total"},
+            ),
+            "phi_mean": (
+                "L",
+                phi_mean,
+                {"description": "mean local porosity sum_phi phi mu(phi, L) (exact)"},
+            ),
             "phi_var": ("L", phi_var, {"description": "variance of the local porosity"}),
-            "exact": ("L", np.array([p.mu.exact for p in per], np.int8),
-                      {"description": "1 = one bin per porosity k/L^3; 0 = k = 1..L^3-1 binned"}),
+            "exact": (
+                "L",
+                np.array([p.mu.exact for p in per], np.int8),
+                {"description": "1 = one bin per porosity k/L^3; 0 = k = 1..L^3-1 binned"},
+            ),
             "lambda_cells": (dims_b, lam_cells, {"description": "cells (percolation placement) in the bin"}),
-            "percolating": (dims_ba, lam_perc, {"description": "of lambda_cells, those percolating in alpha"}),
-            "lambda": (dims_ba, _ratio(lam_perc, lam_cells[:, :, None]),
-                       {"description": "local percolation probability lambda_alpha(phi, L) = percolating / "
-                        "lambda_cells; NaN where the bin has no cell"}),
+            "percolating": (
+                dims_ba,
+                lam_perc,
+                {"description": "of lambda_cells, those percolating in alpha"},
+            ),
+            "lambda": (
+                dims_ba,
+                _ratio(lam_perc, lam_cells[:, :, None]),
+                {
+                    "description": "local percolation probability lambda_alpha(phi, L) = percolating / "
+                    "lambda_cells; NaN where the bin has no cell"
+                },
+            ),
             "lambda_cells_total": ("L", lam_total, {"description": "cells behind lambda and p"}),
-            "percolating_total": (("L", "alpha"), perc_total, {"description": "percolating cells per direction"}),
-            "p": (("L", "alpha"), perc_total / lam_total[:, None],
-                  {"description": "fraction of percolating cells p_alpha(L) = sum_phi lambda_alpha mu over the "
-                   "percolation cells (eq. 4.6.6)"}),
-            "lambda_stride": ("L", np.array([p.lam_stride for p in per], np.int64),
-                              {"description": "voxels between percolation-cell origins"}),
-            "placement": ("L", np.array([p.placement for p in per], dtype=object),
-                          {"description": "where the mu cells were placed"}),
+            "percolating_total": (
+                ("L", "alpha"),
+                perc_total,
+                {"description": "percolating cells per direction"},
+            ),
+            "p": (
+                ("L", "alpha"),
+                perc_total / lam_total[:, None],
+                {
+                    "description": "fraction of percolating cells p_alpha(L) = sum_phi lambda_alpha mu over the "
+                    "percolation cells (eq. 4.6.6)"
+                },
+            ),
+            "lambda_stride": (
+                "L",
+                np.array([p.lam_stride for p in per], np.int64),
+                {"description": "voxels between percolation-cell origins"},
+            ),
+            "placement": (
+                "L",
+                np.array([p.placement for p in per], dtype=object),
+                {"description": "where the mu cells were placed"},
+            ),
         },
         coords={
             "L": ("L", sizes, {"units": "voxels", "description": "cell edge"}),
             "L_um": ("L", sizes * float(voxel_um), {"units": "um", "description": "cell edge"}),
             "bin": ("bin", np.arange(cells.shape[1], dtype=np.int64)),
-            "alpha": ("alpha", np.array(alphas, dtype=object),
-                      {"description": "x, y, z; 3 = all three; c = at least one (thesis Table 4.1)"}),
+            "alpha": (
+                "alpha",
+                np.array(alphas, dtype=object),
+                {"description": "x, y, z; 3 = all three; c = at least one (thesis Table 4.1)"},
+            ),
         },
         attrs={
             "voxel_um": float(voxel_um),
@@ -555,7 +704,7 @@ def _dataset(per: list[_PerSize], pore: np.ndarray, voxel_um: float, periodic, w
             "L_star": int(L_star),
             "L_star_um": float(L_star * voxel_um) if L_star else float("nan"),
             "L_star_note": "smallest computed L with mu(0,L) = mu(1,L) = 0 (eq. 4.6.4); L_star = 0 and L_star_um = "
-                           "NaN: none of the computed L qualifies",
+            "NaN: none of the computed L qualifies",
             "cell_um_to_voxels": str(mapping) if mapping else "",
             "skipped_cell_voxels": np.array(skipped, np.int64),
             "settings": settings.model_dump_json(),
@@ -577,14 +726,24 @@ def _surface_dataset(per: list[_PerSize], sizes: np.ndarray, voxel_um: float) ->
     dims = ("L", "sv_bin")
     return xr.Dataset(
         {
-            "sv_per_um": (dims, 0.5 * (k_lo + k_hi) * scale[:, None],
-                          {"units": "1/um", "description": "local S_V of the bin (centre); NaN = no bin"}),
+            "sv_per_um": (
+                dims,
+                0.5 * (k_lo + k_hi) * scale[:, None],
+                {"units": "1/um", "description": "local S_V of the bin (centre); NaN = no bin"},
+            ),
             "sv_lo_per_um": (dims, k_lo * scale[:, None], {"units": "1/um"}),
             "sv_hi_per_um": (dims, k_hi * scale[:, None], {"units": "1/um"}),
             "sv_cells": (dims, cells, {"description": "cells with local S_V in the bin"}),
-            "mu_sv": (dims, cells / n[:, None], {"description": "local S_V distribution mu(S_V, L), per bin"}),
-            "sv_mean_per_um": ("L", k_sum.sum(axis=1) * scale / n,
-                               {"units": "1/um", "description": "mean local S_V"}),
+            "mu_sv": (
+                dims,
+                cells / n[:, None],
+                {"description": "local S_V distribution mu(S_V, L), per bin"},
+            ),
+            "sv_mean_per_um": (
+                "L",
+                k_sum.sum(axis=1) * scale / n,
+                {"units": "1/um", "description": "mean local S_V"},
+            ),
         },
         coords={"sv_bin": ("sv_bin", np.arange(cells.shape[1], dtype=np.int64))},
     )

@@ -348,8 +348,21 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                                     stamp[v] = 0
                             gen = np.uint32(0)
                         gen += np.uint32(1)
-                        ok = _spans(flat, xoff, yoff, zoff, size, axis, offs_by_axis[axis], lin_by_axis[axis],
-                                    stamp, gen, stack, parent, box)
+                        ok = _spans(
+                            flat,
+                            xoff,
+                            yoff,
+                            zoff,
+                            size,
+                            axis,
+                            offs_by_axis[axis],
+                            lin_by_axis[axis],
+                            stamp,
+                            gen,
+                            stack,
+                            parent,
+                            box,
+                        )
                         if ok:
                             last[axis, 0] = origin[axis]
                             for d in range(3):

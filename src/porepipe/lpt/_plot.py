@@ -37,10 +37,17 @@ def plot_mu(ds: xr.Dataset, path) -> Path:
     for i in _pick(ds.sizes["L"]):
         d = ds.isel(L=i)
         inner = np.isfinite(d.phi.values)
-        _curve(ax, d.phi.values[inner], d.mu_density.values[inner], f"L = {float(d.L_um):g} µm ({int(d.L)} vx)")
+        _curve(
+            ax, d.phi.values[inner], d.mu_density.values[inner], f"L = {float(d.L_um):g} µm ({int(d.L)} vx)"
+        )
     ax.axvline(ds.attrs["phi_bar"], color="0.5", ls=":", lw=1, label="mean porosity")
-    ax.set(xlabel="local porosity φ", ylabel="μ(φ, L)  (density)", yscale="log", xlim=(0, 1),
-           title="local porosity distribution")
+    ax.set(
+        xlabel="local porosity φ",
+        ylabel="μ(φ, L)  (density)",
+        yscale="log",
+        xlim=(0, 1),
+        title="local porosity distribution",
+    )
     ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
@@ -55,8 +62,13 @@ def plot_lambda(ds: xr.Dataset, path, alpha: str | None = None) -> Path:
         d = ds.isel(L=i).sel(alpha=alpha)
         lam = np.where(d.lambda_cells.values >= MIN_LAMBDA_CELLS, d["lambda"].values, np.nan)
         _curve(ax, d.phi.values, lam, f"L = {float(d.L_um):g} µm ({int(d.L)} vx)")
-    ax.set(xlabel="local porosity φ", ylabel=f"λ_{alpha}(φ, L)", xlim=(0, 1), ylim=(-0.02, 1.02),
-           title=f"local percolation probability (bins with >= {MIN_LAMBDA_CELLS} cells)")
+    ax.set(
+        xlabel="local porosity φ",
+        ylabel=f"λ_{alpha}(φ, L)",
+        xlim=(0, 1),
+        ylim=(-0.02, 1.02),
+        title=f"local percolation probability (bins with >= {MIN_LAMBDA_CELLS} cells)",
+    )
     ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
@@ -67,8 +79,13 @@ def plot_p(ds: xr.Dataset, path) -> Path:
     ax = fig.add_subplot()
     for alpha in ds.alpha.values:
         _curve(ax, ds.L_um.values, ds.p.sel(alpha=alpha).values, f"α = {alpha}")
-    ax.set(xlabel="cell edge L [µm]", ylabel="p_α(L)", xscale="log", ylim=(-0.02, 1.02),
-           title="fraction of percolating cells")
+    ax.set(
+        xlabel="cell edge L [µm]",
+        ylabel="p_α(L)",
+        xscale="log",
+        ylim=(-0.02, 1.02),
+        title="fraction of percolating cells",
+    )
     ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
@@ -81,7 +98,9 @@ def plot_surface(ds: xr.Dataset, path) -> Path:
         d = ds.isel(L=i)
         if int(d.L) > 1:
             _curve(ax, d.sv_per_um.values, d.mu_sv.values, f"L = {float(d.L_um):g} µm ({int(d.L)} vx)")
-    ax.set(xlabel="local S_V [1/µm]", ylabel="μ(S_V, L)  (per bin)", title="local specific-surface distribution")
+    ax.set(
+        xlabel="local S_V [1/µm]", ylabel="μ(S_V, L)  (per bin)", title="local specific-surface distribution"
+    )
     ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
@@ -89,7 +108,11 @@ def plot_surface(ds: xr.Dataset, path) -> Path:
 def plot_lpt(ds: xr.Dataset, stem) -> list[Path]:
     """All plots of ``ds`` as ``{stem}_mu.png``, ``_lambda.png``, ``_p.png`` (and ``_sv.png``); returns the paths."""
     stem = Path(stem)
-    paths = [plot_mu(ds, f"{stem}_mu.png"), plot_lambda(ds, f"{stem}_lambda.png"), plot_p(ds, f"{stem}_p.png")]
+    paths = [
+        plot_mu(ds, f"{stem}_mu.png"),
+        plot_lambda(ds, f"{stem}_lambda.png"),
+        plot_p(ds, f"{stem}_p.png"),
+    ]
     if "mu_sv" in ds:
         paths.append(plot_surface(ds, f"{stem}_sv.png"))
     return paths

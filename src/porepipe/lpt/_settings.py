@@ -49,23 +49,41 @@ class Settings(BaseModel):
         default_factory=list,
         description="cell edge lengths L in µm; each is rounded to whole voxels at every resolution "
         "(the voxel value is stated in the output). Empty and no cell_voxels: powers of two 1, 2, 4 ... voxels "
-        "up to the smallest sample edge.")
+        "up to the smallest sample edge.",
+    )
     cell_voxels: list[Annotated[int, Field(ge=1)]] = Field(
-        default_factory=list, description="cell edge lengths L in voxels (instead of cell_um, not with it)")
-    placement: Placement = Field(Placement.auto, description="auto: wrap on periodic axes; inside: never wrap")
-    mu_stride: int = Field(1, ge=1, description="distance in voxels between cell origins for μ and S_V (1 = all)")
+        default_factory=list, description="cell edge lengths L in voxels (instead of cell_um, not with it)"
+    )
+    placement: Placement = Field(
+        Placement.auto, description="auto: wrap on periodic axes; inside: never wrap"
+    )
+    mu_stride: int = Field(
+        1, ge=1, description="distance in voxels between cell origins for μ and S_V (1 = all)"
+    )
     lambda_stride: int | None = Field(
-        None, ge=1, description="distance in voxels between cell origins for λ; None: the smallest stride that "
-        "keeps the cell count at or below lambda_max_cells")
-    lambda_max_cells: int = Field(100_000, ge=1, description="cap on the percolation cells per L when lambda_stride is None")
+        None,
+        ge=1,
+        description="distance in voxels between cell origins for λ; None: the smallest stride that "
+        "keeps the cell count at or below lambda_max_cells",
+    )
+    lambda_max_cells: int = Field(
+        100_000, ge=1, description="cap on the percolation cells per L when lambda_stride is None"
+    )
     connectivity: Connectivity = Field(Connectivity.face, description="pore-path connectivity: 6 or 26")
     directions: list[Direction] = Field(
-        default_factory=lambda: list(Direction), description="percolation directions α to evaluate (Table 4.1)")
+        default_factory=lambda: list(Direction),
+        description="percolation directions α to evaluate (Table 4.1)",
+    )
     max_bins: int = Field(
-        1001, ge=3, description="μ(φ, L) is exact on the porosities k/L³ while L³+1 <= max_bins; above, k = 1..L³-1 "
-        "are binned into max_bins-2 bins (φ = 0 and φ = 1 keep their own bins)")
+        1001,
+        ge=3,
+        description="μ(φ, L) is exact on the porosities k/L³ while L³+1 <= max_bins; above, k = 1..L³-1 "
+        "are binned into max_bins-2 bins (φ = 0 and φ = 1 keep their own bins)",
+    )
     surface: bool = Field(True, description="also compute the local specific-surface distribution μ(S_V, L)")
-    surface_bins: int = Field(201, ge=3, description="bins of μ(S_V, L) (S_V = 0 and the maximum keep their own)")
+    surface_bins: int = Field(
+        201, ge=3, description="bins of μ(S_V, L) (S_V = 0 and the maximum keep their own)"
+    )
     plots: bool = Field(True, description="write PNG plots of μ(φ,L), λ_α(φ,L), p_α(L) next to the data file")
 
     @field_validator("directions")

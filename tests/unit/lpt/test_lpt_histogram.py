@@ -78,6 +78,7 @@ def test_binned_histogram_is_the_exact_one_summed(pore):
 def test_large_window_uses_wide_ring():
     # a 256 x 256 slice sum (65536) overflows uint16; the kernel must switch to uint32 slice sums
     pore = np.ones((1, 256, 256), np.uint8)
-    h = A._box_histogram(pore[None], np.array([[1, 256, 256]]), A.CellGrid(1, (1, 256, 256), (False, True, True)),
-                         1, None)
+    h = A._box_histogram(
+        pore[None], np.array([[1, 256, 256]]), A.CellGrid(1, (1, 256, 256), (False, True, True)), 1, None
+    )
     assert h.k_max == 256 * 256 and h.counts[-1] == 256 * 256 and h.counts[:-1].sum() == 0

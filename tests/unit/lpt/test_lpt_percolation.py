@@ -32,8 +32,9 @@ def test_percolation_matches_labelling(connectivity, size, phi):
     assert np.array_equal(bits, ref)
 
 
-@pytest.mark.parametrize("only,mask", [(["3"], K.BIT_ALL), (["c"], K.BIT_ANY), (["y"], K.BIT_Y),
-                                       (["x", "z"], K.BIT_X | K.BIT_Z)])
+@pytest.mark.parametrize(
+    "only,mask", [(["3"], K.BIT_ALL), (["c"], K.BIT_ANY), (["y"], K.BIT_Y), (["x", "z"], K.BIT_X | K.BIT_Z)]
+)
 def test_early_exit_keeps_the_requested_bits(only, mask):
     rng = np.random.default_rng(3)
     pore = (rng.random((20, 20, 20)) < 0.31).astype(np.uint8)
@@ -48,7 +49,9 @@ def test_counts_from_box_sums_equal_counted_ones():
     pore = (rng.random((16, 16, 16)) < 0.3).astype(np.uint8)
     h = A.local_porosity_histogram(pore, 7, wrap=(True, True, True), record_stride=3)
     origins = A.cell_grid(pore.shape, 7, (True, True, True)).origins(3)
-    assert np.array_equal(A.percolation_bits(pore, 7, origins, h.records), A.percolation_bits(pore, 7, origins))
+    assert np.array_equal(
+        A.percolation_bits(pore, 7, origins, h.records), A.percolation_bits(pore, 7, origins)
+    )
 
 
 @pytest.mark.parametrize("connectivity,n", [(Connectivity.face, 6), (Connectivity.vertex, 26)])
