@@ -8,7 +8,6 @@ from pydantic import ValidationError
 from porepipe._shared.errors import PorepipeError
 from porepipe.decorate import decorate, polyhedron, random_type, read_plane_file, voxelize_grains
 from porepipe.decorate._settings import Settings
-
 from tests.unit.decorate.naive_grains import naive_grey
 
 

@@ -18,7 +18,7 @@ def sample_coords(n, voxel_um):
 
 
 def naive_grey(deco, box_um, voxel_um, periodic=True):
-    shape = [int(round(b / voxel_um)) for b in box_um]
+    shape = [round(b / voxel_um) for b in box_um]
     xs, ys, zs = (sample_coords(n, voxel_um) for n in shape)
     world = world_grains(deco)
     inside = np.zeros((len(xs), len(ys), len(zs)), dtype=bool)
