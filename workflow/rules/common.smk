@@ -44,6 +44,21 @@ def scene_of(wildcards):
     return SCENES[wildcards.scene]
 
 
+def grey_stage(scene):
+    """Which stage makes the scene's grey volumes: decorated grains, or the spheres themselves."""
+    return "decorate" if scene.decoration is not None else "voxelize"
+
+
+def grey_volumes(scene):
+    """The grey volume of every resolution of the scene."""
+    return per_resolution(scene, grey_stage(scene) + "/grey_a{a}.h5")
+
+
+def grey_volume(wildcards):
+    """The grey volume of resolution wildcards.a."""
+    return results(scene_of(wildcards), grey_stage(scene_of(wildcards)), f"grey_a{wildcards.a}.h5")
+
+
 def scene_file(wildcards):
     return SCENE_FILES[wildcards.scene]
 

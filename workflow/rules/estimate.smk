@@ -1,6 +1,6 @@
 rule estimate:
     input:
-        lambda wildcards: per_resolution(scene_of(wildcards), "voxelize/grey_a{a}.h5"),
+        lambda wildcards: grey_volumes(scene_of(wildcards)),
     output:
         "results/{scene}/estimate/estimate.h5",
     log:

@@ -9,7 +9,7 @@ def minkowski_inputs(wildcards):
         "scene": scene_file(wildcards),
     }
     if scene_of(wildcards).minkowski.threshold_functions:
-        inputs["grey"] = f"results/{wildcards.scene}/voxelize/grey_a{wildcards.a}.h5"
+        inputs["grey"] = grey_volume(wildcards)
     return inputs
 
 

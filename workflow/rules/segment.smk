@@ -5,7 +5,7 @@ def segmentation_args(wildcards):
 
 rule segment:
     input:
-        "results/{scene}/voxelize/grey_a{a}.h5",
+        grey_volume,
     output:
         "results/{scene}/segment/binary_a{a}.h5",
     log:
