@@ -710,8 +710,11 @@ def _dataset(
             "settings": settings.model_dump_json(),
         },
     )
+    ds = ds.set_coords(["phi", "phi_lo", "phi_hi"])  # so that e.g. ds.mu.sel(L=8).plot(x="phi") works
     if settings.surface:
-        ds = ds.merge(_surface_dataset(per, sizes, voxel_um))
+        ds = ds.merge(
+            _surface_dataset(per, sizes, voxel_um).set_coords(["sv_per_um", "sv_lo_per_um", "sv_hi_per_um"])
+        )
         ds.attrs["surface_method"] = SURFACE_METHOD
     return ds
 
