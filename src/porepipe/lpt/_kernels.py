@@ -156,6 +156,9 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
         x0a = x0b
 
 
+#: largest cell edge for the percolation search: (size + 2)^3 must stay below 2^31 (int32 parent links)
+MAX_PERCOLATION_SIZE = 1288
+
 #: bits of a packed stack entry: (i << 2*_SHIFT) | (j << _SHIFT) | k, for padded cell coordinates < 2**_SHIFT
 _SHIFT = 16
 _MASK = (1 << _SHIFT) - 1
@@ -244,10 +247,10 @@ def _spans(flat, xoff, yoff, zoff, size, axis, steps, lin, stamp, gen, stack, pa
                     box[3] = max(box[3], c0)
                     box[4] = max(box[4], c1)
                     box[5] = max(box[5], c2)
-                    u = parent[u]
+                    u = np.int64(parent[u])
                 return True
             stamp[w] = gen
-            parent[w] = v
+            parent[w] = np.int32(v)
             stack[top] = (ni << (2 * _SHIFT)) | (nj << _SHIFT) | nk
             top += 1
     return False
@@ -310,7 +313,7 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                     if i == 0 or j == 0 or k == 0 or i == p - 1 or j == p - 1 or k == p - 1:
                         stamp[(i * p + j) * p + k] = _WALL
         stack = np.empty(full, np.int64)
-        parent = np.empty(p * p * p, np.int64)
+        parent = np.empty(p * p * p, np.int32)  # padded index < 2^31 (size <= MAX_PERCOLATION_SIZE)
         box = np.zeros(6, np.int64)
         origin = np.zeros(3, np.int64)
         # spanning paths kept for reuse, per axis: the last one, and the last one per z origin. A record is the
