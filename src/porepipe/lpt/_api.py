@@ -384,7 +384,9 @@ def percolation_bits(
     pore = _as_pore(pore)
     cell_grid(pore.shape, size)
     if size > K.MAX_PERCOLATION_SIZE:
-        raise PorepipeError(f"percolation cells are limited to L <= {K.MAX_PERCOLATION_SIZE} voxels, got {size}")
+        raise PorepipeError(
+            f"percolation cells are limited to L <= {K.MAX_PERCOLATION_SIZE} voxels, got {size}"
+        )
     origins = np.ascontiguousarray(np.asarray(origins, dtype=np.int64).reshape(-1, 3))
     if origins.size and ((origins < 0).any() or (origins >= np.array(pore.shape)).any()):
         raise PorepipeError(
