@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -125,6 +126,20 @@ def _scene_copy(raw: dict, scene_dir: Path, resolutions: list[float], path: Path
     return path
 
 
+def _running_copy(raw: dict, scene_dir: Path, resolutions: list[float], path: Path) -> Path:
+    """The scene copy the workflow runs: one path, and its first modification time kept.
+
+    Only ``resolutions_um`` changes between rounds, which no per-resolution job depends on; keeping the path and
+    the mtime stops Snakemake from rerunning the resolutions already done (the gather rules still rerun, because
+    their input lists grow).
+    """
+    stat = path.stat() if path.is_file() else None
+    _scene_copy(raw, scene_dir, resolutions, path)
+    if stat is not None:
+        os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    return path
+
+
 def _observed(sweep_path: Path, quantity: str, per_voxel: bool):
     from porepipe._shared.store import read_table
 
@@ -164,8 +179,8 @@ def run_adaptive(scene_path, cores: int = 1, runner=None) -> Decision:
     resolutions = sorted(scene.resolutions_um, reverse=True)
     log = []
     for round_no in range(settings.max_rounds + 1):
-        copy = _scene_copy(raw, scene_path.parent, resolutions, out_dir / f"round{round_no}.yaml")
-        runner(copy, target)
+        _scene_copy(raw, scene_path.parent, resolutions, out_dir / f"round{round_no}.yaml")  # the record
+        runner(_running_copy(raw, scene_path.parent, resolutions, out_dir / "scene.yaml"), target)
         a, q, cost = _observed(Path(target), settings.quantity, per_voxel)
         dec = decide(a, q, cost, target_rel_err=settings.target_rel_err, budget=budget,
                      exponent=exponent_value(scene.sweep.exponent), confidence=scene.sweep.confidence,
@@ -181,7 +196,9 @@ def run_adaptive(scene_path, cores: int = 1, runner=None) -> Decision:
 
 def _porepipe_run(cores: int):
     def run(scene_copy: Path, target: str) -> None:
-        cmd = [sys.executable, "-m", "porepipe.cli", "run", str(scene_copy), "--cores", str(cores), "--", target]
+        from porepipe.cli import snakemake_command
+
+        cmd = snakemake_command(scene_copy, cores, extra=[target])
         if subprocess.run(cmd, check=False).returncode != 0:
             raise PorepipeError(f"the workflow failed for {scene_copy} (command: {' '.join(cmd)})")
     return run

@@ -56,7 +56,8 @@ def register(subparsers) -> None:
     p.add_argument("--scene", help="scene file: takes sweep.exponent and sweep.confidence from it")
     p.add_argument("--exponent", default="free", choices=[e.value for e in Exponent])
     p.add_argument("--confidence", type=float, default=0.95)
-    p.add_argument("--adaptive", action="store_true", help="run the scene's adaptive refinement (sweep.adaptive)")
+    p.add_argument("--adaptive", action="store_true",
+                   help="run the scene's adaptive refinement (sweep.adaptive); exit 0 = target met, 3 = stopped first")
     p.add_argument("--cores", type=int, default=1, help="with --adaptive: cores for each workflow run")
     p.set_defaults(func=_sweep)
     p = subparsers.add_parser("subsample", help="cut the corner cube of edge L µm from a binary volume")
