@@ -100,8 +100,13 @@ def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_
         parts.append(xr.Dataset({k: ((), v) for k, v in mk.items()}))
         parts.append(timed("percolation", _stats.percolation, pore))
         if stats.grains:
-            parts.append(timed("grains", _stats.grain_statistics, _grain_mask(phases, stats.grain_phase), voxel_um,
-                               _min_distance(stats.grain_min_distance_um, voxel_um), settings.periodic))
+            window = central_window(shape, stats.grain_max_voxels)
+            grains = timed("grains", _stats.grain_statistics, _grain_mask(phases, stats.grain_phase)[window],
+                           voxel_um, _min_distance(stats.grain_min_distance_um, voxel_um),
+                           settings.periodic and window == tuple(slice(0, n) for n in shape))
+            grains.attrs["grain_window_voxels"] = np.asarray([w.stop - w.start for w in window], np.int64)
+            grains["grain_window_origin_um"] = ("xyz", np.asarray([w.start for w in window]) * voxel_um)
+            parts.append(grains)
     root = xr.merge(parts, combine_attrs="drop_conflicts")
     root.attrs.update(voxel_um=voxel_um, shape=np.asarray(shape, np.int64), method=phases.method.value,
                       phases=list(phases.names), pore_phases=[phases.names[i] for i in phases.pore_index],
@@ -118,6 +123,16 @@ def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_
         out["permeability"] = permeability(pore, settings=permeability_settings, voxel_um=voxel_um,
                                            progress=False).to_dataset()
     return out
+
+
+def central_window(shape, max_voxels: int) -> tuple[slice, slice, slice]:
+    """Central sub-box of ``shape`` with at most ``max_voxels`` voxels (same aspect ratio; 0 = the whole box)."""
+    total = int(np.prod(shape, dtype=np.int64))
+    if max_voxels <= 0 or total <= max_voxels:
+        return tuple(slice(0, int(n)) for n in shape)
+    scale = (max_voxels / total) ** (1.0 / 3.0)
+    size = [max(1, min(int(n), int(n * scale))) for n in shape]
+    return tuple(slice((int(n) - s) // 2, (int(n) - s) // 2 + s) for n, s in zip(shape, size))
 
 
 def _grain_mask(phases: Phases, grain_phase: str | None) -> np.ndarray:

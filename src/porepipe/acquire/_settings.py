@@ -110,6 +110,9 @@ class Statistics(_Strict):
     grains: bool = Field(True, description="watershed grain segmentation: count, radii, elongation, orientation")
     grain_min_distance_um: PosFloat | None = Field(
         None, description="smallest distance between two grain centres (watershed markers); default 2 voxels")
+    grain_max_voxels: int = Field(
+        256**3, ge=0, description="grains are measured in a central sub-box of at most this many voxels (0: whole "
+        "image); number density, radii and shapes are intensive, and the watershed is the costliest statistic")
     grain_phase: str | None = Field(None, description="phase that forms the grains (default: all non-pore phases)")
     lpt: bool = Field(False, description="run local porosity theory on the image (uses the scene's `lpt` section)")
     permeability: bool = Field(False, description="run LBM on the image (uses the scene's `permeability` section)")

@@ -95,3 +95,12 @@ def test_percolation_of_a_tube_along_x():
 def test_3d_statistics_refuse_a_section():
     with pytest.raises(PorepipeError, match="needs a 3-D image"):
         _stats.percolation(np.zeros((5, 5, 1), np.uint8))
+
+
+def test_central_grain_window():
+    from porepipe.acquire._api import central_window
+
+    assert central_window((512, 512, 512), 256**3) == (slice(128, 384),) * 3
+    assert central_window((10, 10, 10), 0) == (slice(0, 10),) * 3
+    win = central_window((400, 200, 100), 10**6)
+    assert np.prod([w.stop - w.start for w in win]) <= 10**6
