@@ -30,7 +30,8 @@ def test_dry_run_lists_only_the_rules_the_analyses_need(tmp_path):
     rules = _planned_rules(MINI, tmp_path)
     scene = yaml.safe_load(MINI.read_text())
     n_res = len(scene["resolutions_um"])
-    assert rules == {"all": 1, "pack": 1, "voxelize": n_res, "segment": n_res, "estimate": 1, "minkowski": n_res}, rules
+    assert rules == {"all": 1, "pack": 1, "voxelize": n_res, "segment": n_res, "estimate": 1, "minkowski": n_res,
+                     "sweep": 1, "report": 1}, rules
 
 
 def test_dry_run_without_segmentation_has_no_segment_jobs(tmp_path):
@@ -60,5 +61,7 @@ def test_mini_scene_runs_end_to_end(tmp_path):
     assert read_attrs(res / "estimate" / "estimate.h5")["stage"] == "estimate"
     with xr.open_dataset(res / "minkowski" / "minkowski_a1.h5", engine="h5netcdf") as mk:
         assert abs(float(mk.phi_pore) - pore.mean()) < 1e-12  # same volume, same porosity
+    report = (res / "report" / "index.html").read_text()
+    assert "<img" in report and "<table" in report
     leftovers = [p for p in res.rglob("*") if p.name.startswith(".")]
     assert not leftovers, leftovers

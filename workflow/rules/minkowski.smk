@@ -35,3 +35,25 @@ rule minkowski:
 
 
 ANALYSIS_TARGETS["minkowski"] = lambda scene: per_resolution(scene, "minkowski/minkowski_a{a}.h5")
+
+
+rule minkowski_subsample:
+    input:
+        binary="results/{scene}/segment/binary_a{a}_L{L}.h5",
+        scene=scene_file,
+    output:
+        "results/{scene}/minkowski/minkowski_a{a}_L{L}.h5",
+    log:
+        "results/{scene}/logs/minkowski_a{a}_L{L}.log",
+    benchmark:
+        "results/{scene}/cost/minkowski_a{a}_L{L}.tsv"
+    wildcard_constraints:
+        L=r"[0-9]+(\.[0-9]+)?",
+    threads: workflow.cores
+    shell:
+        "porepipe minkowski {input.binary} --scene {input.scene} -o {output} --threads {threads} > {log} 2>&1"
+
+
+SUBSAMPLE_TARGETS["minkowski"] = lambda scene, edge: per_subsample(
+    scene, "minkowski/minkowski_a{a}_L{L}.h5", edge
+)

@@ -7,7 +7,7 @@ def report_inputs(wildcards):
     inputs = {
         "sweep": f"results/{scene.name}/sweep/sweep.h5",
         "scene": scene_file(wildcards),
-        "grey": per_resolution(scene, "voxelize/grey_a{a}.h5") if scene.report.slices else [],
+        "grey": grey_volumes(scene) if scene.report.slices else [],
         "binary": [],
         "lpt": per_resolution(scene, "lpt/lpt_a{a}.h5") if "lpt" in names else [],
     }

@@ -19,7 +19,7 @@ def sweep_results(scene):
 
 def sweep_volumes(scene):
     """Grey and binary volumes behind the results (their cost is the upstream cost of every run)."""
-    out = per_resolution(scene, "voxelize/grey_a{a}.h5")
+    out = grey_volumes(scene)
     measured = {a.value for a in scene.analyses} - SWEEP_SKIP - {"estimate"}
     if measured or any(a.value == "segment" for a in scene.analyses):
         out += per_resolution(scene, "segment/binary_a{a}.h5")

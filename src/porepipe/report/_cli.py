@@ -22,7 +22,8 @@ def main(args) -> int:
     if not sweep.is_file():
         raise PorepipeError(f"{sweep} does not exist: run the workflow first (`porepipe run {args.scene}` with "
                             "`report` in the scene's analyses)")
-    grey = args.grey if args.grey is not None else _existing(scene, "voxelize/grey_a{a}.h5")
+    grey_stage = "decorate" if scene.decoration is not None else "voxelize"
+    grey = args.grey if args.grey is not None else _existing(scene, grey_stage + "/grey_a{a}.h5")
     binary = args.binary if args.binary is not None else _existing(scene, "segment/binary_a{a}.h5")
     lpt = args.lpt if args.lpt is not None else _existing(scene, "lpt/lpt_a{a}.h5")
     out = Path(args.out or Path("results", scene.name, "report", "index.html"))
