@@ -19,8 +19,6 @@ import json
 import time
 from pathlib import Path
 
-import numpy as np
-
 from porepipe.lbm import Settings
 from porepipe.lbm import _calibration as cal
 
@@ -45,9 +43,9 @@ def table_6_2(sizes):
         run, wall = _timed(case, s)
         eps_v, e_v = cal.mid_section_velocity_error(case, run, s, b)
         kappa = cal.duct_kappa(case, run)
-        rows.append(dict(B=b, eps_v=eps_v, eps_v_thesis=TABLE_6_2[b], e_v=e_v, kappa=kappa,
-                         kappa_th=cal.square_duct_kappa(b), eps_kappa=kappa / cal.square_duct_kappa(b) - 1,
-                         steps=run.steps, converged=run.converged, wall_s=wall))
+        rows.append({"B": b, "eps_v": eps_v, "eps_v_thesis": TABLE_6_2[b], "e_v": e_v, "kappa": kappa,
+                         "kappa_th": cal.square_duct_kappa(b), "eps_kappa": kappa / cal.square_duct_kappa(b) - 1,
+                         "steps": run.steps, "converged": run.converged, "wall_s": wall})
         print(f"Table 6.2 B={b}: <|eps_v|> {eps_v:.6f} (thesis {TABLE_6_2[b]}), eps_kappa {rows[-1]['eps_kappa']:+.4%}"
               f", {run.steps} steps, {wall:.1f} s", flush=True)
     return rows
@@ -60,7 +58,7 @@ def kappa_errors(sizes):
         for coll in ("bgk", "mrt", "trt"):
             run, wall = _timed(case, Settings(collision=coll, tau=0.857, max_steps=400_000))
             eps = cal.duct_kappa(case, run) / cal.square_duct_kappa(b) - 1
-            rows.append(dict(B=b, collision=coll, tau=0.857, eps_kappa=eps, steps=run.steps, wall_s=wall))
+            rows.append({"B": b, "collision": coll, "tau": 0.857, "eps_kappa": eps, "steps": run.steps, "wall_s": wall})
             print(f"duct B={b} {coll}: eps_kappa {eps:+.4%}", flush=True)
     return rows
 
@@ -74,8 +72,8 @@ def shaped_ducts(sizes):
             for coll in ("bgk", "mrt", "trt"):
                 run, wall = _timed(case, Settings(collision=coll, tau=0.857, max_steps=400_000))
                 kappa = cal.duct_kappa(case, run)
-                rows.append(dict(shape=shape, B=b, collision=coll, kappa=kappa, kappa_th=ref,
-                                 eps_kappa=kappa / ref - 1, wall_s=wall))
+                rows.append({"shape": shape, "B": b, "collision": coll, "kappa": kappa, "kappa_th": ref,
+                                 "eps_kappa": kappa / ref - 1, "wall_s": wall})
                 print(f"{shape} B={b} {coll}: kappa {kappa:.5f} vs {ref:.5f} ({kappa / ref - 1:+.3%})", flush=True)
     return rows
 
@@ -87,13 +85,13 @@ def table_6_3(quick: bool):
                  tolerance_velocity=1e-6, tolerance_kappa=1e-7, max_steps=400_000)
     run, wall = _timed(case, s)
     ref = cal.square_duct_kappa(7)
-    rows = [dict(method=m, kappa=run.estimates[f"{m}/mean"], eps_kappa=run.estimates[f"{m}/mean"] / ref - 1,
-                 kappa_thesis=TABLE_6_3[m][0], eps_thesis_percent=TABLE_6_3[m][1]) for m in TABLE_6_3]
+    rows = [{"method": m, "kappa": run.estimates[f"{m}/mean"], "eps_kappa": run.estimates[f"{m}/mean"] / ref - 1,
+                 "kappa_thesis": TABLE_6_3[m][0], "eps_thesis_percent": TABLE_6_3[m][1]} for m in TABLE_6_3]
     periodic = cal.square_duct(7, thesis_chambers=False)
     prun, _ = _timed(periodic, Settings(collision="bgk", tau=0.857))
-    rows.append(dict(method="no chambers, force everywhere", kappa=cal.duct_kappa(periodic, prun),
-                     eps_kappa=cal.duct_kappa(periodic, prun) / ref - 1, kappa_thesis=1.73689,
-                     eps_thesis_percent=0.87277))
+    rows.append({"method": "no chambers, force everywhere", "kappa": cal.duct_kappa(periodic, prun),
+                     "eps_kappa": cal.duct_kappa(periodic, prun) / ref - 1, "kappa_thesis": 1.73689,
+                     "eps_thesis_percent": 0.87277})
     for r in rows:
         print(f"Table 6.3 {r['method']}: {r['kappa']:.5f} ({r['eps_kappa']:+.3%}); thesis {r['kappa_thesis']} "
               f"({r['eps_thesis_percent']} %)", flush=True)
@@ -108,7 +106,7 @@ def tau_study(b):
             run, wall = _timed(case, Settings(collision=coll, tau=tau, max_steps=400_000, **extra))
             eps = cal.duct_kappa(case, run) / cal.square_duct_kappa(b) - 1
             name = coll + (" (Λ=3/16)" if extra else "")
-            rows.append(dict(B=b, collision=name, tau=tau, eps_kappa=eps, steps=run.steps, wall_s=wall))
+            rows.append({"B": b, "collision": name, "tau": tau, "eps_kappa": eps, "steps": run.steps, "wall_s": wall})
         spread = [r["eps_kappa"] for r in rows if r["collision"] == name and 0.6 <= r["tau"] <= 2.0]
         print(f"tau study B={b} {name}: eps_kappa over tau in [0.6, 2]: {min(spread):+.3%} … {max(spread):+.3%}",
               flush=True)

@@ -5,6 +5,17 @@ from porepipe.lbm._settings import Axis, Collision, Gradient, Lateral, Precision
 from porepipe.lbm._solver import StabilityError
 
 __all__ = [
-    "DARCY_M2", "PermeabilityResult", "kappa_units", "permeability", "Axis", "Collision", "Gradient", "Lateral",
-    "Precision", "Settings", "Setup", "Velocity", "StabilityError",
+    "DARCY_M2",
+    "Axis",
+    "Collision",
+    "Gradient",
+    "Lateral",
+    "PermeabilityResult",
+    "Precision",
+    "Settings",
+    "Setup",
+    "StabilityError",
+    "Velocity",
+    "kappa_units",
+    "permeability",
 ]

@@ -10,9 +10,9 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.lbm._domain import Prepared, chamber_setup, periodic_setup
-from porepipe.lbm._solver import Run, StabilityError, check_tau, solve
 from porepipe.lbm._lattice import CS2
-from porepipe.lbm._settings import Axis, Collision, Lateral, Settings, Setup
+from porepipe.lbm._settings import Axis, Lateral, Settings, Setup
+from porepipe.lbm._solver import Run, StabilityError, check_tau, solve
 
 #: 1 darcy in m² (9.869233e-13; thesis §4.4: 1 D = 0.9869 µm²).
 DARCY_M2 = 9.869233e-13
@@ -166,8 +166,8 @@ def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings
     check_tau(settings)
     internal = np.ascontiguousarray(np.moveaxis(pore, axis.index, 0))
     prep = prepare(internal, settings)
-    base = dict(axis=axis, voxel_um=float(voxel_um), settings=settings, porosity=float(pore.mean()),
-                n_pruned=prep.pruned_nodes, n_spanning=prep.n_spanning)
+    base = {"axis": axis, "voxel_um": float(voxel_um), "settings": settings, "porosity": float(pore.mean()),
+                "n_pruned": prep.pruned_nodes, "n_spanning": prep.n_spanning}
     if prep.lattice is None:
         return PermeabilityResult(**kappa_units(0.0, voxel_um), method="percolation", estimates={}, converged=True,
                                   steps=0, reason=prep.reason, history={}, mlups=0.0, n_nodes=0, **base)

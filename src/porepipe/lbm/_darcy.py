@@ -26,7 +26,7 @@ class Sampler:
     n_layers: int
 
     @classmethod
-    def of(cls, lat: Lattice) -> "Sampler":
+    def of(cls, lat: Lattice) -> Sampler:
         counts = np.diff(lat.layer_start)
         layer = np.repeat(np.arange(lat.shape[0], dtype=np.int64), counts)
         win = lat.node_window()

@@ -22,7 +22,7 @@ def write_result(path, result: PermeabilityResult, *, scene: str = "", scene_has
         w.attrs.update(kappa_lu=result.kappa_lu, kappa_m2=result.kappa_m2, kappa_mD=result.kappa_mD,
                        kappa_D=result.kappa_D)
         if result.velocity is not None:
-            common = dict(voxel_um=result.voxel_um, origin_um=origin_um, periodic=(False, False, False))
+            common = {"voxel_um": result.voxel_um, "origin_um": origin_um, "periodic": (False, False, False)}
             for k, name in enumerate("xyz"):
                 w.write_volume(f"velocity_{name}", result.velocity[k], **common,
                                attrs={"units": "lattice (voxel per step)", "meaning": "fluid velocity, 0 in solid"})
@@ -65,8 +65,8 @@ def write_vti(path, fields: dict[str, np.ndarray], *, spacing: float, origin=(0.
     text = "\n".join([
         '<?xml version="1.0"?>',
         '<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
-        f'  <ImageData WholeExtent="{extent}" Origin="{origin[0]} {origin[1]} {origin[2]}" '
-        f'Spacing="{spacing} {spacing} {spacing}">',
+        (f'  <ImageData WholeExtent="{extent}" Origin="{origin[0]} {origin[1]} {origin[2]}" '
+         f'Spacing="{spacing} {spacing} {spacing}">'),
         f'    <Piece Extent="{extent}">',
         '      <CellData>', *arrays, '      </CellData>',
         '    </Piece>', '  </ImageData>', '</VTKFile>', ''])

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit, prange
 
 from porepipe._shared.numba_config import FASTMATH
-from porepipe.lbm._lattice import C, OPPOSITE, W, dhumieres_matrix
+from porepipe.lbm._lattice import OPPOSITE, C, W, dhumieres_matrix
 
 _CX = C[:, 0].astype(np.float64)
 _CY = C[:, 1].astype(np.float64)

@@ -84,7 +84,7 @@ class Settings(BaseModel):
     velocity: Velocity = Field(Velocity.mean, description="superficial velocity: mean over sample or flux form")
     precision: Precision = Field(Precision.float64, description="population storage (arithmetic is float64)")
     prune: bool = Field(True, description="drop pore clusters that cannot carry flow before the run")
-    tolerance_velocity: float = Field(1e-5, gt=0, description="max relative change of v over a window (6.1.30)")
+    tolerance_velocity: float = Field(1e-4, gt=0, description="max relative change of v over a window (6.1.30)")
     tolerance_density: float = Field(1e-9, gt=0, description="max relative change of ρ over a window (6.1.30)")
     tolerance_kappa: float = Field(1e-5, gt=0, description="relative change of κ over a window")
     window_steps: int = Field(500, ge=10, description="steps dt between two convergence checks")

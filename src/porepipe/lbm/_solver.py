@@ -24,8 +24,9 @@ from porepipe.lbm._settings import Collision, Settings
 
 #: τ̂ − ½ below this is refused (ν̂ → 0: the scheme loses stability and the wall position runs away).
 TAU_MIN_GAP = 5e-3
-#: velocity changes are taken relative to max(|v|, this × max |v|): stagnant nodes do not dominate Eq. 6.1.30.
-VELOCITY_FLOOR = 1e-3
+#: velocity changes are taken relative to max(|v|, this × max |v|): near-stagnant nodes (slower than 1 % of the
+#: peak, negligible for the flux) do not hold up Eq. 6.1.30.
+VELOCITY_FLOOR = 1e-2
 #: below this many pore nodes per thread a parallel step costs more in thread wake-ups than it saves.
 NODES_PER_THREAD = 32_768
 #: keys of the settings that change the numbers (checkpoints must match them).

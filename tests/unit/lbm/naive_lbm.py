@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from porepipe.lbm._lattice import C, OPPOSITE, Q, W, dhumieres_matrix
+from porepipe.lbm._lattice import OPPOSITE, C, Q, W, dhumieres_matrix
 
 
 def collision_matrix(kind: str, tau: float, magic: float = 3 / 16, tau_bulk: float = 1.0) -> np.ndarray:

@@ -65,7 +65,7 @@ def test_fields_follow_the_callers_axes_and_vti_reads_back(tmp_path):
 def test_checkpoint_resume_gives_the_same_answer(tmp_path):
     """A run stopped by the step limit resumes from its checkpoint and ends where an uninterrupted run ends."""
     pore = _slit(h=8)
-    base = dict(collision="mrt", window_steps=50, tolerance_kappa=1e-8, tolerance_velocity=1e-7)
+    base = {"collision": "mrt", "window_steps": 50, "tolerance_kappa": 1e-8, "tolerance_velocity": 1e-7}
     full = permeability(pore, "x", Settings(**base), progress=False)
     ckpt = tmp_path / "run.ckpt.h5"
     with pytest.raises(StabilityError, match="not converged"):

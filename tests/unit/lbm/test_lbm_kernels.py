@@ -6,7 +6,7 @@ from naive_lbm import collision_matrix, equilibrium, step
 
 from porepipe.lbm import Settings
 from porepipe.lbm._domain import build_lattice
-from porepipe.lbm._lattice import C, OPPOSITE, W, mrt_rates, dhumieres_matrix
+from porepipe.lbm._lattice import OPPOSITE, C, W, dhumieres_matrix, mrt_rates
 from porepipe.lbm._solver import make_stepper
 
 

@@ -1,0 +1,160 @@
+"""LBM throughput: MLUPS (pore-node updates per second) against the memory-bandwidth bound.
+
+For BGK / TRT / MRT in float64 and float32 at 1 and 2 threads, on a dense 128³ box and on a porous 128³ sample
+(overlapping spheres, porosity ≈ 0.2, only the percolating pore nodes stored). The bound is the measured
+STREAM-like copy bandwidth (read + write bytes per second, numba kernel at the same thread count) divided by the
+bytes per update: 304 B (float64) or 152 B (float32) — 19 populations read and written. Our kernel also reads
+18 int32 neighbour indices per node (72 B), which the bound does not count.
+If lbmpy is installed, its D3Q19 SRT kernel runs on the same dense box in the same process for comparison.
+
+Timings come from a shared, loaded 2-core machine: treat them as lower bounds of what the code can do.
+
+Usage: python benchmarks/lbm.py [--size 128] [--steps 10] [--out DIR]
+Writes lbm_benchmark.json and lbm_benchmark.md into --out (default: current directory).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+from numba import njit, prange
+from scipy import ndimage
+
+from porepipe.lbm import Settings
+from porepipe.lbm._domain import build_lattice, periodic_setup
+from porepipe.lbm._solver import make_stepper
+
+BYTES = {"float64": 304, "float32": 152}
+
+
+@njit(parallel=True, cache=True)
+def _copy(a, b):
+    for i in prange(a.size):
+        b[i] = a[i]
+
+
+def bandwidth_gbs(threads: int, n: int = 2**25, repeats: int = 7) -> float:
+    """STREAM-like copy bandwidth (2 × bytes / s) of a numba kernel with ``threads`` threads, best of repeats."""
+    numba.set_num_threads(threads)
+    a = np.ones(n)
+    b = np.empty_like(a)
+    _copy(a, b)
+    best = 0.0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        _copy(a, b)
+        best = max(best, 2 * a.nbytes / (time.perf_counter() - t0) / 1e9)
+    return best
+
+
+def porous_sample(size: int, porosity: float = 0.2, radius: float = 6.0, seed: int = 11) -> np.ndarray:
+    """Pore space of a Boolean model of overlapping spheres (periodic), porosity ≈ ``porosity``."""
+    rng = np.random.default_rng(seed)
+    count = int(-np.log(porosity) / (4 / 3 * np.pi * radius**3) * size**3)
+    seeds = np.ones((size,) * 3, dtype=bool)
+    idx = rng.integers(0, size, size=(count, 3))
+    seeds[idx[:, 0], idx[:, 1], idx[:, 2]] = False
+    tiled = np.pad(seeds, int(radius) + 1, mode="wrap")
+    dist = ndimage.distance_transform_edt(tiled)[(slice(int(radius) + 1, -int(radius) - 1),) * 3]
+    return dist >= radius
+
+
+def time_lattice(lat, collision: str, precision: str, threads: int, steps: int, repeats: int = 3) -> float:
+    numba.set_num_threads(threads)
+    n = lat.n_nodes
+    src = np.zeros(19 * n, dtype=precision)
+    dst = np.zeros_like(src)
+    step = make_stepper(Settings(collision=collision, precision=precision), lat)
+    none = np.zeros((4, 0))
+    step(src, dst, none, False, 2)  # compile / warm up
+    best = 0.0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        step(src, dst, none, False, steps)
+        best = max(best, n * steps / (time.perf_counter() - t0) / 1e6)
+    return best
+
+
+def lbmpy_mlups(size: int, steps: int, threads: int) -> float | None:
+    """MLUPS of lbmpy's generated D3Q19 SRT kernel on a periodic dense box (None if lbmpy is unavailable)."""
+    try:
+        import pystencils as ps
+        from lbmpy import LBMConfig, LBStencil, Method, Stencil
+        from lbmpy.scenarios import create_fully_periodic_flow
+    except ImportError:
+        return None
+    numba.set_num_threads(threads)
+    cfg = LBMConfig(stencil=LBStencil(Stencil.D3Q19), method=Method.SRT, relaxation_rate=1 / 0.857)
+    kernel_cfg = ps.CreateKernelConfig(target=ps.Target.CPU)
+    try:
+        if threads > 1:
+            kernel_cfg.cpu.openmp.enable = True
+            kernel_cfg.cpu.openmp.num_threads = threads
+    except AttributeError:
+        if threads > 1:
+            return None
+    scenario = create_fully_periodic_flow(np.zeros((size,) * 3 + (3,)), lbm_config=cfg, config=kernel_cfg)
+    scenario.run(2)
+    t0 = time.perf_counter()
+    scenario.run(steps)
+    return size**3 * steps / (time.perf_counter() - t0) / 1e6
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--size", type=int, default=128)
+    p.add_argument("--steps", type=int, default=10)
+    p.add_argument("--out", default=".")
+    p.add_argument("--no-lbmpy", action="store_true")
+    args = p.parse_args(argv)
+    max_threads = min(2, numba.config.NUMBA_NUM_THREADS)
+    thread_counts = list(range(1, max_threads + 1))
+    bw = {t: bandwidth_gbs(t) for t in thread_counts}
+    for t, v in bw.items():
+        print(f"copy bandwidth, {t} thread(s): {v:.1f} GB/s", flush=True)
+    size = args.size
+    dense = build_lattice(np.ones((size,) * 3, dtype=bool), (True,) * 3, (0, size), (0, size))
+    sample = porous_sample(size)
+    prep = periodic_setup(sample, mirror=False, lateral_periodic=True, prune=True)
+    porous = prep.lattice
+    print(f"porous sample: porosity {sample.mean():.3f}, {porous.n_nodes} flow nodes after pruning "
+          f"({prep.pruned_nodes} dropped)", flush=True)
+    rows = []
+    for geometry, lat in (("dense", dense), ("porous", porous)):
+        for threads in thread_counts:
+            for collision in ("bgk", "trt", "mrt"):
+                for precision in ("float64", "float32"):
+                    mlups = time_lattice(lat, collision, precision, threads, args.steps)
+                    bound = bw[threads] * 1e3 / BYTES[precision]
+                    rows.append({"geometry": geometry, "threads": threads, "collision": collision, "precision": precision,
+                                     "nodes": lat.n_nodes, "mlups": mlups, "bound_mlups": bound, "fraction": mlups / bound})
+                    print(f"{geometry:6s} {threads}t {collision} {precision}: {mlups:7.1f} MLUPS, bound "
+                          f"{bound:6.1f} ({mlups / bound:.0%})", flush=True)
+    peer = []
+    if not args.no_lbmpy:
+        for threads in thread_counts:
+            value = lbmpy_mlups(size, args.steps, threads)
+            peer.append({"threads": threads, "mlups": value})
+            print(f"lbmpy SRT dense {threads}t: " + (f"{value:.1f} MLUPS" if value else "not available"), flush=True)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "lbm_benchmark.json").write_text(json.dumps({"bandwidth_gbs": bw, "rows": rows, "lbmpy": peer}, indent=1))
+    md = ["# LBM throughput (shared, loaded 2-core machine)", "",
+          "copy bandwidth: " + ", ".join(f"{t} thread(s) {v:.1f} GB/s" for t, v in bw.items()), "",
+          "| geometry | threads | collision | precision | nodes | MLUPS | bound | fraction |", "|---" * 8 + "|"]
+    md += [f"| {r['geometry']} | {r['threads']} | {r['collision']} | {r['precision']} | {r['nodes']} | "
+           f"{r['mlups']:.1f} | {r['bound_mlups']:.1f} | {r['fraction']:.0%} |" for r in rows]
+    md += ["", "lbmpy SRT (dense box): " + ", ".join(
+        f"{r['threads']}t {r['mlups']:.1f} MLUPS" if r["mlups"] else f"{r['threads']}t n/a" for r in peer)]
+    (out / "lbm_benchmark.md").write_text("\n".join(md) + "\n")
+    print("\n".join(md))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
