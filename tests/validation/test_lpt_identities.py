@@ -104,3 +104,31 @@ def test_characteristic_length_eq_4_6_4(random_ds):
     assert ds.attrs["L_star"] == min(int(L) for L in ds.L.values if not has_pure_cell(int(L)))
     assert characteristic_length([4, 2, 8], [0, 3, 0], [1, 0, 0]) == 8
     assert characteristic_length([2], [1], [0]) == 0
+
+
+@pytest.mark.parametrize("size", [2, 5, 12])
+def test_mean_local_surface_is_the_global_face_estimate(size):
+    pore = random_pore((12, 14, 16), 0.4, 3)
+    voxel_um = 2.5
+    ds = local_porosity_analysis(
+        pore, voxel_um=voxel_um, periodic=PERIODIC, settings=Settings(cell_voxels=[size], lambda_max_cells=1)
+    )
+    # periodic, all positions: a face lies inside L²(L-1) of the N cells, so the mean face count per cell is
+    # F L²(L-1)/N and mean S_V = (2/3) F L²(L-1) / (N L³ a) = (1 - 1/L) * (2/3) F / (N a)  (counted here by np.roll)
+    faces = sum(int(np.count_nonzero(pore != np.roll(pore, 1, axis=a))) for a in range(3))
+    global_sv = (2 / 3) * faces / (pore.size * voxel_um)
+    np.testing.assert_allclose(ds.sv_mean_per_um.item(), (1 - 1 / size) * global_sv, rtol=1e-12)
+
+
+def test_local_surface_of_a_plane():
+    pore = np.zeros((16, 8, 8), np.uint8)
+    pore[:8] = 1  # pore half-space; with wrapping the interfaces are the planes x = 8 and x = 0
+    ds = local_porosity_analysis(
+        pore, voxel_um=0.5, periodic=PERIODIC, settings=Settings(cell_voxels=[4], lambda_max_cells=1)
+    )
+    # a cell of L = 4 holds one whole plane (16 faces) for 2 * 3 of the 16 x origins, else none:
+    # S_V = (2/3) * 16 / (4³ * 0.5 µm) = 1/3 µm⁻¹ on 6/16 of the cells
+    sv = ds.sv_per_um.values[0]
+    mu = ds.mu_sv.values[0]
+    np.testing.assert_allclose(mu[np.isclose(sv, 1 / 3, rtol=1e-12)].sum(), 6 / 16, rtol=1e-12)
+    np.testing.assert_allclose(mu[sv == 0].sum(), 10 / 16, rtol=1e-12)
