@@ -38,7 +38,8 @@ def _experiment():
 @pytest.fixture(scope="module")
 def loop(tmp_path_factory):
     packing, grey = _experiment()
-    acquire = Settings(calibration=Calibration(max_overlap=0.3, steps=600, porosity_iterations=2))
+    # the experiment is made of spheres, so the model is too (decoration off)
+    acquire = Settings(calibration=Calibration(max_overlap=0.3, steps=600, porosity_iterations=2, decoration=False))
     phases = segment_phases(grey, acquire.segmentation)  # the image: grey 0..216 read as an 8-bit scan
     exp = image_statistics(phases, VOXEL_UM, acquire)[None]
     scene = calibrated_scene(exp, acquire.calibration, name="loop-model", seed=9)

@@ -161,7 +161,7 @@ def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: st
         "analyses": ["segment", "minkowski", "lpt"],
     }
     classes = elongation_classes(stats_ds, calibration.elongation_classes)
-    deco = _decoration(classes)
+    deco = _decoration(classes) if calibration.decoration else None
     if deco is not None:
         scene["decoration"] = deco
     scene["_calibration"] = {

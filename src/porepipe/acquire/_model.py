@@ -1,8 +1,7 @@
 """Run a calibrated model scene in-process (pack -> voxelise -> Otsu -> the same statistics as the image).
 
 The model is measured by exactly the code that measured the image (:func:`image_statistics`), so the comparison is
-like for like. Decoration, if the scene has it, is not applied here (the model is the sphere packing); the scene
-file runs the full pipeline with ``porepipe run``.
+like for like. A ``decoration`` section of the scene replaces every sphere by its polyhedral grain (decorate stage).
 """
 
 from __future__ import annotations
@@ -33,7 +32,10 @@ def model_phases(grey: np.ndarray) -> Phases:
 
 
 def model_grey(scene, base_dir: Path | str = "."):
-    """Pack and voxelise a model scene at its finest resolution: (grey, packing, voxel_um)."""
+    """Pack, decorate (if the scene says so) and voxelise a model scene at its finest resolution.
+
+    Returns (grey, packing, voxel_um).
+    """
     from porepipe.packing import pack_spheres
     from porepipe.voxelize import voxelize
 
@@ -43,6 +45,12 @@ def model_grey(scene, base_dir: Path | str = "."):
     box = np.asarray(scene.domain.size_um, dtype=np.float64)
     per = bool(scene.domain.periodic)
     packing = pack_spheres(scene.packing, box, per, seed=scene.seed, base_dir=base_dir)
+    if getattr(scene, "decoration", None) is not None:
+        from porepipe.decorate import decorate, voxelize_grains
+
+        deco = decorate(packing.centres_um, packing.radii_um, scene.decoration, seed=scene.seed, box_um=box,
+                        periodic=per, base_dir=base_dir)
+        return voxelize_grains(deco, box, a, per), packing, a
     return voxelize(packing.centres_um, packing.radii_um, box, a, per), packing, a
 
 
@@ -98,6 +106,7 @@ def run_model(scene, acquire_settings: Settings, out, *, base_dir: Path | str = 
         for group, ds in tables.items():
             w.write_table(ds, group)
         w.attrs.update(voxel_um=a, porosity=float(tables[None].porosity), n_spheres=int(packing.radii_um.size),
-                       packing_converged=int(packing.all_converged), decoration_applied=0, is_2d=0,
+                       packing_converged=int(packing.all_converged),
+                       decoration_applied=int(getattr(scene, "decoration", None) is not None), is_2d=0,
                        source=f"model scene {scene.name}")
     return tables

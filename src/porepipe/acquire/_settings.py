@@ -136,6 +136,8 @@ class Calibration(_Strict):
     box_um: tuple[PosFloat, PosFloat, PosFloat] | None = Field(None, description="model box (default: the image's)")
     resolution_um: PosFloat | None = Field(None, description="model voxel size (default: the image's)")
     elongation_classes: int = Field(4, ge=1, le=32, description="elongation classes for the decoration")
+    decoration: bool = Field(True, description="add a `decoration` section (random polyhedra, one family per "
+                             "elongation class, inscribed scaling) and decorate the model run; false: spheres")
     steps: int = Field(400, ge=1, description="DEM step limit of the calibrated packing")
     porosity_iterations: int = Field(
         2, ge=0, le=10, description="pack-and-measure rounds that adjust the sphere count to the image's porosity")
