@@ -81,7 +81,7 @@ def main() -> int:
     results.mkdir(exist_ok=True)
     (results / f"acquire_{n}.json").write_text(json.dumps(record, indent=2))
     rows = ["| part | seconds |", "|---|---|"] + [f"| {k} | {v:.2f} |" for k, v in parts.items()]
-    print(f"acquire benchmark {n}³ uint8 ({n**3 / 1e6:.0f} Mvoxels): wall {wall:.1f} s (limit 300), peak RSS "
+    print(f"acquire benchmark {n}³ uint8 ({n**3 / 1e6:.2f} Mvoxels): wall {wall:.1f} s (limit 300), peak RSS "
           f"{peak_mb:.0f} MB (limit 8192); timings on a shared, loaded 2-core machine")
     print("\n".join(rows))
     return 0 if record["acceptance"]["ok"] else 1

@@ -79,7 +79,7 @@ def _lpt_overlay(exp: xr.Dataset, mod: xr.Dataset) -> xr.Dataset:
         return xr.Dataset()
     data = {}
     for side, ds in (("experiment", e), ("model", m)):
-        data[f"mu_{side}"] = (("side_L", "bin"), ds.mu.values)
+        data[f"mu_{side}"] = (("side_L", "bin"), (ds.mu_density if "mu_density" in ds else ds.mu).values)
         data[f"phi_{side}"] = (("side_L", "bin"), ds.phi.values)
         data[f"lambda3_{side}"] = (("side_L", "bin"), ds["lambda"].sel(alpha="3").values)
         data[f"p3_{side}"] = ("side_L", ds.p.sel(alpha="3").values)
@@ -138,7 +138,8 @@ def plot_comparison(ds: xr.Dataset, path) -> Path:
             for side, style in (("experiment", "-"), ("model", "--")):
                 phi = ds[f"phi_{side}"].isel(side_L=i).values
                 ok = np.isfinite(phi)
-                axes[0, 0].plot(phi[ok], ds[f"mu_{side}"].isel(side_L=i).values[ok], style, color=color,
+                inner = ok & (phi > 0) & (phi < 1)  # μ(0), μ(1) are point masses, not density: left out here
+                axes[0, 0].plot(phi[inner], ds[f"mu_{side}"].isel(side_L=i).values[inner], style, color=color,
                                 label=f"{side} L={Ls[i]:g} µm")
                 axes[0, 1].plot(phi[ok], ds[f"lambda3_{side}"].isel(side_L=i).values[ok], style, color=color)
         for side, style in (("experiment", "o-"), ("model", "s--")):
@@ -148,7 +149,7 @@ def plot_comparison(ds: xr.Dataset, path) -> Path:
     else:
         for ax in (axes[0, 0], axes[0, 1], axes[1, 0]):
             ax.text(0.5, 0.5, "no LPT on both sides", ha="center", transform=ax.transAxes)
-    axes[0, 0].set(xlabel="φ", ylabel="μ(φ, L)", title="local porosity distribution")
+    axes[0, 0].set(xlabel="φ", ylabel="μ(φ, L) [probability density]", title="local porosity distribution")
     axes[0, 1].set(xlabel="φ", ylabel="λ₃(φ, L)", title="local percolation probability")
     axes[1, 0].set(xlabel="L [µm]", ylabel="p₃(L)", title="fraction of percolating cells")
     if "two_point_experiment" in ds:
