@@ -88,7 +88,7 @@ def test_wrong_resolution_for_the_binary(tmp_path):
     rng = np.random.default_rng(3)
     np.save(tmp_path / "v.npy", np.where(rng.random((12, 12, 12)) < 0.4, 30, 220).astype(np.uint8))
     acquire(Settings(image=tmp_path / "v.npy", voxel_um=3.0), tmp_path / "s.h5")
-    with pytest.raises(PorepipeError, match=r"voxels of 3.0 µm; set the scene's resolutions_um to \[3\]"):
+    with pytest.raises(PorepipeError, match=r"voxels of 3.0 µm; allowed: whole multiples of 3 µm"):
         write_binary(tmp_path / "s.h5", tmp_path / "b.h5", 2.0)
 
 

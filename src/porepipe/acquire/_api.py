@@ -170,10 +170,33 @@ def acquire(settings: Settings, out, *, base_dir: Path | str = ".", image_path=N
     return tables
 
 
+def coarsen_pore(pore: np.ndarray, factor: int) -> np.ndarray:
+    """Pore indicator at ``factor`` times the voxel edge: a coarse voxel is pore if less than half of its
+    ``factor``³ fine voxels are matrix (the image analogue of the segment stage's trivial threshold, pore if
+    g <= 107 of 216, i.e. less than half matrix, §4.7.2).
+    Trailing fine voxels that do not fill a whole coarse voxel are dropped."""
+    n = [s // factor for s in pore.shape]
+    if min(n) < 1:
+        raise PorepipeError(f"coarsening by {factor} leaves no voxel of the image of shape {pore.shape}")
+    view = pore[: n[0] * factor, : n[1] * factor, : n[2] * factor]
+    counts = view.reshape(n[0], factor, n[1], factor, n[2], factor).sum(axis=(1, 3, 5), dtype=np.int64)
+    return (2 * counts > factor**3).astype(np.uint8)
+
+
+def _factor(a_um: float, voxel: float, source: str) -> int:
+    factor = int(round(a_um / voxel))
+    if factor < 1 or not np.isclose(a_um, factor * voxel, rtol=1e-6):
+        raise PorepipeError(f"resolution a = {a_um} µm requested, but the image {source} has voxels of {voxel} µm; "
+                            f"allowed: whole multiples of {voxel:g} µm (e.g. resolutions_um: [{voxel:g}, "
+                            f"{2 * voxel:g}])")
+    return factor
+
+
 def write_binary(statistics_path, out, a_um: float | None = None) -> float:
     """Write ``binary_a{a}.h5`` (volume ``pore``) from the phase volume of ``statistics.h5``; returns its porosity.
 
-    ``a_um`` must be the image's voxel size (the binary is the image itself, at its own resolution).
+    ``a_um`` is the image's voxel size (the binary is the image itself) or a whole multiple of it (block rule of
+    :func:`coarsen_pore`, for resolution sweeps of an image).
     """
     attrs = read_attrs(statistics_path)
     if int(attrs.get("is_2d", 0)):
@@ -181,20 +204,23 @@ def write_binary(statistics_path, out, a_um: float | None = None) -> float:
                             "permeability) need a 3-D image or a stack of serial sections")
     labels, vattrs = read_volume(statistics_path, PHASES_VOLUME)
     voxel = float(vattrs["voxel_um"])
-    if a_um is not None and not np.isclose(a_um, voxel, rtol=1e-6):
-        raise PorepipeError(f"resolution a = {a_um} µm requested, but the image {attrs.get('source')} has voxels of "
-                            f"{voxel} µm; set the scene's resolutions_um to [{voxel:g}]")
+    factor = 1 if a_um is None else _factor(float(a_um), voxel, str(attrs.get("source")))
     lut = np.zeros(len(str(vattrs["phases"]).split(",")), np.uint8)
     lut[np.atleast_1d(vattrs["pore_index"]).astype(np.int64)] = 1
     pore = lut[labels]
+    del labels
+    if factor > 1:
+        pore = coarsen_pore(pore, factor)
     thresholds = np.atleast_1d(np.asarray(vattrs["thresholds"], dtype=np.float64))
     porosity = float(pore.mean(dtype=np.float64))
     with ResultWriter(out, stage="acquire", scene=attrs.get("scene", ""), scene_hash=attrs.get("scene_hash", "")) as w:
-        w.write_volume("pore", pore, voxel_um=voxel, origin_um=vattrs.get("origin_um", (0.0, 0.0, 0.0)),
+        w.write_volume("pore", pore, voxel_um=voxel * factor, origin_um=vattrs.get("origin_um", (0.0, 0.0, 0.0)),
                        periodic=vattrs.get("periodic", (0, 0, 0)),
                        attrs={"threshold": float(thresholds[0]), "method": str(vattrs["method"]),
-                              "meaning": "1 = pore, 0 = matrix (segmented image)"})
+                              "coarsening": factor,
+                              "meaning": "1 = pore, 0 = matrix (segmented image; coarse voxel pore if less than half "
+                                         "of its fine voxels are matrix)"})
         w.write_table(xr.Dataset({"porosity": ((), porosity)}, attrs={"threshold": float(thresholds[0])}))
-        w.attrs.update(threshold=float(thresholds[0]), method=str(vattrs["method"]), voxel_um=voxel,
-                       porosity=porosity, source=str(attrs.get("source", "")))
+        w.attrs.update(threshold=float(thresholds[0]), method=str(vattrs["method"]), voxel_um=voxel * factor,
+                       porosity=porosity, source=str(attrs.get("source", "")), coarsening=factor)
     return porosity

@@ -104,3 +104,14 @@ def test_central_grain_window():
     assert central_window((10, 10, 10), 0) == (slice(0, 10),) * 3
     win = central_window((400, 200, 100), 10**6)
     assert np.prod([w.stop - w.start for w in win]) <= 10**6
+
+
+def test_coarsen_pore_block_rule_against_loops():
+    from porepipe.acquire._api import coarsen_pore
+
+    pore = (np.random.default_rng(9).random((9, 8, 7)) < 0.5).astype(np.uint8)
+    got = coarsen_pore(pore, 2)
+    assert got.shape == (4, 4, 3)
+    for i, j, k in np.ndindex(got.shape):
+        block = pore[2 * i:2 * i + 2, 2 * j:2 * j + 2, 2 * k:2 * k + 2]
+        assert got[i, j, k] == (block.sum() > 4)  # less than half matrix
