@@ -1,8 +1,9 @@
 # Data acquisition (thesis §4.7 item 1, ch. 8): a scene with an `acquire:` section starts from an image.
 #   acquire            image -> results/{scene}/acquire/statistics.h5 (phases volume + statistics tables)
-#   acquire_binary     statistics.h5 -> results/{scene}/segment/binary_a{a}.h5, the image at its own voxel size, so
-#                      minkowski/lpt/permeability run on it unchanged. It only exists for acquire scenes (wildcard
-#                      constraint) and wins over `segment` there (ruleorder); model scenes keep `segment`.
+#   acquire_binary     statistics.h5 -> results/{scene}/segment/binary_a{a}.h5, the image at its own voxel size (or a
+#                      whole multiple of it, block rule), so minkowski/lpt/permeability run on it unchanged. It only
+#                      matches acquire scenes (wildcard constraint) and wins over `segment` there (ruleorder); model
+#                      scenes keep `segment`, for which this rule does not match at all.
 #   acquire_calibrate  statistics -> calibrated model scene YAML (packing + decoration), editable
 #   acquire_model      calibrated scene -> model_statistics.h5 (pack, voxelise, Otsu, the same statistics)
 #   acquire_compare    both -> comparison.h5 (+ .png, .md): Tables 8.4/8.5 layout and μ, λ, p overlays
