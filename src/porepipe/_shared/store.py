@@ -22,8 +22,9 @@ import json
 import os
 import resource
 import time
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any
 
 import h5py
 import numpy as np
@@ -96,7 +97,7 @@ class ResultWriter:
         self._h5: h5py.File | None = None
 
     # -- context -------------------------------------------------------------------------------------------------
-    def __enter__(self) -> "ResultWriter":
+    def __enter__(self) -> ResultWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._t0 = time.perf_counter()
         self._c0 = time.process_time()
@@ -121,7 +122,7 @@ class ResultWriter:
         for ds, group in self._tables:
             ds.to_netcdf(self.tmp_path, engine="h5netcdf", mode="a", group=group)
         with h5py.File(self.tmp_path, "a") as f:
-            self.attrs["created"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+            self.attrs["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
             self.attrs["wall_s"] = time.perf_counter() - self._t0
             self.attrs["cpu_s"] = time.process_time() - self._c0
             self.attrs["peak_mb"] = _peak_mb()

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import h5py
 import numpy as np
-import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.numba_config import set_threads
@@ -15,7 +14,7 @@ from porepipe.decorate._api import decorate, iter_grain_slabs
 from porepipe.decorate._io import decoration_dataset, read_grains
 from porepipe.scene import load_scene, scene_part
 from porepipe.voxelize._api import grid_shape
-from porepipe.voxelize._kernels import N_SAMPLES
+from porepipe.voxelize._cli import write_grey_volume
 from porepipe.voxelize._spheres import spheres_from_scene
 
 
@@ -58,17 +57,10 @@ def voxelize_grains_scene(scene, grains_path, voxel_um: float, out, threads: int
     method = scene.decoration.method if scene.decoration is not None else "boundary"
     slab = scene.decoration.slab_planes if scene.decoration is not None else 32
     part = scene_part(scene, "seed", "domain", "spheres", "decoration") | {"voxel_um": voxel_um}
-    hist = np.zeros(N_SAMPLES + 1, dtype=np.int64)
     with ResultWriter(out, stage="voxelize_grains", scene=scene.name, scene_hash=hash_of(part), threads=threads) as w:
-        dset = w.create_volume("grey", shape, np.uint8, voxel_um=voxel_um, periodic=(scene.domain.periodic,) * 3,
-                               attrs={"meaning": "number of the 6x6x6 sample points in the matrix (0..216)"})
-        for i0, grey in iter_grain_slabs(deco, box, voxel_um, scene.domain.periodic, method, slab, progress):
-            dset[i0:i0 + len(grey)] = grey
-            hist += np.bincount(grey.ravel(), minlength=N_SAMPLES + 1)
-        w.write_table(xr.Dataset({"grey_histogram": ("g", hist, {"long_name": "M(g, a)"})},
-                                 coords={"g": np.arange(N_SAMPLES + 1)},
-                                 attrs={"voxel_um": voxel_um, "n_grains": len(deco)}))
-        w.attrs.update(voxel_um=voxel_um, method=str(method), n_grains=len(deco), shape=np.asarray(shape))
+        slabs = iter_grain_slabs(deco, box, voxel_um, scene.domain.periodic, method, slab, progress)
+        write_grey_volume(w, slabs, shape, voxel_um, scene.domain.periodic, {"n_grains": len(deco)})
+        w.attrs.update(method=str(method))
 
 
 def _main_decorate(args) -> int:

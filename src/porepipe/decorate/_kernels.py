@@ -21,13 +21,12 @@ from porepipe.voxelize._kernels import (
     _ROWS_PER_WORD,
     _WORDS,
     FULL,
-    N_SAMPLES,
     PARTIAL,
     SUB,
     UNTOUCHED,
     _axis_range,
+    _grey_from_status,
     _hull_gap,
-    _popcount64,
     _sample_coord,
 )
 
@@ -194,18 +193,7 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
                     _poly_points(words, i, j, k, cx, cy, cz, planes, active, n_active, h, partial)
                 for w in range(_WORDS):
                     mask[j, k, w] |= words[w]
-    for j in range(ny):
-        for k in range(nz):
-            st = status[j, k]
-            if st == FULL:
-                out[j, k] = N_SAMPLES
-            elif st == PARTIAL:
-                count = 0
-                for w in range(_WORDS):
-                    count += _popcount64(mask[j, k, w])
-                out[j, k] = count
-            else:
-                out[j, k] = 0
+    _grey_from_status(status, mask, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)

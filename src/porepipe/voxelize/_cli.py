@@ -20,19 +20,28 @@ def voxelize_scene(scene, voxel_um: float, out, packing_path=None, threads: int 
     box = scene.domain.size_um
     shape = grid_shape(box, voxel_um)
     part = scene_part(scene, "domain", "spheres") | {"voxel_um": voxel_um, "packing": str(packing_path or "")}
-    hist = np.zeros(N_SAMPLES + 1, dtype=np.int64)
     with ResultWriter(out, stage="voxelize", scene=scene.name, scene_hash=hash_of(part), threads=threads) as w:
-        dset = w.create_volume("grey", shape, np.uint8, voxel_um=voxel_um, periodic=(scene.domain.periodic,) * 3,
-                               attrs={"meaning": "number of the 6x6x6 sample points in the matrix (0..216)"})
-        for i0, slab in iter_grey_slabs(centres, radii, box, voxel_um, scene.domain.periodic,
-                                        scene.voxelize.method, scene.voxelize.slab_planes, progress):
-            dset[i0:i0 + len(slab)] = slab
-            hist += np.bincount(slab.ravel(), minlength=N_SAMPLES + 1)
-        w.write_table(xr.Dataset({"grey_histogram": ("g", hist, {"long_name": "M(g, a)"})},
-                                 coords={"g": np.arange(N_SAMPLES + 1)},
-                                 attrs={"voxel_um": voxel_um, "n_spheres": len(radii)}))
-        w.attrs.update(voxel_um=voxel_um, method=scene.voxelize.method.value, n_spheres=len(radii),
-                       shape=np.asarray(shape))
+        slabs = iter_grey_slabs(centres, radii, box, voxel_um, scene.domain.periodic, scene.voxelize.method,
+                                scene.voxelize.slab_planes, progress)
+        write_grey_volume(w, slabs, shape, voxel_um, scene.domain.periodic, {"n_spheres": len(radii)})
+        w.attrs.update(method=scene.voxelize.method.value)
+
+
+def write_grey_volume(writer: ResultWriter, slabs, shape, voxel_um: float, periodic: bool, attrs: dict) -> np.ndarray:
+    """Write volume ``grey`` slab by slab from ``(i0, slab)`` pairs, and the grey histogram M(g, a) as the table.
+
+    ``attrs`` (e.g. the number of spheres or grains) go to the table and the root. Returns the histogram.
+    """
+    hist = np.zeros(N_SAMPLES + 1, dtype=np.int64)
+    dset = writer.create_volume("grey", shape, np.uint8, voxel_um=voxel_um, periodic=(periodic,) * 3,
+                                attrs={"meaning": "number of the 6x6x6 sample points in the matrix (0..216)"})
+    for i0, slab in slabs:
+        dset[i0:i0 + len(slab)] = slab
+        hist += np.bincount(slab.ravel(), minlength=N_SAMPLES + 1)
+    writer.write_table(xr.Dataset({"grey_histogram": ("g", hist, {"long_name": "M(g, a)"})},
+                                  coords={"g": np.arange(N_SAMPLES + 1)}, attrs={"voxel_um": voxel_um, **attrs}))
+    writer.attrs.update(voxel_um=voxel_um, shape=np.asarray(shape), **attrs)
+    return hist
 
 
 def main(args) -> int:

@@ -89,6 +89,23 @@ def _popcount64(x):
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def _grey_from_status(status, mask, out):
+    """Grey values of a plane: 216 for FULL voxels, the popcount of the sample mask for PARTIAL ones, else 0."""
+    for j in range(status.shape[0]):
+        for k in range(status.shape[1]):
+            st = status[j, k]
+            if st == FULL:
+                out[j, k] = N_SAMPLES
+            elif st == PARTIAL:
+                count = 0
+                for w in range(_WORDS):
+                    count += _popcount64(mask[j, k, w])
+                out[j, k] = count
+            else:
+                out[j, k] = 0
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, status, mask, scratch, out):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); ``status``/``mask``/``scratch`` are this thread's."""
     status[:, :] = UNTOUCHED
@@ -123,18 +140,7 @@ def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_on
                         mask[j, k, w] = 0
                     status[j, k] = PARTIAL
                 _mark_points(mask, j, k, i, cx, cy, cz, r2, h, scratch[0], scratch[1], scratch[2], boundary_only)
-    for j in range(ny):
-        for k in range(nz):
-            st = status[j, k]
-            if st == FULL:
-                out[j, k] = N_SAMPLES
-            elif st == PARTIAL:
-                count = 0
-                for w in range(_WORDS):
-                    count += _popcount64(mask[j, k, w])
-                out[j, k] = count
-            else:
-                out[j, k] = 0
+    _grey_from_status(status, mask, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
