@@ -130,3 +130,26 @@ def test_cli_writes_fields_and_vti(tmp_path):
     vz, vattrs = read_volume(out, "velocity_z")
     assert vattrs["voxel_um"] == 2.0 and np.all(vz[pore_z] > 0)
     assert out.with_suffix(".vti").is_file()
+
+
+def test_check_schedule_ramps_then_follows_the_window():
+    """Checks at 1, 2, 4, … (early blow-ups caught at once), then on multiples of the window (resumable)."""
+    from porepipe.lbm._solver import _next_check
+
+    done, seen = 0, []
+    while done < 2000:
+        done = _next_check(done, 500)
+        seen.append(done)
+    assert seen == [1, 2, 4, 8, 16, 32, 64, 128, 256, 500, 1000, 1500, 2000]
+
+
+def test_scene_carries_the_permeability_section():
+    """The scene model holds this stage's Settings under `permeability`, defaults filled in."""
+    from pathlib import Path
+
+    from porepipe.scene import load_scene
+
+    scene_file = Path(__file__).parents[3] / "config" / "scenes" / "mini.yaml"
+    scene = load_scene(scene_file)
+    assert isinstance(scene.permeability, Settings)
+    assert scene.permeability == Settings()
