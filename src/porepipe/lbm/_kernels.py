@@ -23,7 +23,7 @@ _OPP = OPPOSITE.copy()
 _M = dhumieres_matrix()
 _M_NORM2 = (_M * _M).sum(axis=1)
 #: nodes per work block of the parallel loop (scratch of 19 x _BLOCK float64 stays in L1/L2).
-_BLOCK = 256
+_BLOCK = 1024
 
 
 # -- geometry -------------------------------------------------------------------------------------------------------
