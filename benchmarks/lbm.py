@@ -111,7 +111,10 @@ def main(argv=None) -> int:
     p.add_argument("--steps", type=int, default=10)
     p.add_argument("--out", default=".")
     p.add_argument("--no-lbmpy", action="store_true")
+    p.add_argument("--smoke", action="store_true", help="24^3, 2 steps, no lbmpy (CI smoke; no figures to quote)")
     args = p.parse_args(argv)
+    if args.smoke:
+        args.size, args.steps, args.no_lbmpy = 24, 2, True
     max_threads = min(2, numba.config.NUMBA_NUM_THREADS)
     thread_counts = list(range(1, max_threads + 1))
     bw = {t: bandwidth_gbs(t) for t in thread_counts}

@@ -126,14 +126,18 @@ def main(argv=None) -> int:
     p.add_argument("--max-b", type=int, default=32, help="largest duct (64 is the thesis's; hours here)")
     p.add_argument("--out", default=".", help="directory for lbm_calibration.json / .md")
     p.add_argument("--quick", action="store_true", help="reduced Table 6.3 box")
+    p.add_argument("--smoke", action="store_true", help="B = 4 only, reduced boxes (CI smoke; no figures to quote)")
     args = p.parse_args(argv)
+    if args.smoke:
+        args.max_b, args.quick = 4, True
+    tau_sizes = (4, 4) if args.smoke else (16, 20)
     sizes = [b for b in (4, 8, 16, 32, 64) if b <= args.max_b]
     t0 = time.perf_counter()
     res = {"table_6_2": table_6_2(sizes), "kappa_errors": kappa_errors(sizes),
            "shaped_ducts": shaped_ducts([b for b in (8, 16, 32) if b <= args.max_b])}
     res["table_6_3"], steps, wall = table_6_3(args.quick)
-    res["tau_study_16"] = tau_study(16)
-    res["tau_study_20"] = tau_study(20)
+    res["tau_study_16"] = tau_study(tau_sizes[0])
+    res["tau_study_20"] = tau_study(tau_sizes[1])
     res["total_wall_s"] = time.perf_counter() - t0
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

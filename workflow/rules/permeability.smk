@@ -23,8 +23,19 @@ rule permeability:
         " --threads {threads} > {log} 2>&1"
 
 
+def permeability_resolutions(scene):
+    chosen = scene.permeability.resolutions_um or scene.resolutions_um
+    unknown = sorted(set(chosen) - set(scene.resolutions_um))
+    if unknown:
+        raise ValueError(
+            f"scene {scene.name!r}: permeability.resolutions_um = {unknown} are not among resolutions_um = "
+            f"{scene.resolutions_um}"
+        )
+    return chosen
+
+
 ANALYSIS_TARGETS["permeability"] = lambda scene: [
-    path
+    results(scene, "permeability", f"perm_a{res_tag(a)}_{axis}.h5")
     for axis in permeability_axes(scene)
-    for path in per_resolution(scene, "permeability/perm_a{a}_" + axis + ".h5")
+    for a in permeability_resolutions(scene)
 ]

@@ -66,6 +66,10 @@ class Settings(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     axes: tuple[Axis, ...] = Field((Axis.z,), min_length=1, description="flow directions; one result file each")
+    resolutions_um: list[float] = Field(
+        default_factory=list,
+        description="run only at these of the scene's resolutions (empty: all); fine lattices cost most",
+    )
     collision: Collision = Field(Collision.mrt, description="bgk, trt or mrt (the thesis's safe choice)")
     tau: float = Field(0.857, gt=0.5, description="relaxation time τ̂ of the shear modes; ν̂ = (τ̂ − ½)/3")
     tau_bulk: float = Field(1.0, gt=0.5, description="MRT only: relaxation time of the energy moment")
