@@ -14,6 +14,7 @@ SUB = 6                  # sample points per voxel edge
 N_SAMPLES = SUB ** 3     # 216
 _ROWS_PER_WORD = 10      # 36 rows of 6 sample points, 10 rows (60 bits) per uint64 word
 _WORDS = 4               # ceil(36 / 10) words per voxel
+_FULL_ROW = (1 << SUB) - 1
 #: relative margin on squared distances for the whole-voxel shortcuts; far above rounding (1e-16), far below
 #: any geometric scale, so a voxel whose sample hull is within it of the sphere surface is sampled point by point.
 _MARGIN = 1e-9
@@ -49,11 +50,11 @@ def _hull_gap(c, voxel, h):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, skip_rows):
+def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, words, skip_rows):
     """OR into ``mask[j, k]`` the sample points of voxel (i, j, k) inside the ball (cx, cy, cz, r2).
 
     Bit layout: row q = 6·sx + sy (6 points along z) occupies bits 6·(q mod 10) .. +5 of word q // 10, so a row
-    never straddles two words. ``dx2``/``dy2``/``dz2`` are scratch buffers of length 6. With ``skip_rows`` a row
+    never straddles two words. ``dx2``/``dy2``/``dz2`` (length 6) and ``words`` (uint64, length 4) are scratch. With ``skip_rows`` a row
     whose (x, y) distance alone exceeds r is skipped; without it (brute force) all 216 points are tested.
     """
     for s in range(SUB):
@@ -63,16 +64,28 @@ def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, skip_rows):
         dx2[s] = dx * dx
         dy2[s] = dy * dy
         dz2[s] = dz * dz
-    words = np.zeros(_WORDS, dtype=np.uint64)
+    for w in range(_WORDS):
+        words[w] = 0
+    dz2_min = dz2[0]
+    dz2_max = dz2[0]
+    for s in range(1, SUB):
+        dz2_min = min(dz2_min, dz2[s])
+        dz2_max = max(dz2_max, dz2[s])
     for sx in range(SUB):
         for sy in range(SUB):
             dxy = dx2[sx] + dy2[sy]
-            if skip_rows and dxy > r2:
-                continue
+            if skip_rows:
+                # rounding is monotone, so dxy + dz2_min/max bound dxy + dz2[sz] exactly: whole rows are decided
+                # without a per-point test and without changing any decision
+                if dxy + dz2_min > r2:
+                    continue
+                if dxy + dz2_max <= r2:
+                    q = SUB * sx + sy
+                    words[q // _ROWS_PER_WORD] |= np.uint64(_FULL_ROW) << np.uint64(SUB * (q % _ROWS_PER_WORD))
+                    continue
             row = 0
             for sz in range(SUB):
-                if dxy + dz2[sz] <= r2:
-                    row |= 1 << sz
+                row |= int(dxy + dz2[sz] <= r2) << sz  # branch-free
             if row:
                 q = SUB * sx + sy
                 words[q // _ROWS_PER_WORD] |= np.uint64(row) << np.uint64(SUB * (q % _ROWS_PER_WORD))
@@ -106,7 +119,8 @@ def _grey_from_status(status, mask, out):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, status, mask, scratch, out):
+def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, status, mask, scratch, words,
+                    out):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); ``status``/``mask``/``scratch`` are this thread's."""
     status[:, :] = UNTOUCHED
     plane_lo = _sample_coord(i, 0, h)
@@ -139,7 +153,8 @@ def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_on
                     for w in range(_WORDS):
                         mask[j, k, w] = 0
                     status[j, k] = PARTIAL
-                _mark_points(mask, j, k, i, cx, cy, cz, r2, h, scratch[0], scratch[1], scratch[2], boundary_only)
+                _mark_points(mask, j, k, i, cx, cy, cz, r2, h, scratch[0], scratch[1], scratch[2], words,
+                             boundary_only)
     _grey_from_status(status, mask, out)
 
 
@@ -153,6 +168,7 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
         status = np.empty((ny, nz), dtype=np.uint8)
         mask = np.empty((ny, nz, _WORDS), dtype=np.uint64)
         scratch = np.empty((3, SUB))
+        words = np.empty(_WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             _voxelize_plane(i0 + p, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only,
-                            status, mask, scratch, out[p])
+                            status, mask, scratch, words, out[p])
