@@ -149,7 +149,14 @@ def test_scene_carries_the_permeability_section():
 
     from porepipe.scene import load_scene
 
+    import yaml
+
+    from porepipe.scene import parse_scene
+
     scene_file = Path(__file__).parents[3] / "config" / "scenes" / "mini.yaml"
     scene = load_scene(scene_file)
     assert isinstance(scene.permeability, Settings)
-    assert scene.permeability == Settings()
+    raw = yaml.safe_load(scene_file.read_text())
+    assert scene.permeability == Settings(**raw["permeability"])  # given keys taken, the rest defaulted
+    raw.pop("permeability")
+    assert parse_scene(raw, scene_file.parent).permeability == Settings()  # no section: all defaults
