@@ -27,6 +27,7 @@ from porepipe.voxelize._kernels import (
     _axis_range,
     _grey_from_status,
     _hull_gap,
+    _plane_candidates,
     _sample_coord,
 )
 
@@ -145,10 +146,7 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
                  boundary_only, status, mask, scratch, partial, active, xy, words, out):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); the other arrays are this thread's buffers."""
     status[:, :] = UNTOUCHED
-    plane_lo = _sample_coord(i, 0, h)
-    plane_hi = _sample_coord(i, SUB - 1, h)
-    first = np.searchsorted(xmin_sorted, plane_lo - 2.0 * hx_max, side="left")
-    last = np.searchsorted(xmin_sorted, plane_hi, side="right")
+    plane_lo, first, last = _plane_candidates(i, h, xmin_sorted, hx_max)
     for q in range(first, last):
         s = order[q]
         cx, cy, cz = img_pos[s, 0], img_pos[s, 1], img_pos[s, 2]

@@ -119,15 +119,22 @@ def _grey_from_status(status, mask, out):
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def _plane_candidates(i, h, xmin_sorted, half_extent_max):
+    """Sample-hull start of plane x = i and the range [first, last) of bodies (sorted by x-min = cx − half extent)
+    whose x-extent can meet the plane's sample hull."""
+    plane_lo = _sample_coord(i, 0, h)
+    plane_hi = _sample_coord(i, SUB - 1, h)
+    first = np.searchsorted(xmin_sorted, plane_lo - 2.0 * half_extent_max, side="left")
+    last = np.searchsorted(xmin_sorted, plane_hi, side="right")
+    return plane_lo, first, last
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, status, mask, scratch, words,
                     out):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); ``status``/``mask``/``scratch`` are this thread's."""
     status[:, :] = UNTOUCHED
-    plane_lo = _sample_coord(i, 0, h)
-    plane_hi = _sample_coord(i, SUB - 1, h)
-    # candidates: images with x-extent [cx - r, cx + r] meeting [plane_lo, plane_hi]; xmin = cx - r is sorted
-    first = np.searchsorted(xmin_sorted, plane_lo - 2.0 * r_max, side="left")
-    last = np.searchsorted(xmin_sorted, plane_hi, side="right")
+    plane_lo, first, last = _plane_candidates(i, h, xmin_sorted, r_max)
     for q in range(first, last):
         s = order[q]
         cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
