@@ -14,9 +14,23 @@ from porepipe.minkowski._api import (
     threshold_histograms,
     threshold_histograms_slabs,
 )
+from porepipe.minkowski._boolean import boolean_lattice_densities, miles_densities
 from porepipe.minkowski._weights import Adjacency
 
-__all__ = ["Adjacency", "configuration_histogram", "configuration_histogram_slabs", "iter_slabs",
-           "matrix_histogram", "minkowski_from_histogram", "minkowski_functionals",
-           "minkowski_functions_of_threshold", "n_cells", "specific_surface_from_histogram",
-           "threshold_dataset", "threshold_histograms", "threshold_histograms_slabs"]
+__all__ = [
+    "Adjacency",
+    "boolean_lattice_densities",
+    "configuration_histogram",
+    "configuration_histogram_slabs",
+    "iter_slabs",
+    "matrix_histogram",
+    "miles_densities",
+    "minkowski_from_histogram",
+    "minkowski_functionals",
+    "minkowski_functions_of_threshold",
+    "n_cells",
+    "specific_surface_from_histogram",
+    "threshold_dataset",
+    "threshold_histograms",
+    "threshold_histograms_slabs",
+]
