@@ -189,6 +189,7 @@ def cell_union_volumes(radius_um: float, voxel_um: tuple[float, float, float]) -
             members = [b for b in range(8) if key >> b & 1]
             known[key] = union_of_balls_volume(_weights.VERTICES[members] * np.asarray(voxel_um), radius_um)
         volumes[mask] = known[key]
+    volumes.setflags(write=False)                      # cached: callers must not change it
     return volumes
 
 
