@@ -13,11 +13,13 @@ import hashlib
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.lbm._kernels import _gather_table, _node_ids
+from porepipe.lbm._kernels import _gather_table, _node_ids, _runs
 from porepipe.lbm._percolation import flow_paths
 
 #: beyond this many populations the gather index needs 64 bits
 _INT32_LIMIT = 2**31 - 1
+#: runs of at least this many nodes stream by offset (no index load); shorter ones use the gather table
+MIN_RUN = 8
 
 
 @dataclasses.dataclass
@@ -38,6 +40,11 @@ class Lattice:
         Half-open layer ranges of the force zone F and the sample S.
     window : (L1, L2) bool ndarray or None
         Part of the cross-section that belongs to S (None = all of it).
+    run_start : (R + 1,) int64 ndarray
+        Node ranges ``run_start[r]:run_start[r + 1]`` that stream by a constant offset per population (derived
+        from ``gather``; see :func:`porepipe.lbm._kernels._runs`).
+    run_offset : (R, 18) int64 ndarray
+        Pull source of population q of node n in run r is ``run_offset[r, q - 1] + n``; −1 = use ``gather``.
     """
 
     pore: np.ndarray
@@ -47,6 +54,16 @@ class Lattice:
     force_layers: tuple[int, int]
     sample_layers: tuple[int, int]
     window: np.ndarray | None = None
+    run_start: np.ndarray = dataclasses.field(default=None, repr=False)
+    run_offset: np.ndarray = dataclasses.field(default=None, repr=False)
+
+    def __post_init__(self):
+        if self.run_start is None:
+            n = self.n_nodes
+            start = np.empty(n + 1, dtype=np.int64)
+            offset = np.empty((max(n, 1), 18), dtype=np.int64)
+            r = int(_runs(self.gather, MIN_RUN, start, offset))
+            self.run_start, self.run_offset = start[:r + 1].copy(), offset[:max(r, 1)].copy()
 
     @property
     def n_nodes(self) -> int:
