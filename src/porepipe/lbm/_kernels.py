@@ -12,7 +12,10 @@ Each collision operator has its own step kernel; they share the gather/moment/st
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from llvmlite import ir
+from numba import njit, prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from porepipe._shared.numba_config import FASTMATH
 from porepipe.lbm._lattice import OPPOSITE, C, W, dhumieres_matrix
@@ -26,6 +29,44 @@ _M = dhumieres_matrix()
 _M_NORM2 = (_M * _M).sum(axis=1)
 #: nodes per work block of the parallel loop (scratch of 19 x _BLOCK float64 stays in L1/L2).
 _BLOCK = 1024
+#: population arrays larger than this (bytes, both buffers) are written with non-temporal stores: they cannot stay
+#: in cache until the next step reads them, and bypassing the cache saves the read-for-ownership of every line.
+STREAMING_BYTES = 16 * 2**20
+
+
+def streams(src) -> bool:
+    """Whether the step kernels should write ``src``'s populations (and its twin's) non-temporally."""
+    return 2 * src.nbytes > STREAMING_BYTES
+
+
+# -- non-temporal stores ------------------------------------------------------------------------------------------
+@intrinsic
+def _stream_store(typingctx, arr, idx, val):
+    """``arr[idx] = val`` as a non-temporal store (no negative-index wrap; idx must be in range)."""
+    sig = types.void(arr, idx, val)
+
+    def codegen(context, builder, signature, args):
+        arrty = signature.args[0]
+        ary = context.make_array(arrty)(context, builder, args[0])
+        ptr = cgutils.get_item_pointer(context, builder, arrty, ary, [args[1]], wraparound=False)
+        value = context.cast(builder, args[2], signature.args[2], arrty.dtype)
+        store = builder.store(value, ptr)
+        store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def _store_fence(typingctx):
+    """Full fence (``mfence`` on x86): the non-temporal stores of this thread are visible before what follows."""
+    sig = types.void()
+
+    def codegen(context, builder, signature, args):
+        builder.fence("seq_cst")
+        return context.get_dummy_value()
+
+    return sig, codegen
 
 
 # -- geometry -------------------------------------------------------------------------------------------------------
@@ -188,12 +229,18 @@ def _force_coefficient(q, force):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _store_block(dst, n0, cnt, n_nodes, fb, mom, fields, store, force):
-    """Write the post-collision populations; optionally δρ and the velocity u = (j + ρb/2)/ρ."""
+def _store_block(dst, n0, cnt, n_nodes, fb, mom, fields, store, force, streaming):
+    """Write the post-collision populations (non-temporal if ``streaming``); optionally δρ and u = (j + ρb/2)/ρ."""
     for q in range(19):
         out = dst[q * n_nodes + n0:q * n_nodes + n0 + cnt]  # a view: zero-based index, the copy vectorises
-        for i in range(cnt):
-            out[i] = fb[q, i]
+        if streaming:  # a pure copy loop: non-temporal stores would keep a compute loop from vectorising
+            for i in range(cnt):
+                _stream_store(out, i, fb[q, i])
+        else:
+            for i in range(cnt):
+                out[i] = fb[q, i]
+    if streaming:
+        _store_fence()
     if store:
         for i in range(cnt):
             on = 0.5 * mom[7, i]
@@ -269,8 +316,12 @@ def _collide_mrt(fb, cnt, mom, force, rates_scaled, mb):
 
 # -- step kernels: one per operator ---------------------------------------------------------------------------------
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _step_bgk(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store, n_steps, omega):
-    """``n_steps`` BGK steps, alternating src -> dst -> src; fields of the last step if ``store``."""
+def _step_bgk(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store,
+              n_steps, streaming, omega):
+    """``n_steps`` BGK steps, alternating src -> dst -> src; fields of the last step if ``store``.
+
+    ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
+    """
     n_nodes = gather.shape[1]
     n_blocks = (n_nodes + _BLOCK - 1) // _BLOCK
     for s in range(n_steps):
@@ -284,11 +335,12 @@ def _step_bgk(src, dst, gather, run_start, run_offset, force_lo, force_hi, force
             _gather_block(a, gather, run_start, run_offset, n0, cnt, fb)
             _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
             _collide_bgk(fb, cnt, mom, force, omega)
-            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force)
+            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force, streaming)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _step_trt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store, n_steps, omega_plus, omega_minus):
+def _step_trt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store,
+              n_steps, streaming, omega_plus, omega_minus):
     """``n_steps`` TRT steps (see :func:`_step_bgk`)."""
     n_nodes = gather.shape[1]
     n_blocks = (n_nodes + _BLOCK - 1) // _BLOCK
@@ -303,11 +355,12 @@ def _step_trt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force
             _gather_block(a, gather, run_start, run_offset, n0, cnt, fb)
             _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
             _collide_trt(fb, cnt, mom, force, omega_plus, omega_minus)
-            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force)
+            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force, streaming)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _step_mrt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store, n_steps, rates_scaled):
+def _step_mrt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store,
+              n_steps, streaming, rates_scaled):
     """``n_steps`` MRT steps (see :func:`_step_bgk`)."""
     n_nodes = gather.shape[1]
     n_blocks = (n_nodes + _BLOCK - 1) // _BLOCK
@@ -323,7 +376,7 @@ def _step_mrt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force
             _gather_block(a, gather, run_start, run_offset, n0, cnt, fb)
             _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
             _collide_mrt(fb, cnt, mom, force, rates_scaled, mb)
-            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force)
+            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force, streaming)
 
 
 # -- reductions ---------------------------------------------------------------------------------------------------------

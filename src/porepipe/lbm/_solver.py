@@ -70,20 +70,21 @@ def make_stepper(settings: Settings, lat: Lattice):
     lo, hi = lat.force_nodes
     force = np.array([settings.body_force, 0.0, 0.0])
     tau = settings.tau
+    geometry = (lat.gather, lat.run_start, lat.run_offset, lo, hi, force)
     if settings.collision is Collision.bgk:
         def step(src, dst, fields, store, n):
-            K._step_bgk(src, dst, lat.gather, lat.run_start, lat.run_offset, lo, hi, force, fields, store, n, 1.0 / tau)
+            K._step_bgk(src, dst, *geometry, fields, store, n, K.streams(src), 1.0 / tau)
     elif settings.collision is Collision.trt:
         omega_minus = 1.0 / trt_minus_tau(tau, settings.magic)
 
         def step(src, dst, fields, store, n):
-            K._step_trt(src, dst, lat.gather, lat.run_start, lat.run_offset, lo, hi, force, fields, store, n, 1.0 / tau, omega_minus)
+            K._step_trt(src, dst, *geometry, fields, store, n, K.streams(src), 1.0 / tau, omega_minus)
     else:
         m = dhumieres_matrix()
         scaled = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
 
         def step(src, dst, fields, store, n):
-            K._step_mrt(src, dst, lat.gather, lat.run_start, lat.run_offset, lo, hi, force, fields, store, n, scaled)
+            K._step_mrt(src, dst, *geometry, fields, store, n, K.streams(src), scaled)
     return step
 
 

@@ -65,12 +65,16 @@ def test_runs_reproduce_the_gather_table():
 @pytest.mark.parametrize("collision", ["bgk", "trt", "mrt"])
 @pytest.mark.parametrize("force_layers", [(0, 5), (1, 3)])
 @pytest.mark.parametrize("geometry", ["random", "open"])
-def test_sparse_steps_match_dense_reference(collision, force_layers, geometry):
+@pytest.mark.parametrize("streaming", [False, True])
+def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, streaming, monkeypatch):
     """Five fused pull/collide steps on a random porous box (gather-table path) and on a mostly open box (mostly
-    offset-streaming runs) equal the dense reference.
+    offset-streaming runs) equal the dense reference, with cached and with non-temporal population stores.
 
     Tolerance 1e-13 absolute on populations of size ~0.1: both are float64 with different summation order.
     """
+    from porepipe.lbm import _kernels
+
+    monkeypatch.setattr(_kernels, "STREAMING_BYTES", 0 if streaming else 2**62)
     pore = _random_pore((5, 4, 6), 0.7, seed=2) if geometry == "random" else _open_pore()
     periodic = (True, False, True)
     lat = build_lattice(pore, periodic, force_layers, (0, 5))
