@@ -8,7 +8,7 @@ in µm⁻³ (Zauner 2020, §4.5, Eqs. 4.5.1-4.5.3).
 
 from __future__ import annotations
 
-from typing import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 
 import numba
 import numpy as np

@@ -90,7 +90,7 @@ def _segments(direction: np.ndarray) -> tuple[list[tuple[int, int]], int]:
     return pairs, share
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def transition_table() -> np.ndarray:
     """(13, 256) int64: per direction, foreground/background transitions in a cell × 4 (denominator 4)."""
     table = np.zeros((len(DIRECTIONS), N_CODES), dtype=np.int64)
@@ -130,7 +130,7 @@ def _section_polygons(normal: np.ndarray) -> tuple[list[list[int]], int]:
     return polygons, share
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _section_euler6() -> np.ndarray:
     """(13, 256) int64: Euler contribution × 24 of the cell's planar sections (4-/6-adjacency) per plane family."""
     table = np.zeros((len(DIRECTIONS), N_CODES), dtype=np.int64)
@@ -146,7 +146,7 @@ def _section_euler6() -> np.ndarray:
     return table
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _euler6() -> np.ndarray:
     """(256,) int64: Euler contribution × 8 of the cell to the cubical complex K6."""
     table = _FG.sum(axis=1).copy()                                    # vertices, shared by 8 cells
