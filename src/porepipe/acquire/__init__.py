@@ -1,16 +1,16 @@
 """Data acquisition: read µ-CT / SEM images, segment them, measure their statistics, calibrate a model, compare."""
 
-from porepipe.acquire._api import Prepared, acquire, central_window, image_statistics, open_image, prepare, write_binary
-from porepipe.acquire._calibrate import RadiusFit, calibrated_scene, fit_radius_distribution, write_scene_yaml
-from porepipe.acquire._compare import compare, comparison_markdown, plot_comparison, write_comparison
-from porepipe.acquire._io import Image, read_image, require_spacing
-from porepipe.acquire._model import match_porosity, model_grey, run_model
-from porepipe.acquire._prepare import GreyHistogram, Phases, denoise, grey_histogram, segment_phases
-from porepipe.acquire._settings import Settings
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = [
-    "GreyHistogram", "Image", "Phases", "Prepared", "RadiusFit", "Settings", "acquire", "calibrated_scene",
-    "central_window", "compare", "comparison_markdown", "denoise", "fit_radius_distribution", "grey_histogram",
-    "image_statistics", "match_porosity", "model_grey", "open_image", "plot_comparison", "prepare", "read_image",
-    "require_spacing", "run_model", "segment_phases", "write_binary", "write_comparison", "write_scene_yaml",
-]
+_EXPORTS = {
+    **dict.fromkeys(["Prepared", "acquire", "central_window", "image_statistics", "open_image", "prepare",
+                     "write_binary"], "_api"),
+    **dict.fromkeys(["RadiusFit", "calibrated_scene", "fit_radius_distribution", "write_scene_yaml"], "_calibrate"),
+    **dict.fromkeys(["compare", "comparison_markdown", "plot_comparison", "write_comparison"], "_compare"),
+    **dict.fromkeys(["Image", "read_image", "require_spacing"], "_io"),
+    **dict.fromkeys(["match_porosity", "model_grey", "run_model"], "_model"),
+    **dict.fromkeys(["GreyHistogram", "Phases", "denoise", "grey_histogram", "segment_phases"], "_prepare"),
+    "Settings": "_settings",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,56 +1,33 @@
 """Grain decoration: polyhedral grain types on a sphere packing and their grey-value voxelisation (Zauner 2020, §4.7)."""
 
-from porepipe.decorate._api import (
-    Decoration,
-    build_library,
-    decorate,
-    grain_images,
-    iter_grain_slabs,
-    mean_overlap_volume,
-    minimise_overlap,
-    neighbour_pairs,
-    pair_overlap_volume,
-    points_in_grains,
-    scale_factors,
-    voxelize_grains,
-    world_grains,
-)
-from porepipe.decorate._io import decoration_dataset, read_grains
-from porepipe.decorate._library import (
-    GrainType,
-    Kind,
-    polyhedron,
-    quartz_type,
-    random_type,
-    read_plane_file,
-    sphere_type,
-)
-from porepipe.decorate._rotation import anisotropic_rotations, uniform_rotations, von_mises_fisher
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = [
-    "Decoration",
-    "GrainType",
-    "Kind",
-    "anisotropic_rotations",
-    "build_library",
-    "decorate",
-    "decoration_dataset",
-    "grain_images",
-    "iter_grain_slabs",
-    "mean_overlap_volume",
-    "minimise_overlap",
-    "neighbour_pairs",
-    "pair_overlap_volume",
-    "points_in_grains",
-    "polyhedron",
-    "quartz_type",
-    "random_type",
-    "read_grains",
-    "read_plane_file",
-    "scale_factors",
-    "sphere_type",
-    "uniform_rotations",
-    "von_mises_fisher",
-    "voxelize_grains",
-    "world_grains",
-]
+_EXPORTS = {
+    "Decoration": "_api",
+    "GrainType": "_library",
+    "Kind": "_library",
+    "anisotropic_rotations": "_rotation",
+    "build_library": "_api",
+    "decorate": "_api",
+    "decoration_dataset": "_io",
+    "grain_images": "_api",
+    "iter_grain_slabs": "_api",
+    "mean_overlap_volume": "_api",
+    "minimise_overlap": "_api",
+    "neighbour_pairs": "_api",
+    "pair_overlap_volume": "_api",
+    "points_in_grains": "_api",
+    "polyhedron": "_library",
+    "quartz_type": "_library",
+    "random_type": "_library",
+    "read_grains": "_io",
+    "read_plane_file": "_library",
+    "scale_factors": "_api",
+    "sphere_type": "_library",
+    "uniform_rotations": "_rotation",
+    "von_mises_fisher": "_rotation",
+    "voxelize_grains": "_api",
+    "world_grains": "_api",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,31 +1,20 @@
 """Grey-value estimators: porosity bounds, their extrapolation to a → 0, and specific-surface bounds (§7.2–7.3)."""
 
-from porepipe.estimate._api import (
-    PorosityLimit,
-    cap_base_area,
-    corner_cut,
-    estimate_from_histograms,
-    porosity_at_threshold,
-    porosity_bounds,
-    porosity_mean_grey,
-    regress_porosity_limit,
-    richardson_limit,
-    surface_estimates,
-    surface_per_grey,
-    two_point_line,
-)
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = [
-    "PorosityLimit",
-    "cap_base_area",
-    "corner_cut",
-    "estimate_from_histograms",
-    "porosity_at_threshold",
-    "porosity_bounds",
-    "porosity_mean_grey",
-    "regress_porosity_limit",
-    "richardson_limit",
-    "surface_estimates",
-    "surface_per_grey",
-    "two_point_line",
-]
+_EXPORTS = {
+    "PorosityLimit": "_api",
+    "cap_base_area": "_api",
+    "corner_cut": "_api",
+    "estimate_from_histograms": "_api",
+    "porosity_at_threshold": "_api",
+    "porosity_bounds": "_api",
+    "porosity_mean_grey": "_api",
+    "regress_porosity_limit": "_api",
+    "richardson_limit": "_api",
+    "surface_estimates": "_api",
+    "surface_per_grey": "_api",
+    "two_point_line": "_api",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

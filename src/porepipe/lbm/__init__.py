@@ -1,21 +1,21 @@
 """Lattice-Boltzmann permeability (D3Q19; BGK, TRT, MRT; sparse pore-node storage), thesis chapter 6."""
 
-from porepipe.lbm._api import DARCY_M2, PermeabilityResult, kappa_units, permeability
-from porepipe.lbm._settings import Axis, Collision, Gradient, Lateral, Precision, Settings, Setup, Velocity
-from porepipe.lbm._solver import StabilityError
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = [
-    "DARCY_M2",
-    "Axis",
-    "Collision",
-    "Gradient",
-    "Lateral",
-    "PermeabilityResult",
-    "Precision",
-    "Settings",
-    "Setup",
-    "StabilityError",
-    "Velocity",
-    "kappa_units",
-    "permeability",
-]
+_EXPORTS = {
+    "Axis": "_settings",
+    "Collision": "_settings",
+    "DARCY_M2": "_api",
+    "Gradient": "_settings",
+    "Lateral": "_settings",
+    "PermeabilityResult": "_api",
+    "Precision": "_settings",
+    "Settings": "_settings",
+    "Setup": "_settings",
+    "StabilityError": "_solver",
+    "Velocity": "_settings",
+    "kappa_units": "_api",
+    "permeability": "_api",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,34 +1,23 @@
 """Local porosity theory: local porosity and S_V distributions μ(φ, L), local percolation λ_α(φ, L), p_α(L)."""
 
-from porepipe.lpt._api import (
-    BoxHistogram,
-    CellGrid,
-    auto_stride,
-    cell_grid,
-    cell_sizes,
-    characteristic_length,
-    local_porosity_analysis,
-    local_porosity_histogram,
-    local_surface_histogram,
-    percolation_bits,
-)
-from porepipe.lpt._plot import plot_lpt
-from porepipe.lpt._settings import Connectivity, Direction, Placement, Settings
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = [
-    "BoxHistogram",
-    "CellGrid",
-    "Connectivity",
-    "Direction",
-    "Placement",
-    "Settings",
-    "auto_stride",
-    "cell_grid",
-    "cell_sizes",
-    "characteristic_length",
-    "local_porosity_analysis",
-    "local_porosity_histogram",
-    "local_surface_histogram",
-    "percolation_bits",
-    "plot_lpt",
-]
+_EXPORTS = {
+    "BoxHistogram": "_api",
+    "CellGrid": "_api",
+    "Connectivity": "_settings",
+    "Direction": "_settings",
+    "Placement": "_settings",
+    "Settings": "_settings",
+    "auto_stride": "_api",
+    "cell_grid": "_api",
+    "cell_sizes": "_api",
+    "characteristic_length": "_api",
+    "local_porosity_analysis": "_api",
+    "local_porosity_histogram": "_api",
+    "local_surface_histogram": "_api",
+    "percolation_bits": "_api",
+    "plot_lpt": "_plot",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,36 +1,23 @@
 """Minkowski functionals (φ, S_V, K_V, T_V, χ) of voxel volumes from the 2x2x2 configuration histogram."""
 
-from porepipe.minkowski._api import (
-    configuration_histogram,
-    configuration_histogram_slabs,
-    iter_slabs,
-    matrix_histogram,
-    minkowski_from_histogram,
-    minkowski_functionals,
-    minkowski_functions_of_threshold,
-    n_cells,
-    specific_surface_from_histogram,
-    threshold_dataset,
-    threshold_histograms,
-    threshold_histograms_slabs,
-)
-from porepipe.minkowski._boolean import boolean_lattice_densities, miles_densities
-from porepipe.minkowski._weights import Adjacency
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = [
-    "Adjacency",
-    "boolean_lattice_densities",
-    "configuration_histogram",
-    "configuration_histogram_slabs",
-    "iter_slabs",
-    "matrix_histogram",
-    "miles_densities",
-    "minkowski_from_histogram",
-    "minkowski_functionals",
-    "minkowski_functions_of_threshold",
-    "n_cells",
-    "specific_surface_from_histogram",
-    "threshold_dataset",
-    "threshold_histograms",
-    "threshold_histograms_slabs",
-]
+_EXPORTS = {
+    "Adjacency": "_weights",
+    "boolean_lattice_densities": "_boolean",
+    "configuration_histogram": "_api",
+    "configuration_histogram_slabs": "_api",
+    "iter_slabs": "_api",
+    "matrix_histogram": "_api",
+    "miles_densities": "_boolean",
+    "minkowski_from_histogram": "_api",
+    "minkowski_functionals": "_api",
+    "minkowski_functions_of_threshold": "_api",
+    "n_cells": "_api",
+    "specific_surface_from_histogram": "_api",
+    "threshold_dataset": "_api",
+    "threshold_histograms": "_api",
+    "threshold_histograms_slabs": "_api",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,10 +1,20 @@
 """DEM packing of overlapping spheres (the thesis's PackDEM, Zauner 2020, ch. 5)."""
 
-from porepipe.packing._api import Packing, pack_spheres, schedule_value, sphere_overlaps
-from porepipe.packing._io import read_packing, write_packing, write_xyzr_file
-from porepipe.packing._neighbours import build_neighbours
-from porepipe.packing._settings import Effect, RadiusDist, Settings
-from porepipe.packing._setup import sample_radii
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = ["Effect", "Packing", "RadiusDist", "Settings", "build_neighbours", "pack_spheres", "read_packing",
-           "sample_radii", "schedule_value", "sphere_overlaps", "write_packing", "write_xyzr_file"]
+_EXPORTS = {
+    "Effect": "_settings",
+    "Packing": "_api",
+    "RadiusDist": "_settings",
+    "Settings": "_settings",
+    "build_neighbours": "_neighbours",
+    "pack_spheres": "_api",
+    "read_packing": "_io",
+    "sample_radii": "_setup",
+    "schedule_value": "_api",
+    "sphere_overlaps": "_api",
+    "write_packing": "_io",
+    "write_xyzr_file": "_io",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

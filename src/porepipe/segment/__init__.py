@@ -1,5 +1,12 @@
 """Segmentation of grey volumes into pore and matrix (Otsu or fixed threshold, pore if g <= g_th)."""
 
-from porepipe.segment._api import Threshold, choose_threshold, otsu_threshold, segment
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = ["Threshold", "choose_threshold", "otsu_threshold", "segment"]
+_EXPORTS = {
+    "Threshold": "_api",
+    "choose_threshold": "_api",
+    "otsu_threshold": "_api",
+    "segment": "_api",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

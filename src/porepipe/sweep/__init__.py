@@ -1,41 +1,32 @@
 """Resolution and sample-size sweeps, extrapolation to a → 0, adaptive refinement (thesis §4.6.1, §6.2, §7.2, §7.5)."""
 
-from porepipe.sweep._adaptive import Decision, Outcome, decide, predict_cost, run_adaptive
-from porepipe.sweep._api import FORMS, add_limits, build_sweep, exponent_value, limit_from_sweep, limit_of
-from porepipe.sweep._crop import corner_voxels, crop_corner
-from porepipe.sweep._fit import Limit, Status, fit_inverse_length, fit_power, two_point_limit
-from porepipe.sweep._gather import (
-           FULL,
-           file_quantities,
-           gather,
-           parse_name,
-           per_a_quantities,
-           read_benchmarks,
-)
+from porepipe._shared.lazy import lazy_exports
 
-__all__ = [
-           "FORMS",
-           "FULL",
-           "Decision",
-           "Limit",
-           "Outcome",
-           "Status",
-           "add_limits",
-           "build_sweep",
-           "corner_voxels",
-           "crop_corner",
-           "decide",
-           "exponent_value",
-           "file_quantities",
-           "fit_inverse_length",
-           "fit_power",
-           "gather",
-           "limit_from_sweep",
-           "limit_of",
-           "parse_name",
-           "per_a_quantities",
-           "predict_cost",
-           "read_benchmarks",
-           "run_adaptive",
-           "two_point_limit",
-]
+_EXPORTS = {
+    "Decision": "_adaptive",
+    "FORMS": "_api",
+    "FULL": "_gather",
+    "Limit": "_fit",
+    "Outcome": "_adaptive",
+    "Status": "_fit",
+    "add_limits": "_api",
+    "build_sweep": "_api",
+    "corner_voxels": "_crop",
+    "crop_corner": "_crop",
+    "decide": "_adaptive",
+    "exponent_value": "_api",
+    "file_quantities": "_gather",
+    "fit_inverse_length": "_fit",
+    "fit_power": "_fit",
+    "gather": "_gather",
+    "limit_from_sweep": "_api",
+    "limit_of": "_api",
+    "parse_name": "_gather",
+    "per_a_quantities": "_gather",
+    "predict_cost": "_adaptive",
+    "read_benchmarks": "_gather",
+    "run_adaptive": "_adaptive",
+    "two_point_limit": "_fit",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
