@@ -237,6 +237,11 @@ def load_scene(path) -> BaseModel:
     return parse_scene(raw, path.parent, str(path))
 
 
+def grey_stage(scene) -> str:
+    """The stage whose results folder holds the scene's grey volumes: decorated grains, or the spheres themselves."""
+    return "decorate" if getattr(scene, "decoration", None) is not None else "voxelize"
+
+
 def scene_part(scene, *keys: str) -> dict:
     """The JSON-able parts of the scene a result depends on (for its hash)."""
     dumped = scene.model_dump(mode="json")

@@ -4,7 +4,7 @@ import os
 import sys
 from pathlib import Path
 
-from porepipe.scene import load_scene
+from porepipe.scene import grey_stage, load_scene
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH
 os.environ["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")])
@@ -42,11 +42,6 @@ def per_resolution(scene, pattern):
 
 def scene_of(wildcards):
     return SCENES[wildcards.scene]
-
-
-def grey_stage(scene):
-    """Which stage makes the scene's grey volumes: decorated grains, or the spheres themselves."""
-    return "decorate" if scene.decoration is not None else "voxelize"
 
 
 def grey_volumes(scene):

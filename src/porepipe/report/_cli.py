@@ -15,15 +15,14 @@ def _existing(scene, pattern: str) -> list[str]:
 
 def main(args) -> int:
     from porepipe.report._api import build_report  # matplotlib only when a report is built
-    from porepipe.scene import load_scene
+    from porepipe.scene import grey_stage, load_scene
 
     scene = load_scene(args.scene)
     sweep = Path(args.sweep or Path("results", scene.name, "sweep", "sweep.h5"))
     if not sweep.is_file():
         raise PorepipeError(f"{sweep} does not exist: run the workflow first (`porepipe run {args.scene}` with "
                             "`report` in the scene's analyses)")
-    grey_stage = "decorate" if scene.decoration is not None else "voxelize"
-    grey = args.grey if args.grey is not None else _existing(scene, grey_stage + "/grey_a{a}.h5")
+    grey = args.grey if args.grey is not None else _existing(scene, grey_stage(scene) + "/grey_a{a}.h5")
     binary = args.binary if args.binary is not None else _existing(scene, "segment/binary_a{a}.h5")
     lpt = args.lpt if args.lpt is not None else _existing(scene, "lpt/lpt_a{a}.h5")
     out = Path(args.out or Path("results", scene.name, "report", "index.html"))
