@@ -21,6 +21,7 @@ import numpy as np
 
 from porepipe.packing import Settings, build_neighbours, pack_spheres
 from porepipe.packing import _kernels as K
+from porepipe.packing._api import pair_tables
 
 LAMMPS_CHUTE_PER_CORE = 1.1e7
 
@@ -39,15 +40,17 @@ def time_kernel(x, r, box, nbr, flags, steps, threads):
     n = r.size
     kernel = K.make_step_kernel(*flags)
     types = np.zeros(n, np.int64)
+    ids = np.arange(n, dtype=np.int64)
     per = np.ones(3, bool)
     args = dict(frozen=np.zeros(n, np.uint8), k=np.array([20.0]), sig=np.array([0.3]), cm=np.array([0.9]),
                 cp=np.array([1.1]), fmax=np.zeros(1))
     xa, xb = x.copy(), np.empty_like(x)
     v, fa, fb = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
     sig, conv, aux = np.empty(n), np.empty(n, np.uint8), np.empty((n, 3))
+    tables = pair_tables(args["k"], args["sig"])
 
     def one(s):
-        kernel(xa, xb, v, fa, fb, r, types, args["frozen"], nbr[0], nbr[1], box, per, args["k"], args["sig"],
+        kernel(xa, xb, v, fa, fb, r, types, ids, args["frozen"], nbr[0], nbr[1], box, per, *tables, args["sig"],
                args["cm"], args["cp"], args["fmax"], 1.3, 0.01, 1.0, 7, s, x, r, sig, conv, aux)
 
     one(0)  # compile / load from cache
@@ -87,9 +90,10 @@ def main() -> None:
     steps = args.steps or (3 if args.smoke else 20 if args.small else 5)
     x, r, box = polydisperse(n)
     t0 = time.perf_counter()
-    nbr = build_neighbours(x, r, np.zeros(n, np.int64), box, np.ones(3, bool), np.ones((1, 1), np.uint8), 1.3,
-                           0.3)
+    *nbr, order = build_neighbours(x, r, np.zeros(n, np.int64), box, np.ones(3, bool), np.ones((1, 1), np.uint8),
+                                   1.3, 0.3, reorder=True)
     build_s = time.perf_counter() - t0
+    x, r = x[order], r[order]  # the engine keeps spheres in cell order (memory locality), and so does the benchmark
     rows = []
     variants = {"bare (no effects)": (False, False, False), "freezing": (True, False, False),
                 "stochastic forces": (False, True, False), "walls": (False, False, True),

@@ -30,7 +30,6 @@ Decisions the thesis leaves open (documented here once, used everywhere):
 from __future__ import annotations
 
 import dataclasses
-import time
 from pathlib import Path
 
 import numba
@@ -41,7 +40,7 @@ from porepipe._shared.progress import Progress
 from porepipe.packing import _kernels as K
 from porepipe.packing._neighbours import build_neighbours, check_box
 from porepipe.packing._settings import Effect, Ramp, Settings, Stage
-from porepipe.packing._setup import place_type, radius_bounds
+from porepipe.packing._setup import place_type, radius_bounds, read_sphere_file
 
 #: bit of each effect in the per-step ``effects`` history column
 EFFECT_BITS = {e: 1 << i for i, e in enumerate(Effect)}
@@ -96,6 +95,8 @@ class State:
     frozen: np.ndarray
     x_build: np.ndarray
     r_build: np.ndarray
+    ids: np.ndarray       # insertion number of each sphere; the arrays are kept in cell order for memory locality
+    next_id: int
     since_build: int
     stage: int            # index of the stage in progress
     step: int             # last completed stage-local step (0: stage not started, spheres not inserted)
@@ -107,10 +108,11 @@ class State:
     snapshots: list[dict]
 
     @classmethod
-    def empty(cls) -> "State":
+    def empty(cls) -> State:
         z3 = np.zeros((0, 3))
         return cls(x=z3, v=z3.copy(), f=z3.copy(), r=np.zeros(0), types=np.zeros(0, dtype=np.int64),
-                   frozen=np.zeros(0, dtype=np.uint8), x_build=z3.copy(), r_build=np.zeros(0), since_build=0,
+                   frozen=np.zeros(0, dtype=np.uint8), x_build=z3.copy(), r_build=np.zeros(0),
+                   ids=np.zeros(0, dtype=np.int64), next_id=0, since_build=0,
                    stage=0, step=0, nconv_prev=0, need_rebuild=True, history={k: [] for k in HISTORY_KEYS},
                    stage_converged=[], stage_steps=[], snapshots=[])
 
@@ -176,6 +178,13 @@ class _Tables:
         return k, xi
 
 
+def pair_tables(k_t: np.ndarray, sig_t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per type pair: k_ij = (k_i + k_j)/2, the harmonic coefficient sqrt(k_ij) (1 + k_ij/4), and
+    sigma* = min(sigma_max,i, sigma_max,j) (the step kernel reads these instead of recomputing them per pair)."""
+    k = 0.5 * (k_t[:, None] + k_t[None, :])
+    return k, np.sqrt(k) * (1.0 + 0.25 * k), np.minimum(sig_t[:, None], sig_t[None, :])
+
+
 def _seed_stream(seed: int, *keys: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([int(seed), *keys]))
 
@@ -184,30 +193,50 @@ def _counter_seed(seed: int, stage: int) -> int:
     return int(np.random.SeedSequence([int(seed), 1_000_003, stage]).generate_state(1, dtype=np.uint64)[0] >> 1)
 
 
+_PER_SPHERE = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build", "ids")
+
+
 def _keep(state: State, mask: np.ndarray) -> None:
-    for name in ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build"):
+    """Keep the spheres selected by ``mask`` (a boolean mask or a permutation)."""
+    for name in _PER_SPHERE:
         setattr(state, name, getattr(state, name)[mask])
     state.need_rebuild = True
 
 
-def _start_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, seed: int, base_dir: Path) -> None:
+def _id_order(state: State) -> np.ndarray:
+    """Permutation that puts the state's spheres back in insertion order (the order of every output)."""
+    return np.argsort(state.ids, kind="stable")
+
+
+def _append(state: State, centres: np.ndarray, radii: np.ndarray, types: np.ndarray, velocity) -> None:
+    """Add spheres at rest-velocity ``velocity`` with the next insertion numbers."""
+    n = radii.size
+    state.x = np.concatenate([state.x, centres])
+    state.v = np.concatenate([state.v, np.tile(np.asarray(velocity, float), (n, 1))])
+    state.f = np.concatenate([state.f, np.zeros((n, 3))])
+    state.r = np.concatenate([state.r, radii])
+    state.types = np.concatenate([state.types, types])
+    state.frozen = np.concatenate([state.frozen, np.zeros(n, dtype=np.uint8)])
+    state.x_build = np.concatenate([state.x_build, centres])
+    state.r_build = np.concatenate([state.r_build, radii])
+    state.ids = np.concatenate([state.ids, np.arange(state.next_id, state.next_id + n, dtype=np.int64)])
+    state.next_id += n
+
+
+def _start_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, periodic: np.ndarray, seed: int,
+                 base_dir: Path) -> None:
     """Remove and insert types at the start of a stage."""
     names = [t.name for t in settings.types]
     if stage.remove_types:
         gone = np.isin(state.types, [names.index(n) for n in stage.remove_types])
         _keep(state, ~gone)
+    if stage.insert_file is not None:
+        _append(state, *read_sphere_file(stage.insert_file, settings, box, periodic, base_dir),
+                settings.initial_velocity)
     for name in stage.insert:
         t = names.index(name)
         centres, radii = place_type(t, settings.types[t], settings, box, _seed_stream(seed, state.stage, t), base_dir)
-        n = radii.size
-        state.x = np.concatenate([state.x, centres])
-        state.v = np.concatenate([state.v, np.tile(np.asarray(settings.initial_velocity, float), (n, 1))])
-        state.f = np.concatenate([state.f, np.zeros((n, 3))])
-        state.r = np.concatenate([state.r, radii])
-        state.types = np.concatenate([state.types, np.full(n, t, dtype=np.int64)])
-        state.frozen = np.concatenate([state.frozen, np.zeros(n, dtype=np.uint8)])
-        state.x_build = np.concatenate([state.x_build, centres])
-        state.r_build = np.concatenate([state.r_build, radii])
+        _append(state, centres, radii, np.full(radii.size, t, dtype=np.int64), settings.initial_velocity)
     state.need_rebuild = True
     state.nconv_prev = 0
     state.since_build = 0
@@ -225,16 +254,22 @@ def _guard(stats, state: State, tables: _Tables, stage: Stage, stage_idx: int, s
     if bad >= 0 or not np.isfinite(ke):
         i = int(bad if bad >= 0 else darg)
         t = tables.names[int(state.types[i])] if i >= 0 else "?"
-        raise PorepipeError(f"{where}: non-finite position or velocity of sphere {i} (type {t!r}); the time step "
+        raise PorepipeError(f"{where}: non-finite position or velocity of sphere {_sphere_no(state, i)} (type {t!r}); "
+                            f"the time step "
                             f"dt = {stage.dt} is too large for the interaction constant k[{t}] or the damping")
     limit = settings.max_step_fraction * float(box.min())
     if dmax > limit:
         i = int(darg)
         t = tables.names[int(state.types[i])]
         raise PorepipeError(
-            f"{where}: runaway sphere {i} (type {t!r}, r = {state.r[i]:.4g} µm) moved {dmax:.4g} µm in one step "
+            f"{where}: runaway sphere {_sphere_no(state, i)} (type {t!r}, r = {state.r[i]:.4g} µm) moved {dmax:.4g} µm in one step "
             f"(limit max_step_fraction * box = {limit:.4g} µm, kinetic energy {ke:.4g}); likely cause: dt = {stage.dt} "
             f"too large for k[{t}] = {stage.k.get(t, 1.0)} (or a too-strong stochastic force / overlap at start)")
+
+
+def _sphere_no(state: State, i: int) -> int:
+    """The user-facing number of the sphere at position i (its insertion number; -1 if none)."""
+    return int(state.ids[i]) if 0 <= i < state.ids.size else -1
 
 
 def _effect_bits(effects, adapting: bool, locking: bool) -> int:
@@ -263,11 +298,12 @@ def _finish_stage(state: State, stage: Stage, tables: _Tables, box, periodic, co
                 break
             _keep(state, ~doomed)
             sig, conv = sphere_overlaps(state.x, state.r, state.types, box, periodic, tables.sig, tables.pair_on)
+    order = _id_order(state)
     state.stage_converged.append(bool(conv.all()))
     state.stage_steps.append(state.step)
-    state.snapshots.append({"name": stage.name, "centres_um": state.x.copy(), "radii_um": state.r.copy(),
-                            "types": state.types.astype(np.int32), "max_overlap": sig.copy(),
-                            "converged": conv.copy()})
+    state.snapshots.append({"name": stage.name, "centres_um": state.x[order], "radii_um": state.r[order],
+                            "types": state.types[order].astype(np.int32), "max_overlap": sig[order],
+                            "converged": conv[order]})
     state.stage += 1
     state.step = 0
     state.need_rebuild = True
@@ -284,7 +320,7 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
     for s in (0, stage.steps):
         check_damping(tables.k_and_damping(stage, s)[1], stage.dt, f"packing stage {stage_idx} ({stage.name!r})")
     if state.step == 0:
-        _start_stage(state, settings, stage, box, seed, base_dir)
+        _start_stage(state, settings, stage, box, periodic, seed, base_dir)
         state.frozen[:] = tables.type_frozen[state.types]
     n = state.r.size
     threads = numba.get_num_threads()
@@ -320,17 +356,19 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
                 state.since_build = 0
             skin = settings.skin_rel * float(state.r_build.min())
             check_box(state.r_build, box, periodic, settings.cutoff, skin)
-            nbr = build_neighbours(state.x_build, state.r_build, state.types, box, periodic, tables.pair_on,
-                                   settings.cutoff, skin)
+            *nbr, order = build_neighbours(state.x_build, state.r_build, state.types, box, periodic,
+                                           tables.pair_on, settings.cutoff, skin, reorder=True)
             rebuilt = int(state.need_rebuild)
+            _keep(state, order)
             state.need_rebuild = False
         else:
             rebuilt = 0
         k_t, xi_t = tables.k_and_damping(stage, s)
         cm = 1.0 - 0.5 * stage.dt * xi_t
         cp = 1.0 + 0.5 * stage.dt * xi_t
-        kernel(state.x, x_new, state.v, state.f, f_new, state.r, state.types, state.frozen, nbr[0], nbr[1], box,
-               periodic, k_t, tables.sig, cm, cp, tables.fmax, settings.cutoff, stage.dt, settings.mass, cseed, s,
+        kernel(state.x, x_new, state.v, state.f, f_new, state.r, state.types, state.ids, state.frozen, nbr[0], nbr[1],
+               box, periodic, *pair_tables(k_t, tables.sig), tables.sig, cm, cp, tables.fmax, settings.cutoff,
+               stage.dt, settings.mass, cseed, s,
                state.x_build, state.r_build, sig, conv, aux)
         stats = _step_stats(sig, conv, aux)
         nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
@@ -427,14 +465,17 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     if n == 0:
         return sig, conv
     box = np.asarray(box_um, dtype=np.float64)
-    per = np.asarray(periodic, dtype=np.bool_)
+    per = np.broadcast_to(np.asarray(periodic, dtype=np.bool_), (3,))
+    x = x.copy()
+    x[:, per] = np.mod(x[:, per], box[per])  # the kernels assume periodic coordinates in [0, L)
     start, idx = build_neighbours(x, r, types, box, per, pair_on, 1.0, 0.0)
     kernel = K.make_step_kernel(True, False, not per.all())
     frozen = np.ones(n, dtype=np.uint8)
     zeros = np.zeros((n, 3))
     ones = np.ones(nt)
-    kernel(x, np.empty_like(x), zeros.copy(), zeros.copy(), zeros.copy(), r, types, frozen, start, idx, box, per,
-           ones, np.asarray(max_overlap_t, dtype=np.float64), ones, ones, np.zeros(nt), float(cutoff), 1.0, 1.0, 0,
+    sig_t = np.asarray(max_overlap_t, dtype=np.float64)
+    kernel(x, np.empty_like(x), zeros.copy(), zeros.copy(), zeros.copy(), r, types, np.arange(n), frozen, start, idx,
+           box, per, *pair_tables(ones, sig_t), sig_t, ones, ones, np.zeros(nt), float(cutoff), 1.0, 1.0, 0,
            0, x, r, sig, conv, np.empty((n, 3)))
     return sig, conv
 
@@ -489,7 +530,7 @@ def pack_spheres(settings: Settings, box_um, periodic=True, seed: int = 0, *, ba
     last = state.snapshots[-1]
     history = {k: np.asarray(v, dtype=np.int64 if k in _HISTORY_INT else np.float64)
                for k, v in state.history.items()}
-    return Packing(centres_um=state.x.copy(), radii_um=state.r.copy(), types=state.types.astype(np.int32),
+    return Packing(centres_um=last["centres_um"].copy(), radii_um=last["radii_um"].copy(), types=last["types"].copy(),
                    max_overlap=last["max_overlap"], converged=last["converged"],
                    type_names=[t.name for t in settings.types], box_um=box, periodic=per, history=history,
                    stage_converged=list(state.stage_converged), stage_steps=list(state.stage_steps),

@@ -21,8 +21,8 @@ from porepipe._shared.errors import PorepipeError
 from porepipe.packing._api import EFFECT_BITS, HISTORY_KEYS, Packing, State
 
 _SPHERE_KEYS = ("centres_um", "radii_um", "types", "max_overlap", "converged")
-_STATE_ARRAYS = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build")
-_STATE_INTS = ("since_build", "stage", "step", "nconv_prev")
+_STATE_ARRAYS = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build", "ids")
+_STATE_INTS = ("since_build", "stage", "step", "nconv_prev", "next_id")
 
 
 def history_dataset(packing: Packing) -> xr.Dataset:

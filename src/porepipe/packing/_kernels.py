@@ -45,6 +45,20 @@ def _pair_force(dx, dxeq, k):
     return 4.0 * k / dx * u8 * (u8 - 1.0)
 
 
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _pair_force_over_dist(dx, dxeq, k, hcoef):
+    """f(dx) / dx of :func:`_pair_force` for dx > 0, with hcoef = sqrt(k) (1 + k/4) precomputed per type pair:
+    two divisions and no square root per pair (the step kernel's hot path)."""
+    inv = 1.0 / dx
+    if dx <= dxeq:
+        return hcoef * (dxeq - dx) * inv / (dxeq * dxeq)
+    u = dxeq * inv
+    u2 = u * u
+    u4 = u2 * u2
+    u8 = u4 * u4
+    return 4.0 * k * inv * inv * u8 * (u8 - 1.0)
+
+
 @njit(cache=True, fastmath=FASTMATH)
 def _pair_potential(dx, dxeq, k):
     """Pair potential V(dx) whose negative derivative is :func:`_pair_force` (continuous at dx_eq, V(dx_eq) = -k/4)."""
@@ -77,7 +91,7 @@ def _uniform(seed, a, b, c):
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _tie_axis(i, j, axis):
-    """Component ``axis`` of the push direction on i from j when their centres coincide.
+    """Component ``axis`` of the push direction on sphere id i from sphere id j when their centres coincide.
 
     A unit vector drawn from the unordered pair, with the sign flipped for the other partner, so that
     f_ij = -f_ji holds exactly (Newton's third law) even at dx = 0.
@@ -95,9 +109,24 @@ def _tie_axis(i, j, axis):
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _min_image(d, length, periodic):
+    """Minimum image of a difference of two coordinates that both lie in [0, length) (|d| < length): no
+    division, no floor. The engine keeps periodic coordinates in [0, L); callers wrap external input first."""
     if periodic:
-        return d - length * math.floor(d / length + 0.5)
+        if d > 0.5 * length:
+            return d - length
+        if d < -0.5 * length:
+            return d + length
     return d
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _wrap_cell(q, n):
+    """Cell index q in [-n, 2n) wrapped onto [0, n) without an integer division."""
+    if q < 0:
+        return q + n
+    if q >= n:
+        return q - n
+    return q
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -145,14 +174,16 @@ def _axis_range(xa, reach, side, n, periodic):
 @njit(cache=True, fastmath=FASTMATH)
 def _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic,
                pair_on, cut, skin, out, write):
-    """Partners j of sphere i in the half list: classes >= cls[i], and j > i inside the own class.
+    """Partners j of sphere i in the half list: classes <= cls[i], and j > i inside the own class.
 
-    Counts them, and writes them to ``out`` when ``write`` is set.
+    A sphere looks *down* the hierarchy: a large sphere scans the fine grids of the smaller classes over its own
+    reach, so a fine sphere never visits the (few, far-reaching) cells of the large classes; the work per pair
+    stays O(1) for any radius ratio. Counts the partners, and writes them to ``out`` when ``write`` is set.
     """
     ci = cls[i]
     ti = types[i]
     cnt = np.int64(0)
-    for c in range(ci, ncls):
+    for c in range(ci, -1, -1):
         if side[c, 0] <= 0.0:
             continue  # empty class
         reach = cut * (r[i] + side[c, 3]) + skin
@@ -160,12 +191,12 @@ def _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cel
         lo1, hi1 = _axis_range(x[i, 1], reach, side[c, 1], ncell[c, 1], periodic[1])
         lo2, hi2 = _axis_range(x[i, 2], reach, side[c, 2], ncell[c, 2], periodic[2])
         for q0 in range(lo0, hi0 + 1):
-            w0 = q0 % ncell[c, 0]
+            w0 = _wrap_cell(q0, ncell[c, 0])
             for q1 in range(lo1, hi1 + 1):
-                w1 = q1 % ncell[c, 1]
+                w1 = _wrap_cell(q1, ncell[c, 1])
+                row = cell_off[c] + (w0 * ncell[c, 1] + w1) * ncell[c, 2]
                 for q2 in range(lo2, hi2 + 1):
-                    w2 = q2 % ncell[c, 2]
-                    cell = cell_off[c] + (w0 * ncell[c, 1] + w1) * ncell[c, 2] + w2
+                    cell = row + _wrap_cell(q2, ncell[c, 2])
                     for p in range(cell_start[cell], cell_start[cell + 1]):
                         j = cell_items[p]
                         if c == ci and j <= i:
@@ -268,8 +299,8 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
     FREEZE, STOCH, WALLS = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
-    def _step(x_old, x_new, v, f_prev, f_new, r, types, frozen, nbr_start, nbr_idx, box, periodic, k_t, sig_t,
-              cm_t, cp_t, fmax_t, cut, dt, mass, seed, step, x_build, r_build, sig_max, conv, aux):
+    def _step(x_old, x_new, v, f_prev, f_new, r, types, ids, frozen, nbr_start, nbr_idx, box, periodic, kpair, hcoef,
+              sigp, sig_t, cm_t, cp_t, fmax_t, cut, dt, mass, seed, step, x_build, r_build, sig_max, conv, aux):
         n = x_old.shape[0]
         half_dt2_m = 0.5 * dt * dt / mass
         for i in prange(n):
@@ -299,25 +330,24 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                 rsum = ri + rj
                 rmin2 = rsum - abs(ri - rj)
                 sig = (rsum - dist) / rmin2
-                if sig > smax:
-                    smax = sig
+                smax = max(smax, sig)
                 if FREEZE:
                     if is_frozen:
                         continue
-                dxeq = rsum - 0.5 * min(sig_t[ti], sig_t[tj]) * rmin2
+                dxeq = rsum - 0.5 * sigp[ti, tj] * rmin2
                 if dist > cut * dxeq:
                     continue
                 nforce += 1
-                f = _pair_force(dist, dxeq, 0.5 * (k_t[ti] + k_t[tj]))
                 if dist > 0.0:
-                    g = f / dist
+                    g = _pair_force_over_dist(dist, dxeq, kpair[ti, tj], hcoef[ti, tj])
                     fx += g * dx0
                     fy += g * dx1
                     fz += g * dx2
                 else:
-                    fx += f * _tie_axis(i, j, 0)
-                    fy += f * _tie_axis(i, j, 1)
-                    fz += f * _tie_axis(i, j, 2)
+                    f = hcoef[ti, tj] / dxeq
+                    fx += f * _tie_axis(ids[i], ids[j], 0)
+                    fy += f * _tie_axis(ids[i], ids[j], 1)
+                    fz += f * _tie_axis(ids[i], ids[j], 2)
             sig_max[i] = smax
             ok = smax > 0.0 and smax <= sig_t[ti]
             conv[i] = 1 if ok else 0
@@ -332,9 +362,9 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
             if STOCH:
                 if nforce == 0 and not ok and fmax_t[ti] > 0.0:
                     fm = fmax_t[ti] * ri
-                    fx += fm * (2.0 * _uniform(seed, step, i, 0) - 1.0)
-                    fy += fm * (2.0 * _uniform(seed, step, i, 1) - 1.0)
-                    fz += fm * (2.0 * _uniform(seed, step, i, 2) - 1.0)
+                    fx += fm * (2.0 * _uniform(seed, step, ids[i], 0) - 1.0)
+                    fy += fm * (2.0 * _uniform(seed, step, ids[i], 1) - 1.0)
+                    fz += fm * (2.0 * _uniform(seed, step, ids[i], 2) - 1.0)
             f_new[i, 0] = fx
             f_new[i, 1] = fy
             f_new[i, 2] = fz

@@ -2,9 +2,11 @@
 costs O(N) and not all-pairs work.
 
 Spheres are sorted into radius classes ``floor(log2(r / r_min))``. Each class has its own cell grid whose cells
-are about half its interaction reach. A sphere looks for partners only in its own class (partners with a larger
-index) and in the classes of *larger* spheres, scanning the cells within its own reach
-``cutoff * (r_i + R_max,class) + skin``. Each unordered pair is found once (the half list); the full list used by
+are about one same-class interaction reach wide. A sphere looks for partners only in its own class (partners with
+a larger index) and in the classes of *smaller* spheres, scanning the cells within its own reach
+``cutoff * (r_i + R_max,class) + skin`` (Ogarko & Luding 2012: the large sphere covers many small cells, which
+costs about as many cell visits as it has partners, while a small sphere querying a large class would visit
+every large sphere within the large reach). Each unordered pair is found once (the half list); the full list used by
 the force kernel is its symmetric completion, so the force on each sphere is a gather without write races.
 """
 
@@ -17,6 +19,8 @@ from porepipe.packing import _kernels as K
 
 #: cells per class grid at most this many times its members (+ a constant), bounding memory for sparse classes
 _MAX_CELLS_PER_SPHERE = 8
+#: cell edge of a class grid in units of the class's own pair reach cutoff * 2 R_max + skin
+_CELL_PER_REACH = 1.0
 
 
 def check_box(radii_um: np.ndarray, box_um: np.ndarray, periodic: np.ndarray, cutoff: float, skin_um: float) -> None:
@@ -50,7 +54,7 @@ def _class_grids(x, r, box, cutoff, skin):
     for c in range(ncls):
         if members[c] == 0:
             continue
-        target = 0.5 * (2.0 * cutoff * rmax_c[c] + skin)
+        target = _CELL_PER_REACH * (2.0 * cutoff * rmax_c[c] + skin)
         target = max(target, (np.prod(box) / (_MAX_CELLS_PER_SPHERE * members[c] + 64)) ** (1.0 / 3.0))
         ncell[c] = np.maximum(1, np.floor(box / target)).astype(np.int64)
         side[c, :3] = box / ncell[c]
@@ -60,8 +64,13 @@ def _class_grids(x, r, box, cutoff, skin):
     return cls, ncls, side, ncell, cell_off
 
 
-def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um):
+def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um, reorder=False):
     """Full CSR neighbour list: partners j of i with |x_i - x_j| <= cutoff * (r_i + r_j) + skin (minimum image).
+
+    Periodic coordinates must lie in [0, L) (the engine keeps them there).
+
+    With ``reorder`` the spheres are first put in cell order (radius class, then cell; stable), so that partners
+    sit close in memory; the list then refers to the reordered spheres ``x_um[order]``.
 
     Returns
     -------
@@ -69,16 +78,24 @@ def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_
         Offsets; the partners of i are ``idx[start[i]:start[i + 1]]``.
     idx : (E,) int64
         Partner indices, each unordered pair listed from both ends.
+    order : (N,) int64
+        Only with ``reorder``: the permutation applied (new sphere k is old sphere ``order[k]``).
     """
     n = x_um.shape[0]
     if n == 0:
-        return np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        empty = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        return (*empty, np.zeros(0, dtype=np.int64)) if reorder else empty
     cls, ncls, side, ncell, cell_off = _class_grids(x_um, r_um, box_um, cutoff, skin_um)
     cell_of = np.empty(n, dtype=np.int64)
     K._assign_cells(x_um, cls, side, ncell, cell_off, cell_of)
     cell_start = np.empty(cell_off[-1] + 1, dtype=np.int64)
     cell_items = np.empty(n, dtype=np.int64)
     K._counting_sort(cell_of, cell_off[-1], cell_start, cell_items)
+    order = None
+    if reorder:
+        order = cell_items
+        x_um, r_um, types, cls = x_um[order], r_um[order], types[order], cls[order]
+        cell_items = np.arange(n, dtype=np.int64)
     per = np.asarray(periodic, dtype=np.bool_)
     args = (x_um, r_um, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box_um, per, pair_on,
             float(cutoff), float(skin_um))
@@ -91,4 +108,4 @@ def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_
     start = np.empty(n + 1, dtype=np.int64)
     idx = np.empty(2 * half_idx.size, dtype=np.int64)
     K._full_from_half(half_start, half_idx, start, idx)
-    return start, idx
+    return (start, idx, order) if reorder else (start, idx)

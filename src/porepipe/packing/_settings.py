@@ -148,11 +148,31 @@ class StochasticForces(_Strict):
     types: list[str] | None = Field(None, description="affected types (default: all)")
 
 
+class SphereFormat(str, enum.Enum):
+    """File formats of PackDEM's ``input_file`` (§9.2.3)."""
+
+    auto = "auto"        # by suffix: .h5/.hdf5 -> packing, .dat -> dat, anything else -> xyzr
+    xyzr = "xyzr"        # ASCII 'x y z r' per line (µm)
+    dat = "dat"          # ASCII 'index type x y z r' per line, type = 1-based number of the scene's types
+    packing = "packing"  # a porepipe packing.h5 (types by name)
+
+
+class SphereFile(_Strict):
+    """Spheres read from a file (PackDEM ``init = file``): e.g. a primary packing made once, filled many ways."""
+
+    path: Path = Field(description="the file, relative to the scene file")
+    format: SphereFormat = Field(SphereFormat.auto, description="file format")
+    type: str | None = Field(None, description="type of every sphere in the file (required for xyzr; for dat and "
+                             "packing files it overrides the types in the file)")
+
+
 class Stage(_Strict):
     """One run of the DEM (a `phase` of §5.6): it starts from the previous stage's spheres."""
 
     name: str = Field("stage", description="label in the history")
     insert: list[str] = Field(default_factory=list, description="types placed randomly at the start of this stage")
+    insert_file: SphereFile | None = Field(None, description="spheres read from a file at the start of this stage "
+                                           "(before the random inserts)")
     remove_types: list[str] = Field(default_factory=list, description="types deleted at the start of this stage")
     steps: int = Field(1000, ge=1, description="step limit s_max of the stage (PackDEM `Steps`)")
     dt: PosFloat = Field(0.5, description="time step Delta t")
@@ -235,6 +255,8 @@ class Settings(_Strict):
                     "delete_unconverged": st.delete_unconverged}
             if st.adaptive_radii is not None:
                 refs["adaptive_radii.types"] = st.adaptive_radii.types
+            if st.insert_file is not None and st.insert_file.type is not None:
+                refs["insert_file.type"] = [st.insert_file.type]
             if st.stochastic_forces is not None and st.stochastic_forces.types is not None:
                 refs["stochastic_forces.types"] = st.stochastic_forces.types
             for key, used in refs.items():

@@ -1,4 +1,5 @@
-"""Initial state of a packing stage: radius sampling (§5.1), placement by count or density, sub-regions (gfile)."""
+"""Initial state of a packing stage: radius sampling (§5.1), placement by count or density, sub-regions (gfile),
+spheres read from a file (PackDEM ``init = file``)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.packing._settings import RadiusDist, RadiusSpec, Settings, SphereType
+from porepipe.packing._settings import RadiusDist, RadiusSpec, Settings, SphereFile, SphereFormat, SphereType
 
 
 def _discrete_table(spec: RadiusSpec, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -109,3 +110,90 @@ def place_type(t: int, stype: SphereType, settings: Settings, box_um: np.ndarray
         idx = np.stack([pick % ncube[0], (pick // ncube[0]) % ncube[1], pick // (ncube[0] * ncube[1])], axis=1)
         centres = (idx + rng.random((n, 3))) * (box_um / ncube)
     return centres, sample_radii(stype.radius_um, n, rng, base_dir)
+
+
+def _read_dat(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """PackDEM ``dat``: 'index type x y z r' per line; returns centres, radii, 1-based type numbers."""
+    try:
+        data = np.loadtxt(path, ndmin=2, comments="#")
+    except ValueError as err:
+        raise PorepipeError(f"{path}: expected 'index type x y z r' per line: {err}") from err
+    if data.size == 0:
+        return np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=np.int64)
+    if data.shape[1] != 6:
+        raise PorepipeError(f"{path}: expected 6 columns 'index type x y z r', got {data.shape[1]}")
+    numbers = data[:, 1]
+    if np.any(numbers != np.round(numbers)):
+        raise PorepipeError(f"{path}: the type column (2nd) must hold whole numbers 1..N_types")
+    return data[:, 2:5], data[:, 5], numbers.astype(np.int64)
+
+
+def _file_format(spec: SphereFile) -> SphereFormat:
+    if spec.format is not SphereFormat.auto:
+        return spec.format
+    suffix = spec.path.suffix.lower()
+    return SphereFormat.packing if suffix in (".h5", ".hdf5") else SphereFormat.dat if suffix == ".dat" \
+        else SphereFormat.xyzr
+
+
+def _file_types(spec: SphereFile, fmt: SphereFormat, path: Path, raw, n: int, names: list[str]) -> np.ndarray:
+    """Type index of every sphere of the file: the override ``type``, or the file's own numbers / names."""
+    if spec.type is not None:
+        return np.full(n, names.index(spec.type), dtype=np.int64)
+    if fmt is SphereFormat.xyzr:
+        raise PorepipeError(f"packing insert_file {path}: an xyzr file has no types; set insert_file.type")
+    if fmt is SphereFormat.dat:
+        bad = np.flatnonzero((raw < 1) | (raw > len(names)))
+        if bad.size:
+            raise PorepipeError(f"{path}: line {bad[0] + 1} has type number {raw[bad[0]]}; the scene's types are "
+                                f"1..{len(names)} ({names})")
+        return raw - 1
+    file_names, numbers = raw
+    unknown = sorted({file_names[k] for k in np.unique(numbers)} - set(names))
+    if unknown:
+        raise PorepipeError(f"{path}: sphere type(s) {unknown} are not types of this scene ({names}); set "
+                            "insert_file.type to map every sphere to one type")
+    lookup = np.array([names.index(t) if t in names else -1 for t in file_names], dtype=np.int64)
+    return lookup[numbers]
+
+
+def read_sphere_file(spec: SphereFile, settings: Settings, box_um: np.ndarray, periodic: np.ndarray,
+                     base_dir: Path | str = ".") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centres (N, 3), radii (N,) and type indices (N,) of the spheres of ``spec`` (PackDEM ``init = file``).
+
+    Periodic coordinates are wrapped into [0, L); a centre outside a closed axis, or a radius outside the
+    bounds of its type (which the radius protocol keeps), is an error naming the sphere.
+    """
+    from porepipe.packing._io import read_packing
+    from porepipe.voxelize._spheres import check_spheres, read_xyzr
+
+    path = spec.path if spec.path.is_absolute() else Path(base_dir) / spec.path
+    if not path.is_file():
+        raise PorepipeError(f"packing insert_file.path {path} does not exist")
+    names = [t.name for t in settings.types]
+    fmt = _file_format(spec)
+    if fmt is SphereFormat.packing:
+        data = read_packing(path)
+        centres, radii = check_spheres(data["centres_um"], data["radii_um"], str(path))
+        raw = (data["type_names"], data["types"].astype(np.int64))
+    elif fmt is SphereFormat.dat:
+        centres, radii, raw = _read_dat(path)
+        centres, radii = check_spheres(centres, radii, str(path))
+    else:
+        (centres, radii), raw = read_xyzr(path), None
+    types = _file_types(spec, fmt, path, raw, radii.size, names)
+    per = np.asarray(periodic, dtype=bool)
+    centres[:, per] = np.mod(centres[:, per], box_um[per])
+    outside = np.flatnonzero(((centres < 0) | (centres > box_um)).any(axis=1))
+    if outside.size:
+        i = outside[0]
+        raise PorepipeError(f"{path}: sphere {i} at {centres[i].tolist()} µm lies outside the box {box_um.tolist()} "
+                            "µm along a closed (non-periodic) axis")
+    bounds = np.array([radius_bounds(t.radius_um, base_dir) for t in settings.types])
+    lo, hi = bounds[types, 0], bounds[types, 1]
+    bad = np.flatnonzero((radii < lo * (1 - 1e-12)) | (radii > hi * (1 + 1e-12)))
+    if bad.size:
+        i = bad[0]
+        raise PorepipeError(f"{path}: sphere {i} has r = {radii[i]} µm outside [{lo[i]}, {hi[i]}] µm of its type "
+                            f"{names[types[i]]!r}; widen that type's radius_um min_um/max_um")
+    return centres, radii, types

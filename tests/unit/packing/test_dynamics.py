@@ -5,6 +5,7 @@ import pytest
 from naive_packing import neighbour_pairs
 
 from porepipe.packing import _kernels as K
+from porepipe.packing._api import pair_tables
 from porepipe.packing._kernels import _pair_dxeq
 from porepipe.packing._neighbours import build_neighbours
 
@@ -36,8 +37,10 @@ class Run:
     def step(self):
         self.s += 1
         xn, fn = np.empty_like(self.x), np.empty_like(self.f)
-        self.kernel(self.x, xn, self.v, self.f, fn, self.r, self.types, np.zeros(len(self.r), np.uint8),
-                    self.nbr[0], self.nbr[1], self.box, self.per, self.k, self.sig, self.cm, self.cp,
+        self.kernel(self.x, xn, self.v, self.f, fn, self.r, self.types, np.arange(len(self.r)),
+                    np.zeros(len(self.r), np.uint8),
+                    self.nbr[0], self.nbr[1], self.box, self.per, *pair_tables(self.k, self.sig), self.sig,
+                    self.cm, self.cp,
                     np.zeros(len(self.k)), self.cut, self.dt, 1.0, 0, self.s, self.x, self.r, self.sigmax, self.conv,
                     np.empty((len(self.r), 3)))
         self.x, self.f = xn, fn

@@ -73,3 +73,17 @@ def test_equilibrium_distance_of_the_overlap_window():
         dxeq = _pair_dxeq(ri, rj, s)
         sigma = (ri + rj - dxeq) / (2 * min(ri, rj))
         assert sigma == pytest.approx(s / 2, rel=1e-12)
+
+
+@pytest.mark.parametrize("k", [1.0, 20.0, 400.0, 1200.0])
+def test_kernel_fast_path_equals_reference_force_over_distance(k):
+    """The step kernel's f/dx (precomputed sqrt(k)(1 + k/4), one reciprocal) equals the reference f(dx)/dx to
+    round-off (1e-13 relative: a few ulps of the different operation order) on both branches and across dx_eq."""
+    from porepipe.packing._kernels import _pair_force_over_dist
+
+    dxeq = 2.3
+    hcoef = np.sqrt(k) * (1.0 + 0.25 * k)
+    for dx in np.concatenate([np.linspace(1e-3, 1.3 * dxeq, 701), [dxeq, np.nextafter(dxeq, 9.0)]]):
+        ref = _pair_force(dx, dxeq, k) / dx
+        fast = _pair_force_over_dist(dx, dxeq, k, hcoef)
+        assert fast == pytest.approx(ref, rel=1e-13, abs=1e-13 * abs(hcoef / dxeq**2))

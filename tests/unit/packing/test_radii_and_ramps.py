@@ -5,7 +5,7 @@ import pytest
 from scipy import stats
 
 from porepipe.packing import Settings, sample_radii, schedule_value
-from porepipe.packing._settings import Ramp, RadiusSpec
+from porepipe.packing._settings import RadiusSpec, Ramp
 from porepipe.packing._setup import place_type
 
 
@@ -55,7 +55,7 @@ def test_ramp_equals_recursive_definition():
     ramp = Ramp(start=1200.0, end=1.0, from_step=20, to_step=25)
     dk = (ramp.end - ramp.start) / (ramp.to_step - ramp.from_step)
     k = ramp.start
-    for s in range(0, 40):
+    for s in range(40):
         if s < ramp.from_step:
             k = ramp.start
         elif s < ramp.to_step:
