@@ -26,25 +26,33 @@ MIN_RUN = 8
 class Lattice:
     """Sparse D3Q19 lattice of the pore nodes of one domain (flow along axis 0).
 
+    The pull source of population q (1..18) of node n is a flat index into the population array (bounce-back
+    encoded: the node's own opposite population when the upstream node is solid). Nodes come in runs: in a regular
+    run the source is ``run_offset[r, q - 1] + n`` (no table); an irregular run reads it from ``gather``, which holds
+    only the irregular nodes, column ``n + run_base[r]``.
+
     Attributes
     ----------
     pore : (L0, L1, L2) bool ndarray
         Fluid nodes actually simulated.
     periodic : tuple of 3 bool
         Which axes wrap; a non-periodic face is a halfway bounce-back wall.
-    gather : (18, N) uint32 or uint64 ndarray
-        Pull source (flat population index) of q = 1..18 for every node; bounce-back is encoded.
+    gather : (18, N_irregular) uint32 or uint64 ndarray
+        Pull sources of the nodes of the irregular runs.
     layer_start : (L0 + 1,) int64 ndarray
         Nodes of layer ℓ are ``layer_start[ℓ]:layer_start[ℓ + 1]``.
     force_layers, sample_layers : (int, int)
         Half-open layer ranges of the force zone F and the sample S.
+    run_start : (R + 1,) int64 ndarray
+        Node ranges ``run_start[r]:run_start[r + 1]`` (see :func:`porepipe.lbm._kernels._runs`).
+    run_offset : (R, 18) int64 ndarray
+        Offsets of a regular run; −1 marks an irregular run.
+    run_base : (R,) int64 ndarray
+        Column of node n of irregular run r in ``gather`` is ``n + run_base[r]``.
+    n_wall_links : int
+        Number of bounce-back links (populations whose pull source is their own node).
     window : (L1, L2) bool ndarray or None
         Part of the cross-section that belongs to S (None = all of it).
-    run_start : (R + 1,) int64 ndarray
-        Node ranges ``run_start[r]:run_start[r + 1]`` that stream by a constant offset per population (derived
-        from ``gather``; see :func:`porepipe.lbm._kernels._runs`).
-    run_offset : (R, 18) int64 ndarray
-        Pull source of population q of node n in run r is ``run_offset[r, q - 1] + n``; −1 = use ``gather``.
     """
 
     pore: np.ndarray
@@ -53,21 +61,26 @@ class Lattice:
     layer_start: np.ndarray
     force_layers: tuple[int, int]
     sample_layers: tuple[int, int]
+    run_start: np.ndarray = dataclasses.field(repr=False)
+    run_offset: np.ndarray = dataclasses.field(repr=False)
+    run_base: np.ndarray = dataclasses.field(repr=False)
+    n_wall_links: int = 0
     window: np.ndarray | None = None
-    run_start: np.ndarray = dataclasses.field(default=None, repr=False)
-    run_offset: np.ndarray = dataclasses.field(default=None, repr=False)
-
-    def __post_init__(self):
-        if self.run_start is None:
-            n = self.n_nodes
-            start = np.empty(n + 1, dtype=np.int64)
-            offset = np.empty((max(n, 1), 18), dtype=np.int64)
-            r = int(_runs(self.gather, MIN_RUN, start, offset))
-            self.run_start, self.run_offset = start[:r + 1].copy(), offset[:max(r, 1)].copy()
 
     @property
     def n_nodes(self) -> int:
-        return int(self.gather.shape[1])
+        return int(self.layer_start[-1])
+
+    def full_gather(self) -> np.ndarray:
+        """(18, N) int64 pull source of every node (the table the runs compress; tests and diagnostics)."""
+        out = np.empty((18, self.n_nodes), dtype=np.int64)
+        for r in range(self.run_start.size - 1):
+            a, b = int(self.run_start[r]), int(self.run_start[r + 1])
+            if self.run_offset[r, 0] >= 0:
+                out[:, a:b] = self.run_offset[r][:, None] + np.arange(a, b)
+            else:
+                out[:, a:b] = self.gather[:, a + self.run_base[r]:b + self.run_base[r]]
+        return out
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -81,12 +94,6 @@ class Lattice:
     @property
     def body_force_everywhere(self) -> bool:
         return self.force_layers == (0, self.shape[0])
-
-    @property
-    def n_wall_links(self) -> int:
-        """Number of bounce-back links (populations whose pull source is their own node)."""
-        n = self.n_nodes
-        return int(np.count_nonzero(self.gather % n == np.arange(n)))
 
     def node_window(self) -> np.ndarray:
         """(N,) bool: node lies in the sample's lateral window."""
@@ -104,7 +111,7 @@ class Lattice:
 
 
 def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, window=None) -> Lattice:
-    """Number the pore nodes and build the pull/bounce-back gather table.
+    """Number the pore nodes and build the pull/bounce-back tables (runs + gather table of the irregular runs).
 
     Parameters
     ----------
@@ -120,19 +127,43 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
     pore = np.ascontiguousarray(pore, dtype=bool)
     if pore.ndim != 3 or min(pore.shape) < 1:
         raise PorepipeError(f"pore volume must be 3-D with positive sizes, got shape {pore.shape}")
-    ids = np.empty(pore.size, dtype=np.int64)
-    n = int(_node_ids(pore.reshape(-1), ids))
-    # unsigned: numba skips its negative-index wrap-around test, so the gather loop vectorises (2x faster)
-    index_dtype = np.uint32 if 19 * n <= _INT32_LIMIT else np.uint64
-    gather = np.empty((18, n), dtype=index_dtype)
-    if n:
-        _gather_table(ids.reshape(pore.shape), np.array(pore.shape, dtype=np.int64),
-                      np.array([bool(p) for p in periodic]), n, gather)
+    full = _full_gather(pore, periodic)
+    n = full.shape[1]
+    start, offset = _node_runs(full)
+    irregular = offset[:, 0] < 0
+    lengths = np.diff(start)
+    base = np.zeros(lengths.size, dtype=np.int64)
+    base[irregular] = np.cumsum(lengths * irregular)[irregular] - lengths[irregular] - start[:-1][irregular]
+    gather = np.ascontiguousarray(full[:, np.repeat(irregular, lengths)])
+    walls = int(np.count_nonzero(full % max(n, 1) == np.arange(n))) if n else 0
+    del full
     counts = np.count_nonzero(pore.reshape(pore.shape[0], -1), axis=1)
     layer_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     return Lattice(pore, tuple(bool(p) for p in periodic), gather, layer_start,
                    (int(force_layers[0]), int(force_layers[1])), (int(sample_layers[0]), int(sample_layers[1])),
-                   window)
+                   start, offset, base, walls, window)
+
+
+def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:
+    """(18, N) pull-source table of every pore node (uint32 when 19 N fits, else uint64)."""
+    ids = np.empty(pore.size, dtype=np.int64)
+    n = int(_node_ids(pore.reshape(-1), ids))
+    # unsigned: numba skips its negative-index wrap-around test, so the gather loop vectorises (2x faster)
+    index_dtype = np.uint32 if 19 * n <= _INT32_LIMIT else np.uint64
+    full = np.empty((18, n), dtype=index_dtype)
+    if n:
+        _gather_table(ids.reshape(pore.shape), np.array(pore.shape, dtype=np.int64),
+                      np.array([bool(p) for p in periodic]), n, full)
+    return full
+
+
+def _node_runs(full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(run_start (R + 1,), run_offset (R, 18)) of a full pull-source table (one row per run, −1 = irregular)."""
+    n = full.shape[1]
+    start = np.empty(n + 1, dtype=np.int64)
+    offset = np.empty((max(n, 1), 18), dtype=np.int64)
+    r = int(_runs(full, MIN_RUN, start, offset))
+    return start[:r + 1].copy(), offset[:max(r, 1)].copy()
 
 
 @dataclasses.dataclass

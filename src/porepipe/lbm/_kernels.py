@@ -1,12 +1,13 @@
 """Numba kernels of the sparse D3Q19 solver: neighbour table, fused stream-collide steps, reductions.
 
 Populations are stored zero-centred, f̃_i = f_i − w_i (ρ° = 1), in a flat array ``src[q * n + node]``
-(structure of arrays) of float64 or float32; arithmetic is always float64. Streaming is a two-array pull:
-node ``n`` gathers ``src[gather[q - 1, n]]``, where the gather index already encodes halfway bounce-back
-(the index of the node's own opposite population when the upstream node is solid), so the hot loop has no
-branch. Runs of nodes whose 18 sources all advance with the node (the open interior of the pore space, nearly the
-whole of a dense box) stream by a constant offset per population instead: contiguous copies, no index traffic.
-Each collision operator has its own step kernel; they share the gather/moment/store helpers.
+(structure of arrays) of float64 or float32; arithmetic is always float64. Streaming is a two-array pull from a
+source index that already encodes halfway bounce-back (the node's own opposite population when the upstream node
+is solid), so the hot loop has no branch. Runs of nodes whose 18 sources all advance with the node (the open
+interior of the pore space, nearly the whole of a dense box) stream by a constant offset per population:
+contiguous copies, no index traffic; the other (irregular) runs read their sources from a table that holds only
+their nodes. One step kernel serves the three collision operators; a tile of nodes is pulled into an L1 scratch,
+collided in one vectorised loop over its nodes (BGK, TRT) and stored.
 """
 
 from __future__ import annotations
@@ -27,8 +28,10 @@ _W = W.copy()
 _OPP = OPPOSITE.copy()
 _M = dhumieres_matrix()
 _M_NORM2 = (_M * _M).sum(axis=1)
-#: nodes per work block of the parallel loop (scratch of 19 x _BLOCK float64 stays in L1/L2).
-_BLOCK = 1024
+#: nodes per tile (a multiple of 8): the 19 x _TILE float64 scratch (19.5 kB) stays in L1.
+_TILE = 128
+#: nodes per parallel work chunk (a multiple of _TILE; one scratch allocation and one store fence per chunk).
+_CHUNK = 16384
 #: population arrays larger than this (bytes, both buffers) are written with non-temporal stores: they cannot stay
 #: in cache until the next step reads them, and bypassing the cache saves the read-for-ownership of every line.
 STREAMING_BYTES = 16 * 2**20
@@ -39,18 +42,52 @@ def streams(src) -> bool:
     return 2 * src.nbytes > STREAMING_BYTES
 
 
-# -- non-temporal stores ------------------------------------------------------------------------------------------
+# -- unchecked element access (no negative-index wrap test: indices must be in range) ---------------------------------
+def _item_pointer(context, builder, arrty, arr, idxty, idx):
+    """Pointer to ``arr[idx]``; ``idx`` is one integer or a tuple of integers (one per axis)."""
+    ary = context.make_array(arrty)(context, builder, arr)
+    if isinstance(idxty, types.BaseTuple):
+        parts = cgutils.unpack_tuple(builder, idx, len(idxty))
+        inds = [context.cast(builder, v, t, types.intp) for v, t in zip(parts, idxty)]
+    else:
+        inds = [context.cast(builder, idx, idxty, types.intp)]
+    return cgutils.get_item_pointer(context, builder, arrty, ary, inds, wraparound=False)
+
+
 @intrinsic
-def _stream_store(typingctx, arr, idx, val):
-    """``arr[idx] = val`` as a non-temporal store (no negative-index wrap; idx must be in range)."""
+def _get(typingctx, arr, idx):
+    """``arr[idx]`` without the wrap-around test: loops over computed indices vectorise."""
+    sig = arr.dtype(arr, idx)
+
+    def codegen(context, builder, signature, args):
+        return builder.load(_item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1]))
+
+    return sig, codegen
+
+
+@intrinsic
+def _set(typingctx, arr, idx, val):
+    """``arr[idx] = val`` without the wrap-around test."""
     sig = types.void(arr, idx, val)
 
     def codegen(context, builder, signature, args):
         arrty = signature.args[0]
-        ary = context.make_array(arrty)(context, builder, args[0])
-        ptr = cgutils.get_item_pointer(context, builder, arrty, ary, [args[1]], wraparound=False)
-        value = context.cast(builder, args[2], signature.args[2], arrty.dtype)
-        store = builder.store(value, ptr)
+        ptr = _item_pointer(context, builder, arrty, args[0], signature.args[1], args[1])
+        builder.store(context.cast(builder, args[2], signature.args[2], arrty.dtype), ptr)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
+@intrinsic
+def _stream_store(typingctx, arr, idx, val):
+    """``arr[idx] = val`` as a non-temporal store (no wrap-around test)."""
+    sig = types.void(arr, idx, val)
+
+    def codegen(context, builder, signature, args):
+        arrty = signature.args[0]
+        ptr = _item_pointer(context, builder, arrty, args[0], signature.args[1], args[1])
+        store = builder.store(context.cast(builder, args[2], signature.args[2], arrty.dtype), ptr)
         store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
         return context.get_dummy_value()
 
@@ -159,135 +196,224 @@ def _runs(gather, min_run, start_out, offset_out):
     return n_runs
 
 
-# -- block helpers: a block of up to _BLOCK nodes is processed population by population, so every inner loop
-#    runs over contiguous nodes and vectorises; scratch arrays are allocated once per block of the prange.
-@njit(cache=True, fastmath=FASTMATH)
-def _gather_block(src, gather, run_start, run_offset, n0, cnt, fb):
-    """Pull the populations arriving at nodes n0 … n0+cnt-1 into ``fb`` (19, _BLOCK) float64.
+# -- tiles: a parallel chunk of nodes is processed _TILE nodes at a time in a flat float64 scratch
+#    ``f[q * _TILE + i]`` that stays in L1. Loading and storing a tile are contiguous per-population copies; BGK and
+#    TRT collide a tile in one loop over its nodes that vectorises across nodes (the row offsets are compile-time
+#    constants, so the compiler sees that the rows do not overlap and needs no run-time alias checks).
+_NUMERIC = {"cache": True, "fastmath": FASTMATH, "error_model": "numpy"}  # numpy: no division-by-zero branch
 
-    Regular runs copy contiguous slices (no index traffic); irregular runs go through the gather table.
-    """
-    rest = src[n0:n0 + cnt]
-    for i in range(cnt):
-        fb[0, i] = rest[i]
-    end = n0 + cnt
-    r = np.searchsorted(run_start, n0, side="right") - 1
-    while run_start[r] < end:
-        a = max(run_start[r], n0)
-        b = min(run_start[r + 1], end)
-        # views with zero-based loop indices: numba's negative-index test folds away and the copies vectorise
-        for q in range(1, 19):
-            out = fb[q, a - n0:b - n0]
-            if run_offset[r, 0] < 0:
-                row = gather[q - 1, a:b]
-                for i in range(b - a):
-                    out[i] = src[row[i]]
-            else:
-                off = run_offset[r, q - 1]
-                seg = src[off + a:off + b]
-                for i in range(b - a):
-                    out[i] = seg[i]
+
+@njit(inline="always", **_NUMERIC)
+def _ix(q, i):
+    """Index of population q of tile node i in the flat tile scratch."""
+    return q * _TILE + i
+
+
+@njit(**_NUMERIC)
+def _next_tile(run_start, r, n0, hi):
+    """(run holding node n0, tile length): a tile never crosses a run boundary, _TILE, or the chunk end ``hi``."""
+    while run_start[r + 1] <= n0:
         r += 1
+    return r, min(_TILE, run_start[r + 1] - n0, hi - n0)
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _moments_block(fb, cnt, n0, force_lo, force_hi, mom):
-    """Per node: mom = (δρ, j_x, j_y, j_z, ρ, 1/ρ, j², force on/off) of the gathered populations."""
+@njit(**_NUMERIC)
+def _lanes(cnt):
+    """Nodes a tile's collision loop runs over: cnt rounded up to a multiple of 8 (whole vectors, no scalar
+    remainder loop; the extra lanes hold stale scratch values and are never stored)."""
+    return (cnt + 7) & -8
+
+
+@njit(**_NUMERIC)
+def _load_tile(src, gather, run_offset, run_base, r, n0, cnt, f):
+    """Pull the populations arriving at nodes n0 … n0+cnt-1 (all in run r) into ``f``.
+
+    A regular run copies contiguous ranges (no index traffic); an irregular one reads its sources from the gather
+    table of the irregular nodes (columns n + run_base[r], contiguous).
+    """
     for i in range(cnt):
-        mom[0, i] = 0.0
-        mom[1, i] = 0.0
-        mom[2, i] = 0.0
-        mom[3, i] = 0.0
+        _set(f, i, _get(src, n0 + i))
+    regular = run_offset[r, 0] >= 0
+    for q in range(1, 19):
+        row = q * _TILE
+        if regular:
+            off = run_offset[r, q - 1] + n0
+            for i in range(cnt):
+                _set(f, row + i, _get(src, off + i))
+        else:
+            col = n0 + run_base[r]
+            for i in range(cnt):
+                _set(f, row + i, _get(src, _get(gather, (q - 1, col + i))))
+
+
+@njit(**_NUMERIC)
+def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
+    """Write a tile's post-collision populations (non-temporal stores if ``streaming``)."""
     for q in range(19):
-        cx, cy, cz = _CX[q], _CY[q], _CZ[q]
-        for i in range(cnt):
-            v = fb[q, i]
-            mom[0, i] += v
-            mom[1, i] += cx * v
-            mom[2, i] += cy * v
-            mom[3, i] += cz * v
+        base = q * n_nodes + n0
+        if streaming:  # a pure copy loop: non-temporal stores would keep a compute loop from vectorising
+            for i in range(cnt):
+                _stream_store(dst, base + i, _get(f, _ix(q, i)))
+        else:
+            for i in range(cnt):
+                _set(dst, base + i, _get(f, _ix(q, i)))
+
+
+@njit(inline="always", **_NUMERIC)
+def _pop(f, q, i):
+    """Population q of tile node i (unchecked: the node loop vectorises)."""
+    return _get(f, q * _TILE + i)
+
+
+@njit(inline="always", **_NUMERIC)
+def _moments(f, i):
+    """(δρ, j_x, j_y, j_z) of tile node i: Σ f̃_q and Σ c_q f̃_q, summed in population order."""
+    d = 0.0
+    for q in range(19):
+        d += _pop(f, q, i)
+    jx = (_pop(f, 1, i) - _pop(f, 2, i) + _pop(f, 7, i) - _pop(f, 8, i) + _pop(f, 9, i) - _pop(f, 10, i)
+          + _pop(f, 11, i) - _pop(f, 12, i) + _pop(f, 13, i) - _pop(f, 14, i))
+    jy = (_pop(f, 3, i) - _pop(f, 4, i) + _pop(f, 7, i) - _pop(f, 8, i) - _pop(f, 9, i) + _pop(f, 10, i)
+          + _pop(f, 15, i) - _pop(f, 16, i) + _pop(f, 17, i) - _pop(f, 18, i))
+    jz = (_pop(f, 5, i) - _pop(f, 6, i) + _pop(f, 11, i) - _pop(f, 12, i) - _pop(f, 13, i) + _pop(f, 14, i)
+          + _pop(f, 15, i) - _pop(f, 16, i) - _pop(f, 17, i) + _pop(f, 18, i))
+    return d, jx, jy, jz
+
+
+@njit(inline="always", **_NUMERIC)
+def _force_on(n, force_lo, force_hi):
+    """1.0 if node n lies in the force zone [force_lo, force_hi), else 0.0."""
+    return 1.0 * ((n >= force_lo) & (n < force_hi))
+
+
+@njit(**_NUMERIC)
+def _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields):
+    """δρ and u = (j + ρb/2)/ρ of the gathered (pre-collision) populations of a tile."""
     for i in range(cnt):
-        rho = 1.0 + mom[0, i]
-        mom[4, i] = rho
-        mom[5, i] = 1.0 / rho
-        mom[6, i] = mom[1, i] * mom[1, i] + mom[2, i] * mom[2, i] + mom[3, i] * mom[3, i]
-        n = n0 + i
-        mom[7, i] = 1.0 * ((n >= force_lo) & (n < force_hi))
+        d, jx, jy, jz = _moments(f, i)
+        inv = 1.0 / (1.0 + d)
+        on = 0.5 * _force_on(n0 + i, force_lo, force_hi)
+        fields[0, n0 + i] = d
+        fields[1, n0 + i] = jx * inv + on * force[0]
+        fields[2, n0 + i] = jy * inv + on * force[1]
+        fields[3, n0 + i] = jz * inv + on * force[2]
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(inline="always", **_NUMERIC)
+def _force_coefficient(q, force):
+    """3 w_q (b·c_q): the body-force source is φ_q = this × ρ (thesis Eq. 6.1.20, h0 = h2 = 0)."""
+    return 3.0 * _W[q] * (_CX[q] * force[0] + _CY[q] * force[1] + _CZ[q] * force[2])
+
+
+@njit(inline="always", **_NUMERIC)
+def _equilibria(cj, d, jj, inv, w):
+    """Zero-centred equilibria (f̃^eq_p, f̃^eq_p+1) of an opposite pair with c_p·j = cj (thesis Eq. 6.1.11):
+    w [δρ ± 3 c·j + (9/2 (c·j)² − 3/2 j²)/ρ], rounded as the population-by-population formula."""
+    quad = (4.5 * cj * cj - 1.5 * jj) * inv
+    t = 3.0 * cj
+    return w * (d + t + quad), w * (d - t + quad)
+
+
+@njit(inline="always", **_NUMERIC)
+def _rest_equilibrium(d, jj, inv):
+    """f̃^eq_0 = w_0 (δρ − 3/2 j²/ρ)."""
+    return _W[0] * (d + -(1.5 * jj) * inv)
+
+
+# -- collision operators on a tile (in place on the float64 scratch f). ``force`` is a tuple (b_x, b_y, b_z) so that
+#    no array but f is touched in the node loop. Pairs (p, p + 1) are opposite; their c_p·j are listed in each loop.
+@njit(inline="always", **_NUMERIC)
+def _bgk_pair(f, i, p, cj, d, jj, inv, rho_on, force, omega):
+    e_p, e_r = _equilibria(cj, d, jj, inv, _W[p])
+    f_p, f_r = _pop(f, p, i), _pop(f, p + 1, i)
+    _set(f, _ix(p, i), f_p + (omega * (e_p - f_p) + _force_coefficient(p, force) * rho_on))
+    _set(f, _ix(p + 1, i), f_r + (omega * (e_r - f_r) + _force_coefficient(p + 1, force) * rho_on))
+
+
+@njit(**_NUMERIC)
+def _collide_bgk(f, cnt, n0, force_lo, force_hi, force, omega):
+    for i in range(cnt):
+        d, jx, jy, jz = _moments(f, i)
+        rho = 1.0 + d
+        inv = 1.0 / rho
+        jj = jx * jx + jy * jy + jz * jz
+        on = rho * _force_on(n0 + i, force_lo, force_hi)
+        _set(f, i, _pop(f, 0, i) + omega * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
+        _bgk_pair(f, i, 1, jx, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 3, jy, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 5, jz, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 7, jx + jy, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 9, jx - jy, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 11, jx + jz, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 13, jx - jz, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 15, jy + jz, d, jj, inv, on, force, omega)
+        _bgk_pair(f, i, 17, jy - jz, d, jj, inv, on, force, omega)
+
+
+@njit(inline="always", **_NUMERIC)
+def _trt_pair(f, i, p, cj, d, jj, inv, rho_on, force, half_plus, half_minus):
+    e_p, e_r = _equilibria(cj, d, jj, inv, _W[p])
+    f_p, f_r = _pop(f, p, i), _pop(f, p + 1, i)
+    sym = half_plus * (e_p + e_r - f_p - f_r)
+    anti = half_minus * (e_p - e_r - f_p + f_r)
+    _set(f, _ix(p, i), f_p + (sym + anti + _force_coefficient(p, force) * rho_on))
+    _set(f, _ix(p + 1, i), f_r + (sym - anti + _force_coefficient(p + 1, force) * rho_on))
+
+
+@njit(**_NUMERIC)
+def _collide_trt(f, cnt, n0, force_lo, force_hi, force, omega_plus, omega_minus):
+    hp = 0.5 * omega_plus
+    hm = 0.5 * omega_minus
+    for i in range(cnt):
+        d, jx, jy, jz = _moments(f, i)
+        rho = 1.0 + d
+        inv = 1.0 / rho
+        jj = jx * jx + jy * jy + jz * jz
+        on = rho * _force_on(n0 + i, force_lo, force_hi)
+        _set(f, i, _pop(f, 0, i) + omega_plus * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
+        _trt_pair(f, i, 1, jx, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 3, jy, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 5, jz, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 7, jx + jy, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 9, jx - jy, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 11, jx + jz, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 13, jx - jz, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 15, jy + jz, d, jj, inv, on, force, hp, hm)
+        _trt_pair(f, i, 17, jy - jz, d, jj, inv, on, force, hp, hm)
+
+
+@njit(**_NUMERIC)
 def _feq(q, i, mom):
     """Zero-centred equilibrium f̃^eq_q = w_q [δρ + 3 c·j + (9/2 (c·j)² − 3/2 j²)/ρ] (thesis Eq. 6.1.11)."""
     cj = _CX[q] * mom[1, i] + _CY[q] * mom[2, i] + _CZ[q] * mom[3, i]
     return _W[q] * (mom[0, i] + 3.0 * cj + (4.5 * cj * cj - 1.5 * mom[6, i]) * mom[5, i])
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _force_coefficient(q, force):
-    """3 w_q (b·c_q): the body-force source is φ_q = this × ρ (thesis Eq. 6.1.20, h0 = h2 = 0)."""
-    return 3.0 * _W[q] * (_CX[q] * force[0] + _CY[q] * force[1] + _CZ[q] * force[2])
-
-
-@njit(cache=True, fastmath=FASTMATH)
-def _store_block(dst, n0, cnt, n_nodes, fb, mom, fields, store, force, streaming):
-    """Write the post-collision populations (non-temporal if ``streaming``); optionally δρ and u = (j + ρb/2)/ρ."""
-    for q in range(19):
-        out = dst[q * n_nodes + n0:q * n_nodes + n0 + cnt]  # a view: zero-based index, the copy vectorises
-        if streaming:  # a pure copy loop: non-temporal stores would keep a compute loop from vectorising
-            for i in range(cnt):
-                _stream_store(out, i, fb[q, i])
-        else:
-            for i in range(cnt):
-                out[i] = fb[q, i]
-    if streaming:
-        _store_fence()
-    if store:
-        for i in range(cnt):
-            on = 0.5 * mom[7, i]
-            fields[0, n0 + i] = mom[0, i]
-            fields[1, n0 + i] = mom[1, i] * mom[5, i] + on * force[0]
-            fields[2, n0 + i] = mom[2, i] * mom[5, i] + on * force[1]
-            fields[3, n0 + i] = mom[3, i] * mom[5, i] + on * force[2]
-
-
-# -- collision operators on a block (in place on the float64 scratch fb) -------------------------------------------
-@njit(cache=True, fastmath=FASTMATH)
-def _collide_bgk(fb, cnt, mom, force, omega):
-    for q in range(19):
-        fq = _force_coefficient(q, force)
-        for i in range(cnt):
-            fb[q, i] += omega * (_feq(q, i, mom) - fb[q, i]) + fq * mom[4, i] * mom[7, i]
-
-
-@njit(cache=True, fastmath=FASTMATH)
-def _collide_trt(fb, cnt, mom, force, omega_plus, omega_minus):
+@njit(**_NUMERIC)
+def _moments_tile(f, cnt, n0, force_lo, force_hi, mom):
+    """Per node: mom = (δρ, j_x, j_y, j_z, ρ, 1/ρ, j², force on/off) of the gathered populations."""
     for i in range(cnt):
-        fb[0, i] += omega_plus * (_feq(0, i, mom) - fb[0, i])
-    half_p = 0.5 * omega_plus
-    half_m = 0.5 * omega_minus
-    for p in range(1, 19, 2):
-        r = p + 1
-        fp = _force_coefficient(p, force)
-        fr = _force_coefficient(r, force)
-        for i in range(cnt):
-            e_p = _feq(p, i, mom)
-            e_r = _feq(r, i, mom)
-            sym = half_p * (e_p + e_r - fb[p, i] - fb[r, i])
-            anti = half_m * (e_p - e_r - fb[p, i] + fb[r, i])
-            rho_on = mom[4, i] * mom[7, i]
-            fb[p, i] += sym + anti + fp * rho_on
-            fb[r, i] += sym - anti + fr * rho_on
+        d, jx, jy, jz = _moments(f, i)
+        mom[0, i] = d
+        mom[1, i] = jx
+        mom[2, i] = jy
+        mom[3, i] = jz
+        mom[4, i] = 1.0 + d
+        mom[5, i] = 1.0 / (1.0 + d)
+        mom[6, i] = jx * jx + jy * jy + jz * jz
+        mom[7, i] = _force_on(n0 + i, force_lo, force_hi)
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _collide_mrt(fb, cnt, mom, force, rates_scaled, mb):
+@njit(**_NUMERIC)
+def _collide_mrt(f, cnt, n0, force_lo, force_hi, force, rates_scaled, mom, mb):
     """d'Humières MRT: f ← f − M⁻¹ Š M (f − f^eq) + φ, with M⁻¹ = Mᵀ diag(1/|M_k|²) (rows orthogonal).
 
-    ``rates_scaled[k] = s_k / |M_k|²``; ``mb`` (19, _BLOCK) is scratch for the moments.
+    ``rates_scaled[k] = s_k / |M_k|²``; ``mom`` (8, _TILE) and ``mb`` (19, _TILE) are scratch.
     """
+    _moments_tile(f, cnt, n0, force_lo, force_hi, mom)
     for q in range(19):
         for i in range(cnt):
-            fb[q, i] -= _feq(q, i, mom)
+            f[_ix(q, i)] -= _feq(q, i, mom)
     for k in range(19):
         for i in range(cnt):
             mb[k, i] = 0.0
@@ -298,7 +424,7 @@ def _collide_mrt(fb, cnt, mom, force, rates_scaled, mb):
             if mkq == 0.0:
                 continue
             for i in range(cnt):
-                mb[k, i] += mkq * fb[q, i]
+                mb[k, i] += mkq * f[_ix(q, i)]
         s = rates_scaled[k]
         for i in range(cnt):
             mb[k, i] *= s
@@ -309,74 +435,57 @@ def _collide_mrt(fb, cnt, mom, force, rates_scaled, mb):
             if mkq == 0.0 or rates_scaled[k] == 0.0:
                 continue
             for i in range(cnt):
-                fb[q, i] -= mkq * mb[k, i]
+                f[_ix(q, i)] -= mkq * mb[k, i]
         for i in range(cnt):
-            fb[q, i] += _feq(q, i, mom) + fq * mom[4, i] * mom[7, i]
+            f[_ix(q, i)] += _feq(q, i, mom) + fq * mom[4, i] * mom[7, i]
 
 
-# -- step kernels: one per operator ---------------------------------------------------------------------------------
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _step_bgk(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store,
-              n_steps, streaming, omega):
-    """``n_steps`` BGK steps, alternating src -> dst -> src; fields of the last step if ``store``.
+# -- the step kernel ------------------------------------------------------------------------------------------------
+BGK, TRT, MRT = 0, 1, 2
 
-    ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
+
+@njit(**_NUMERIC)
+def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates_scaled, mom, mb):
+    """Collide a tile with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only), ``rates_scaled`` for MRT."""
+    if op == BGK:
+        _collide_bgk(f, lanes, n0, force_lo, force_hi, force, omega[0])
+    elif op == TRT:
+        _collide_trt(f, lanes, n0, force_lo, force_hi, force, omega[0], omega[1])
+    else:
+        _collide_mrt(f, lanes, n0, force_lo, force_hi, force, rates_scaled, mom, mb)
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
+def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force_hi, force, fields, store, n_steps,
+          streaming, omega, rates_scaled):
+    """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
+    step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
+
+    Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, collide, store.
     """
-    n_nodes = gather.shape[1]
-    n_blocks = (n_nodes + _BLOCK - 1) // _BLOCK
+    n_nodes = run_start[-1]
+    b3 = (force[0], force[1], force[2])
+    w2 = (omega[0], omega[1])
+    n_chunks = (n_nodes + _CHUNK - 1) // _CHUNK
     for s in range(n_steps):
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
         keep = store and s == n_steps - 1
-        for blk in prange(n_blocks):
-            fb = np.empty((19, _BLOCK))
-            mom = np.empty((8, _BLOCK))
-            n0 = blk * _BLOCK
-            cnt = min(n_nodes, n0 + _BLOCK) - n0
-            _gather_block(a, gather, run_start, run_offset, n0, cnt, fb)
-            _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
-            _collide_bgk(fb, cnt, mom, force, omega)
-            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force, streaming)
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _step_trt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store,
-              n_steps, streaming, omega_plus, omega_minus):
-    """``n_steps`` TRT steps (see :func:`_step_bgk`)."""
-    n_nodes = gather.shape[1]
-    n_blocks = (n_nodes + _BLOCK - 1) // _BLOCK
-    for s in range(n_steps):
-        a, b = (src, dst) if s % 2 == 0 else (dst, src)
-        keep = store and s == n_steps - 1
-        for blk in prange(n_blocks):
-            fb = np.empty((19, _BLOCK))
-            mom = np.empty((8, _BLOCK))
-            n0 = blk * _BLOCK
-            cnt = min(n_nodes, n0 + _BLOCK) - n0
-            _gather_block(a, gather, run_start, run_offset, n0, cnt, fb)
-            _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
-            _collide_trt(fb, cnt, mom, force, omega_plus, omega_minus)
-            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force, streaming)
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _step_mrt(src, dst, gather, run_start, run_offset, force_lo, force_hi, force, fields, store,
-              n_steps, streaming, rates_scaled):
-    """``n_steps`` MRT steps (see :func:`_step_bgk`)."""
-    n_nodes = gather.shape[1]
-    n_blocks = (n_nodes + _BLOCK - 1) // _BLOCK
-    for s in range(n_steps):
-        a, b = (src, dst) if s % 2 == 0 else (dst, src)
-        keep = store and s == n_steps - 1
-        for blk in prange(n_blocks):
-            fb = np.empty((19, _BLOCK))
-            mom = np.empty((8, _BLOCK))
-            mb = np.empty((19, _BLOCK))
-            n0 = blk * _BLOCK
-            cnt = min(n_nodes, n0 + _BLOCK) - n0
-            _gather_block(a, gather, run_start, run_offset, n0, cnt, fb)
-            _moments_block(fb, cnt, n0, force_lo, force_hi, mom)
-            _collide_mrt(fb, cnt, mom, force, rates_scaled, mb)
-            _store_block(b, n0, cnt, n_nodes, fb, mom, fields, keep, force, streaming)
+        for c in prange(n_chunks):
+            f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
+            mom = np.empty((8, _TILE))
+            mb = np.empty((19, _TILE))
+            n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
+            r = np.searchsorted(run_start, n0, side="right") - 1
+            while n0 < hi:
+                r, cnt = _next_tile(run_start, r, n0, hi)
+                _load_tile(a, gather, run_offset, run_base, r, n0, cnt, f)
+                if keep:
+                    _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields)
+                _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates_scaled, mom, mb)
+                _store_tile(b, n0, cnt, n_nodes, f, streaming)
+                n0 += cnt
+            if streaming:
+                _store_fence()
 
 
 # -- reductions ---------------------------------------------------------------------------------------------------------

@@ -66,25 +66,25 @@ def check_tau(settings: Settings) -> None:
 
 
 def make_stepper(settings: Settings, lat: Lattice):
-    """``step(src, dst, fields, store, n_steps)`` for the chosen operator (the kernel is picked once, here)."""
+    """``step(src, dst, fields, store, n_steps)`` for the chosen operator (its parameters are fixed once, here)."""
     lo, hi = lat.force_nodes
     force = np.array([settings.body_force, 0.0, 0.0])
     tau = settings.tau
-    geometry = (lat.gather, lat.run_start, lat.run_offset, lo, hi, force)
+    omega = np.array([1.0 / tau, 0.0])
+    rates = np.zeros(19)
     if settings.collision is Collision.bgk:
-        def step(src, dst, fields, store, n):
-            K._step_bgk(src, dst, *geometry, fields, store, n, K.streams(src), 1.0 / tau)
+        op = K.BGK
     elif settings.collision is Collision.trt:
-        omega_minus = 1.0 / trt_minus_tau(tau, settings.magic)
-
-        def step(src, dst, fields, store, n):
-            K._step_trt(src, dst, *geometry, fields, store, n, K.streams(src), 1.0 / tau, omega_minus)
+        op = K.TRT
+        omega[1] = 1.0 / trt_minus_tau(tau, settings.magic)
     else:
+        op = K.MRT
         m = dhumieres_matrix()
-        scaled = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
+        rates = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
 
-        def step(src, dst, fields, store, n):
-            K._step_mrt(src, dst, *geometry, fields, store, n, K.streams(src), scaled)
+    def step(src, dst, fields, store, n):
+        K._step(op, src, dst, lat.gather, lat.run_start, lat.run_offset, lat.run_base, lo, hi, force, fields, store, n,
+                K.streams(src), omega, rates)
     return step
 
 

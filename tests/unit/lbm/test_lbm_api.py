@@ -147,11 +147,9 @@ def test_scene_carries_the_permeability_section():
     """The scene model holds this stage's Settings under `permeability`, defaults filled in."""
     from pathlib import Path
 
-    from porepipe.scene import load_scene
-
     import yaml
 
-    from porepipe.scene import parse_scene
+    from porepipe.scene import load_scene, parse_scene
 
     scene_file = Path(__file__).parents[3] / "config" / "scenes" / "mini.yaml"
     scene = load_scene(scene_file)

@@ -41,7 +41,7 @@ def _naive_gather(pore, periodic):
 def test_gather_table_matches_explicit_loops(periodic):
     pore = _random_pore((5, 4, 6), 0.6, seed=1)
     lat = build_lattice(pore, periodic, (0, 5), (0, 5))
-    np.testing.assert_array_equal(lat.gather, _naive_gather(pore, periodic))
+    np.testing.assert_array_equal(lat.full_gather(), _naive_gather(pore, periodic))
 
 
 def _open_pore():
@@ -59,23 +59,36 @@ def test_runs_reproduce_the_gather_table():
     assert lat.run_start[0] == 0 and lat.run_start[-1] == lat.n_nodes and np.all(np.diff(lat.run_start) > 0)
     for r in np.flatnonzero(regular):
         nodes = np.arange(lat.run_start[r], lat.run_start[r + 1])
-        np.testing.assert_array_equal(lat.gather[:, nodes].astype(np.int64), lat.run_offset[r][:, None] + nodes)
+        np.testing.assert_array_equal(lat.full_gather()[:, nodes], lat.run_offset[r][:, None] + nodes)
+
+
+def _chunked_pore():
+    """More pore nodes than one parallel work chunk, mostly open: runs and tiles cross chunk boundaries."""
+    pore = _random_pore((5, 40, 100), 0.995, seed=4)
+    from porepipe.lbm import _kernels
+
+    assert np.count_nonzero(pore) > 1.1 * _kernels._CHUNK
+    return pore
+
+
+_GEOMETRIES = {"random": lambda: _random_pore((5, 4, 6), 0.7, seed=2), "open": _open_pore, "chunks": _chunked_pore}
 
 
 @pytest.mark.parametrize("collision", ["bgk", "trt", "mrt"])
 @pytest.mark.parametrize("force_layers", [(0, 5), (1, 3)])
-@pytest.mark.parametrize("geometry", ["random", "open"])
+@pytest.mark.parametrize("geometry", list(_GEOMETRIES))
 @pytest.mark.parametrize("streaming", [False, True])
 def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, streaming, monkeypatch):
-    """Five fused pull/collide steps on a random porous box (gather-table path) and on a mostly open box (mostly
-    offset-streaming runs) equal the dense reference, with cached and with non-temporal population stores.
+    """Five fused pull/collide steps on a random porous box (gather-table path), on a mostly open box (mostly
+    offset-streaming runs) and on an open box of several parallel chunks equal the dense reference, with cached and
+    with non-temporal population stores.
 
     Tolerance 1e-13 absolute on populations of size ~0.1: both are float64 with different summation order.
     """
     from porepipe.lbm import _kernels
 
     monkeypatch.setattr(_kernels, "STREAMING_BYTES", 0 if streaming else 2**62)
-    pore = _random_pore((5, 4, 6), 0.7, seed=2) if geometry == "random" else _open_pore()
+    pore = _GEOMETRIES[geometry]()
     periodic = (True, False, True)
     lat = build_lattice(pore, periodic, force_layers, (0, 5))
     tau = 0.8
