@@ -30,6 +30,7 @@ Decisions the thesis leaves open (documented here once, used everywhere):
 from __future__ import annotations
 
 import dataclasses
+import time
 from pathlib import Path
 
 import numba
@@ -45,7 +46,9 @@ from porepipe.packing._setup import place_type, radius_bounds, read_sphere_file
 #: bit of each effect in the per-step ``effects`` history column
 EFFECT_BITS = {e: 1 << i for i, e in enumerate(Effect)}
 HISTORY_KEYS = ("stage", "step", "n_spheres", "converged", "max_overlap", "mean_overlap", "kinetic_energy",
-                "max_displacement_um", "effects", "rebuilt")
+                "max_displacement_um", "effects", "rebuilt", "wall_s")
+#: history columns that describe the machine, not the packing (they differ between identical runs)
+HISTORY_TIMING = ("wall_s",)
 _HISTORY_INT = {"stage", "step", "n_spheres", "converged", "effects", "rebuilt"}
 
 
@@ -349,6 +352,7 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
     converged = n == 0
     while not converged and state.step < stage.steps:
         s = state.step + 1
+        t_step = time.perf_counter()
         if nbr is None or state.need_rebuild:
             if state.need_rebuild:
                 state.x_build = state.x.copy()
@@ -399,7 +403,8 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
         _record(state, stage=stage_idx, step=s, n_spheres=n, converged=int(nconv), max_overlap=float(smax),
                 mean_overlap=float(ssum / scnt) if scnt else float("nan"), kinetic_energy=float(ke),
                 max_displacement_um=float(dmax) if not converged else 0.0,
-                effects=_effect_bits(effects, adapting, locking), rebuilt=rebuilt)
+                effects=_effect_bits(effects, adapting, locking), rebuilt=rebuilt,
+                wall_s=time.perf_counter() - t_step)
         if prog is not None:
             prog.update(s, f"converged {nconv}/{n}, max sigma {smax:.4g}, E_kin {ke:.4g}", force=converged)
         if checkpoint is not None and settings.checkpoint_every and s % settings.checkpoint_every == 0:
@@ -411,16 +416,11 @@ def _step_stats(sig: np.ndarray, conv: np.ndarray, aux: np.ndarray) -> tuple:
     """Reductions of one step: (converged count, kinetic energy, max sigma, sum and count of finite sigma,
     largest step displacement and its sphere, list staleness, first non-finite sphere or -1).
 
-    NumPy reductions over the per-sphere arrays: the same values for any thread count.
+    One numba pass over fixed chunks: the same values for any thread count.
     """
     if sig.size == 0:
         return 0, 0.0, -np.inf, 0.0, 0, 0.0, -1, 0.0, -1
-    finite_sig = sig > -np.inf
-    ok = np.isfinite(aux).all(axis=1)
-    bad = -1 if ok.all() else int(np.argmin(ok))
-    darg = int(np.argmax(aux[:, 1]))
-    return (int(conv.sum()), float(aux[:, 0].sum()), float(sig.max()), float(sig[finite_sig].sum()),
-            int(finite_sig.sum()), float(aux[darg, 1]), darg, float(aux[:, 2].max()), bad)
+    return K._step_reductions(sig, conv, aux)
 
 
 def _adapt_radii(r: np.ndarray, types: np.ndarray, sig: np.ndarray, tables) -> None:

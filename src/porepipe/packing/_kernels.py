@@ -274,6 +274,74 @@ def _sphere_aux(i, x_old, x_new, v, x_build, r, r_build, box, periodic, cut, mas
 
 
 # ---------------------------------------------------------------------------------------------------------------------
+#: the per-step reductions run over this many fixed chunks, so their floating-point sums are the same for any thread count
+_REDUCE_CHUNKS = 64
+
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _step_reductions(sig, conv, aux):
+    """One pass over the per-sphere results of a step: (converged count, kinetic energy, max sigma, sum and count of
+    finite sigma, largest step displacement and its sphere, list staleness, first non-finite sphere or -1)."""
+    n = sig.size
+    part = np.zeros((_REDUCE_CHUNKS, 9))
+    for c in prange(_REDUCE_CHUNKS):
+        nconv = 0
+        ke = 0.0
+        smax = _NEG_INF
+        ssum = 0.0
+        scnt = 0
+        dmax = -1.0
+        darg = -1
+        stale = 0.0
+        bad = -1
+        for i in range(c * n // _REDUCE_CHUNKS, (c + 1) * n // _REDUCE_CHUNKS):
+            nconv += conv[i]
+            ke += aux[i, 0]
+            if sig[i] > smax:
+                smax = sig[i]
+            if sig[i] > _NEG_INF:
+                ssum += sig[i]
+                scnt += 1
+            if aux[i, 1] > dmax:
+                dmax = aux[i, 1]
+                darg = i
+            stale = max(stale, aux[i, 2])
+            if bad < 0 and not (math.isfinite(aux[i, 0]) and math.isfinite(aux[i, 1]) and math.isfinite(aux[i, 2])):
+                bad = i
+        part[c, 0] = nconv
+        part[c, 1] = ke
+        part[c, 2] = smax
+        part[c, 3] = ssum
+        part[c, 4] = scnt
+        part[c, 5] = dmax
+        part[c, 6] = darg
+        part[c, 7] = stale
+        part[c, 8] = bad
+    nconv = 0
+    ke = 0.0
+    smax = _NEG_INF
+    ssum = 0.0
+    scnt = 0
+    dmax = 0.0
+    darg = -1
+    stale = 0.0
+    bad = -1
+    for c in range(_REDUCE_CHUNKS):
+        nconv += int(part[c, 0])
+        ke += part[c, 1]
+        smax = max(smax, part[c, 2])
+        ssum += part[c, 3]
+        scnt += int(part[c, 4])
+        if part[c, 6] >= 0 and (darg < 0 or part[c, 5] > dmax):
+            dmax = part[c, 5]
+            darg = int(part[c, 6])
+        stale = max(stale, part[c, 7])
+        if bad < 0 and part[c, 8] >= 0:
+            bad = int(part[c, 8])
+    return nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad
+
+
+# ---------------------------------------------------------------------------------------------------------------------
 # the step: forces at x^{s-1}, damped velocity-Störmer-Verlet update (§5.3), per-sphere overlap and convergence
 _STEP_CACHE: dict = {}
 

@@ -133,3 +133,23 @@ def test_neighbour_list_equals_all_pairs_reference(periodic):
         got |= {(min(i, j), max(i, j)) for j in js.tolist()}
     assert got == neighbour_pairs(x, r, box, per, 1.3, 0.2)
     assert idx.size == 2 * len(got)
+
+
+@pytest.mark.parametrize("n", [1, 63, 64, 65, 10007])
+def test_step_reductions_match_numpy(n):
+    """The fused one-pass reductions of a step equal the plain numpy ones (sums to 1e-12 relative: other order)."""
+    from porepipe.packing._api import _step_stats
+
+    rng = np.random.default_rng(n)
+    sig = rng.normal(size=n)
+    sig[rng.random(n) < 0.2] = -np.inf
+    conv = (rng.random(n) < 0.5).astype(np.uint8)
+    aux = rng.random((n, 3))
+    nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = _step_stats(sig, conv, aux)
+    finite = sig > -np.inf
+    assert (nconv, scnt, smax, stale, bad) == (conv.sum(), finite.sum(), sig.max(), aux[:, 2].max(), -1)
+    assert ke == pytest.approx(aux[:, 0].sum(), rel=1e-12)
+    assert ssum == pytest.approx(sig[finite].sum(), rel=1e-12, abs=1e-12)
+    assert (dmax, darg) == (aux[:, 1].max(), np.argmax(aux[:, 1]))
+    aux[n // 2, 0] = np.nan
+    assert _step_stats(sig, conv, aux)[-1] == n // 2
