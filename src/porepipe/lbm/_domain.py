@@ -13,7 +13,7 @@ import hashlib
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.lbm._kernels import _gather_table, _node_ids, _runs
+from porepipe.lbm._kernels import _compact_columns, _gather_table, _node_ids, _runs, _wall_links
 from porepipe.lbm._percolation import flow_paths
 
 #: beyond this many populations the gather index needs 64 bits
@@ -128,14 +128,13 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
     if pore.ndim != 3 or min(pore.shape) < 1:
         raise PorepipeError(f"pore volume must be 3-D with positive sizes, got shape {pore.shape}")
     full = _full_gather(pore, periodic)
-    n = full.shape[1]
     start, offset = _node_runs(full)
-    irregular = offset[:, 0] < 0
     lengths = np.diff(start)
+    irregular = offset[:lengths.size, 0] < 0
     base = np.zeros(lengths.size, dtype=np.int64)
     base[irregular] = np.cumsum(lengths * irregular)[irregular] - lengths[irregular] - start[:-1][irregular]
-    gather = np.ascontiguousarray(full[:, np.repeat(irregular, lengths)])
-    walls = int(np.count_nonzero(full % max(n, 1) == np.arange(n))) if n else 0
+    walls = int(_wall_links(full))
+    gather = _irregular_columns(full, np.repeat(irregular, lengths))
     del full
     counts = np.count_nonzero(pore.reshape(pore.shape[0], -1), axis=1)
     layer_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
@@ -145,8 +144,11 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
 
 
 def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:
-    """(18, N) pull-source table of every pore node (uint32 when 19 N fits, else uint64)."""
-    ids = np.empty(pore.size, dtype=np.int64)
+    """(18, N) pull-source table of every pore node (uint32 when 19 N fits, else uint64).
+
+    The voxel → node map is int32 (4 B per voxel) unless the volume has 2³¹ voxels or more.
+    """
+    ids = np.empty(pore.size, dtype=np.int32 if pore.size <= _INT32_LIMIT else np.int64)
     n = int(_node_ids(pore.reshape(-1), ids))
     # unsigned: numba skips its negative-index wrap-around test, so the gather loop vectorises (2x faster)
     index_dtype = np.uint32 if 19 * n <= _INT32_LIMIT else np.uint64
@@ -157,13 +159,27 @@ def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:
     return full
 
 
+def _irregular_columns(full: np.ndarray, irregular: np.ndarray) -> np.ndarray:
+    """The columns of the irregular nodes: compacted in place (no second table) when they are most of the table,
+    else copied so that the full table can be freed."""
+    k = int(np.count_nonzero(irregular))
+    if 2 * k > full.shape[1]:
+        _compact_columns(full, irregular)
+        return full[:, :k]
+    return np.ascontiguousarray(full[:, irregular])
+
+
 def _node_runs(full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(run_start (R + 1,), run_offset (R, 18)) of a full pull-source table (one row per run, −1 = irregular)."""
     n = full.shape[1]
     start = np.empty(n + 1, dtype=np.int64)
-    offset = np.empty((max(n, 1), 18), dtype=np.int64)
-    r = int(_runs(full, MIN_RUN, start, offset))
-    return start[:r + 1].copy(), offset[:max(r, 1)].copy()
+    regular = np.empty(max(n, 1), dtype=np.bool_)
+    r = int(_runs(full, MIN_RUN, start, regular))
+    start, regular = start[:r + 1].copy(), regular[:r]
+    offset = np.full((max(r, 1), 18), -1, dtype=np.int64)
+    heads = start[:r][regular]
+    offset[:r][regular] = full[:, heads].T.astype(np.int64) - heads[:, None]
+    return start, offset
 
 
 @dataclasses.dataclass

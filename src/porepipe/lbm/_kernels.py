@@ -161,13 +161,13 @@ def _gather_table(ids, shape, periodic, n_nodes, gather_out):
 
 
 @njit(cache=True)
-def _runs(gather, min_run, start_out, offset_out):
+def _runs(gather, min_run, start_out, regular_out):
     """Split the nodes into runs whose 18 pull sources all advance with the node (storage-order streaming).
 
-    Within a run ``[start_out[r], start_out[r + 1])`` population q of node n comes from
-    ``offset_out[r, q - 1] + n`` (a wall link pulls the node's own opposite population, which advances too), so
-    the gather needs no index. Runs shorter than ``min_run`` are merged into irregular runs (offset −1: use the
-    gather table). Returns the number of runs.
+    Within a regular run ``[start_out[r], start_out[r + 1])`` population q of node n comes from
+    ``gather[q - 1, start] - start + n`` (a wall link pulls the node's own opposite population, which advances too),
+    so the gather needs no index. Runs shorter than ``min_run`` are merged into irregular runs
+    (``regular_out[r] = False``: use the gather table). Returns the number of runs.
     """
     n_nodes = gather.shape[1]
     n_runs = 0
@@ -184,16 +184,38 @@ def _runs(gather, min_run, start_out, offset_out):
                 break
             m += 1
         regular = m - n >= min_run
-        if not regular and n_runs > 0 and offset_out[n_runs - 1, 0] < 0:
+        if not regular and n_runs > 0 and not regular_out[n_runs - 1]:
             n = m  # extends the previous irregular run
             continue
         start_out[n_runs] = n
-        for q in range(18):
-            offset_out[n_runs, q] = np.int64(gather[q, n]) - n if regular else -1
+        regular_out[n_runs] = regular
         n_runs += 1
         n = m
     start_out[n_runs] = n_nodes
     return n_runs
+
+
+@njit(cache=True)
+def _wall_links(gather):
+    """Number of bounce-back links: populations whose pull source is their own node's opposite population."""
+    n_nodes = gather.shape[1]
+    count = 0
+    for q in range(1, 19):
+        for n in range(n_nodes):
+            count += np.int64(gather[q - 1, n]) == _OPP[q] * n_nodes + n
+    return count
+
+
+@njit(cache=True)
+def _compact_columns(table, keep):
+    """Move the columns ``keep`` of ``table`` to its front, in order (in place); returns their number."""
+    count = 0
+    for n in range(table.shape[1]):
+        if keep[n]:
+            for q in range(table.shape[0]):
+                table[q, count] = table[q, n]
+            count += 1
+    return count
 
 
 # -- tiles: a parallel chunk of nodes is processed _TILE nodes at a time in a flat float64 scratch
