@@ -48,10 +48,10 @@ def _pair_force(dx, dxeq, k):
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _pair_force_over_dist(dx, dxeq, k, hcoef):
     """f(dx) / dx of :func:`_pair_force` for dx > 0, with hcoef = sqrt(k) (1 + k/4) precomputed per type pair:
-    two divisions and no square root per pair (the step kernel's hot path)."""
-    inv = 1.0 / dx
+    one division and no square root per pair (the step kernel's hot path)."""
     if dx <= dxeq:
-        return hcoef * (dxeq - dx) * inv / (dxeq * dxeq)
+        return hcoef * (dxeq - dx) / (dx * dxeq * dxeq)
+    inv = 1.0 / dx
     u = dxeq * inv
     u2 = u * u
     u4 = u2 * u2
@@ -397,8 +397,8 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                 dist = math.sqrt(dx0 * dx0 + dx1 * dx1 + dx2 * dx2)
                 rsum = ri + rj
                 rmin2 = rsum - abs(ri - rj)
-                sig = (rsum - dist) / rmin2
-                smax = max(smax, sig)
+                if rsum - dist > smax * rmin2:  # sigma_ij > smax, tested without a division (rmin2 > 0)
+                    smax = (rsum - dist) / rmin2
                 if FREEZE:
                     if is_frozen:
                         continue
