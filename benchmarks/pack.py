@@ -115,6 +115,7 @@ def main() -> None:
     variants = {"bare (no effects)": (False, False, False), "freezing": (True, False, False),
                 "stochastic forces": (False, True, False), "walls": (False, False, True),
                 "all compiled in, switched off": (True, True, True)}
+    time_kernel(x, r, box, nbr, (False, False, False), steps, 1)  # warm-up: first touch of every page
     for threads in (1, 2):
         base = None
         for label, flags in variants.items():
