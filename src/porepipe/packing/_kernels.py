@@ -123,6 +123,15 @@ def _min_image(d, length, periodic):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
+def _wrap(xa, length):
+    """Coordinate wrapped into [0, length); the division only for a coordinate that left the box."""
+    if 0.0 <= xa < length:
+        return xa
+    xa -= length * math.floor(xa / length)
+    return 0.0 if xa >= length else xa
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
 def _wrap_cell(q, n):
     """Cell index q in [-n, 2n) wrapped onto [0, n) without an integer division."""
     if q < 0:
@@ -440,13 +449,14 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
             f_new[i, 1] = fy
             f_new[i, 2] = fz
             cm = cm_t[ti]
-            cp = cp_t[ti]
+            decay = cm / cp_t[ti]
+            kick = dt / (2.0 * mass * cp_t[ti])
             for a in range(3):
-                va = cm / cp * v[i, a] + (f_prev[i, a] + f_new[i, a]) * dt / (2.0 * mass * cp)
+                va = decay * v[i, a] + (f_prev[i, a] + f_new[i, a]) * kick
                 xa = x_old[i, a] + cm * va * dt + f_new[i, a] * half_dt2_m
                 if WALLS:
                     if periodic[a]:
-                        xa -= box[a] * math.floor(xa / box[a])
+                        xa = _wrap(xa, box[a])
                     else:
                         if xa < 0.0:
                             xa = -xa
@@ -456,9 +466,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                             va = -va
                         xa = min(max(xa, 0.0), box[a])
                 else:
-                    xa -= box[a] * math.floor(xa / box[a])
-                    if xa >= box[a]:
-                        xa = 0.0
+                    xa = _wrap(xa, box[a])
                 v[i, a] = va
                 x_new[i, a] = xa
             _sphere_aux(i, x_old, x_new, v, x_build, r, r_build, box, periodic, cut, mass, aux)
