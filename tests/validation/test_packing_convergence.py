@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 import h5py
+import numba
 import numpy as np
 import pytest
 import xarray as xr
@@ -67,6 +68,23 @@ def test_same_seed_same_packing_and_other_seed_differs():
     np.testing.assert_array_equal(a.centres_um, b.centres_um)
     np.testing.assert_array_equal(a.radii_um, b.radii_um)
     assert not np.array_equal(a.centres_um, c.centres_um)
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs at least 2 numba threads to compare")
+def test_one_and_two_threads_give_the_same_packing():
+    """Forces are gathered per sphere in list order and the step reductions run over fixed chunks, so the thread
+    count does not change a single bit (parallel_min_spheres = 0 forces the parallel kernels on)."""
+    settings = _settings(n=150, parallel_min_spheres=0)
+    runs = []
+    for threads in (1, 2):
+        numba.set_num_threads(threads)
+        try:
+            runs.append(pack_spheres(settings, BOX, True, seed=9))
+        finally:
+            numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    np.testing.assert_array_equal(runs[0].centres_um, runs[1].centres_um)
+    np.testing.assert_array_equal(runs[0].radii_um, runs[1].radii_um)
+    np.testing.assert_array_equal(runs[0].history["kinetic_energy"], runs[1].history["kinetic_energy"])
 
 
 def test_checkpoint_resume_is_bit_identical(tmp_path, monkeypatch):
