@@ -7,7 +7,7 @@ is solid), so the hot loop has no branch. Runs of nodes whose 18 sources all adv
 interior of the pore space, nearly the whole of a dense box) stream by a constant offset per population:
 contiguous copies, no index traffic; the other (irregular) runs read their sources from a table that holds only
 their nodes. One step kernel serves the three collision operators; a tile of nodes is pulled into an L1 scratch,
-collided in one vectorised loop over its nodes (BGK, TRT) and stored.
+collided in one vectorised loop over its nodes (BGK, TRT, MRT) and stored.
 """
 
 from __future__ import annotations
@@ -19,15 +19,13 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from porepipe._shared.numba_config import FASTMATH
-from porepipe.lbm._lattice import OPPOSITE, C, W, dhumieres_matrix
+from porepipe.lbm._lattice import OPPOSITE, C, W
 
 _CX = C[:, 0].astype(np.float64)
 _CY = C[:, 1].astype(np.float64)
 _CZ = C[:, 2].astype(np.float64)
 _W = W.copy()
 _OPP = OPPOSITE.copy()
-_M = dhumieres_matrix()
-_M_NORM2 = (_M * _M).sum(axis=1)
 #: nodes per tile (a multiple of 8): the 19 x _TILE float64 scratch (19.5 kB) stays in L1.
 _TILE = 128
 #: nodes per parallel work chunk (a multiple of _TILE; one scratch allocation and one store fence per chunk).
@@ -404,62 +402,95 @@ def _collide_trt(f, cnt, n0, force_lo, force_hi, force, omega_plus, omega_minus)
         _trt_pair(f, i, 17, jy - jz, d, jj, inv, on, force, hp, hm)
 
 
-@njit(**_NUMERIC)
-def _feq(q, i, mom):
-    """Zero-centred equilibrium f̃^eq_q = w_q [δρ + 3 c·j + (9/2 (c·j)² − 3/2 j²)/ρ] (thesis Eq. 6.1.11)."""
-    cj = _CX[q] * mom[1, i] + _CY[q] * mom[2, i] + _CZ[q] * mom[3, i]
-    return _W[q] * (mom[0, i] + 3.0 * cj + (4.5 * cj * cj - 1.5 * mom[6, i]) * mom[5, i])
+# -- MRT (d'Humières 2002 basis, rows of :func:`porepipe.lbm._lattice.dhumieres_matrix`), per node as BGK/TRT.
+#    f ← f − M⁻¹ Š (m − m^eq) + φ with M⁻¹ = Mᵀ diag(1/|M_k|²) (rows orthogonal). M has only 0/±1/±2/… entries
+#    that depend on the pair sums a_p = f_p + f_p+1 (even moments) and differences b_p = f_p − f_p+1 (odd moments),
+#    so m and Mᵀ(…) are written out as sums shared between moments. ``s`` is the tuple of s_k / |M_k|² in row order;
+#    the conserved rows (ρ, j) have s_k = 0 and are skipped. The equilibrium moments of the zero-centred f̃^eq:
+#    e = −11 δρ + 19 j²/ρ, ε = 3 δρ − 11/2 j²/ρ, q = −2/3 j, 3p_xx = (2j_x² − j_y² − j_z²)/ρ, p_ww = (j_y² − j_z²)/ρ,
+#    π = −p/2, p_αβ = j_α j_β/ρ, m = 0.
+@njit(inline="always", **_NUMERIC)
+def _pair(f, i, p):
+    """(f_p + f_p+1, f_p − f_p+1) of tile node i."""
+    x, y = _pop(f, p, i), _pop(f, p + 1, i)
+    return x + y, x - y
+
+
+@njit(inline="always", **_NUMERIC)
+def _mrt_even(r, ax, ay, az, a7, a9, a11, a13, a15, a17, jx, jy, jz, jj, inv, s):
+    """Relaxed even moments mapped back: (Δf_0, axis x, y, z, diagonal xy, xz, yz, ±p_xy, ±p_xz, ±p_yz parts)."""
+    dxy, dxz, dyz = a7 + a9, a11 + a13, a15 + a17
+    sa, sd = ax + ay + az, dxy + dxz + dyz
+    e = s[1] * (19.0 * (sd - r - jj * inv))
+    eps = s[2] * (9.0 * r - 7.0 * sa - 2.0 * sd + 5.5 * jj * inv)
+    axx, dxx, pxx = 2.0 * ax - ay - az, dxy + dxz - 2.0 * dyz, (2.0 * jx * jx - jy * jy - jz * jz) * inv
+    aww, dww, pww = ay - az, dxy - dxz, (jy * jy - jz * jz) * inv
+    p_xx, pi_xx = s[9] * (axx + dxx - pxx), s[10] * (dxx - 2.0 * axx + 0.5 * pxx)
+    p_ww, pi_ww = s[11] * (aww + dww - pww), s[12] * (dww - 2.0 * aww + 0.5 * pww)
+    u1, u2, w1, w2 = p_xx - 2.0 * pi_xx, p_xx + pi_xx, p_ww - 2.0 * pi_ww, p_ww + pi_ww
+    axis, diag = -11.0 * e - 4.0 * eps, 8.0 * e + eps
+    return (12.0 * eps - 30.0 * e, axis + 2.0 * u1, axis - u1 + w1, axis - u1 - w1,
+            diag + u2 + w2, diag + u2 - w2, diag - 2.0 * u2,
+            s[13] * (a7 - a9 - jx * jy * inv), s[15] * (a11 - a13 - jx * jz * inv), s[14] * (a15 - a17 - jy * jz * inv))
+
+
+@njit(inline="always", **_NUMERIC)
+def _mrt_odd(bx, by, bz, b7, b9, b11, b13, b15, b17, s):
+    """Relaxed odd moments mapped back: (axis x, y, z, then per diagonal plane xy, xz, yz the parts A ± B)."""
+    qx = s[4] * (5.0 / 3.0) * (b7 + b9 + b11 + b13 - 2.0 * bx)
+    qy = s[6] * (5.0 / 3.0) * (b7 - b9 + b15 + b17 - 2.0 * by)
+    qz = s[8] * (5.0 / 3.0) * (b11 - b13 + b15 - b17 - 2.0 * bz)
+    mx = s[16] * (b7 + b9 - b11 - b13)
+    my = s[17] * (b9 - b7 + b15 + b17)
+    mz = s[18] * (b11 - b13 - b15 + b17)
+    return -4.0 * qx, -4.0 * qy, -4.0 * qz, qx + mx, qy - my, qx - mx, qz + mz, qy + my, qz - mz
+
+
+@njit(inline="always", **_NUMERIC)
+def _mrt_set(f, i, p, even, odd, rho_on, force):
+    """Post-collision pair (p, p + 1): f_p − (even + odd) + φ_p, f_p+1 − (even − odd) + φ_p+1."""
+    _set(f, _ix(p, i), _pop(f, p, i) - (even + odd) + _force_coefficient(p, force) * rho_on)
+    _set(f, _ix(p + 1, i), _pop(f, p + 1, i) - (even - odd) + _force_coefficient(p + 1, force) * rho_on)
+
+
+@njit(inline="always", **_NUMERIC)
+def _mrt_plane(f, i, p, even, p_ab, odd_a, odd_b, rho_on, force):
+    """The two diagonal pairs p, p + 2 of one plane: even ± p_αβ, odd A ± B."""
+    _mrt_set(f, i, p, even + p_ab, odd_a + odd_b, rho_on, force)
+    _mrt_set(f, i, p + 2, even - p_ab, odd_a - odd_b, rho_on, force)
+
+
+@njit(inline="always", **_NUMERIC)
+def _mrt_node(f, i, on, force, s):
+    """MRT collision of tile node i in place (``on`` = 1.0 in the force zone)."""
+    r = _pop(f, 0, i)
+    ax, bx = _pair(f, i, 1)
+    ay, by = _pair(f, i, 3)
+    az, bz = _pair(f, i, 5)
+    a7, b7 = _pair(f, i, 7)
+    a9, b9 = _pair(f, i, 9)
+    a11, b11 = _pair(f, i, 11)
+    a13, b13 = _pair(f, i, 13)
+    a15, b15 = _pair(f, i, 15)
+    a17, b17 = _pair(f, i, 17)
+    rho = 1.0 + (r + (ax + ay + az) + (a7 + a9 + a11 + a13 + a15 + a17))
+    jx, jy, jz = bx + b7 + b9 + b11 + b13, by + b7 - b9 + b15 + b17, bz + b11 - b13 + b15 - b17
+    ev = _mrt_even(r, ax, ay, az, a7, a9, a11, a13, a15, a17, jx, jy, jz, jx * jx + jy * jy + jz * jz, 1.0 / rho, s)
+    od = _mrt_odd(bx, by, bz, b7, b9, b11, b13, b15, b17, s)
+    rho_on = rho * on
+    _set(f, i, r - ev[0])
+    _mrt_set(f, i, 1, ev[1], od[0], rho_on, force)
+    _mrt_set(f, i, 3, ev[2], od[1], rho_on, force)
+    _mrt_set(f, i, 5, ev[3], od[2], rho_on, force)
+    _mrt_plane(f, i, 7, ev[4], ev[7], od[3], od[4], rho_on, force)
+    _mrt_plane(f, i, 11, ev[5], ev[8], od[5], od[6], rho_on, force)
+    _mrt_plane(f, i, 15, ev[6], ev[9], od[7], od[8], rho_on, force)
 
 
 @njit(**_NUMERIC)
-def _moments_tile(f, cnt, n0, force_lo, force_hi, mom):
-    """Per node: mom = (δρ, j_x, j_y, j_z, ρ, 1/ρ, j², force on/off) of the gathered populations."""
+def _collide_mrt(f, cnt, n0, force_lo, force_hi, force, s):
     for i in range(cnt):
-        d, jx, jy, jz = _moments(f, i)
-        mom[0, i] = d
-        mom[1, i] = jx
-        mom[2, i] = jy
-        mom[3, i] = jz
-        mom[4, i] = 1.0 + d
-        mom[5, i] = 1.0 / (1.0 + d)
-        mom[6, i] = jx * jx + jy * jy + jz * jz
-        mom[7, i] = _force_on(n0 + i, force_lo, force_hi)
-
-
-@njit(**_NUMERIC)
-def _collide_mrt(f, cnt, n0, force_lo, force_hi, force, rates_scaled, mom, mb):
-    """d'Humières MRT: f ← f − M⁻¹ Š M (f − f^eq) + φ, with M⁻¹ = Mᵀ diag(1/|M_k|²) (rows orthogonal).
-
-    ``rates_scaled[k] = s_k / |M_k|²``; ``mom`` (8, _TILE) and ``mb`` (19, _TILE) are scratch.
-    """
-    _moments_tile(f, cnt, n0, force_lo, force_hi, mom)
-    for q in range(19):
-        for i in range(cnt):
-            f[_ix(q, i)] -= _feq(q, i, mom)
-    for k in range(19):
-        for i in range(cnt):
-            mb[k, i] = 0.0
-        if rates_scaled[k] == 0.0:
-            continue
-        for q in range(19):
-            mkq = _M[k, q]
-            if mkq == 0.0:
-                continue
-            for i in range(cnt):
-                mb[k, i] += mkq * f[_ix(q, i)]
-        s = rates_scaled[k]
-        for i in range(cnt):
-            mb[k, i] *= s
-    for q in range(19):
-        fq = _force_coefficient(q, force)
-        for k in range(19):
-            mkq = _M[k, q]
-            if mkq == 0.0 or rates_scaled[k] == 0.0:
-                continue
-            for i in range(cnt):
-                f[_ix(q, i)] -= mkq * mb[k, i]
-        for i in range(cnt):
-            f[_ix(q, i)] += _feq(q, i, mom) + fq * mom[4, i] * mom[7, i]
+        _mrt_node(f, i, _force_on(n0 + i, force_lo, force_hi), force, s)
 
 
 # -- the step kernel ------------------------------------------------------------------------------------------------
@@ -467,19 +498,19 @@ BGK, TRT, MRT = 0, 1, 2
 
 
 @njit(**_NUMERIC)
-def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates_scaled, mom, mb):
-    """Collide a tile with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only), ``rates_scaled`` for MRT."""
+def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
+    """Collide a tile with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only), ``rates`` (s_k/|M_k|²) for MRT."""
     if op == BGK:
         _collide_bgk(f, lanes, n0, force_lo, force_hi, force, omega[0])
     elif op == TRT:
         _collide_trt(f, lanes, n0, force_lo, force_hi, force, omega[0], omega[1])
     else:
-        _collide_mrt(f, lanes, n0, force_lo, force_hi, force, rates_scaled, mom, mb)
+        _collide_mrt(f, lanes, n0, force_lo, force_hi, force, rates)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force_hi, force, fields, store, n_steps,
-          streaming, omega, rates_scaled):
+          streaming, omega, rates):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
     step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
 
@@ -494,8 +525,6 @@ def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force
         keep = store and s == n_steps - 1
         for c in prange(n_chunks):
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
-            mom = np.empty((8, _TILE))
-            mb = np.empty((19, _TILE))
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
             r = np.searchsorted(run_start, n0, side="right") - 1
             while n0 < hi:
@@ -503,7 +532,7 @@ def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force
                 _load_tile(a, gather, run_offset, run_base, r, n0, cnt, f)
                 if keep:
                     _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields)
-                _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates_scaled, mom, mb)
+                _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
                 _store_tile(b, n0, cnt, n_nodes, f, streaming)
                 n0 += cnt
             if streaming:

@@ -71,7 +71,7 @@ def make_stepper(settings: Settings, lat: Lattice):
     force = np.array([settings.body_force, 0.0, 0.0])
     tau = settings.tau
     omega = np.array([1.0 / tau, 0.0])
-    rates = np.zeros(19)
+    rates = (0.0,) * 19  # MRT's s_k / |M_k|², a tuple: constants of the collision loop
     if settings.collision is Collision.bgk:
         op = K.BGK
     elif settings.collision is Collision.trt:
@@ -80,7 +80,8 @@ def make_stepper(settings: Settings, lat: Lattice):
     else:
         op = K.MRT
         m = dhumieres_matrix()
-        rates = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
+        scaled = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
+        rates = tuple(float(x) for x in scaled)
 
     def step(src, dst, fields, store, n):
         K._step(op, src, dst, lat.gather, lat.run_start, lat.run_offset, lat.run_base, lo, hi, force, fields, store, n,
