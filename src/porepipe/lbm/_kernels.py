@@ -7,7 +7,8 @@ is solid), so the hot loop has no branch. Runs of nodes whose 18 sources all adv
 interior of the pore space, nearly the whole of a dense box) stream by a constant offset per population:
 contiguous copies, no index traffic; the other (irregular) runs read their sources from a table that holds only
 their nodes. One step kernel serves the three collision operators; a tile of nodes is pulled into an L1 scratch,
-collided in one vectorised loop over its nodes (BGK, TRT, MRT) and stored.
+collided in one vectorised loop over its nodes (BGK, TRT, MRT) and stored; a tile may span several runs (it is
+loaded run by run), so its collision loop has full length however short the runs are.
 """
 
 from __future__ import annotations
@@ -230,14 +231,6 @@ def _ix(q, i):
 
 
 @njit(**_NUMERIC)
-def _next_tile(run_start, r, n0, hi):
-    """(run holding node n0, tile length): a tile never crosses a run boundary, _TILE, or the chunk end ``hi``."""
-    while run_start[r + 1] <= n0:
-        r += 1
-    return r, min(_TILE, run_start[r + 1] - n0, hi - n0)
-
-
-@njit(**_NUMERIC)
 def _lanes(cnt):
     """Nodes a tile's collision loop runs over: cnt rounded up to a multiple of 8 (whole vectors, no scalar
     remainder loop; the extra lanes hold stale scratch values and are never stored)."""
@@ -245,17 +238,15 @@ def _lanes(cnt):
 
 
 @njit(**_NUMERIC)
-def _load_tile(src, gather, run_offset, run_base, r, n0, cnt, f):
-    """Pull the populations arriving at nodes n0 … n0+cnt-1 (all in run r) into ``f``.
+def _load_segment(src, gather, run_offset, run_base, r, n0, cnt, t, f):
+    """Pull populations 1..18 arriving at nodes n0 … n0+cnt-1 (all in run r) into tile lanes t … t+cnt-1.
 
     A regular run copies contiguous ranges (no index traffic); an irregular one reads its sources from the gather
     table of the irregular nodes (columns n + run_base[r], contiguous).
     """
-    for i in range(cnt):
-        _set(f, i, _get(src, n0 + i))
     regular = run_offset[r, 0] >= 0
     for q in range(1, 19):
-        row = q * _TILE
+        row = q * _TILE + t
         if regular:
             off = run_offset[r, q - 1] + n0
             for i in range(cnt):
@@ -264,6 +255,23 @@ def _load_tile(src, gather, run_offset, run_base, r, n0, cnt, f):
             col = n0 + run_base[r]
             for i in range(cnt):
                 _set(f, row + i, _get(src, _get(gather, (q - 1, col + i))))
+
+
+@njit(**_NUMERIC)
+def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
+    """Pull the populations arriving at nodes n0 … n0+cnt-1 into ``f``, run by run (a tile may span several runs,
+    so its collision loop has full length however short the runs are). ``r`` is the run holding n0 or an earlier
+    one; returns the run holding the tile's last node."""
+    for i in range(cnt):
+        _set(f, i, _get(src, n0 + i))
+    t = 0
+    while t < cnt:
+        while run_start[r + 1] <= n0 + t:
+            r += 1
+        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        _load_segment(src, gather, run_offset, run_base, r, n0 + t, seg, t, f)
+        t += seg
+    return r
 
 
 @njit(**_NUMERIC)
@@ -528,8 +536,8 @@ def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
             r = np.searchsorted(run_start, n0, side="right") - 1
             while n0 < hi:
-                r, cnt = _next_tile(run_start, r, n0, hi)
-                _load_tile(a, gather, run_offset, run_base, r, n0, cnt, f)
+                cnt = min(_TILE, hi - n0)
+                r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
                 if keep:
                     _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields)
                 _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
