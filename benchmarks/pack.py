@@ -77,7 +77,7 @@ ENGINE_EFFECTS = {
 }
 
 
-def time_engine(xyzr, box, steps, threads, effect="none", repeats=2):
+def time_engine(xyzr, box, steps, threads, effect="none", repeats=4):
     """Per-step wall time of the whole engine (step loop, reductions, guards, protocol) on the benchmark packing
     (read from ``xyzr``, the same spheres as the kernel runs) with one optional effect switched on (lists built
     once); the median step of the best of ``repeats`` runs."""
@@ -104,7 +104,7 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=None)
     args = ap.parse_args()
     n = 2_000 if args.smoke else 20_000 if args.small else 1_000_000
-    steps = args.steps or (10 if args.smoke else 50 if args.small else 6)
+    steps = args.steps or (10 if args.smoke else 50 if args.small else 10)
     x, r, box = polydisperse(n)
     t0 = time.perf_counter()
     *nbr, order = build_neighbours(x, r, np.zeros(n, np.int64), box, np.ones(3, bool), np.ones((1, 1), np.uint8),
@@ -119,7 +119,7 @@ def main() -> None:
     for threads in (1, 2):
         base = None
         for label, flags in variants.items():
-            dt_step = min(time_kernel(x, r, box, nbr, flags, steps, threads) for _ in range(2))
+            dt_step = min(time_kernel(x, r, box, nbr, flags, steps, threads) for _ in range(4))
             base = dt_step if base is None else base
             rows.append({"threads": threads, "kernel": label, "s_per_step": dt_step, "sphere_steps_per_s": n / dt_step,
                          "vs_bare": dt_step / base})
@@ -130,7 +130,7 @@ def main() -> None:
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     pairs = nbr[1].size / 2 / n
     print(f"# porepipe pack benchmark: N = {n} polydisperse spheres (r in [1, 4] µm), {pairs:.1f} list pairs per "
-          f"sphere, list build {build_s:.2f} s; best of 2 runs of {steps} steps\n")
+          f"sphere, list build {build_s:.2f} s; best of 4 runs of {steps} steps\n")
     print("| threads | kernel (compiled effects, none active) | s/step | sphere-steps/s | vs bare | "
           "vs LAMMPS chute (1.1e7/core) |")
     print("|---|---|---|---|---|---|")
