@@ -66,33 +66,30 @@ def _get(typingctx, arr, idx):
     return sig, codegen
 
 
-@intrinsic
-def _set(typingctx, arr, idx, val):
-    """``arr[idx] = val`` without the wrap-around test."""
-    sig = types.void(arr, idx, val)
-
-    def codegen(context, builder, signature, args):
-        arrty = signature.args[0]
-        ptr = _item_pointer(context, builder, arrty, args[0], signature.args[1], args[1])
-        builder.store(context.cast(builder, args[2], signature.args[2], arrty.dtype), ptr)
-        return context.get_dummy_value()
-
-    return sig, codegen
-
-
-@intrinsic
-def _stream_store(typingctx, arr, idx, val):
-    """``arr[idx] = val`` as a non-temporal store (no wrap-around test)."""
-    sig = types.void(arr, idx, val)
+def _store_codegen(nontemporal: bool):
+    """Code generator of ``arr[idx] = val`` without the wrap-around test, optionally as a non-temporal store."""
 
     def codegen(context, builder, signature, args):
         arrty = signature.args[0]
         ptr = _item_pointer(context, builder, arrty, args[0], signature.args[1], args[1])
         store = builder.store(context.cast(builder, args[2], signature.args[2], arrty.dtype), ptr)
-        store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
+        if nontemporal:
+            store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
         return context.get_dummy_value()
 
-    return sig, codegen
+    return codegen
+
+
+@intrinsic
+def _set(typingctx, arr, idx, val):
+    """``arr[idx] = val`` without the wrap-around test."""
+    return types.void(arr, idx, val), _store_codegen(False)
+
+
+@intrinsic
+def _stream_store(typingctx, arr, idx, val):
+    """``arr[idx] = val`` as a non-temporal store (no wrap-around test)."""
+    return types.void(arr, idx, val), _store_codegen(True)
 
 
 @intrinsic
