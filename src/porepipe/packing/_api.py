@@ -212,7 +212,7 @@ def _id_order(state: State) -> np.ndarray:
 
 
 def _append(state: State, centres: np.ndarray, radii: np.ndarray, types: np.ndarray, velocity) -> None:
-    """Add spheres at rest-velocity ``velocity`` with the next insertion numbers."""
+    """Append spheres moving at ``velocity``; they get the next insertion numbers."""
     n = radii.size
     state.x = np.concatenate([state.x, centres])
     state.v = np.concatenate([state.v, np.tile(np.asarray(velocity, float), (n, 1))])
@@ -258,14 +258,15 @@ def _guard(stats, state: State, tables: _Tables, stage: Stage, stage_idx: int, s
         i = int(bad if bad >= 0 else darg)
         t = tables.names[int(state.types[i])] if i >= 0 else "?"
         raise PorepipeError(f"{where}: non-finite position or velocity of sphere {_sphere_no(state, i)} (type {t!r}); "
-                            f"the time step "
-                            f"dt = {stage.dt} is too large for the interaction constant k[{t}] or the damping")
+                            f"the time step dt = {stage.dt} is too large for the interaction constant k[{t}] or the "
+                            "damping")
     limit = settings.max_step_fraction * float(box.min())
     if dmax > limit:
         i = int(darg)
         t = tables.names[int(state.types[i])]
         raise PorepipeError(
-            f"{where}: runaway sphere {_sphere_no(state, i)} (type {t!r}, r = {state.r[i]:.4g} µm) moved {dmax:.4g} µm in one step "
+            f"{where}: runaway sphere {_sphere_no(state, i)} (type {t!r}, r = {state.r[i]:.4g} µm) moved {dmax:.4g} µm "
+            "in one step "
             f"(limit max_step_fraction * box = {limit:.4g} µm, kinetic energy {ke:.4g}); likely cause: dt = {stage.dt} "
             f"too large for k[{t}] = {stage.k.get(t, 1.0)} (or a too-strong stochastic force / overlap at start)")
 
