@@ -108,3 +108,15 @@ def test_bad_settings_name_the_key():
         Settings.model_validate({"types": [{"name": "a", "radius_um": {"min_um": 1, "max_um": 2}}]})
     with pytest.raises(PorepipeError, match="at least one"):
         pack_spheres(Settings(), [10.0] * 3)
+
+
+def test_neighbour_search_refuses_centres_outside_a_periodic_box():
+    """The minimum image assumes coordinates in [0, L): a centre at L or beyond is an error naming the axis, not a
+    silently wrong list; sphere_overlaps wraps user coordinates itself and gives the wrapped answer."""
+    x = np.array([[10.0, 10, 10], [310.0, 10, 10]])   # the second is the first's neighbour at x = 10 after wrapping
+    r = np.array([6.0, 6.0])
+    with pytest.raises(PorepipeError, match="periodic axis x span"):
+        build_neighbours(x, r, np.zeros(2, np.int64), np.full(3, 300.0), np.ones(3, bool), np.ones((1, 1), np.uint8),
+                         1.3, 0.0)
+    sig, _ = sphere_overlaps(x, r, np.zeros(2, np.int64), [300.0] * 3, [True] * 3, [0.3])
+    np.testing.assert_array_equal(sig, [1.0, 1.0])   # coincident after wrapping: sigma = 2r / 2r

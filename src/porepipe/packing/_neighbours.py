@@ -42,6 +42,14 @@ def check_box(radii_um: np.ndarray, box_um: np.ndarray, periodic: np.ndarray, cu
                 "that with periodic faces); enlarge domain.size_um, lower packing.cutoff or the largest radii")
 
 
+def _check_in_box(x_um, box_um, periodic) -> None:
+    """Refuse periodic coordinates outside [0, L): the kernels' minimum image assumes |x_i - x_j| < L."""
+    lo, hi = x_um.min(axis=0), x_um.max(axis=0)
+    for axis in np.flatnonzero(np.asarray(periodic, dtype=bool) & ((lo < 0) | (hi >= box_um))):
+        raise PorepipeError(f"sphere centres along periodic axis {'xyz'[axis]} span [{lo[axis]:.6g}, {hi[axis]:.6g}] "
+                            f"µm, outside [0, {box_um[axis]:.6g}) µm; wrap them into the box first (np.mod)")
+
+
 def _class_grids(x, r, box, cutoff, skin):
     cls = np.floor(np.log2(r / r.min())).astype(np.int64)
     np.maximum(cls, 0, out=cls)
@@ -67,7 +75,7 @@ def _class_grids(x, r, box, cutoff, skin):
 def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um, reorder=False):
     """Full CSR neighbour list: partners j of i with |x_i - x_j| <= cutoff * (r_i + r_j) + skin (minimum image).
 
-    Periodic coordinates must lie in [0, L) (the engine keeps them there).
+    Periodic coordinates must lie in [0, L) (the engine keeps them there); others raise a PorepipeError.
 
     With ``reorder`` the spheres are first put in cell order (radius class, then cell; stable), so that partners
     sit close in memory; the list then refers to the reordered spheres ``x_um[order]``.
@@ -85,6 +93,7 @@ def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_
     if n == 0:
         empty = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
         return (*empty, np.zeros(0, dtype=np.int64)) if reorder else empty
+    _check_in_box(x_um, box_um, periodic)
     cls, ncls, side, ncell, cell_off = _class_grids(x_um, r_um, box_um, cutoff, skin_um)
     cell_of = np.empty(n, dtype=np.int64)
     K._assign_cells(x_um, cls, side, ncell, cell_off, cell_of)
