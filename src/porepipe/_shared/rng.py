@@ -12,7 +12,7 @@ import zlib
 
 import numpy as np
 
-__all__ = ["seed_sequence", "stream", "kernel_seed"]
+__all__ = ["kernel_seed", "seed_sequence", "stream"]
 
 
 def _stage_word(stage: str) -> int:
