@@ -10,11 +10,14 @@ from __future__ import annotations
 
 import dataclasses
 import glob
+import math
+import struct
 from pathlib import Path
 from typing import Sequence
 
 import h5py
 import numpy as np
+import psutil
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.acquire._settings import ByteOrder, ImageFormat, MemoryOrder, Raw
@@ -77,7 +80,7 @@ def read_raw(path, raw: Raw) -> np.ndarray:
         raise PorepipeError(f"acquire.raw.dtype = {raw.dtype!r}: give a plain integer or float type without byte "
                             "order (set the order in acquire.raw.byte_order)")
     dtype = base.newbyteorder("<" if raw.byte_order is ByteOrder.little else ">")
-    expected = raw.header_bytes + int(np.prod(raw.shape, dtype=np.int64)) * dtype.itemsize
+    expected = raw.header_bytes + math.prod(int(n) for n in raw.shape) * dtype.itemsize  # Python ints: no overflow
     size = path.stat().st_size
     if size != expected:
         raise PorepipeError(
@@ -161,6 +164,32 @@ def _section_files(path: Path) -> list[str]:
     return files
 
 
+#: what tifffile raises on damaged or unusual files besides its own error (a bad offset, a short tag, a bad code)
+_TIFF_ERRORS = (OSError, ValueError, IndexError, KeyError, TypeError, struct.error)
+
+
+def _check_tiff_page(tif, name: str) -> None:
+    """Refuse a file without image data, with colour samples, or too large for this machine's free memory."""
+    if not len(tif.pages) or not tif.series:
+        raise PorepipeError(f"TIFF {name} holds no image page (damaged or not a TIFF)")
+    page, series = tif.pages[0], tif.series[0]
+    samples = int(getattr(page, "samplesperpixel", 1) or 1)
+    if samples > 1 or "S" in series.axes:
+        raise PorepipeError(f"TIFF {name} has {samples} samples per pixel (axes {series.axes!r}, e.g. RGB); expected one "
+                            "grey channel: convert it to grey values first")
+    need = int(np.prod(series.shape, dtype=object)) * np.dtype(series.dtype).itemsize
+    free = psutil.virtual_memory().available
+    if need > free:
+        raise PorepipeError(f"TIFF {name} claims shape {tuple(series.shape)} ({need / 2**30:.1f} GiB), more than the "
+                            f"{free / 2**30:.1f} GiB of free memory")
+
+
+def _read_tiff_file(name: str, tifffile) -> tuple[np.ndarray, tuple | None]:
+    with tifffile.TiffFile(name) as tif:
+        _check_tiff_page(tif, name)
+        return tif.series[0].asarray(), _tiff_spacing(tif)
+
+
 def read_tiff(path) -> tuple[np.ndarray, tuple | None, bool]:
     """Read a TIFF file (2-D, multi-page or 3-D) or a directory/glob of 2-D sections stacked along z.
 
@@ -169,20 +198,30 @@ def read_tiff(path) -> tuple[np.ndarray, tuple | None, bool]:
     data : (x, y, z) ndarray
     spacing : (sx, sy, sz or None) in µm, or None
     is_2d : bool
+
+    Raises
+    ------
+    PorepipeError
+        A damaged file, colour samples, a shape larger than the free memory, or sections of unequal shape.
     """
     import tifffile
 
     path = Path(path)
     files = [str(path)] if path.is_file() else _section_files(path)
+    current = files[0]
     try:
-        with tifffile.TiffFile(files[0]) as tif:
-            spacing = _tiff_spacing(tif)
-        if len(files) == 1:
-            arr = tifffile.imread(files[0])
-        else:
-            arr = np.stack([tifffile.imread(f) for f in files])
-    except (tifffile.TiffFileError, OSError, ValueError) as err:
-        raise PorepipeError(f"cannot read TIFF {files[0]}: {err}") from err
+        arr, spacing = _read_tiff_file(current, tifffile)
+        if len(files) > 1:
+            sections = [arr]
+            for current in files[1:]:
+                section = _read_tiff_file(current, tifffile)[0]
+                if section.shape != arr.shape:
+                    raise PorepipeError(f"TIFF section {current} has shape {section.shape}, the first section "
+                                        f"{files[0]} has {arr.shape}; all sections must have one shape")
+                sections.append(section)
+            arr = np.stack(sections)
+    except (tifffile.TiffFileError, *_TIFF_ERRORS) as err:
+        raise PorepipeError(f"cannot read TIFF {current}: {err}") from err
     if arr.ndim == 2:
         return arr.T[:, :, None], spacing, len(files) == 1
     if arr.ndim != 3:
