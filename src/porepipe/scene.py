@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import enum
 import math
+import os
+import reprlib
 from pathlib import Path
 from typing import Annotated, Any
 
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -24,6 +25,7 @@ from pydantic import (
 
 from porepipe._registry import OPTIONAL_SECTIONS, stage_settings
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.yaml_safe import load_yaml
 
 #: relative tolerance when checking that a resolution divides the box
 _DIVIDES_RTOL = 1e-9
@@ -103,7 +105,7 @@ class Segmentation(_Strict):
 
 class SceneBase(_Strict):
     name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="scene name = results folder")
-    seed: int = Field(0, ge=0, description="root of every random stream of the scene")
+    seed: int = Field(0, ge=0, strict=True, description="root of every random stream of the scene")
     domain: Domain | None = Field(None, description="the box; required unless the scene starts from an image")
     spheres: Spheres | None = Field(None, description="the matrix; required unless the scene starts from an image")
     resolutions_um: list[PositiveUm] = Field(min_length=1, description="voxel sizes a in µm, coarse to fine")
@@ -163,6 +165,22 @@ def _get(raw: dict, loc: tuple):
     return value
 
 
+def _short_repr() -> reprlib.Repr:
+    short = reprlib.Repr()  # keyword arguments to Repr() need Python 3.12
+    short.maxstring = short.maxother = 60
+    short.maxlist = short.maxtuple = 6
+    short.maxdict, short.maxlevel = 4, 3
+    return short
+
+
+_SHORT = _short_repr()
+
+
+def _short(value) -> str:
+    """A repr of a scene value short enough for one error line, whatever the value holds."""
+    return _SHORT.repr(value)
+
+
 def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
     problems = []
     for e in err.errors():
@@ -172,7 +190,49 @@ def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
             msg = "unknown key (misspelt?)"
         elif e["type"] == "enum":
             msg = f"{msg}"
-        problems.append(f"{_loc(loc)} = {_get(raw, loc)!r}: {msg}")
+        problems.append(f"{_loc(loc)} = {_short(_get(raw, loc))}: {msg[:300]}")
+    return problems
+
+
+def _is_length(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+
+
+def _machine_bytes() -> int:
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 2**62
+
+
+#: bytes per sphere the packing engine holds (positions, velocities, forces, radii, ids, cell and neighbour lists)
+_PACK_BYTES_PER_SPHERE = 256
+
+
+def _size_problems(raw: dict, size, res) -> list[str]:
+    """Resolutions that do not divide the box, and volumes or packings that cannot fit in this machine's memory."""
+    problems, memory = [], _machine_bytes()
+    for i, a in enumerate(res):
+        if not _is_length(a):
+            continue
+        edges = [edge for edge in size if _is_length(edge)]
+        bad = [f"{edge!r} ({edge / a:.6g} voxels)" for edge in edges
+               if abs(edge / a - round(edge / a)) > _DIVIDES_RTOL * max(1.0, edge / a)]
+        if bad:
+            problems.append(f"resolutions_um[{i}] = {a!r}: does not divide the box edge(s) {', '.join(bad)} of "
+                            "domain.size_um; allowed: a voxel size giving a whole number of voxels per edge")
+        voxels = math.prod(edge / a for edge in edges) if len(edges) == 3 else 0.0
+        if voxels > memory:
+            problems.append(f"resolutions_um[{i}] = {a!r}: the volume would have {voxels:.3g} voxels "
+                            f"({voxels / 2**30:.3g} GiB at 1 byte each), more than this machine's "
+                            f"{memory / 2**30:.0f} GiB of memory")
+    types = _get(raw, ("packing", "types"))
+    counts = [t.get("count") for t in types if isinstance(t, dict)] if isinstance(types, list) else []
+    spheres = sum(c for c in counts if isinstance(c, (int, float)) and not isinstance(c, bool) and c > 0)
+    if math.isfinite(spheres) and spheres * _PACK_BYTES_PER_SPHERE > memory:
+        problems.append(f"packing.types[*].count = {spheres:.3g} spheres in all: the packing engine would need about "
+                        f"{spheres * _PACK_BYTES_PER_SPHERE / 2**30:.3g} GiB, more than this machine's "
+                        f"{memory / 2**30:.0f} GiB of memory")
     return problems
 
 
@@ -182,20 +242,12 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
     size = _get(raw, ("domain", "size_um"))
     res = raw.get("resolutions_um")
     if isinstance(size, (list, tuple)) and isinstance(res, list):
-        for i, a in enumerate(res):
-            if not isinstance(a, (int, float)) or a <= 0:
-                continue
-            bad = [f"{edge!r} ({edge / a:.6g} voxels)" for edge in size
-                   if isinstance(edge, (int, float)) and edge > 0
-                   and abs(edge / a - round(edge / a)) > _DIVIDES_RTOL * max(1.0, edge / a)]
-            if bad:
-                problems.append(f"resolutions_um[{i}] = {a!r}: does not divide the box edge(s) {', '.join(bad)} of "
-                                "domain.size_um; allowed: a voxel size giving a whole number of voxels per edge")
+        problems += _size_problems(raw, size, res)
     spheres = raw.get("spheres")
     if isinstance(spheres, dict):
         for key in ("hdf5", "xyzr"):
             if isinstance(spheres.get(key), str) and not (base_dir / spheres[key]).is_file():
-                problems.append(f"spheres.{key} = {spheres[key]!r}: file not found (looked in {base_dir})")
+                problems.append(f"spheres.{key} = {_short(spheres[key])}: file not found (looked in {base_dir})")
         if spheres.get("pack") is True and "packing" not in raw:
             problems.append("spheres.pack = True: needs a `packing:` section that says how to pack")
     return problems
@@ -231,9 +283,9 @@ def load_scene(path) -> BaseModel:
     if not path.is_file():
         raise SceneError(str(path), [f"scene file {path} does not exist"])
     try:
-        raw = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as err:
-        raise SceneError(str(path), [f"not valid YAML: {err}"]) from err
+        raw = load_yaml(path)
+    except PorepipeError as err:
+        raise SceneError(str(path), [str(err)]) from None
     return parse_scene(raw, path.parent, str(path))
 
 
