@@ -92,7 +92,7 @@ def load_yaml(path) -> Any:
             "(spheres, images) in files the scene names"
         )
     try:
-        document = yaml.load(path.read_text(), Loader=_BoundedLoader)  # noqa: S506 - a SafeLoader subclass
+        document = yaml.load(path.read_text(), Loader=_BoundedLoader)  # a SafeLoader subclass
     except yaml.YAMLError as err:
         text = " ".join(str(err).split())
         raise PorepipeError(f"{path}: not valid YAML: {text[:300]}") from None
