@@ -84,6 +84,19 @@ class PorosityLimit:
     error_method: str
 
 
+def _add_exact_limits(ds: xr.Dataset, bounds: np.ndarray) -> xr.Dataset:
+    """No voxel is partly matrix at any resolution (a single phase, or faces on voxel planes): φ is known exactly."""
+    phi = float(bounds[-1, 0])
+    why = "no partial voxels at any resolution: both bounds equal the porosity, nothing to extrapolate"
+    ds["phi_star"] = ("pair", 0.5 * (ds["phi_0"].values + ds["phi_215"].values))
+    ds["phi_2star"] = ("pair", ds["phi_215"].values - ds["phi_0"].values)
+    ds["phi_regression"] = ((), phi, {"error_method": "exact", "supported": 1, "why": why})
+    ds["phi_regression_err"] = ((), 0.0)
+    ds["phi_limit"] = ((), phi, {"method": why})
+    ds["phi_limit_err"] = ((), 0.0, {"method": "exact"})
+    return ds
+
+
 def regress_porosity_limit(phi0_lines, phi215_lines) -> PorosityLimit:
     """Regress φ* = (ϕ_0 + ϕ_215)/2 linearly on φ** = ϕ_215 − ϕ_0 and return the intercept (φ** → 0).
 
@@ -224,6 +237,8 @@ def estimate_from_histograms(voxel_um, hists) -> xr.Dataset:
 
 def _add_limits(ds: xr.Dataset, a: np.ndarray, bounds: np.ndarray) -> xr.Dataset:
     """The a → 0 porosity: the thesis's φ*/φ** regression, and three-point limits of both bounds."""
+    if np.all(bounds[:, 0] == bounds[:, 1]):
+        return _add_exact_limits(ds, bounds)
     lim = regress_porosity_limit(ds["phi_0"].values, ds["phi_215"].values)
     width = lim.phi_2star
     # the regression needs bound widths that shrink towards 0 (as in Table 7.2); otherwise it extrapolates noise
