@@ -45,9 +45,13 @@ def snakemake_command(scene_path, cores: int, dry_run: bool = False, extra: list
 
 def _run(args) -> int:
     scene = load_scene(args.scene)  # fail fast, with every problem listed
-    result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, args.snakemake_args))
-    if result.returncode == 0 and not args.dry_run:
+    extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
+    result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra))
+    if result.returncode == 0 and not (args.dry_run or args.unlock):
         print(f"porepipe: results of scene {scene.name!r} are in {Path('results', scene.name).resolve()}")
+    elif result.returncode != 0 and Path(".snakemake", "locks").is_dir() and any(Path(".snakemake", "locks").iterdir()):
+        print(f"porepipe run: if no other run of this directory is alive (a killed run leaves its lock), "
+              f"`porepipe run {args.scene} --unlock` releases the lock; then run again", file=sys.stderr)
     return result.returncode
 
 
@@ -62,17 +66,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene")
     p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
     p.add_argument("-n", "--dry-run", action="store_true", help="list the jobs only")
-    p.add_argument("snakemake_args", nargs=argparse.REMAINDER, help="after --: passed to snakemake")
-    p.set_defaults(func=_run)
+    p.add_argument("--unlock", action="store_true",
+                   help="release the lock a killed run left on this directory (Snakemake --unlock), run nothing")
+    p.epilog = "Arguments after `--` go to Snakemake unchanged, e.g. `porepipe run S.yaml --cores 2 -- --forceall`."
+    p.set_defaults(func=_run, snakemake_args=[])
     for module in stage_cli_modules():
         module.register(sub)
     return parser
 
 
+def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
+    """``run … -- ARGS``: the porepipe arguments and the ones after the first ``--`` (for Snakemake)."""
+    if argv[:1] == ["run"] and "--" in argv:
+        cut = argv.index("--")
+        return argv[:cut], argv[cut + 1:]
+    return argv, []
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    if getattr(args, "snakemake_args", None) and args.snakemake_args[0] == "--":
-        args.snakemake_args = args.snakemake_args[1:]
+    own, passthrough = _split_passthrough(list(sys.argv[1:] if argv is None else argv))
+    args = build_parser().parse_args(own)
+    if args.command == "run":
+        args.snakemake_args = passthrough
     try:
         return int(args.func(args) or 0)
     except PorepipeError as err:

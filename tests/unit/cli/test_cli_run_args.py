@@ -1,0 +1,57 @@
+"""`porepipe run` parses its own options wherever they stand and passes only what follows `--` to Snakemake."""
+
+import subprocess
+
+import pytest
+
+from porepipe import cli
+
+SCENE = "config/scenes/mini.yaml"
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    seen = []
+
+    def fake_run(cmd, *args, **kwargs):
+        seen.append(cmd)
+        return subprocess.CompletedProcess(cmd, 0)
+
+    monkeypatch.setattr(cli.subprocess, "run", fake_run)
+    return seen
+
+
+def _tail(cmd):
+    return cmd[cmd.index("--show-failed-logs") + 1 :]
+
+
+def test_options_after_the_scene_are_porepipes_and_after_dashes_snakemakes(calls, capsys):
+    assert cli.main(["run", SCENE, "--cores", "2", "--", "--unlock"]) == 0
+    cmd = calls[0]
+    assert cmd[cmd.index("--cores") + 1] == "2"
+    assert _tail(cmd) == ["--unlock"]  # before: ['--cores', '2', '--', '--unlock'] went to Snakemake
+
+
+def test_dry_run_flag_is_understood_and_prints_no_results_line(calls, capsys):
+    assert cli.main(["run", SCENE, "-n"]) == 0
+    assert _tail(calls[0]) == ["--dry-run"]
+    assert "results of scene" not in capsys.readouterr().out
+
+
+def test_unlock_option(calls, capsys):
+    assert cli.main(["run", SCENE, "--unlock"]) == 0
+    assert _tail(calls[0]) == ["--unlock"]
+    assert "results of scene" not in capsys.readouterr().out
+
+
+def test_plain_run_passes_nothing_extra(calls, capsys):
+    assert cli.main(["run", SCENE, "--cores", "1"]) == 0
+    assert _tail(calls[0]) == []
+    assert "results of scene 'mini'" in capsys.readouterr().out
+
+
+def test_arguments_after_dashes_may_look_like_porepipe_options(calls):
+    assert cli.main(["run", SCENE, "--", "--cores", "9", "-n"]) == 0
+    cmd = calls[0]
+    assert cmd[cmd.index("--cores") + 1] != "9"  # porepipe's own --cores default
+    assert _tail(cmd) == ["--cores", "9", "-n"]
