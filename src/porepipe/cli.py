@@ -46,7 +46,7 @@ def snakemake_command(scene_path, cores: int, dry_run: bool = False, extra: list
 def _run(args) -> int:
     scene = load_scene(args.scene)  # fail fast, with every problem listed
     extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
-    result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra))
+    result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False)
     if result.returncode == 0 and not (args.dry_run or args.unlock):
         print(f"porepipe: results of scene {scene.name!r} are in {Path('results', scene.name).resolve()}")
     elif result.returncode != 0 and Path(".snakemake", "locks").is_dir() and any(Path(".snakemake", "locks").iterdir()):
