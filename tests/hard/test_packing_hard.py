@@ -17,9 +17,21 @@ from naive_packing import neighbour_pairs  # noqa: E402
 
 
 def _one_type(count=20, rmin=40.0, rmax=60.0, **stage):
-    st = {"name": "s", "insert": ["a"], "steps": 50, "dt": 0.25, "k": {"a": 400}, "damping": {"a": 4}, **stage}
-    return Settings.model_validate({"types": [{"name": "a", "count": count,
-                                               "radius_um": {"min_um": rmin, "max_um": rmax}}], "stages": [st]})
+    st = {
+        "name": "s",
+        "insert": ["a"],
+        "steps": 50,
+        "dt": 0.25,
+        "k": {"a": 400},
+        "damping": {"a": 4},
+        **stage,
+    }
+    return Settings.model_validate(
+        {
+            "types": [{"name": "a", "count": count, "radius_um": {"min_um": rmin, "max_um": rmax}}],
+            "stages": [st],
+        }
+    )
 
 
 def test_coincident_centres_separate_to_equilibrium():
@@ -37,7 +49,7 @@ def test_sphere_far_from_all_others_is_finite_and_unconverged():
     x = np.array([[10.0, 10, 10], [30.0, 10, 10], [150.0, 150, 150]])
     r = np.array([10.0, 10.0, 5.0])
     sig, conv = sphere_overlaps(x, r, np.zeros(3, np.int64), [300.0] * 3, [True] * 3, [0.3])
-    np.testing.assert_array_equal(sig, [0.0, 0.0, -np.inf])   # the pair touches exactly: sigma = 0
+    np.testing.assert_array_equal(sig, [0.0, 0.0, -np.inf])  # the pair touches exactly: sigma = 0
     np.testing.assert_array_equal(conv, [0, 0, 0])
     # a lone sphere in a run: no force, it stays put without stochastic forces and the run ends unconverged
     p = pack_spheres(_one_type(count=1, rmin=5, rmax=5), [300.0] * 3, True, seed=0)
@@ -60,8 +72,12 @@ def test_radius_ratio_100_to_1_neighbour_search_scales():
     assert elapsed < 2.0
     sub = np.concatenate([np.arange(4), rng.choice(np.arange(4, r.size), 300, replace=False)])
     ref = neighbour_pairs(x[sub], r[sub], box, np.ones(3, bool), 1.3, 0.15)
-    got = {(a, b) for a in range(sub.size) for b in range(a + 1, sub.size)
-           if sub[b] in set(idx[start[sub[a]]:start[sub[a] + 1]].tolist())}
+    got = {
+        (a, b)
+        for a in range(sub.size)
+        for b in range(a + 1, sub.size)
+        if sub[b] in set(idx[start[sub[a]] : start[sub[a] + 1]].tolist())
+    }
     assert got == ref
 
 
@@ -83,11 +99,24 @@ def test_damping_at_and_beyond_the_limit():
 
 
 def test_zero_spheres_of_a_type_and_empty_stage():
-    settings = Settings.model_validate({
-        "types": [{"name": "a", "count": 30, "radius_um": {"min_um": 40, "max_um": 60}},
-                  {"name": "b", "count": 0, "radius_um": {"min_um": 1, "max_um": 2}}],
-        "stages": [{"name": "s", "insert": ["a", "b"], "steps": 30, "dt": 0.25, "k": {"a": 400},
-                    "damping": {"a": 4}}]})
+    settings = Settings.model_validate(
+        {
+            "types": [
+                {"name": "a", "count": 30, "radius_um": {"min_um": 40, "max_um": 60}},
+                {"name": "b", "count": 0, "radius_um": {"min_um": 1, "max_um": 2}},
+            ],
+            "stages": [
+                {
+                    "name": "s",
+                    "insert": ["a", "b"],
+                    "steps": 30,
+                    "dt": 0.25,
+                    "k": {"a": 400},
+                    "damping": {"a": 4},
+                }
+            ],
+        }
+    )
     p = pack_spheres(settings, [600.0] * 3, True, seed=0)
     assert p.radii_um.size == 30 and np.all(p.types == 0)
     empty = settings.model_copy(update={"stages": [settings.stages[0].model_copy(update={"insert": ["b"]})]})
@@ -102,8 +131,12 @@ def test_runaway_time_step_stops_with_a_message():
 
 def test_bad_settings_name_the_key():
     with pytest.raises(ValidationError, match="unknown type"):
-        Settings.model_validate({"types": [{"name": "a", "count": 1, "radius_um": {"min_um": 1, "max_um": 2}}],
-                                 "stages": [{"insert": ["b"]}]})
+        Settings.model_validate(
+            {
+                "types": [{"name": "a", "count": 1, "radius_um": {"min_um": 1, "max_um": 2}}],
+                "stages": [{"insert": ["b"]}],
+            }
+        )
     with pytest.raises(ValidationError, match="exactly one of count"):
         Settings.model_validate({"types": [{"name": "a", "radius_um": {"min_um": 1, "max_um": 2}}]})
     with pytest.raises(PorepipeError, match="at least one"):
@@ -113,10 +146,35 @@ def test_bad_settings_name_the_key():
 def test_neighbour_search_refuses_centres_outside_a_periodic_box():
     """The minimum image assumes coordinates in [0, L): a centre at L or beyond is an error naming the axis, not a
     silently wrong list; sphere_overlaps wraps user coordinates itself and gives the wrapped answer."""
-    x = np.array([[10.0, 10, 10], [310.0, 10, 10]])   # the second is the first's neighbour at x = 10 after wrapping
+    x = np.array(
+        [[10.0, 10, 10], [310.0, 10, 10]]
+    )  # the second is the first's neighbour at x = 10 after wrapping
     r = np.array([6.0, 6.0])
     with pytest.raises(PorepipeError, match="periodic axis x span"):
-        build_neighbours(x, r, np.zeros(2, np.int64), np.full(3, 300.0), np.ones(3, bool), np.ones((1, 1), np.uint8),
-                         1.3, 0.0)
+        build_neighbours(
+            x,
+            r,
+            np.zeros(2, np.int64),
+            np.full(3, 300.0),
+            np.ones(3, bool),
+            np.ones((1, 1), np.uint8),
+            1.3,
+            0.0,
+        )
     sig, _ = sphere_overlaps(x, r, np.zeros(2, np.int64), [300.0] * 3, [True] * 3, [0.3])
-    np.testing.assert_array_equal(sig, [1.0, 1.0])   # coincident after wrapping: sigma = 2r / 2r
+    np.testing.assert_array_equal(sig, [1.0, 1.0])  # coincident after wrapping: sigma = 2r / 2r
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf")])
+@pytest.mark.parametrize("key", ["initial_velocity", "adaptive trigger"])
+def test_non_finite_settings_are_refused_by_the_schema(key, value):
+    # before: a NaN initial velocity validated and the run then blamed dt (issue 20, item 8)
+    raw = _one_type().model_dump(mode="python")
+    if key == "initial_velocity":
+        raw["initial_velocity"] = (0.0, value, 0.0)
+        where = "initial_velocity"
+    else:
+        raw["stages"][0]["adaptive_radii"] = {"types": ["a"], "trigger": value}
+        where = "trigger"
+    with pytest.raises(ValidationError, match=rf"{where}[\s\S]*finite number"):
+        Settings.model_validate(raw)
