@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-import os
 import time
 from pathlib import Path
 
@@ -13,6 +12,7 @@ import h5py
 import numba
 import numpy as np
 
+from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import hash_of
@@ -94,15 +94,13 @@ def _checkpoint_key(lat: Lattice, settings: Settings) -> str:
 
 
 def _save_checkpoint(path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with h5py.File(tmp, "w") as f:
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["key"] = key
         f.attrs["step"] = step
         f.create_dataset("populations", data=pops)
         f.create_dataset("fields", data=fields)
         for name, values in history.items():
             f.create_dataset(f"history/{name}", data=np.asarray(values))
-    os.replace(tmp, path)
 
 
 def _load_checkpoint(path: Path, key: str, pops: np.ndarray):
