@@ -23,9 +23,10 @@ from porepipe.decorate._library import (
 )
 from porepipe.decorate._rotation import anisotropic_rotations, uniform_rotations
 from porepipe.decorate._settings import Generator, OrientationMode, ScaleRule, Settings
-from porepipe.voxelize._api import VoxelizeMethod, grid_shape
-from porepipe.voxelize._kernels import SUB
-from porepipe.voxelize._spheres import check_spheres
+from porepipe.voxelize._api import grid_shape
+from porepipe.voxelize._settings import VoxelizeMethod
+from porepipe._shared.sample_points import SUB
+from porepipe._shared.spheres import check_spheres
 
 #: sub-streams of the scene seed
 _STREAM_LIBRARY, _STREAM_ASSIGN, _STREAM_ORIENT, _STREAM_MINIMISER = 71, 72, 73, 74

@@ -15,7 +15,7 @@ from porepipe.decorate._io import decoration_dataset, read_grains
 from porepipe.scene import load_scene, scene_part
 from porepipe.voxelize._api import grid_shape
 from porepipe.voxelize._cli import write_grey_volume
-from porepipe.voxelize._spheres import spheres_from_scene
+from porepipe._shared.spheres import spheres_from_scene
 
 
 def _sphere_types(scene, packing_path, n: int) -> np.ndarray:

@@ -16,7 +16,7 @@ from porepipe.minkowski._api import (
     threshold_histograms_slabs,
 )
 from porepipe.minkowski._settings import Settings
-from porepipe.minkowski._weights import Adjacency
+from porepipe.minkowski._settings import Adjacency
 
 #: table group of the Minkowski functions of the grey threshold in the result file
 THRESHOLD_GROUP = "threshold"

@@ -9,8 +9,8 @@ from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import ResultWriter, hash_of
 from porepipe.scene import load_scene, scene_part
 from porepipe.voxelize._api import grid_shape, iter_grey_slabs
-from porepipe.voxelize._kernels import N_SAMPLES
-from porepipe.voxelize._spheres import spheres_from_scene
+from porepipe._shared.sample_points import N_SAMPLES
+from porepipe._shared.spheres import spheres_from_scene
 
 
 def voxelize_scene(scene, voxel_um: float, out, packing_path=None, threads: int | None = None, progress=True):
