@@ -14,13 +14,12 @@ uint64 word q // 10 (:data:`WORDS` words per voxel). A voxel's state while a pla
 import numpy as np
 from numba import njit
 
+from porepipe._shared.grey import N_SAMPLES, SUB
 from porepipe._shared.numba_config import FASTMATH
 
 __all__ = ["FULL", "FULL_ROW", "MARGIN", "N_SAMPLES", "PARTIAL", "ROWS_PER_WORD", "SUB", "UNTOUCHED", "WORDS",
            "axis_range", "grey_from_status", "hull_gap", "or_row", "plane_candidates", "popcount64", "sample_coord"]
 
-SUB = 6                  # sample points per voxel edge
-N_SAMPLES = SUB ** 3     # 216
 ROWS_PER_WORD = 10      # 36 rows of 6 sample points, 10 rows (60 bits) per uint64 word
 WORDS = 4               # ceil(36 / 10) words per voxel
 FULL_ROW = (1 << SUB) - 1

@@ -47,6 +47,36 @@ def hash_of(obj: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def result_hash(stage: str, *, scene_part: Any = None, settings: Any = None, inputs: Sequence = (),
+                **extra: Any) -> str:
+    """The hash of what determines a result, made the same way by every stage (root attribute ``scene_hash``).
+
+    Parameters
+    ----------
+    stage : str
+        The stage writing the result.
+    scene_part : JSON-able, optional
+        The parts of the scene the result depends on (:func:`porepipe.scene.scene_part`).
+    settings : pydantic model or JSON-able, optional
+        The stage's settings after command-line overrides.
+    inputs : sequence of path-like
+        Result files it is computed from; each enters by its own ``scene_hash``, so a change upstream changes the
+        hash downstream. Order matters (sort it where the inputs are a set).
+    **extra : JSON-able
+        Further arguments that change the result (a voxel size, an axis, a sub-sample edge).
+
+    Returns
+    -------
+    str
+        16 hex digits (:func:`hash_of` of the record).
+    """
+    if hasattr(settings, "model_dump"):
+        settings = settings.model_dump(mode="json")
+    record = {"stage": stage, "scene": scene_part, "settings": settings,
+              "inputs": [read_attrs(p).get("scene_hash", "") for p in inputs], "extra": extra}
+    return hash_of(record)
+
+
 def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
@@ -280,8 +310,9 @@ def volume_meta(dset: h5py.Dataset, path) -> VolumeMeta:
     if voxel.size == 3 and np.allclose(voxel, voxel[0], rtol=1e-9, atol=0):
         voxel = voxel[:1]
     if voxel.size != 1 or not np.isfinite(voxel[0]) or voxel[0] <= 0:
-        raise PorepipeError(f"{path}: volume {dset.name} attribute voxel_um = {attrs['voxel_um']!r}; allowed: one "
-                            "positive number (cubic voxels; resample anisotropic images first)")
+        kind = "anisotropic voxels are not supported" if voxel.size == 3 else "not a voxel edge"
+        raise PorepipeError(f"{path}: volume {dset.name} attribute voxel_um = {attrs['voxel_um']!r}: {kind}; "
+                            "allowed: one positive number in µm (cubic voxels; resample anisotropic images first)")
     origin = np.asarray(attrs["origin_um"], dtype=np.float64).ravel()
     periodic = np.asarray(attrs["periodic"]).ravel()
     if origin.size != 3 or not np.all(np.isfinite(origin)):

@@ -120,11 +120,9 @@ def elongation_classes(stats_ds: xr.Dataset, n_classes: int) -> list[dict]:
 
 
 def _decoration(classes: list[dict]) -> dict | None:
-    """A decoration section with one random-polyhedron family per elongation class (if the stage is installed)."""
-    try:
-        from porepipe.decorate._settings import Settings as DecorationSettings
-    except ImportError:
-        return None
+    """A decoration section with one random-polyhedron family per elongation class."""
+    from porepipe.decorate import Settings as DecorationSettings
+
     families = [{"name": f"elong{i}", "generator": "random", "count": 8, "facets": 36,
                  "elongation": [min(c["elongation"][0], 0.9), min(c["elongation"][1], 0.9)]}
                 for i, c in enumerate(classes)]
