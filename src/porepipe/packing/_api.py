@@ -35,6 +35,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from porepipe._shared import rng
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe.packing import _kernels as K
@@ -115,12 +116,17 @@ def pair_tables(k_t: np.ndarray, sig_t: np.ndarray) -> tuple[np.ndarray, np.ndar
     return k, np.sqrt(k) * (1.0 + 0.25 * k), np.minimum(sig_t[:, None], sig_t[None, :])
 
 
-def _seed_stream(seed: int, *keys: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence([int(seed), *keys]))
+#: sub-streams of the stage's random stream (porepipe._shared.rng, stage name "packing"): placement and radii of a
+#: type inserted in a protocol stage (keys: stage, type), and the counter seed of the stochastic forces (key: stage)
+_STREAM_PLACEMENT, _STREAM_FORCES = 0, 1
+
+
+def _seed_stream(seed: int, stage: int, type_index: int) -> np.random.Generator:
+    return rng.stream(seed, "packing", _STREAM_PLACEMENT, stage, type_index)
 
 
 def _counter_seed(seed: int, stage: int) -> int:
-    return int(np.random.SeedSequence([int(seed), 1_000_003, stage]).generate_state(1, dtype=np.uint64)[0] >> 1)
+    return rng.kernel_seed(seed, "packing", _STREAM_FORCES, stage)
 
 
 _PER_SPHERE = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build", "ids")
