@@ -59,7 +59,7 @@ def atomic_path(path) -> Iterator[Path]:
     Examples
     --------
     >>> with atomic_path("table.csv") as tmp:  # doctest: +SKIP
-    ...     tmp.write_text("a,b\\n1,2\\n")
+    ...     tmp.write_text(text)
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -12,8 +12,18 @@ import importlib
 def lazy_exports(package: str, exports: dict[str, str]):
     """``__getattr__`` and ``__dir__`` for ``package`` that import ``exports[name]`` on first use.
 
-    ``exports[name]`` is a submodule of ``package`` (``"_api"``) or an absolute module name (``"porepipe._shared.x"``)
-    for a name the package re-exports from shared code.
+    Parameters
+    ----------
+    package : str
+        The package's ``__name__``.
+    exports : dict of str -> str
+        Public name -> the module that defines it: a submodule of ``package`` (``"_api"``) or an absolute module
+        name (``"porepipe._shared.x"``) for a name the package re-exports from shared code.
+
+    Returns
+    -------
+    (callable, callable)
+        The module-level ``__getattr__`` and ``__dir__``.
     """
 
     def __getattr__(name: str):

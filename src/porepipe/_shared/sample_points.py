@@ -86,8 +86,24 @@ def grey_from_status(status, mask, out):
 
 @njit(cache=True, fastmath=FASTMATH)
 def plane_candidates(i, h, xmin_sorted, half_extent_max):
-    """Sample-hull start of plane x = i and the range [first, last) of bodies (sorted by x-min = cx − half extent)
-    whose x-extent can meet the plane's sample hull."""
+    """Sample-hull start of plane x = i and the range [first, last) of bodies whose x-extent can meet its hull.
+
+    Parameters
+    ----------
+    i : int
+        The voxel plane.
+    h : float
+        Voxel edge / 6 (µm).
+    xmin_sorted : (N,) float64
+        x-min (= cx - half extent) of the bodies, ascending.
+    half_extent_max : float
+        Largest half extent of any body (µm).
+
+    Returns
+    -------
+    (float, int, int)
+        x of the plane's first sample point, and first, last: the bodies ``first .. last - 1`` of the sorted order.
+    """
     plane_lo = sample_coord(i, 0, h)
     plane_hi = sample_coord(i, SUB - 1, h)
     first = np.searchsorted(xmin_sorted, plane_lo - 2.0 * half_extent_max, side="left")
@@ -97,9 +113,17 @@ def plane_candidates(i, h, xmin_sorted, half_extent_max):
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def or_row(words, sx, sy, row):
-    """OR the 6-bit ``row`` of sample points (sx, sy, 0..5) into the voxel's mask ``words`` (uint64, length WORDS).
+    """OR the 6-bit ``row`` of sample points (sx, sy, 0..5) into a voxel's mask.
 
-    Bit layout: row q = 6·sx + sy occupies bits 6·(q mod 10) .. +5 of word q // 10, so a row never straddles words.
+    Parameters
+    ----------
+    words : (WORDS,) uint64
+        The voxel's sample mask; row q = 6·sx + sy occupies bits 6·(q mod 10) .. +5 of word q // 10, so a row never
+        straddles two words.
+    sx, sy : int
+        Sample indices (0..5) along x and y.
+    row : int
+        Bit k set = sample point (sx, sy, k) is in the matrix; 0 leaves the mask unchanged.
     """
     if row:
         q = SUB * sx + sy

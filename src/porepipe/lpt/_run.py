@@ -19,7 +19,21 @@ from porepipe.lpt._settings import Settings
 def read_binary(path, subsample_um: float | None = None) -> tuple[np.ndarray, float, tuple[bool, bool, bool], str]:
     """Pore volume, voxel edge (µm), periodicity and a note; optionally only the corner cube of edge ``subsample_um``.
 
-    A file written by ``porepipe subsample`` (root attribute ``sample_um``) is itself a corner sub-sample.
+    Parameters
+    ----------
+    path : path-like
+        Binary volume (volume ``pore``); a file written by ``porepipe subsample`` (root attribute ``sample_um``) is
+        itself a corner sub-sample.
+    subsample_um : float, optional
+        Edge of the corner cube to read (µm); its cut faces are not periodic.
+
+    Returns
+    -------
+    pore : (X, Y, Z) ndarray of uint8
+    voxel_um : float
+    periodic : (bool, bool, bool)
+    note : str
+        What part of the sample was read.
     """
     root = read_attrs(path)
     with open_volume(path, "pore") as dset:

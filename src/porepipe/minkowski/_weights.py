@@ -186,7 +186,7 @@ def _plane_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         a, b = [ax for ax in range(3) if ax != nz[0]]
         return np.eye(3, dtype=np.int64)[a], np.eye(3, dtype=np.int64)[b]
     if len(nz) == 2:
-        zero = [ax for ax in range(3) if normal[ax] == 0][0]
+        zero = next(ax for ax in range(3) if normal[ax] == 0)
         p = np.eye(3, dtype=np.int64)[zero]
         q = np.zeros(3, dtype=np.int64)
         q[nz[0]], q[nz[1]] = normal[nz[1]], -normal[nz[0]]

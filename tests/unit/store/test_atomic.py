@@ -24,7 +24,7 @@ def test_atomic_path_replaces_the_file_only_when_the_block_succeeds(tmp_path):
     assert sorted(p.name for p in path.parent.iterdir()) == ["t.txt"]  # the temporary file is gone too
     with atomic_path(path) as tmp:
         tmp.write_text("new\n")
-        assert not path.read_text() == "new\n"  # nothing visible under the final name before the commit
+        assert path.read_text() != "new\n"  # nothing visible under the final name before the commit
     assert path.read_text() == "new\n"
 
 
