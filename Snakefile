@@ -1,5 +1,6 @@
 # porepipe workflow: the Snakefile only includes rule files and names the final targets.
 # Scenes come from config/config.yaml (key `scenes`) or from `--config scene=PATH` (what `porepipe run` passes).
+# A new stage adds its own `include:` line here (CI checks that every workflow/rules/*.smk is included).
 from pathlib import Path
 
 import yaml
@@ -9,15 +10,20 @@ if not config.get("scene") and not config.get("scenes"):
 
 
 include: "workflow/rules/common.smk"
-
-
-for _rule_file in sorted(Path(workflow.basedir, "workflow", "rules").glob("*.smk")):
-    if _rule_file.name != "common.smk":
-
-        include: str(_rule_file)
+include: "workflow/rules/pack.smk"
+include: "workflow/rules/decorate.smk"
+include: "workflow/rules/voxelize.smk"
+include: "workflow/rules/segment.smk"
+include: "workflow/rules/estimate.smk"
+include: "workflow/rules/minkowski.smk"
+include: "workflow/rules/lpt.smk"
+include: "workflow/rules/permeability.smk"
+include: "workflow/rules/acquire.smk"
+include: "workflow/rules/sweep.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:
+    default_target: True
     input:
         all_targets(),
-    default_target: True

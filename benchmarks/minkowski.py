@@ -59,7 +59,7 @@ def main() -> None:
     for threads in (1, 2):
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
         t_hist = best_of(lambda: configuration_histogram(volume, True), args.repeat)
-        t_read = best_of(lambda: _touch_all(volume, threads), args.repeat)
+        t_read = best_of(lambda threads=threads: _touch_all(volume, threads), args.repeat)
         rows.append({"tool": "porepipe configuration_histogram", "threads": threads, "seconds": t_hist,
                      "mvox_per_s": nvox / t_hist / 1e6, "read_once_mvox_per_s": nvox / t_read / 1e6})
     t_np = best_of(lambda: numpy_histogram(volume), 1)

@@ -1,13 +1,13 @@
 """Which packages make up porepipe's stages: the CLI and the scene schema are assembled from this one list.
 
-A stage package may provide ``_settings.Settings`` (a pydantic model, put into the scene under ``scene_key``) and
-``_cli.register(subparsers)`` (its CLI subcommands).
+Every stage package provides ``_cli.register(subparsers)`` (its CLI subcommands) and, when it has a scene key,
+``_settings.Settings`` (a pydantic model, put into the scene under that key). A listed stage whose module is missing is
+an error, not a silent gap in the CLI or the schema.
 """
 
 from __future__ import annotations
 
 import importlib
-import importlib.util
 
 #: (package, scene key) in workflow order; scene key None = the stage has no scene section.
 STAGES: list[tuple[str, str | None]] = [
@@ -28,27 +28,23 @@ STAGES: list[tuple[str, str | None]] = [
 OPTIONAL_SECTIONS = {"acquire", "packing", "decoration"}
 
 
-def _optional_module(name: str):
-    """Import ``name`` if its package is installed (stages land one by one), else None."""
+def _stage_module(package: str, module: str):
+    """Import ``package.module``; a listed stage that is missing is an error naming it (never silently skipped)."""
+    name = f"{package}.{module}"
     try:
-        spec = importlib.util.find_spec(name)
-    except ModuleNotFoundError:
-        return None
-    return importlib.import_module(name) if spec is not None else None
+        return importlib.import_module(name)
+    except ModuleNotFoundError as err:
+        if err.name is not None and (name == err.name or name.startswith(err.name + ".")):
+            raise ImportError(f"porepipe._registry.STAGES lists {package!r}, but {name} is missing: add the module "
+                              "or remove the stage from STAGES") from err
+        raise
 
 
 def stage_settings() -> dict[str, type]:
-    """Scene key -> Settings model of every installed stage that has one."""
-    found = {}
-    for package, key in STAGES:
-        if key is None:
-            continue
-        module = _optional_module(f"{package}._settings")
-        if module is not None:
-            found[key] = module.Settings
-    return found
+    """Scene key -> Settings model of every stage that has a scene section."""
+    return {key: _stage_module(package, "_settings").Settings for package, key in STAGES if key is not None}
 
 
 def stage_cli_modules() -> list:
-    """The ``_cli`` modules of all installed stages, in workflow order."""
-    return [m for m in (_optional_module(f"{p}._cli") for p, _ in STAGES) if m is not None]
+    """The ``_cli`` modules of all stages, in workflow order."""
+    return [_stage_module(package, "_cli") for package, _ in STAGES]

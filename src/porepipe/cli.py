@@ -11,13 +11,14 @@ from pathlib import Path
 from porepipe import __version__
 from porepipe._registry import stage_cli_modules
 from porepipe._shared.errors import PorepipeError
-from porepipe.scene import SceneError, load_scene
 
 #: the repository root holding the Snakefile (src layout: <root>/src/porepipe/cli.py)
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 def _validate(args) -> int:
+    from porepipe.scene import SceneError, load_scene
+
     failed = 0
     for path in args.scene:
         try:
@@ -44,6 +45,8 @@ def snakemake_command(scene_path, cores: int, dry_run: bool = False, extra: list
 
 
 def _run(args) -> int:
+    from porepipe.scene import load_scene
+
     scene = load_scene(args.scene)  # fail fast, with every problem listed
     extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
     result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False)
@@ -56,6 +59,7 @@ def _run(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``porepipe`` argument parser with every stage's subcommands."""
     parser = argparse.ArgumentParser(prog="porepipe", description=__doc__)
     parser.add_argument("--version", action="version", version=f"porepipe {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -84,6 +88,7 @@ def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``porepipe`` command; returns the exit code (2 on bad input, with one line on stderr)."""
     own, passthrough = _split_passthrough(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(own)
     if args.command == "run":

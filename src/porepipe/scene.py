@@ -26,6 +26,10 @@ from pydantic import (
 from porepipe._registry import OPTIONAL_SECTIONS, stage_settings
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.yaml_safe import load_yaml
+from porepipe.segment._settings import Segmentation, SegmentationMethod
+
+__all__ = ["Analysis", "Domain", "Scene", "SceneError", "Segmentation", "SegmentationMethod", "Spheres", "grey_stage",
+           "load_scene", "parse_scene", "scene_part"]
 
 #: relative tolerance when checking that a resolution divides the box
 _DIVIDES_RTOL = 1e-9
@@ -41,11 +45,6 @@ class Analysis(str, enum.Enum):
     permeability = "permeability"  # lattice-Boltzmann permeability
     acquire = "acquire"            # image statistics, calibrated model scene, model-vs-experiment comparison
     report = "report"              # resolution sweep, extrapolation and the accuracy-versus-cost report
-
-
-class SegmentationMethod(str, enum.Enum):
-    otsu = "otsu"
-    fixed = "fixed"
 
 
 class _Strict(BaseModel):
@@ -86,21 +85,6 @@ class Spheres(_Strict):
             if r <= 0:
                 raise ValueError(f"sphere {i} has radius {r}; allowed: r > 0")
         return spheres
-
-
-class Segmentation(_Strict):
-    """Pore if grey value g <= threshold (the thesis's convention, §4.7.2)."""
-
-    method: SegmentationMethod = SegmentationMethod.otsu
-    threshold: int | None = Field(None, ge=0, le=215, description="g_th for method fixed (0..215)")
-
-    @model_validator(mode="after")
-    def _threshold_for_fixed(self):
-        if self.method is SegmentationMethod.fixed and self.threshold is None:
-            raise ValueError("method fixed needs `threshold` (an integer 0..215)")
-        if self.method is SegmentationMethod.otsu and self.threshold is not None:
-            raise ValueError("`threshold` is only used with method fixed; remove it or set method: fixed")
-        return self
 
 
 class SceneBase(_Strict):
@@ -188,8 +172,6 @@ def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
         msg = e["msg"].removeprefix("Value error, ")
         if e["type"] == "extra_forbidden":
             msg = "unknown key (misspelt?)"
-        elif e["type"] == "enum":
-            msg = f"{msg}"
         problems.append(f"{_loc(loc)} = {_short(_get(raw, loc))}: {msg[:300]}")
     return problems
 
@@ -290,8 +272,8 @@ def load_scene(path) -> BaseModel:
 
 
 def grey_stage(scene) -> str:
-    """The stage whose results folder holds the scene's grey volumes: decorated grains, or the spheres themselves."""
-    return "decorate" if getattr(scene, "decoration", None) is not None else "voxelize"
+    """The rule whose results folder holds the scene's grey volumes: decorated grains, or the spheres themselves."""
+    return "voxelize_grains" if getattr(scene, "decoration", None) is not None else "voxelize"
 
 
 def scene_part(scene, *keys: str) -> dict:

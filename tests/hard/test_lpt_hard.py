@@ -7,10 +7,9 @@ import pytest
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import ResultWriter, read_table
+from porepipe._shared.store import ResultWriter, read_binary_volume, read_table
 from porepipe.cli import main as cli_main
 from porepipe.lpt import Settings, local_porosity_analysis, local_porosity_histogram, percolation_bits
-from porepipe.lpt._cli import cubic_voxel_um
 from porepipe.sweep._crop import crop_corner
 
 FLOAT_VARS = ["mu", "phi_mean", "phi_var", "p", "mu_sv", "sv_mean_per_um"]
@@ -120,10 +119,15 @@ def write_binary(path, pore, voxel_um=1.0, periodic=(True, True, True)):
 
 
 def test_anisotropic_voxels_are_refused(tmp_path):
-    assert cubic_voxel_um([2.0, 2.0, 2.0], "f") == 2.0
-    with pytest.raises(PorepipeError, match="anisotropic"):
-        cubic_voxel_um([1.0, 1.0, 2.0], "f")
     path = tmp_path / "binary_a1.h5"
+    write_binary(path, np.ones((8, 8, 8), np.uint8))
+    with h5py.File(path, "a") as f:
+        f["volumes/pore"].attrs["voxel_um"] = np.array([2.0, 2.0, 2.0])  # three equal edges are one cubic voxel
+    assert read_binary_volume(path)[1].voxel_um == 2.0
+    with h5py.File(path, "a") as f:
+        f["volumes/pore"].attrs["voxel_um"] = np.array([1.0, 1.0, 2.0])
+    with pytest.raises(PorepipeError, match="anisotropic"):
+        read_binary_volume(path)
     write_binary(path, np.ones((8, 8, 8), np.uint8))
     with h5py.File(path, "a") as f:
         f["volumes/pore"].attrs["voxel_um"] = np.array([1.0, 1.0, 2.0])

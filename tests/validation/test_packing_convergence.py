@@ -48,7 +48,10 @@ def test_converged_packing_satisfies_overlap_window(seed):
 
 
 def test_radius_distribution_kept_without_adaptive_radii():
-    p = pack_spheres(_settings(n=80, adapt=False), BOX, True, seed=2)
+    # Without adaptive radii, 80 spheres in this box converge within the 600 steps for seeds 0, 1, 3, 5, 6, 7 of 0..7
+    # (porepipe._shared.rng streams); seeds 2 and 4 end with 2 isolated spheres at the step limit. The test is about
+    # the radius distribution of a converged packing, so it uses seed 0 (it used seed 2 under the old streams).
+    p = pack_spheres(_settings(n=80, adapt=False), BOX, True, seed=0)
     assert p.all_converged
     _assert_valid_packing(p, 0.3)
     lo, hi, a = 40.0, 80.0, 0.05
@@ -88,23 +91,23 @@ def test_one_and_two_threads_give_the_same_packing():
 
 
 def test_checkpoint_resume_is_bit_identical(tmp_path, monkeypatch):
-    import porepipe.packing._io as pio
+    import porepipe.packing._api as engine  # the name the engine calls (it imports _io's save_checkpoint at the top)
 
     settings = _settings(checkpoint_every=7)
     ref = pack_spheres(settings, BOX, True, seed=3)
     assert ref.stage_steps[0] > 28
     ck = tmp_path / "ck.h5"
-    real_save = pio.save_checkpoint
+    real_save = engine.save_checkpoint
 
     def save_then_die(path, state):
         real_save(path, state)
         if state.step >= 28:
             raise KeyboardInterrupt("simulated kill after the checkpoint of step 28")
 
-    monkeypatch.setattr(pio, "save_checkpoint", save_then_die)
+    monkeypatch.setattr(engine, "save_checkpoint", save_then_die)
     with pytest.raises(KeyboardInterrupt):
         pack_spheres(settings, BOX, True, seed=3, checkpoint_path=ck)
-    monkeypatch.setattr(pio, "save_checkpoint", real_save)
+    monkeypatch.setattr(engine, "save_checkpoint", real_save)
     with h5py.File(ck) as f:
         assert f.attrs["step"] == 28
     resumed = pack_spheres(settings, BOX, True, seed=3, checkpoint_path=ck, resume=True)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from porepipe.packing import read_packing
-from porepipe.packing._cli import pack_scene
+from porepipe.packing._run import run as pack_scene
 
 SCENES = Path(__file__).parents[2] / "config" / "scenes"
 

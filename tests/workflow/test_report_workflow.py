@@ -102,7 +102,7 @@ def test_report_opens_in_headless_chromium(run, tmp_path):
 def test_subsample_rule_cuts_the_corner(run):
     res, _ = run
     cwd = res.parent.parent
-    target = "results/small/segment/binary_a2_L20.h5"
+    target = "results/small/subsample/binary_a2_L20.h5"
     out = _porepipe("run", str(cwd / "small.yaml"), "--cores", "1", "--", target, cwd=cwd)
     assert out.returncode == 0, out.stderr[-3000:]
     from porepipe._shared.store import read_volume

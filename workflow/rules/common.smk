@@ -1,13 +1,18 @@
 # Shared workflow code: load and validate the scenes (first thing, so a bad scene stops the run with every problem
-# listed), the per-analysis target registry, and input helpers.
-import os
+# listed), the per-analysis target registries, file-name helpers, every input function of the rules, and the
+# resources the rules declare.
+import glob
+import math
+import re
+import shlex
 import sys
 from pathlib import Path
 
+from porepipe._shared.naming import TAG_RE, res_tag
 from porepipe.scene import grey_stage, load_scene
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH
-os.environ["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), os.environ.get("PATH", "")])
+shell.prefix(f'export PATH={shlex.quote(str(Path(sys.executable).parent))}:"$PATH"; ')
 
 _scene_files = [config["scene"]] if config.get("scene") else config.get("scenes", [])
 if not _scene_files:
@@ -20,17 +25,17 @@ for _path in _scene_files:
     SCENES[_scene.name] = _scene
     SCENE_FILES[_scene.name] = _path
 
+#: a resolution or sub-sample edge in a file name: the repr-exact tag of porepipe._shared.naming.res_tag
+NUMBER_RE = TAG_RE
+
 
 wildcard_constraints:
     scene=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
-    a=r"[0-9]+(\.[0-9]+)?",
+    a=NUMBER_RE,
+    sub=rf"(_L{NUMBER_RE})?",
 
 
-def res_tag(a):
-    """Resolution as it appears in file names: 2.0 -> '2', 0.5 -> '0.5'."""
-    return f"{a:g}"
-
-
+# -- names ------------------------------------------------------------------------------------------------------------
 def results(scene, *parts):
     return str(Path("results", scene.name, *parts))
 
@@ -40,26 +45,200 @@ def per_resolution(scene, pattern):
     return [results(scene, pattern.format(a=res_tag(a))) for a in scene.resolutions_um]
 
 
+def per_subsample(scene, pattern, edge_um):
+    """`pattern` with a = every resolution and L = the sub-sample edge, e.g. 'minkowski/minkowski_a{a}_L{L}.h5'."""
+    return [results(scene, pattern.format(a=res_tag(a), L=res_tag(edge_um))) for a in scene.resolutions_um]
+
+
 def scene_of(wildcards):
     return SCENES[wildcards.scene]
-
-
-def grey_volumes(scene):
-    """The grey volume of every resolution of the scene."""
-    return per_resolution(scene, grey_stage(scene) + "/grey_a{a}.h5")
-
-
-def grey_volume(wildcards):
-    """The grey volume of resolution wildcards.a."""
-    return results(scene_of(wildcards), grey_stage(scene_of(wildcards)), f"grey_a{wildcards.a}.h5")
 
 
 def scene_file(wildcards):
     return SCENE_FILES[wildcards.scene]
 
 
+def is_acquire_scene(scene):
+    return getattr(scene, "acquire", None) is not None
+
+
+# a regex that matches exactly the acquire scenes (and nothing when there are none)
+ACQUIRE_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_acquire_scene(s)) or "(?!)"
+
+
+# -- volumes ----------------------------------------------------------------------------------------------------------
+def grey_volumes(scene):
+    """The grey volume of every resolution of the scene."""
+    return per_resolution(scene, f"{grey_stage(scene)}/grey_a{{a}}.h5")
+
+
+def grey_volume(wildcards):
+    """The grey volume of resolution wildcards.a."""
+    scene = scene_of(wildcards)
+    return results(scene, grey_stage(scene), f"grey_a{wildcards.a}.h5")
+
+
+def binary_stage(scene):
+    """Folder (= the writing rule) of the scene's whole binary volumes; the image's own, or the segmented model."""
+    return "acquire_binary" if is_acquire_scene(scene) else "segment"
+
+
+def binary_volumes(scene):
+    """The whole binary volume of every resolution of the scene."""
+    return per_resolution(scene, f"{binary_stage(scene)}/binary_a{{a}}.h5")
+
+
+def subsample_volumes(scene, edge_um):
+    """The corner sub-samples of edge `edge_um` of every resolution (rule subsample)."""
+    return per_subsample(scene, "subsample/binary_a{a}_L{L}.h5", edge_um)
+
+
+def binary_volume(wildcards):
+    """Binary volume of resolution a: the whole one, or with wildcards.sub = '_L<edge>' the corner sub-sample."""
+    scene = scene_of(wildcards)
+    if getattr(wildcards, "sub", ""):
+        return results(scene, "subsample", f"binary_a{wildcards.a}{wildcards.sub}.h5")
+    return results(scene, binary_stage(scene), f"binary_a{wildcards.a}.h5")
+
+
+def whole_binary_volume(wildcards):
+    scene = scene_of(wildcards)
+    return results(scene, binary_stage(scene), f"binary_a{wildcards.a}.h5")
+
+
+def packing_input(wildcards):
+    """packing.h5 of the pack rule when the scene's spheres come from it (voxelize, decorate)."""
+    scene = scene_of(wildcards)
+    return [results(scene, "pack", "packing.h5")] if scene.spheres.pack else []
+
+
+def packing_arg(wildcards, input):
+    return f"--packing {shlex.quote(input.packing[0])}" if input.packing else ""
+
+
+# -- acquire ----------------------------------------------------------------------------------------------------------
+def acquire_image(wildcards):
+    """The image file(s) of an acquire scene, relative to the scene file (a TIFF directory/glob: every section)."""
+    scene = scene_of(wildcards)
+    path = Path(scene.acquire.image)
+    path = path if path.is_absolute() else Path(scene_file(wildcards)).parent / path
+    if path.is_dir():
+        return sorted(str(p) for p in path.iterdir() if p.suffix.lower() in (".tif", ".tiff"))
+    if any(c in str(path) for c in "*?["):
+        return sorted(glob.glob(str(path)))
+    return [str(path)]
+
+
+def acquire_targets(scene):
+    if not is_acquire_scene(scene):
+        raise ValueError(f"scene {scene.name!r} lists analysis `acquire` but has no `acquire:` section")
+    return [
+        results(scene, "acquire", "statistics.h5"),
+        results(scene, "acquire_compare", "comparison.h5"),
+    ]
+
+
+# -- segment, minkowski, permeability -------------------------------------------------------------------------------
+def segmentation_args(wildcards):
+    seg = scene_of(wildcards).segmentation
+    threshold = f" --threshold {seg.threshold}" if seg.threshold is not None else ""
+    return f"--method {seg.method.value}{threshold}"
+
+
+def minkowski_inputs(wildcards):
+    """Binary volume (whole or sub-sample), scene, and the grey volume when threshold functions are asked for."""
+    inputs = {"binary": binary_volume(wildcards), "scene": scene_file(wildcards)}
+    if scene_of(wildcards).minkowski.threshold_functions and not wildcards.sub:
+        inputs["grey"] = grey_volume(wildcards)
+    return inputs
+
+
+def minkowski_grey_arg(wildcards, input):
+    return f"--grey {shlex.quote(input.grey)}" if "grey" in input.keys() else ""
+
+
+def permeability_axes(scene):
+    return [axis.value for axis in scene.permeability.axes]
+
+
+def permeability_resolutions(scene):
+    chosen = scene.permeability.resolutions_um or scene.resolutions_um
+    unknown = sorted(set(chosen) - set(scene.resolutions_um))
+    if unknown:
+        raise ValueError(
+            f"scene {scene.name!r}: permeability.resolutions_um = {unknown} are not among resolutions_um = "
+            f"{scene.resolutions_um}"
+        )
+    return chosen
+
+
+# -- sweep and report -----------------------------------------------------------------------------------------------
+#: analyses whose outputs are not measurements to gather
+SWEEP_SKIP = {"report", "segment"}
+
+
+def sweep_results(wildcards):
+    scene = scene_of(wildcards)
+    out = []
+    for analysis in scene.analyses:
+        if analysis.value in SWEEP_SKIP or analysis.value not in ANALYSIS_TARGETS:
+            continue
+        out += ANALYSIS_TARGETS[analysis.value](scene)
+        for edge in scene.sweep.sample_um:
+            out += SUBSAMPLE_TARGETS.get(analysis.value, lambda scene, edge: [])(scene, edge)
+    return out or ANALYSIS_TARGETS["estimate"](scene)
+
+
+def sweep_volumes(wildcards):
+    """Grey and binary volumes behind the results (their cost is the upstream cost of every run)."""
+    scene = scene_of(wildcards)
+    out = [] if is_acquire_scene(scene) else grey_volumes(scene)
+    measured = {a.value for a in scene.analyses} - SWEEP_SKIP - {"estimate"}
+    if measured or any(a.value == "segment" for a in scene.analyses):
+        out += binary_volumes(scene)
+    if any(a in SUBSAMPLE_TARGETS for a in measured):
+        for edge in scene.sweep.sample_um:
+            out += subsample_volumes(scene, edge)
+    return out
+
+
+def report_inputs(wildcards):
+    scene = scene_of(wildcards)
+    names = {a.value for a in scene.analyses}
+    inputs = {
+        "sweep": results(scene, "sweep", "sweep.h5"),
+        "scene": scene_file(wildcards),
+        "grey": grey_volumes(scene) if scene.report.slices else [],
+        "binary": [],
+        "lpt": per_resolution(scene, "lpt/lpt_a{a}.h5") if "lpt" in names else [],
+    }
+    if scene.report.slices and names - {"report", "estimate"}:
+        inputs["binary"] = binary_volumes(scene)
+    return inputs
+
+
+# -- resources --------------------------------------------------------------------------------------------------------
+def voxels(wildcards):
+    """Voxels of the volume of resolution wildcards.a (the box of the scene; an image scene: its crop or 512³)."""
+    scene = scene_of(wildcards)
+    if scene.domain is None:
+        crop = getattr(scene.acquire, "crop", None)
+        return math.prod(crop.size) if crop is not None else 512**3
+    return math.prod(round(edge / float(wildcards.a)) for edge in scene.domain.size_um)
+
+
+def mem_mb(bytes_per_voxel, base_mb=500):
+    """A `resources: mem_mb` function: `base_mb` plus `bytes_per_voxel` for every voxel of the rule's volume."""
+    return lambda wildcards: int(base_mb + bytes_per_voxel * voxels(wildcards) / 2**20)
+
+
 #: analysis name -> function(scene) -> list of final outputs; each rule file registers its analysis here.
 ANALYSIS_TARGETS = {}
+
+#: analysis name -> function(scene, edge_um) -> that analysis's outputs on the corner sub-samples
+#: results/{scene}/subsample/binary_a{a}_L{edge}.h5 (scene key sweep.sample_um); engines that accept sub-samples
+#: register here, and the sweep gathers them with the sample size as a dimension.
+SUBSAMPLE_TARGETS = {}
 
 
 def all_targets():
@@ -67,17 +246,8 @@ def all_targets():
     for scene in SCENES.values():
         for analysis in scene.analyses:
             if analysis.value not in ANALYSIS_TARGETS:
-                raise ValueError(f"scene {scene.name!r}: no workflow rule produces analysis {analysis.value!r}")
+                raise ValueError(
+                    f"scene {scene.name!r}: no workflow rule produces analysis {analysis.value!r}"
+                )
             out += ANALYSIS_TARGETS[analysis.value](scene)
     return out
-
-
-#: analysis name -> function(scene, edge_um) -> that analysis's outputs on the corner sub-samples
-#: results/{scene}/segment/binary_a{a}_L{edge}.h5 (scene key sweep.sample_um); engines that accept sub-samples
-#: register here, and the sweep gathers them with the sample size as a dimension.
-SUBSAMPLE_TARGETS = {}
-
-
-def per_subsample(scene, pattern, edge_um):
-    """`pattern` with a = every resolution and L = the sub-sample edge, e.g. 'minkowski/minkowski_a{a}_L{L}.h5'."""
-    return [results(scene, pattern.format(a=res_tag(a), L=res_tag(edge_um))) for a in scene.resolutions_um]

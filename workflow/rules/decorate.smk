@@ -1,28 +1,28 @@
-# Grain decoration (thesis §4.7.1 step 3): grains.h5 for scenes with a `decoration:` section, and the grey volumes
-# of the grain model. The segment rule reads results/{scene}/decorate/grey_a{a}.h5 instead of
-# results/{scene}/voxelize/grey_a{a}.h5 when the scene has `decoration`.
-
-
-def decorate_packing_input(wildcards):
-    scene = scene_of(wildcards)
-    return [results(scene, "pack", "packing.h5")] if scene.spheres.pack else []
+# Grain decoration (thesis §4.7.1 step 3): grains.h5 for scenes with a `decoration:` section, and the grey volumes of
+# the grain model (rule voxelize_grains); segment then reads results/{scene}/voxelize_grains/grey_a{a}.h5 instead of
+# results/{scene}/voxelize/grey_a{a}.h5 (porepipe.scene.grey_stage).
 
 
 rule decorate:
     input:
         scene=scene_file,
-        packing=decorate_packing_input,
+        packing=packing_input,
     output:
         "results/{scene}/decorate/grains.h5",
     log:
         "results/{scene}/logs/decorate.log",
     benchmark:
         "results/{scene}/cost/decorate.tsv"
-    params:
-        packing=lambda wildcards, input: f"--packing {input.packing}" if input.packing else "",
+    conda:
+        "../envs/porepipe.yaml"
     threads: workflow.cores
+    resources:
+        mem_mb=4000,
+        runtime=60,
+    params:
+        packing=packing_arg,
     shell:
-        "porepipe decorate {input.scene} -o {output} {params.packing} --threads {threads} > {log} 2>&1"
+        "porepipe decorate {input.scene:q} -o {output:q} {params.packing} --threads {threads} > {log:q} 2>&1"
 
 
 rule voxelize_grains:
@@ -30,12 +30,17 @@ rule voxelize_grains:
         scene=scene_file,
         grains="results/{scene}/decorate/grains.h5",
     output:
-        "results/{scene}/decorate/grey_a{a}.h5",
+        "results/{scene}/voxelize_grains/grey_a{a}.h5",
     log:
         "results/{scene}/logs/voxelize_grains_a{a}.log",
     benchmark:
         "results/{scene}/cost/voxelize_grains_a{a}.tsv"
-    threads: workflow.cores
+    conda:
+        "../envs/porepipe.yaml"
+    threads: 4
+    resources:
+        mem_mb=mem_mb(bytes_per_voxel=8),
+        runtime=120,
     shell:
-        "porepipe voxelize-grains {input.scene} --grains {input.grains} --a {wildcards.a} -o {output}"
-        " --threads {threads} > {log} 2>&1"
+        "porepipe voxelize-grains {input.scene:q} --grains {input.grains:q} --a {wildcards.a} -o {output:q}"
+        " --threads {threads} > {log:q} 2>&1"

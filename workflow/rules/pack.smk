@@ -1,3 +1,6 @@
+# DEM packing (thesis ch. 5): the scene's staged protocol -> packing.h5 (+ xyzr); it checkpoints and resumes.
+
+
 rule pack:
     input:
         scene=scene_file,
@@ -8,9 +11,14 @@ rule pack:
         "results/{scene}/logs/pack.log",
     benchmark:
         "results/{scene}/cost/pack.tsv"
+    conda:
+        "../envs/porepipe.yaml"
+    threads: workflow.cores
+    resources:
+        mem_mb=4000,
+        runtime=240,
     params:
         checkpoint="results/{scene}/pack/checkpoint.h5",
-    threads: workflow.cores
     shell:
-        "porepipe pack {input.scene} -o {output.packing} --xyzr {output.xyzr}"
-        " --checkpoint {params.checkpoint} --resume --threads {threads} > {log} 2>&1"
+        "porepipe pack {input.scene:q} -o {output.packing:q} --xyzr {output.xyzr:q}"
+        " --checkpoint {params.checkpoint:q} --resume --threads {threads} > {log:q} 2>&1"

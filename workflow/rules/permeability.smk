@@ -1,13 +1,10 @@
-# Lattice-Boltzmann permeability (thesis ch. 6): one job per resolution and flow axis.
-
-
-def permeability_axes(scene):
-    return [axis.value for axis in scene.permeability.axes]
+# Lattice-Boltzmann permeability (thesis ch. 6): one job per resolution and flow axis; a run that hits its step limit
+# leaves its checkpoint beside the result, and the rerun resumes from it.
 
 
 rule permeability:
     input:
-        binary="results/{scene}/segment/binary_a{a}.h5",
+        binary=whole_binary_volume,
         scene=scene_file,
     output:
         "results/{scene}/permeability/perm_a{a}_{axis}.h5",
@@ -17,21 +14,16 @@ rule permeability:
         "results/{scene}/cost/permeability_a{a}_{axis}.tsv"
     wildcard_constraints:
         axis="[xyz]",
+    conda:
+        "../envs/porepipe.yaml"
     threads: workflow.cores
+    resources:
+        # 19 populations x 2 copies in float64 per node, plus the fields and the index arrays
+        mem_mb=mem_mb(bytes_per_voxel=400, base_mb=1000),
+        runtime=720,
     shell:
-        "porepipe permeability {input.binary} --scene {input.scene} --axis {wildcards.axis} -o {output}"
-        " --threads {threads} > {log} 2>&1"
-
-
-def permeability_resolutions(scene):
-    chosen = scene.permeability.resolutions_um or scene.resolutions_um
-    unknown = sorted(set(chosen) - set(scene.resolutions_um))
-    if unknown:
-        raise ValueError(
-            f"scene {scene.name!r}: permeability.resolutions_um = {unknown} are not among resolutions_um = "
-            f"{scene.resolutions_um}"
-        )
-    return chosen
+        "porepipe permeability {input.binary:q} --scene {input.scene:q} --axis {wildcards.axis} -o {output:q}"
+        " --resume --threads {threads} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["permeability"] = lambda scene: [

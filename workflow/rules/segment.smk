@@ -1,6 +1,4 @@
-def segmentation_args(wildcards):
-    seg = scene_of(wildcards).segmentation
-    return f"--method {seg.method.value}" + (f" --threshold {seg.threshold}" if seg.threshold is not None else "")
+# Segmentation (thesis §4.7.2): pore if grey <= g_th (Otsu or fixed), one binary volume per resolution.
 
 
 rule segment:
@@ -12,10 +10,16 @@ rule segment:
         "results/{scene}/logs/segment_a{a}.log",
     benchmark:
         "results/{scene}/cost/segment_a{a}.tsv"
+    conda:
+        "../envs/porepipe.yaml"
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=10,
     params:
         method=segmentation_args,
     shell:
-        "porepipe segment {input} -o {output} {params.method} > {log} 2>&1"
+        "porepipe segment {input:q} -o {output:q} {params.method} > {log:q} 2>&1"
 
 
-ANALYSIS_TARGETS["segment"] = lambda scene: per_resolution(scene, "segment/binary_a{a}.h5")
+ANALYSIS_TARGETS["segment"] = lambda scene: binary_volumes(scene)

@@ -1,6 +1,4 @@
-def packing_input(wildcards):
-    scene = scene_of(wildcards)
-    return [results(scene, "pack", "packing.h5")] if scene.spheres.pack else []
+# Grey-value voxelisation (thesis §4.7.2): the grey volume 0..216 of the scene's spheres at every resolution.
 
 
 rule voxelize:
@@ -13,9 +11,14 @@ rule voxelize:
         "results/{scene}/logs/voxelize_a{a}.log",
     benchmark:
         "results/{scene}/cost/voxelize_a{a}.tsv"
+    conda:
+        "../envs/porepipe.yaml"
+    threads: 4
+    resources:
+        mem_mb=mem_mb(bytes_per_voxel=4),
+        runtime=60,
     params:
-        packing=lambda wildcards, input: f"--packing {input.packing}" if input.packing else "",
-    threads: workflow.cores
+        packing=packing_arg,
     shell:
-        "porepipe voxelize {input.scene} --a {wildcards.a} -o {output} {params.packing}"
-        " --threads {threads} > {log} 2>&1"
+        "porepipe voxelize {input.scene:q} --a {wildcards.a} -o {output:q} {params.packing}"
+        " --threads {threads} > {log:q} 2>&1"

@@ -9,17 +9,18 @@ Layout of a result file
 - ``/volumes/<name>``: chunked, compressed 3-D arrays with ``voxel_um``, ``origin_um`` and ``periodic`` attributes;
 - ``/arrays/<name>``: other plain arrays.
 
-The file is written under a hidden temporary name in the target directory and renamed only when complete, so a
-killed job never leaves a file that Snakemake or :func:`read_attrs` would take as finished.
+The file is written under a hidden temporary name in the target directory and renamed only when complete
+(:mod:`porepipe._shared.atomic`: fsync, then rename), so a killed job never leaves a file that Snakemake or
+:func:`read_attrs` would take as finished.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import datetime as _dt
 import hashlib
 import json
-import os
 import resource
 import time
 from collections.abc import Iterator, Sequence
@@ -31,6 +32,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe import __version__
+from porepipe._shared.atomic import commit, temporary_path
 from porepipe._shared.errors import PorepipeError
 
 VOLUME_GROUP = "volumes"
@@ -43,6 +45,36 @@ def hash_of(obj: Any) -> str:
     """Stable short hash of a JSON-serialisable object (e.g. the scene part a result depends on)."""
     text = json.dumps(obj, sort_keys=True, default=str, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def result_hash(stage: str, *, scene_part: Any = None, settings: Any = None, inputs: Sequence = (),
+                **extra: Any) -> str:
+    """The hash of what determines a result, made the same way by every stage (root attribute ``scene_hash``).
+
+    Parameters
+    ----------
+    stage : str
+        The stage writing the result.
+    scene_part : JSON-able, optional
+        The parts of the scene the result depends on (:func:`porepipe.scene.scene_part`).
+    settings : pydantic model or JSON-able, optional
+        The stage's settings after command-line overrides.
+    inputs : sequence of path-like
+        Result files it is computed from; each enters by its own ``scene_hash``, so a change upstream changes the
+        hash downstream. Order matters (sort it where the inputs are a set).
+    **extra : JSON-able
+        Further arguments that change the result (a voxel size, an axis, a sub-sample edge).
+
+    Returns
+    -------
+    str
+        16 hex digits (:func:`hash_of` of the record).
+    """
+    if hasattr(settings, "model_dump"):
+        settings = settings.model_dump(mode="json")
+    record = {"stage": stage, "scene": scene_part, "settings": settings,
+              "inputs": [read_attrs(p).get("scene_hash", "") for p in inputs], "extra": extra}
+    return hash_of(record)
 
 
 def _peak_mb() -> float:
@@ -85,7 +117,7 @@ class ResultWriter:
 
     def __init__(self, path, *, stage: str, scene: str = "", scene_hash: str = "", threads: int | None = None):
         self.path = Path(path)
-        self.tmp_path = self.path.with_name(f".{self.path.name}.{os.getpid()}.tmp")
+        self.tmp_path = temporary_path(self.path)
         self.attrs: dict[str, Any] = {
             "stage": stage,
             "scene": scene,
@@ -128,7 +160,7 @@ class ResultWriter:
             self.attrs["peak_mb"] = _peak_mb()
             for key, value in self.attrs.items():
                 f.attrs[key] = value
-        os.replace(self.tmp_path, self.path)
+        commit(self.tmp_path, self.path)
 
     # -- writers ---------------------------------------------------------------------------------------------------
     @property
@@ -235,3 +267,89 @@ def read_table(path, group: str | None = None) -> xr.Dataset:
     path = _check_file(path)
     with xr.open_dataset(path, engine="h5netcdf", group=group, phony_dims="sort") as ds:
         return ds.load()
+
+
+# -- the metadata of a volume, read one way ---------------------------------------------------------------------------
+#: attributes every volume carries (written by :meth:`ResultWriter.create_volume`)
+VOLUME_META_KEYS = ("voxel_um", "origin_um", "periodic")
+
+
+@dataclasses.dataclass(frozen=True)
+class VolumeMeta:
+    """Geometry of a stored volume: voxel edge (µm), origin of voxel (0, 0, 0)'s corner (µm), periodicity per axis.
+
+    ``attrs`` holds every attribute of the dataset (``threshold``, ``method`` …), decoded to Python values.
+    """
+
+    voxel_um: float
+    origin_um: tuple[float, float, float]
+    periodic: tuple[bool, bool, bool]
+    attrs: dict = dataclasses.field(default_factory=dict, compare=False)
+
+
+def volume_meta(dset: h5py.Dataset, path) -> VolumeMeta:
+    """The :class:`VolumeMeta` of an open volume; a missing or malformed attribute is an error naming file and key.
+
+    Parameters
+    ----------
+    dset : h5py.Dataset
+        An open ``/volumes/<name>`` dataset (from :func:`open_volume`).
+    path : path-like
+        The file it came from (for the message).
+
+    Returns
+    -------
+    VolumeMeta
+    """
+    attrs = {k: _decode(v) for k, v in dset.attrs.items()}
+    missing = [k for k in VOLUME_META_KEYS if k not in attrs]
+    if missing:
+        raise PorepipeError(f"{path}: volume {dset.name} lacks the attribute(s) {', '.join(missing)}; a porepipe "
+                            "volume needs voxel_um, origin_um and periodic (rewrite it with a current porepipe)")
+    voxel = np.atleast_1d(np.asarray(attrs["voxel_um"], dtype=np.float64))
+    if voxel.size == 3 and np.allclose(voxel, voxel[0], rtol=1e-9, atol=0):
+        voxel = voxel[:1]
+    if voxel.size != 1 or not np.isfinite(voxel[0]) or voxel[0] <= 0:
+        kind = "anisotropic voxels are not supported" if voxel.size == 3 else "not a voxel edge"
+        raise PorepipeError(f"{path}: volume {dset.name} attribute voxel_um = {attrs['voxel_um']!r}: {kind}; "
+                            "allowed: one positive number in µm (cubic voxels; resample anisotropic images first)")
+    origin = np.asarray(attrs["origin_um"], dtype=np.float64).ravel()
+    periodic = np.asarray(attrs["periodic"]).ravel()
+    if origin.size != 3 or not np.all(np.isfinite(origin)):
+        raise PorepipeError(f"{path}: volume {dset.name} attribute origin_um = {attrs['origin_um']!r}; allowed: "
+                            "3 finite numbers (µm)")
+    if periodic.size != 3 or not np.all(np.isin(periodic, (0, 1))):
+        raise PorepipeError(f"{path}: volume {dset.name} attribute periodic = {attrs['periodic']!r}; allowed: "
+                            "3 flags 0/1 (x, y, z)")
+    return VolumeMeta(float(voxel[0]), tuple(float(o) for o in origin), tuple(bool(p) for p in periodic), attrs)
+
+
+def read_binary_volume(path, name: str = "pore") -> tuple[np.ndarray, VolumeMeta]:
+    """Read a binary volume (``binary_a{a}.h5``: uint8, 1 = pore) and its geometry, refusing incomplete metadata.
+
+    Parameters
+    ----------
+    path : path-like
+        A result file with ``/volumes/<name>``.
+    name : str, optional
+        The volume's name (default ``pore``).
+
+    Returns
+    -------
+    pore : (X, Y, Z) ndarray of uint8
+        1 = pore, 0 = matrix.
+    meta : VolumeMeta
+        ``voxel_um`` (float, µm), ``origin_um`` (3 floats, µm), ``periodic`` (3 bools) and all attributes.
+
+    Raises
+    ------
+    PorepipeError
+        The file or volume is missing, or lacks ``voxel_um``, ``origin_um`` or ``periodic`` (the message names the
+        file and the attribute), or the volume is not 3-D uint8.
+    """
+    with open_volume(path, name) as dset:
+        meta = volume_meta(dset, path)
+        if dset.ndim != 3 or dset.dtype != np.uint8:
+            raise PorepipeError(f"{path}: volume {name!r} is {dset.ndim}-D {dset.dtype}; a binary volume is 3-D "
+                                "uint8 (1 = pore)")
+        return dset[...], meta

@@ -17,6 +17,7 @@ import xarray as xr
 import yaml
 from scipy import optimize, stats
 
+from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe.acquire._settings import Calibration, Family
 
@@ -119,11 +120,9 @@ def elongation_classes(stats_ds: xr.Dataset, n_classes: int) -> list[dict]:
 
 
 def _decoration(classes: list[dict]) -> dict | None:
-    """A decoration section with one random-polyhedron family per elongation class (if the stage is installed)."""
-    try:
-        from porepipe.decorate._settings import Settings as DecorationSettings
-    except ImportError:
-        return None
+    """A decoration section with one random-polyhedron family per elongation class."""
+    from porepipe.decorate import Settings as DecorationSettings
+
     families = [{"name": f"elong{i}", "generator": "random", "count": 8, "facets": 36,
                  "elongation": [min(c["elongation"][0], 0.9), min(c["elongation"][1], 0.9)]}
                 for i, c in enumerate(classes)]
@@ -179,9 +178,4 @@ def write_scene_yaml(scene: dict, path) -> Path:
     header = ["# Calibrated by `porepipe acquire-calibrate` from image statistics (Zauner 2020 §4.7 item 1).",
               "# Edit freely, then run it with `porepipe run <this file>`. What it was fitted to:"]
     header += [f"#   {line}" for line in yaml.safe_dump(record, sort_keys=False).splitlines()]
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text("\n".join(header) + "\n" + yaml.safe_dump(scene, sort_keys=False))
-    tmp.replace(path)
-    return path
+    return write_text_atomic(path, "\n".join(header) + "\n" + yaml.safe_dump(scene, sort_keys=False))

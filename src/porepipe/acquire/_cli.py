@@ -1,16 +1,11 @@
 """``porepipe acquire`` (image -> statistics.h5) and its follow-ups ``acquire-binary``, ``acquire-calibrate``,
-``acquire-model`` and ``acquire-compare``."""
+``acquire-model`` and ``acquire-compare``. Argparse only; the work is in ``_run``."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import ValidationError
-
-from porepipe._shared.errors import PorepipeError
-from porepipe._shared.numba_config import set_threads
-from porepipe._shared.store import hash_of
-from porepipe.acquire._settings import Settings
+from porepipe._shared.overrides import merge_settings
 
 
 def _scene(path):
@@ -19,49 +14,31 @@ def _scene(path):
     return load_scene(path) if path else None
 
 
-def settings_from_args(args, scene=None) -> Settings:
+def settings_from_args(args, scene=None):
     """The scene's ``acquire`` section (or defaults) with the command-line options laid over it."""
+    from porepipe.acquire._settings import Settings
+
     base = scene.acquire.model_dump(exclude_none=True) if scene is not None and scene.acquire is not None else {}
-    over: dict = {}
-    if args.voxel_um is not None:
-        over["voxel_um"] = args.voxel_um
-    if args.section_um is not None:
-        over["section_um"] = args.section_um
-    if args.format is not None:
-        over["format"] = args.format
-    if args.dataset is not None:
-        over["dataset"] = args.dataset
+    over: dict = {k: getattr(args, k) for k in ("voxel_um", "section_um", "format", "dataset", "denoise")
+                  if getattr(args, k) is not None}
     if args.raw_shape is not None:
         over["raw"] = {"dtype": args.raw_dtype, "shape": args.raw_shape, "byte_order": args.raw_byte_order,
                        "header_bytes": args.raw_header, "order": args.raw_order}
     if args.crop is not None:
         over["crop"] = {"size": args.crop, "centre": True}
-    if args.denoise is not None:
-        over["denoise"] = args.denoise
-    seg = dict(base.get("segmentation", {}))
-    for key in ("method", "phases", "pore_phases", "thresholds"):
-        if getattr(args, key) is not None:
-            seg[key] = getattr(args, key)
-    stats = dict(base.get("statistics", {}))
+    over["segmentation"] = {k: getattr(args, k) for k in ("method", "phases", "pore_phases", "thresholds")
+                            if getattr(args, k) is not None}
     if args.no_grains:
-        stats["grains"] = False
-    try:
-        return Settings.model_validate({**base, **over, "segmentation": seg, "statistics": stats})
-    except ValidationError as err:
-        raise PorepipeError(f"acquire settings: {err}") from None
+        over["statistics"] = {"grains": False}
+    return merge_settings(Settings, base, over, "acquire settings")
 
 
 def _main(args) -> int:
-    from porepipe.acquire._api import acquire
+    from porepipe.acquire._run import run
 
-    set_threads(args.threads)
     scene = _scene(args.scene)
-    settings = settings_from_args(args, scene)
-    base_dir = Path(args.scene).parent if args.scene else Path(".")
-    tables = acquire(settings, args.out, base_dir=base_dir, image_path=args.image,
-                     scene_name=scene.name if scene else "",
-                     scene_hash=hash_of(settings.model_dump(mode="json")),
-                     lpt_settings=getattr(scene, "lpt", None), permeability_settings=getattr(scene, "permeability", None))
+    tables = run(settings_from_args(args, scene), args.out, scene=scene, image_path=args.image,
+                 base_dir=Path(args.scene).parent if args.scene else Path("."), threads=args.threads)
     root = tables[None]
     print(f"porosity {float(root.porosity):.6g}, thresholds {root.threshold.values.tolist()}, "
           f"voxel {root.attrs['voxel_um']:g} µm -> {args.out}")
@@ -69,54 +46,40 @@ def _main(args) -> int:
 
 
 def _binary(args) -> int:
-    from porepipe.acquire._api import write_binary
+    from porepipe.acquire._run import run_binary
 
-    phi = write_binary(args.statistics, args.out, args.a)
+    phi = run_binary(args.statistics, args.out, args.a)
     print(f"porosity {phi:.6g} -> {args.out}")
     return 0
 
 
 def _calibrate(args) -> int:
-    from porepipe._shared.store import read_table
-    from porepipe.acquire._calibrate import calibrated_scene, write_scene_yaml
-    from porepipe.acquire._model import match_porosity
+    from porepipe.acquire._run import run_calibrate
 
-    scene = _scene(args.scene)
-    settings = scene.acquire if scene is not None and scene.acquire is not None else Settings()
-    name = args.name or (f"{scene.name}-model" if scene else "calibrated-model")
-    model = calibrated_scene(read_table(args.statistics), settings.calibration, name=name,
-                             seed=scene.seed if scene else 0)
-    history = match_porosity(model, model["_calibration"]["target_porosity"],
-                             settings.calibration.porosity_iterations, Path(args.out).parent)
-    model["_calibration"]["porosity_matching"] = [{"count": n, "porosity": phi} for n, phi in history]
-    write_scene_yaml(model, args.out)
-    print(f"calibrated scene {name!r} -> {args.out}")
+    out = run_calibrate(args.statistics, args.out, scene=_scene(args.scene), name=args.name)
+    print(f"calibrated scene -> {out}")
     return 0
 
 
 def _model(args) -> int:
-    from porepipe.acquire._model import run_model
+    from porepipe.acquire._run import run_calibrated_model
 
-    set_threads(args.threads)
-    model = _scene(args.model_scene)
-    scene = _scene(args.scene)
-    settings = scene.acquire if scene is not None and scene.acquire is not None else Settings()
-    tables = run_model(model, settings, args.out, base_dir=Path(args.model_scene).parent,
-                       lpt_settings=getattr(scene, "lpt", None),
-                       permeability_settings=getattr(scene, "permeability", None))
+    tables = run_calibrated_model(_scene(args.model_scene), args.model_scene, args.out, scene=_scene(args.scene),
+                                  threads=args.threads)
     print(f"model porosity {float(tables[None].porosity):.6g} -> {args.out}")
     return 0
 
 
 def _compare(args) -> int:
-    from porepipe.acquire._compare import comparison_markdown, write_comparison
+    from porepipe.acquire._compare import comparison_markdown
+    from porepipe.acquire._run import run_compare
 
-    ds = write_comparison(args.experiment, args.model, args.out)
-    print(comparison_markdown(ds))
+    print(comparison_markdown(run_compare(args.experiment, args.model, args.out)))
     return 0
 
 
 def register(subparsers) -> None:
+    """Add ``acquire`` and its follow-ups to the ``porepipe`` command."""
     p = subparsers.add_parser("acquire", help="statistics of a µ-CT/SEM image (statistics.h5)")
     p.add_argument("image", nargs="?", default=None, help="image file, TIFF directory or glob (default: the scene's)")
     p.add_argument("-o", "--out", required=True, help="output statistics.h5")

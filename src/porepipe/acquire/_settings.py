@@ -7,6 +7,7 @@ Its presence switches the acquisition stage on (Zauner 2020, §4.7 item 1 and ch
 from __future__ import annotations
 
 import enum
+import itertools
 from pathlib import Path
 from typing import Annotated
 
@@ -96,7 +97,7 @@ class Segmentation(_Strict):
             raise ValueError(f"method otsu gives two phases, got {len(self.phases)}; use multi_otsu or thresholds")
         if self.method is Method.thresholds:
             t = self.thresholds or []
-            if len(t) != len(self.phases) - 1 or any(b <= a for a, b in zip(t, t[1:])):
+            if len(t) != len(self.phases) - 1 or any(b <= a for a, b in itertools.pairwise(t)):
                 raise ValueError(f"method thresholds needs {len(self.phases) - 1} ascending thresholds, got {t}")
         elif self.thresholds is not None:
             raise ValueError("`thresholds` is only used with method thresholds")

@@ -6,6 +6,7 @@ _EXPORTS = {
     "Decoration": "_api",
     "GrainType": "_library",
     "Kind": "_library",
+    "Settings": "_settings",
     "anisotropic_rotations": "_rotation",
     "build_library": "_api",
     "decorate": "_api",

@@ -10,6 +10,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError, cKDTree
 
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.rng import stream as rng_stream
 from porepipe._shared.progress import Progress
 from porepipe.decorate._kernels import KIND_POLYHEDRON, KIND_SPHERE, _points_inside, _voxelize_grains_slab
 from porepipe.decorate._library import (
@@ -23,16 +24,17 @@ from porepipe.decorate._library import (
 )
 from porepipe.decorate._rotation import anisotropic_rotations, uniform_rotations
 from porepipe.decorate._settings import Generator, OrientationMode, ScaleRule, Settings
-from porepipe.voxelize._api import VoxelizeMethod, grid_shape
-from porepipe.voxelize._kernels import SUB
-from porepipe.voxelize._spheres import check_spheres
+from porepipe.voxelize import VoxelizeMethod, grid_shape
+from porepipe._shared.sample_points import SUB
+from porepipe._shared.spheres import check_spheres
 
 #: sub-streams of the scene seed
-_STREAM_LIBRARY, _STREAM_ASSIGN, _STREAM_ORIENT, _STREAM_MINIMISER = 71, 72, 73, 74
+#: sub-streams of the stage's random stream (porepipe._shared.rng, stage name "decorate")
+_STREAM_LIBRARY, _STREAM_ASSIGN, _STREAM_ORIENT, _STREAM_MINIMISER = 0, 1, 2, 3
 
 
 def _rng(seed: int, stream: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence([int(seed), stream]))
+    return rng_stream(seed, "decorate", stream)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -361,7 +363,7 @@ def minimise_overlap(deco: Decoration, box_um, periodic: bool = True, trials: in
     Neighbours are the grains whose circumscribed spheres meet (a k-d tree over the periodic box) — the thesis's cells
     of volume V^OM are replaced by this exact neighbour list.
     """
-    rng = np.random.default_rng() if rng is None else rng
+    rng = _rng(0, _STREAM_MINIMISER) if rng is None else rng
     box = np.asarray(box_um, dtype=np.float64)
     rotations = deco.rotations.copy()
     cur = dataclasses.replace(deco, rotations=rotations)

@@ -62,7 +62,8 @@ def read_grains(path) -> tuple[Decoration, np.ndarray]:
             lib.append(sphere_type(name))
             continue
         s, n = int(ds["plane_start"].values[t]), int(ds["plane_count"].values[t])
-        lib.append(polyhedron(name, ds["normal"].values[s:s + n], ds["offset"].values[s:s + n], centre=False))
+        lib.append(polyhedron(name, ds["normal"].values[s:s + n], ds["offset"].values[s:s + n], centre=False,
+                              unit=True))
     deco = Decoration(np.ascontiguousarray(ds["centre_um"].values), ds["type"].values.astype(np.int64),
                       np.ascontiguousarray(ds["rotation"].values), ds["scale"].values.astype(np.float64), lib,
                       ds["family"].values.astype(np.int64))

@@ -1,7 +1,7 @@
 """Numba kernels: grey values (6³ sample points per voxel in the matrix) of a union of spheres and convex polyhedra.
 
 Sample point k (0..5) of voxel i along an axis sits at ``(6*i + k + 0.5) * (a/6)`` (the foundation's
-:func:`porepipe.voxelize._kernels._sample_coord`). A point p is in polyhedral grain g (centre c) when
+:func:`porepipe._shared.sample_points.sample_coord`). A point p is in polyhedral grain g (centre c) when
 ``(n0*dx + n1*dy) + n2*dz <= d`` for every plane (n, d) of g, with dx = p_x - c_x etc., in exactly this order of
 operations; in a sphere when ``(dx*dx + dy*dy) + dz*dz <= r*r`` (as in the foundation).
 
@@ -16,39 +16,32 @@ import numpy as np
 from numba import njit, prange
 
 from porepipe._shared.numba_config import FASTMATH
-from porepipe.voxelize._kernels import (
-    _MARGIN,
-    _ROWS_PER_WORD,
-    _WORDS,
+from porepipe._shared.sample_points import (
     FULL,
+    MARGIN,
     PARTIAL,
     SUB,
     UNTOUCHED,
-    _axis_range,
-    _grey_from_status,
-    _hull_gap,
-    _plane_candidates,
-    _sample_coord,
+    WORDS,
+    axis_range,
+    grey_from_status,
+    hull_gap,
+    or_row,
+    plane_candidates,
+    sample_coord,
 )
 
 KIND_SPHERE = 0
 KIND_POLYHEDRON = 1
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _or_row(words, sx, sy, row):
-    if row:
-        q = SUB * sx + sy
-        words[q // _ROWS_PER_WORD] |= np.uint64(row) << np.uint64(SUB * (q % _ROWS_PER_WORD))
-
-
 @njit(cache=True, fastmath=FASTMATH)
 def _sphere_points(words, i, j, k, cx, cy, cz, r2, h, skip_rows, scratch):
     """OR into ``words`` the sample points of voxel (i, j, k) inside the ball (c, r²)."""
     for s in range(SUB):
-        dx = _sample_coord(i, s, h) - cx
-        dy = _sample_coord(j, s, h) - cy
-        dz = _sample_coord(k, s, h) - cz
+        dx = sample_coord(i, s, h) - cx
+        dy = sample_coord(j, s, h) - cy
+        dz = sample_coord(k, s, h) - cz
         scratch[0, s] = dx * dx
         scratch[1, s] = dy * dy
         scratch[2, s] = dz * dz
@@ -61,22 +54,22 @@ def _sphere_points(words, i, j, k, cx, cy, cz, r2, h, skip_rows, scratch):
             for sz in range(SUB):
                 if dxy + scratch[2, sz] <= r2:
                     row |= 1 << sz
-            _or_row(words, sx, sy, row)
+            or_row(words, sx, sy, row)
 
 
 @njit(cache=True, fastmath=FASTMATH)
 def _poly_points(words, i, j, k, cx, cy, cz, planes, active, n_active, h, partial):
     """OR into ``words`` the sample points of voxel (i, j, k) inside every plane ``planes[active[:n_active]]`` about c."""
     for sx in range(SUB):
-        dx = _sample_coord(i, sx, h) - cx
+        dx = sample_coord(i, sx, h) - cx
         for sy in range(SUB):
-            dy = _sample_coord(j, sy, h) - cy
+            dy = sample_coord(j, sy, h) - cy
             for t in range(n_active):
                 p = active[t]
                 partial[t] = planes[p, 0] * dx + planes[p, 1] * dy
             row = 0
             for sz in range(SUB):
-                dz = _sample_coord(k, sz, h) - cz
+                dz = sample_coord(k, sz, h) - cz
                 inside = True
                 for t in range(n_active):
                     p = active[t]
@@ -85,7 +78,7 @@ def _poly_points(words, i, j, k, cx, cy, cz, planes, active, n_active, h, partia
                         break
                 if inside:
                     row |= 1 << sz
-            _or_row(words, sx, sy, row)
+            or_row(words, sx, sy, row)
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -100,10 +93,10 @@ def _extremes(n, lo, hi):
 def _xy_bounds(i, j, cx, cy, planes, p0, p1, h, xy):
     """Per plane t = p - p0 of the grain: xy[t, 0] = min, xy[t, 1] = max of (n0*dx + n1*dy) bound over the sample hull
     of column (i, j), summed in the kernels' order."""
-    dxl = _sample_coord(i, 0, h) - cx
-    dxh = _sample_coord(i, SUB - 1, h) - cx
-    dyl = _sample_coord(j, 0, h) - cy
-    dyh = _sample_coord(j, SUB - 1, h) - cy
+    dxl = sample_coord(i, 0, h) - cx
+    dxh = sample_coord(i, SUB - 1, h) - cx
+    dyl = sample_coord(j, 0, h) - cy
+    dyh = sample_coord(j, SUB - 1, h) - cy
     for p in range(p0, p1):
         xl, xh = _extremes(planes[p, 0], dxl, dxh)
         yl, yh = _extremes(planes[p, 1], dyl, dyh)
@@ -116,8 +109,8 @@ def _classify_poly(k, cz, planes, p0, p1, h, margin, xy, active):
     """(UNTOUCHED, 0) if the voxel's sample hull is outside some plane, (FULL, 0) if inside all, else (PARTIAL, m)
     with ``active[:m]`` the planes the hull crosses: every sample point satisfies the others, so only these are
     tested point by point. ``xy`` comes from :func:`_xy_bounds` for the voxel's column."""
-    dzl = _sample_coord(k, 0, h) - cz
-    dzh = _sample_coord(k, SUB - 1, h) - cz
+    dzl = sample_coord(k, 0, h) - cz
+    dzh = sample_coord(k, SUB - 1, h) - cz
     m = 0
     for p in range(p0, p1):
         zl, zh = _extremes(planes[p, 2], dzl, dzh)
@@ -131,12 +124,12 @@ def _classify_poly(k, cz, planes, p0, p1, h, margin, xy, active):
 
 @njit(cache=True, fastmath=FASTMATH)
 def _classify_sphere(i, j, k, cx, cy, cz, r2, h):
-    nx_, fx_ = _hull_gap(cx, i, h)
-    ny_, fy_ = _hull_gap(cy, j, h)
-    nz_, fz_ = _hull_gap(cz, k, h)
-    if nx_ * nx_ + ny_ * ny_ + nz_ * nz_ > r2 * (1.0 + _MARGIN):
+    nx_, fx_ = hull_gap(cx, i, h)
+    ny_, fy_ = hull_gap(cy, j, h)
+    nz_, fz_ = hull_gap(cz, k, h)
+    if nx_ * nx_ + ny_ * ny_ + nz_ * nz_ > r2 * (1.0 + MARGIN):
         return UNTOUCHED
-    if fx_ * fx_ + fy_ * fy_ + fz_ * fz_ <= r2 * (1.0 - _MARGIN):
+    if fx_ * fx_ + fy_ * fy_ + fz_ * fz_ <= r2 * (1.0 - MARGIN):
         return FULL
     return PARTIAL
 
@@ -146,7 +139,7 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
                  boundary_only, status, mask, scratch, partial, active, xy, words, out):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); the other arrays are this thread's buffers."""
     status[:, :] = UNTOUCHED
-    plane_lo, first, last = _plane_candidates(i, h, xmin_sorted, hx_max)
+    plane_lo, first, last = plane_candidates(i, h, xmin_sorted, hx_max)
     for q in range(first, last):
         s = order[q]
         cx, cy, cz = img_pos[s, 0], img_pos[s, 1], img_pos[s, 2]
@@ -156,9 +149,9 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
         r = radius[g]
         r2 = r * r
         p0, p1 = plane_ptr[g], plane_ptr[g + 1]
-        margin = _MARGIN * (r + SUB * h)
-        j0, j1 = _axis_range(cy, img_pos[s, 4], h, ny)
-        k0, k1 = _axis_range(cz, img_pos[s, 5], h, nz)
+        margin = MARGIN * (r + SUB * h)
+        j0, j1 = axis_range(cy, img_pos[s, 4], h, ny)
+        k0, k1 = axis_range(cz, img_pos[s, 5], h, nz)
         for j in range(j0, j1):
             if boundary_only and kind[g] == KIND_POLYHEDRON:
                 _xy_bounds(i, j, cx, cy, planes, p0, p1, h, xy)
@@ -177,10 +170,10 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
                         status[j, k] = FULL
                         continue
                 if status[j, k] == UNTOUCHED:
-                    for w in range(_WORDS):
+                    for w in range(WORDS):
                         mask[j, k, w] = 0
                     status[j, k] = PARTIAL
-                for w in range(_WORDS):
+                for w in range(WORDS):
                     words[w] = 0
                 if kind[g] == KIND_SPHERE:
                     _sphere_points(words, i, j, k, cx, cy, cz, r2, h, boundary_only, scratch)
@@ -189,9 +182,9 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
                         for t in range(n_active):
                             active[t] = p0 + t
                     _poly_points(words, i, j, k, cx, cy, cz, planes, active, n_active, h, partial)
-                for w in range(_WORDS):
+                for w in range(WORDS):
                     mask[j, k, w] |= words[w]
-    _grey_from_status(status, mask, out)
+    grey_from_status(status, mask, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
@@ -203,12 +196,12 @@ def _voxelize_grains_slab(i0, i1, img_pos, img_grain, order, xmin_sorted, hx_max
     per = (nplanes + nthreads - 1) // nthreads
     for t in prange(nthreads):
         status = np.empty((ny, nz), dtype=np.uint8)
-        mask = np.empty((ny, nz, _WORDS), dtype=np.uint64)
+        mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
         scratch = np.empty((3, SUB))
         partial = np.empty(max(max_planes, 1))
         active = np.empty(max(max_planes, 1), dtype=np.int64)
         xy = np.empty((max(max_planes, 1), 2))
-        words = np.empty(_WORDS, dtype=np.uint64)
+        words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             _grain_plane(i0 + p, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes,
                          h, ny, nz, boundary_only, status, mask, scratch, partial, active, xy, words, out[p])

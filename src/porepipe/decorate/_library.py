@@ -25,6 +25,8 @@ QUARTZ_CAP_ANGLE_DEG = 51.8
 
 
 class Kind(enum.IntEnum):
+    """Body of a grain type: the sphere itself, or a convex polyhedron (a set of planes)."""
+
     SPHERE = 0
     POLYHEDRON = 1
 
@@ -75,7 +77,7 @@ def sphere_type(name: str = "sphere") -> GrainType:
                      1.0, 1.0, 1.0, np.zeros((0, 3)))
 
 
-def _normalise(name, normals, offsets) -> tuple[np.ndarray, np.ndarray]:
+def _normalise(name, normals, offsets, unit: bool = False) -> tuple[np.ndarray, np.ndarray]:
     normals = np.asarray(normals, dtype=np.float64)
     offsets = np.asarray(offsets, dtype=np.float64)
     if normals.ndim != 2 or normals.shape[1] != 3 or offsets.shape != (normals.shape[0],):
@@ -88,6 +90,11 @@ def _normalise(name, normals, offsets) -> tuple[np.ndarray, np.ndarray]:
         raise PorepipeError(f"grain type {name!r}: {len(length)} planes cannot bound a polyhedron (need >= 4)")
     if (length == 0).any():
         raise PorepipeError(f"grain type {name!r}: plane {int(np.argmin(length))} has a zero normal")
+    if unit:
+        if not np.allclose(length, 1.0, rtol=0, atol=1e-12):
+            raise PorepipeError(f"grain type {name!r}: normals read as unit vectors have lengths up to "
+                                f"{float(np.abs(length - 1).max()):.3g} away from 1")
+        return normals, offsets
     return normals / length[:, None], offsets / length
 
 
@@ -178,7 +185,7 @@ def _faces(normals, offsets, verts, size) -> np.ndarray:
     return keep
 
 
-def polyhedron(name: str, normals, offsets, centre: bool = True) -> GrainType:
+def polyhedron(name: str, normals, offsets, centre: bool = True, *, unit: bool = False) -> GrainType:
     """A convex polyhedron {x : n·x <= d} with its exact measures.
 
     Parameters
@@ -190,13 +197,16 @@ def polyhedron(name: str, normals, offsets, centre: bool = True) -> GrainType:
     offsets : (m,) array_like
     centre : bool
         Translate the polyhedron so its centroid is the origin.
+    unit : bool
+        The normals are unit vectors already (a plane set read back from a file): used as given, so a type is rebuilt
+        bit for bit (dividing by a norm that rounds to 1 ± 1 ulp would move a normal by an ulp).
 
     Raises
     ------
     PorepipeError
         The planes do not bound a polyhedron (unbounded), leave no interior (empty or flat), or contain NaN/Inf.
     """
-    normals, offsets = _normalise(name, normals, offsets)
+    normals, offsets = _normalise(name, normals, offsets, unit)
     check_bounded(name, normals)
     interior, _ = chebyshev_ball(name, normals, offsets)
     verts = _vertices(name, normals, offsets, interior)

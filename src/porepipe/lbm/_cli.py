@@ -1,17 +1,14 @@
-"""``porepipe permeability``: LBM permeability of a binary volume along one or more axes."""
+"""``porepipe permeability``: LBM permeability of a binary volume along one or more axes (argparse only).
+
+The work is in ``_run``.
+"""
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
-
-import numpy as np
+import argparse
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.numba_config import set_threads
-from porepipe._shared.store import hash_of, read_attrs, read_volume
-from porepipe.lbm._api import permeability
-from porepipe.lbm._io import write_result
+from porepipe._shared.overrides import given_options, merge_settings
 from porepipe.lbm._settings import Axis, Collision, Gradient, Lateral, Precision, Settings, Setup, Velocity
 
 #: CLI flag -> settings key for the options that override the scene
@@ -21,57 +18,23 @@ _OVERRIDES = ("collision", "tau", "tau_bulk", "magic", "setup", "mirror", "later
 
 
 def _settings(args) -> Settings:
-    base = {}
+    base = None
     if args.scene:
         from porepipe.scene import load_scene
 
-        base = load_scene(args.scene).permeability.model_dump()
-    for key in _OVERRIDES:
-        value = getattr(args, key, None)
-        if value is not None:
-            base[key] = value
-    try:
-        return Settings(**base)
-    except ValueError as err:
-        raise PorepipeError(f"permeability settings: {err}") from err
-
-
-def _output_path(args, binary: Path, axis: Axis) -> Path:
-    if args.out:
-        return Path(args.out)
-    match = re.search(r"_a([0-9.]+?)\.h5$", binary.name)
-    tag = match.group(1) if match else binary.stem
-    return Path(args.out_dir or binary.parent) / f"perm_a{tag}_{axis.value}.h5"
-
-
-def run_file(binary, args) -> list[Path]:
-    """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis."""
-    binary = Path(binary)
-    settings = _settings(args)
-    axes = tuple(Axis(a) for a in args.axis) if args.axis else settings.axes
-    if args.out and len(axes) != 1:
-        raise PorepipeError(f"--out names one file but {len(axes)} axes were asked for; use --out-dir")
-    threads = set_threads(args.threads)
-    pore, vattrs = read_volume(binary, "pore")
-    src = read_attrs(binary)
-    voxel_um = float(vattrs.get("voxel_um", 1.0))
-    written = []
-    for axis in axes:
-        out = _output_path(args, binary, axis)
-        result = permeability(pore.astype(bool), axis, settings, voxel_um,
-                              checkpoint=out.with_name(f".{out.name}.checkpoint.h5"))
-        part = {"binary": src.get("scene_hash", ""), "axis": axis.value, "settings": settings.model_dump(mode="json")}
-        write_result(out, result, scene=src.get("scene", ""), scene_hash=hash_of(part), threads=threads,
-                     origin_um=tuple(np.asarray(vattrs.get("origin_um", (0.0, 0.0, 0.0)), dtype=float)))
-        print(f"axis {axis.value}: kappa = {result.kappa_lu:.6g} voxel^2 = {result.kappa_m2:.6g} m^2 = "
-              f"{result.kappa_mD:.6g} mD ({result.method}, {result.reason}, {result.steps} steps, "
-              f"{result.mlups:.1f} MLUPS) -> {out}")
-        written.append(out)
-    return written
+        base = load_scene(args.scene).permeability
+    return merge_settings(Settings, base, given_options(args, _OVERRIDES), "permeability settings")
 
 
 def main(args) -> int:
-    run_file(args.binary, args)
+    """Run the subcommand; returns the exit code."""
+    from porepipe.lbm._run import run
+
+    for out, r in run(args.binary, _settings(args), args.axis, out=args.out, out_dir=args.out_dir,
+                      threads=args.threads, checkpoint=args.checkpoint, resume=args.resume):
+        print(f"axis {r.axis.value}: kappa = {r.kappa_lu:.6g} voxel^2 = "
+              f"{r.kappa_m2:.6g} m^2 = {r.kappa_mD:.6g} mD ({r.method}, {r.reason}, {r.steps} steps, "
+              f"{r.mlups:.1f} MLUPS) -> {out}")
     return 0
 
 
@@ -84,6 +47,7 @@ def _bool(text: str) -> bool:
 
 
 def register(subparsers) -> None:
+    """Add ``permeability`` to the ``porepipe`` command."""
     p = subparsers.add_parser("permeability", help="lattice-Boltzmann permeability of a binary volume")
     p.add_argument("binary", help="binary_a{a}.h5 (volume 'pore', 1 = pore)")
     p.add_argument("--axis", action="append", choices=[a.value for a in Axis],
@@ -92,6 +56,9 @@ def register(subparsers) -> None:
     p.add_argument("--out-dir", help="directory for perm_a{a}_{axis}.h5 files")
     p.add_argument("--scene", help="scene YAML whose `permeability` section gives the defaults")
     p.add_argument("--threads", type=int, default=None)
+    p.add_argument("--checkpoint", help="checkpoint file (one axis; default .<out>.checkpoint.h5 beside the result)")
+    p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
+                   help="continue from a matching checkpoint (default); --no-resume starts afresh")
     p.add_argument("--collision", choices=[c.value for c in Collision])
     p.add_argument("--setup", choices=[s.value for s in Setup])
     p.add_argument("--lateral", choices=[s.value for s in Lateral])

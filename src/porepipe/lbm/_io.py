@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import base64
-import os
 from pathlib import Path
 
 import numpy as np
 
+from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.store import ResultWriter
 from porepipe.lbm._api import PermeabilityResult
 
@@ -70,7 +70,4 @@ def write_vti(path, fields: dict[str, np.ndarray], *, spacing: float, origin=(0.
         f'    <Piece Extent="{extent}">',
         '      <CellData>', *arrays, '      </CellData>',
         '    </Piece>', '  </ImageData>', '</VTKFile>', ''])
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-    return path
+    return write_text_atomic(path, text)

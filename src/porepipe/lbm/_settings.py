@@ -30,11 +30,15 @@ class Lateral(str, enum.Enum):
 
 
 class Precision(str, enum.Enum):
+    """Storage type of the populations (the arithmetic is float64 either way)."""
+
     float64 = "float64"
     float32 = "float32"
 
 
 class Axis(str, enum.Enum):
+    """Flow direction: array axis 0, 1 or 2 of the volume."""
+
     x = "x"
     y = "y"
     z = "z"

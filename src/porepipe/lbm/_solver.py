@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-import os
 import time
 from pathlib import Path
 
@@ -13,6 +12,7 @@ import h5py
 import numba
 import numpy as np
 
+from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import hash_of
@@ -29,8 +29,14 @@ TAU_MIN_GAP = 5e-3
 VELOCITY_FLOOR = 1e-2
 #: below this many pore nodes per thread a parallel step costs more in thread wake-ups than it saves.
 NODES_PER_THREAD = 32_768
-#: keys of the settings that change the numbers (checkpoints must match them).
-_PHYSICS_KEYS = ("collision", "tau", "tau_bulk", "magic", "mrt_magic", "body_force", "precision")
+#: settings that only steer when a run stops, what it reports or writes: they do not change the populations, so a
+#: checkpoint stays valid across them (a rerun with more ``max_steps`` resumes). Every other setting — including any
+#: added later — enters the checkpoint key, so the list fails safe: a forgotten entry discards, never misuses, a
+#: checkpoint.
+_RUN_CONTROL_KEYS = frozenset({
+    "axes", "resolutions_um", "gradient", "trim_layers", "velocity", "tolerance_velocity", "tolerance_density",
+    "tolerance_kappa", "window_steps", "max_steps", "accept_unconverged", "mach_max", "write_fields", "write_vti",
+    "checkpoint_every_s"})
 
 
 class StabilityError(PorepipeError):
@@ -77,11 +83,14 @@ def make_stepper(settings: Settings, lat: Lattice):
     elif settings.collision is Collision.trt:
         op = K.TRT
         omega[1] = 1.0 / trt_minus_tau(tau, settings.magic)
-    else:
+    elif settings.collision is Collision.mrt:
         op = K.MRT
         m = dhumieres_matrix()
         scaled = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
         rates = tuple(float(x) for x in scaled)
+    else:
+        raise PorepipeError(f"permeability.collision = {settings.collision!r}: no stepper for it (steppers exist for "
+                            "bgk, trt and mrt)")
 
     def step(src, dst, fields, store, n):
         K._step(op, src, dst, lat.gather, lat.run_start, lat.run_offset, lat.run_base, lo, hi, force, fields, store, n,
@@ -90,19 +99,18 @@ def make_stepper(settings: Settings, lat: Lattice):
 
 
 def _checkpoint_key(lat: Lattice, settings: Settings) -> str:
-    return hash_of({"lattice": lat.key(), **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}})
+    physics = {k: v for k, v in settings.model_dump(mode="json").items() if k not in _RUN_CONTROL_KEYS}
+    return hash_of({"lattice": lat.key(), **physics})
 
 
 def _save_checkpoint(path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with h5py.File(tmp, "w") as f:
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["key"] = key
         f.attrs["step"] = step
         f.create_dataset("populations", data=pops)
         f.create_dataset("fields", data=fields)
         for name, values in history.items():
             f.create_dataset(f"history/{name}", data=np.asarray(values))
-    os.replace(tmp, path)
 
 
 def _load_checkpoint(path: Path, key: str, pops: np.ndarray):

@@ -78,7 +78,7 @@ class CellGrid:
 
     def describe(self, stride: int) -> str:
         parts = []
-        for name, n, w, m in zip("xyz", self.shape, self.wrap, self.npos):
+        for name, w, m in zip("xyz", self.wrap, self.npos):
             kind = "periodic wrap, all n origins" if w else "fully inside, n - L + 1 origins"
             parts.append(f"{name}: {kind} ({m} at stride 1)")
         return f"cubes of L = {self.size} voxels, origins every {stride} voxel(s); " + "; ".join(parts)

@@ -3,7 +3,7 @@
 from porepipe._shared.lazy import lazy_exports
 
 _EXPORTS = {
-    "Adjacency": "_weights",
+    "Adjacency": "_settings",
     "boolean_lattice_densities": "_boolean",
     "configuration_histogram": "_api",
     "configuration_histogram_slabs": "_api",

@@ -16,7 +16,7 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.minkowski import _kernels, _weights
-from porepipe.minkowski._weights import Adjacency
+from porepipe.minkowski._settings import Adjacency
 
 PHASES = ("pore", "matrix")
 UNITS = {"phi": "1", "S_V": "µm^-1", "K_V": "µm^-2", "T_V": "µm^-3", "chi": "1"}

@@ -46,7 +46,7 @@ from scipy.integrate import quad
 from porepipe._shared.errors import PorepipeError
 from porepipe.minkowski import _weights
 from porepipe.minkowski._api import _adjacency, voxel3
-from porepipe.minkowski._weights import Adjacency
+from porepipe.minkowski._settings import Adjacency
 
 QUANTITIES = ("phi", "S_V", "K_V", "chi_V")
 

@@ -1,8 +1,20 @@
 """Scene section ``minkowski``."""
 
+import enum
+
 from pydantic import BaseModel, ConfigDict, Field
 
-from porepipe.minkowski._weights import Adjacency
+
+class Adjacency(str, enum.Enum):
+    """Complementary adjacency pair: which phase is 6- and which is 26-connected."""
+
+    pore6_matrix26 = "pore6_matrix26"
+    pore26_matrix6 = "pore26_matrix6"
+
+    def of(self, phase: str) -> int:
+        """Adjacency (6 or 26) of ``phase`` ('pore' or 'matrix')."""
+        pore = 6 if self is Adjacency.pore6_matrix26 else 26
+        return pore if phase == "pore" else 32 - pore
 
 
 class Settings(BaseModel):

@@ -37,7 +37,6 @@ The surface estimator counts plain transitions and so does not depend on the adj
 
 from __future__ import annotations
 
-import enum
 import functools
 import itertools
 from dataclasses import dataclass
@@ -55,18 +54,6 @@ EULER_DENOMINATOR = 8
 VERTICES = np.array([(b & 1, (b >> 1) & 1, (b >> 2) & 1) for b in range(8)], dtype=np.int64)
 #: foreground flag of vertex b in code c, shape (256, 8)
 _FG = ((np.arange(N_CODES)[:, None] >> np.arange(8)[None, :]) & 1).astype(np.int64)
-
-
-class Adjacency(str, enum.Enum):
-    """Complementary adjacency pair: which phase is 6- and which is 26-connected."""
-
-    pore6_matrix26 = "pore6_matrix26"
-    pore26_matrix6 = "pore26_matrix6"
-
-    def of(self, phase: str) -> int:
-        """Adjacency (6 or 26) of ``phase`` ('pore' or 'matrix')."""
-        pore = 6 if self is Adjacency.pore6_matrix26 else 26
-        return pore if phase == "pore" else 32 - pore
 
 
 def complement(codes: np.ndarray) -> np.ndarray:
@@ -199,7 +186,7 @@ def _plane_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         a, b = [ax for ax in range(3) if ax != nz[0]]
         return np.eye(3, dtype=np.int64)[a], np.eye(3, dtype=np.int64)[b]
     if len(nz) == 2:
-        zero = [ax for ax in range(3) if normal[ax] == 0][0]
+        zero = next(ax for ax in range(3) if normal[ax] == 0)
         p = np.eye(3, dtype=np.int64)[zero]
         q = np.zeros(3, dtype=np.int64)
         q[nz[0]], q[nz[1]] = normal[nz[1]], -normal[nz[0]]

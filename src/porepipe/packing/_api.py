@@ -29,96 +29,24 @@ Decisions the thesis leaves open (documented here once, used everywhere):
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from pathlib import Path
 
 import numba
 import numpy as np
 
+from porepipe._shared import rng
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe.packing import _kernels as K
 from porepipe.packing._neighbours import build_neighbours, check_box
+from porepipe.packing._io import load_checkpoint, save_checkpoint
 from porepipe.packing._settings import Effect, Ramp, Settings, Stage
 from porepipe.packing._setup import place_type, radius_bounds, read_sphere_file
+from porepipe.packing._types import _HISTORY_INT, EFFECT_BITS, HISTORY_KEYS, HISTORY_TIMING, Packing, State
 
-#: bit of each effect in the per-step ``effects`` history column
-EFFECT_BITS = {e: 1 << i for i, e in enumerate(Effect)}
-HISTORY_KEYS = ("stage", "step", "n_spheres", "converged", "max_overlap", "mean_overlap", "kinetic_energy",
-                "max_displacement_um", "effects", "rebuilt", "wall_s")
-#: history columns that describe the machine, not the packing (they differ between identical runs)
-HISTORY_TIMING = ("wall_s",)
-_HISTORY_INT = {"stage", "step", "n_spheres", "converged", "effects", "rebuilt"}
-
-
-@dataclasses.dataclass
-class Packing:
-    """A sphere packing and how it was made.
-
-    Attributes
-    ----------
-    centres_um : (N, 3) float64
-    radii_um : (N,) float64
-    types : (N,) int32
-        Index into ``type_names``.
-    max_overlap : (N,) float64
-        max_j sigma_ij at the final configuration (-inf: no partner in reach).
-    converged : (N,) uint8
-        0 < max_overlap <= sigma_max of the sphere's type.
-    """
-
-    centres_um: np.ndarray
-    radii_um: np.ndarray
-    types: np.ndarray
-    max_overlap: np.ndarray
-    converged: np.ndarray
-    type_names: list[str]
-    box_um: np.ndarray
-    periodic: np.ndarray
-    history: dict[str, np.ndarray]
-    stage_converged: list[bool]
-    stage_steps: list[int]
-    snapshots: list[dict]
-
-    @property
-    def all_converged(self) -> bool:
-        return bool(self.stage_converged) and self.stage_converged[-1]
-
-
-@dataclasses.dataclass
-class State:
-    """Everything a run needs to continue bit-identically (what a checkpoint stores)."""
-
-    x: np.ndarray
-    v: np.ndarray
-    f: np.ndarray
-    r: np.ndarray
-    types: np.ndarray
-    frozen: np.ndarray
-    x_build: np.ndarray
-    r_build: np.ndarray
-    ids: np.ndarray       # insertion number of each sphere; the arrays are kept in cell order for memory locality
-    next_id: int
-    since_build: int
-    stage: int            # index of the stage in progress
-    step: int             # last completed stage-local step (0: stage not started, spheres not inserted)
-    nconv_prev: int
-    need_rebuild: bool
-    history: dict[str, list]
-    stage_converged: list[bool]
-    stage_steps: list[int]
-    snapshots: list[dict]
-
-    @classmethod
-    def empty(cls) -> State:
-        z3 = np.zeros((0, 3))
-        return cls(x=z3, v=z3.copy(), f=z3.copy(), r=np.zeros(0), types=np.zeros(0, dtype=np.int64),
-                   frozen=np.zeros(0, dtype=np.uint8), x_build=z3.copy(), r_build=np.zeros(0),
-                   ids=np.zeros(0, dtype=np.int64), next_id=0, since_build=0,
-                   stage=0, step=0, nconv_prev=0, need_rebuild=True, history={k: [] for k in HISTORY_KEYS},
-                   stage_converged=[], stage_steps=[], snapshots=[])
-
+__all__ = ["EFFECT_BITS", "HISTORY_KEYS", "HISTORY_TIMING", "Packing", "State", "check_damping", "pack_spheres",
+           "pair_tables", "schedule_value", "sphere_overlaps"]
 
 def schedule_value(sched, step: int, default: float) -> float:
     """Value of a constant or a linear ramp (5.4.1) at stage step ``step``.
@@ -188,12 +116,17 @@ def pair_tables(k_t: np.ndarray, sig_t: np.ndarray) -> tuple[np.ndarray, np.ndar
     return k, np.sqrt(k) * (1.0 + 0.25 * k), np.minimum(sig_t[:, None], sig_t[None, :])
 
 
-def _seed_stream(seed: int, *keys: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence([int(seed), *keys]))
+#: sub-streams of the stage's random stream (porepipe._shared.rng, stage name "packing"): placement and radii of a
+#: type inserted in a protocol stage (keys: stage, type), and the counter seed of the stochastic forces (key: stage)
+_STREAM_PLACEMENT, _STREAM_FORCES = 0, 1
+
+
+def _seed_stream(seed: int, stage: int, type_index: int) -> np.random.Generator:
+    return rng.stream(seed, "packing", _STREAM_PLACEMENT, stage, type_index)
 
 
 def _counter_seed(seed: int, stage: int) -> int:
-    return int(np.random.SeedSequence([int(seed), 1_000_003, stage]).generate_state(1, dtype=np.uint64)[0] >> 1)
+    return rng.kernel_seed(seed, "packing", _STREAM_FORCES, stage)
 
 
 _PER_SPHERE = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build", "ids")
@@ -516,8 +449,6 @@ def pack_spheres(settings: Settings, box_um, periodic=True, seed: int = 0, *, ba
     -------
     Packing
     """
-    from porepipe.packing._io import load_checkpoint, save_checkpoint
-
     box, per = _as_box(box_um, periodic)
     if not settings.types or not settings.stages:
         raise PorepipeError("packing needs at least one entry in `types` and one in `stages`")

@@ -10,15 +10,16 @@ each stage's final spheres are kept under ``stages/<index>_<name>/``.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import h5py
 import numpy as np
 import xarray as xr
 
+from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
-from porepipe.packing._api import EFFECT_BITS, HISTORY_KEYS, Packing, State
+from porepipe._shared.spheres import write_xyzr
+from porepipe.packing._types import EFFECT_BITS, HISTORY_KEYS, Packing, State
 
 _SPHERE_KEYS = ("centres_um", "radii_um", "types", "max_overlap", "converged")
 _STATE_ARRAYS = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build", "ids")
@@ -74,36 +75,27 @@ def read_packing(path) -> dict:
 
 def write_xyzr_file(path, packing: Packing) -> None:
     """PackDEM ``xyzr`` export: one sphere per line, ``x y z r`` in µm."""
-    from porepipe.voxelize import write_xyzr
-
     write_xyzr(path, packing.centres_um, packing.radii_um)
 
 
 def save_checkpoint(path, state: State) -> None:
     """Write the full engine state atomically (temporary name, then rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with h5py.File(tmp, "w") as f:
-            for key in _STATE_ARRAYS:
-                f.create_dataset(key, data=getattr(state, key))
-            for key in _STATE_INTS:
-                f.attrs[key] = int(getattr(state, key))
-            f.attrs["need_rebuild"] = int(state.need_rebuild)
-            f.attrs["stage_converged"] = np.asarray(state.stage_converged, dtype=np.int8)
-            f.attrs["stage_steps"] = np.asarray(state.stage_steps, dtype=np.int64)
-            h = f.create_group("history")
-            for key in HISTORY_KEYS:
-                h.create_dataset(key, data=np.asarray(state.history[key]))
-            for i, snap in enumerate(state.snapshots):
-                g = f.create_group(f"snapshots/{i}")
-                g.attrs["name"] = snap["name"]
-                for key in _SPHERE_KEYS:
-                    g.create_dataset(key, data=snap[key])
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+        for key in _STATE_ARRAYS:
+            f.create_dataset(key, data=getattr(state, key))
+        for key in _STATE_INTS:
+            f.attrs[key] = int(getattr(state, key))
+        f.attrs["need_rebuild"] = int(state.need_rebuild)
+        f.attrs["stage_converged"] = np.asarray(state.stage_converged, dtype=np.int8)
+        f.attrs["stage_steps"] = np.asarray(state.stage_steps, dtype=np.int64)
+        h = f.create_group("history")
+        for key in HISTORY_KEYS:
+            h.create_dataset(key, data=np.asarray(state.history[key]))
+        for i, snap in enumerate(state.snapshots):
+            g = f.create_group(f"snapshots/{i}")
+            g.attrs["name"] = snap["name"]
+            for key in _SPHERE_KEYS:
+                g.create_dataset(key, data=snap[key])
 
 
 def load_checkpoint(path) -> State:

@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.spheres import check_spheres, read_xyzr
+from porepipe.packing._io import read_packing
 from porepipe.packing._settings import RadiusDist, RadiusSpec, Settings, SphereFile, SphereFormat, SphereType
 
 
@@ -164,9 +166,6 @@ def read_sphere_file(spec: SphereFile, settings: Settings, box_um: np.ndarray, p
     Periodic coordinates are wrapped into [0, L); a centre outside a closed axis, or a radius outside the
     bounds of its type (which the radius protocol keeps), is an error naming the sphere.
     """
-    from porepipe.packing._io import read_packing
-    from porepipe.voxelize._spheres import check_spheres, read_xyzr
-
     path = spec.path if spec.path.is_absolute() else Path(base_dir) / spec.path
     if not path.is_file():
         raise PorepipeError(f"packing insert_file.path {path} does not exist")

@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe import __version__
+from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures
@@ -150,8 +151,5 @@ def build_report(sweep_path, out_html, *, settings: Settings | None = None, grey
     page = ("<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"
             f"<title>porepipe report {html.escape(scene_name)}</title><style>{_CSS}</style></head><body>"
             + "\n".join(parts) + "</body></html>\n")
-    tmp = out_html.with_name(f".{out_html.name}.tmp")
-    tmp.write_text(page, encoding="utf-8")
-    os.replace(tmp, out_html)
-    return out_html
+    return write_text_atomic(out_html, page)
 

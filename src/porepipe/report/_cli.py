@@ -1,37 +1,26 @@
-"""``porepipe report SCENE.yaml``: the accuracy-versus-cost report of a scene (results/<scene>/report/index.html)."""
+"""``porepipe report SCENE.yaml``: the accuracy-versus-cost report of a scene (results/<scene>/report/index.html).
+
+Argparse only; the work is in ``_run``.
+"""
 
 from __future__ import annotations
 
 import sys
-from pathlib import Path
-
-from porepipe._shared.errors import PorepipeError
-
-
-def _existing(scene, pattern: str) -> list[str]:
-    paths = [Path("results", scene.name, pattern.format(a=f"{a:g}")) for a in scene.resolutions_um]
-    return [str(p) for p in paths if p.is_file()]
 
 
 def main(args) -> int:
-    from porepipe.report._api import build_report  # matplotlib only when a report is built
-    from porepipe.scene import grey_stage, load_scene
+    """Run the subcommand; returns the exit code."""
+    from porepipe.report._run import run  # matplotlib only when a report is built
+    from porepipe.scene import load_scene
 
-    scene = load_scene(args.scene)
-    sweep = Path(args.sweep or Path("results", scene.name, "sweep", "sweep.h5"))
-    if not sweep.is_file():
-        raise PorepipeError(f"{sweep} does not exist: run the workflow first (`porepipe run {args.scene}` with "
-                            "`report` in the scene's analyses)")
-    grey = args.grey if args.grey is not None else _existing(scene, grey_stage(scene) + "/grey_a{a}.h5")
-    binary = args.binary if args.binary is not None else _existing(scene, "segment/binary_a{a}.h5")
-    lpt = args.lpt if args.lpt is not None else _existing(scene, "lpt/lpt_a{a}.h5")
-    out = Path(args.out or Path("results", scene.name, "report", "index.html"))
-    build_report(sweep, out, settings=scene.report, grey=grey, binary=binary, lpt=lpt, scene_name=scene.name)
+    out = run(load_scene(args.scene), args.scene, sweep=args.sweep, out=args.out, grey=args.grey,
+              binary=args.binary, lpt=args.lpt)
     print(f"report: written {out}", file=sys.stderr)
     return 0
 
 
 def register(subparsers) -> None:
+    """Add ``report`` to the ``porepipe`` command."""
     p = subparsers.add_parser("report", help="accuracy-versus-cost report (HTML + PNG) of a scene's sweep")
     p.add_argument("scene", help="scene YAML file")
     p.add_argument("--sweep", help="sweep.h5 (default results/<scene>/sweep/sweep.h5)")

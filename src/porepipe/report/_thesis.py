@@ -155,6 +155,7 @@ def table_6_3() -> Table:
 
 
 def thesis_tables(ds: xr.Dataset, which, model: str | None) -> list[Table]:
+    """The thesis tables named in ``which`` (report settings), each with the scene's own values beside them."""
     builders = {ThesisTable.t5_1: lambda: table_5_1(ds, model), ThesisTable.t5_2: lambda: table_5_2(ds, model),
                 ThesisTable.t6_2: table_6_2, ThesisTable.t6_3: table_6_3, ThesisTable.t6_4: table_6_4,
                 ThesisTable.t7_2: table_7_2, ThesisTable.t7_3: lambda: table_7_3(ds)}

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.scene import SegmentationMethod
+from porepipe.segment._settings import SegmentationMethod
 
 G_MAX = 216
 #: threshold used when the histogram has a single populated grey value (Otsu undefined): pore if the voxel is

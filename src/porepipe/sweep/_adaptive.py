@@ -26,6 +26,8 @@ COST_EXPONENT_RANGE = (1.0, 6.0)
 
 
 class Outcome(str, enum.Enum):
+    """Why an adaptive sweep stops, or that it refines once more."""
+
     target_met = "target_met"
     budget_spent = "budget_spent"
     max_rounds = "max_rounds"
@@ -34,6 +36,8 @@ class Outcome(str, enum.Enum):
 
 @dataclasses.dataclass(frozen=True)
 class Decision:
+    """The adaptive sweep's decision after a round: outcome, next voxel size (µm), the limit q∞ and its error."""
+
     outcome: Outcome
     next_a: float | None
     q_inf: float

@@ -29,7 +29,7 @@ def limit_of(a_um, values, exponent: float | None, confidence: float = 0.95) -> 
 
 
 def add_limits(ds: xr.Dataset, exponent: Exponent | str = Exponent.free, confidence: float = 0.95) -> xr.Dataset:
-    """Add q∞ and its verdict over (form, quantity, sample_um): ``q_inf``, ``err``, ``status``, ``why`` …"""
+    """Add q∞ and its verdict over (form, quantity, sample_um): ``q_inf``, ``err``, ``status``, ``why`` and more."""
     p_of = {"power": exponent_value(exponent), "linear": 1.0}
     shape = (len(FORMS), ds.sizes["quantity"], ds.sizes["sample_um"])
     num = {k: np.full(shape, np.nan) for k in _LIMIT_FIELDS}

@@ -1,21 +1,20 @@
-"""``porepipe sweep`` (gather + extrapolate, or ``--adaptive SCENE``) and ``porepipe subsample`` (corner crop)."""
+"""``porepipe sweep`` (gather + extrapolate, or ``--adaptive SCENE``) and ``porepipe subsample`` (corner crop).
+
+Argparse only; the work is in ``_run`` (and ``_adaptive``, which drives whole workflow runs).
+"""
 
 from __future__ import annotations
 
 import sys
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import ResultWriter, hash_of
-from porepipe.sweep._adaptive import Outcome, run_adaptive
-from porepipe.sweep._api import build_sweep
-from porepipe.sweep._crop import crop_corner
 from porepipe.sweep._settings import Exponent
-
-# (scipy, used by the fits, is imported only when a fit runs: this module is imported by every `porepipe` command)
 
 
 def _sweep(args) -> int:
     if args.adaptive:
+        from porepipe.sweep._adaptive import Outcome, run_adaptive
+
         if len(args.inputs) != 1:
             raise PorepipeError(f"sweep --adaptive takes one scene file, got {args.inputs}")
         dec = run_adaptive(args.inputs[0], cores=args.cores)
@@ -30,10 +29,10 @@ def _sweep(args) -> int:
 
         scene = load_scene(args.scene)
         exponent, confidence, scene_name = scene.sweep.exponent, scene.sweep.confidence, scene.name
-    ds = build_sweep(args.inputs, args.volumes, args.cost_dir, exponent, confidence)
-    part = {"inputs": sorted(args.inputs), "exponent": Exponent(exponent).value, "confidence": confidence}
-    with ResultWriter(args.out, stage="sweep", scene=scene_name, scene_hash=hash_of(part)) as w:
-        w.write_table(ds)
+    from porepipe.sweep._run import run
+
+    ds = run(args.inputs, args.out, volumes=args.volumes, cost_dir=args.cost_dir, exponent=exponent,
+             confidence=confidence, scene_name=scene_name)
     ok = int((ds.status == "ok").sum())
     print(f"sweep: {ds.sizes['quantity']} quantities x {ds.sizes['a_um']} resolutions x {ds.sizes['sample_um']} "
           f"samples; {ok} supported limits; written {args.out}", file=sys.stderr)
@@ -41,12 +40,15 @@ def _sweep(args) -> int:
 
 
 def _subsample(args) -> int:
-    shape = crop_corner(args.binary, args.edge_um, args.out)
+    from porepipe.sweep._run import run_subsample
+
+    shape = run_subsample(args.binary, args.edge_um, args.out)
     print(f"subsample: corner cube {shape} written to {args.out}", file=sys.stderr)
     return 0
 
 
 def register(subparsers) -> None:
+    """Add ``sweep`` and ``subsample`` to the ``porepipe`` command."""
     p = subparsers.add_parser("sweep", help="gather results over resolutions and sample sizes into sweep.h5 and "
                               "extrapolate to a -> 0; or --adaptive SCENE: refine until a target error is met")
     p.add_argument("inputs", nargs="*", help="result files (*_a{a}*.h5, estimate.h5); with --adaptive: the scene")

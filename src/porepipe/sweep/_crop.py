@@ -30,7 +30,7 @@ def crop_corner(binary_path, edge_um: float, out) -> tuple[int, int, int]:
     """
     root = read_attrs(binary_path)
     with open_volume(binary_path, "pore") as dset:
-        vattrs = {k: v for k, v in dset.attrs.items()}
+        vattrs = dict(dset.attrs.items())
         n = corner_voxels(float(edge_um), float(vattrs["voxel_um"]), dset.shape)
         cube = np.ascontiguousarray(dset[:n, :n, :n])
     extra = {k: v for k, v in vattrs.items() if k not in ("voxel_um", "origin_um", "periodic")}

@@ -2,26 +2,19 @@
 
 from __future__ import annotations
 
-import enum
 import itertools
 
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
-from porepipe.voxelize._kernels import N_SAMPLES, SUB, _voxelize_slab
-from porepipe.voxelize._spheres import check_spheres
+from porepipe._shared.sample_points import N_SAMPLES, SUB
+from porepipe.voxelize._kernels import _voxelize_slab
+from porepipe.voxelize._settings import VoxelizeMethod
+from porepipe._shared.spheres import check_spheres
 
 #: relative tolerance for "the voxel size divides the box"
 _DIVIDES_RTOL = 1e-9
-
-
-class VoxelizeMethod(str, enum.Enum):
-    """``boundary``: sample only voxels a sphere surface crosses; ``brute``: all 216 points of every voxel near a
-    sphere (the thesis's method, kept as oracle and for the benchmark). Both give identical grey values."""
-
-    boundary = "boundary"
-    brute = "brute"
 
 
 def grid_shape(box_um, voxel_um: float) -> tuple[int, int, int]:

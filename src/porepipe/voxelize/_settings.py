@@ -1,8 +1,16 @@
 """Scene section ``voxelize``."""
 
+import enum
+
 from pydantic import BaseModel, ConfigDict, Field
 
-from porepipe.voxelize._api import VoxelizeMethod
+
+class VoxelizeMethod(str, enum.Enum):
+    """``boundary``: sample only voxels a sphere surface crosses; ``brute``: all 216 points of every voxel near a
+    sphere (the thesis's method, kept as oracle and for the benchmark). Both give identical grey values."""
+
+    boundary = "boundary"
+    brute = "brute"
 
 
 class Settings(BaseModel):

@@ -7,7 +7,8 @@ import xarray as xr
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter
 from porepipe.minkowski import minkowski_functionals
-from porepipe.minkowski._cli import THRESHOLD_GROUP, minkowski_file
+from porepipe.minkowski._run import THRESHOLD_GROUP
+from porepipe.minkowski._run import run as minkowski_file
 from porepipe.minkowski._settings import Settings
 
 

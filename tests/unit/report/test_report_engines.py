@@ -7,7 +7,7 @@ import xarray as xr
 
 from porepipe._shared.store import ResultWriter
 from porepipe.lpt import Settings as LptSettings
-from porepipe.lpt._cli import lpt_file
+from porepipe.lpt._run import run as lpt_file
 from porepipe.report import build_report
 from porepipe.report._settings import Settings
 from porepipe.sweep import FULL, build_sweep, crop_corner

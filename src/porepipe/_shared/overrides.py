@@ -1,0 +1,55 @@
+"""Command-line options laid over a scene's settings: the one merge that acquire, lpt and permeability share."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from porepipe._shared.errors import PorepipeError
+
+__all__ = ["given_options", "merge_settings"]
+
+
+def given_options(args: Any, keys) -> dict:
+    """``{key: args.key}`` for the keys the command line gave (None = not given)."""
+    return {k: getattr(args, k) for k in keys if getattr(args, k, None) is not None}
+
+
+def _deep_merge(base: dict, over: dict) -> dict:
+    out = dict(base)
+    for key, value in over.items():
+        out[key] = _deep_merge(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) \
+            else value
+    return out
+
+
+def merge_settings(model: type[BaseModel], base: BaseModel | dict | None, overrides: dict, what: str) -> BaseModel:
+    """``base`` (a scene section, or None for the defaults) with ``overrides`` laid over it, validated as ``model``.
+
+    Parameters
+    ----------
+    model : pydantic model class
+        The stage's ``Settings``.
+    base : model instance, dict or None
+        The scene's section; None = the defaults.
+    overrides : dict
+        Options from the command line (only those given); nested dicts merge into nested sections key by key.
+    what : str
+        Names the settings in the error message (``"lpt options"``).
+
+    Returns
+    -------
+    model instance
+
+    Raises
+    ------
+    PorepipeError
+        The merged settings are invalid; the message names ``what`` and pydantic's reasons.
+    """
+    if isinstance(base, BaseModel):
+        base = base.model_dump()
+    try:
+        return model.model_validate(_deep_merge(base or {}, overrides))
+    except ValidationError as err:
+        raise PorepipeError(f"{what}: {err}") from None

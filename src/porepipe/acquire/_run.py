@@ -1,0 +1,115 @@
+"""File in, compute, file out for the acquire stage: image -> statistics, binary, calibrated scene, model, comparison."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import xarray as xr
+
+from porepipe._shared.numba_config import set_threads
+from porepipe._shared.store import read_table, result_hash
+from porepipe.acquire._api import acquire, write_binary
+from porepipe.acquire._calibrate import calibrated_scene, write_scene_yaml
+from porepipe.acquire._compare import write_comparison
+from porepipe.acquire._model import match_porosity, run_model
+from porepipe.acquire._settings import Settings
+
+
+def _section(scene) -> Settings:
+    return scene.acquire if scene is not None and scene.acquire is not None else Settings()
+
+
+def run(settings: Settings, out, *, scene=None, image_path=None, base_dir=".",
+        threads: int | None = None) -> dict[str | None, xr.Dataset]:
+    """Read, prepare, segment and measure an image; write ``statistics.h5``.
+
+    Parameters
+    ----------
+    settings : Settings
+        The ``acquire`` settings (scene section with command-line options laid over it).
+    out : path-like
+        ``statistics.h5``.
+    scene : Scene, optional
+        The image scene (its name, ``lpt`` and ``permeability`` sections).
+    image_path : path-like, optional
+        The image (default: ``settings.image``).
+    base_dir : path-like
+        Directory relative image paths refer to (the scene file's).
+    threads : int, optional
+        Numba threads (default: all).
+
+    Returns
+    -------
+    dict of str or None -> xarray.Dataset
+        The tables by group (None = root).
+    """
+    set_threads(threads)
+    return acquire(settings, out, base_dir=base_dir, image_path=image_path, scene_name=scene.name if scene else "",
+                   scene_hash=result_hash("acquire", settings=settings, image=str(image_path or "")),
+                   lpt_settings=getattr(scene, "lpt", None),
+                   permeability_settings=getattr(scene, "permeability", None))
+
+
+def run_binary(statistics_path, out, a_um: float | None = None) -> float:
+    """Write ``binary_a{a}.h5`` of an acquired image; returns its porosity (see :func:`acquire.write_binary`)."""
+    return write_binary(statistics_path, out, a_um)
+
+
+def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) -> Path:
+    """Write a model scene YAML calibrated to the image statistics (packing + decoration, porosity matched).
+
+    Parameters
+    ----------
+    statistics_path : path-like
+        ``statistics.h5`` of the image.
+    out : path-like
+        The scene YAML to write.
+    scene : Scene, optional
+        The image scene (its ``acquire.calibration`` settings and seed).
+    name : str, optional
+        Name of the model scene (default ``<scene>-model``).
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    settings = _section(scene)
+    name = name or (f"{scene.name}-model" if scene else "calibrated-model")
+    model = calibrated_scene(read_table(statistics_path), settings.calibration, name=name,
+                             seed=scene.seed if scene else 0)
+    history = match_porosity(model, model["_calibration"]["target_porosity"],
+                             settings.calibration.porosity_iterations, Path(out).parent)
+    model["_calibration"]["porosity_matching"] = [{"count": n, "porosity": phi} for n, phi in history]
+    return write_scene_yaml(model, out)
+
+
+def run_calibrated_model(model_scene, model_path, out, *, scene=None,
+                         threads: int | None = None) -> dict[str | None, xr.Dataset]:
+    """Pack, voxelise and measure a calibrated model scene; write ``model_statistics.h5``.
+
+    Parameters
+    ----------
+    model_scene : Scene
+        The calibrated scene.
+    model_path : path-like
+        Its file (relative paths refer to its directory).
+    out : path-like
+        ``model_statistics.h5``.
+    scene : Scene, optional
+        The image scene (which statistics to measure).
+    threads : int, optional
+        Numba threads (default: all).
+
+    Returns
+    -------
+    dict of str or None -> xarray.Dataset
+    """
+    set_threads(threads)
+    return run_model(model_scene, _section(scene), out, base_dir=Path(model_path).parent,
+                     lpt_settings=getattr(scene, "lpt", None),
+                     permeability_settings=getattr(scene, "permeability", None))
+
+
+def run_compare(experiment_path, model_path, out) -> xr.Dataset:
+    """Write ``comparison.h5`` (+ PNG and Markdown beside it): model against experiment."""
+    return write_comparison(experiment_path, model_path, out)

@@ -1,0 +1,70 @@
+"""Type stub of porepipe.decorate: its lazy exports (``_EXPORTS`` in __init__.py) for IDEs and type checkers.
+
+Kept equal to the export table by tests/unit/store/test_stubs.py.
+"""
+
+from porepipe.decorate._api import (
+    Decoration as Decoration,
+    build_library as build_library,
+    decorate as decorate,
+    grain_images as grain_images,
+    iter_grain_slabs as iter_grain_slabs,
+    mean_overlap_volume as mean_overlap_volume,
+    minimise_overlap as minimise_overlap,
+    neighbour_pairs as neighbour_pairs,
+    pair_overlap_volume as pair_overlap_volume,
+    points_in_grains as points_in_grains,
+    scale_factors as scale_factors,
+    voxelize_grains as voxelize_grains,
+    world_grains as world_grains,
+)
+from porepipe.decorate._io import (
+    decoration_dataset as decoration_dataset,
+    read_grains as read_grains,
+)
+from porepipe.decorate._library import (
+    GrainType as GrainType,
+    Kind as Kind,
+    polyhedron as polyhedron,
+    quartz_type as quartz_type,
+    random_type as random_type,
+    read_plane_file as read_plane_file,
+    sphere_type as sphere_type,
+)
+from porepipe.decorate._rotation import (
+    anisotropic_rotations as anisotropic_rotations,
+    uniform_rotations as uniform_rotations,
+    von_mises_fisher as von_mises_fisher,
+)
+from porepipe.decorate._settings import (
+    Settings as Settings,
+)
+
+__all__ = [
+    "Decoration",
+    "GrainType",
+    "Kind",
+    "Settings",
+    "anisotropic_rotations",
+    "build_library",
+    "decorate",
+    "decoration_dataset",
+    "grain_images",
+    "iter_grain_slabs",
+    "mean_overlap_volume",
+    "minimise_overlap",
+    "neighbour_pairs",
+    "pair_overlap_volume",
+    "points_in_grains",
+    "polyhedron",
+    "quartz_type",
+    "random_type",
+    "read_grains",
+    "read_plane_file",
+    "scale_factors",
+    "sphere_type",
+    "uniform_rotations",
+    "von_mises_fisher",
+    "voxelize_grains",
+    "world_grains",
+]

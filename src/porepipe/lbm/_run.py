@@ -1,0 +1,79 @@
+"""File in, compute, file out: ``perm_a{a}_{axis}.h5`` from a binary volume, one file per flow axis."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.numba_config import set_threads
+from porepipe._shared.store import read_attrs, read_binary_volume, result_hash
+from porepipe.lbm._api import PermeabilityResult, permeability
+from porepipe.lbm._io import write_result
+from porepipe.lbm._settings import Axis, Settings
+
+
+def output_path(binary, axis: Axis, out=None, out_dir=None) -> Path:
+    """``out`` if given, else ``perm_a{a}_{axis}.h5`` in ``out_dir`` (default: beside ``binary``)."""
+    if out:
+        return Path(out)
+    binary = Path(binary)
+    match = re.search(r"_a([0-9.]+?)\.h5$", binary.name)
+    tag = match.group(1) if match else binary.stem
+    return Path(out_dir or binary.parent) / f"perm_a{tag}_{axis.value}.h5"
+
+
+def default_checkpoint(out) -> Path:
+    """The checkpoint beside a result file when none is named: ``.<name>.checkpoint.h5`` (hidden)."""
+    out = Path(out)
+    return out.with_name(f".{out.name}.checkpoint.h5")
+
+
+def run(binary, settings: Settings, axes=None, *, out=None, out_dir=None, threads: int | None = None,
+        checkpoint=None, resume: bool = True) -> list[tuple[Path, PermeabilityResult]]:
+    """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis.
+
+    Parameters
+    ----------
+    binary : path-like
+        Binary volume (1 = pore) with ``voxel_um``, ``origin_um``, ``periodic``.
+    settings : Settings
+        The ``permeability`` settings (scene section with command-line options laid over it).
+    axes : sequence of Axis or str, optional
+        Flow axes (default ``settings.axes``).
+    out : path-like, optional
+        The result file (one axis only).
+    out_dir : path-like, optional
+        Directory of the ``perm_a{a}_{axis}.h5`` files (default: beside ``binary``).
+    threads : int, optional
+        Numba threads (default: all).
+    checkpoint : path-like, optional
+        Checkpoint file (one axis only); default ``.<result name>.checkpoint.h5`` beside each result. It is written
+        every ``checkpoint_every_s`` and at the step limit, keyed by the geometry and physics, deleted on success.
+    resume : bool
+        Continue from a matching checkpoint; False discards an existing one and starts afresh.
+
+    Returns
+    -------
+    list of (pathlib.Path, PermeabilityResult)
+        Each axis's result file and result.
+    """
+    axes = tuple(Axis(a) for a in axes) if axes else settings.axes
+    if out and len(axes) != 1:
+        raise PorepipeError(f"--out names one file but {len(axes)} axes were asked for; use --out-dir")
+    if checkpoint and len(axes) != 1:
+        raise PorepipeError(f"--checkpoint names one file but {len(axes)} axes were asked for; give one --axis")
+    threads = set_threads(threads)
+    pore, meta = read_binary_volume(binary)
+    scene = read_attrs(binary).get("scene", "")
+    written = []
+    for axis in axes:
+        path = output_path(binary, axis, out, out_dir)
+        ckpt = Path(checkpoint) if checkpoint else default_checkpoint(path)
+        if not resume:
+            ckpt.unlink(missing_ok=True)
+        result = permeability(pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt)
+        digest = result_hash("permeability", settings=settings, inputs=[binary], axis=axis.value)
+        write_result(path, result, scene=scene, scene_hash=digest, threads=threads, origin_um=meta.origin_um)
+        written.append((path, result))
+    return written

@@ -1,0 +1,34 @@
+"""Type stub of porepipe.report: its lazy exports (``_EXPORTS`` in __init__.py) for IDEs and type checkers.
+
+Kept equal to the export table by tests/unit/store/test_stubs.py.
+"""
+
+from porepipe.report._analysis import (
+    Reference as Reference,
+    cost_per_digit as cost_per_digit,
+    error_cost_table as error_cost_table,
+    pareto_front as pareto_front,
+    reference_limit as reference_limit,
+    runs_of as runs_of,
+    varying_quantities as varying_quantities,
+)
+from porepipe.report._api import (
+    build_report as build_report,
+)
+from porepipe.report._thesis import (
+    Table as Table,
+    thesis_tables as thesis_tables,
+)
+
+__all__ = [
+    "Reference",
+    "Table",
+    "build_report",
+    "cost_per_digit",
+    "error_cost_table",
+    "pareto_front",
+    "reference_limit",
+    "runs_of",
+    "thesis_tables",
+    "varying_quantities",
+]

@@ -1,0 +1,48 @@
+"""File in, compute, file out: ``report/index.html`` (+ PNG, CSV) of a scene's sweep."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.naming import res_tag
+from porepipe.report._api import build_report
+from porepipe.scene import grey_stage
+
+
+def existing(scene, pattern: str) -> list[str]:
+    """``results/<scene>/<pattern>`` for every resolution of the scene (``{a}`` = its tag) that exists."""
+    paths = [Path("results", scene.name, pattern.format(a=res_tag(a))) for a in scene.resolutions_um]
+    return [str(p) for p in paths if p.is_file()]
+
+
+def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=None) -> Path:
+    """Write the accuracy-versus-cost report of ``scene``.
+
+    Parameters
+    ----------
+    scene : Scene
+        The validated scene (its ``report`` section).
+    scene_path : path-like
+        Its file (named in the message when the sweep is missing).
+    sweep : path-like, optional
+        ``sweep.h5`` (default ``results/<scene>/sweep/sweep.h5``).
+    out : path-like, optional
+        ``index.html`` (default ``results/<scene>/report/index.html``).
+    grey, binary, lpt : sequence of path-like, optional
+        Volumes for cross-sections and LPT results for curves (default: those of the scene that exist).
+
+    Returns
+    -------
+    pathlib.Path
+        The page written.
+    """
+    sweep = Path(sweep or Path("results", scene.name, "sweep", "sweep.h5"))
+    if not sweep.is_file():
+        raise PorepipeError(f"{sweep} does not exist: run the workflow first (`porepipe run {scene_path}` with "
+                            "`report` in the scene's analyses)")
+    grey = grey if grey is not None else existing(scene, grey_stage(scene) + "/grey_a{a}.h5")
+    binary = binary if binary is not None else existing(scene, "segment/binary_a{a}.h5")
+    lpt = lpt if lpt is not None else existing(scene, "lpt/lpt_a{a}.h5")
+    out = Path(out or Path("results", scene.name, "report", "index.html"))
+    return build_report(sweep, out, settings=scene.report, grey=grey, binary=binary, lpt=lpt, scene_name=scene.name)

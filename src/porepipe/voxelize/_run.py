@@ -1,0 +1,50 @@
+"""File in, compute, file out: the grey volume of a scene's spheres at one voxel size (``grey_a{a}.h5``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from porepipe._shared.grey import write_grey_volume
+from porepipe._shared.numba_config import set_threads
+from porepipe._shared.spheres import spheres_from_scene
+from porepipe._shared.store import ResultWriter, result_hash
+from porepipe.scene import scene_part
+from porepipe.voxelize._api import grid_shape, iter_grey_slabs
+
+
+def run(scene, voxel_um: float, out, *, packing_path=None, threads: int | None = None,
+        progress: bool = True) -> np.ndarray:
+    """Write ``grey_a{a}.h5``: volume ``grey`` (uint8 0..216) and the grey histogram M(g, a) as its table.
+
+    Parameters
+    ----------
+    scene : Scene
+        The validated scene (its ``domain``, ``spheres`` and ``voxelize`` sections are used).
+    voxel_um : float
+        Voxel edge a in µm; it must divide every box edge.
+    out : path-like
+        The result file.
+    packing_path : path-like, optional
+        ``packing.h5`` of the pack stage, when ``spheres.pack`` is set.
+    threads : int, optional
+        Numba threads (default: all).
+    progress : bool
+        Print progress lines.
+
+    Returns
+    -------
+    (217,) ndarray of int64
+        The grey histogram M(g, a).
+    """
+    threads = set_threads(threads)
+    centres, radii = spheres_from_scene(scene, packing_path)
+    box = scene.domain.size_um
+    shape = grid_shape(box, voxel_um)
+    digest = result_hash("voxelize", scene_part=scene_part(scene, "domain", "spheres"), voxel_um=voxel_um,
+                         packing=str(packing_path or ""))
+    with ResultWriter(out, stage="voxelize", scene=scene.name, scene_hash=digest, threads=threads) as w:
+        slabs = iter_grey_slabs(centres, radii, box, voxel_um, scene.domain.periodic, scene.voxelize.method,
+                                scene.voxelize.slab_planes, progress)
+        hist = write_grey_volume(w, slabs, shape, voxel_um, scene.domain.periodic, {"n_spheres": len(radii)})
+        w.attrs.update(method=scene.voxelize.method.value)
+    return hist
