@@ -180,11 +180,8 @@ class DiffusionResult:
     tallies: Tallies | None = None
 
 
-def _wall(settings: Settings):
-    law = _LAW[settings.wall_law]
-    mixed = law != K.SPECULAR and settings.accommodation < 1.0
-    speed = K.SPEED_FLUX if settings.wall_speed is WallSpeed.thermal else K.SPEED_KEPT
-    return K.make_wall_law(law, mixed, speed)
+def _wall(settings: Settings) -> tuple:
+    return K.wall_flags(_LAW[settings.wall_law], settings.accommodation, settings.wall_speed is WallSpeed.thermal)
 
 
 def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> Tallies:

@@ -344,13 +344,12 @@ def _uniform_in_pore(cells, h, pos, idx, state):
     return state
 
 
-_CACHE: dict = {}
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _reflect(law, mixed, wall_speed, event, u, speed_now, vmean, alpha, state):
+    """Reflect ``u`` at wall face ``event`` by ``law``; returns (speed, state).
 
-
-def make_wall_law(law: int, mixed: bool, speed: int):
-    """The reflection ``_reflect(event, u, speed, vmean, alpha, state) -> (speed, state)`` with the chosen law.
-
-    ``law`` and the flags are closure constants: a law the scene does not name is not compiled into the kernel.
+    Called with closure constants of the kernel factories and inlined, so the branches of the laws a scene does
+    not name are folded away at compile time.
 
     Parameters
     ----------
@@ -358,33 +357,31 @@ def make_wall_law(law: int, mixed: bool, speed: int):
         SPECULAR, LAMBERT, COSINE_DTHETA or ISOTROPIC.
     mixed : bool
         Maxwell mixture: diffuse with probability ``alpha`` (the accommodation coefficient), else specular.
-    speed : int
-        SPEED_KEPT (|v| unchanged, thesis) or SPEED_FLUX (thermal re-emission from the flux-weighted MB law).
+    wall_speed : int
+        SPEED_KEPT (|v| unchanged, thesis) or SPEED_FLUX (thermal re-emission, flux-weighted MB).
     """
-    key = ("wall", law, bool(mixed), speed)
-    if key in _CACHE:
-        return _CACHE[key]
-    LAW, MIXED, SPEED = key[1:]
+    axis = event >> 1
+    sign = -1.0 if (event & 1) else 1.0  # back into the pore
+    diffuse = law != SPECULAR
+    if mixed:
+        x, state = _uniform(state)
+        diffuse = diffuse and x <= alpha
+    if diffuse:
+        state = _emit(law, axis, sign, u, state)
+        if wall_speed == SPEED_FLUX:
+            speed_now, state = _speed(SPEED_FLUX, vmean, state)
+    else:
+        u[axis] = -u[axis]
+    return speed_now, state
 
-    @njit(cache=True, fastmath=FASTMATH)
-    def _reflect(event, u, speed_now, vmean, alpha, state):
-        axis = event >> 1
-        sign = -1.0 if (event & 1) else 1.0  # back into the pore
-        diffuse = LAW != SPECULAR
-        if MIXED:
-            x, state = _uniform(state)
-            diffuse = diffuse and x <= alpha
-        if diffuse:
-            state = _emit(LAW, axis, sign, u, state)
-        else:
-            u[axis] = -u[axis]
-        if SPEED == SPEED_FLUX:
-            if diffuse:
-                speed_now, state = _speed(SPEED_FLUX, vmean, state)
-        return speed_now, state
 
-    _CACHE[key] = _reflect
-    return _reflect
+_CACHE: dict = {}
+
+
+def wall_flags(law: int, accommodation: float, thermal: bool) -> tuple[int, bool, int]:
+    """(law, mixed, wall_speed) closure constants for the factories."""
+    mixed = law != SPECULAR and accommodation < 1.0
+    return int(law), bool(mixed), SPEED_FLUX if thermal else SPEED_KEPT
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -421,7 +418,7 @@ def _profile_add(prof, p_start, u_ax, length, speed, bin_w):
         b += 1
 
 
-def make_transport_kernel(wall, inlet_law: int, inlet_speed: int, wk: bool, profile: bool, maps: bool,
+def make_transport_kernel(wall: tuple, inlet_law: int, inlet_speed: int, wk: bool, profile: bool, maps: bool,
                           orient: bool):
     """Transmission (``wk=False``) or Wicke-Kallenbach (``wk=True``) kernel with only the requested tallies.
 
@@ -434,10 +431,10 @@ def make_transport_kernel(wall, inlet_law: int, inlet_speed: int, wk: bool, prof
     opposite face (FLUSS) counts it (species 1: T_OUT_HIGH, species 2: T_OUT_LOW) and re-injects it there as the
     other species. The profile then holds the time-integrated amount of species 1 per axial bin.
     """
-    key = ("transport", wall, inlet_law, inlet_speed, bool(wk), bool(profile), bool(maps), bool(orient))
+    key = ("transport", *wall, inlet_law, inlet_speed, bool(wk), bool(profile), bool(maps), bool(orient))
     if key in _CACHE:
         return _CACHE[key]
-    _, _reflect, INLET, INSPEED, WK, PROFILE, MAPS, ORIENT = key
+    _, LAW, MIXED, WSPEED, INLET, INSPEED, WK, PROFILE, MAPS, ORIENT = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
     def _transport(geom, h, periodic, axis, inlet_cells, outlet_cells, seed, first, per_batch, max_hits, t_end,
@@ -503,7 +500,7 @@ def make_transport_kernel(wall, inlet_law: int, inlet_speed: int, wk: bool, prof
                             hitmap[b, ev, ma, mb] += 1
                         if hits >= max_hits:
                             break
-                        speed, state = _reflect(ev, u, speed, vmean, alpha, state)
+                        speed, state = _reflect(LAW, MIXED, WSPEED, ev, u, speed, vmean, alpha, state)
                     tally[b, T_TIME] += 0.0 if WK else t_now
                     if ev == -2:
                         break
@@ -533,17 +530,17 @@ def make_transport_kernel(wall, inlet_law: int, inlet_speed: int, wk: bool, prof
     return _transport
 
 
-def make_equilibrium_kernel(wall, speed_dist: int, msd: bool):
+def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
     """Particles in equilibrium (uniform in the pore space, isotropic, speeds from ``speed_dist``) for ``t_end``.
 
     Closed pores (``msd=False``): counts wall hits and path length (mean flight = path / hits -> 4V/S for diffuse
     Lambert walls). Periodic medium (``msd=True``): also the squared unwrapped displacement per axis at the
     sample times ``t_samples``, summed per batch into ``msd_out[b, k, axis]``.
     """
-    key = ("equilibrium", wall, speed_dist, bool(msd))
+    key = ("equilibrium", *wall, speed_dist, bool(msd))
     if key in _CACHE:
         return _CACHE[key]
-    _, _reflect, SPEED, MSD = key
+    _, LAW, MIXED, WSPEED, SPEED, MSD = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
     def _equilibrium(geom, h, periodic, cells, seed, first, per_batch, max_hits, t_end, t_samples, vmean, alpha,
@@ -595,7 +592,7 @@ def make_equilibrium_kernel(wall, speed_dist: int, msd: bool):
                     hits += 1
                     if stop:
                         break
-                    speed, state = _reflect(ev, u, speed, vmean, alpha, state)
+                    speed, state = _reflect(LAW, MIXED, WSPEED, ev, u, speed, vmean, alpha, state)
                 tally[b, T_PARTICLES] += 1
                 tally[b, T_HITS] += hits
                 tally[b, T_TIME] += t_now
