@@ -314,24 +314,35 @@ def _estimate(rows: np.ndarray, wk: bool) -> tuple[float, float]:
     return _ratio(rows[:, K.T_OUT_HIGH] + rows[:, K.T_OUT_LOW], rows[:, K.T_TIME])
 
 
+def _bin_volumes(geom: Geometry, nb: int) -> np.ndarray:
+    """Accessible pore volume in each of ``nb`` equal axial bins (layers split by overlap)."""
+    ax = geom.axis
+    layer = np.count_nonzero(geom.codes > 0, axis=tuple(d for d in range(3) if d != ax)) * float(np.prod(geom.h))
+    n = layer.size
+    edges = np.linspace(0.0, n, nb + 1)  # in layers
+    out = np.zeros(nb)
+    for b in range(nb):
+        lo, hi = edges[b], edges[b + 1]
+        j = np.arange(int(np.floor(lo)), min(int(np.ceil(hi)), n))
+        overlap = np.minimum(j + 1, hi) - np.maximum(j, lo)
+        out[b] = np.sum(layer[j] * np.clip(overlap, 0.0, 1.0))
+    return out
+
+
 def _profile_d(tallies, rows, length, a_open, geom) -> float:
-    """FLUSS flux of species 1 over the fitted gradient of its time-integrated profile (middle 60 %)."""
+    """FLUSS flux of species 1 over the fitted gradient of its time-averaged concentration (middle 60 %)."""
     prof = tallies.profile
     nb = prof.size
-    t_total = rows[:, K.T_TIME].sum() / max(rows[:, K.T_PARTICLES].sum(), 1)  # lifetime of one particle
-    n_part = rows[:, K.T_PARTICLES].sum()
-    bin_len = length / nb
-    # concentration per bin: time-integrated species-1 amount / (lifetime * bin pore volume)
-    vol_bin = geom.pore_volume / nb
-    conc = prof / (t_total * vol_bin)
-    z = (np.arange(nb) + 0.5) * bin_len
-    mid = (z > 0.2 * length) & (z < 0.8 * length)
+    lifetime = rows[:, K.T_TIME].sum() / max(rows[:, K.T_PARTICLES].sum(), 1)
+    vol = _bin_volumes(geom, nb)
+    conc = np.divide(prof, lifetime * vol, out=np.zeros(nb), where=vol > 0)
+    z = (np.arange(nb) + 0.5) * length / nb
+    mid = (z > 0.2 * length) & (z < 0.8 * length) & (vol > 0)
     if mid.sum() < 2:
-        return float("nan")
+        return 0.0
     slope = np.polyfit(z[mid], conc[mid], 1)[0]
-    flux = rows[:, K.T_OUT_HIGH].sum() / t_total / a_open
-    _ = n_part
-    return float(-flux / slope) if slope < 0 else float("inf")
+    flux = rows[:, K.T_OUT_HIGH].sum() / lifetime / a_open
+    return float(-flux / slope) if slope < 0 else 0.0
 
 
 def _common_values(v, geom, settings, rows):
@@ -359,9 +370,18 @@ def _derived(v, geom, settings):
 
 
 def _arrays(tallies, settings, geom, axis):
+    """Profiles and maps. ``concentration``: time-averaged particles per voxel volume per simulated particle
+    (transmission: per injected particle, in jiffies/voxel³; WK: species 1 per particle alive)."""
     out = {}
+    rows = tallies.rows
     if settings.profile_bins:
         out["profile"] = tallies.profile
+        vol = _bin_volumes(geom, tallies.profile.size)
+        norm = rows[:, K.T_PARTICLES].sum()
+        if settings.setup is Setup.wicke_kallenbach:
+            norm *= rows[:, K.T_TIME].sum() / max(rows[:, K.T_PARTICLES].sum(), 1)
+        out["concentration"] = np.divide(tallies.profile, vol * max(norm, 1e-300), out=np.zeros_like(vol),
+                                         where=vol > 0)
     if settings.hit_map_bins:
         out["hit_map"] = tallies.hitmap
     if settings.orientation_bins:
@@ -376,7 +396,7 @@ def equilibrium(pore: np.ndarray, settings: Settings | None = None, voxel_um=1.0
 
     Closed pores (no periodic axis): mean flight between wall hits and hit rate; for diffuse Lambert walls the
     exact values are 4V/S and v̄S/(4V) (V, S = pore volume and voxel wall area). Periodic axes: D_dd = slope of
-    <Δx_d²>/2 against time over the last half of the samples (intrinsic, per pore volume); D_eff = ε·D_dd.
+    <Δx_d²>/2 against time over the last 3/4 of the samples (intrinsic, per pore volume); D_eff = ε·D_dd.
 
     Parameters
     ----------
@@ -462,11 +482,11 @@ def _closed_geometry(pore, voxel_um) -> Geometry:
 
 
 def _msd_fit(tallies, t_samples):
-    """D per axis = slope/2 of the batch msd curves over the last half of the samples; batch-means error."""
+    """D per axis = slope/2 of the batch msd curves over the last 3/4 of the samples; batch-means error."""
     rows = tallies.rows
     npart = rows[:, K.T_PARTICLES]
     curves = tallies.msd / npart[:, None, None]  # (batches, samples, 3)
-    half = slice(len(t_samples) // 2, None)
+    half = slice(len(t_samples) // 4, None)
     t = t_samples[half]
     tc = t - t.mean()
     slopes = np.einsum("s,bsd->bd", tc, curves[:, half, :]) / np.sum(tc * tc) / 2.0
