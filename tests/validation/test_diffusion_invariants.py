@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "diffusion"))
-from naive_diffusion import wall_area_naive  # noqa: E402
+from naive_diffusion import wall_area_naive
 
-from porepipe.diffusion import Settings, Setup, closed_box, cylinder, equilibrium, square_capillary, transport  # noqa: E402
+from porepipe.diffusion import Settings, Setup, closed_box, cylinder, equilibrium, square_capillary, transport
 
 SETTINGS = Settings(batches=32, batch_particles=200, max_rounds=1)
 
@@ -47,7 +47,10 @@ def _check_four_v_over_s(pore, voxel, seed, t_end):
     v = r.values
     assert v["four_v_over_s"] == pytest.approx(expected, rel=1e-12)
     assert v["wall_hits"] > 20 * v["particles"]
-    assert abs(v["mean_free_flight"] - expected) <= 3 * v["mean_free_flight_err"], (v["mean_free_flight"], expected)
+    assert abs(v["mean_free_flight"] - expected) <= 3 * v["mean_free_flight_err"], (
+        v["mean_free_flight"],
+        expected,
+    )
     assert v["mean_free_flight_err"] < 0.01 * expected  # the test has teeth: a 3 % error would be caught
     return v
 
@@ -74,7 +77,9 @@ def test_long_tube_knudsen_limit():
     s = Settings(batches=32, batch_particles=400, max_rounds=1, initial_speed="mean")
     rel = {}
     for radius in (6, 12):
-        r = equilibrium(cylinder(radius, 6).pore, s, periodic=(False, False, True), seed=radius, t_end=300.0 * radius)
+        r = equilibrium(
+            cylinder(radius, 6).pore, s, periodic=(False, False, True), seed=radius, t_end=300.0 * radius
+        )
         v = r.values
         assert "D_xx" not in v and "D_yy" not in v  # walled axes have no long-time diffusion
         rel[radius] = (v["D_zz"] / (2 * radius / 3), v["D_zz_err"] / (2 * radius / 3))
@@ -106,8 +111,18 @@ def test_wicke_kallenbach_equals_transmission():
     """Counter-diffusion flux with Δc = 2N/V_P reproduces v̄LW/4 (Lambert inlet, flux-weighted speeds), and the
     species-1 profile falls monotonically from the species-1 face."""
     pore = square_capillary(8, 40).pore
-    wk = transport(pore, 2, Settings(setup=Setup.wicke_kallenbach, batches=32, batch_particles=40, max_rounds=1,
-                                     wk_time_jiffies=20000.0), seed=7)
+    wk = transport(
+        pore,
+        2,
+        Settings(
+            setup=Setup.wicke_kallenbach,
+            batches=32,
+            batch_particles=40,
+            max_rounds=1,
+            wk_time_jiffies=20000.0,
+        ),
+        seed=7,
+    )
     tr = transport(pore, 2, Settings(batches=32, batch_particles=1000, max_rounds=1), seed=7)
     a, b = wk.values, tr.values
     assert abs(a["D"] - b["D"]) <= 3 * math.hypot(a["D_err"], b["D_err"]), (a["D"], b["D"])

@@ -37,8 +37,14 @@ from porepipe.diffusion._settings import InletLaw, Settings, Setup, SpeedDist, W
 from porepipe.diffusion._species import mean_speed
 
 STAGE = "diffusion"
-_LAW = {WallLaw.specular: K.SPECULAR, WallLaw.lambert: K.LAMBERT, WallLaw.cosine_dtheta: K.COSINE_DTHETA,
-        WallLaw.isotropic: K.ISOTROPIC, InletLaw.lambert: K.LAMBERT, InletLaw.isotropic: K.ISOTROPIC}
+_LAW = {
+    WallLaw.specular: K.SPECULAR,
+    WallLaw.lambert: K.LAMBERT,
+    WallLaw.cosine_dtheta: K.COSINE_DTHETA,
+    WallLaw.isotropic: K.ISOTROPIC,
+    InletLaw.lambert: K.LAMBERT,
+    InletLaw.isotropic: K.ISOTROPIC,
+}
 _SPEED = {SpeedDist.mean: K.SPEED_MEAN, SpeedDist.maxwell: K.SPEED_MAXWELL, SpeedDist.flux: K.SPEED_FLUX}
 
 
@@ -99,10 +105,17 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
     K._chessboard_codes(keep, codes)
     h = voxel / voxel.min()
     n_acc = int(np.count_nonzero(keep))
-    return Geometry(codes=codes, h=h, periodic=per, voxel_um=voxel, axis=axis,
-                    total_porosity=float(np.count_nonzero(pore)) / pore.size,
-                    accessible_porosity=n_acc / pore.size, pore_volume=n_acc * float(np.prod(h)),
-                    wall_area=wall_area(keep, h, per, open_axis=axis))
+    return Geometry(
+        codes=codes,
+        h=h,
+        periodic=per,
+        voxel_um=voxel,
+        axis=axis,
+        total_porosity=float(np.count_nonzero(pore)) / pore.size,
+        accessible_porosity=n_acc / pore.size,
+        pore_volume=n_acc * float(np.prod(h)),
+        wall_area=wall_area(keep, h, per, open_axis=axis),
+    )
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -129,8 +142,16 @@ class Tallies:
 def _save_checkpoint(path: Path, key: str, tallies: Tallies) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     with open(tmp, "wb") as f:
-        np.savez(f, key=np.array(key), rows=tallies.rows, profile=tallies.profile, hitmap=tallies.hitmap,
-                 orientation=tallies.orientation, msd=tallies.msd, rounds=np.array(tallies.rounds))
+        np.savez(
+            f,
+            key=np.array(key),
+            rows=tallies.rows,
+            profile=tallies.profile,
+            hitmap=tallies.hitmap,
+            orientation=tallies.orientation,
+            msd=tallies.msd,
+            rounds=np.array(tallies.rounds),
+        )
     os.replace(tmp, path)
 
 
@@ -181,7 +202,9 @@ class DiffusionResult:
 
 
 def _wall(settings: Settings) -> tuple:
-    return K.wall_flags(_LAW[settings.wall_law], settings.accommodation, settings.wall_speed is WallSpeed.thermal)
+    return K.wall_flags(
+        _LAW[settings.wall_law], settings.accommodation, settings.wall_speed is WallSpeed.thermal
+    )
 
 
 def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> Tallies:
@@ -189,8 +212,9 @@ def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> 
     checkpoint = Path(checkpoint) if checkpoint else None
     tallies = _load_checkpoint(checkpoint, key) if checkpoint else None
     if tallies is None:
-        tallies = Tallies(np.zeros((0, K.N_TALLY)), *(np.zeros(s) for s in shapes[:3]),
-                          np.zeros((0, *shapes[3])), 0)
+        tallies = Tallies(
+            np.zeros((0, K.N_TALLY)), *(np.zeros(s) for s in shapes[:3]), np.zeros((0, *shapes[3])), 0
+        )
     progress = Progress(label, settings.max_rounds)
     while tallies.rounds < settings.max_rounds:
         if tallies.rounds >= 2 and enough(tallies):
@@ -200,8 +224,11 @@ def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> 
         run_round(tallies)
         if checkpoint:
             _save_checkpoint(checkpoint, key, tallies)
-        progress.update(tallies.rounds, f"{int(tallies.rows[:, K.T_PARTICLES].sum())} particles, "
-                                         f"{tallies.rows[:, K.T_HITS].sum():.3g} wall hits")
+        progress.update(
+            tallies.rounds,
+            f"{int(tallies.rows[:, K.T_PARTICLES].sum())} particles, "
+            f"{tallies.rows[:, K.T_HITS].sum():.3g} wall hits",
+        )
     return tallies
 
 
@@ -209,12 +236,23 @@ def _buffers(settings, geom, b):
     nb = max(settings.profile_bins, 1)
     mb = max(settings.hit_map_bins, 1)
     ob = max(settings.orientation_bins, 1)
-    return (np.zeros((b, K.N_TALLY)), np.zeros((b, nb)), np.zeros((b, 6, mb, mb), dtype=np.int64),
-            np.zeros((b, ob, 2 * ob), dtype=np.int64))
+    return (
+        np.zeros((b, K.N_TALLY)),
+        np.zeros((b, nb)),
+        np.zeros((b, 6, mb, mb), dtype=np.int64),
+        np.zeros((b, ob, 2 * ob), dtype=np.int64),
+    )
 
 
-def transport(pore: np.ndarray, axis: int, settings: Settings | None = None, voxel_um=1.0,
-              periodic=(False, False, False), seed: int = 0, checkpoint=None) -> DiffusionResult:
+def transport(
+    pore: np.ndarray,
+    axis: int,
+    settings: Settings | None = None,
+    voxel_um=1.0,
+    periodic=(False, False, False),
+    seed: int = 0,
+    checkpoint=None,
+) -> DiffusionResult:
     """Transmission probability W (``settings.setup = transmission``) or Wicke-Kallenbach D (``wicke_kallenbach``).
 
     Parameters
@@ -241,12 +279,20 @@ def transport(pore: np.ndarray, axis: int, settings: Settings | None = None, vox
     settings = settings or Settings()
     geom = prepare(pore, voxel_um, periodic, axis)
     wk = settings.setup is Setup.wicke_kallenbach
-    kernel = K.make_transport_kernel(_wall(settings), _LAW[settings.inlet_law], _SPEED[settings.inlet_speed], wk,
-                                     settings.profile_bins > 0, settings.hit_map_bins > 0,
-                                     settings.orientation_bins > 0)
+    kernel = K.make_transport_kernel(
+        _wall(settings),
+        _LAW[settings.inlet_law],
+        _SPEED[settings.inlet_speed],
+        wk,
+        settings.profile_bins > 0,
+        settings.hit_map_bins > 0,
+        settings.orientation_bins > 0,
+    )
     inlet, outlet = geom.cells(0), geom.cells(-1)
     if outlet.shape[0] == 0:
-        outlet = inlet  # unreachable after accessible_pore (a spanning cluster touches both faces); keeps types
+        outlet = (
+            inlet  # unreachable after accessible_pore (a spanning cluster touches both faces); keeps types
+        )
     vmean = 1.0
     length = geom.codes.shape[axis] * geom.h[axis]
     a_open = inlet.shape[0] * float(np.prod(np.delete(geom.h, axis)))
@@ -256,25 +302,59 @@ def transport(pore: np.ndarray, axis: int, settings: Settings | None = None, vox
     map_bin = np.array(geom.codes.shape, float) * geom.h / max(settings.hit_map_bins, 1)
     b = settings.batches
     per = settings.batch_particles
-    key = hash_of({"pore": _pore_hash(geom.codes), "h": geom.h.tolist(), "axis": axis, "seed": seed,
-                   "settings": settings.model_dump(mode="json")})
+    key = hash_of(
+        {
+            "pore": _pore_hash(geom.codes),
+            "h": geom.h.tolist(),
+            "axis": axis,
+            "seed": seed,
+            "settings": settings.model_dump(mode="json"),
+        }
+    )
 
     def run_round(tallies):
         rows, prof, hmap, orient = _buffers(settings, geom, b)
         first = tallies.rounds * b * per
-        kernel(geom.codes, geom.h, geom.periodic, axis, inlet, outlet, seed_k, first, per,
-               settings.max_hits_per_particle, t_end, vmean, settings.accommodation, rows, prof, hmap, orient,
-               map_bin)
+        kernel(
+            geom.codes,
+            geom.h,
+            geom.periodic,
+            axis,
+            inlet,
+            outlet,
+            seed_k,
+            first,
+            per,
+            settings.max_hits_per_particle,
+            t_end,
+            vmean,
+            settings.accommodation,
+            rows,
+            prof,
+            hmap,
+            orient,
+            map_bin,
+        )
         tallies.add(rows, prof, hmap, orient, np.zeros(0))
 
     def enough(tallies):
         w, err = _estimate(tallies.rows, wk)
         return err <= settings.target_rel_error * abs(w)
 
-    tallies = _run_rounds(settings, key, checkpoint, f"diffusion {'xyz'[axis]}", run_round, enough,
-                          [(max(settings.profile_bins, 1),), (6, max(settings.hit_map_bins, 1),
-                           max(settings.hit_map_bins, 1)), (max(settings.orientation_bins, 1),
-                           2 * max(settings.orientation_bins, 1)), (0,)])
+    tallies = _run_rounds(
+        settings,
+        key,
+        checkpoint,
+        f"diffusion {'xyz'[axis]}",
+        run_round,
+        enough,
+        [
+            (max(settings.profile_bins, 1),),
+            (6, max(settings.hit_map_bins, 1), max(settings.hit_map_bins, 1)),
+            (max(settings.orientation_bins, 1), 2 * max(settings.orientation_bins, 1)),
+            (0,),
+        ],
+    )
     res = DiffusionResult(settings.setup.value, "xyz"[axis], tallies=tallies)
     v = res.values
     rows = tallies.rows
@@ -317,7 +397,9 @@ def _estimate(rows: np.ndarray, wk: bool) -> tuple[float, float]:
 def _bin_volumes(geom: Geometry, nb: int) -> np.ndarray:
     """Accessible pore volume in each of ``nb`` equal axial bins (layers split by overlap)."""
     ax = geom.axis
-    layer = np.count_nonzero(geom.codes > 0, axis=tuple(d for d in range(3) if d != ax)) * float(np.prod(geom.h))
+    layer = np.count_nonzero(geom.codes > 0, axis=tuple(d for d in range(3) if d != ax)) * float(
+        np.prod(geom.h)
+    )
     n = layer.size
     edges = np.linspace(0.0, n, nb + 1)  # in layers
     out = np.zeros(nb)
@@ -348,11 +430,20 @@ def _profile_d(tallies, rows, length, a_open, geom) -> float:
 def _common_values(v, geom, settings, rows):
     hits = rows[:, K.T_HITS].sum()
     flights = rows[:, K.T_FLIGHTS].sum()
-    v.update(particles=int(rows[:, K.T_PARTICLES].sum()), wall_hits=int(hits), voxel_crossings=int(rows[:, K.T_CROSS].sum()),
-             flights=int(flights), total_porosity=geom.total_porosity, accessible_porosity=geom.accessible_porosity,
-             pore_volume=geom.pore_volume, wall_area=geom.wall_area, four_v_over_s=4 * geom.pore_volume / geom.wall_area,
-             mean_free_flight=float(rows[:, K.T_PATH].sum() / max(hits, 1)),
-             hit_rate=float(hits / max(rows[:, K.T_TIME].sum(), 1e-300)), batches=int(rows.shape[0]))
+    v.update(
+        particles=int(rows[:, K.T_PARTICLES].sum()),
+        wall_hits=int(hits),
+        voxel_crossings=int(rows[:, K.T_CROSS].sum()),
+        flights=int(flights),
+        total_porosity=geom.total_porosity,
+        accessible_porosity=geom.accessible_porosity,
+        pore_volume=geom.pore_volume,
+        wall_area=geom.wall_area,
+        four_v_over_s=4 * geom.pore_volume / geom.wall_area,
+        mean_free_flight=float(rows[:, K.T_PATH].sum() / max(hits, 1)),
+        hit_rate=float(hits / max(rows[:, K.T_TIME].sum(), 1e-300)),
+        batches=int(rows.shape[0]),
+    )
 
 
 def _derived(v, geom, settings):
@@ -380,8 +471,9 @@ def _arrays(tallies, settings, geom, axis):
         norm = rows[:, K.T_PARTICLES].sum()
         if settings.setup is Setup.wicke_kallenbach:
             norm *= rows[:, K.T_TIME].sum() / max(rows[:, K.T_PARTICLES].sum(), 1)
-        out["concentration"] = np.divide(tallies.profile, vol * max(norm, 1e-300), out=np.zeros_like(vol),
-                                         where=vol > 0)
+        out["concentration"] = np.divide(
+            tallies.profile, vol * max(norm, 1e-300), out=np.zeros_like(vol), where=vol > 0
+        )
     if settings.hit_map_bins:
         out["hit_map"] = tallies.hitmap
     if settings.orientation_bins:
@@ -390,8 +482,15 @@ def _arrays(tallies, settings, geom, axis):
 
 
 # ---------------------------------------------------------------------------------------------------------------------
-def equilibrium(pore: np.ndarray, settings: Settings | None = None, voxel_um=1.0, periodic=(False, False, False),
-                seed: int = 0, checkpoint=None, t_end: float | None = None) -> DiffusionResult:
+def equilibrium(
+    pore: np.ndarray,
+    settings: Settings | None = None,
+    voxel_um=1.0,
+    periodic=(False, False, False),
+    seed: int = 0,
+    checkpoint=None,
+    t_end: float | None = None,
+) -> DiffusionResult:
     """Particles in equilibrium in the pore space: wall-hit statistics, and the msd D tensor along periodic axes.
 
     Closed pores (no periodic axis): mean flight between wall hits and hit rate; for diffuse Lambert walls the
@@ -420,16 +519,40 @@ def equilibrium(pore: np.ndarray, settings: Settings | None = None, voxel_um=1.0
     cells = geom.cells()
     b, per_b = settings.batches, settings.batch_particles
     seed_k = kernel_seed(seed, STAGE, 2)
-    key = hash_of({"pore": _pore_hash(geom.codes), "h": geom.h.tolist(), "per": per.tolist(), "seed": seed,
-                   "t": t_end, "settings": settings.model_dump(mode="json")})
+    key = hash_of(
+        {
+            "pore": _pore_hash(geom.codes),
+            "h": geom.h.tolist(),
+            "per": per.tolist(),
+            "seed": seed,
+            "t": t_end,
+            "settings": settings.model_dump(mode="json"),
+        }
+    )
 
     def run_round(tallies):
         rows = np.zeros((b, K.N_TALLY))
         msd_b = np.zeros((b, settings.msd_samples, 3))
         first = tallies.rounds * b * per_b
-        kernel(geom.codes, geom.h, geom.periodic, cells, seed_k, first, per_b, settings.max_hits_per_particle, t_end,
-               t_samples, 1.0, settings.accommodation, rows, msd_b)
-        tallies.add(rows, np.zeros((b, 1)), np.zeros((b, 6, 1, 1), np.int64), np.zeros((b, 1, 2), np.int64), msd_b)
+        kernel(
+            geom.codes,
+            geom.h,
+            geom.periodic,
+            cells,
+            seed_k,
+            first,
+            per_b,
+            settings.max_hits_per_particle,
+            t_end,
+            t_samples,
+            1.0,
+            settings.accommodation,
+            rows,
+            msd_b,
+        )
+        tallies.add(
+            rows, np.zeros((b, 1)), np.zeros((b, 6, 1, 1), np.int64), np.zeros((b, 1, 2), np.int64), msd_b
+        )
 
     def enough(tallies):
         if msd:
@@ -439,10 +562,18 @@ def equilibrium(pore: np.ndarray, settings: Settings | None = None, voxel_um=1.0
         f, err = _ratio(tallies.rows[:, K.T_PATH], tallies.rows[:, K.T_HITS])
         return err <= settings.target_rel_error * f
 
-    tallies = _run_rounds(settings, key, checkpoint, "diffusion equilibrium", run_round, enough,
-                          [(1,), (6, 1, 1), (1, 2), (settings.msd_samples, 3)])
-    res = DiffusionResult("msd" if msd else "closed", "".join("xyz"[d] for d in range(3) if per[d]) or "-",
-                          tallies=tallies)
+    tallies = _run_rounds(
+        settings,
+        key,
+        checkpoint,
+        "diffusion equilibrium",
+        run_round,
+        enough,
+        [(1,), (6, 1, 1), (1, 2), (settings.msd_samples, 3)],
+    )
+    res = DiffusionResult(
+        "msd" if msd else "closed", "".join("xyz"[d] for d in range(3) if per[d]) or "-", tallies=tallies
+    )
     v = res.values
     _common_values(v, geom, settings, tallies.rows)
     flight, flight_err = _ratio(tallies.rows[:, K.T_PATH], tallies.rows[:, K.T_HITS])
@@ -456,8 +587,11 @@ def equilibrium(pore: np.ndarray, settings: Settings | None = None, voxel_um=1.0
         res.arrays["msd"] = tallies.msd.sum(axis=0) / max(tallies.rows[:, K.T_PARTICLES].sum(), 1)
         res.arrays["msd_time"] = t_samples
         dmean = float(np.mean(d[per]))
-        v.update(D=dmean, D_err=float(np.sqrt(np.sum(err[per] ** 2)) / per.sum()),
-                 D_ref=4.0 * geom.pore_volume / geom.wall_area / 3.0)
+        v.update(
+            D=dmean,
+            D_err=float(np.sqrt(np.sum(err[per] ** 2)) / per.sum()),
+            D_ref=4.0 * geom.pore_volume / geom.wall_area / 3.0,
+        )
         v["D_eff"] = geom.accessible_porosity * dmean
         v["D_eff_err"] = geom.accessible_porosity * v["D_err"]
         _derived(v, geom, settings)
@@ -477,8 +611,17 @@ def _closed_geometry(pore, voxel_um) -> Geometry:
     h = voxel / voxel.min()
     n = int(keep.sum())
     per = np.zeros(3, dtype=bool)
-    return Geometry(codes, h, per, voxel, None, n / pore.size, n / pore.size, n * float(np.prod(h)),
-                    wall_area(keep, h, per, None))
+    return Geometry(
+        codes,
+        h,
+        per,
+        voxel,
+        None,
+        n / pore.size,
+        n / pore.size,
+        n * float(np.prod(h)),
+        wall_area(keep, h, per, None),
+    )
 
 
 def _msd_fit(tallies, t_samples):

@@ -40,8 +40,11 @@ class PoreVolume:
 
 
 def _volume(pore: np.ndarray, voxel=(1.0, 1.0, 1.0), periodic=(False, False, False)) -> PoreVolume:
-    return PoreVolume(np.ascontiguousarray(pore, dtype=np.uint8), np.asarray(voxel, dtype=float).reshape(3),
-                      np.asarray(periodic, dtype=bool).reshape(3))
+    return PoreVolume(
+        np.ascontiguousarray(pore, dtype=np.uint8),
+        np.asarray(voxel, dtype=float).reshape(3),
+        np.asarray(periodic, dtype=bool).reshape(3),
+    )
 
 
 def _positive_int(name: str, value) -> int:
@@ -58,7 +61,9 @@ def square_capillary(a: int, length: int) -> PoreVolume:
 
 def slit(width: int, length: int, depth: int = 4) -> PoreVolume:
     """Slit of ``width`` voxels between two plates normal to x, periodic across y (``depth`` voxels), along z."""
-    width, length, depth = (_positive_int(k, v) for k, v in (("width", width), ("length", length), ("depth", depth)))
+    width, length, depth = (
+        _positive_int(k, v) for k, v in (("width", width), ("length", length), ("depth", depth))
+    )
     return _volume(np.ones((width, depth, length), dtype=np.uint8), periodic=(False, True, False))
 
 
@@ -82,7 +87,7 @@ def cylinder(radius: float, length: float, voxel=(1.0, 1.0, 1.0)) -> PoreVolume:
     voxel = np.asarray(voxel, dtype=float)
     if not radius > 0 or not length > 0:
         raise PorepipeError(f"cylinder needs radius > 0 and length > 0, got {radius!r}, {length!r}")
-    nz = max(1, int(round(length / voxel[2])))
+    nz = max(1, round(length / voxel[2]))
     disk = _disk(radius, voxel)
     return _volume(np.repeat(disk[:, :, None], nz, axis=2).astype(np.uint8), voxel)
 
@@ -93,35 +98,37 @@ def constricted_capillary(radius: int, length: int, throat_radius: int, throat_l
     throat = _disk(throat_radius, vol.voxel)
     pad = (vol.pore.shape[0] - throat.shape[0]) // 2
     ring = np.zeros(vol.pore.shape[:2], dtype=bool)
-    ring[pad:pad + throat.shape[0], pad:pad + throat.shape[1]] = throat
+    ring[pad : pad + throat.shape[0], pad : pad + throat.shape[1]] = throat
     pore = vol.pore.copy()
     for centre in (length / 3.0, 2.0 * length / 3.0):
-        lo = max(0, int(round(centre - throat_length / 2.0)))
-        pore[:, :, lo:lo + int(throat_length)] &= ring[:, :, None].astype(np.uint8)
+        lo = max(0, round(centre - throat_length / 2.0))
+        pore[:, :, lo : lo + int(throat_length)] &= ring[:, :, None].astype(np.uint8)
     return _volume(pore, vol.voxel)
 
 
-def pocketed_capillary(a: int, length: int, pocket_depth: int, pocket_width: int, n_pockets: int = 3) -> PoreVolume:
+def pocketed_capillary(
+    a: int, length: int, pocket_depth: int, pocket_width: int, n_pockets: int = 3
+) -> PoreVolume:
     """§4.2.3 B: a square a x a channel in a solid shell with few, deep pockets cut into the lateral walls.
 
     Pockets alternate between the four walls, evenly spaced along z.
     """
     s = pocket_depth
     pore = np.zeros((a + 2 * s, a + 2 * s, length), dtype=np.uint8)
-    pore[s:s + a, s:s + a, :] = 1
+    pore[s : s + a, s : s + a, :] = 1
     for k in range(n_pockets):
-        z0 = int(round((k + 0.5) * length / n_pockets - pocket_width / 2.0))
+        z0 = round((k + 0.5) * length / n_pockets - pocket_width / 2.0)
         zs = slice(max(0, z0), min(length, z0 + pocket_width))
         mid = slice(s + a // 2 - pocket_width // 2, s + a // 2 - pocket_width // 2 + pocket_width)
         wall = k % 4
         if wall == 0:
             pore[:s, mid, zs] = 1
         elif wall == 1:
-            pore[s + a:, mid, zs] = 1
+            pore[s + a :, mid, zs] = 1
         elif wall == 2:
             pore[mid, :s, zs] = 1
         else:
-            pore[mid, s + a:, zs] = 1
+            pore[mid, s + a :, zs] = 1
     return _volume(pore)
 
 
@@ -196,13 +203,16 @@ def accessible_pore(pore: np.ndarray, axis: int | None, periodic=(False, False, 
     sizes = np.bincount(labels.ravel())
     sizes[0] = 0
     if axis is not None:
-        spanning = np.intersect1d(np.unique(np.take(labels, 0, axis=axis)),
-                                  np.unique(np.take(labels, -1, axis=axis)))
+        spanning = np.intersect1d(
+            np.unique(np.take(labels, 0, axis=axis)), np.unique(np.take(labels, -1, axis=axis))
+        )
         spanning = spanning[spanning > 0]
         if spanning.size == 0:
             name = "xyz"[axis]
-            raise PorepipeError(f"no face-connected pore path joins the inlet face {name} = 0 to the outlet face "
-                                f"{name} = {pore.shape[axis] - 1} (shape {pore.shape}); nothing can be transmitted")
+            raise PorepipeError(
+                f"no face-connected pore path joins the inlet face {name} = 0 to the outlet face "
+                f"{name} = {pore.shape[axis] - 1} (shape {pore.shape}); nothing can be transmitted"
+            )
         keep = spanning[np.argmax(sizes[spanning])]
     else:
         keep = int(np.argmax(sizes))
@@ -227,6 +237,8 @@ def wall_area(pore: np.ndarray, voxel, periodic=(False, False, False), open_axis
             wrap = int(np.count_nonzero(np.take(p, 0, axis=d) ^ np.take(p, -1, axis=d)))
             inner -= wrap
             if d != open_axis:
-                inner += int(np.count_nonzero(np.take(p, 0, axis=d))) + int(np.count_nonzero(np.take(p, -1, axis=d)))
+                inner += int(np.count_nonzero(np.take(p, 0, axis=d))) + int(
+                    np.count_nonzero(np.take(p, -1, axis=d))
+                )
         area += inner * face
     return float(area)

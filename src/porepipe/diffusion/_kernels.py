@@ -93,8 +93,7 @@ def _chessboard_codes(pore, out):
                                 val = 0
                             else:
                                 val = out[a, b, c]
-                            if val + 1 < best:
-                                best = val + 1
+                            best = min(best, val + 1)
                 out[i, j, k] = best
     for i in range(n0 - 1, -1, -1):
         for j in range(n1 - 1, -1, -1):
@@ -103,7 +102,7 @@ def _chessboard_codes(pore, out):
                 if cur == 0:
                     continue
                 best = cur
-                for di in range(0, 2):
+                for di in range(2):
                     for dj in range(-1, 2):
                         for dk in range(-1, 2):
                             if di == 0 and (dj < 0 or (dj == 0 and dk <= 0)):
@@ -113,8 +112,7 @@ def _chessboard_codes(pore, out):
                                 val = 0
                             else:
                                 val = out[a, b, c]
-                            if val + 1 < best:
-                                best = val + 1
+                            best = min(best, val + 1)
                 out[i, j, k] = best
 
 
@@ -168,8 +166,7 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
                 t = min(t, ((i2 + r + 1) * h2 - p2) / u2)
             elif s2 < 0:
                 t = min(t, ((i2 - r) * h2 - p2) / u2)
-            if t < 0.0:
-                t = 0.0
+            t = max(t, 0.0)
             p0 += t * u0
             p1 += t * u1
             p2 += t * u2
@@ -281,7 +278,9 @@ def _cos_theta(law, state):
     if law == LAMBERT:
         return math.sqrt(x), state  # cosine per solid angle: sin^2 uniform
     if law == COSINE_DTHETA:
-        return math.sqrt(1.0 - (1.0 - x) * (1.0 - x)), state  # thesis (3.31) per d-theta: sin uniform in [0, 1)
+        return math.sqrt(
+            1.0 - (1.0 - x) * (1.0 - x)
+        ), state  # thesis (3.31) per d-theta: sin uniform in [0, 1)
     return x, state  # isotropic: cos uniform in (0, 1]
 
 
@@ -418,8 +417,9 @@ def _profile_add(prof, p_start, u_ax, length, speed, bin_w):
         b += 1
 
 
-def make_transport_kernel(wall: tuple, inlet_law: int, inlet_speed: int, wk: bool, profile: bool, maps: bool,
-                          orient: bool):
+def make_transport_kernel(
+    wall: tuple, inlet_law: int, inlet_speed: int, wk: bool, profile: bool, maps: bool, orient: bool
+):
     """Transmission (``wk=False``) or Wicke-Kallenbach (``wk=True``) kernel with only the requested tallies.
 
     Transmission: each particle enters at the low face of the exit axis (a uniform point of an open inlet pixel,
@@ -437,8 +437,26 @@ def make_transport_kernel(wall: tuple, inlet_law: int, inlet_speed: int, wk: boo
     _, LAW, MIXED, WSPEED, INLET, INSPEED, WK, PROFILE, MAPS, ORIENT = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
-    def _transport(geom, h, periodic, axis, inlet_cells, outlet_cells, seed, first, per_batch, max_hits, t_end,
-                   vmean, alpha, tally, prof, hitmap, orient_hist, map_bin):
+    def _transport(
+        geom,
+        h,
+        periodic,
+        axis,
+        inlet_cells,
+        outlet_cells,
+        seed,
+        first,
+        per_batch,
+        max_hits,
+        t_end,
+        vmean,
+        alpha,
+        tally,
+        prof,
+        hitmap,
+        orient_hist,
+        map_bin,
+    ):
         n_batches = tally.shape[0]
         n_ax = geom.shape[axis]
         length_ax = n_ax * h[axis]
@@ -469,9 +487,13 @@ def make_transport_kernel(wall: tuple, inlet_law: int, inlet_speed: int, wk: boo
                     while True:
                         p_ax = pos[axis]
                         if ORIENT:
-                            ob = min(int((u[axis] + 1.0) * 0.5 * orient_hist.shape[1]), orient_hist.shape[1] - 1)
+                            ob = min(
+                                int((u[axis] + 1.0) * 0.5 * orient_hist.shape[1]), orient_hist.shape[1] - 1
+                            )
                             ph = math.atan2(u[(axis + 2) % 3], u[(axis + 1) % 3])
-                            pb = min(int((ph + math.pi) / _TWO_PI * orient_hist.shape[2]), orient_hist.shape[2] - 1)
+                            pb = min(
+                                int((ph + math.pi) / _TWO_PI * orient_hist.shape[2]), orient_hist.shape[2] - 1
+                            )
                             orient_hist[b, ob, pb] += 1
                         ev, ln, cr = _fly(geom, h, periodic, axis, pos, idx, u, img)
                         tally[b, T_CROSS] += cr
@@ -482,9 +504,8 @@ def make_transport_kernel(wall: tuple, inlet_law: int, inlet_speed: int, wk: boo
                             ln = (t_end - t_now) * speed
                             dt = t_end - t_now
                             ev = -2
-                        if PROFILE:
-                            if (not WK) or species == 0:
-                                _profile_add(prof[b], p_ax, u[axis], ln, speed, bin_w)
+                        if PROFILE and ((not WK) or species == 0):
+                            _profile_add(prof[b], p_ax, u[axis], ln, speed, bin_w)
                         t_now += dt
                         if ev == -2:
                             break
@@ -543,8 +564,22 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
     _, LAW, MIXED, WSPEED, SPEED, MSD = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
-    def _equilibrium(geom, h, periodic, cells, seed, first, per_batch, max_hits, t_end, t_samples, vmean, alpha,
-                     tally, msd_out):
+    def _equilibrium(
+        geom,
+        h,
+        periodic,
+        cells,
+        seed,
+        first,
+        per_batch,
+        max_hits,
+        t_end,
+        t_samples,
+        vmean,
+        alpha,
+        tally,
+        msd_out,
+    ):
         n_batches = tally.shape[0]
         n_t = t_samples.shape[0]
         ext = np.empty(3)

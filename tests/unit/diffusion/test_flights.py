@@ -65,14 +65,14 @@ def test_many_consecutive_flights_stay_in_pore():
     for _ in range(20000):
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
-        event, length, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
+        event, _, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
         _check_end(codes, h, pos, idx, event)
         # leave the wall into the pore: flip the normal component if it points into the solid
         d, up = event >> 1, event & 1
         nxt = rng.normal(size=3)
         nxt[d] = -abs(nxt[d]) if up else abs(nxt[d])
         u = nxt / np.linalg.norm(nxt)
-        event, length, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
+        event, _, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
         _check_end(codes, h, pos, idx, event)
 
 
@@ -103,7 +103,11 @@ def test_edge_and_corner_hits_are_deterministic():
     u = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
     pos, idx = np.array([1.5, 1.5, 1.5]), np.array([1, 1, 1])
     event, length, _ = _fly(codes, h, per, -1, pos, idx, u, img)
-    assert event == 3 and idx.tolist() == [2, 1, 1]  # stepped x into (2,1,1), then met the y face of the column
+    assert event == 3 and idx.tolist() == [
+        2,
+        1,
+        1,
+    ]  # stepped x into (2,1,1), then met the y face of the column
     np.testing.assert_allclose(pos, [2.0, 2.0, 1.5], atol=1e-12)
     assert length == pytest.approx(np.sqrt(0.5))
     pore = np.ones((3, 3, 3), np.uint8)

@@ -106,4 +106,6 @@ def test_errors_all_solid_and_no_path():
 def test_wall_area_equals_face_count(periodic, open_axis):
     pore = _random_pore((6, 7, 5), 0.6, 3)
     h = (1.0, 0.5, 2.0)
-    assert wall_area(pore, h, periodic, open_axis) == pytest.approx(wall_area_naive(pore, h, periodic, open_axis))
+    assert wall_area(pore, h, periodic, open_axis) == pytest.approx(
+        wall_area_naive(pore, h, periodic, open_axis)
+    )

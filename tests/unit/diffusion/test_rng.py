@@ -19,7 +19,9 @@ def _draw(seed, particle, n):
 def test_uniform_range_and_ks():
     x = _draw(12345, 7, 200000)
     assert x.min() > 0.0 and x.max() <= 1.0
-    assert stats.kstest(x, "uniform").pvalue > 1e-3  # fixed seed: a true U(0,1] passes, a biased one would not
+    assert (
+        stats.kstest(x, "uniform").pvalue > 1e-3
+    )  # fixed seed: a true U(0,1] passes, a biased one would not
 
 
 def test_streams_of_neighbouring_particles_are_uncorrelated():

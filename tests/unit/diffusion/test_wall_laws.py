@@ -38,8 +38,9 @@ CDF = {  # P(cos θ <= c) about the wall normal
 }
 
 
-@pytest.mark.parametrize("law,other", [(K.LAMBERT, K.ISOTROPIC), (K.ISOTROPIC, K.LAMBERT),
-                                       (K.COSINE_DTHETA, K.LAMBERT)])
+@pytest.mark.parametrize(
+    "law,other", [(K.LAMBERT, K.ISOTROPIC), (K.ISOTROPIC, K.LAMBERT), (K.COSINE_DTHETA, K.LAMBERT)]
+)
 @pytest.mark.parametrize("event", [5, 0, 3])
 def test_diffuse_law_polar_and_azimuth(law, other, event):
     s = _sample(law, False, K.SPEED_KEPT, event, 1.0, N, 11 + event)
