@@ -257,9 +257,9 @@ def transport(
 
     Parameters
     ----------
-    pore : (n0, n1, n2) ndarray
+    pore : (n0, n1, n2) ndarray or Geometry
         1 = pore; particles enter/leave through the faces normal to ``axis``; the lateral outside is solid unless
-        ``periodic``.
+        ``periodic``. A :class:`Geometry` prepared for ``axis`` by :func:`prepare` is used as it is.
     axis : int
         Transport axis.
     settings : Settings
@@ -277,7 +277,9 @@ def transport(
         ``values``: W, W_err, D_transmission (voxel²/jiffie and m²/s), ..., see the module docstring.
     """
     settings = settings or Settings()
-    geom = prepare(pore, voxel_um, periodic, axis)
+    geom = (
+        pore if isinstance(pore, Geometry) and pore.axis == axis else prepare(pore, voxel_um, periodic, axis)
+    )
     wk = settings.setup is Setup.wicke_kallenbach
     kernel = K.make_transport_kernel(
         _wall(settings),

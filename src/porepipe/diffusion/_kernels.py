@@ -137,6 +137,7 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
         Voxel faces crossed.
     """
     n0, n1, n2 = geom.shape
+    flat = geom.reshape(n0 * n1 * n2)
     length = 0.0
     crossings = 0
     u0, u1, u2 = u[0], u[1], u[2]
@@ -144,9 +145,12 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     s0 = 1 if u0 > 0.0 else (-1 if u0 < 0.0 else 0)
     s1 = 1 if u1 > 0.0 else (-1 if u1 < 0.0 else 0)
     s2 = 1 if u2 > 0.0 else (-1 if u2 < 0.0 else 0)
-    dt0 = h0 / abs(u0) if s0 != 0 else _INF
-    dt1 = h1 / abs(u1) if s1 != 0 else _INF
-    dt2 = h2 / abs(u2) if s2 != 0 else _INF
+    iu0 = 1.0 / u0 if s0 != 0 else 0.0  # multiplications instead of divisions in the walk
+    iu1 = 1.0 / u1 if s1 != 0 else 0.0
+    iu2 = 1.0 / u2 if s2 != 0 else 0.0
+    dt0 = h0 * abs(iu0) if s0 != 0 else _INF
+    dt1 = h1 * abs(iu1) if s1 != 0 else _INF
+    dt2 = h2 * abs(iu2) if s2 != 0 else _INF
     i0, i1, i2 = idx[0], idx[1], idx[2]
     p0, p1, p2 = pos[0], pos[1], pos[2]
     while True:
@@ -155,17 +159,17 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
             # jump to the surface of the all-pore cube [i - r, i + r] (index space)
             t = _INF
             if s0 > 0:
-                t = min(t, ((i0 + r + 1) * h0 - p0) / u0)
+                t = min(t, ((i0 + r + 1) * h0 - p0) * iu0)
             elif s0 < 0:
-                t = min(t, ((i0 - r) * h0 - p0) / u0)
+                t = min(t, ((i0 - r) * h0 - p0) * iu0)
             if s1 > 0:
-                t = min(t, ((i1 + r + 1) * h1 - p1) / u1)
+                t = min(t, ((i1 + r + 1) * h1 - p1) * iu1)
             elif s1 < 0:
-                t = min(t, ((i1 - r) * h1 - p1) / u1)
+                t = min(t, ((i1 - r) * h1 - p1) * iu1)
             if s2 > 0:
-                t = min(t, ((i2 + r + 1) * h2 - p2) / u2)
+                t = min(t, ((i2 + r + 1) * h2 - p2) * iu2)
             elif s2 < 0:
-                t = min(t, ((i2 - r) * h2 - p2) / u2)
+                t = min(t, ((i2 - r) * h2 - p2) * iu2)
             t = max(t, 0.0)
             p0 += t * u0
             p1 += t * u1
@@ -175,32 +179,36 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
             i1 = min(max(np.int64(math.floor(p1 / h1)), i1 - r), i1 + r)
             i2 = min(max(np.int64(math.floor(p2 / h2)), i2 - r), i2 + r)
         # voxel walk from the segment start (p0, p1, p2) in voxel (i0, i1, i2)
-        t0 = (((i0 + 1) * h0 - p0) / u0 if s0 > 0 else (i0 * h0 - p0) / u0) if s0 != 0 else _INF
-        t1 = (((i1 + 1) * h1 - p1) / u1 if s1 > 0 else (i1 * h1 - p1) / u1) if s1 != 0 else _INF
-        t2 = (((i2 + 1) * h2 - p2) / u2 if s2 > 0 else (i2 * h2 - p2) / u2) if s2 != 0 else _INF
+        t0 = (((i0 + 1) * h0 - p0) * iu0 if s0 > 0 else (i0 * h0 - p0) * iu0) if s0 != 0 else _INF
+        t1 = (((i1 + 1) * h1 - p1) * iu1 if s1 > 0 else (i1 * h1 - p1) * iu1) if s1 != 0 else _INF
+        t2 = (((i2 + 1) * h2 - p2) * iu2 if s2 > 0 else (i2 * h2 - p2) * iu2) if s2 != 0 else _INF
         t0 = max(t0, 0.0)
         t1 = max(t1, 0.0)
         t2 = max(t2, 0.0)
         event = -1
         d = 0
         t = 0.0
+        lin = (i0 * n1 + i1) * n2 + i2  # flat index of (i0, i1, i2); one load per crossing
         while True:
             if t0 <= t1 and t0 <= t2:
                 d = 0
                 t = t0
                 j = i0 + s0
+                step = s0 * n1 * n2
                 if j < 0 or j >= n0:
                     if exit_axis == 0:
                         event = EXIT_HIGH if s0 > 0 else EXIT_LOW
                         break
                     if periodic[0]:
                         j = j - s0 * n0
+                        step = (j - i0) * n1 * n2
                         p0 -= s0 * n0 * h0
                         img[0] += s0
                     else:
                         event = 1 if s0 > 0 else 0
                         break
-                if geom[j, i1, i2] == 0:
+                c = flat[lin + step]
+                if c == 0:
                     event = 1 if s0 > 0 else 0
                     break
                 i0 = j
@@ -209,18 +217,21 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
                 d = 1
                 t = t1
                 j = i1 + s1
+                step = s1 * n2
                 if j < 0 or j >= n1:
                     if exit_axis == 1:
                         event = EXIT_HIGH if s1 > 0 else EXIT_LOW
                         break
                     if periodic[1]:
                         j = j - s1 * n1
+                        step = (j - i1) * n2
                         p1 -= s1 * n1 * h1
                         img[1] += s1
                     else:
                         event = 3 if s1 > 0 else 2
                         break
-                if geom[i0, j, i2] == 0:
+                c = flat[lin + step]
+                if c == 0:
                     event = 3 if s1 > 0 else 2
                     break
                 i1 = j
@@ -229,24 +240,28 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
                 d = 2
                 t = t2
                 j = i2 + s2
+                step = s2
                 if j < 0 or j >= n2:
                     if exit_axis == 2:
                         event = EXIT_HIGH if s2 > 0 else EXIT_LOW
                         break
                     if periodic[2]:
                         j = j - s2 * n2
+                        step = j - i2
                         p2 -= s2 * n2 * h2
                         img[2] += s2
                     else:
                         event = 5 if s2 > 0 else 4
                         break
-                if geom[i0, i1, j] == 0:
+                c = flat[lin + step]
+                if c == 0:
                     event = 5 if s2 > 0 else 4
                     break
                 i2 = j
                 t2 += dt2
+            lin += step
             crossings += 1
-            if geom[i0, i1, i2] >= 3:
+            if c >= 3:
                 break  # a jump pays: restart from the crossing point
         # move the segment start to time t, snap the event axis onto its face, keep the rest inside the voxel
         p0 += t * u0

@@ -82,28 +82,20 @@ def test_checkpoint_resume_gives_the_same_numbers(tmp_path):
 
 def test_cli_end_to_end_and_bad_input(tmp_path, capsys):
     binary = _binary(tmp_path / "binary_a1.h5", square_capillary(4, 20).pore, voxel_um=1.0)
-    rc = cli_main(
-        [
-            "diffusion",
-            str(binary),
-            "--axis",
-            "z",
-            "--batches",
-            "4",
-            "--batch-particles",
-            "50",
-            "--max-rounds",
-            "1",
-            "--wall-law",
-            "isotropic",
-            "--threads",
-            "1",
-        ]
-    )
+    args = "--axis z --batches 4 --batch-particles 200 --max-rounds 1 --wall-law isotropic --threads 1"
+    rc = cli_main(["diffusion", str(binary), *args.split(), "--hit-map-bins", "4", "--orientation-bins", "3"])
     assert rc == 0
     out = tmp_path / "diffusion_a1_z.h5"
     assert out.is_file() and "W = " in capsys.readouterr().out
-    assert xr.open_dataset(out, engine="h5netcdf").attrs["settings"].count("isotropic") == 1
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    assert ds.attrs["settings"].count("isotropic") == 1
+    # every wall hit is on a lateral face (a straight channel has no wall normal to z); the four lateral faces
+    # share them alike (4 σ of a multinomial count); every flight is in the orientation histogram
+    per_face = ds["hit_map"].sum(dim=("map_a", "map_b")).values
+    assert per_face.sum() == int(ds["wall_hits"]) and per_face[4] == per_face[5] == 0
+    mean = per_face[:4].mean()
+    assert np.all(np.abs(per_face[:4] - mean) < 4 * np.sqrt(mean))
+    assert int(ds["orientation"].sum()) == int(ds["flights"])
     solid = _binary(tmp_path / "solid_a1.h5", np.zeros((3, 3, 3), np.uint8))
     rc = cli_main(["diffusion", str(solid), "-o", str(tmp_path / "x.h5")])
     err = capsys.readouterr().err.strip().splitlines()
