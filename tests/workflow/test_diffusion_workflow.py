@@ -16,10 +16,11 @@ def _planned(scene_path, cwd):
         [sys.executable, "-m", "porepipe.cli", "run", str(scene_path), "--cores", "1", "-n"],
         cwd=cwd,
         capture_output=True,
+        check=False,
         text=True,
     )
     assert out.returncode == 0, out.stderr + out.stdout
-    table = re.findall(r"^(\w+)\s+(\d+)\s*$", out.stdout, flags=re.M)
+    table = re.findall(r"^(\w+)\s+(\d+)\s*$", out.stdout, flags=re.MULTILINE)
     return {name: int(count) for name, count in table if name != "total"}, out.stdout
 
 
