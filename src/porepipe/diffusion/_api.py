@@ -215,7 +215,7 @@ def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> 
         tallies = Tallies(
             np.zeros((0, K.N_TALLY)), *(np.zeros(s) for s in shapes[:3]), np.zeros((0, *shapes[3])), 0
         )
-    progress = Progress(label, settings.max_rounds)
+    progress = Progress(label, 0)  # the stop is statistical, so no ETA
     while tallies.rounds < settings.max_rounds:
         if tallies.rounds >= 2 and enough(tallies):
             break
