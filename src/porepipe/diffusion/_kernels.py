@@ -481,6 +481,7 @@ def make_transport_kernel(
             u = np.empty(3)
             idx = np.empty(3, dtype=np.int64)
             img = np.zeros(3, dtype=np.int64)
+            acc = np.zeros(4 * N_TALLY)  # batch-local counters (padded: no false sharing between threads)
             for q in range(per_batch):
                 pid = first + b * per_batch + q
                 state = _stream_state(seed, pid)
@@ -511,9 +512,9 @@ def make_transport_kernel(
                             )
                             orient_hist[b, ob, pb] += 1
                         ev, ln, cr = _fly(geom, h, periodic, axis, pos, idx, u, img)
-                        tally[b, T_CROSS] += cr
-                        tally[b, T_PATH] += ln
-                        tally[b, T_FLIGHTS] += 1
+                        acc[T_CROSS] += cr
+                        acc[T_PATH] += ln
+                        acc[T_FLIGHTS] += 1
                         dt = ln / speed
                         if WK and t_now + dt > t_end:
                             ln = (t_end - t_now) * speed
@@ -537,7 +538,7 @@ def make_transport_kernel(
                         if hits >= max_hits:
                             break
                         speed, state = _reflect(LAW, MIXED, WSPEED, ev, u, speed, vmean, alpha, state)
-                    tally[b, T_TIME] += 0.0 if WK else t_now
+                    acc[T_TIME] += 0.0 if WK else t_now
                     if ev == -2:
                         break
                     if ev < 6:
@@ -548,19 +549,21 @@ def make_transport_kernel(
                         outcome = 1 if high else 0
                         break
                     if high == (side == 0):  # FLUSS: count, swap species, re-enter from the face reached
-                        tally[b, T_OUT_HIGH if species == 0 else T_OUT_LOW] += 1
+                        acc[T_OUT_HIGH if species == 0 else T_OUT_LOW] += 1
                         species = 1 - species
                         side = 1 - side
-                tally[b, T_PARTICLES] += 1
-                tally[b, T_HITS] += hits
+                acc[T_PARTICLES] += 1
+                acc[T_HITS] += hits
                 if WK:
-                    tally[b, T_TIME] += t_now
+                    acc[T_TIME] += t_now
                 elif outcome == 1:
-                    tally[b, T_OUT_HIGH] += 1
+                    acc[T_OUT_HIGH] += 1
                 elif outcome == 0:
-                    tally[b, T_OUT_LOW] += 1
+                    acc[T_OUT_LOW] += 1
                 else:
-                    tally[b, T_TRUNC] += 1
+                    acc[T_TRUNC] += 1
+            for c in range(N_TALLY):
+                tally[b, c] = acc[c]
 
     _CACHE[key] = _transport
     return _transport
@@ -606,6 +609,7 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
             u = np.empty(3)
             idx = np.empty(3, dtype=np.int64)
             img = np.zeros(3, dtype=np.int64)
+            acc = np.zeros(4 * N_TALLY)  # batch-local counters (padded: no false sharing between threads)
             for q in range(per_batch):
                 pid = first + b * per_batch + q
                 state = _stream_state(seed, pid)
@@ -633,21 +637,23 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
                         ln = (t_end - t_now) * speed
                         dt = t_end - t_now
                         t_now = t_end
-                        tally[b, T_PATH] += ln
+                        acc[T_PATH] += ln
                         break
                     t_now += dt
-                    tally[b, T_PATH] += ln
-                    tally[b, T_CROSS] += cr
-                    tally[b, T_FLIGHTS] += 1
+                    acc[T_PATH] += ln
+                    acc[T_CROSS] += cr
+                    acc[T_FLIGHTS] += 1
                     hits += 1
                     if stop:
                         break
                     speed, state = _reflect(LAW, MIXED, WSPEED, ev, u, speed, vmean, alpha, state)
-                tally[b, T_PARTICLES] += 1
-                tally[b, T_HITS] += hits
-                tally[b, T_TIME] += t_now
+                acc[T_PARTICLES] += 1
+                acc[T_HITS] += hits
+                acc[T_TIME] += t_now
                 if hits >= max_hits:
-                    tally[b, T_TRUNC] += 1
+                    acc[T_TRUNC] += 1
+            for c in range(N_TALLY):
+                tally[b, c] = acc[c]
 
     _CACHE[key] = _equilibrium
     return _equilibrium
