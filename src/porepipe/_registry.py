@@ -20,6 +20,7 @@ STAGES: list[tuple[str, str | None]] = [
     ("porepipe.minkowski", "minkowski"),
     ("porepipe.lpt", "lpt"),
     ("porepipe.lbm", "permeability"),
+    ("porepipe.diffusion", "diffusion"),
     ("porepipe.sweep", "sweep"),
     ("porepipe.report", "report"),
 ]

@@ -43,6 +43,7 @@ class Analysis(str, enum.Enum):
     minkowski = "minkowski"        # φ, S_V, K_V, T_V of the segmented volume
     lpt = "lpt"                    # local porosity theory
     permeability = "permeability"  # lattice-Boltzmann permeability
+    diffusion = "diffusion"        # Knudsen diffusion (transmission, Wicke-Kallenbach, msd)
     acquire = "acquire"            # image statistics, calibrated model scene, model-vs-experiment comparison
     report = "report"              # resolution sweep, extrapolation and the accuracy-versus-cost report
 

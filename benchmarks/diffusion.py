@@ -1,0 +1,131 @@
+"""Benchmark of the Knudsen engine: wall hits and voxel crossings per second, 1 and 2 threads.
+
+    python benchmarks/diffusion.py           # 30 x 30 x 300 capillary and a 96^3 porous sample
+    python benchmarks/diffusion.py --smoke   # seconds (CI)
+
+Prints a markdown table and writes diffusion.json in the working directory. Peer: SPARTA's free-molecular DSMC moves
+1.2e7 particles per CPU-second per core (its published benchmark log); a particle-move there is one time step of one
+particle, a wall hit here is one whole flight from wall to wall (many voxels). Target: 2e7 wall hits/s on 2 cores.
+Geometry memory: 1 byte per voxel (the distance-code array) plus the (m, 3) inlet/outlet pixel lists.
+Timings are taken on a shared machine: treat them as lower bounds. A porous sample from the mini scene is used if
+``results/mini/segment/binary_a1.h5`` exists in the working directory, else a Boolean sphere model of similar
+porosity (0.35) and grain size (8-voxel radius).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from porepipe._shared.numba_config import set_threads
+from porepipe.diffusion import Settings, WallLaw, square_capillary, transport
+from porepipe.diffusion._api import prepare
+
+SPARTA_MOVES_PER_CORE_S = 1.2e7
+TARGET_HITS_2_CORES = 2e7
+
+
+def porous_sample(edge: int, seed: int = 0) -> np.ndarray:
+    """The mini scene's binary volume if present, else Boolean spheres (radius 8 voxels) at porosity ~0.35."""
+    mini = Path("results/mini/segment/binary_a1.h5")
+    if mini.is_file():
+        from porepipe._shared.store import read_volume
+
+        pore, _ = read_volume(mini, "pore")
+        return pore[:edge, :edge, :edge].copy()
+    rng = np.random.default_rng(seed)
+    radius = 8.0
+    n = int(-np.log(0.35) * edge**3 / (4 / 3 * np.pi * radius**3))
+    solid = np.zeros((edge,) * 3, dtype=bool)
+    grid = np.indices((edge,) * 3).reshape(3, -1).T + 0.5
+    for c in rng.uniform(0, edge, (n, 3)):
+        d = np.abs(grid - c)
+        d = np.minimum(d, edge - d)  # periodic images
+        solid.ravel()[np.sum(d * d, axis=1) <= radius * radius] = True
+    return (~solid).astype(np.uint8)
+
+
+def measure(pore, settings, threads, repeats):
+    """Best of ``repeats`` timed kernel runs (the geometry is prepared once, outside the timing)."""
+    set_threads(threads)
+    pore = prepare(pore, axis=2)
+    transport(pore, 2, settings.model_copy(update={"max_rounds": 1, "batch_particles": 4}), seed=1)  # compile
+    best = None
+    for rep in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        r = transport(pore, 2, settings, seed=2 + rep)
+        dt, cpu = time.perf_counter() - t0, time.process_time() - c0
+        if best is None or dt < best[0]:
+            best = (dt, cpu, r.values)
+    dt, cpu, v = best
+    return {
+        "threads": threads,
+        "seconds": dt,
+        "cpu_seconds": cpu,
+        "wall_hits": v["wall_hits"],
+        "crossings": v["voxel_crossings"],
+        "hits_per_s": v["wall_hits"] / dt,
+        "hits_per_cpu_s": v["wall_hits"] / cpu,
+        "crossings_per_s": v["voxel_crossings"] / dt,
+        "W": v["W"],
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--smoke", action="store_true", help="small sizes, one repeat")
+    args = parser.parse_args()
+    per = 40 if args.smoke else 400
+    repeats = 1 if args.smoke else 3
+    bare = Settings(batches=32, batch_particles=per, max_rounds=1, profile_bins=0)
+    cases = [
+        ("capillary 30x30x300, Lambert", square_capillary(30, 300).pore, bare),
+        (
+            "capillary 30x30x300, isotropic",
+            square_capillary(30, 300).pore,
+            bare.model_copy(update={"wall_law": WallLaw.isotropic}),
+        ),
+        (
+            "capillary, Lambert + profile/maps/orientation",
+            square_capillary(30, 300).pore,
+            bare.model_copy(update={"profile_bins": 32, "hit_map_bins": 16, "orientation_bins": 9}),
+        ),
+        (
+            f"porous sample {48 if args.smoke else 96}^3, Lambert",
+            porous_sample(48 if args.smoke else 96),
+            bare,
+        ),
+    ]
+    rows = []
+    for name, pore, settings in cases:
+        geom = prepare(pore, axis=2)
+        for threads in (1, 2):
+            row = {
+                "case": name,
+                "geometry_bytes_per_voxel": geom.codes.nbytes / geom.codes.size,
+                **measure(pore, settings, threads, repeats),
+            }
+            rows.append(row)
+    print(
+        "| case | threads | wall hits/s | wall hits per CPU-s | voxel crossings/s | crossings per hit | W |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(
+            f"| {r['case']} | {r['threads']} | {r['hits_per_s']:.3g} | {r['hits_per_cpu_s']:.3g} | "
+            f"{r['crossings_per_s']:.3g} | {r['crossings'] / max(r['wall_hits'], 1):.1f} | {r['W']:.4f} |"
+        )
+    print(
+        f"\npeer: SPARTA free-molecular DSMC {SPARTA_MOVES_PER_CORE_S:.2g} particle-moves per CPU-second per core "
+        f"(2 cores: {2 * SPARTA_MOVES_PER_CORE_S:.2g}); target here {TARGET_HITS_2_CORES:.2g} wall hits/s on 2 "
+        "cores; geometry 1 byte per voxel"
+    )
+    Path("diffusion.json").write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()

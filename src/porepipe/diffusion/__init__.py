@@ -1,0 +1,32 @@
+"""Knudsen diffusion in the voxel pore space: exact flights, wall laws, transmission, D_eff (Mahler 2001, ch. 2-3)."""
+
+from porepipe._shared.lazy import lazy_exports
+
+_EXPORTS = {
+    "Axis": "_settings",
+    "DiffusionResult": "_api",
+    "Geometry": "_api",
+    "InletLaw": "_settings",
+    "PoreVolume": "_geometry",
+    "SPECIES": "_species",
+    "Settings": "_settings",
+    "Setup": "_settings",
+    "SpeedDist": "_settings",
+    "WallLaw": "_settings",
+    "WallSpeed": "_settings",
+    "accessible_pore": "_geometry",
+    "closed_box": "_geometry",
+    "constricted_capillary": "_geometry",
+    "cylinder": "_geometry",
+    "equilibrium": "_api",
+    "mean_speed": "_species",
+    "pocketed_capillary": "_geometry",
+    "prepare": "_api",
+    "rough_capillary": "_geometry",
+    "slit": "_geometry",
+    "square_capillary": "_geometry",
+    "transport": "_api",
+    "wall_area": "_geometry",
+}
+__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,0 +1,129 @@
+"""``porepipe diffusion``: Knudsen diffusion of a binary volume along one axis."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.numba_config import set_threads
+from porepipe.diffusion._settings import Axis, InletLaw, Settings, Setup, SpeedDist, WallLaw, WallSpeed
+
+#: CLI option -> settings key, for the options that override the scene
+_OVERRIDES = (
+    "setup",
+    "wall_law",
+    "accommodation",
+    "wall_speed",
+    "inlet_law",
+    "inlet_speed",
+    "initial_speed",
+    "species",
+    "temperature_K",
+    "target_rel_error",
+    "max_wall_hits",
+    "max_rounds",
+    "batches",
+    "batch_particles",
+    "profile_bins",
+    "hit_map_bins",
+    "orientation_bins",
+    "wk_time_jiffies",
+    "msd_time_jiffies",
+)
+
+
+def _settings(args) -> tuple[Settings, int, str]:
+    base, seed, name = {}, 0, ""
+    if args.scene:
+        from porepipe.scene import load_scene
+
+        scene = load_scene(args.scene)
+        base, seed, name = scene.diffusion.model_dump(), scene.seed, scene.name
+    for key in _OVERRIDES:
+        value = getattr(args, key, None)
+        if value is not None:
+            base[key] = value
+    if args.seed is not None:
+        seed = args.seed
+    try:
+        return Settings(**base), seed, name
+    except ValueError as err:
+        raise PorepipeError(f"diffusion settings: {err}".replace("\n", "; ")) from err
+
+
+def _output(args, binary: Path, axis: str) -> Path:
+    if args.out:
+        return Path(args.out)
+    match = re.search(r"_a([0-9.]+?)\.h5$", binary.name)
+    tag = match.group(1) if match else binary.stem
+    return binary.parent / f"diffusion_a{tag}_{axis}.h5"
+
+
+def main(args) -> int:
+    from porepipe.diffusion._run import run
+
+    settings, seed, scene = _settings(args)
+    threads = set_threads(args.threads)
+    binary = Path(args.binary)
+    out = _output(args, binary, args.axis)
+    run(
+        settings,
+        binary,
+        out,
+        args.axis,
+        seed=seed,
+        scene=scene,
+        threads=threads,
+        checkpoint=args.checkpoint,
+        resume=args.resume,
+    )
+    from porepipe._shared.store import read_table
+
+    v = read_table(out)
+    head = f"W = {float(v['W']):.5g} ± {float(v['W_err']):.2g}, " if "W" in v else ""
+    print(
+        f"diffusion {args.axis} ({settings.setup.value}): {head}D = {float(v['D_m2_s']):.5g} "
+        f"± {float(v['D_err_m2_s']):.2g} m^2/s, {int(v['wall_hits'])} wall hits -> {out}"
+    )
+    return 0
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "diffusion", help="Knudsen diffusion (transmission, Wicke-Kallenbach, msd) of a binary volume"
+    )
+    p.add_argument("binary", help="binary_a{a}.h5 (volume 'pore', 1 = pore)")
+    p.add_argument("--axis", choices=[a.value for a in Axis], default="z", help="transport axis (default z)")
+    p.add_argument("-o", "--out", help="result file; default diffusion_a{a}_{axis}.h5 beside the input")
+    p.add_argument("--scene", help="scene YAML whose `diffusion` section and seed give the defaults")
+    p.add_argument("--seed", type=int, help="override the scene seed")
+    p.add_argument("--threads", type=int, default=None)
+    p.add_argument("--checkpoint", help="checkpoint file (default .{out}.checkpoint.npz)")
+    p.add_argument("--resume", action="store_true", help="continue from a matching checkpoint")
+    for name, enum in (
+        ("setup", Setup),
+        ("wall-law", WallLaw),
+        ("wall-speed", WallSpeed),
+        ("inlet-law", InletLaw),
+        ("inlet-speed", SpeedDist),
+        ("initial-speed", SpeedDist),
+    ):
+        p.add_argument(f"--{name}", dest=name.replace("-", "_"), choices=[e.value for e in enum])
+    p.add_argument("--species")
+    for name, kind in (
+        ("accommodation", float),
+        ("temperature-K", float),
+        ("target-rel-error", float),
+        ("max-wall-hits", int),
+        ("max-rounds", int),
+        ("batches", int),
+        ("batch-particles", int),
+        ("profile-bins", int),
+        ("hit-map-bins", int),
+        ("orientation-bins", int),
+        ("wk-time-jiffies", float),
+        ("msd-time-jiffies", float),
+    ):
+        p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
+    p.set_defaults(func=main)

@@ -1,0 +1,659 @@
+"""Numba kernels of the Knudsen engine: counter-based random numbers, the 1-byte distance geometry, exact flights
+(3-D DDA with empty-space jumps), wall laws, and the set-up kernels built by a factory from the scene's choices.
+
+Geometry code per voxel (uint8): 0 = solid; k >= 1 = pore whose L-infinity (chessboard) distance to the nearest
+solid voxel or to the outside of the box is k (saturated at 255). Every voxel of the cube of half-width k - 1 around a
+pore voxel is pore, so a particle may fly straight to that cube's surface without looking at single voxels.
+
+Events returned by :func:`_fly`: 0..5 = wall face ``2 * axis + (step > 0)`` (the particle moved in direction ``step``
+along ``axis`` and met a solid voxel or the closed outside), 6 = left through the low face of the exit axis, 7 = left
+through its high face.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from porepipe._shared.numba_config import FASTMATH
+
+_INF = np.inf
+_GAMMA = np.uint64(0x9E3779B97F4A7C15)
+_M1 = np.uint64(0xBF58476D1CE4E5B9)
+_M2 = np.uint64(0x94D049BB133111EB)
+_S30 = np.uint64(30)
+_S27 = np.uint64(27)
+_S31 = np.uint64(31)
+_S11 = np.uint64(11)
+_TWO_M53 = 1.0 / 9007199254740992.0
+_TWO_PI = 2.0 * math.pi
+
+# wall / inlet laws (closure constants of the kernel factory)
+SPECULAR = 0
+LAMBERT = 1
+COSINE_DTHETA = 2
+ISOTROPIC = 3
+# speed distributions
+SPEED_MEAN = 0  # every particle at its species' mean speed
+SPEED_MAXWELL = 1  # Maxwell-Boltzmann f(v) ~ v^2 exp(-v^2 / 2 s^2) (thesis 3.2)
+SPEED_FLUX = 2  # flux-weighted Maxwell-Boltzmann ~ v^3 exp(-v^2 / 2 s^2) (particles crossing a plane)
+SPEED_KEPT = -1  # wall keeps |v| (thesis)
+
+EXIT_LOW = 6
+EXIT_HIGH = 7
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# counter-based random numbers: SplitMix64, one stream per particle, state = mix(seed, particle id)
+@njit(cache=True, inline="always")
+def _mix(z):
+    z = (z ^ (z >> _S30)) * _M1
+    z = (z ^ (z >> _S27)) * _M2
+    return z ^ (z >> _S31)
+
+
+@njit(cache=True)
+def _stream_state(seed, particle):
+    """Start state of particle ``particle``'s stream under the 63-bit ``seed`` (independent of thread count)."""
+    return _mix(np.uint64(seed) ^ _mix(np.uint64(particle) * _GAMMA + _GAMMA))
+
+
+@njit(cache=True, inline="always")
+def _uniform(state):
+    """(u in (0, 1], new state)."""
+    state = state + _GAMMA
+    return (float(_mix(state) >> _S11) + 1.0) * _TWO_M53, state
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# geometry: chessboard distance to the solid (outside of the box counts as solid), two raster passes
+@njit(cache=True)
+def _chessboard_codes(pore, out):
+    """``out[i,j,k]`` = 0 for solid, else min(255, L-inf distance to the nearest solid or outside voxel).
+
+    Two raster passes of the 3x3x3 unit-weight chamfer mask, which is exact for the chessboard metric.
+    """
+    n0, n1, n2 = pore.shape
+    for i in range(n0):
+        for j in range(n1):
+            for k in range(n2):
+                if pore[i, j, k] == 0:
+                    out[i, j, k] = 0
+                    continue
+                best = 255
+                for di in range(-1, 1):
+                    for dj in range(-1, 2):
+                        for dk in range(-1, 2):
+                            if di == 0 and (dj > 0 or (dj == 0 and dk >= 0)):
+                                continue
+                            a, b, c = i + di, j + dj, k + dk
+                            if a < 0 or b < 0 or c < 0 or b >= n1 or c >= n2:
+                                val = 0
+                            else:
+                                val = out[a, b, c]
+                            best = min(best, val + 1)
+                out[i, j, k] = best
+    for i in range(n0 - 1, -1, -1):
+        for j in range(n1 - 1, -1, -1):
+            for k in range(n2 - 1, -1, -1):
+                cur = out[i, j, k]
+                if cur == 0:
+                    continue
+                best = cur
+                for di in range(2):
+                    for dj in range(-1, 2):
+                        for dk in range(-1, 2):
+                            if di == 0 and (dj < 0 or (dj == 0 and dk <= 0)):
+                                continue
+                            a, b, c = i + di, j + dj, k + dk
+                            if a >= n0 or b < 0 or c < 0 or b >= n1 or c >= n2:
+                                val = 0
+                            else:
+                                val = out[a, b, c]
+                            best = min(best, val + 1)
+                out[i, j, k] = best
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# the flight
+@njit(cache=True, fastmath=FASTMATH)
+def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
+    """Fly from ``pos`` (inside pore voxel ``idx``) along the unit vector ``u`` to the next event.
+
+    Exact voxel traversal (Amanatides-Woo) with jumps through pore cubes of the distance code. Ties between axes
+    (a flight exactly through an edge or corner) are resolved deterministically, lowest axis first. On return
+    ``pos``/``idx`` hold the event point and the (pore) voxel it belongs to; at a wall the coordinate of the hit
+    axis is exactly the face plane. ``img`` counts periodic wraps per axis (unwrapped = pos + img * n * h).
+
+    Returns
+    -------
+    event : int
+        0..5 wall face, 6 / 7 exit through the low / high face of ``exit_axis``.
+    length : float
+        Path length flown.
+    crossings : int
+        Voxel faces crossed.
+    """
+    n0, n1, n2 = geom.shape
+    flat = geom.reshape(n0 * n1 * n2)
+    length = 0.0
+    crossings = 0
+    u0, u1, u2 = u[0], u[1], u[2]
+    h0, h1, h2 = h[0], h[1], h[2]
+    s0 = 1 if u0 > 0.0 else (-1 if u0 < 0.0 else 0)
+    s1 = 1 if u1 > 0.0 else (-1 if u1 < 0.0 else 0)
+    s2 = 1 if u2 > 0.0 else (-1 if u2 < 0.0 else 0)
+    iu0 = 1.0 / u0 if s0 != 0 else 0.0  # multiplications instead of divisions in the walk
+    iu1 = 1.0 / u1 if s1 != 0 else 0.0
+    iu2 = 1.0 / u2 if s2 != 0 else 0.0
+    dt0 = h0 * abs(iu0) if s0 != 0 else _INF
+    dt1 = h1 * abs(iu1) if s1 != 0 else _INF
+    dt2 = h2 * abs(iu2) if s2 != 0 else _INF
+    i0, i1, i2 = idx[0], idx[1], idx[2]
+    p0, p1, p2 = pos[0], pos[1], pos[2]
+    while True:
+        r = np.int64(geom[i0, i1, i2]) - 1
+        if r >= 2:
+            # jump to the surface of the all-pore cube [i - r, i + r] (index space)
+            t = _INF
+            if s0 > 0:
+                t = min(t, ((i0 + r + 1) * h0 - p0) * iu0)
+            elif s0 < 0:
+                t = min(t, ((i0 - r) * h0 - p0) * iu0)
+            if s1 > 0:
+                t = min(t, ((i1 + r + 1) * h1 - p1) * iu1)
+            elif s1 < 0:
+                t = min(t, ((i1 - r) * h1 - p1) * iu1)
+            if s2 > 0:
+                t = min(t, ((i2 + r + 1) * h2 - p2) * iu2)
+            elif s2 < 0:
+                t = min(t, ((i2 - r) * h2 - p2) * iu2)
+            t = max(t, 0.0)
+            p0 += t * u0
+            p1 += t * u1
+            p2 += t * u2
+            length += t
+            i0 = min(max(np.int64(math.floor(p0 / h0)), i0 - r), i0 + r)
+            i1 = min(max(np.int64(math.floor(p1 / h1)), i1 - r), i1 + r)
+            i2 = min(max(np.int64(math.floor(p2 / h2)), i2 - r), i2 + r)
+        # voxel walk from the segment start (p0, p1, p2) in voxel (i0, i1, i2)
+        t0 = (((i0 + 1) * h0 - p0) * iu0 if s0 > 0 else (i0 * h0 - p0) * iu0) if s0 != 0 else _INF
+        t1 = (((i1 + 1) * h1 - p1) * iu1 if s1 > 0 else (i1 * h1 - p1) * iu1) if s1 != 0 else _INF
+        t2 = (((i2 + 1) * h2 - p2) * iu2 if s2 > 0 else (i2 * h2 - p2) * iu2) if s2 != 0 else _INF
+        t0 = max(t0, 0.0)
+        t1 = max(t1, 0.0)
+        t2 = max(t2, 0.0)
+        event = -1
+        d = 0
+        t = 0.0
+        lin = (i0 * n1 + i1) * n2 + i2  # flat index of (i0, i1, i2); one load per crossing
+        while True:
+            if t0 <= t1 and t0 <= t2:
+                d = 0
+                t = t0
+                j = i0 + s0
+                step = s0 * n1 * n2
+                if j < 0 or j >= n0:
+                    if exit_axis == 0:
+                        event = EXIT_HIGH if s0 > 0 else EXIT_LOW
+                        break
+                    if periodic[0]:
+                        j = j - s0 * n0
+                        step = (j - i0) * n1 * n2
+                        p0 -= s0 * n0 * h0
+                        img[0] += s0
+                    else:
+                        event = 1 if s0 > 0 else 0
+                        break
+                c = flat[lin + step]
+                if c == 0:
+                    event = 1 if s0 > 0 else 0
+                    break
+                i0 = j
+                t0 += dt0
+            elif t1 <= t2:
+                d = 1
+                t = t1
+                j = i1 + s1
+                step = s1 * n2
+                if j < 0 or j >= n1:
+                    if exit_axis == 1:
+                        event = EXIT_HIGH if s1 > 0 else EXIT_LOW
+                        break
+                    if periodic[1]:
+                        j = j - s1 * n1
+                        step = (j - i1) * n2
+                        p1 -= s1 * n1 * h1
+                        img[1] += s1
+                    else:
+                        event = 3 if s1 > 0 else 2
+                        break
+                c = flat[lin + step]
+                if c == 0:
+                    event = 3 if s1 > 0 else 2
+                    break
+                i1 = j
+                t1 += dt1
+            else:
+                d = 2
+                t = t2
+                j = i2 + s2
+                step = s2
+                if j < 0 or j >= n2:
+                    if exit_axis == 2:
+                        event = EXIT_HIGH if s2 > 0 else EXIT_LOW
+                        break
+                    if periodic[2]:
+                        j = j - s2 * n2
+                        step = j - i2
+                        p2 -= s2 * n2 * h2
+                        img[2] += s2
+                    else:
+                        event = 5 if s2 > 0 else 4
+                        break
+                c = flat[lin + step]
+                if c == 0:
+                    event = 5 if s2 > 0 else 4
+                    break
+                i2 = j
+                t2 += dt2
+            lin += step
+            crossings += 1
+            if c >= 3:
+                break  # a jump pays: restart from the crossing point
+        # move the segment start to time t, snap the event axis onto its face, keep the rest inside the voxel
+        p0 += t * u0
+        p1 += t * u1
+        p2 += t * u2
+        length += t
+        if event >= 0:
+            if d == 0:
+                p0 = (i0 + (s0 > 0)) * h0
+            elif d == 1:
+                p1 = (i1 + (s1 > 0)) * h1
+            else:
+                p2 = (i2 + (s2 > 0)) * h2
+        p0 = min(max(p0, i0 * h0), (i0 + 1) * h0)
+        p1 = min(max(p1, i1 * h1), (i1 + 1) * h1)
+        p2 = min(max(p2, i2 * h2), (i2 + 1) * h2)
+        if event >= 0:
+            pos[0], pos[1], pos[2] = p0, p1, p2
+            idx[0], idx[1], idx[2] = i0, i1, i2
+            return event, length, crossings
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# directions and speeds
+@njit(cache=True, inline="always")
+def _cos_theta(law, state):
+    """cos of the angle to the normal for a diffuse law; never 0 (no flight parallel to the wall)."""
+    x, state = _uniform(state)
+    if law == LAMBERT:
+        return math.sqrt(x), state  # cosine per solid angle: sin^2 uniform
+    if law == COSINE_DTHETA:
+        return math.sqrt(
+            1.0 - (1.0 - x) * (1.0 - x)
+        ), state  # thesis (3.31) per d-theta: sin uniform in [0, 1)
+    return x, state  # isotropic: cos uniform in (0, 1]
+
+
+@njit(cache=True)
+def _emit(law, axis, sign, u, state):
+    """Overwrite ``u`` with a diffuse direction about the normal ``sign * e_axis``."""
+    c, state = _cos_theta(law, state)
+    x, state = _uniform(state)
+    s = math.sqrt(max(0.0, 1.0 - c * c))
+    phi = _TWO_PI * x
+    a = (axis + 1) % 3
+    b = (axis + 2) % 3
+    u[axis] = sign * c
+    u[a] = s * math.cos(phi)
+    u[b] = s * math.sin(phi)
+    return state
+
+
+@njit(cache=True)
+def _speed(dist, vmean, state):
+    """A speed from ``dist`` (SPEED_MEAN / SPEED_MAXWELL / SPEED_FLUX) for a species of mean speed ``vmean``."""
+    if dist == SPEED_MEAN:
+        return vmean, state
+    sigma = vmean * math.sqrt(math.pi / 8.0)
+    if dist == SPEED_FLUX:
+        x, state = _uniform(state)
+        y, state = _uniform(state)
+        return sigma * math.sqrt(-2.0 * math.log(x * y)), state
+    x, state = _uniform(state)
+    z, state = _uniform(state)
+    w, state = _uniform(state)
+    rad = -2.0 * math.log(x)  # g1^2 + g2^2 of a Box-Muller pair is exponential with mean 2; g3 from (z, w)
+    g3 = math.sqrt(-2.0 * math.log(z)) * math.cos(_TWO_PI * w)
+    acc = rad + g3 * g3
+    return sigma * math.sqrt(acc), state
+
+
+@njit(cache=True)
+def _isotropic(u, state):
+    """Uniform direction on the sphere."""
+    x, state = _uniform(state)
+    y, state = _uniform(state)
+    c = 2.0 * x - 1.0
+    s = math.sqrt(max(0.0, 1.0 - c * c))
+    u[0] = c
+    u[1] = s * math.cos(_TWO_PI * y)
+    u[2] = s * math.sin(_TWO_PI * y)
+    return state
+
+
+@njit(cache=True)
+def _uniform_in_pore(cells, h, pos, idx, state):
+    """Uniform position in a random voxel of ``cells`` ((m, 3) int64)."""
+    x, state = _uniform(state)
+    c = min(int(x * cells.shape[0]), cells.shape[0] - 1)
+    for d in range(3):
+        idx[d] = cells[c, d]
+        y, state = _uniform(state)
+        pos[d] = (idx[d] + 1.0 - y) * h[d]
+    return state
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _reflect(law, mixed, wall_speed, event, u, speed_now, vmean, alpha, state):
+    """Reflect ``u`` at wall face ``event`` by ``law``; returns (speed, state).
+
+    Called with closure constants of the kernel factories and inlined, so the branches of the laws a scene does
+    not name are folded away at compile time.
+
+    Parameters
+    ----------
+    law : int
+        SPECULAR, LAMBERT, COSINE_DTHETA or ISOTROPIC.
+    mixed : bool
+        Maxwell mixture: diffuse with probability ``alpha`` (the accommodation coefficient), else specular.
+    wall_speed : int
+        SPEED_KEPT (|v| unchanged, thesis) or SPEED_FLUX (thermal re-emission, flux-weighted MB).
+    """
+    axis = event >> 1
+    sign = -1.0 if (event & 1) else 1.0  # back into the pore
+    diffuse = law != SPECULAR
+    if mixed:
+        x, state = _uniform(state)
+        diffuse = diffuse and x <= alpha
+    if diffuse:
+        state = _emit(law, axis, sign, u, state)
+        if wall_speed == SPEED_FLUX:
+            speed_now, state = _speed(SPEED_FLUX, vmean, state)
+    else:
+        u[axis] = -u[axis]
+    return speed_now, state
+
+
+_CACHE: dict = {}
+
+
+def wall_flags(law: int, accommodation: float, thermal: bool) -> tuple[int, bool, int]:
+    """(law, mixed, wall_speed) closure constants for the factories."""
+    mixed = law != SPECULAR and accommodation < 1.0
+    return int(law), bool(mixed), SPEED_FLUX if thermal else SPEED_KEPT
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# tallies shared by the set-up kernels
+#: columns of the per-batch tally array
+T_PARTICLES, T_OUT_HIGH, T_OUT_LOW, T_TRUNC, T_HITS, T_CROSS, T_PATH, T_TIME, T_FLIGHTS = range(9)
+N_TALLY = 9
+
+
+@njit(cache=True)
+def _profile_add(prof, p_start, u_ax, length, speed, bin_w):
+    """Add the time a straight flight of ``length`` from axial coordinate ``p_start`` spends in each axial bin."""
+    nb = prof.shape[0]
+    if length <= 0.0:
+        return
+    p_end = p_start + u_ax * length
+    lo = min(p_start, p_end)
+    hi = max(p_start, p_end)
+    total_t = length / speed
+    if hi - lo <= 1e-300:
+        b = min(max(int(lo / bin_w), 0), nb - 1)
+        prof[b] += total_t
+        return
+    per_len = total_t / (hi - lo)
+    b = min(max(int(lo / bin_w), 0), nb - 1)
+    while True:
+        edge = (b + 1) * bin_w
+        top = min(hi, edge)
+        if top > lo:
+            prof[b] += (top - lo) * per_len
+        if hi <= edge or b == nb - 1:
+            break
+        lo = edge
+        b += 1
+
+
+def make_transport_kernel(
+    wall: tuple, inlet_law: int, inlet_speed: int, wk: bool, profile: bool, maps: bool, orient: bool
+):
+    """Transmission (``wk=False``) or Wicke-Kallenbach (``wk=True``) kernel with only the requested tallies.
+
+    Transmission: each particle enters at the low face of the exit axis (a uniform point of an open inlet pixel,
+    direction from ``inlet_law`` about the axis) and flies until it leaves through the high face (counted in
+    T_OUT_HIGH) or back through the low face (T_OUT_LOW), or reaches ``max_hits`` wall hits (T_TRUNC).
+
+    Wicke-Kallenbach (§3.6.3): each particle lives for ``t_end`` jiffies. It starts as species 1 at the low face or
+    species 2 at the high face; leaving through its own start face (REFLEX) re-injects it there, reaching the
+    opposite face (FLUSS) counts it (species 1: T_OUT_HIGH, species 2: T_OUT_LOW) and re-injects it there as the
+    other species. The profile then holds the time-integrated amount of species 1 per axial bin.
+    """
+    key = ("transport", *wall, inlet_law, inlet_speed, bool(wk), bool(profile), bool(maps), bool(orient))
+    if key in _CACHE:
+        return _CACHE[key]
+    _, LAW, MIXED, WSPEED, INLET, INSPEED, WK, PROFILE, MAPS, ORIENT = key
+
+    @njit(cache=True, fastmath=FASTMATH, parallel=True)
+    def _transport(
+        geom,
+        h,
+        periodic,
+        axis,
+        inlet_cells,
+        outlet_cells,
+        seed,
+        first,
+        per_batch,
+        max_hits,
+        t_end,
+        vmean,
+        alpha,
+        tally,
+        prof,
+        hitmap,
+        orient_hist,
+        map_bin,
+    ):
+        n_batches = tally.shape[0]
+        n_ax = geom.shape[axis]
+        length_ax = n_ax * h[axis]
+        bin_w = length_ax / prof.shape[1]
+        for b in prange(n_batches):
+            pos = np.empty(3)
+            u = np.empty(3)
+            idx = np.empty(3, dtype=np.int64)
+            img = np.zeros(3, dtype=np.int64)
+            acc = np.zeros(4 * N_TALLY)  # batch-local counters (padded: no false sharing between threads)
+            for q in range(per_batch):
+                pid = first + b * per_batch + q
+                state = _stream_state(seed, pid)
+                species = 0
+                if WK:
+                    x, state = _uniform(state)
+                    species = 0 if x <= 0.5 else 1
+                side = species  # 0 = enter at the low face, 1 = at the high face
+                t_now = 0.0
+                hits = 0
+                outcome = -1
+                while True:
+                    # (re-)injection at face `side`
+                    cells = inlet_cells if side == 0 else outlet_cells
+                    state = _uniform_in_pore(cells, h, pos, idx, state)
+                    pos[axis] = 0.0 if side == 0 else length_ax
+                    state = _emit(INLET, axis, 1.0 if side == 0 else -1.0, u, state)
+                    speed, state = _speed(INSPEED, vmean, state)
+                    while True:
+                        p_ax = pos[axis]
+                        if ORIENT:
+                            ob = min(
+                                int((u[axis] + 1.0) * 0.5 * orient_hist.shape[1]), orient_hist.shape[1] - 1
+                            )
+                            ph = math.atan2(u[(axis + 2) % 3], u[(axis + 1) % 3])
+                            pb = min(
+                                int((ph + math.pi) / _TWO_PI * orient_hist.shape[2]), orient_hist.shape[2] - 1
+                            )
+                            orient_hist[b, ob, pb] += 1
+                        ev, ln, cr = _fly(geom, h, periodic, axis, pos, idx, u, img)
+                        acc[T_CROSS] += cr
+                        acc[T_PATH] += ln
+                        acc[T_FLIGHTS] += 1
+                        dt = ln / speed
+                        if WK and t_now + dt > t_end:
+                            ln = (t_end - t_now) * speed
+                            dt = t_end - t_now
+                            ev = -2
+                        if PROFILE and ((not WK) or species == 0):
+                            _profile_add(prof[b], p_ax, u[axis], ln, speed, bin_w)
+                        t_now += dt
+                        if ev == -2:
+                            break
+                        if ev >= 6:
+                            break
+                        hits += 1
+                        if MAPS:
+                            fa = ((ev >> 1) + 1) % 3
+                            fb = ((ev >> 1) + 2) % 3
+                            lo_ax, hi_ax = min(fa, fb), max(fa, fb)
+                            ma = min(int(pos[lo_ax] / map_bin[lo_ax]), hitmap.shape[2] - 1)
+                            mb = min(int(pos[hi_ax] / map_bin[hi_ax]), hitmap.shape[3] - 1)
+                            hitmap[b, ev, ma, mb] += 1
+                        if hits >= max_hits:
+                            break
+                        speed, state = _reflect(LAW, MIXED, WSPEED, ev, u, speed, vmean, alpha, state)
+                    acc[T_TIME] += 0.0 if WK else t_now
+                    if ev == -2:
+                        break
+                    if ev < 6:
+                        outcome = 2
+                        break
+                    high = ev == EXIT_HIGH
+                    if not WK:
+                        outcome = 1 if high else 0
+                        break
+                    if high == (side == 0):  # FLUSS: count, swap species, re-enter from the face reached
+                        acc[T_OUT_HIGH if species == 0 else T_OUT_LOW] += 1
+                        species = 1 - species
+                        side = 1 - side
+                acc[T_PARTICLES] += 1
+                acc[T_HITS] += hits
+                if WK:
+                    acc[T_TIME] += t_now
+                elif outcome == 1:
+                    acc[T_OUT_HIGH] += 1
+                elif outcome == 0:
+                    acc[T_OUT_LOW] += 1
+                else:
+                    acc[T_TRUNC] += 1
+            for c in range(N_TALLY):
+                tally[b, c] = acc[c]
+
+    _CACHE[key] = _transport
+    return _transport
+
+
+def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
+    """Particles in equilibrium (uniform in the pore space, isotropic, speeds from ``speed_dist``) for ``t_end``.
+
+    Closed pores (``msd=False``): counts wall hits and path length (mean flight = path / hits -> 4V/S for diffuse
+    Lambert walls). Periodic medium (``msd=True``): also the squared unwrapped displacement per axis at the
+    sample times ``t_samples``, summed per batch into ``msd_out[b, k, axis]``.
+    """
+    key = ("equilibrium", *wall, speed_dist, bool(msd))
+    if key in _CACHE:
+        return _CACHE[key]
+    _, LAW, MIXED, WSPEED, SPEED, MSD = key
+
+    @njit(cache=True, fastmath=FASTMATH, parallel=True)
+    def _equilibrium(
+        geom,
+        h,
+        periodic,
+        cells,
+        seed,
+        first,
+        per_batch,
+        max_hits,
+        t_end,
+        t_samples,
+        vmean,
+        alpha,
+        tally,
+        msd_out,
+    ):
+        n_batches = tally.shape[0]
+        n_t = t_samples.shape[0]
+        ext = np.empty(3)
+        for d in range(3):
+            ext[d] = geom.shape[d] * h[d]
+        for b in prange(n_batches):
+            pos = np.empty(3)
+            start = np.empty(3)
+            u = np.empty(3)
+            idx = np.empty(3, dtype=np.int64)
+            img = np.zeros(3, dtype=np.int64)
+            acc = np.zeros(4 * N_TALLY)  # batch-local counters (padded: no false sharing between threads)
+            for q in range(per_batch):
+                pid = first + b * per_batch + q
+                state = _stream_state(seed, pid)
+                state = _uniform_in_pore(cells, h, pos, idx, state)
+                state = _isotropic(u, state)
+                speed, state = _speed(SPEED, vmean, state)
+                for d in range(3):
+                    start[d] = pos[d]
+                    img[d] = 0
+                t_now = 0.0
+                k = 0
+                hits = 0
+                while True:
+                    ev, ln, cr = _fly(geom, h, periodic, -1, pos, idx, u, img)
+                    dt = ln / speed
+                    stop = t_now + dt >= t_end or hits + 1 >= max_hits
+                    if MSD:
+                        while k < n_t and t_samples[k] <= t_now + dt:
+                            back = (t_now + dt - t_samples[k]) * speed
+                            for d in range(3):
+                                disp = pos[d] - back * u[d] + img[d] * ext[d] - start[d]
+                                msd_out[b, k, d] += disp * disp
+                            k += 1
+                    if t_now + dt > t_end:
+                        ln = (t_end - t_now) * speed
+                        dt = t_end - t_now
+                        t_now = t_end
+                        acc[T_PATH] += ln
+                        break
+                    t_now += dt
+                    acc[T_PATH] += ln
+                    acc[T_CROSS] += cr
+                    acc[T_FLIGHTS] += 1
+                    hits += 1
+                    if stop:
+                        break
+                    speed, state = _reflect(LAW, MIXED, WSPEED, ev, u, speed, vmean, alpha, state)
+                acc[T_PARTICLES] += 1
+                acc[T_HITS] += hits
+                acc[T_TIME] += t_now
+                if hits >= max_hits:
+                    acc[T_TRUNC] += 1
+            for c in range(N_TALLY):
+                tally[b, c] = acc[c]
+
+    _CACHE[key] = _equilibrium
+    return _equilibrium

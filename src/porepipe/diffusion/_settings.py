@@ -1,0 +1,119 @@
+"""Scene section ``diffusion``: Knudsen diffusion in the voxel pore space (Mahler 2001, ch. 2-3)."""
+
+from __future__ import annotations
+
+import enum
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+
+class Axis(str, enum.Enum):
+    x = "x"
+    y = "y"
+    z = "z"
+
+    @property
+    def index(self) -> int:
+        return "xyz".index(self.value)
+
+
+class Setup(str, enum.Enum):
+    """What is simulated (thesis §3.6)."""
+
+    transmission = "transmission"  # enter at the inlet face, count outlet vs back at the inlet: W, D = v̄LW/4
+    wicke_kallenbach = (
+        "wicke_kallenbach"  # two-species counter-diffusion, REFLEX/FLUSS with swap (§3.6.3, 3.45)
+    )
+    msd = "msd"  # periodic medium, mean-square displacement -> D_eff tensor (xx, yy, zz)
+
+
+class WallLaw(str, enum.Enum):
+    """Direction after a wall hit (§3.5.3)."""
+
+    lambert = "lambert"  # cosine per solid angle (Knudsen's law; sin^2 θ uniform) — the default
+    cosine_dtheta = "cosine_dtheta"  # the thesis's (3.31) read per dθ: sin θ uniform
+    isotropic = "isotropic"  # cos θ uniform: the thesis's production law (GWisotrop)
+    specular = "specular"  # angle in = angle out
+
+
+class InletLaw(str, enum.Enum):
+    """Direction of a particle entering through an open face."""
+
+    lambert = "lambert"  # a reservoir's flux crossing a plane (exact for an equilibrium gas)
+    isotropic = "isotropic"  # uniform over the inward hemisphere (thesis §5.2)
+
+
+class WallSpeed(str, enum.Enum):
+    kept = "kept"  # |v| unchanged at a wall (thesis)
+    thermal = "thermal"  # re-emitted with a speed from the flux-weighted Maxwell-Boltzmann law
+
+
+class SpeedDist(str, enum.Enum):
+    flux = "flux"  # flux-weighted MB, f ~ v^3 exp(-v^2/2s^2): particles crossing a plane (exact for an inlet)
+    maxwell = "maxwell"  # MB f ~ v^2 exp(-v^2/2s^2) (thesis 3.2, its choice also for re-injection)
+    mean = "mean"  # every particle at v̄
+
+
+class Settings(BaseModel):
+    """Knudsen (free-molecular) diffusion: point particles, exact voxel flights, diffuse or specular walls."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False)
+
+    setup: Setup = Field(Setup.transmission, description="transmission, wicke_kallenbach or msd")
+    axes: list[Axis] = Field(
+        default_factory=lambda: [Axis.z], description="transport axes (one result file each)"
+    )
+    resolutions_um: list[float] = Field(
+        default_factory=list, description="resolutions to run (subset of the scene's); empty = all"
+    )
+    wall_law: WallLaw = Field(WallLaw.lambert, description="diffuse law at a wall (or specular)")
+    accommodation: float = Field(
+        1.0, ge=0.0, le=1.0, description="Maxwell mixture: fraction of diffuse hits (1 = fully diffuse)"
+    )
+    wall_speed: WallSpeed = Field(WallSpeed.kept, description="speed after a wall hit: kept or thermal")
+    inlet_law: InletLaw = Field(InletLaw.lambert, description="direction law of entering particles")
+    inlet_speed: SpeedDist = Field(SpeedDist.flux, description="speed law of entering particles")
+    initial_speed: SpeedDist = Field(
+        SpeedDist.maxwell, description="speed law of particles placed in the pore space (msd)"
+    )
+    species: str = Field("N2", description="gas (thesis Table 3.1 name, or 'butene' of §4.2.3)")
+    temperature_K: float = Field(298.15, gt=0, description="gas and wall temperature in K")
+    target_rel_error: float = Field(
+        0.01, gt=0, description="stop when the relative 1-σ error of W / D is below"
+    )
+    max_wall_hits: int = Field(10**9, ge=1, description="stop after this many wall hits in total")
+    max_rounds: int = Field(200, ge=1, description="stop after this many rounds")
+    batches: int = Field(32, ge=2, description="independent particle streams (batches) per round")
+    batch_particles: int = Field(256, ge=1, description="particles per batch and round")
+    max_hits_per_particle: int = Field(
+        10**7, ge=1, description="a particle is dropped (counted as truncated) after this many hits"
+    )
+    wk_time_jiffies: float = Field(
+        0.0, ge=0, description="Wicke-Kallenbach lifetime per particle; 0 = 20 L^2 / (v̄ d)"
+    )
+    msd_time_jiffies: float = Field(0.0, ge=0, description="msd flight time per particle; 0 = 50 box lengths")
+    msd_samples: int = Field(20, ge=4, description="sample times of the msd curve")
+    profile_bins: int = Field(32, ge=0, description="axial bins of the concentration profile (0 = off)")
+    hit_map_bins: int = Field(0, ge=0, description="bins per side of the wall-hit map per face (0 = off)")
+    orientation_bins: int = Field(
+        0,
+        ge=0,
+        description="bins of cos(angle to the axis) in the flight-orientation histogram "
+        "(azimuth gets 2x as many); 0 = off",
+    )
+
+    @field_validator("species")
+    @classmethod
+    def _known(cls, value):
+        from porepipe.diffusion._species import SPECIES
+
+        if value not in SPECIES:
+            raise ValueError(f"unknown species {value!r}; allowed: {', '.join(SPECIES)}")
+        return value
+
+    @field_validator("axes")
+    @classmethod
+    def _some(cls, value):
+        if not value or len(set(value)) != len(value):
+            raise ValueError(f"axes must be a non-empty list of distinct x/y/z, got {value}")
+        return value

@@ -1,0 +1,102 @@
+"""Hard cases of the Knudsen engine: degenerate geometry, bad input, no NaN."""
+
+import math
+
+import numpy as np
+import pytest
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.diffusion import Settings, equilibrium, prepare, square_capillary, transport
+from porepipe.scene import SceneError, parse_scene
+
+S = Settings(batches=16, batch_particles=500, max_rounds=1)
+
+
+def _finite(values):
+    return all(math.isfinite(v) for v in values.values() if isinstance(v, float))
+
+
+def test_one_voxel_channel_equals_the_scaled_square_channel():
+    """A 1 x 1 x 10 channel is the a = 30, L = 300 square channel scaled by 1/30: W = 0.119 (digest table)."""
+    r = transport(np.ones((1, 1, 10), np.uint8), 2, S, seed=1)
+    assert abs(r.values["W"] - 0.119) <= 3 * math.hypot(r.values["W_err"], 0.0005)
+    assert r.values["mean_free_flight"] > 0 and _finite(r.values)
+
+
+def test_partly_blocked_inlet_starts_only_in_open_pixels():
+    """Only one inlet pixel is open and it leads straight to the outlet through a 1-voxel duct: no particle may
+    start in the solid, so every flight history stays in that duct (four walls + two ends)."""
+    pore = np.zeros((5, 5, 12), np.uint8)
+    pore[2, 2, :] = 1
+    r = transport(pore, 2, S, seed=2)
+    geom = prepare(pore, axis=2)
+    assert np.all(geom.codes[tuple(geom.cells(0).T)] > 0)
+    assert abs(r.values["W"] - transport(np.ones((1, 1, 12), np.uint8), 2, S, seed=2).values["W"]) < 1e-12
+
+
+def test_closed_pores_are_dropped_and_reported():
+    pore = square_capillary(6, 20).pore.copy()
+    pore[:, :, 10] = 0
+    pore[2:4, 2:4, 10] = 1  # a throat keeps the path
+    pore[0, 0, 3] = 0
+    with_bubble = np.pad(pore, ((0, 3), (0, 0), (0, 0)))
+    with_bubble[7, 2, 5] = 1  # an isolated bubble beside the channel
+    r = transport(with_bubble, 2, S, seed=3)
+    assert r.values["accessible_porosity"] < r.values["total_porosity"]
+    assert _finite(r.values)
+
+
+@pytest.mark.parametrize(
+    "pore,match",
+    [
+        (np.zeros((4, 4, 4), np.uint8), "all solid"),
+        (
+            np.concatenate([np.ones((3, 3, 2)), np.zeros((3, 3, 1)), np.ones((3, 3, 2))], axis=2).astype(
+                np.uint8
+            ),
+            "no face-connected pore path joins the inlet face z = 0 to the outlet face z = 4",
+        ),
+    ],
+)
+def test_clear_errors(pore, match):
+    with pytest.raises(PorepipeError, match=match):
+        transport(pore, 2, S)
+
+
+def test_all_solid_equilibrium_and_bad_voxel_size():
+    with pytest.raises(PorepipeError, match="all solid"):
+        equilibrium(np.zeros((3, 3, 3), np.uint8), S)
+    with pytest.raises(PorepipeError, match="voxel_um"):
+        prepare(np.ones((3, 3, 3), np.uint8), voxel_um=(1.0, 0.0, 1.0))
+    with pytest.raises(PorepipeError, match="3-D"):
+        prepare(np.ones((3, 3), np.uint8))
+
+
+def test_grazing_cube_lattice_msd_has_no_nan():
+    """Periodic medium of cubes touching at edges (a checkerboard of solid cubes): flights graze edges and
+    corners all the time; the result is finite and the particles stay in the pore space."""
+    idx = np.indices((8, 8, 8)).sum(axis=0)
+    pore = ((idx // 2) % 2 == 0).astype(np.uint8)  # 2-voxel checkerboard blocks meet along edges
+    pore[:, :, :] |= (np.indices((8, 8, 8))[2] // 2 % 2 == 0).astype(np.uint8)
+    r = equilibrium(
+        pore, Settings(batches=8, batch_particles=100, max_rounds=1), periodic=(1, 1, 1), seed=4, t_end=200.0
+    )
+    assert _finite(r.values) and r.values["wall_hits"] > 0
+
+
+def test_scene_section_rejects_misspelt_keys_and_bad_values():
+    base = {
+        "name": "t",
+        "domain": {"size_um": [10, 10, 10]},
+        "spheres": {"inline": [[5, 5, 5, 2]]},
+        "resolutions_um": [1.0],
+        "analyses": ["segment", "diffusion"],
+    }
+    scene = parse_scene({**base, "diffusion": {"wall_law": "isotropic"}})
+    assert scene.diffusion.wall_law.value == "isotropic"
+    with pytest.raises(SceneError) as err:
+        parse_scene({**base, "diffusion": {"wal_law": "lambert", "accommodation": 2, "species": "Xe"}})
+    text = str(err.value)
+    assert (
+        "diffusion.wal_law" in text and "diffusion.accommodation" in text and "unknown species 'Xe'" in text
+    )

@@ -1,0 +1,135 @@
+"""Exact flights: the DDA with jumps against an independent sort-all-crossings reference, and the edge cases."""
+
+import numpy as np
+import pytest
+from naive_diffusion import flight_naive
+
+from porepipe.diffusion._kernels import _chessboard_codes, _fly
+
+
+def _codes(pore):
+    codes = np.empty(pore.shape, np.uint8)
+    _chessboard_codes(pore.astype(np.uint8), codes)
+    return codes
+
+
+def _check_end(codes, h, pos, idx, event):
+    """The particle ends in a pore voxel, inside its closed box, on the face of the event, facing solid."""
+    assert codes[tuple(idx)] > 0
+    lo, hi = idx * h, (idx + 1) * h
+    assert np.all(pos >= lo) and np.all(pos <= hi)
+    d, up = event >> 1, event & 1
+    assert pos[d] == (hi[d] if up else lo[d])  # exactly on the plane, no round-off
+    nb = idx.copy()
+    nb[d] += 1 if up else -1
+    assert not (0 <= nb[d] < codes.shape[d]) or codes[tuple(nb)] == 0
+
+
+@pytest.mark.parametrize("h", [(1.0, 1.0, 1.0), (1.0, 1.0, 6.1), (0.5, 1.3, 1.0)])
+def test_random_flights_match_reference_and_never_enter_solid(h):
+    rng = np.random.default_rng(42)
+    pore = (rng.random((14, 12, 16)) < 0.93).astype(np.uint8)
+    pore[3:11, 3:9, 3:13] = 1  # a big cavity, so the jumps are exercised too
+    codes = _codes(pore)
+    h = np.array(h)
+    cells = np.argwhere(codes > 0)
+    periodic = np.zeros(3, dtype=np.bool_)
+    img = np.zeros(3, dtype=np.int64)
+    n_flights = 400
+    for _ in range(n_flights):
+        idx = cells[rng.integers(len(cells))].astype(np.int64)
+        pos = (idx + rng.random(3)) * h
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        ref = flight_naive(codes, h, pos.copy(), u)
+        p, i = pos.copy(), idx.copy()
+        event, length, _ = _fly(codes, h, periodic, -1, p, i, u, img)
+        assert ref is not None
+        t_ref, ev_ref = ref
+        assert event == ev_ref
+        assert length == pytest.approx(t_ref, rel=1e-9, abs=1e-9)
+        np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
+        _check_end(codes, h, p, i, event)
+
+
+def test_many_consecutive_flights_stay_in_pore():
+    """A particle bouncing 20 000 times (new random directions into the pore) never ends outside the pore space."""
+    rng = np.random.default_rng(1)
+    pore = (rng.random((20, 20, 20)) < 0.85).astype(np.uint8)
+    codes = _codes(pore)
+    h = np.ones(3)
+    periodic = np.zeros(3, dtype=np.bool_)
+    img = np.zeros(3, dtype=np.int64)
+    idx = np.argwhere(codes > 0)[0].astype(np.int64)
+    pos = (idx + 0.5) * h
+    for _ in range(20000):
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        event, _, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
+        _check_end(codes, h, pos, idx, event)
+        # leave the wall into the pore: flip the normal component if it points into the solid
+        d, up = event >> 1, event & 1
+        nxt = rng.normal(size=3)
+        nxt[d] = -abs(nxt[d]) if up else abs(nxt[d])
+        u = nxt / np.linalg.norm(nxt)
+        event, _, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
+        _check_end(codes, h, pos, idx, event)
+
+
+def test_zero_components_fly_along_the_axis():
+    pore = np.ones((3, 3, 10), np.uint8)
+    pore[1, 1, 7] = 0
+    codes = _codes(pore)
+    h = np.ones(3)
+    per = np.zeros(3, dtype=np.bool_)
+    img = np.zeros(3, dtype=np.int64)
+    pos, idx = np.array([1.5, 1.5, 0.25]), np.array([1, 1, 0])
+    event, length, cross = _fly(codes, h, per, -1, pos, idx, np.array([0.0, 0.0, 1.0]), img)
+    assert (event, length, cross) == (5, 6.75, 6)
+    assert pos.tolist() == [1.5, 1.5, 7.0] and idx.tolist() == [1, 1, 6]
+    pos, idx = np.array([1.5, 1.5, 2.5]), np.array([1, 1, 2])
+    event, length, _ = _fly(codes, h, per, -1, pos, idx, np.array([-1.0, 0.0, 0.0]), img)
+    assert (event, length) == (0, 1.5) and pos.tolist() == [0.0, 1.5, 2.5]
+
+
+def test_edge_and_corner_hits_are_deterministic():
+    """A flight exactly through an edge / a corner: ties go to the lowest axis first (documented rule)."""
+    h = np.ones(3)
+    per = np.zeros(3, dtype=np.bool_)
+    img = np.zeros(3, dtype=np.int64)
+    pore = np.ones((3, 3, 3), np.uint8)
+    pore[2, 2, :] = 0  # solid column: the diagonal from the centre of (1, 1, z) meets its edge at (2, 2)
+    codes = _codes(pore)
+    u = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
+    pos, idx = np.array([1.5, 1.5, 1.5]), np.array([1, 1, 1])
+    event, length, _ = _fly(codes, h, per, -1, pos, idx, u, img)
+    assert event == 3 and idx.tolist() == [
+        2,
+        1,
+        1,
+    ]  # stepped x into (2,1,1), then met the y face of the column
+    np.testing.assert_allclose(pos, [2.0, 2.0, 1.5], atol=1e-12)
+    assert length == pytest.approx(np.sqrt(0.5))
+    pore = np.ones((3, 3, 3), np.uint8)
+    pore[2, 2, 2] = 0
+    codes = _codes(pore)
+    u = np.ones(3) / np.sqrt(3.0)
+    for _ in range(2):  # same input, same answer
+        pos, idx = np.array([1.5, 1.5, 1.5]), np.array([1, 1, 1])
+        event, length, _ = _fly(codes, h, per, -1, pos, idx, u, img)
+        assert event == 5 and idx.tolist() == [2, 2, 1]
+        np.testing.assert_allclose(pos, [2.0, 2.0, 2.0], atol=1e-12)
+
+
+def test_exit_and_periodic_wrap():
+    pore = np.ones((4, 4, 5), np.uint8)
+    codes = _codes(pore)
+    h = np.ones(3)
+    img = np.zeros(3, dtype=np.int64)
+    per = np.array([True, False, False])
+    u = np.array([3.0, 0.0, 4.0]) / 5.0
+    pos, idx = np.array([0.5, 2.5, 0.0]), np.array([0, 2, 0])
+    event, length, _ = _fly(codes, h, per, 2, pos, idx, u, img)
+    assert event == 7 and length == pytest.approx(5 / 0.8)
+    assert pos[2] == 5.0  # exactly on the outlet plane
+    assert img.tolist() == [1, 0, 0] and pos[0] == pytest.approx(0.25)  # x: 0.5 + 3.75 = 4.25 -> wrapped once

@@ -1,0 +1,111 @@
+"""Geometry: generators, the accessible cluster, wall area and the 1-byte distance codes against naive references."""
+
+import numpy as np
+import pytest
+from naive_diffusion import chessboard_naive, largest_spanning_naive, wall_area_naive
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.diffusion import (
+    accessible_pore,
+    closed_box,
+    constricted_capillary,
+    cylinder,
+    pocketed_capillary,
+    prepare,
+    rough_capillary,
+    slit,
+    square_capillary,
+    wall_area,
+)
+from porepipe.diffusion._kernels import _chessboard_codes
+
+
+def _random_pore(shape, p, seed):
+    return (np.random.default_rng(seed).random(shape) < p).astype(np.uint8)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_codes_equal_scipy_chessboard(seed):
+    pore = _random_pore((13, 11, 17), 0.8 + 0.04 * seed, seed)
+    codes = np.empty(pore.shape, np.uint8)
+    _chessboard_codes(pore, codes)
+    np.testing.assert_array_equal(codes, chessboard_naive(pore))
+
+
+def test_codes_saturate_at_255_and_fit_one_byte():
+    pore = np.ones((520, 3, 3), np.uint8)  # distance along x never exceeds 2 here; a long open box instead:
+    big = np.ones((600, 600, 1), np.uint8)
+    codes = np.empty(big.shape, np.uint8)
+    _chessboard_codes(big, codes)
+    assert codes.dtype == np.uint8 and codes.max() == 1  # one layer thick: every voxel touches the outside
+    codes = np.empty(pore.shape, np.uint8)
+    _chessboard_codes(pore, codes)
+    np.testing.assert_array_equal(codes, chessboard_naive(pore))
+
+
+def test_cylinder_voxels_are_the_centres_inside():
+    vol = cylinder(5.3, 7, voxel=(1.0, 0.5, 1.0))
+    n0, n1, _ = vol.pore.shape
+    assert (n0, n1) == (11, 22)
+    for i in range(n0):
+        for j in range(n1):
+            x = (i + 0.5) * 1.0 - n0 * 1.0 / 2
+            y = (j + 0.5) * 0.5 - n1 * 0.5 / 2
+            assert vol.pore[i, j, 0] == (x * x + y * y <= 5.3**2)
+    assert np.all(vol.pore == vol.pore[:, :, :1])
+
+
+def test_generators_shapes_and_porosity():
+    assert square_capillary(3, 9).pore.shape == (3, 3, 9)
+    s = slit(4, 10, depth=3)
+    assert s.pore.shape == (4, 3, 10) and s.periodic.tolist() == [False, True, False]
+    a = constricted_capillary(6, 36, 2, 4)
+    full = cylinder(6, 36).pore
+    assert a.pore.sum() < full.sum() and a.pore[:, :, 0].sum() == full[:, :, 0].sum()
+    assert a.pore[:, :, 12].sum() == cylinder(2, 1).pore.sum()  # the throat is the r = 2 disk
+    b = pocketed_capillary(6, 30, 3, 4, n_pockets=3)
+    assert b.pore.sum() == 6 * 6 * 30 + 3 * 3 * 4 * 4
+    c = rough_capillary(8, 40, 0.3, seed=1)
+    frac = 1 - c.pore.sum() / c.pore.size
+    assert 0.3 * 28 / 64 - 0.05 < frac < 0.3 * 28 / 64 + 0.05  # 28 of 64 cells per layer are wall cells
+    assert closed_box((2, 3, 4)).pore.sum() == 24
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_accessible_cluster_equals_bfs(seed):
+    pore = _random_pore((9, 8, 12), 0.62, seed)
+    ref = largest_spanning_naive(pore, 2)
+    if ref is None:
+        with pytest.raises(PorepipeError, match="no face-connected pore path"):
+            accessible_pore(pore, 2)
+    else:
+        np.testing.assert_array_equal(accessible_pore(pore, 2).astype(bool), ref)
+
+
+def test_accessible_vs_total_porosity():
+    pore = np.zeros((5, 5, 6), np.uint8)
+    pore[2, 2, :] = 1  # the channel
+    pore[0, 0, 1:3] = 1  # a closed bubble: counts in the total, not in the accessible porosity
+    g = prepare(pore, 1.0, axis=2)
+    assert g.total_porosity == pytest.approx(8 / 150, rel=1e-12)
+    assert g.accessible_porosity == pytest.approx(6 / 150, rel=1e-12)
+
+
+def test_errors_all_solid_and_no_path():
+    with pytest.raises(PorepipeError, match="all solid"):
+        prepare(np.zeros((3, 3, 3), np.uint8))
+    pore = np.ones((4, 4, 6), np.uint8)
+    pore[:, :, 3] = 0
+    with pytest.raises(PorepipeError, match=r"no face-connected pore path joins the inlet face z = 0"):
+        prepare(pore, axis=2)
+    with pytest.raises(PorepipeError, match="x = 0"):
+        prepare(np.transpose(pore, (2, 1, 0)), axis=0)
+
+
+@pytest.mark.parametrize("periodic,open_axis", [((0, 0, 0), None), ((0, 1, 0), 2), ((1, 1, 0), None)])
+def test_wall_area_equals_face_count(periodic, open_axis):
+    pore = _random_pore((6, 7, 5), 0.6, 3)
+    h = (1.0, 0.5, 2.0)
+    assert wall_area(pore, h, periodic, open_axis) == pytest.approx(
+        wall_area_naive(pore, h, periodic, open_axis)
+    )

@@ -1,0 +1,105 @@
+"""The stage's file door: binary volume in, xarray-readable result out; units; thread-count independence;
+checkpoint/resume; the CLI."""
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from porepipe._shared.numba_config import set_threads
+from porepipe._shared.store import ResultWriter, read_attrs
+from porepipe.cli import main as cli_main
+from porepipe.diffusion import Settings, mean_speed, square_capillary, transport
+from porepipe.diffusion._run import run
+from porepipe.diffusion._species import jiffie_s
+
+SMALL = Settings(batches=8, batch_particles=100, max_rounds=2, target_rel_error=1e-6)
+
+
+def _binary(path, pore, voxel_um=0.01, periodic=(0, 0, 0)):
+    with ResultWriter(path, stage="segment", scene="t", scene_hash="abc") as w:
+        w.write_volume("pore", pore, voxel_um=voxel_um, periodic=periodic)
+    return path
+
+
+def test_thesis_units():
+    """Digest §13.1: v̄(N2, 298 K) = 474.7 m/s; with 10 nm voxels one jiffie is 21.07 ps."""
+    v = mean_speed("N2", 298.0)
+    # the digest's 474.7 uses M = 28.0 g/mol; with 28.013 g/mol v̄ is sqrt(28/28.013) = 0.99977 times that
+    assert v == pytest.approx(474.7 * math.sqrt(28.0 / 28.013), abs=0.01)
+    assert jiffie_s(10e-9, v) == pytest.approx(21.07e-12, rel=5e-4)
+
+
+def test_run_writes_readable_result_with_cost(tmp_path):
+    binary = _binary(tmp_path / "binary_a0.01.h5", square_capillary(6, 30).pore)
+    out = run(SMALL, binary, tmp_path / "d.h5", "z", seed=3, scene="t", threads=1)
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    attrs = read_attrs(out)
+    for key in ("wall_s", "cpu_s", "peak_mb", "threads", "scene_hash"):
+        assert key in attrs
+    assert attrs["stage"] == "diffusion" and attrs["axis"] == "z"
+    w = float(ds["W"])
+    assert 0 < w < 1 and float(ds["W_err"]) > 0
+    # D = v̄ L W / 4 with L = 30 voxels of 10 nm and v̄ of N2 at the default 298.15 K
+    vbar = mean_speed("N2", 298.15)
+    assert float(ds["D_m2_s"]) == pytest.approx(vbar * 30 * 0.01e-6 * w / 4, rel=1e-12)
+    assert ds["concentration"].dims == ("axial_bin",)
+    assert "tortuosity" in ds and "definitions" in ds.attrs
+    assert all(math.isfinite(float(ds[k])) for k in ds.data_vars if ds[k].ndim == 0)
+    assert not (tmp_path / ".d.h5.checkpoint.npz").exists()
+
+
+def test_same_numbers_for_one_and_two_threads():
+    pore = square_capillary(5, 40).pore
+    rows = []
+    for threads in (1, 2):
+        set_threads(threads)
+        rows.append(transport(pore, 2, SMALL, seed=9).tallies.rows)
+    set_threads(None)
+    np.testing.assert_array_equal(rows[0], rows[1])
+
+
+def test_checkpoint_resume_gives_the_same_numbers(tmp_path):
+    pore = square_capillary(5, 40).pore
+    ck = tmp_path / "ck.npz"
+    full = transport(pore, 2, SMALL.model_copy(update={"max_rounds": 3}), seed=4).tallies.rows
+    transport(
+        pore, 2, SMALL.model_copy(update={"max_rounds": 3}), seed=4, checkpoint=ck
+    )  # writes ck per round
+    # pretend the run was killed after round 1: keep only that much, then resume to 3 rounds
+    z = dict(np.load(ck))
+    z["rows"], z["rounds"] = z["rows"][:8], np.array(1)
+    np.savez(ck, **z)
+    resumed = transport(
+        pore, 2, SMALL.model_copy(update={"max_rounds": 3}), seed=4, checkpoint=ck
+    ).tallies.rows
+    np.testing.assert_array_equal(full, resumed)
+    # a checkpoint of another input (other seed) is discarded, not mixed in
+    other = transport(pore, 2, SMALL.model_copy(update={"max_rounds": 3}), seed=5, checkpoint=ck).tallies
+    assert other.rounds == 3 and not np.array_equal(other.rows, full)
+
+
+def test_cli_end_to_end_and_bad_input(tmp_path, capsys):
+    binary = _binary(tmp_path / "binary_a1.h5", square_capillary(4, 20).pore, voxel_um=1.0)
+    args = "--axis z --batches 4 --batch-particles 200 --max-rounds 1 --wall-law isotropic --threads 1"
+    rc = cli_main(["diffusion", str(binary), *args.split(), "--hit-map-bins", "4", "--orientation-bins", "3"])
+    assert rc == 0
+    out = tmp_path / "diffusion_a1_z.h5"
+    assert out.is_file() and "W = " in capsys.readouterr().out
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    assert ds.attrs["settings"].count("isotropic") == 1
+    # every wall hit is on a lateral face (a straight channel has no wall normal to z); the four lateral faces
+    # share them alike (4 σ of a multinomial count); every flight is in the orientation histogram
+    per_face = ds["hit_map"].sum(dim=("map_a", "map_b")).values
+    assert per_face.sum() == int(ds["wall_hits"]) and per_face[4] == per_face[5] == 0
+    mean = per_face[:4].mean()
+    assert np.all(np.abs(per_face[:4] - mean) < 4 * np.sqrt(mean))
+    assert int(ds["orientation"].sum()) == int(ds["flights"])
+    solid = _binary(tmp_path / "solid_a1.h5", np.zeros((3, 3, 3), np.uint8))
+    rc = cli_main(["diffusion", str(solid), "-o", str(tmp_path / "x.h5")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "all solid" in err[0]
+    assert not list(tmp_path.glob("x.h5*")) and not list(tmp_path.glob(".x.h5*"))
+    rc = cli_main(["diffusion", str(binary), "--accommodation", "1.5", "-o", str(tmp_path / "y.h5")])
+    assert rc == 2 and "accommodation" in capsys.readouterr().err
