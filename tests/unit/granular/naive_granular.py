@@ -61,3 +61,21 @@ def overlap(p, q):
         return 0.0, cross
     x, y = h[:, 0], h[:, 1]
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)), cross
+
+
+def square(a):
+    h = 0.5 * a
+    return [(-h, -h), (h, -h), (h, h), (-h, h)]
+
+
+def simulation(particles, walls=(), **settings):
+    """A Simulation of explicitly given particles and walls (no gravity unless given)."""
+    from porepipe.granular import Settings, Simulation
+
+    settings.setdefault("gravity_m_s2", (0.0, 0.0))
+    s = Settings.model_validate(dict(particles=list(particles), walls=list(walls), **settings))
+    return Simulation(s, seed=0)
+
+
+def floor(width=1.0, top=0.0, depth=0.1):
+    return {"name": "floor", "vertices_m": [(-width, top - depth), (width, top - depth), (width, top), (-width, top)]}
