@@ -160,6 +160,8 @@ class Simulation:
             self.gpar = np.array([_GKIND[g.kind], g.g1_m_s2, g.g2_m_s2, g.time_s[0], g.time_s[1], g.steps, g.ramp])
         else:
             self.gpar = np.zeros(7)
+        g0 = self.gvec * (K._gravity_scale(self.gpar, 0.0) if s.gravity is not None else 1.0)
+        self.G[2, :n, :2] = 0.5 * self.dt**2 * g0  # r_2 = dt^2/2 q'' at t = 0 (no contact forces yet)
         self.drag_par = np.zeros((len(s.drag_springs), 10))
         for k, d in enumerate(s.drag_springs):
             if d.particle >= n:
