@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numba
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
@@ -38,6 +39,8 @@ from porepipe.granular._settings import DropMode, GravityKind, Integrator, Setti
 from porepipe.granular._shapes import check_convex, inscribed_radius
 from porepipe.granular._system import collect_bodies, particle_properties, wall_polygons
 
+#: fewest particles per thread worth a parallel region
+PARTICLES_PER_THREAD = 1000
 _WAVE = {Waveform.cosinus: 1, Waveform.sawtooth: 2, Waveform.tapping: 3, Waveform.triangle: 4}
 _GKIND = {GravityKind.constant: 0, GravityKind.linear: 1, GravityKind.step: 2, GravityKind.smooth_step: 3}
 
@@ -272,6 +275,16 @@ class Simulation:
             The stability guard fired (overlap explosion, runaway speed, NaN); the message gives the dt to try.
         """
         end = self.step + int(steps)
+        # a parallel region costs ~10 us (much more on a loaded machine): small systems run on one thread (the
+        # result does not depend on the thread count)
+        threads = numba.get_num_threads()
+        numba.set_num_threads(max(1, min(threads, self.n_mob // PARTICLES_PER_THREAD)))
+        try:
+            self._advance(end)
+        finally:
+            numba.set_num_threads(threads)
+
+    def _advance(self, end: int) -> None:
         while self.step < end:
             if self._insert_due():
                 self._place_all()

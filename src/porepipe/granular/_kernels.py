@@ -267,7 +267,8 @@ def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, v
                         if WEAK:
                             cap *= max(abs(vt), vmin) ** -0.1
                         spring = ft[p] + kt * vt * dt
-                        f_t = spring + gam_t * math.sqrt(kt * m_t) * vt
+                        dtan = gam_t * math.sqrt(kt * m_t) * vt
+                        f_t = spring + dtan
                         if abs(f_t) > cap:
                             f_t = math.copysign(cap, f_t)
                             spring = f_t
