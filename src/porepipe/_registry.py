@@ -22,6 +22,7 @@ STAGES: list[tuple[str, str | None]] = [
     ("porepipe.lbm", "permeability"),
     ("porepipe.sweep", "sweep"),
     ("porepipe.report", "report"),
+    ("porepipe.granular", "granular"),
 ]
 
 #: scene sections whose presence switches a stage on (default: absent); all others default to their Settings()

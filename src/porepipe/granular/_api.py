@@ -196,6 +196,7 @@ class Simulation:
         self.nb_j = np.zeros(0, np.int64)
         self.ft = np.zeros(0)
         self.aold = np.zeros(0)
+        self.pout = np.zeros((0, len(K.POUT)))
         self.rebuild()
 
     # -- set-up helpers ------------------------------------------------------------------------------------------
@@ -235,11 +236,10 @@ class Simulation:
         x = np.ascontiguousarray(self.G[0, :n, :2])
         start, nb_j = candidate_pairs(self.method, x, self.r_circ, self.active[:n], self.skin, self.wall_boxes(),
                                       n, self.order)
-        ft, aold = np.zeros(len(nb_j)), np.zeros(len(nb_j))
-        _carry_state(self.nb_start, self.nb_j, self.ft, self.aold, start, nb_j, ft, aold)
-        self.nb_start, self.nb_j, self.ft, self.aold = start, nb_j, ft, aold
+        ft, aold, pout = np.zeros(len(nb_j)), np.zeros(len(nb_j)), np.zeros((len(nb_j), len(K.POUT)))
+        _carry_state(self.nb_start, self.nb_j, self.ft, self.aold, self.pout, start, nb_j, ft, aold, pout)
+        self.nb_start, self.nb_j, self.ft, self.aold, self.pout = start, nb_j, ft, aold, pout
         self.tr_start, self.tr_p = _transpose(n, start, nb_j)
-        self.pout = np.zeros((len(nb_j), len(K.POUT)))
         self.x_build = x.copy()
         self.scratch = np.zeros((n, 6))
         self.rebuilds += 1
@@ -309,6 +309,9 @@ class Simulation:
         what = {K.GUARD_OVERLAP: f"overlap area {diag[2]:.3g} r_eq² (limit {self.mat[6]:g})",
                 K.GUARD_NAN: "a non-finite position or velocity",
                 K.GUARD_MOVE: f"a displacement of {diag[2]:.3g} m in one step (limit {self.mat[7]:.3g} m)"}[code]
+        if self.step <= 1:
+            raise PorepipeError(f"granular: particle {int(diag[1])} starts with {what}: the initial placement "
+                                "overlaps (widen the block's grid_m or move the particle)")
         raise PorepipeError(
             f"granular: unstable at step {self.step} (t = {self.time_s:.6g} s): particle {int(diag[1])} shows "
             f"{what}; dt = {self.dt:.3g} s vs the rule (pi/10) sqrt(m_min/E) = {self.dt_rule:.3g} s "

@@ -190,8 +190,9 @@ def _transpose(n_mob, start, nb_j):
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _carry_state(old_start, old_j, old_ft, old_a, new_start, new_j, new_ft, new_a):
-    """Copy every surviving pair's (spring, previous overlap) from the old list to the new one (sorted merge)."""
+def _carry_state(old_start, old_j, old_ft, old_a, old_out, new_start, new_j, new_ft, new_a, new_out):
+    """Copy every surviving pair's (spring, previous overlap, last forces) from the old list to the new one
+    (a sorted merge per particle)."""
     for i in prange(new_start.shape[0] - 1):
         a = old_start[i]
         ae = old_start[i + 1]
@@ -202,9 +203,13 @@ def _carry_state(old_start, old_j, old_ft, old_a, new_start, new_j, new_ft, new_
             if a < ae and old_j[a] == j:
                 new_ft[p] = old_ft[a]
                 new_a[p] = old_a[a]
+                for c in range(new_out.shape[1]):
+                    new_out[p, c] = old_out[a, c]
             else:
                 new_ft[p] = 0.0
                 new_a[p] = 0.0
+                for c in range(new_out.shape[1]):
+                    new_out[p, c] = 0.0
 
 
 def _csr_from_pairs(n, pi, pj):

@@ -55,10 +55,13 @@ def test_state_is_carried_over_by_pair():
     old_j = np.array([1, 2, 2])
     new_start = np.array([0, 1, 3, 3])
     new_j = np.array([2, 2, 5])
-    ft, aa = np.zeros(3), np.zeros(3)
-    _carry_state(old_start, old_j, np.array([1.0, 2.0, 3.0]), np.array([4.0, 5.0, 6.0]), new_start, new_j, ft, aa)
-    np.testing.assert_array_equal(ft, [2.0, 3.0, 0.0])
+    ft, aa, out = np.zeros(3), np.zeros(3), np.full((3, 2), -1.0)
+    old_out = np.arange(6.0).reshape(3, 2)
+    _carry_state(old_start, old_j, np.array([1.0, 2.0, 3.0]), np.array([4.0, 5.0, 6.0]), old_out, new_start, new_j,
+                 ft, aa, out)
+    np.testing.assert_array_equal(ft, [2.0, 3.0, 0.0])  # pair (0, 2) was old pair 1, (1, 2) old pair 2, (1, 5) new
     np.testing.assert_array_equal(aa, [5.0, 6.0, 0.0])
+    np.testing.assert_array_equal(out, [[2.0, 3.0], [4.0, 5.0], [0.0, 0.0]])
 
 
 def _pile(method, threads):
