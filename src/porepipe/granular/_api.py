@@ -309,7 +309,7 @@ class Simulation:
         what = {K.GUARD_OVERLAP: f"overlap area {diag[2]:.3g} r_eq² (limit {self.mat[6]:g})",
                 K.GUARD_NAN: "a non-finite position or velocity",
                 K.GUARD_MOVE: f"a displacement of {diag[2]:.3g} m in one step (limit {self.mat[7]:.3g} m)"}[code]
-        if self.step <= 1:
+        if self.step <= 1 and code == K.GUARD_OVERLAP:
             raise PorepipeError(f"granular: particle {int(diag[1])} starts with {what}: the initial placement "
                                 "overlaps (widen the block's grid_m or move the particle)")
         raise PorepipeError(
