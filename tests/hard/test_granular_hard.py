@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "granular"))
-from naive_granular import floor, simulation, square  # noqa: E402
+from naive_granular import floor, simulation, square
 
-from porepipe._shared.errors import PorepipeError  # noqa: E402
-from porepipe.granular import Settings, Simulation  # noqa: E402
-from porepipe.scene import SceneError, parse_scene  # noqa: E402
+from porepipe._shared.errors import PorepipeError
+from porepipe.granular import Settings, Simulation
+from porepipe.scene import SceneError, parse_scene
 
 SOFT = {"young_N_m": 1e6, "density_kg_m2": 1000.0}
 

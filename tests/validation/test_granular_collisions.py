@@ -12,9 +12,9 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "granular"))
-from naive_granular import floor, simulation, square  # noqa: E402
+from naive_granular import floor, simulation, square
 
-from porepipe.granular import regular_polygon  # noqa: E402
+from porepipe.granular import regular_polygon
 
 R = 0.005
 ELASTIC = {"young_N_m": 1e7, "density_kg_m2": 5000.0, "damping": 0.0, "friction": 0.0}

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "granular"))
-from naive_granular import floor, simulation  # noqa: E402
+from naive_granular import floor, simulation
 
-from porepipe.granular import rectangle, regular_polygon  # noqa: E402
+from porepipe.granular import rectangle, regular_polygon
 
 G = 9.81
 E = 1e7  # the thesis's particle modulus (§4.3.3)

@@ -67,7 +67,8 @@ def polygon_overlap(p, q):
     tag_a, tag_b = np.empty(kmax, np.int64), np.empty(kmax, np.int64)
     geo = np.empty(11)
     cp, cq = p.mean(axis=0), q.mean(axis=0)
-    _overlap_geometry(p, len(p), q, len(q), cp[0], cp[1], cq[0], cq[1], buf_a, tag_a, buf_b, tag_b, geo)
+    _overlap_geometry(p, len(p), q, len(q), cp[0], cp[1], cq[0], cq[1], buf_a, tag_a, buf_b, tag_b,
+                      np.empty(kmax), geo)
     out = {"area_m2": float(geo[0]), "centroid_m": geo[7:9].copy(), "point_m": geo[5:7].copy()}
     if geo[0] <= 0:
         return out | {"c1_m": np.full(2, np.nan), "c2_m": np.full(2, np.nan), "normal": np.full(2, np.nan),
@@ -112,8 +113,9 @@ class Simulation:
         bodies = collect_bodies(s, seed)
         props = particle_properties(bodies.vertices, s.material.density_kg_m2)
         walls = wall_polygons(s)
-        wall_props = [dict(centroid_m=v.mean(axis=0), vertices_m=check_convex(v, f"granular wall {name!r}")
-                           - v.mean(axis=0)) for name, v, _ in walls]
+        wall_props = [{"centroid_m": v.mean(axis=0),
+                       "vertices_m": check_convex(v, f"granular wall {name!r}") - v.mean(axis=0)}
+                      for name, v, _ in walls]
         n, nw = len(props), len(walls)
         if n == 0:
             raise PorepipeError("granular: the scene has no particles (give particles, blocks or drop_sources)")
@@ -182,7 +184,8 @@ class Simulation:
             "drag_springs": len(s.drag_springs) > 0,
             "surface_velocity": bool((self.surf != 0).any()),
         }
-        self._stepper = K.make_stepper(s.integrator is Integrator.gear, *self.effects.values())
+        self._stepper = K.make_stepper(*self.effects.values())
+        self.gear = s.integrator is Integrator.gear
         self.method = s.neighbour_search.value
         self.order = np.arange(n, dtype=np.int64)
         self.time_s = 0.0
@@ -264,7 +267,7 @@ class Simulation:
         pending = self.insert_s[self.active[: self.n_mob] == 0]
         if pending.size == 0:
             return 1 << 62
-        return max(int(math.ceil(pending.min() / self.dt - 0.5)), self.step + 1)
+        return max(math.ceil(pending.min() / self.dt - 0.5), self.step + 1)
 
     def advance(self, steps: int) -> None:
         """Advance by ``steps`` time steps (inserting particles and rebuilding the list as needed).
@@ -295,7 +298,8 @@ class Simulation:
                 self.G, self.body, self.nc, self.wv, self.aabb, self.inv_m, self.inv_I, self.inv_r, self.area,
                 self.active, self.n_mob, self.wall_base, self.wall_vib, self.surf, self.nb_start, self.nb_j,
                 self.tr_start, self.tr_p, self.ft, self.aold, self.pout, self.x_build, self.scratch, self.mat,
-                self.gvec, self.gpar, self.drag_par, self.time_s, self.dt, stop - self.step, 0.5 * self.skin, diag)
+                self.gvec, self.gpar, self.drag_par, self.time_s, self.dt, stop - self.step, 0.5 * self.skin, self.gear,
+                diag)
             self.step += int(done)
             self.time_s = self.step * self.dt
             self.max_overlap_seen = max(self.max_overlap_seen, diag[3])

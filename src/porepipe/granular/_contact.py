@@ -24,7 +24,7 @@ def _cross(ax, ay, bx, by):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b):
+def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b, side):
     """Clip convex P (CCW, n_p corners) by convex Q (CCW); the result (count returned) is in buf_a / tag_a.
 
     The clip starts at the edge of Q that faces P's centroid (cpx, cpy), so that the working polygon shrinks to
@@ -41,8 +41,8 @@ def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_
         k1 = k + 1 if k + 1 < n_q else 0
         ex = Q[k1, 0] - Q[k, 0]
         ey = Q[k1, 1] - Q[k, 1]
-        d = ey * (cpx - cqx) - ex * (cpy - cqy)  # outward normal (ey, -ex) dot (cP - cQ), not normalised
-        d /= math.sqrt(ex * ex + ey * ey)
+        d = ey * (cpx - cqx) - ex * (cpy - cqy)  # outward normal (ey, -ex) . (cP - cQ), times |e|
+        d = d * abs(d) / (ex * ex + ey * ey)  # sign(d) d^2/|e|^2: ranks like the normalised distance, no sqrt
         if d > best:
             best = d
             k0 = k
@@ -56,15 +56,22 @@ def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_
         qy = Q[k, 1]
         ex = Q[k1, 0] - qx
         ey = Q[k1, 1] - qy
+        lo = 0.0
+        for v in range(m):
+            dv = _cross(ex, ey, src[v, 0] - qx, src[v, 1] - qy)
+            side[v] = dv
+            lo = min(lo, dv)
+        if lo >= 0.0:
+            continue  # the whole working polygon is inside this edge: nothing to clip, nothing to copy
         out = 0
         ax = src[m - 1, 0]
         ay = src[m - 1, 1]
         ta = stag[m - 1]
-        da = _cross(ex, ey, ax - qx, ay - qy)
+        da = side[m - 1]
         for v in range(m):
             bx = src[v, 0]
             by = src[v, 1]
-            db = _cross(ex, ey, bx - qx, by - qy)
+            db = side[v]
             if da >= 0.0:
                 dst[out, 0] = ax
                 dst[out, 1] = ay
@@ -99,7 +106,7 @@ def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _overlap_geometry(P, n_p, Q, n_q, cpx, cpy, cqx, cqy, buf_a, tag_a, buf_b, tag_b, out):
+def _overlap_geometry(P, n_p, Q, n_q, cpx, cpy, cqx, cqy, buf_a, tag_a, buf_b, tag_b, side, out):
     """Overlap of convex polygons P and Q: fills out = (A, c1x, c1y, c2x, c2y, sx, sy, gx, gy, ok_line, m).
 
     A is the overlap area (0 if they do not overlap), c1/c2 the two boundary crossings that are farthest apart,
@@ -107,7 +114,7 @@ def _overlap_geometry(P, n_p, Q, n_q, cpx, cpy, cqx, cqy, buf_a, tag_a, buf_b, t
     (two crossings, not coincident) and 0 otherwise (one polygon inside the other, coincident polygons);
     out[10] = number of corners of the overlap polygon (left in buf_a).
     """
-    m = _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b)
+    m = _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b, side)
     for k in range(11):
         out[k] = 0.0
     if m < 3:

@@ -105,14 +105,15 @@ def _gravity_scale(gp, t):
 _STEPPERS: dict = {}
 
 
-def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, variable_gravity: bool,
-                 drag: bool, surface_velocity: bool):
+def make_stepper(cohesion: bool, weakening: bool, vibration: bool, variable_gravity: bool, drag: bool,
+                 surface_velocity: bool):
     """Return the step-loop kernel compiled with exactly the requested effects (closure constants).
+
+    The integrator (Gear or velocity Verlet) is a run-time argument ``gear`` of the kernel: it is not an effect,
+    and its branch per particle costs nothing next to the contacts.
 
     Parameters
     ----------
-    gear : bool
-        Gear 6-value predictor-corrector (App. F) if True, else velocity Verlet.
     cohesion : bool
         Cohesive force k_coh x contact-line length (Eq. 2.28).
     weakening : bool
@@ -131,16 +132,16 @@ def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, v
     callable
         ``_steps(...) -> (steps_done, code)``; see :func:`porepipe.granular._api.Simulation` for its arguments.
     """
-    key = (bool(gear), bool(cohesion), bool(weakening), bool(vibration), bool(variable_gravity), bool(drag),
+    key = (bool(cohesion), bool(weakening), bool(vibration), bool(variable_gravity), bool(drag),
            bool(surface_velocity))
     if key in _STEPPERS:
         return _STEPPERS[key]
-    GEAR, COH, WEAK, VIB, VARG, DRAG, SURF = key
+    COH, WEAK, VIB, VARG, DRAG, SURF = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
     def _steps(G, body, nc, wv, aabb, inv_m, inv_I, inv_r, area, active, n_mob, wall_base, wall_vib, surf,
                nb_start, nb_j, tr_start, tr_p, ft, aold, pout, x_build, scratch, mat, gvec, gpar, drag_par,
-               t0, dt, nsteps, skin_half, diag):
+               t0, dt, nsteps, skin_half, gear, diag):
         n_body = nc.shape[0]
         E = mat[0]
         gam = mat[1]
@@ -168,7 +169,7 @@ def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, v
             for i in prange(n_mob):
                 if active[i] == 0:
                     continue
-                if GEAR:
+                if gear:
                     for d in range(3):
                         r0 = G[0, i, d]
                         r1 = G[1, i, d]
@@ -206,6 +207,7 @@ def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, v
                 buf_b = np.empty((2 * kmax + 4, 2))
                 tag_a = np.empty(2 * kmax + 4, np.int64)
                 tag_b = np.empty(2 * kmax + 4, np.int64)
+                side = np.empty(2 * kmax + 4)
                 geo = np.empty(11)
                 for i in range(blk * BLOCK, min((blk + 1) * BLOCK, n_mob)):
                     for p in range(nb_start[i], nb_start[i + 1]):
@@ -222,7 +224,7 @@ def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, v
                         xj = G[0, j, 0]
                         yj = G[0, j, 1]
                         _overlap_geometry(wv[i], nc[i], wv[j], nc[j], xi, yi, xj, yj, buf_a, tag_a, buf_b, tag_b,
-                                          geo)
+                                          side, geo)
                         A = geo[0]
                         if A <= 0.0:
                             ft[p] = 0.0
@@ -287,8 +289,7 @@ def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, v
                         pout[p, 8] = A
                         pout[p, 9] = L
                         ov = A * max(inv_r[i], inv_r[j]) ** 2  # overlap relative to the smaller particle
-                        if ov > scratch[i, 4]:
-                            scratch[i, 4] = ov
+                        scratch[i, 4] = max(scratch[i, 4], ov)
             # 3. forces on each particle (fixed summation order: own pairs, then pairs where it is j), corrector
             if DRAG:
                 for s in range(drag_par.shape[0]):
@@ -325,7 +326,7 @@ def make_stepper(gear: bool, cohesion: bool, weakening: bool, vibration: bool, v
                 acc2 = half_dt2 * tq * inv_I[i]
                 for d in range(3):
                     a = acc0 if d == 0 else (acc1 if d == 1 else acc2)
-                    if GEAR:
+                    if gear:
                         corr = a - G[2, i, d]
                         G[0, i, d] += G0 * corr
                         G[1, i, d] += G1 * corr

@@ -117,7 +117,7 @@ def run(settings: Settings, out, *, seed: int = 0, scene: str = "", threads: int
 def _simulate(settings, seed, checkpoint, resume, progress, key):
     """Step the simulation to the end, collecting frames and time series; checkpoint on the way."""
     sim = Simulation(settings, seed)
-    total = int(round(settings.duration_s / sim.dt))
+    total = round(settings.duration_s / sim.dt)
     frame_steps = np.unique(np.round(np.linspace(0, total, settings.output.frames + 1)).astype(np.int64))
     frames: list[Frame] = []
     series: list[tuple] = []

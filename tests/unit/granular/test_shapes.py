@@ -7,7 +7,14 @@ import pytest
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.granular import check_convex, ellipse_polygon, polygon_properties, rectangle, regular_polygon
-from porepipe.granular._shapes import AngleMode, Dist, corner_numbers, draw, inscribed_radius, truncated_unit_gauss
+from porepipe.granular._shapes import (
+    AngleMode,
+    Dist,
+    corner_numbers,
+    draw,
+    inscribed_radius,
+    truncated_unit_gauss,
+)
 
 
 @pytest.mark.parametrize(("a", "b"), [(1.0, 1.0), (0.3, 2.0), (1e-3, 5e-3)])
