@@ -39,8 +39,16 @@ TARGET = 5e6
 def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
     """n random 8-10-gons packed row by row so that neighbours overlap slightly (coordination ~ 3-4)."""
     a = 0.005
-    shape = Shape(size_m=(a, a), size_spread=spread, size_dist="EQUAL", corners=9, corners_spread=1,
-                  corners_dist="EQUAL", angle_mode="RAND1", orientation_dist="EQUAL")
+    shape = Shape(
+        size_m=(a, a),
+        size_spread=spread,
+        size_dist="EQUAL",
+        corners=9,
+        corners_spread=1,
+        corners_dist="EQUAL",
+        angle_mode="RAND1",
+        orientation_dist="EQUAL",
+    )
     outlines, phis = generate_shapes(shape, n, np.random.default_rng(seed))
     r = np.array([math.sqrt(polygon_properties(v)["area_m2"] / math.pi) for v in outlines])
     width = 2.0 * a * math.sqrt(n) * 1.1
@@ -55,12 +63,16 @@ def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
         parts.append({"vertices_m": v.tolist(), "position_m": (x, y), "angle_rad": float(phi)})
         row_r.append(ri)
         prev_r = ri
-    return Settings.model_validate({
-        "dt_s": 2e-6, "neighbour_search": method,
-        "material": {"young_N_m": 1e7, "density_kg_m2": 5000.0, "damping": 0.5, "friction": 0.6},
-        "box": {"lower_m": (0.0, 0.0), "upper_m": (width + 2 * a, y + 4 * a)},
-        "guard": {"max_overlap": 2.0}, "particles": parts,
-    })
+    return Settings.model_validate(
+        {
+            "dt_s": 2e-6,
+            "neighbour_search": method,
+            "material": {"young_N_m": 1e7, "density_kg_m2": 5000.0, "damping": 0.5, "friction": 0.6},
+            "box": {"lower_m": (0.0, 0.0), "upper_m": (width + 2 * a, y + 4 * a)},
+            "guard": {"max_overlap": 2.0},
+            "particles": parts,
+        }
+    )
 
 
 def _time(sim: Simulation, steps: int, repeats: int) -> float:
@@ -79,8 +91,15 @@ def measure(n: int, spread: float, method: str, threads: int, warm: int, steps: 
     rate = _time(sim, steps, repeats)
     c = sim.contacts()
     coord = 2.0 * np.sum(c["j"] < sim.n_mob) / sim.n_mob
-    return {"n": sim.n_mob, "spread": spread, "method": method, "threads": threads, "rate": rate,
-            "coordination": float(coord), "rebuilds": sim.rebuilds}
+    return {
+        "n": sim.n_mob,
+        "spread": spread,
+        "method": method,
+        "threads": threads,
+        "rate": rate,
+        "coordination": float(coord),
+        "rebuilds": sim.rebuilds,
+    }
 
 
 def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
@@ -114,11 +133,16 @@ def main() -> None:
                     continue
                 r = measure(n, spread, method, threads, warm, steps, repeats)
                 rows.append(r)
-                print(f"N={r['n']:6d} I={spread:.1f} {method:6s} threads={threads}: {r['rate']:.3g} polygon-steps/s "
-                      f"(coordination {r['coordination']:.2f}, {r['rebuilds']} list builds)", flush=True)
+                print(
+                    f"N={r['n']:6d} I={spread:.1f} {method:6s} threads={threads}: {r['rate']:.3g} polygon-steps/s "
+                    f"(coordination {r['coordination']:.2f}, {r['rebuilds']} list builds)",
+                    flush=True,
+                )
     cost = effect_cost(n, warm, steps, repeats)
-    print(f"effects: bare {cost['bare']:.3g}, all compiled in {cost['all effects compiled in']:.3g} "
-          f"polygon-steps/s -> compile-time switches save {cost['ratio']:.3f}x")
+    print(
+        f"effects: bare {cost['bare']:.3g}, all compiled in {cost['all effects compiled in']:.3g} "
+        f"polygon-steps/s -> compile-time switches save {cost['ratio']:.3f}x"
+    )
     best = max(r["rate"] for r in rows)
     print("\n| case | polygon-steps/s |\n|---|---|")
     for r in rows:

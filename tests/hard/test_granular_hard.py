@@ -39,7 +39,9 @@ def test_vertex_exactly_on_an_edge_and_parallel_touching_edges():
     flat = {"vertices_m": square(0.01), "position_m": (0.05, 0.005)}
     sim = simulation([tip, flat], [floor()], dt_s=1e-6, gravity_m_s2=(0.0, -9.81), material=SOFT)
     y_tip = sim.position[0, 1] + min(v[1] for v in sim.body[0, :3])
-    assert y_tip == pytest.approx(0.0, abs=1e-15)  # the tip exactly on the floor's edge, the square flush on it
+    assert y_tip == pytest.approx(
+        0.0, abs=1e-15
+    )  # the tip exactly on the floor's edge, the square flush on it
     sim.advance(1)
     # after one step they have sunk by g dt^2/2 = 5e-12 m: overlap areas of that order, finite normals
     assert np.all(sim.contacts()["area_m2"] < 1e-13)
@@ -52,8 +54,12 @@ def test_vertex_exactly_on_an_edge_and_parallel_touching_edges():
 
 def test_needle_thin_polygon_uses_the_inscribed_radius():
     needle = [(-0.02, -1e-4), (0.02, -1e-4), (0.02, 1e-4), (-0.02, 1e-4)]
-    sim = simulation([{"vertices_m": needle, "position_m": (0.0, 0.008), "angle_rad": 0.3}], [floor()],
-                     gravity_m_s2=(0.0, -9.81), material={"young_N_m": 1e7, "density_kg_m2": 1000.0})
+    sim = simulation(
+        [{"vertices_m": needle, "position_m": (0.0, 0.008), "angle_rad": 0.3}],
+        [floor()],
+        gravity_m_s2=(0.0, -9.81),
+        material={"young_N_m": 1e7, "density_kg_m2": 1000.0},
+    )
     # Eq. 2.9 with m = pi r_in^2 rho (r_in = 0.1 mm), not the needle's mass (8x larger)
     assert sim.dt == pytest.approx(0.5 * 0.1 * math.pi * math.sqrt(math.pi * 1e-8 * 1000 / 1e7), rel=1e-12)
     touched = 0
@@ -81,8 +87,13 @@ def test_nan_velocity_is_caught():
 
 
 def test_particle_outside_every_wall_falls_freely():
-    sim = simulation([{"vertices_m": square(0.01), "position_m": (5.0, -3.0)}], [floor()], dt_s=1e-4,
-                     gravity_m_s2=(0.0, -9.81), material=SOFT)
+    sim = simulation(
+        [{"vertices_m": square(0.01), "position_m": (5.0, -3.0)}],
+        [floor()],
+        dt_s=1e-4,
+        gravity_m_s2=(0.0, -9.81),
+        material=SOFT,
+    )
     sim.advance(1000)
     _finite(sim)
     assert sim.position[0, 1] == pytest.approx(-3.0 - 0.5 * 9.81 * 0.1**2, rel=1e-12)
@@ -91,11 +102,25 @@ def test_particle_outside_every_wall_falls_freely():
 
 def test_bad_input_names_the_key():
     with pytest.raises(PorepipeError, match="granular particle 1: not a convex polygon"):
-        Simulation(Settings.model_validate({"particles": [
-            {"vertices_m": square(0.01)}, {"vertices_m": [(0, 0), (1, 0), (0.1, 0.1), (0, 1)]}]}))
+        Simulation(
+            Settings.model_validate(
+                {
+                    "particles": [
+                        {"vertices_m": square(0.01)},
+                        {"vertices_m": [(0, 0), (1, 0), (0.1, 0.1), (0, 1)]},
+                    ]
+                }
+            )
+        )
     with pytest.raises(PorepipeError, match="granular wall 'w': not a convex polygon"):
-        Simulation(Settings.model_validate({"particles": [{"vertices_m": square(0.01)}],
-                                            "walls": [{"name": "w", "vertices_m": [(0, 0), (1, 0), (1, 0)]}]}))
+        Simulation(
+            Settings.model_validate(
+                {
+                    "particles": [{"vertices_m": square(0.01)}],
+                    "walls": [{"name": "w", "vertices_m": [(0, 0), (1, 0), (1, 0)]}],
+                }
+            )
+        )
     with pytest.raises(PorepipeError, match="no particles"):
         Simulation(Settings())
     with pytest.raises(SceneError, match="granular.material.young_N_m"):

@@ -21,7 +21,11 @@ ELASTIC = {"young_N_m": 1e7, "density_kg_m2": 5000.0, "damping": 0.0, "friction"
 
 
 def _disk(x, y, u, v, n=64):
-    return {"vertices_m": [tuple(p) for p in regular_polygon(n, R)], "position_m": (x, y), "velocity_m_s": (u, v)}
+    return {
+        "vertices_m": [tuple(p) for p in regular_polygon(n, R)],
+        "position_m": (x, y),
+        "velocity_m_s": (u, v),
+    }
 
 
 def _run_until_apart(sim, max_steps=20000):
@@ -37,8 +41,11 @@ def _run_until_apart(sim, max_steps=20000):
 
 def _scatter(b_over_d, young, dt):
     b = b_over_d * 2 * R
-    sim = simulation([_disk(-R - 2e-4, 0.5 * b, 0.5, 0.0), _disk(R + 2e-4, -0.5 * b, -0.5, 0.0)], dt_s=dt,
-                     material={**ELASTIC, "young_N_m": young})
+    sim = simulation(
+        [_disk(-R - 2e-4, 0.5 * b, 0.5, 0.0), _disk(R + 2e-4, -0.5 * b, -0.5, 0.0)],
+        dt_s=dt,
+        material={**ELASTIC, "young_N_m": young},
+    )
     _run_until_apart(sim, 100000)
     return sim.velocity
 
@@ -64,9 +71,18 @@ def test_binary_elastic_collision(b_over_d):
 
 def _bounce(poly, gamma, v0=0.2, dt=2e-6):
     lo = np.min(np.asarray(poly)[:, 1])
-    sim = simulation([{"vertices_m": [tuple(p) for p in poly], "position_m": (0.0, -lo + 2 * v0 * dt),
-                       "velocity_m_s": (0.0, -v0)}], [floor()], dt_s=dt,
-                     material={**ELASTIC, "damping": gamma})
+    sim = simulation(
+        [
+            {
+                "vertices_m": [tuple(p) for p in poly],
+                "position_m": (0.0, -lo + 2 * v0 * dt),
+                "velocity_m_s": (0.0, -v0),
+            }
+        ],
+        [floor()],
+        dt_s=dt,
+        material={**ELASTIC, "damping": gamma},
+    )
     _run_until_apart(sim)
     return sim.velocity[0, 1] / v0
 
@@ -144,9 +160,13 @@ def test_ring_collision_of_24_disks():
     parts = []
     for k in range(n):
         a = 2 * math.pi * k / n
-        parts.append({"vertices_m": [tuple(p) for p in regular_polygon(64, R, phase_rad=a)],
-                      "position_m": (rc * math.cos(a), rc * math.sin(a)),
-                      "velocity_m_s": (-u * math.cos(a), -u * math.sin(a))})
+        parts.append(
+            {
+                "vertices_m": [tuple(p) for p in regular_polygon(64, R, phase_rad=a)],
+                "position_m": (rc * math.cos(a), rc * math.sin(a)),
+                "velocity_m_s": (-u * math.cos(a), -u * math.sin(a)),
+            }
+        )
     sim = simulation(parts, dt_s=1e-6, material=ELASTIC)
     _run_until_apart(sim)
     v = sim.velocity
@@ -161,9 +181,17 @@ def test_energy_conservation_of_an_elastic_gas_in_a_box():
     # kinetic energy (read when no contact is active) is the initial one within 0.1 % (measured 1.7e-4; the
     # area force is conservative only up to the polygon corners and the Gear truncation error)
     gen = np.random.default_rng(4)
-    parts = [_disk(x, y, *gen.normal(0, 0.3, 2)) for x in (0.015, 0.035, 0.055) for y in (0.015, 0.035, 0.055, 0.075)]
-    sim = simulation(parts, dt_s=2e-6, material=ELASTIC,
-                     box={"lower_m": (0.0, 0.0), "upper_m": (0.07, 0.09), "closed_top": True})
+    parts = [
+        _disk(x, y, *gen.normal(0, 0.3, 2))
+        for x in (0.015, 0.035, 0.055)
+        for y in (0.015, 0.035, 0.055, 0.075)
+    ]
+    sim = simulation(
+        parts,
+        dt_s=2e-6,
+        material=ELASTIC,
+        box={"lower_m": (0.0, 0.0), "upper_m": (0.07, 0.09), "closed_top": True},
+    )
     e0 = sim.kinetic_energy()
     sim.advance(60000)
     while len(sim.contacts()["i"]):

@@ -23,9 +23,13 @@ RHO = 1000.0
 def _tilted(theta_deg, poly, mu, steps, dt, damping=0.5, y0=None):
     th = math.radians(theta_deg)
     lo = np.min(np.asarray(poly)[:, 1])
-    sim = simulation([{"vertices_m": [tuple(v) for v in poly], "position_m": (0.0, -lo if y0 is None else y0)}],
-                     [floor(width=2.0)], dt_s=dt, gravity_m_s2=(G * math.sin(th), -G * math.cos(th)),
-                     material={"young_N_m": E, "density_kg_m2": RHO, "damping": damping, "friction": mu})
+    sim = simulation(
+        [{"vertices_m": [tuple(v) for v in poly], "position_m": (0.0, -lo if y0 is None else y0)}],
+        [floor(width=2.0)],
+        dt_s=dt,
+        gravity_m_s2=(G * math.sin(th), -G * math.cos(th)),
+        material={"young_N_m": E, "density_kg_m2": RHO, "damping": damping, "friction": mu},
+    )
     sim.advance(steps)
     return sim
 
@@ -92,14 +96,22 @@ def test_pull_threshold_is_mu_Fn_for_any_contact_area(shape):
     # contact spring at the threshold, 0.2 um). The onset force lies within 6 % of mu m g (the force rises 0.34 %
     # per ms; measured onsets 0.95 (the thin strip chatters most and creeps early) to 1.03).
     mu, k, v = 0.3, 100.0, 0.01
-    polys = {"square": rectangle(0.01, 0.01), "plate": rectangle(0.02, 0.005), "strip": rectangle(0.04, 0.0025),
-             "hexagon": regular_polygon(6, math.sqrt(2e-4 / (3 * math.sqrt(3))))}
+    polys = {
+        "square": rectangle(0.01, 0.01),
+        "plate": rectangle(0.02, 0.005),
+        "strip": rectangle(0.04, 0.0025),
+        "hexagon": regular_polygon(6, math.sqrt(2e-4 / (3 * math.sqrt(3)))),
+    }
     poly = polys[shape]
     lo = poly[:, 1].min()
-    sim = simulation([{"vertices_m": [tuple(p) for p in poly], "position_m": (0.0, -lo)}], [floor(width=2.0)],
-                     dt_s=1e-5, gravity_m_s2=(0.0, -G),
-                     material={"young_N_m": E, "density_kg_m2": RHO, "damping": 0.5, "friction": mu},
-                     drag_springs=[{"particle": 0, "k_N_m": k, "velocity_m_s": (v, 0.0)}])
+    sim = simulation(
+        [{"vertices_m": [tuple(p) for p in poly], "position_m": (0.0, -lo)}],
+        [floor(width=2.0)],
+        dt_s=1e-5,
+        gravity_m_s2=(0.0, -G),
+        material={"young_N_m": E, "density_kg_m2": RHO, "damping": 0.5, "friction": mu},
+        drag_springs=[{"particle": 0, "k_N_m": k, "velocity_m_s": (v, 0.0)}],
+    )
     assert sim.mass[0] == pytest.approx(0.1, rel=1e-9)
     x0 = sim.position[0, 0]
     threshold = mu * 0.1 * G

@@ -67,17 +67,25 @@ def polygon_overlap(p, q):
     tag_a, tag_b = np.empty(kmax, np.int64), np.empty(kmax, np.int64)
     geo = np.empty(11)
     cp, cq = p.mean(axis=0), q.mean(axis=0)
-    _overlap_geometry(p, len(p), q, len(q), cp[0], cp[1], cq[0], cq[1], buf_a, tag_a, buf_b, tag_b,
-                      np.empty(kmax), geo)
+    _overlap_geometry(
+        p, len(p), q, len(q), cp[0], cp[1], cq[0], cq[1], buf_a, tag_a, buf_b, tag_b, np.empty(kmax), geo
+    )
     out = {"area_m2": float(geo[0]), "centroid_m": geo[7:9].copy(), "point_m": geo[5:7].copy()}
     if geo[0] <= 0:
-        return out | {"c1_m": np.full(2, np.nan), "c2_m": np.full(2, np.nan), "normal": np.full(2, np.nan),
-                      "length_m": 0.0}
+        return out | {
+            "c1_m": np.full(2, np.nan),
+            "c2_m": np.full(2, np.nan),
+            "normal": np.full(2, np.nan),
+            "length_m": 0.0,
+        }
     nx, ny, length = _contact_frame(geo, cp[0], cp[1], cq[0], cq[1], False, buf_a)
     line = geo[9] > 0
-    return out | {"c1_m": geo[1:3].copy() if line else np.full(2, np.nan),
-                  "c2_m": geo[3:5].copy() if line else np.full(2, np.nan),
-                  "normal": np.array([nx, ny]), "length_m": float(length)}
+    return out | {
+        "c1_m": geo[1:3].copy() if line else np.full(2, np.nan),
+        "c2_m": geo[3:5].copy() if line else np.full(2, np.nan),
+        "normal": np.array([nx, ny]),
+        "length_m": float(length),
+    }
 
 
 def time_step_rule(min_mass_kg: float, young_N_m: float) -> float:
@@ -113,12 +121,18 @@ class Simulation:
         bodies = collect_bodies(s, seed)
         props = particle_properties(bodies.vertices, s.material.density_kg_m2)
         walls = wall_polygons(s)
-        wall_props = [{"centroid_m": v.mean(axis=0),
-                       "vertices_m": check_convex(v, f"granular wall {name!r}") - v.mean(axis=0)}
-                      for name, v, _ in walls]
+        wall_props = [
+            {
+                "centroid_m": v.mean(axis=0),
+                "vertices_m": check_convex(v, f"granular wall {name!r}") - v.mean(axis=0),
+            }
+            for name, v, _ in walls
+        ]
         n, nw = len(props), len(walls)
         if n == 0:
-            raise PorepipeError("granular: the scene has no particles (give particles, blocks or drop_sources)")
+            raise PorepipeError(
+                "granular: the scene has no particles (give particles, blocks or drop_sources)"
+            )
         self.n_mob, self.n_walls = n, nw
         kmax = max(len(p["vertices_m"]) for p in props + wall_props)
         b = n + nw
@@ -152,9 +166,18 @@ class Simulation:
         self.active = np.concatenate([(self.insert_s <= 0).astype(np.uint8), np.ones(nw, np.uint8)])
         self.wall_names = [name for name, _, _ in walls]
         self._wall_setup(walls)
-        self.mat = np.array([E, s.material.damping, s.material.friction, s.material.tangential_damping,
-                             s.material.cohesion_N_m, s.material.weakening_v_min_m_s,
-                             s.guard.max_overlap, s.guard.max_move * float(self.r_in.min())])
+        self.mat = np.array(
+            [
+                E,
+                s.material.damping,
+                s.material.friction,
+                s.material.tangential_damping,
+                s.material.cohesion_N_m,
+                s.material.weakening_v_min_m_s,
+                s.guard.max_overlap,
+                s.guard.max_move * float(self.r_in.min()),
+            ]
+        )
         self.gvec = np.asarray(s.gravity_m_s2, dtype=np.float64)
         g = s.gravity
         gnorm = float(np.linalg.norm(self.gvec))
@@ -162,7 +185,9 @@ class Simulation:
             if gnorm == 0:
                 raise PorepipeError("granular.gravity needs a direction: gravity_m_s2 must not be (0, 0)")
             self.gvec = self.gvec / gnorm
-            self.gpar = np.array([_GKIND[g.kind], g.g1_m_s2, g.g2_m_s2, g.time_s[0], g.time_s[1], g.steps, g.ramp])
+            self.gpar = np.array(
+                [_GKIND[g.kind], g.g1_m_s2, g.g2_m_s2, g.time_s[0], g.time_s[1], g.steps, g.ramp]
+            )
         else:
             self.gpar = np.zeros(7)
         g0 = self.gvec * (K._gravity_scale(self.gpar, 0.0) if s.gravity is not None else 1.0)
@@ -174,8 +199,18 @@ class Simulation:
             c, sn = math.cos(bodies.position[d.particle, 2]), math.sin(bodies.position[d.particle, 2])
             fx, fy = d.fixing_point_m
             anchor = bodies.position[d.particle, :2] + [c * fx - sn * fy, sn * fx + c * fy]
-            self.drag_par[k] = (d.particle, fx, fy, anchor[0], anchor[1], d.velocity_m_s[0], d.velocity_m_s[1],
-                                d.time_s[0], d.time_s[1], d.k_N_m)
+            self.drag_par[k] = (
+                d.particle,
+                fx,
+                fy,
+                anchor[0],
+                anchor[1],
+                d.velocity_m_s[0],
+                d.velocity_m_s[1],
+                d.time_s[0],
+                d.time_s[1],
+                d.k_N_m,
+            )
         self.effects = {
             "cohesion": s.material.cohesion_N_m > 0,
             "velocity_weakening": s.material.velocity_weakening,
@@ -216,14 +251,23 @@ class Simulation:
             self.surf[n + k] = w.surface_velocity_m_s
             if w.vibration is not None:
                 v = w.vibration
-                self.wall_vib[n + k] = (_WAVE[v.waveform], v.amplitude_m, v.frequency_hz, math.cos(v.angle_rad),
-                                        math.sin(v.angle_rad), v.from_s, v.to_s)
+                self.wall_vib[n + k] = (
+                    _WAVE[v.waveform],
+                    v.amplitude_m,
+                    v.frequency_hz,
+                    math.cos(v.angle_rad),
+                    math.sin(v.angle_rad),
+                    v.from_s,
+                    v.to_s,
+                )
                 pad[n + k] = v.amplitude_m
         self.wall_pad = pad
 
     def _place_all(self):
         for i in range(self.nc.shape[0]):
-            K._place(self.body, self.nc, self.G[0, i, 0], self.G[0, i, 1], self.G[0, i, 2], self.wv, self.aabb, i)
+            K._place(
+                self.body, self.nc, self.G[0, i, 0], self.G[0, i, 1], self.G[0, i, 2], self.wv, self.aabb, i
+            )
 
     def wall_boxes(self) -> np.ndarray:
         """(W, 4) bounding boxes of the walls, padded by their vibration amplitude."""
@@ -237,8 +281,9 @@ class Simulation:
         """Rebuild the candidate list at the current positions, carrying every contact's state over."""
         n = self.n_mob
         x = np.ascontiguousarray(self.G[0, :n, :2])
-        start, nb_j = candidate_pairs(self.method, x, self.r_circ, self.active[:n], self.skin, self.wall_boxes(),
-                                      n, self.order)
+        start, nb_j = candidate_pairs(
+            self.method, x, self.r_circ, self.active[:n], self.skin, self.wall_boxes(), n, self.order
+        )
         ft, aold, pout = np.zeros(len(nb_j)), np.zeros(len(nb_j)), np.zeros((len(nb_j), len(K.POUT)))
         _carry_state(self.nb_start, self.nb_j, self.ft, self.aold, self.pout, start, nb_j, ft, aold, pout)
         self.nb_start, self.nb_j, self.ft, self.aold, self.pout = start, nb_j, ft, aold, pout
@@ -295,11 +340,40 @@ class Simulation:
             stop = min(end, self._next_insert_step())
             diag = np.zeros(4)
             done, code = self._stepper(
-                self.G, self.body, self.nc, self.wv, self.aabb, self.inv_m, self.inv_I, self.inv_r, self.area,
-                self.active, self.n_mob, self.wall_base, self.wall_vib, self.surf, self.nb_start, self.nb_j,
-                self.tr_start, self.tr_p, self.ft, self.aold, self.pout, self.x_build, self.scratch, self.mat,
-                self.gvec, self.gpar, self.drag_par, self.time_s, self.dt, stop - self.step, 0.5 * self.skin, self.gear,
-                diag)
+                self.G,
+                self.body,
+                self.nc,
+                self.wv,
+                self.aabb,
+                self.inv_m,
+                self.inv_I,
+                self.inv_r,
+                self.area,
+                self.active,
+                self.n_mob,
+                self.wall_base,
+                self.wall_vib,
+                self.surf,
+                self.nb_start,
+                self.nb_j,
+                self.tr_start,
+                self.tr_p,
+                self.ft,
+                self.aold,
+                self.pout,
+                self.x_build,
+                self.scratch,
+                self.mat,
+                self.gvec,
+                self.gpar,
+                self.drag_par,
+                self.time_s,
+                self.dt,
+                stop - self.step,
+                0.5 * self.skin,
+                self.gear,
+                diag,
+            )
             self.step += int(done)
             self.time_s = self.step * self.dt
             self.max_overlap_seen = max(self.max_overlap_seen, diag[3])
@@ -310,16 +384,21 @@ class Simulation:
 
     def _guard_error(self, code, diag):
         try_dt = min(0.5 * self.dt, 0.5 * self.dt_rule)
-        what = {K.GUARD_OVERLAP: f"overlap area {diag[2]:.3g} r_eq² (limit {self.mat[6]:g})",
-                K.GUARD_NAN: "a non-finite position or velocity",
-                K.GUARD_MOVE: f"a displacement of {diag[2]:.3g} m in one step (limit {self.mat[7]:.3g} m)"}[code]
+        what = {
+            K.GUARD_OVERLAP: f"overlap area {diag[2]:.3g} r_eq² (limit {self.mat[6]:g})",
+            K.GUARD_NAN: "a non-finite position or velocity",
+            K.GUARD_MOVE: f"a displacement of {diag[2]:.3g} m in one step (limit {self.mat[7]:.3g} m)",
+        }[code]
         if self.step <= 1 and code == K.GUARD_OVERLAP:
-            raise PorepipeError(f"granular: particle {int(diag[1])} starts with {what}: the initial placement "
-                                "overlaps (widen the block's grid_m or move the particle)")
+            raise PorepipeError(
+                f"granular: particle {int(diag[1])} starts with {what}: the initial placement "
+                "overlaps (widen the block's grid_m or move the particle)"
+            )
         raise PorepipeError(
             f"granular: unstable at step {self.step} (t = {self.time_s:.6g} s): particle {int(diag[1])} shows "
             f"{what}; dt = {self.dt:.3g} s vs the rule (pi/10) sqrt(m_min/E) = {self.dt_rule:.3g} s "
-            f"(Eq. 2.9): rerun with granular.dt_s <= {try_dt:.3g}")
+            f"(Eq. 2.9): rerun with granular.dt_s <= {try_dt:.3g}"
+        )
 
     # -- observables -------------------------------------------------------------------------------------------------
     @property
@@ -344,13 +423,17 @@ class Simulation:
         return out
 
     def frame(self) -> Frame:
-        return Frame(self.time_s, self.position, self.velocity, self.active[: self.n_mob].copy(), self.contacts())
+        return Frame(
+            self.time_s, self.position, self.velocity, self.active[: self.n_mob].copy(), self.contacts()
+        )
 
     def kinetic_energy(self) -> float:
         """Translational + rotational kinetic energy of the active particles, J/m (2-D: per unit depth is J)."""
         v = self.velocity
         a = self.active[: self.n_mob] == 1
-        return float(0.5 * np.sum((self.mass * (v[:, 0] ** 2 + v[:, 1] ** 2) + self.inertia * v[:, 2] ** 2)[a]))
+        return float(
+            0.5 * np.sum((self.mass * (v[:, 0] ** 2 + v[:, 1] ** 2) + self.inertia * v[:, 2] ** 2)[a])
+        )
 
     def momentum(self) -> tuple[np.ndarray, float]:
         """Total linear momentum (2,) and angular momentum about the origin of the active particles."""

@@ -13,11 +13,20 @@ def main(args) -> int:
     scene = load_scene(args.scene)
     settings = scene.granular
     if settings is None or not (settings.particles or settings.blocks or settings.drop_sources):
-        raise PorepipeError(f"{args.scene}: the scene has no `granular:` section with particles, blocks or "
-                            "drop_sources")
+        raise PorepipeError(
+            f"{args.scene}: the scene has no `granular:` section with particles, blocks or drop_sources"
+        )
     threads = set_threads(args.threads)
-    run(settings, args.out, seed=scene.seed, scene=scene.name, threads=threads, checkpoint=args.checkpoint,
-        resume=args.resume, progress=not args.quiet)
+    run(
+        settings,
+        args.out,
+        seed=scene.seed,
+        scene=scene.name,
+        threads=threads,
+        checkpoint=args.checkpoint,
+        resume=args.resume,
+        progress=not args.quiet,
+    )
     return 0
 
 
@@ -25,7 +34,9 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("granular", help="2-D frictional DEM of convex polygons (gc2d) -> granular.h5")
     p.add_argument("scene", help="scene YAML with a `granular:` section")
     p.add_argument("-o", "--out", required=True, help="output granular.h5")
-    p.add_argument("--checkpoint", help="checkpoint file, written every granular.checkpoint_every_steps steps")
+    p.add_argument(
+        "--checkpoint", help="checkpoint file, written every granular.checkpoint_every_steps steps"
+    )
     p.add_argument("--resume", action="store_true", help="continue from --checkpoint if it exists")
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--quiet", action="store_true", help="no progress lines")

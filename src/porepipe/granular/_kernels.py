@@ -105,8 +105,14 @@ def _gravity_scale(gp, t):
 _STEPPERS: dict = {}
 
 
-def make_stepper(cohesion: bool, weakening: bool, vibration: bool, variable_gravity: bool, drag: bool,
-                 surface_velocity: bool):
+def make_stepper(
+    cohesion: bool,
+    weakening: bool,
+    vibration: bool,
+    variable_gravity: bool,
+    drag: bool,
+    surface_velocity: bool,
+):
     """Return the step-loop kernel compiled with exactly the requested effects (closure constants).
 
     The integrator (Gear or velocity Verlet) is a run-time argument ``gear`` of the kernel: it is not an effect,
@@ -132,16 +138,54 @@ def make_stepper(cohesion: bool, weakening: bool, vibration: bool, variable_grav
     callable
         ``_steps(...) -> (steps_done, code)``; see :func:`porepipe.granular._api.Simulation` for its arguments.
     """
-    key = (bool(cohesion), bool(weakening), bool(vibration), bool(variable_gravity), bool(drag),
-           bool(surface_velocity))
+    key = (
+        bool(cohesion),
+        bool(weakening),
+        bool(vibration),
+        bool(variable_gravity),
+        bool(drag),
+        bool(surface_velocity),
+    )
     if key in _STEPPERS:
         return _STEPPERS[key]
     COH, WEAK, VIB, VARG, DRAG, SURF = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
-    def _steps(G, body, nc, wv, aabb, inv_m, inv_I, inv_r, area, active, n_mob, wall_base, wall_vib, surf,
-               nb_start, nb_j, tr_start, tr_p, ft, aold, pout, x_build, scratch, mat, gvec, gpar, drag_par,
-               t0, dt, nsteps, skin_half, gear, diag):
+    def _steps(
+        G,
+        body,
+        nc,
+        wv,
+        aabb,
+        inv_m,
+        inv_I,
+        inv_r,
+        area,
+        active,
+        n_mob,
+        wall_base,
+        wall_vib,
+        surf,
+        nb_start,
+        nb_j,
+        tr_start,
+        tr_p,
+        ft,
+        aold,
+        pout,
+        x_build,
+        scratch,
+        mat,
+        gvec,
+        gpar,
+        drag_par,
+        t0,
+        dt,
+        nsteps,
+        skin_half,
+        gear,
+        diag,
+    ):
         n_body = nc.shape[0]
         E = mat[0]
         gam = mat[1]
@@ -214,8 +258,14 @@ def make_stepper(cohesion: bool, weakening: bool, vibration: bool, variable_grav
                         j = nb_j[p]
                         for c in range(10):
                             pout[p, c] = 0.0
-                        if (active[i] == 0 or active[j] == 0 or aabb[i, 1] < aabb[j, 0] or aabb[j, 1] < aabb[i, 0]
-                                or aabb[i, 3] < aabb[j, 2] or aabb[j, 3] < aabb[i, 2]):
+                        if (
+                            active[i] == 0
+                            or active[j] == 0
+                            or aabb[i, 1] < aabb[j, 0]
+                            or aabb[j, 1] < aabb[i, 0]
+                            or aabb[i, 3] < aabb[j, 2]
+                            or aabb[j, 3] < aabb[i, 2]
+                        ):
                             ft[p] = 0.0
                             aold[p] = 0.0
                             continue
@@ -223,8 +273,9 @@ def make_stepper(cohesion: bool, weakening: bool, vibration: bool, variable_grav
                         yi = G[0, i, 1]
                         xj = G[0, j, 0]
                         yj = G[0, j, 1]
-                        _overlap_geometry(wv[i], nc[i], wv[j], nc[j], xi, yi, xj, yj, buf_a, tag_a, buf_b, tag_b,
-                                          side, geo)
+                        _overlap_geometry(
+                            wv[i], nc[i], wv[j], nc[j], xi, yi, xj, yj, buf_a, tag_a, buf_b, tag_b, side, geo
+                        )
                         A = geo[0]
                         if A <= 0.0:
                             ft[p] = 0.0

@@ -140,8 +140,12 @@ def _wall_counts(x, rad, active, cut, wall_box, counts):
         if active[i] != 0:
             for w in range(wall_box.shape[0]):
                 r = rad[i] + cut
-                if (x[i, 0] + r >= wall_box[w, 0] and x[i, 0] - r <= wall_box[w, 1]
-                        and x[i, 1] + r >= wall_box[w, 2] and x[i, 1] - r <= wall_box[w, 3]):
+                if (
+                    x[i, 0] + r >= wall_box[w, 0]
+                    and x[i, 0] - r <= wall_box[w, 1]
+                    and x[i, 1] + r >= wall_box[w, 2]
+                    and x[i, 1] - r <= wall_box[w, 3]
+                ):
                     c += 1
         counts[i] = c
 
@@ -161,8 +165,12 @@ def _merge_lists(n, start_p, pj_p, counts_w, x, rad, active, cut, wall_box, n_mo
         if counts_w[i] > 0:
             r = rad[i] + cut
             for w in range(wall_box.shape[0]):
-                if (x[i, 0] + r >= wall_box[w, 0] and x[i, 0] - r <= wall_box[w, 1]
-                        and x[i, 1] + r >= wall_box[w, 2] and x[i, 1] - r <= wall_box[w, 3]):
+                if (
+                    x[i, 0] + r >= wall_box[w, 0]
+                    and x[i, 0] - r <= wall_box[w, 1]
+                    and x[i, 1] + r >= wall_box[w, 2]
+                    and x[i, 1] - r <= wall_box[w, 3]
+                ):
                     out[o] = n_mob + w
                     o += 1
     return start, out

@@ -39,8 +39,13 @@ def _save_checkpoint(path: Path, key: str, sim: Simulation, frames: list, series
     state = sim.state()
     tmp = path.with_name(f".{path.name}.tmp")
     with open(tmp, "wb") as fh:
-        np.savez(fh, key=np.array(key), frames=np.array(_pack_frames(frames), dtype=object),
-                 series=np.asarray(series, dtype=np.float64).reshape(-1, 5), **state)
+        np.savez(
+            fh,
+            key=np.array(key),
+            frames=np.array(_pack_frames(frames), dtype=object),
+            series=np.asarray(series, dtype=np.float64).reshape(-1, 5),
+            **state,
+        )
     tmp.replace(path)
 
 
@@ -54,7 +59,9 @@ def _load_checkpoint(path: Path, key: str):
         return None
     with np.load(path, allow_pickle=True) as z:
         if str(z["key"]) != key:
-            print(f"porepipe granular: checkpoint {path} is for another scene (key mismatch); starting afresh")
+            print(
+                f"porepipe granular: checkpoint {path} is for another scene (key mismatch); starting afresh"
+            )
             path.unlink()
             return None
         state = {k: z[k] for k in (*Simulation.STATE, "scalars", "max_overlap_seen")}
@@ -70,8 +77,17 @@ def _sample(sim: Simulation) -> tuple:
     return (sim.time_s, sim.kinetic_energy(), len(c["i"]), 2.0 * mobile_pairs / n_act, sim.max_overlap_seen)
 
 
-def run(settings: Settings, out, *, seed: int = 0, scene: str = "", threads: int | None = None, checkpoint=None,
-        resume: bool = False, progress: bool = True) -> Path:
+def run(
+    settings: Settings,
+    out,
+    *,
+    seed: int = 0,
+    scene: str = "",
+    threads: int | None = None,
+    checkpoint=None,
+    resume: bool = False,
+    progress: bool = True,
+) -> Path:
     """Run the granular DEM of ``settings`` and write the result file ``out``.
 
     Parameters
@@ -103,16 +119,25 @@ def run(settings: Settings, out, *, seed: int = 0, scene: str = "", threads: int
     with ResultWriter(out, stage=STAGE, scene=scene, scene_hash=key, threads=threads) as w:
         sim, frames, series, rate = _simulate(settings, seed, checkpoint, resume, progress, key)
         _write(w, sim, frames, series)
-        w.attrs.update({
-            "steps": sim.step, "dt_s": sim.dt, "dt_rule_s": sim.dt_rule, "rebuilds": sim.rebuilds,
-            "integrator": settings.integrator.value, "neighbour_search": settings.neighbour_search.value,
-            "effects": ",".join(k for k, v in sim.effects.items() if v) or "none",
-            "n_particles": sim.n_mob, "n_walls": sim.n_walls, "particle_steps_per_s": rate,
-            "max_overlap": sim.max_overlap_seen,
-        })
+        w.attrs.update(
+            {
+                "steps": sim.step,
+                "dt_s": sim.dt,
+                "dt_rule_s": sim.dt_rule,
+                "rebuilds": sim.rebuilds,
+                "integrator": settings.integrator.value,
+                "neighbour_search": settings.neighbour_search.value,
+                "effects": ",".join(k for k, v in sim.effects.items() if v) or "none",
+                "n_particles": sim.n_mob,
+                "n_walls": sim.n_walls,
+                "particle_steps_per_s": rate,
+                "max_overlap": sim.max_overlap_seen,
+            }
+        )
     if checkpoint:
         Path(checkpoint).unlink(missing_ok=True)
     return out
+
 
 def _simulate(settings, seed, checkpoint, resume, progress, key):
     """Step the simulation to the end, collecting frames and time series; checkpoint on the way."""
@@ -148,7 +173,6 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
     wall = time.perf_counter() - t0
     rate = sim.n_mob * (total - step0) / wall if wall > 0 else 0.0
     return sim, frames, series, rate
-
 
 
 def _write(w: ResultWriter, sim: Simulation, frames: list[Frame], series: list[tuple]) -> None:
@@ -192,4 +216,8 @@ def read_granular(path) -> dict[str, xr.Dataset]:
     path = Path(path)
     if not path.is_file():
         raise PorepipeError(f"granular result {path} does not exist")
-    return {"frames": read_table(path), "contacts": read_table(path, "contacts"), "series": read_table(path, "series")}
+    return {
+        "frames": read_table(path),
+        "contacts": read_table(path, "contacts"),
+        "series": read_table(path, "series"),
+    }

@@ -74,14 +74,18 @@ class Material(_Strict):
     tangential_damping: NonNegFloat = Field(1.0, description="factor on D_t = v_t sqrt(2/7 E m_t) (Eq. 2.26)")
     cohesion_N_m: NonNegFloat = Field(0.0, description="k_coh of F = k_coh x contact-line length (Eq. 2.28)")
     velocity_weakening: bool = Field(False, description="F_r = mu (|v_t|/1 m/s)^(-1/10) F_n (Eq. 2.25)")
-    weakening_v_min_m_s: PosFloat = Field(1e-3, description="|v_t| floor of the weakening law (finite at rest)")
+    weakening_v_min_m_s: PosFloat = Field(
+        1e-3, description="|v_t| floor of the weakening law (finite at rest)"
+    )
 
 
 class Shape(_Strict):
     """Shapes of generated particles: sizes, corner numbers, orientations (App. B.1.6)."""
 
     kind: ShapeKind = ShapeKind.ellipse
-    size_m: Vec2 = Field((0.005, 0.005), description="semi-axes (a, b) of the ellipse, or edges of a rectangle, m")
+    size_m: Vec2 = Field(
+        (0.005, 0.005), description="semi-axes (a, b) of the ellipse, or edges of a rectangle, m"
+    )
     size_spread: NonNegFloat = Field(0.0, lt=1, description="I of Part_Var_Size (relative)")
     size_dist: Dist = Field(Dist.const, description="CONST, EQUAL or GAUSS; a and b are drawn independently")
     corners: int = Field(8, ge=3, description="N_E")
@@ -89,7 +93,9 @@ class Shape(_Strict):
     corners_dist: Dist = Dist.const
     angle_mode: AngleMode = Field(AngleMode.regular, description="corner placement on the ellipse")
     orientation_rad: Finite = Field(0.0, description="phi_0")
-    orientation_dist: Dist = Field(Dist.const, description="EQUAL: [0, 2 pi); GAUSS: ]phi_0 - pi/2, phi_0 + pi/2[")
+    orientation_dist: Dist = Field(
+        Dist.const, description="EQUAL: [0, 2 pi); GAUSS: ]phi_0 - pi/2, phi_0 + pi/2["
+    )
     cut: float = Field(0.0, ge=0, lt=0.5, description="rectangle bevel fraction c")
     round_radius_m: NonNegFloat = Field(0.0, description="rectangle corner radius (0 = sharp)")
     round_corners: int = Field(4, ge=2, description="corners per rounded rectangle corner")
@@ -122,8 +128,12 @@ class Block(_Strict):
     """GENERATE_BLOCK: particles on a lattice in a rectangle, with optional jitter (App. B.1.6)."""
 
     lattice: Lattice = Lattice.rect
-    jitter: Dist = Field(Dist.const, description="CONST (exact lattice), EQUAL or GAUSS within ±grid/2·jitter_fraction")
-    jitter_fraction: NonNegFloat = Field(0.0, le=1.0, description="jitter amplitude in units of half the grid")
+    jitter: Dist = Field(
+        Dist.const, description="CONST (exact lattice), EQUAL or GAUSS within ±grid/2·jitter_fraction"
+    )
+    jitter_fraction: NonNegFloat = Field(
+        0.0, le=1.0, description="jitter amplitude in units of half the grid"
+    )
     lower_m: Vec2 = Field(description="lower-left corner of the block")
     upper_m: Vec2 = Field(description="upper-right corner of the block")
     grid_m: tuple[PosFloat, PosFloat] = Field(description="GRID_DISTANCE (dx, dy)")
@@ -200,8 +210,12 @@ class DragSpring(_Strict):
 class Guard(_Strict):
     """Stability guard: stop with a message (and the dt to try) instead of writing garbage (Eq. 2.9)."""
 
-    max_overlap: PosFloat = Field(0.3, description="overlap area / r_eq² of the smaller particle (r_eq² = area/pi)")
-    max_move: PosFloat = Field(0.2, description="largest displacement per step, in inscribed radii of the smallest")
+    max_overlap: PosFloat = Field(
+        0.3, description="overlap area / r_eq² of the smaller particle (r_eq² = area/pi)"
+    )
+    max_move: PosFloat = Field(
+        0.2, description="largest displacement per step, in inscribed radii of the smallest"
+    )
 
 
 class Output(_Strict):
@@ -212,11 +226,15 @@ class Output(_Strict):
 class Settings(_Strict):
     """The granular DEM run of a scene."""
 
-    dt_s: PosFloat | None = Field(None, description="time step; default 0.5 x (pi/10) sqrt(m_min/E) (Eq. 2.9)")
+    dt_s: PosFloat | None = Field(
+        None, description="time step; default 0.5 x (pi/10) sqrt(m_min/E) (Eq. 2.9)"
+    )
     duration_s: NonNegFloat = Field(0.1, description="simulated time")
     integrator: Integrator = Integrator.gear
     neighbour_search: NeighbourSearch = NeighbourSearch.sweep
-    skin_m: PosFloat | None = Field(None, description="Verlet skin (default: 0.3 x the smallest circumradius)")
+    skin_m: PosFloat | None = Field(
+        None, description="Verlet skin (default: 0.3 x the smallest circumradius)"
+    )
     gravity_m_s2: Vec2 = Field((0.0, -9.81), description="g vector (Eq. 2.13)")
     gravity: Gravity | None = Field(None, description="time-dependent g (effect variable_gravity)")
     material: Material = Material()

@@ -112,11 +112,15 @@ def check_convex(vertices, name: str = "polygon") -> np.ndarray:
     bad = np.nonzero(cross <= _CONVEX_RTOL * scale)[0]
     if area2 == 0 or bad.size:
         k = int((bad[0] + 1) % len(v)) if bad.size else 0
-        raise PorepipeError(f"{name}: not a convex polygon (corner {k} at {v[k].tolist()} is reflex, collinear or "
-                            "repeated); gc2d needs convex particles with corners in order")
+        raise PorepipeError(
+            f"{name}: not a convex polygon (corner {k} at {v[k].tolist()} is reflex, collinear or "
+            "repeated); gc2d needs convex particles with corners in order"
+        )
     turning = np.arctan2(cross, (d1 * d2).sum(1)).sum()
     if turning > 2 * np.pi * (1 + 1e-9):
-        raise PorepipeError(f"{name}: the boundary winds {turning / (2 * np.pi):.2f} times (self-intersecting)")
+        raise PorepipeError(
+            f"{name}: the boundary winds {turning / (2 * np.pi):.2f} times (self-intersecting)"
+        )
     return v
 
 
@@ -155,16 +159,30 @@ def rectangle(a_m: float, b_m: float, cut: float = 0.0, round_radius_m: float = 
     if round_radius_m > 0:
         r = round_radius_m
         if r > min(ha, hb) or round_corners < 2:
-            raise PorepipeError(f"round_radius_m = {r} must not exceed half the shorter edge; round_corners >= 2")
+            raise PorepipeError(
+                f"round_radius_m = {r} must not exceed half the shorter edge; round_corners >= 2"
+            )
         pts = []
-        for q, (cx, cy) in enumerate([(ha - r, hb - r), (-ha + r, hb - r), (-ha + r, -hb + r), (ha - r, -hb + r)]):
+        for q, (cx, cy) in enumerate(
+            [(ha - r, hb - r), (-ha + r, hb - r), (-ha + r, -hb + r), (ha - r, -hb + r)]
+        ):
             for t in np.linspace(0, 0.5 * np.pi, int(round_corners)):
                 pts.append((cx + r * math.cos(t + q * 0.5 * np.pi), cy + r * math.sin(t + q * 0.5 * np.pi)))
         return _drop_duplicates(np.array(pts))
     if cut > 0:
         ca, cb = cut * a_m, cut * b_m
-        return np.array([(ha, -hb + cb), (ha, hb - cb), (ha - ca, hb), (-ha + ca, hb), (-ha, hb - cb),
-                         (-ha, -hb + cb), (-ha + ca, -hb), (ha - ca, -hb)])
+        return np.array(
+            [
+                (ha, -hb + cb),
+                (ha, hb - cb),
+                (ha - ca, hb),
+                (-ha + ca, hb),
+                (-ha, hb - cb),
+                (-ha, -hb + cb),
+                (-ha + ca, -hb),
+                (ha - ca, -hb),
+            ]
+        )
     return np.array([(ha, -hb), (ha, hb), (-ha, hb), (-ha, -hb)])
 
 
@@ -214,7 +232,9 @@ def truncated_unit_gauss(rng: np.random.Generator, size: int) -> np.ndarray:
     return out
 
 
-def draw(dist: Dist, center: float, spread: float, rng: np.random.Generator, size: int, relative: bool = True):
+def draw(
+    dist: Dist, center: float, spread: float, rng: np.random.Generator, size: int, relative: bool = True
+):
     """Draw ``size`` values of a CONST / EQUAL / GAUSS distribution (App. B.1.6).
 
     Parameters

@@ -59,8 +59,15 @@ def generate_shapes(shape: Shape, count: int, gen: np.random.Generator) -> tuple
     out = []
     for k in range(count):
         if shape.kind is ShapeKind.rectangle:
-            out.append(rectangle(a[k], b[k], cut=shape.cut, round_radius_m=shape.round_radius_m,
-                                 round_corners=shape.round_corners))
+            out.append(
+                rectangle(
+                    a[k],
+                    b[k],
+                    cut=shape.cut,
+                    round_radius_m=shape.round_radius_m,
+                    round_corners=shape.round_corners,
+                )
+            )
         else:
             out.append(ellipse_polygon(int(n[k]), a[k], b[k], shape.angle_mode, gen))
     return out, phi
@@ -80,8 +87,9 @@ def lattice_sites(block: Block, gen: np.random.Generator) -> np.ndarray:
         sites = sites[np.lexsort((sites[:, 0], sites[:, 1]))]
     if block.jitter is not Dist.const and block.jitter_fraction > 0:
         for axis, step in ((0, dx), (1, dy)):
-            sites[:, axis] += draw(block.jitter, 0.0, 0.5 * step * block.jitter_fraction, gen, len(sites),
-                                   relative=False)
+            sites[:, axis] += draw(
+                block.jitter, 0.0, 0.5 * step * block.jitter_fraction, gen, len(sites), relative=False
+            )
     if block.max_count is not None:
         sites = sites[: block.max_count]
     return sites
@@ -119,9 +127,13 @@ def collect_bodies(settings: Settings, seed: int) -> Bodies:
         for t, v, phi, x in zip(times, shapes, phis, xs, strict=True):
             add(v, (x, src.y_m), phi, src.velocity_m_s, 0.0, float(t), k)
     n = len(verts)
-    return Bodies(verts, np.asarray(pos, dtype=np.float64).reshape(n, 3),
-                  np.asarray(vel, dtype=np.float64).reshape(n, 3), np.asarray(ins, dtype=np.float64),
-                  np.asarray(drop, dtype=np.int64))
+    return Bodies(
+        verts,
+        np.asarray(pos, dtype=np.float64).reshape(n, 3),
+        np.asarray(vel, dtype=np.float64).reshape(n, 3),
+        np.asarray(ins, dtype=np.float64),
+        np.asarray(drop, dtype=np.int64),
+    )
 
 
 def wall_polygons(settings: Settings) -> list[tuple[str, np.ndarray, Wall | None]]:
@@ -135,10 +147,15 @@ def wall_polygons(settings: Settings) -> list[tuple[str, np.ndarray, Wall | None
     if settings.box is not None:
         (x0, y0), (x1, y1), d = settings.box.lower_m, settings.box.upper_m, settings.box.thickness_m
         if not (x1 > x0 and y1 > y0):
-            raise PorepipeError(f"granular.box: upper_m {settings.box.upper_m} must exceed lower_m "
-                                f"{settings.box.lower_m} in x and y")
-        slabs = [("box floor", (x0 - d, y0 - d, x1 + d, y0)), ("box left", (x0 - d, y0, x0, y1 + d)),
-                 ("box right", (x1, y0, x1 + d, y1 + d))]
+            raise PorepipeError(
+                f"granular.box: upper_m {settings.box.upper_m} must exceed lower_m "
+                f"{settings.box.lower_m} in x and y"
+            )
+        slabs = [
+            ("box floor", (x0 - d, y0 - d, x1 + d, y0)),
+            ("box left", (x0 - d, y0, x0, y1 + d)),
+            ("box right", (x1, y0, x1 + d, y1 + d)),
+        ]
         if settings.box.closed_top:
             slabs.append(("box top", (x0, y1, x1, y1 + d)))
         for name, (a0, b0, a1, b1) in slabs:

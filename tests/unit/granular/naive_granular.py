@@ -78,4 +78,7 @@ def simulation(particles, walls=(), **settings):
 
 
 def floor(width=1.0, top=0.0, depth=0.1):
-    return {"name": "floor", "vertices_m": [(-width, top - depth), (width, top - depth), (width, top), (-width, top)]}
+    return {
+        "name": "floor",
+        "vertices_m": [(-width, top - depth), (width, top - depth), (width, top), (-width, top)],
+    }

@@ -12,8 +12,12 @@ from porepipe.granular._shapes import AngleMode
 
 
 def _random_pair(gen):
-    p = ellipse_polygon(int(gen.integers(3, 12)), gen.uniform(0.5, 2), gen.uniform(0.5, 2), AngleMode.rand1, gen)
-    q = ellipse_polygon(int(gen.integers(3, 12)), gen.uniform(0.5, 2), gen.uniform(0.5, 2), AngleMode.rand1, gen)
+    p = ellipse_polygon(
+        int(gen.integers(3, 12)), gen.uniform(0.5, 2), gen.uniform(0.5, 2), AngleMode.rand1, gen
+    )
+    q = ellipse_polygon(
+        int(gen.integers(3, 12)), gen.uniform(0.5, 2), gen.uniform(0.5, 2), AngleMode.rand1, gen
+    )
     c, s = math.cos(gen.uniform(0, 6.3)), math.sin(gen.uniform(0, 6.3))
     q = q @ np.array([[c, s], [-s, c]]) + gen.uniform(-3, 3, 2)
     return p, q
@@ -35,7 +39,9 @@ def test_overlap_matches_reference_on_random_pairs():
             assert min(d[0, 0] + d[1, 1], d[0, 1] + d[1, 0]) < 1e-10
             np.testing.assert_allclose(got["point_m"], crossings.mean(axis=0), atol=1e-10)
             t = pair[1] - pair[0]
-            assert abs(np.dot(got["normal"], t)) < 1e-10 * np.linalg.norm(t)  # normal is perpendicular to c1c2
+            assert abs(np.dot(got["normal"], t)) < 1e-10 * np.linalg.norm(
+                t
+            )  # normal is perpendicular to c1c2
             assert got["length_m"] == pytest.approx(np.linalg.norm(t), rel=1e-10)
             # oriented from p towards q: q's centroid lies on the normal's side
             assert np.dot(got["normal"], q.mean(axis=0) - p.mean(axis=0)) > 0
@@ -45,7 +51,9 @@ def test_overlap_matches_reference_on_random_pairs():
 def test_disjoint_and_touching_give_zero_area():
     sq = rectangle(1.0, 1.0)
     assert polygon_overlap(sq, sq + [1.5, 0.0])["area_m2"] == 0.0
-    assert polygon_overlap(sq, sq + [1.0, 0.0])["area_m2"] == pytest.approx(0.0, abs=1e-15)  # parallel touching
+    assert polygon_overlap(sq, sq + [1.0, 0.0])["area_m2"] == pytest.approx(
+        0.0, abs=1e-15
+    )  # parallel touching
     tri = np.array([(0.5, 0.0), (1.5, -0.5), (1.5, 0.5)])  # vertex exactly on the square's edge
     assert polygon_overlap(sq, tri)["area_m2"] == pytest.approx(0.0, abs=1e-15)
 

@@ -17,10 +17,20 @@ DT = 1e-6
 
 
 def _on_floor(h=1e-5, vel=(0.0, 0.0), omega=0.0, **mat):
-    mat = {"young_N_m": E, "density_kg_m2": RHO, "damping": 0.0, "friction": 0.0, "tangential_damping": 0.0,
-           **mat}
-    p = {"vertices_m": square(A_SIDE), "position_m": (0.0, 0.5 * A_SIDE - h), "velocity_m_s": vel,
-         "angular_velocity_rad_s": omega}
+    mat = {
+        "young_N_m": E,
+        "density_kg_m2": RHO,
+        "damping": 0.0,
+        "friction": 0.0,
+        "tangential_damping": 0.0,
+        **mat,
+    }
+    p = {
+        "vertices_m": square(A_SIDE),
+        "position_m": (0.0, 0.5 * A_SIDE - h),
+        "velocity_m_s": vel,
+        "angular_velocity_rad_s": omega,
+    }
     return simulation([p], [floor()], dt_s=DT, material=mat)
 
 
@@ -34,7 +44,9 @@ def test_elastic_normal_force_is_E_area_over_l():
     assert len(c["i"]) == 1 and c["j"][0] == 1
     assert c["area_m2"][0] == pytest.approx(A_SIDE * h, rel=1e-9)
     assert c["fn_N"][0] == pytest.approx(E * A_SIDE * h / R_EQ, rel=1e-9)
-    np.testing.assert_allclose([c["fx_N"][0], c["fy_N"][0]], [0.0, E * A_SIDE * h / R_EQ], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        [c["fx_N"][0], c["fy_N"][0]], [0.0, E * A_SIDE * h / R_EQ], rtol=1e-9, atol=1e-12
+    )
     assert c["length_m"][0] == pytest.approx(A_SIDE, rel=1e-12)
     np.testing.assert_allclose([c["sx_m"][0], c["sy_m"][0]], [0.0, 0.0], atol=1e-15)  # midpoint of c1c2
 
@@ -43,9 +55,11 @@ def test_l_of_two_particles_uses_both_radii_and_newton_three():
     # two equal squares side by side: l = r_eq/2, force pair equal and opposite (accelerations G2 = dt^2 F/2m)
     h = 2e-5
     sq = square(A_SIDE)
-    sim = simulation([{"vertices_m": sq, "position_m": (0.0, 0.0)},
-                      {"vertices_m": sq, "position_m": (A_SIDE - h, 0.0)}], dt_s=DT,
-                     material={"young_N_m": E, "density_kg_m2": RHO, "damping": 0.0, "friction": 0.0})
+    sim = simulation(
+        [{"vertices_m": sq, "position_m": (0.0, 0.0)}, {"vertices_m": sq, "position_m": (A_SIDE - h, 0.0)}],
+        dt_s=DT,
+        material={"young_N_m": E, "density_kg_m2": RHO, "damping": 0.0, "friction": 0.0},
+    )
     sim.advance(1)
     f = E * A_SIDE * h / (0.5 * R_EQ)
     assert sim.contacts()["fn_N"][0] == pytest.approx(f, rel=1e-9)
@@ -148,11 +162,21 @@ def test_newton_three_and_torque_balance_to_round_off():
     parts = []
     for _ in range(40):
         v = ellipse_polygon(int(gen.integers(5, 10)), 0.01, 0.007, AngleMode.rand1, gen)
-        parts.append({"vertices_m": v.tolist(), "position_m": tuple(gen.uniform(0, 0.05, 2)),
-                      "angle_rad": gen.uniform(0, 6.28), "velocity_m_s": tuple(gen.normal(0, 0.01, 2)),
-                      "angular_velocity_rad_s": gen.normal(0, 1.0)})
-    sim = simulation(parts, dt_s=1e-7, material={"young_N_m": 1e5, "damping": 0.5, "friction": 0.5},
-                     guard={"max_overlap": 100.0})
+        parts.append(
+            {
+                "vertices_m": v.tolist(),
+                "position_m": tuple(gen.uniform(0, 0.05, 2)),
+                "angle_rad": gen.uniform(0, 6.28),
+                "velocity_m_s": tuple(gen.normal(0, 0.01, 2)),
+                "angular_velocity_rad_s": gen.normal(0, 1.0),
+            }
+        )
+    sim = simulation(
+        parts,
+        dt_s=1e-7,
+        material={"young_N_m": 1e5, "damping": 0.5, "friction": 0.5},
+        guard={"max_overlap": 100.0},
+    )
     sim.advance(1)
     assert len(sim.contacts()["i"]) > 40
     f = 2 * sim.G[2, :40, :2] * sim.mass[:, None] / 1e-14

@@ -20,8 +20,19 @@ def test_tab_f1_coefficients():
 def test_free_fall_and_spin_are_exact(integrator):
     # constant acceleration: both schemes reproduce x0 + v0 t + g t^2/2 and phi0 + w t to round-off
     g = (0.3, -9.81)
-    sim = simulation([{"vertices_m": square(0.01), "position_m": (0.1, 2.0), "velocity_m_s": (0.5, 1.0),
-                       "angular_velocity_rad_s": 3.0}], gravity_m_s2=g, dt_s=1e-4, integrator=integrator)
+    sim = simulation(
+        [
+            {
+                "vertices_m": square(0.01),
+                "position_m": (0.1, 2.0),
+                "velocity_m_s": (0.5, 1.0),
+                "angular_velocity_rad_s": 3.0,
+            }
+        ],
+        gravity_m_s2=g,
+        dt_s=1e-4,
+        integrator=integrator,
+    )
     sim.advance(2000)
     t = 0.2
     expect = [0.1 + 0.5 * t + 0.5 * g[0] * t * t, 2.0 + t + 0.5 * g[1] * t * t, 3.0 * t]
@@ -39,9 +50,13 @@ def test_elastic_flat_bounce_is_a_half_oscillation(integrator):
     k = E * a / math.sqrt(a * a / math.pi)
     period = math.pi * math.sqrt(m / k)
     dt = period / 100
-    sim = simulation([{"vertices_m": square(a), "position_m": (0.0, 0.5 * a + 2 * v0 * dt), "velocity_m_s": (0, -v0)}],
-                     [floor()], dt_s=dt, integrator=integrator,
-                     material={"young_N_m": E, "density_kg_m2": rho, "damping": 0.0, "friction": 0.0})
+    sim = simulation(
+        [{"vertices_m": square(a), "position_m": (0.0, 0.5 * a + 2 * v0 * dt), "velocity_m_s": (0, -v0)}],
+        [floor()],
+        dt_s=dt,
+        integrator=integrator,
+        material={"young_N_m": E, "density_kg_m2": rho, "damping": 0.0, "friction": 0.0},
+    )
     touching = []
     for _ in range(300):
         sim.advance(1)
@@ -54,9 +69,16 @@ def test_elastic_flat_bounce_is_a_half_oscillation(integrator):
 
 def test_time_step_rule():
     assert time_step_rule(1.0, (math.pi / 10) ** 2) == pytest.approx(1.0)
-    sim = simulation([{"vertices_m": square(0.01), "position_m": (0, 0)},
-                      {"vertices_m": [(-0.02, -0.001), (0.02, -0.001), (0.02, 0.001), (-0.02, 0.001)],
-                       "position_m": (1, 1)}], material={"young_N_m": 1e7, "density_kg_m2": 5000.0})
+    sim = simulation(
+        [
+            {"vertices_m": square(0.01), "position_m": (0, 0)},
+            {
+                "vertices_m": [(-0.02, -0.001), (0.02, -0.001), (0.02, 0.001), (-0.02, 0.001)],
+                "position_m": (1, 1),
+            },
+        ],
+        material={"young_N_m": 1e7, "density_kg_m2": 5000.0},
+    )
     # the needle (4 cm x 2 mm) is lighter than the square, and m = pi r_in^2 rho with r_in = 1 mm is lighter still
     assert sim.dt_rule == pytest.approx(0.1 * math.pi * math.sqrt(math.pi * 1e-6 * 5000 / 1e7), rel=1e-12)
     assert sim.dt == pytest.approx(0.5 * sim.dt_rule)

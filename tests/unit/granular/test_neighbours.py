@@ -29,15 +29,22 @@ def test_methods_match_brute_force(spread):
     ref = _brute(x, rad, active, 0.01)
     for method in ("cells", "sweep"):
         start, nb = candidate_pairs(method, x, rad, active, 0.01, walls, n, np.arange(n))
-        got = {(i, int(j)) for i in range(n) for j in nb[start[i]:start[i + 1]] if j < n}
+        got = {(i, int(j)) for i in range(n) for j in nb[start[i] : start[i + 1]] if j < n}
         assert got == ref
         for i in range(n):
-            row = nb[start[i]:start[i + 1]]
+            row = nb[start[i] : start[i + 1]]
             assert np.all(np.diff(row) > 0)  # sorted by j, walls (index n + w) last
             wall_rows = {int(j) - n for j in row if j >= n}
             r = rad[i] + 0.005
-            expect = {w for w in range(2) if active[i] and x[i, 0] + r >= walls[w, 0] and x[i, 0] - r <= walls[w, 1]
-                      and x[i, 1] + r >= walls[w, 2] and x[i, 1] - r <= walls[w, 3]}
+            expect = {
+                w
+                for w in range(2)
+                if active[i]
+                and x[i, 0] + r >= walls[w, 0]
+                and x[i, 0] - r <= walls[w, 1]
+                and x[i, 1] + r >= walls[w, 2]
+                and x[i, 1] - r <= walls[w, 3]
+            }
             assert wall_rows == expect
 
 
@@ -57,9 +64,21 @@ def test_state_is_carried_over_by_pair():
     new_j = np.array([2, 2, 5])
     ft, aa, out = np.zeros(3), np.zeros(3), np.full((3, 2), -1.0)
     old_out = np.arange(6.0).reshape(3, 2)
-    _carry_state(old_start, old_j, np.array([1.0, 2.0, 3.0]), np.array([4.0, 5.0, 6.0]), old_out, new_start, new_j,
-                 ft, aa, out)
-    np.testing.assert_array_equal(ft, [2.0, 3.0, 0.0])  # pair (0, 2) was old pair 1, (1, 2) old pair 2, (1, 5) new
+    _carry_state(
+        old_start,
+        old_j,
+        np.array([1.0, 2.0, 3.0]),
+        np.array([4.0, 5.0, 6.0]),
+        old_out,
+        new_start,
+        new_j,
+        ft,
+        aa,
+        out,
+    )
+    np.testing.assert_array_equal(
+        ft, [2.0, 3.0, 0.0]
+    )  # pair (0, 2) was old pair 1, (1, 2) old pair 2, (1, 5) new
     np.testing.assert_array_equal(aa, [5.0, 6.0, 0.0])
     np.testing.assert_array_equal(out, [[2.0, 3.0], [4.0, 5.0], [0.0, 0.0]])
 
@@ -67,13 +86,30 @@ def test_state_is_carried_over_by_pair():
 def _pile(method, threads):
     numba.set_num_threads(threads)
     try:
-        sim = simulation([], gravity_m_s2=(0.0, -9.81), neighbour_search=method, dt_s=2e-5,
-                         box={"lower_m": (0, 0), "upper_m": (0.1, 0.2)},
-                         blocks=[{"lower_m": (0, 0), "upper_m": (0.1, 0.1), "grid_m": (0.012, 0.012),
-                                  "jitter": "EQUAL", "jitter_fraction": 0.1,
-                                  "shape": {"size_m": (0.005, 0.004), "corners": 7, "corners_spread": 2,
-                                            "corners_dist": "EQUAL", "angle_mode": "RAND1",
-                                            "orientation_dist": "EQUAL"}}])
+        sim = simulation(
+            [],
+            gravity_m_s2=(0.0, -9.81),
+            neighbour_search=method,
+            dt_s=2e-5,
+            box={"lower_m": (0, 0), "upper_m": (0.1, 0.2)},
+            blocks=[
+                {
+                    "lower_m": (0, 0),
+                    "upper_m": (0.1, 0.1),
+                    "grid_m": (0.012, 0.012),
+                    "jitter": "EQUAL",
+                    "jitter_fraction": 0.1,
+                    "shape": {
+                        "size_m": (0.005, 0.004),
+                        "corners": 7,
+                        "corners_spread": 2,
+                        "corners_dist": "EQUAL",
+                        "angle_mode": "RAND1",
+                        "orientation_dist": "EQUAL",
+                    },
+                }
+            ],
+        )
         sim.advance(3000)
         return sim
     finally:

@@ -16,10 +16,23 @@ from porepipe.granular import _run as granular_run
 
 REPO = Path(__file__).parents[3]
 SMALL = {
-    "duration_s": 0.03, "dt_s": 2e-5, "checkpoint_every_steps": 400,
+    "duration_s": 0.03,
+    "dt_s": 2e-5,
+    "checkpoint_every_steps": 400,
     "box": {"lower_m": (0, 0), "upper_m": (0.06, 0.1)},
-    "blocks": [{"lower_m": (0, 0), "upper_m": (0.06, 0.05), "grid_m": (0.012, 0.012),
-                "shape": {"size_m": (0.005, 0.005), "corners": 7, "angle_mode": "RAND1", "orientation_dist": "EQUAL"}}],
+    "blocks": [
+        {
+            "lower_m": (0, 0),
+            "upper_m": (0.06, 0.05),
+            "grid_m": (0.012, 0.012),
+            "shape": {
+                "size_m": (0.005, 0.005),
+                "corners": 7,
+                "angle_mode": "RAND1",
+                "orientation_dist": "EQUAL",
+            },
+        }
+    ],
     "output": {"frames": 4, "series_every": 100},
 }
 
@@ -29,8 +42,21 @@ def test_result_file_layout(tmp_path):
     d = read_granular(out)
     frames, contacts, series = d["frames"], d["contacts"], d["series"]
     assert frames.position.shape == (5, 20, 3) and frames.time_s.values[-1] == pytest.approx(0.03)
-    assert set(contacts.data_vars) >= {"i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area_m2", "frame"}
-    assert len(contacts.contact) > 0 and np.all(contacts.fn_N.values >= 0)  # never attractive without cohesion
+    assert set(contacts.data_vars) >= {
+        "i",
+        "j",
+        "fx_N",
+        "fy_N",
+        "sx_m",
+        "sy_m",
+        "fn_N",
+        "ft_N",
+        "area_m2",
+        "frame",
+    }
+    assert len(contacts.contact) > 0 and np.all(
+        contacts.fn_N.values >= 0
+    )  # never attractive without cohesion
     assert len(series.sample) == 16
     with xr.open_dataset(out, engine="h5netcdf") as ds:
         assert "vertices_m" in ds
@@ -72,7 +98,9 @@ def test_interrupted_run_resumes_identically(tmp_path, monkeypatch):
     monkeypatch.undo()
     calls = []
     original = granular_run.Simulation.restore
-    monkeypatch.setattr(granular_run.Simulation, "restore", lambda self, st: (calls.append(1), original(self, st)))
+    monkeypatch.setattr(
+        granular_run.Simulation, "restore", lambda self, st: (calls.append(1), original(self, st))
+    )
     out = run(settings, tmp_path / "out.h5", seed=2, checkpoint=ck, resume=True, progress=False)
     assert calls and not ck.exists()
     a, b = read_granular(ref), read_granular(out)
@@ -83,29 +111,61 @@ def test_interrupted_run_resumes_identically(tmp_path, monkeypatch):
 def test_stale_checkpoint_is_discarded(tmp_path):
     ck = tmp_path / "ck.npz"
     np.savez(ck, key=np.array("not-this-scene"))
-    out = run(Settings.model_validate(SMALL), tmp_path / "g.h5", seed=1, checkpoint=ck, resume=True, progress=False)
+    out = run(
+        Settings.model_validate(SMALL), tmp_path / "g.h5", seed=1, checkpoint=ck, resume=True, progress=False
+    )
     assert out.is_file() and not ck.exists()
 
 
 def test_cli_and_bad_scene(tmp_path):
     scene = tmp_path / "s.yaml"
-    scene.write_text("name: s\nanalyses: [granular]\ngranular:\n  duration_s: 0.001\n  dt_s: 1.0e-5\n"
-                     "  particles:\n    - {vertices_m: [[0, 0], [0.01, 0], [0.01, 0.01]]}\n")
+    scene.write_text(
+        "name: s\nanalyses: [granular]\ngranular:\n  duration_s: 0.001\n  dt_s: 1.0e-5\n"
+        "  particles:\n    - {vertices_m: [[0, 0], [0.01, 0], [0.01, 0.01]]}\n"
+    )
     exe = [sys.executable, "-m", "porepipe.cli"]
-    ok = subprocess.run([*exe, "granular", str(scene), "-o", str(tmp_path / "g.h5"), "--quiet"],
-                        capture_output=True, text=True, check=False)
+    ok = subprocess.run(
+        [*exe, "granular", str(scene), "-o", str(tmp_path / "g.h5"), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert ok.returncode == 0, ok.stderr
-    scene.write_text("name: s\nanalyses: [granular]\ngranular:\n  particles:\n"
-                     "    - {vertices_m: [[0, 0], [0.01, 0], [0.002, 0.002], [0, 0.01]]}\n")
-    bad = subprocess.run([*exe, "granular", str(scene), "-o", str(tmp_path / "b.h5")], capture_output=True, text=True, check=False)
+    scene.write_text(
+        "name: s\nanalyses: [granular]\ngranular:\n  particles:\n"
+        "    - {vertices_m: [[0, 0], [0.01, 0], [0.002, 0.002], [0, 0.01]]}\n"
+    )
+    bad = subprocess.run(
+        [*exe, "granular", str(scene), "-o", str(tmp_path / "b.h5")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert bad.returncode == 2
-    assert "granular particle 0: not a convex polygon" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+    assert (
+        "granular particle 0: not a convex polygon" in bad.stderr
+        and len(bad.stderr.strip().splitlines()) == 1
+    )
     assert not (tmp_path / "b.h5").exists() and not list(tmp_path.glob(".b.h5*"))
 
 
 def test_workflow_dry_run_has_the_granular_rule(tmp_path):
-    res = subprocess.run([sys.executable, "-m", "porepipe.cli", "run", str(REPO / "config/scenes/granular-box.yaml"),
-                          "-n", "--cores", "1"], capture_output=True, text=True, cwd=tmp_path, check=False)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "porepipe.cli",
+            "run",
+            str(REPO / "config/scenes/granular-box.yaml"),
+            "-n",
+            "--cores",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        check=False,
+    )
     assert res.returncode == 0, res.stdout + res.stderr
     assert "rule granular:" in res.stdout or "granular" in res.stdout
     assert "results/granular-box/granular/granular.h5" in res.stdout

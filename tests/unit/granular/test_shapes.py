@@ -37,8 +37,9 @@ def test_regular_polygon_against_closed_form_and_disk_limit(n):
     p = polygon_properties(regular_polygon(n, R, phase_rad=0.3), rho)
     area = 0.5 * n * R * R * math.sin(2 * math.pi / n)
     assert p["area_m2"] == pytest.approx(area, rel=1e-12)
-    assert p["inertia_kg_m2"] == pytest.approx(rho * area * R * R * (1 + 2 * math.cos(math.pi / n) ** 2) / 6,
-                                               rel=1e-11)
+    assert p["inertia_kg_m2"] == pytest.approx(
+        rho * area * R * R * (1 + 2 * math.cos(math.pi / n) ** 2) / 6, rel=1e-11
+    )
     disk = 0.5 * rho * math.pi * R**4
     # the polygon -> disk error is O(1/n^2): 2 pi^2/(3 n^2) relative in the area, I scales like area * R^2
     assert abs(p["inertia_kg_m2"] / disk - 1) < 4 * math.pi**2 / n**2
@@ -59,13 +60,16 @@ def test_clockwise_input_is_reoriented():
     assert len(out) == 4 and np.all(np.linalg.norm(e, axis=1) > 0)
 
 
-@pytest.mark.parametrize(("verts", "why"), [
-    ([(0, 0), (1, 0)], "at least 3"),
-    ([(0, 0), (2, 0), (1, 0.2), (1, 2)], "not a convex"),
-    ([(0, 0), (1, 0), (2, 0), (1, 1)], "not a convex"),  # collinear corner
-    ([(0, 0), (1, 0), (1, 1), (1, 1), (0, 1)], "not a convex"),  # repeated corner
-    ([(0, 0), (1, 0), (0, 0)], "not a convex"),
-])
+@pytest.mark.parametrize(
+    ("verts", "why"),
+    [
+        ([(0, 0), (1, 0)], "at least 3"),
+        ([(0, 0), (2, 0), (1, 0.2), (1, 2)], "not a convex"),
+        ([(0, 0), (1, 0), (2, 0), (1, 1)], "not a convex"),  # collinear corner
+        ([(0, 0), (1, 0), (1, 1), (1, 1), (0, 1)], "not a convex"),  # repeated corner
+        ([(0, 0), (1, 0), (0, 0)], "not a convex"),
+    ],
+)
 def test_bad_polygons_are_named_errors(verts, why):
     with pytest.raises(PorepipeError, match=rf"particle 17: .*{why}"):
         check_convex(verts, "particle 17")
