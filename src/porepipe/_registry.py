@@ -23,6 +23,7 @@ STAGES: list[tuple[str, str | None]] = [
     ("porepipe.diffusion", "diffusion"),
     ("porepipe.sweep", "sweep"),
     ("porepipe.report", "report"),
+    ("porepipe.granular", "granular"),
 ]
 
 #: scene sections whose presence switches a stage on (default: absent); all others default to their Settings()

@@ -46,6 +46,7 @@ class Analysis(str, enum.Enum):
     diffusion = "diffusion"        # Knudsen diffusion (transmission, Wicke-Kallenbach, msd)
     acquire = "acquire"            # image statistics, calibrated model scene, model-vs-experiment comparison
     report = "report"              # resolution sweep, extrapolation and the accuracy-versus-cost report
+    granular = "granular"          # 2-D frictional DEM of convex polygons (gc2d, Schinner 2001)
 
 
 class _Strict(BaseModel):
@@ -93,12 +94,17 @@ class SceneBase(_Strict):
     seed: int = Field(0, ge=0, strict=True, description="root of every random stream of the scene")
     domain: Domain | None = Field(None, description="the box; required unless the scene starts from an image")
     spheres: Spheres | None = Field(None, description="the matrix; required unless the scene starts from an image")
-    resolutions_um: list[PositiveUm] = Field(min_length=1, description="voxel sizes a in µm, coarse to fine")
+    resolutions_um: list[PositiveUm] = Field(default_factory=list, min_length=1,
+                                             description="voxel sizes a in µm, coarse to fine (none: 2-D granular)")
     segmentation: Segmentation = Segmentation()
     analyses: list[Analysis] = Field(default_factory=lambda: [Analysis.estimate])
 
     @model_validator(mode="after")
     def _model_source(self):
+        if self.analyses and set(self.analyses) <= {Analysis.granular}:
+            return self  # a 2-D granular scene has no box, spheres or voxels
+        if not self.resolutions_um:
+            raise ValueError("missing resolutions_um: give at least one voxel size in µm")
         if getattr(self, "acquire", None) is None:
             missing = [k for k in ("domain", "spheres") if getattr(self, k) is None]
             if missing:

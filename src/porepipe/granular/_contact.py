@@ -1,0 +1,216 @@
+"""Narrow phase and contact law of gc2d (Schinner 2001, §2.2.2, Fig. 2.4): numba helpers, no validation.
+
+Overlap of two convex polygons by Sutherland-Hodgman clipping with edge tags: every edge of the working polygon
+remembers whether it lies on the boundary of P (tag < 0) or on edge k of Q (tag k >= 0); a vertex whose incoming
+and outgoing edges belong to different polygons is a boundary crossing point. Two crossings c1, c2 give the
+contact line of Fig. 2.4.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from porepipe._shared.numba_config import FASTMATH
+
+#: contact line shorter than this fraction of the overlap's extent counts as degenerate (fall-back normal)
+_LINE_EPS = 1e-9
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _cross(ax, ay, bx, by):
+    return ax * by - ay * bx
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b, side):
+    """Clip convex P (CCW, n_p corners) by convex Q (CCW); the result (count returned) is in buf_a / tag_a.
+
+    The clip starts at the edge of Q that faces P's centroid (cpx, cpy), so that the working polygon shrinks to
+    the small overlap region after the first pass.
+    """
+    for k in range(n_p):
+        buf_a[k, 0] = P[k, 0]
+        buf_a[k, 1] = P[k, 1]
+        tag_a[k] = -1 - k
+    m = n_p
+    best = -1e300
+    k0 = 0
+    for k in range(n_q):
+        k1 = k + 1 if k + 1 < n_q else 0
+        ex = Q[k1, 0] - Q[k, 0]
+        ey = Q[k1, 1] - Q[k, 1]
+        d = ey * (cpx - cqx) - ex * (cpy - cqy)  # outward normal (ey, -ex) . (cP - cQ), times |e|
+        d = d * abs(d) / (ex * ex + ey * ey)  # sign(d) d^2/|e|^2: ranks like the normalised distance, no sqrt
+        if d > best:
+            best = d
+            k0 = k
+    src, stag, dst, dtag = buf_a, tag_a, buf_b, tag_b
+    for kk in range(n_q):
+        k = k0 + kk
+        if k >= n_q:
+            k -= n_q
+        k1 = k + 1 if k + 1 < n_q else 0
+        qx = Q[k, 0]
+        qy = Q[k, 1]
+        ex = Q[k1, 0] - qx
+        ey = Q[k1, 1] - qy
+        lo = 0.0
+        for v in range(m):
+            dv = _cross(ex, ey, src[v, 0] - qx, src[v, 1] - qy)
+            side[v] = dv
+            lo = min(lo, dv)
+        if lo >= 0.0:
+            continue  # the whole working polygon is inside this edge: nothing to clip, nothing to copy
+        out = 0
+        ax = src[m - 1, 0]
+        ay = src[m - 1, 1]
+        ta = stag[m - 1]
+        da = side[m - 1]
+        for v in range(m):
+            bx = src[v, 0]
+            by = src[v, 1]
+            db = side[v]
+            if da >= 0.0:
+                dst[out, 0] = ax
+                dst[out, 1] = ay
+                dtag[out] = ta
+                out += 1
+                if db < 0.0:
+                    t = da / (da - db)
+                    dst[out, 0] = ax + t * (bx - ax)
+                    dst[out, 1] = ay + t * (by - ay)
+                    dtag[out] = k
+                    out += 1
+            elif db >= 0.0:
+                t = da / (da - db)
+                dst[out, 0] = ax + t * (bx - ax)
+                dst[out, 1] = ay + t * (by - ay)
+                dtag[out] = ta
+                out += 1
+            ax = bx
+            ay = by
+            ta = stag[v]
+            da = db
+        m = out
+        src, stag, dst, dtag = dst, dtag, src, stag
+        if m < 3:
+            return 0
+    if src is not buf_a:
+        for v in range(m):
+            buf_a[v, 0] = src[v, 0]
+            buf_a[v, 1] = src[v, 1]
+            tag_a[v] = stag[v]
+    return m
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _overlap_geometry(P, n_p, Q, n_q, cpx, cpy, cqx, cqy, buf_a, tag_a, buf_b, tag_b, side, out):
+    """Overlap of convex polygons P and Q: fills out = (A, c1x, c1y, c2x, c2y, sx, sy, gx, gy, ok_line, m).
+
+    A is the overlap area (0 if they do not overlap), c1/c2 the two boundary crossings that are farthest apart,
+    s their midpoint (the application point), g the overlap centroid, ok_line = 1 if c1c2 is a proper line
+    (two crossings, not coincident) and 0 otherwise (one polygon inside the other, coincident polygons);
+    out[10] = number of corners of the overlap polygon (left in buf_a).
+    """
+    m = _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b, side)
+    for k in range(11):
+        out[k] = 0.0
+    if m < 3:
+        return
+    out[10] = m
+    ox = buf_a[0, 0]
+    oy = buf_a[0, 1]
+    a2 = 0.0
+    gx = 0.0
+    gy = 0.0
+    for v in range(1, m - 1):
+        x1 = buf_a[v, 0] - ox
+        y1 = buf_a[v, 1] - oy
+        x2 = buf_a[v + 1, 0] - ox
+        y2 = buf_a[v + 1, 1] - oy
+        c = x1 * y2 - x2 * y1
+        a2 += c
+        gx += c * (x1 + x2)
+        gy += c * (y1 + y2)
+    if a2 <= 0.0:
+        return
+    out[0] = 0.5 * a2
+    out[7] = ox + gx / (3.0 * a2)
+    out[8] = oy + gy / (3.0 * a2)
+    # boundary crossings: incoming and outgoing edge tags from different polygons; keep the farthest pair
+    best = -1.0
+    ext = 0.0
+    for v in range(m):
+        tin = tag_a[v - 1] if v > 0 else tag_a[m - 1]
+        dx = buf_a[v, 0] - out[7]
+        dy = buf_a[v, 1] - out[8]
+        ext = max(ext, dx * dx + dy * dy)
+        if (tin < 0) == (tag_a[v] < 0):
+            continue
+        for w in range(v):
+            tw = tag_a[w - 1] if w > 0 else tag_a[m - 1]
+            if (tw < 0) == (tag_a[w] < 0):
+                continue
+            dx = buf_a[v, 0] - buf_a[w, 0]
+            dy = buf_a[v, 1] - buf_a[w, 1]
+            d2 = dx * dx + dy * dy
+            if d2 > best:
+                best = d2
+                out[1] = buf_a[w, 0]
+                out[2] = buf_a[w, 1]
+                out[3] = buf_a[v, 0]
+                out[4] = buf_a[v, 1]
+    if best > _LINE_EPS * _LINE_EPS * ext and best > 0.0:
+        out[5] = 0.5 * (out[1] + out[3])
+        out[6] = 0.5 * (out[2] + out[4])
+        out[9] = 1.0
+    else:
+        out[5] = out[7]
+        out[6] = out[8]
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _contact_frame(geo, xi, yi, xj, yj, j_is_wall, buf):
+    """Normal n (from i to j), tangent t = n rotated by +90 deg, and contact-line length L; returns (nx, ny, L).
+
+    With a proper contact line, n is perpendicular to c1c2. Otherwise (containment, coincident polygons) n is
+    the centroid direction (or +y for coincident centroids) and L the overlap's width across n.
+    """
+    sx = geo[5]
+    sy = geo[6]
+    if geo[9] > 0.0:
+        tx = geo[3] - geo[1]
+        ty = geo[4] - geo[2]
+        L = math.sqrt(tx * tx + ty * ty)
+        nx = ty / L
+        ny = -tx / L
+        if j_is_wall:
+            s = nx * (sx - xi) + ny * (sy - yi)
+        else:
+            s = nx * (xj - xi) + ny * (yj - yi)
+        if s < 0.0:
+            nx = -nx
+            ny = -ny
+        return nx, ny, L
+    dx = xj - xi
+    dy = yj - yi
+    d = math.sqrt(dx * dx + dy * dy)
+    if j_is_wall or d == 0.0:
+        dx = sx - xi
+        dy = sy - yi
+        d = math.sqrt(dx * dx + dy * dy)
+    if d > 0.0:
+        nx = dx / d
+        ny = dy / d
+    else:
+        nx = 0.0
+        ny = 1.0
+    lo = 1e300
+    hi = -1e300
+    for v in range(int(geo[10])):
+        p = -ny * buf[v, 0] + nx * buf[v, 1]
+        lo = min(lo, p)
+        hi = max(hi, p)
+    return nx, ny, max(hi - lo, 0.0)

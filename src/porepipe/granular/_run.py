@@ -1,0 +1,223 @@
+"""``run``: a ``granular:`` scene section in, ``granular.h5`` out (frames, contacts, time series, cost).
+
+Result layout (``xarray.open_dataset(path, engine="h5netcdf")`` reads the root; ``group="contacts"`` and
+``group="series"`` the others):
+
+- root: ``position`` (frame, particle, dof = x, y, phi) in m / rad, ``velocity`` (m/s, rad/s), ``active``,
+  ``time_s`` (frame); particle outlines ``vertices_m`` (particle, corner, xy; NaN-padded), ``mass_kg``,
+  ``inertia_kg_m2``; walls ``wall_vertices_m`` (wall, corner, xy);
+- ``contacts``: one row per contact and frame: ``frame``, ``i``, ``j`` (j >= n_particles: wall j - n), force on i
+  ``fx_N``, ``fy_N`` (-F on j), application point ``sx_m``, ``sy_m``, ``fn_N``, ``ft_N``, ``area_m2``,
+  ``length_m``;
+- ``series``: ``time_s``, ``kinetic_energy_J``, ``contacts``, ``coordination``, ``max_overlap``.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.progress import Progress
+from porepipe._shared.store import ResultWriter, hash_of
+from porepipe.granular._api import Frame, Simulation
+from porepipe.granular._settings import Settings
+
+STAGE = "granular"
+_CONTACT_KEYS = ("i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area_m2", "length_m")
+
+
+def result_hash(settings: Settings, seed: int) -> str:
+    """Hash of what determines the result: the ``granular`` section and the scene seed."""
+    return hash_of({"seed": int(seed), "granular": settings.model_dump(mode="json")})
+
+
+def _save_checkpoint(path: Path, key: str, sim: Simulation, frames: list, series: list) -> None:
+    state = sim.state()
+    tmp = path.with_name(f".{path.name}.tmp")
+    with open(tmp, "wb") as fh:
+        np.savez(
+            fh,
+            key=np.array(key),
+            frames=np.array(_pack_frames(frames), dtype=object),
+            series=np.asarray(series, dtype=np.float64).reshape(-1, 5),
+            **state,
+        )
+    tmp.replace(path)
+
+
+def _pack_frames(frames: list) -> list:
+    return [(f.time_s, f.position, f.velocity, f.active, f.contacts) for f in frames]
+
+
+def _load_checkpoint(path: Path, key: str):
+    """(state, frames, series) of a checkpoint with the same key, else None (a stale one is discarded)."""
+    if not path.is_file():
+        return None
+    with np.load(path, allow_pickle=True) as z:
+        if str(z["key"]) != key:
+            print(
+                f"porepipe granular: checkpoint {path} is for another scene (key mismatch); starting afresh"
+            )
+            path.unlink()
+            return None
+        state = {k: z[k] for k in (*Simulation.STATE, "scalars", "max_overlap_seen")}
+        frames = [Frame(*f) for f in z["frames"]]
+        series = [tuple(r) for r in z["series"]]
+    return state, frames, series
+
+
+def _sample(sim: Simulation) -> tuple:
+    c = sim.contacts()
+    n_act = max(int(sim.active[: sim.n_mob].sum()), 1)
+    mobile_pairs = int(np.sum(c["j"] < sim.n_mob))
+    return (sim.time_s, sim.kinetic_energy(), len(c["i"]), 2.0 * mobile_pairs / n_act, sim.max_overlap_seen)
+
+
+def run(
+    settings: Settings,
+    out,
+    *,
+    seed: int = 0,
+    scene: str = "",
+    threads: int | None = None,
+    checkpoint=None,
+    resume: bool = False,
+    progress: bool = True,
+) -> Path:
+    """Run the granular DEM of ``settings`` and write the result file ``out``.
+
+    Parameters
+    ----------
+    settings : Settings
+        The scene's ``granular:`` section.
+    out : path-like
+        Result HDF5 file (written atomically).
+    seed : int
+        Scene seed.
+    scene : str
+        Scene name (recorded in the file).
+    threads : int, optional
+        Thread count actually used (recorded).
+    checkpoint : path-like, optional
+        Checkpoint file, written every ``checkpoint_every_steps`` and deleted on success.
+    resume : bool
+        Continue from ``checkpoint`` if it exists and belongs to the same scene part.
+    progress : bool
+        Print progress lines on stderr.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out``.
+    """
+    out = Path(out)
+    key = result_hash(settings, seed)
+    with ResultWriter(out, stage=STAGE, scene=scene, scene_hash=key, threads=threads) as w:
+        sim, frames, series, rate = _simulate(settings, seed, checkpoint, resume, progress, key)
+        _write(w, sim, frames, series)
+        w.attrs.update(
+            {
+                "steps": sim.step,
+                "dt_s": sim.dt,
+                "dt_rule_s": sim.dt_rule,
+                "rebuilds": sim.rebuilds,
+                "integrator": settings.integrator.value,
+                "neighbour_search": settings.neighbour_search.value,
+                "effects": ",".join(k for k, v in sim.effects.items() if v) or "none",
+                "n_particles": sim.n_mob,
+                "n_walls": sim.n_walls,
+                "particle_steps_per_s": rate,
+                "max_overlap": sim.max_overlap_seen,
+            }
+        )
+    if checkpoint:
+        Path(checkpoint).unlink(missing_ok=True)
+    return out
+
+
+def _simulate(settings, seed, checkpoint, resume, progress, key):
+    """Step the simulation to the end, collecting frames and time series; checkpoint on the way."""
+    sim = Simulation(settings, seed)
+    total = round(settings.duration_s / sim.dt)
+    frame_steps = np.unique(np.round(np.linspace(0, total, settings.output.frames + 1)).astype(np.int64))
+    frames: list[Frame] = []
+    series: list[tuple] = []
+    ck = Path(checkpoint) if checkpoint else None
+    if ck is not None and resume:
+        loaded = _load_checkpoint(ck, key)
+        if loaded is not None:
+            state, frames, series = loaded
+            sim.restore(state)
+    prog = Progress("granular", total) if progress else None
+    t0 = time.perf_counter()
+    step0 = sim.step
+    every = settings.output.series_every
+    while True:
+        if sim.step in frame_steps and (not frames or frames[-1].time_s < sim.time_s):
+            frames.append(sim.frame())
+        if sim.step % every == 0 and (not series or series[-1][0] < sim.time_s):
+            series.append(_sample(sim))
+        if sim.step >= total:
+            break
+        nxt = min(total, (sim.step // every + 1) * every, int(frame_steps[frame_steps > sim.step][0]))
+        nxt = min(nxt, (sim.step // settings.checkpoint_every_steps + 1) * settings.checkpoint_every_steps)
+        sim.advance(nxt - sim.step)
+        if ck is not None and sim.step % settings.checkpoint_every_steps == 0 and sim.step < total:
+            _save_checkpoint(ck, key, sim, frames, series)
+        if prog is not None:
+            prog.update(sim.step, f"t = {sim.time_s:.4g} s, {len(sim.contacts()['i'])} contacts")
+    wall = time.perf_counter() - t0
+    rate = sim.n_mob * (total - step0) / wall if wall > 0 else 0.0
+    return sim, frames, series, rate
+
+
+def _write(w: ResultWriter, sim: Simulation, frames: list[Frame], series: list[tuple]) -> None:
+    n = sim.n_mob
+    kmax = sim.body.shape[1]
+    verts = np.full((n, kmax, 2), np.nan)
+    for i in range(n):
+        verts[i, : sim.nc[i]] = sim.body[i, : sim.nc[i]]
+    wverts = np.full((sim.n_walls, kmax, 2), np.nan)
+    for k in range(sim.n_walls):
+        b = n + k
+        wverts[k, : sim.nc[b]] = sim.body[b, : sim.nc[b]] + sim.G[0, b, :2]
+    root = xr.Dataset(
+        {
+            "position": (("frame", "particle", "dof"), np.stack([f.position for f in frames])),
+            "velocity": (("frame", "particle", "dof"), np.stack([f.velocity for f in frames])),
+            "active": (("frame", "particle"), np.stack([f.active for f in frames])),
+            "time_s": (("frame",), np.array([f.time_s for f in frames])),
+            "vertices_m": (("particle", "corner", "xy"), verts),
+            "n_corners": (("particle",), sim.nc[:n].copy()),
+            "mass_kg": (("particle",), sim.mass),
+            "inertia_kg_m2": (("particle",), sim.inertia),
+            "wall_vertices_m": (("wall", "corner", "xy"), wverts),
+        },
+        coords={"dof": ["x", "y", "phi"], "xy": ["x", "y"], "wall_name": (("wall",), sim.wall_names)},
+        attrs={"angles": "counter-clockwise (gc2d: clockwise)", "units": "SI, 2-D (N/m, kg/m^2)"},
+    )
+    w.write_table(root)
+    rows = {k: np.concatenate([f.contacts[k] for f in frames]) for k in _CONTACT_KEYS}
+    rows["frame"] = np.concatenate([np.full(len(f.contacts["i"]), k, np.int64) for k, f in enumerate(frames)])
+    w.write_table(xr.Dataset({k: (("contact",), v) for k, v in rows.items()}), group="contacts")
+    s = np.asarray(series, dtype=np.float64).reshape(-1, 5)
+    names = ("time_s", "kinetic_energy_J", "contacts", "coordination", "max_overlap")
+    w.write_table(xr.Dataset({k: (("sample",), s[:, c]) for c, k in enumerate(names)}), group="series")
+
+
+def read_granular(path) -> dict[str, xr.Dataset]:
+    """The three tables of a ``granular.h5``: ``frames`` (root), ``contacts``, ``series``."""
+    from porepipe._shared.store import read_table
+
+    path = Path(path)
+    if not path.is_file():
+        raise PorepipeError(f"granular result {path} does not exist")
+    return {
+        "frames": read_table(path),
+        "contacts": read_table(path, "contacts"),
+        "series": read_table(path, "series"),
+    }

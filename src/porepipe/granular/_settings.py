@@ -1,0 +1,249 @@
+"""Scene section ``granular``: a 2-D DEM of convex polygons with friction (gc2d, Schinner 2001).
+
+SI units throughout, named in the keys (``_m``, ``_s``, ``_kg_m2``, ``_N_m``); 2-D: Young's modulus in N/m,
+density in kg/m². An optional effect (cohesion, velocity-weakening friction, variable gravity, vibrating walls,
+wall surface velocity, drag springs) is compiled into the kernel only when the scene names it, i.e. when its
+block or key is present with a non-trivial value.
+"""
+
+from __future__ import annotations
+
+import enum
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from porepipe.granular._shapes import AngleMode, Dist
+
+PosFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+Vec2 = tuple[Finite, Finite]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Integrator(str, enum.Enum):
+    gear = "gear"  # 6-value Gear predictor-corrector, one correction (App. F, Tab. F.1 p = 2)
+    verlet = "verlet"  # velocity Verlet (forces at the half-step velocity)
+
+
+class NeighbourSearch(str, enum.Enum):
+    sweep = "sweep"  # sort-and-sweep with insertion sort (§2.4.2)
+    cells = "cells"  # uniform cell list
+
+
+class ShapeKind(str, enum.Enum):
+    ellipse = "ellipse"  # random convex polygon on an ellipse (App. B.1.6)
+    rectangle = "rectangle"  # a x b, optionally bevelled (cut) or rounded (App. D)
+
+
+class Lattice(str, enum.Enum):
+    rect = "RECT"
+    fcc = "FCC"  # two offset square lattices
+
+
+class Waveform(str, enum.Enum):
+    cosinus = "COSINUS"
+    sawtooth = "SAWTOOTH"
+    tapping = "TAPPING"
+    triangle = "TRIANGLE"
+
+
+class GravityKind(str, enum.Enum):
+    constant = "CONSTANT"
+    linear = "LINEAR"
+    step = "STEP"
+    smooth_step = "SMOOTH_STEP"
+
+
+class DropMode(str, enum.Enum):
+    abs = "ABS"  # insert at height y
+    rel = "REL"  # insert at y above the highest centroid in the window
+
+
+class Material(_Strict):
+    """Contact law parameters (§2.2.2); one material for all particles and walls."""
+
+    young_N_m: PosFloat = Field(1e7, description="E of F_n = E A / l (Eq. 2.20), N/m (2-D)")
+    density_kg_m2: PosFloat = Field(5000.0, description="particle density rho, kg/m² (Eq. 2.10)")
+    damping: NonNegFloat = Field(0.5, description="gamma of the normal damping (Eq. 2.21); 0 = elastic")
+    friction: NonNegFloat = Field(0.6, description="Coulomb mu (Eq. 2.24)")
+    tangential_damping: NonNegFloat = Field(1.0, description="factor on D_t = v_t sqrt(2/7 E m_t) (Eq. 2.26)")
+    cohesion_N_m: NonNegFloat = Field(0.0, description="k_coh of F = k_coh x contact-line length (Eq. 2.28)")
+    velocity_weakening: bool = Field(False, description="F_r = mu (|v_t|/1 m/s)^(-1/10) F_n (Eq. 2.25)")
+    weakening_v_min_m_s: PosFloat = Field(
+        1e-3, description="|v_t| floor of the weakening law (finite at rest)"
+    )
+
+
+class Shape(_Strict):
+    """Shapes of generated particles: sizes, corner numbers, orientations (App. B.1.6)."""
+
+    kind: ShapeKind = ShapeKind.ellipse
+    size_m: Vec2 = Field(
+        (0.005, 0.005), description="semi-axes (a, b) of the ellipse, or edges of a rectangle, m"
+    )
+    size_spread: NonNegFloat = Field(0.0, lt=1, description="I of Part_Var_Size (relative)")
+    size_dist: Dist = Field(Dist.const, description="CONST, EQUAL or GAUSS; a and b are drawn independently")
+    corners: int = Field(8, ge=3, description="N_E")
+    corners_spread: int = Field(0, ge=0, description="N_I: corner numbers N_E ± N_I")
+    corners_dist: Dist = Dist.const
+    angle_mode: AngleMode = Field(AngleMode.regular, description="corner placement on the ellipse")
+    orientation_rad: Finite = Field(0.0, description="phi_0")
+    orientation_dist: Dist = Field(
+        Dist.const, description="EQUAL: [0, 2 pi); GAUSS: ]phi_0 - pi/2, phi_0 + pi/2["
+    )
+    cut: float = Field(0.0, ge=0, lt=0.5, description="rectangle bevel fraction c")
+    round_radius_m: NonNegFloat = Field(0.0, description="rectangle corner radius (0 = sharp)")
+    round_corners: int = Field(4, ge=2, description="corners per rounded rectangle corner")
+
+    @model_validator(mode="after")
+    def _corners_ok(self):
+        if self.corners - self.corners_spread < 3:
+            raise ValueError(f"corners - corners_spread = {self.corners - self.corners_spread} < 3")
+        return self
+
+
+class Particle(_Strict):
+    """One explicitly given particle (PARTICLE object, App. B.1.4)."""
+
+    vertices_m: list[Vec2] | None = Field(None, description="corners (body frame, any origin), CCW or CW")
+    shape: Shape | None = Field(None, description="or a generated shape (one draw)")
+    position_m: Vec2 = Field((0.0, 0.0), description="centroid position")
+    angle_rad: Finite = 0.0
+    velocity_m_s: Vec2 = (0.0, 0.0)
+    angular_velocity_rad_s: Finite = 0.0
+
+    @model_validator(mode="after")
+    def _one_shape(self):
+        if (self.vertices_m is None) == (self.shape is None):
+            raise ValueError("give exactly one of vertices_m or shape")
+        return self
+
+
+class Block(_Strict):
+    """GENERATE_BLOCK: particles on a lattice in a rectangle, with optional jitter (App. B.1.6)."""
+
+    lattice: Lattice = Lattice.rect
+    jitter: Dist = Field(
+        Dist.const, description="CONST (exact lattice), EQUAL or GAUSS within ±grid/2·jitter_fraction"
+    )
+    jitter_fraction: NonNegFloat = Field(
+        0.0, le=1.0, description="jitter amplitude in units of half the grid"
+    )
+    lower_m: Vec2 = Field(description="lower-left corner of the block")
+    upper_m: Vec2 = Field(description="upper-right corner of the block")
+    grid_m: tuple[PosFloat, PosFloat] = Field(description="GRID_DISTANCE (dx, dy)")
+    shape: Shape = Shape()
+    max_count: int | None = Field(None, ge=1, description="stop after this many particles")
+
+
+class DropSource(_Strict):
+    """DROPSOURCE (App. B.1.7): one particle every ``every_s`` at a uniform x in [x - w/2, x + w/2]."""
+
+    mode: DropMode = DropMode.abs
+    x_m: Finite
+    y_m: Finite
+    width_m: NonNegFloat = 0.0
+    every_s: PosFloat = 0.1
+    from_s: NonNegFloat = 0.0
+    to_s: NonNegFloat = Field(description="last insertion time")
+    velocity_m_s: Vec2 = (0.0, 0.0)
+    shape: Shape = Shape(corners=8, corners_spread=2, corners_dist=Dist.equal, size_m=(0.01, 0.01))
+
+
+class Vibration(_Strict):
+    """Vibrating wall (App. B.1.5.2): offset A(t) along (cos angle, sin angle) during [from_s, to_s]."""
+
+    waveform: Waveform = Waveform.cosinus
+    amplitude_m: NonNegFloat = Field(1e-4, description="W")
+    frequency_hz: PosFloat = Field(20.0, description="f")
+    angle_rad: Finite = Field(1.5707963267948966, description="direction, default pi/2 (up)")
+    from_s: NonNegFloat = 0.0
+    to_s: PosFloat = 1e30
+
+
+class Wall(_Strict):
+    """WALL: an immobile convex polygon (App. B.1.5), optionally vibrating or with a surface velocity."""
+
+    name: str = "wall"
+    vertices_m: list[Vec2] = Field(min_length=3, description="corners (world frame before offset/angle)")
+    offset_m: Vec2 = (0.0, 0.0)
+    angle_rad: Finite = Field(0.0, description="rotation about the origin (CCW)")
+    surface_velocity_m_s: Finite = Field(0.0, description="tangential surface speed along the CCW boundary")
+    vibration: Vibration | None = None
+
+
+class Box(_Strict):
+    """Convenience: an open-top (or closed) box of four wall slabs around [x0, x1] x [y0, y1]."""
+
+    lower_m: Vec2
+    upper_m: Vec2
+    thickness_m: PosFloat = 0.01
+    closed_top: bool = False
+
+
+class Gravity(_Strict):
+    """Time-dependent gravity magnitude along the scene's gravity direction (App. B.1.2.2)."""
+
+    kind: GravityKind = GravityKind.constant
+    g1_m_s2: NonNegFloat = 9.81
+    g2_m_s2: NonNegFloat = 9.81
+    time_s: tuple[NonNegFloat, NonNegFloat] = (0.0, 1.0)
+    steps: int = Field(1, ge=1, description="p1: number of steps (STEP, SMOOTH_STEP)")
+    ramp: float = Field(0.0, ge=0, le=1, description="p2: relative ramp width (SMOOTH_STEP)")
+
+
+class DragSpring(_Strict):
+    """Drag spring on a particle (App. B.1.4.2): free end moves with velocity_m_s during time_s."""
+
+    particle: int = Field(ge=0, description="index of the particle (order: particles, blocks, drop sources)")
+    k_N_m: PosFloat = Field(100.0, description="DRAG_K")
+    fixing_point_m: Vec2 = Field((0.0, 0.0), description="attachment relative to the centroid (body frame)")
+    velocity_m_s: Vec2 = (0.01, 0.0)
+    time_s: tuple[NonNegFloat, NonNegFloat] = (0.0, 1e30)
+
+
+class Guard(_Strict):
+    """Stability guard: stop with a message (and the dt to try) instead of writing garbage (Eq. 2.9)."""
+
+    max_overlap: PosFloat = Field(
+        0.3, description="overlap area / r_eq² of the smaller particle (r_eq² = area/pi)"
+    )
+    max_move: PosFloat = Field(
+        0.2, description="largest displacement per step, in inscribed radii of the smallest"
+    )
+
+
+class Output(_Strict):
+    frames: int = Field(10, ge=1, description="frames of particle state and contacts written (evenly spaced)")
+    series_every: int = Field(100, ge=1, description="time-series sample every this many steps")
+
+
+class Settings(_Strict):
+    """The granular DEM run of a scene."""
+
+    dt_s: PosFloat | None = Field(
+        None, description="time step; default 0.5 x (pi/10) sqrt(m_min/E) (Eq. 2.9)"
+    )
+    duration_s: NonNegFloat = Field(0.1, description="simulated time")
+    integrator: Integrator = Integrator.gear
+    neighbour_search: NeighbourSearch = NeighbourSearch.sweep
+    skin_m: PosFloat | None = Field(
+        None, description="Verlet skin (default: 0.3 x the smallest circumradius)"
+    )
+    gravity_m_s2: Vec2 = Field((0.0, -9.81), description="g vector (Eq. 2.13)")
+    gravity: Gravity | None = Field(None, description="time-dependent g (effect variable_gravity)")
+    material: Material = Material()
+    particles: list[Particle] = Field(default_factory=list)
+    blocks: list[Block] = Field(default_factory=list)
+    drop_sources: list[DropSource] = Field(default_factory=list)
+    walls: list[Wall] = Field(default_factory=list)
+    box: Box | None = None
+    drag_springs: list[DragSpring] = Field(default_factory=list)
+    guard: Guard = Guard()
+    output: Output = Output()
+    checkpoint_every_steps: int = Field(20000, ge=1, description="checkpoint interval of long runs")

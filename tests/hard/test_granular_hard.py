@@ -1,0 +1,136 @@
+"""Hard cases of the granular DEM: degenerate contacts, extreme aspect ratios, an unstable time step, NaN,
+zero gravity, a particle outside every wall, bad input."""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "granular"))
+from naive_granular import floor, simulation, square
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.granular import Settings, Simulation
+from porepipe.scene import SceneError, parse_scene
+
+SOFT = {"young_N_m": 1e6, "density_kg_m2": 1000.0}
+
+
+def _finite(sim):
+    assert np.all(np.isfinite(sim.G)) and np.all(np.isfinite(sim.pout))
+
+
+def test_coincident_polygons_are_refused_at_the_start_and_finite_when_allowed():
+    p = {"vertices_m": square(0.01), "position_m": (0.0, 0.0)}
+    with pytest.raises(PorepipeError, match="initial placement overlaps"):
+        simulation([p, p], dt_s=1e-6, material=SOFT).advance(1)
+    sim = simulation([p, p], dt_s=1e-7, material=SOFT, guard={"max_overlap": 10.0, "max_move": 10.0})
+    sim.advance(20)
+    _finite(sim)
+    # the fall-back normal for coincident centroids is +y: they separate along y, symmetrically
+    assert sim.velocity[1, 1] > 0 > sim.velocity[0, 1]
+    assert sim.velocity[0, 1] == pytest.approx(-sim.velocity[1, 1], rel=1e-12)
+
+
+def test_vertex_exactly_on_an_edge_and_parallel_touching_edges():
+    tip = {"vertices_m": [(0.0, 0.0), (0.01, 0.01), (-0.01, 0.01)], "position_m": (0.0, 0.02 / 3)}  # centroid
+    flat = {"vertices_m": square(0.01), "position_m": (0.05, 0.005)}
+    sim = simulation([tip, flat], [floor()], dt_s=1e-6, gravity_m_s2=(0.0, -9.81), material=SOFT)
+    y_tip = sim.position[0, 1] + min(v[1] for v in sim.body[0, :3])
+    assert y_tip == pytest.approx(
+        0.0, abs=1e-15
+    )  # the tip exactly on the floor's edge, the square flush on it
+    sim.advance(1)
+    # after one step they have sunk by g dt^2/2 = 5e-12 m: overlap areas of that order, finite normals
+    assert np.all(sim.contacts()["area_m2"] < 1e-13)
+    _finite(sim)
+    sim.advance(3000)
+    _finite(sim)
+    c = sim.contacts()
+    assert set(c["i"].tolist()) == {0, 1} and np.all(c["fn_N"] >= 0)
+
+
+def test_needle_thin_polygon_uses_the_inscribed_radius():
+    needle = [(-0.02, -1e-4), (0.02, -1e-4), (0.02, 1e-4), (-0.02, 1e-4)]
+    sim = simulation(
+        [{"vertices_m": needle, "position_m": (0.0, 0.008), "angle_rad": 0.3}],
+        [floor()],
+        gravity_m_s2=(0.0, -9.81),
+        material={"young_N_m": 1e7, "density_kg_m2": 1000.0},
+    )
+    # Eq. 2.9 with m = pi r_in^2 rho (r_in = 0.1 mm), not the needle's mass (8x larger)
+    assert sim.dt == pytest.approx(0.5 * 0.1 * math.pi * math.sqrt(math.pi * 1e-8 * 1000 / 1e7), rel=1e-12)
+    touched = 0
+    for _ in range(100):
+        sim.advance(int(0.0005 / sim.dt))
+        _finite(sim)
+        touched += len(sim.contacts()["i"])
+        assert sim.wv[0, :4, 1].min() > -2e-5  # never deeper than 1/5 of its thickness into the floor
+    assert touched > 0
+
+
+def test_too_large_dt_for_E_fires_the_guard_with_the_dt_to_try():
+    p = {"vertices_m": square(0.01), "position_m": (0.0, 0.006), "velocity_m_s": (0.0, -1.0)}
+    sim = simulation([p], [floor()], dt_s=1e-4, material={"young_N_m": 1e12, "density_kg_m2": 1000.0})
+    with pytest.raises(PorepipeError, match=r"unstable at step \d+ .*rerun with granular.dt_s <= ") as err:
+        sim.advance(1000)
+    assert "(pi/10) sqrt(m_min/E)" in str(err.value)
+
+
+def test_nan_velocity_is_caught():
+    sim = simulation([{"vertices_m": square(0.01), "position_m": (0.0, 0.0)}], material=SOFT)
+    sim.G[1, 0, 0] = np.nan
+    with pytest.raises(PorepipeError, match="non-finite"):
+        sim.advance(5)
+
+
+def test_particle_outside_every_wall_falls_freely():
+    sim = simulation(
+        [{"vertices_m": square(0.01), "position_m": (5.0, -3.0)}],
+        [floor()],
+        dt_s=1e-4,
+        gravity_m_s2=(0.0, -9.81),
+        material=SOFT,
+    )
+    sim.advance(1000)
+    _finite(sim)
+    assert sim.position[0, 1] == pytest.approx(-3.0 - 0.5 * 9.81 * 0.1**2, rel=1e-12)
+    assert len(sim.nb_j) == 0  # no candidate pairs at all
+
+
+def test_bad_input_names_the_key():
+    with pytest.raises(PorepipeError, match="granular particle 1: not a convex polygon"):
+        Simulation(
+            Settings.model_validate(
+                {
+                    "particles": [
+                        {"vertices_m": square(0.01)},
+                        {"vertices_m": [(0, 0), (1, 0), (0.1, 0.1), (0, 1)]},
+                    ]
+                }
+            )
+        )
+    with pytest.raises(PorepipeError, match="granular wall 'w': not a convex polygon"):
+        Simulation(
+            Settings.model_validate(
+                {
+                    "particles": [{"vertices_m": square(0.01)}],
+                    "walls": [{"name": "w", "vertices_m": [(0, 0), (1, 0), (1, 0)]}],
+                }
+            )
+        )
+    with pytest.raises(PorepipeError, match="no particles"):
+        Simulation(Settings())
+    with pytest.raises(SceneError, match="granular.material.young_N_m"):
+        parse_scene({"name": "x", "analyses": ["granular"], "granular": {"material": {"young_N_m": -1}}})
+    with pytest.raises(SceneError, match="granular.dt_seconds"):
+        parse_scene({"name": "x", "analyses": ["granular"], "granular": {"dt_seconds": 1}})
+
+
+def test_granular_scene_needs_no_box_or_resolutions_but_others_still_do():
+    scene = parse_scene({"name": "g", "analyses": ["granular"], "granular": {"duration_s": 0.1}})
+    assert scene.granular.duration_s == 0.1 and scene.domain is None
+    with pytest.raises(SceneError, match="resolutions_um"):
+        parse_scene({"name": "x", "domain": {"size_um": [10, 10, 10]}, "spheres": {"inline": [[1, 1, 1, 1]]}})

@@ -1,0 +1,178 @@
+"""Stage plumbing: the result file (xarray-readable frames, contacts, series, cost), checkpoint/resume
+bit-identical to an uninterrupted run, stale checkpoints discarded, the CLI and the workflow rule."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from naive_granular import simulation
+
+from porepipe._shared.store import read_attrs
+from porepipe.granular import Settings, read_granular, run
+from porepipe.granular import _run as granular_run
+
+REPO = Path(__file__).parents[3]
+SMALL = {
+    "duration_s": 0.03,
+    "dt_s": 2e-5,
+    "checkpoint_every_steps": 400,
+    "box": {"lower_m": (0, 0), "upper_m": (0.06, 0.1)},
+    "blocks": [
+        {
+            "lower_m": (0, 0),
+            "upper_m": (0.06, 0.05),
+            "grid_m": (0.012, 0.012),
+            "shape": {
+                "size_m": (0.005, 0.005),
+                "corners": 7,
+                "angle_mode": "RAND1",
+                "orientation_dist": "EQUAL",
+            },
+        }
+    ],
+    "output": {"frames": 4, "series_every": 100},
+}
+
+
+def test_result_file_layout(tmp_path):
+    out = run(Settings.model_validate(SMALL), tmp_path / "g.h5", seed=1, scene="small", progress=False)
+    d = read_granular(out)
+    frames, contacts, series = d["frames"], d["contacts"], d["series"]
+    assert frames.position.shape == (5, 20, 3) and frames.time_s.values[-1] == pytest.approx(0.03)
+    assert set(contacts.data_vars) >= {
+        "i",
+        "j",
+        "fx_N",
+        "fy_N",
+        "sx_m",
+        "sy_m",
+        "fn_N",
+        "ft_N",
+        "area_m2",
+        "frame",
+    }
+    assert len(contacts.contact) > 0 and np.all(
+        contacts.fn_N.values >= 0
+    )  # never attractive without cohesion
+    assert len(series.sample) == 16
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        assert "vertices_m" in ds
+    attrs = read_attrs(out)
+    assert attrs["stage"] == "granular" and attrs["wall_s"] > 0 and attrs["steps"] == 1500
+    assert attrs["effects"] == "none"
+
+
+def test_simulation_restore_is_bit_identical():
+    s = Settings.model_validate({**SMALL, "gravity_m_s2": (0, -9.81)})
+    from porepipe.granular import Simulation
+
+    a = Simulation(s, 1)
+    a.advance(2000)
+    b = Simulation(s, 1)
+    b.advance(1400)
+    assert len(b.contacts()["i"]) > 2  # resumed with live contacts (springs and previous overlaps)
+    state = b.state()
+    c = Simulation(s, 1)
+    c.restore(state)
+    c.advance(600)
+    assert a.rebuilds > 1
+    np.testing.assert_array_equal(a.G, c.G)
+    np.testing.assert_array_equal(a.ft, c.ft)
+
+
+def test_interrupted_run_resumes_identically(tmp_path, monkeypatch):
+    settings = Settings.model_validate(SMALL)
+    ref = run(settings, tmp_path / "ref.h5", seed=2, progress=False)
+    ck = tmp_path / "ck.npz"
+
+    def crash(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(granular_run, "_write", crash)
+    with pytest.raises(KeyboardInterrupt):
+        run(settings, tmp_path / "out.h5", seed=2, checkpoint=ck, progress=False)
+    assert ck.is_file() and not (tmp_path / "out.h5").exists()
+    monkeypatch.undo()
+    calls = []
+    original = granular_run.Simulation.restore
+    monkeypatch.setattr(
+        granular_run.Simulation, "restore", lambda self, st: (calls.append(1), original(self, st))
+    )
+    out = run(settings, tmp_path / "out.h5", seed=2, checkpoint=ck, resume=True, progress=False)
+    assert calls and not ck.exists()
+    a, b = read_granular(ref), read_granular(out)
+    for key in ("frames", "contacts", "series"):
+        xr.testing.assert_equal(a[key], b[key])  # values and coords exactly (the attrs carry wall times)
+
+
+def test_stale_checkpoint_is_discarded(tmp_path):
+    ck = tmp_path / "ck.npz"
+    np.savez(ck, key=np.array("not-this-scene"))
+    out = run(
+        Settings.model_validate(SMALL), tmp_path / "g.h5", seed=1, checkpoint=ck, resume=True, progress=False
+    )
+    assert out.is_file() and not ck.exists()
+
+
+def test_cli_and_bad_scene(tmp_path):
+    scene = tmp_path / "s.yaml"
+    scene.write_text(
+        "name: s\nanalyses: [granular]\ngranular:\n  duration_s: 0.001\n  dt_s: 1.0e-5\n"
+        "  particles:\n    - {vertices_m: [[0, 0], [0.01, 0], [0.01, 0.01]]}\n"
+    )
+    exe = [sys.executable, "-m", "porepipe.cli"]
+    ok = subprocess.run(
+        [*exe, "granular", str(scene), "-o", str(tmp_path / "g.h5"), "--quiet"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert ok.returncode == 0, ok.stderr
+    scene.write_text(
+        "name: s\nanalyses: [granular]\ngranular:\n  particles:\n"
+        "    - {vertices_m: [[0, 0], [0.01, 0], [0.002, 0.002], [0, 0.01]]}\n"
+    )
+    bad = subprocess.run(
+        [*exe, "granular", str(scene), "-o", str(tmp_path / "b.h5")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert bad.returncode == 2
+    assert (
+        "granular particle 0: not a convex polygon" in bad.stderr
+        and len(bad.stderr.strip().splitlines()) == 1
+    )
+    assert not (tmp_path / "b.h5").exists() and not list(tmp_path.glob(".b.h5*"))
+
+
+def test_workflow_dry_run_has_the_granular_rule(tmp_path):
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "porepipe.cli",
+            "run",
+            str(REPO / "config/scenes/granular-box.yaml"),
+            "-n",
+            "--cores",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        check=False,
+    )
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "rule granular:" in res.stdout or "granular" in res.stdout
+    assert "results/granular-box/granular/granular.h5" in res.stdout
+
+
+def test_zero_gravity_rest_is_exact():
+    sim = simulation([{"vertices_m": [(0, 0), (0.01, 0), (0.01, 0.01)], "position_m": (0.3, 0.2)}])
+    x0 = sim.position.copy()
+    sim.advance(500)
+    np.testing.assert_array_equal(sim.position, x0)
