@@ -18,7 +18,7 @@ def diffusion_resolutions(scene):
 
 rule diffusion:
     input:
-        binary="results/{scene}/segment/binary_a{a}.h5",
+        binary=binary_volume,
         scene=scene_file,
     output:
         "results/{scene}/diffusion/diffusion_a{a}_{axis}.h5",
@@ -28,7 +28,13 @@ rule diffusion:
         "results/{scene}/cost/diffusion_a{a}_{axis}.tsv"
     wildcard_constraints:
         axis="[xyz]",
+    conda:
+        "../envs/porepipe.yaml"
     threads: workflow.cores
+    resources:
+        # the 1-byte distance geometry plus scipy's cluster labels while it is prepared (int32 per voxel)
+        mem_mb=mem_mb(bytes_per_voxel=16, base_mb=1000),
+        runtime=240,
     shell:
         "porepipe diffusion {input.binary:q} --scene {input.scene:q} --axis {wildcards.axis} -o {output:q}"
         " --threads {threads} > {log:q} 2>&1"

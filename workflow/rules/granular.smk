@@ -13,7 +13,12 @@ rule granular:
         "results/{scene}/cost/granular.tsv"
     params:
         checkpoint="results/{scene}/granular/checkpoint.npz",
+    conda:
+        "../envs/porepipe.yaml"
     threads: workflow.cores
+    resources:
+        mem_mb=2000,
+        runtime=240,
     shell:
         "porepipe granular {input.scene:q} -o {output:q} --checkpoint {params.checkpoint:q} --resume"
         " --threads {threads} > {log:q} 2>&1"

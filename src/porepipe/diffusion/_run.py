@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import ResultWriter, hash_of, read_attrs, read_volume
+from porepipe._shared.store import VOLUME_META_KEYS, ResultWriter, hash_of, read_attrs, read_volume
 from porepipe.diffusion import _api
 from porepipe.diffusion._settings import Axis, Settings, Setup
 
@@ -122,8 +122,13 @@ def run(
         raise PorepipeError(
             f"{binary}: volume 'pore' must be 3-D uint8 (1 = pore), got {pore.dtype} {pore.shape}"
         )
-    voxel_um = np.broadcast_to(np.asarray(vattrs.get("voxel_um", 1.0), dtype=float), (3,))
-    periodic = np.broadcast_to(np.asarray(vattrs.get("periodic", (0, 0, 0)), dtype=bool), (3,))
+    missing = [key for key in VOLUME_META_KEYS if key not in vattrs]
+    if missing:  # no silent defaults (voxel_um = 1, non-periodic): the one rule of store.volume_meta
+        raise PorepipeError(f"{binary}: volume 'pore' lacks the attribute(s) {', '.join(missing)}; a porepipe "
+                            "volume needs voxel_um, origin_um and periodic")
+    # per-axis voxel edges are allowed here (serial sections), so not store.read_binary_volume (cubic only)
+    voxel_um = np.broadcast_to(np.asarray(vattrs["voxel_um"], dtype=float), (3,))
+    periodic = np.broadcast_to(np.asarray(vattrs["periodic"], dtype=bool), (3,))
     checkpoint = Path(checkpoint) if checkpoint else out.with_name(f".{out.name}.checkpoint.npz")
     if not resume:
         checkpoint.unlink(missing_ok=True)
