@@ -20,10 +20,12 @@ from pathlib import Path
 
 
 def exports(init: Path) -> dict[str, str]:
-    """name -> module (relative ``_api`` or absolute ``porepipe.x``) of a package's lazy export table."""
+    """Name -> module (relative ``_api`` or absolute ``porepipe.x``) of a package's lazy export table."""
     tree = ast.parse(init.read_text())
     for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") in ("_EXPORTS", "_PUBLIC") for t in node.targets):
+        if isinstance(node, ast.Assign) and any(
+            getattr(t, "id", "") in ("_EXPORTS", "_PUBLIC") for t in node.targets
+        ):
             table: dict[str, str] = {}
             value = node.value
             for key, val in zip(value.keys, value.values, strict=True):
@@ -44,12 +46,16 @@ def definitions(path: Path) -> dict[str, ast.AST]:
 def problems_of(node: ast.AST, where: str, sections: bool = True) -> list[str]:
     doc = ast.get_docstring(node)
     if not doc:
-        return [f"{where}: public {type(node).__name__.removesuffix('Def').lower()} {node.name} has no docstring"]
+        return [
+            f"{where}: public {type(node).__name__.removesuffix('Def').lower()} {node.name} has no docstring"
+        ]
     if isinstance(node, ast.FunctionDef):
         args = [a.arg for a in node.args.args + node.args.kwonlyargs if a.arg not in ("self", "cls")]
         if sections and len(args) >= 2 and "\n" in doc.strip() and "Parameters\n" not in doc:
-            return [f"{where}: {node.name}({', '.join(args)}) has a multi-line docstring without a numpydoc "
-                    "Parameters section"]
+            return [
+                f"{where}: {node.name}({', '.join(args)}) has a multi-line docstring without a numpydoc "
+                "Parameters section"
+            ]
     return []
 
 
@@ -58,20 +64,27 @@ def main(root: Path) -> int:
     for init in sorted(root.glob("*/__init__.py")):
         package = init.parent
         for name, module in exports(init).items():
-            rel = module.removeprefix("porepipe.").replace(".", "/") if module.startswith("porepipe.") else None
+            rel = (
+                module.removeprefix("porepipe.").replace(".", "/") if module.startswith("porepipe.") else None
+            )
             path = root / f"{rel}.py" if rel else package / f"{module}.py"
             node = definitions(path).get(name)
             if node is not None:  # constants and re-exported enums' members have nothing to check
                 problems += problems_of(node, f"{path}:{node.lineno}", sections=False)
-                todo += problems_of(node, f"{path}:{node.lineno}")[len(problems_of(node, "", sections=False)):]
+                todo += problems_of(node, f"{path}:{node.lineno}")[
+                    len(problems_of(node, "", sections=False)) :
+                ]
     for path in sorted([*root.glob("_shared/*.py"), *root.glob("*/_run.py")]):
         for name, node in definitions(path).items():
             if not name.startswith("_"):
                 problems += problems_of(node, f"{path}:{node.lineno}")
     for p in problems:
         print(p)
-    print(f"check_docstrings: {len(problems)} problem(s); to do (not failing): {len(todo)} exported stage "
-          "function(s) without a Parameters section" + ("".join(f"\n  {t}" for t in todo) if "-v" in sys.argv else ""))
+    print(
+        f"check_docstrings: {len(problems)} problem(s); to do (not failing): {len(todo)} exported stage "
+        "function(s) without a Parameters section"
+        + ("".join(f"\n  {t}" for t in todo) if "-v" in sys.argv else "")
+    )
     return 1 if problems else 0
 
 

@@ -67,13 +67,17 @@ def main(root: Path) -> int:
                 continue
             private = [p for p in full.split(".")[2:] if p.startswith("_") and not p.startswith("__")]
             if private or (name and name.startswith("_") and not name.startswith("__")):
-                problems.append(f"{path}:{line}: {mod} imports the private {full}{'.' + name if name and full == target else ''}"
-                                f" of stage {there!r}")
+                problems.append(
+                    f"{path}:{line}: {mod} imports the private {full}{'.' + name if name and full == target else ''}"
+                    f" of stage {there!r}"
+                )
     problems += [f"import circle: {' -> '.join(c)}" for c in cycles(graph)]
     for p in problems:
         print(p)
-    print(f"check_imports: {len(files)} modules, {sum(map(len, graph.values()))} imports, "
-          f"{len(problems)} problem(s)")
+    print(
+        f"check_imports: {len(files)} modules, {sum(map(len, graph.values()))} imports, "
+        f"{len(problems)} problem(s)"
+    )
     return 1 if problems else 0
 
 
@@ -111,4 +115,6 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 
 if __name__ == "__main__":
-    sys.exit(main(Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parents[1] / "src/porepipe")))
+    sys.exit(
+        main(Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).resolve().parents[1] / "src/porepipe"))
+    )

@@ -56,8 +56,23 @@ def main() -> int:
         phi_true = make_image(n, raw)
         t_make = time.perf_counter() - t
         out = Path(tmp) / "statistics.h5"
-        cmd = [sys.executable, "-m", "porepipe.cli", "acquire", str(raw), "--voxel-um", "1", "--raw-dtype", "uint8",
-               "--raw-shape", str(n), str(n), str(n), "-o", str(out)] + (["--no-grains"] if args.no_grains else [])
+        cmd = [
+            sys.executable,
+            "-m",
+            "porepipe.cli",
+            "acquire",
+            str(raw),
+            "--voxel-um",
+            "1",
+            "--raw-dtype",
+            "uint8",
+            "--raw-shape",
+            str(n),
+            str(n),
+            str(n),
+            "-o",
+            str(out),
+        ] + (["--no-grains"] if args.no_grains else [])
         t = time.perf_counter()
         proc = subprocess.run(cmd, capture_output=True, text=True)
         wall = time.perf_counter() - t
@@ -68,21 +83,33 @@ def main() -> int:
         with h5py.File(out, "r") as f:
             attrs = dict(f.attrs)
         parts = json.loads(attrs["timing_s"])
-        parts = {"read_prepare": round(float(attrs["timing_read_prepare_s"]), 3),
-                 "segment": round(float(attrs["timing_segment_s"]), 3), **parts}
-    record = {"n": n, "voxels": n**3, "wall_s": round(wall, 2), "peak_mb": round(peak_mb, 1),
-              "porosity": float(attrs["porosity"]), "porosity_voxelised_g_le_108": phi_true, "parts_s": parts,
-              "image_generation_s": round(t_make, 2), "grains": not args.no_grains,
-              "acceptance": {"wall_s_limit": 300, "peak_mb_limit": 8192,
-                             "ok": wall < 300 and peak_mb < 8192},
-              "note": "shared, loaded 2-core machine (several agents); wall includes interpreter start and numba "
-                      "cache load"}
+        parts = {
+            "read_prepare": round(float(attrs["timing_read_prepare_s"]), 3),
+            "segment": round(float(attrs["timing_segment_s"]), 3),
+            **parts,
+        }
+    record = {
+        "n": n,
+        "voxels": n**3,
+        "wall_s": round(wall, 2),
+        "peak_mb": round(peak_mb, 1),
+        "porosity": float(attrs["porosity"]),
+        "porosity_voxelised_g_le_108": phi_true,
+        "parts_s": parts,
+        "image_generation_s": round(t_make, 2),
+        "grains": not args.no_grains,
+        "acceptance": {"wall_s_limit": 300, "peak_mb_limit": 8192, "ok": wall < 300 and peak_mb < 8192},
+        "note": "shared, loaded 2-core machine (several agents); wall includes interpreter start and numba "
+        "cache load",
+    }
     results = Path("benchmark-results") if args.smoke else Path(__file__).with_name("results")
     results.mkdir(exist_ok=True)
     (results / f"acquire_{n}.json").write_text(json.dumps(record, indent=2))
     rows = ["| part | seconds |", "|---|---|"] + [f"| {k} | {v:.2f} |" for k, v in parts.items()]
-    print(f"acquire benchmark {n}³ uint8 ({n**3 / 1e6:.2f} Mvoxels): wall {wall:.1f} s (limit 300), peak RSS "
-          f"{peak_mb:.0f} MB (limit 8192); timings on a shared, loaded 2-core machine")
+    print(
+        f"acquire benchmark {n}³ uint8 ({n**3 / 1e6:.2f} Mvoxels): wall {wall:.1f} s (limit 300), peak RSS "
+        f"{peak_mb:.0f} MB (limit 8192); timings on a shared, loaded 2-core machine"
+    )
     print("\n".join(rows))
     return 0 if record["acceptance"]["ok"] else 1
 

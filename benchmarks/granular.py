@@ -43,7 +43,7 @@ TARGET = 5e6
 
 
 def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
-    """n random 8-10-gons packed row by row so that neighbours overlap slightly (coordination ~ 3-4)."""
+    """N random 8-10-gons packed row by row so that neighbours overlap slightly (coordination ~ 3-4)."""
     a = 0.005
     shape = Shape(
         size_m=(a, a),
@@ -110,7 +110,8 @@ def measure(n: int, spread: float, method: str, threads: int, warm: int, steps: 
 
 def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
     """Bare kernel vs every effect compiled in with neutral values, on the same pile (1 thread, interleaved
-    rounds, best of each, so that the machine's load drifts hit both alike)."""
+    rounds, best of each, so that the machine's load drifts hit both alike).
+    """
     numba.set_num_threads(1)
     sims = {}
     for label, flags in (("bare", (False,) * 6), ("all effects compiled in", (True,) * 6)):

@@ -73,8 +73,9 @@ def regular_fraction(lat) -> float:
     return float(lengths[lat.run_offset[:, 0] >= 0].sum() / max(lat.n_nodes, 1))
 
 
-def time_lattice(lat, collision: str, precision: str, threads: int, steps: int,
-                 repeats: int = 3) -> tuple[float, float]:
+def time_lattice(
+    lat, collision: str, precision: str, threads: int, steps: int, repeats: int = 3
+) -> tuple[float, float]:
     """(MLUPS per wall second, MLUPS per CPU second of this process), each the best of ``repeats``.
 
     On a shared machine the CPU-time figure is the robust one: at 1 thread it is what the kernel does when it has
@@ -127,7 +128,9 @@ def main(argv=None) -> int:
     p.add_argument("--steps", type=int, default=10)
     p.add_argument("--out", default=".")
     p.add_argument("--no-lbmpy", action="store_true")
-    p.add_argument("--smoke", action="store_true", help="24^3, 2 steps, no lbmpy (CI smoke; no figures to quote)")
+    p.add_argument(
+        "--smoke", action="store_true", help="24^3, 2 steps, no lbmpy (CI smoke; no figures to quote)"
+    )
     args = p.parse_args(argv)
     if args.smoke:
         args.size, args.steps, args.no_lbmpy = 24, 2, True
@@ -141,8 +144,11 @@ def main(argv=None) -> int:
     sample = porous_sample(size)
     prep = periodic_setup(sample, mirror=False, lateral_periodic=True, prune=True)
     porous = prep.lattice
-    print(f"porous sample: porosity {sample.mean():.3f}, {porous.n_nodes} flow nodes after pruning "
-          f"({prep.pruned_nodes} dropped)", flush=True)
+    print(
+        f"porous sample: porosity {sample.mean():.3f}, {porous.n_nodes} flow nodes after pruning "
+        f"({prep.pruned_nodes} dropped)",
+        flush=True,
+    )
     rows = []
     for geometry, lat in (("dense", dense), ("porous", porous)):
         print(f"{geometry}: {regular_fraction(lat):.0%} of the nodes in offset-streaming runs", flush=True)
@@ -151,29 +157,59 @@ def main(argv=None) -> int:
                 for precision in ("float64", "float32"):
                     mlups, cpu = time_lattice(lat, collision, precision, threads, args.steps)
                     bound = bw[threads] * 1e3 / BYTES[precision]
-                    rows.append({"geometry": geometry, "threads": threads, "collision": collision, "precision": precision,
-                                 "regular_fraction": regular_fraction(lat), "nodes": lat.n_nodes, "mlups": mlups,
-                                 "mlups_per_cpu_s": cpu, "bound_mlups": bound, "fraction": mlups / bound})
-                    print(f"{geometry:6s} {threads}t {collision} {precision}: {mlups:7.1f} MLUPS "
-                          f"({cpu:5.1f} per CPU s), bound {bound:6.1f} ({mlups / bound:.0%})", flush=True)
+                    rows.append(
+                        {
+                            "geometry": geometry,
+                            "threads": threads,
+                            "collision": collision,
+                            "precision": precision,
+                            "regular_fraction": regular_fraction(lat),
+                            "nodes": lat.n_nodes,
+                            "mlups": mlups,
+                            "mlups_per_cpu_s": cpu,
+                            "bound_mlups": bound,
+                            "fraction": mlups / bound,
+                        }
+                    )
+                    print(
+                        f"{geometry:6s} {threads}t {collision} {precision}: {mlups:7.1f} MLUPS "
+                        f"({cpu:5.1f} per CPU s), bound {bound:6.1f} ({mlups / bound:.0%})",
+                        flush=True,
+                    )
     peer = []
     if not args.no_lbmpy:
         for threads in thread_counts:
             value = lbmpy_mlups(size, args.steps, threads)
             peer.append({"threads": threads, "mlups": value})
-            print(f"lbmpy SRT dense {threads}t: " + (f"{value:.1f} MLUPS" if value else "not available"), flush=True)
+            print(
+                f"lbmpy SRT dense {threads}t: " + (f"{value:.1f} MLUPS" if value else "not available"),
+                flush=True,
+            )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "lbm_benchmark.json").write_text(json.dumps({"bandwidth_gbs": bw, "rows": rows, "lbmpy": peer}, indent=1))
-    md = ["# LBM throughput (shared, loaded 2-core machine)", "",
-          "copy bandwidth: " + ", ".join(f"{t} thread(s) {v:.1f} GB/s" for t, v in bw.items()), "",
-          "| geometry | threads | collision | precision | nodes | MLUPS | MLUPS per CPU s | bound | fraction |",
-          "|---" * 9 + "|"]
-    md += [f"| {r['geometry']} | {r['threads']} | {r['collision']} | {r['precision']} | {r['nodes']} | "
-           f"{r['mlups']:.1f} | {r['mlups_per_cpu_s']:.1f} | {r['bound_mlups']:.1f} | {r['fraction']:.0%} |"
-           for r in rows]
-    md += ["", "lbmpy SRT (dense box): " + ", ".join(
-        f"{r['threads']}t {r['mlups']:.1f} MLUPS" if r["mlups"] else f"{r['threads']}t n/a" for r in peer)]
+    (out / "lbm_benchmark.json").write_text(
+        json.dumps({"bandwidth_gbs": bw, "rows": rows, "lbmpy": peer}, indent=1)
+    )
+    md = [
+        "# LBM throughput (shared, loaded 2-core machine)",
+        "",
+        "copy bandwidth: " + ", ".join(f"{t} thread(s) {v:.1f} GB/s" for t, v in bw.items()),
+        "",
+        "| geometry | threads | collision | precision | nodes | MLUPS | MLUPS per CPU s | bound | fraction |",
+        "|---" * 9 + "|",
+    ]
+    md += [
+        f"| {r['geometry']} | {r['threads']} | {r['collision']} | {r['precision']} | {r['nodes']} | "
+        f"{r['mlups']:.1f} | {r['mlups_per_cpu_s']:.1f} | {r['bound_mlups']:.1f} | {r['fraction']:.0%} |"
+        for r in rows
+    ]
+    md += [
+        "",
+        "lbmpy SRT (dense box): "
+        + ", ".join(
+            f"{r['threads']}t {r['mlups']:.1f} MLUPS" if r["mlups"] else f"{r['threads']}t n/a" for r in peer
+        ),
+    ]
     (out / "lbm_benchmark.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
     return 0

@@ -25,8 +25,12 @@ from porepipe.lbm import Settings
 from porepipe.lbm import _calibration as cal
 
 TABLE_6_2 = {4: 0.064099, 8: 0.021840, 16: 0.007241, 32: 0.002331, 64: 0.000784}
-TABLE_6_3 = {"fit": (1.73244, 0.61423), "fit_trimmed": (1.73689, 0.87278), "ends": (1.71346, 0.48787),
-             "outside": (1.64270, 4.59761)}
+TABLE_6_3 = {
+    "fit": (1.73244, 0.61423),
+    "fit_trimmed": (1.73689, 0.87278),
+    "ends": (1.71346, 0.48787),
+    "outside": (1.64270, 4.59761),
+}
 TAUS = (0.6, 0.7, 0.857, 1.0, 1.5, 2.0, 2.5, 3.0)
 
 
@@ -39,20 +43,42 @@ def _timed(case, settings):
 def table_6_2(sizes, periodic: bool = False):
     """Table 6.2 rows; ``periodic``: a 2-layer periodic duct driven by the body force everywhere instead of the
     thesis set-up. The developed duct flow is translation-invariant, so both give the same middle-section profile
-    (equal to all printed digits at B = 16 and 32 here), and B = 64 takes seconds instead of a 4B-long duct."""
+    (equal to all printed digits at B = 16 and 32 here), and B = 64 takes seconds instead of a 4B-long duct.
+    """
     rows = []
     for b in sizes:
         case = cal.square_duct(b, thesis_chambers=not periodic)
-        s = Settings(collision="bgk", tau=0.857, window_steps=1000, tolerance_velocity=1e-6, tolerance_kappa=1e-6,
-                     max_steps=400_000)
+        s = Settings(
+            collision="bgk",
+            tau=0.857,
+            window_steps=1000,
+            tolerance_velocity=1e-6,
+            tolerance_kappa=1e-6,
+            max_steps=400_000,
+        )
         run, wall = _timed(case, s)
         eps_v, e_v = cal.mid_section_velocity_error(case, run, s, b)
         kappa = cal.duct_kappa(case, run)
-        rows.append({"B": b, "setup": "periodic" if periodic else "thesis", "eps_v": eps_v, "eps_v_thesis": TABLE_6_2[b], "e_v": e_v, "kappa": kappa,
-                         "kappa_th": cal.square_duct_kappa(b), "eps_kappa": kappa / cal.square_duct_kappa(b) - 1,
-                         "steps": run.steps, "converged": run.converged, "wall_s": wall})
-        print(f"Table 6.2 B={b} ({rows[-1]['setup']}): <|eps_v|> {eps_v:.6f} (thesis {TABLE_6_2[b]}), eps_kappa {rows[-1]['eps_kappa']:+.4%}"
-              f", {run.steps} steps, {wall:.1f} s", flush=True)
+        rows.append(
+            {
+                "B": b,
+                "setup": "periodic" if periodic else "thesis",
+                "eps_v": eps_v,
+                "eps_v_thesis": TABLE_6_2[b],
+                "e_v": e_v,
+                "kappa": kappa,
+                "kappa_th": cal.square_duct_kappa(b),
+                "eps_kappa": kappa / cal.square_duct_kappa(b) - 1,
+                "steps": run.steps,
+                "converged": run.converged,
+                "wall_s": wall,
+            }
+        )
+        print(
+            f"Table 6.2 B={b} ({rows[-1]['setup']}): <|eps_v|> {eps_v:.6f} (thesis {TABLE_6_2[b]}), eps_kappa {rows[-1]['eps_kappa']:+.4%}"
+            f", {run.steps} steps, {wall:.1f} s",
+            flush=True,
+        )
     return rows
 
 
@@ -63,7 +89,16 @@ def kappa_errors(sizes):
         for coll in ("bgk", "mrt", "trt"):
             run, wall = _timed(case, Settings(collision=coll, tau=0.857, max_steps=400_000))
             eps = cal.duct_kappa(case, run) / cal.square_duct_kappa(b) - 1
-            rows.append({"B": b, "collision": coll, "tau": 0.857, "eps_kappa": eps, "steps": run.steps, "wall_s": wall})
+            rows.append(
+                {
+                    "B": b,
+                    "collision": coll,
+                    "tau": 0.857,
+                    "eps_kappa": eps,
+                    "steps": run.steps,
+                    "wall_s": wall,
+                }
+            )
             print(f"duct B={b} {coll}: eps_kappa {eps:+.4%}", flush=True)
     return rows
 
@@ -71,35 +106,76 @@ def kappa_errors(sizes):
 def shaped_ducts(sizes):
     rows = []
     for b in sizes:
-        for shape, cross, ref in (("circle", cal.circle_cross(b), cal.circle_duct_kappa(b)),
-                                  ("triangle", cal.triangle_cross(b), cal.triangle_duct_kappa(b))):
+        for shape, cross, ref in (
+            ("circle", cal.circle_cross(b), cal.circle_duct_kappa(b)),
+            ("triangle", cal.triangle_cross(b), cal.triangle_duct_kappa(b)),
+        ):
             case = cal.duct(cross)
             for coll in ("bgk", "mrt", "trt"):
                 run, wall = _timed(case, Settings(collision=coll, tau=0.857, max_steps=400_000))
                 kappa = cal.duct_kappa(case, run)
-                rows.append({"shape": shape, "B": b, "collision": coll, "kappa": kappa, "kappa_th": ref,
-                                 "eps_kappa": kappa / ref - 1, "wall_s": wall})
-                print(f"{shape} B={b} {coll}: kappa {kappa:.5f} vs {ref:.5f} ({kappa / ref - 1:+.3%})", flush=True)
+                rows.append(
+                    {
+                        "shape": shape,
+                        "B": b,
+                        "collision": coll,
+                        "kappa": kappa,
+                        "kappa_th": ref,
+                        "eps_kappa": kappa / ref - 1,
+                        "wall_s": wall,
+                    }
+                )
+                print(
+                    f"{shape} B={b} {coll}: kappa {kappa:.5f} vs {ref:.5f} ({kappa / ref - 1:+.3%})",
+                    flush=True,
+                )
     return rows
 
 
 def table_6_3(quick: bool):
-    case = cal.pressure_method_case() if not quick else cal.pressure_method_case(
-        width=20, inlet=10, sample=20, outlet=10, force=(3, 8))
-    s = Settings(collision="bgk", tau=0.857, window_steps=1000, trim_layers=10 if not quick else 3,
-                 tolerance_velocity=1e-6, tolerance_kappa=1e-7, max_steps=400_000)
+    case = (
+        cal.pressure_method_case()
+        if not quick
+        else cal.pressure_method_case(width=20, inlet=10, sample=20, outlet=10, force=(3, 8))
+    )
+    s = Settings(
+        collision="bgk",
+        tau=0.857,
+        window_steps=1000,
+        trim_layers=10 if not quick else 3,
+        tolerance_velocity=1e-6,
+        tolerance_kappa=1e-7,
+        max_steps=400_000,
+    )
     run, wall = _timed(case, s)
     ref = cal.square_duct_kappa(7)
-    rows = [{"method": m, "kappa": run.estimates[f"{m}/mean"], "eps_kappa": run.estimates[f"{m}/mean"] / ref - 1,
-                 "kappa_thesis": TABLE_6_3[m][0], "eps_thesis_percent": TABLE_6_3[m][1]} for m in TABLE_6_3]
+    rows = [
+        {
+            "method": m,
+            "kappa": run.estimates[f"{m}/mean"],
+            "eps_kappa": run.estimates[f"{m}/mean"] / ref - 1,
+            "kappa_thesis": TABLE_6_3[m][0],
+            "eps_thesis_percent": TABLE_6_3[m][1],
+        }
+        for m in TABLE_6_3
+    ]
     periodic = cal.square_duct(7, thesis_chambers=False)
     prun, _ = _timed(periodic, Settings(collision="bgk", tau=0.857))
-    rows.append({"method": "no chambers, force everywhere", "kappa": cal.duct_kappa(periodic, prun),
-                     "eps_kappa": cal.duct_kappa(periodic, prun) / ref - 1, "kappa_thesis": 1.73689,
-                     "eps_thesis_percent": 0.87277})
+    rows.append(
+        {
+            "method": "no chambers, force everywhere",
+            "kappa": cal.duct_kappa(periodic, prun),
+            "eps_kappa": cal.duct_kappa(periodic, prun) / ref - 1,
+            "kappa_thesis": 1.73689,
+            "eps_thesis_percent": 0.87277,
+        }
+    )
     for r in rows:
-        print(f"Table 6.3 {r['method']}: {r['kappa']:.5f} ({r['eps_kappa']:+.3%}); thesis {r['kappa_thesis']} "
-              f"({r['eps_thesis_percent']} %)", flush=True)
+        print(
+            f"Table 6.3 {r['method']}: {r['kappa']:.5f} ({r['eps_kappa']:+.3%}); thesis {r['kappa_thesis']} "
+            f"({r['eps_thesis_percent']} %)",
+            flush=True,
+        )
     return rows, run.steps, wall
 
 
@@ -111,16 +187,21 @@ def tau_study(b):
             run, wall = _timed(case, Settings(collision=coll, tau=tau, max_steps=400_000, **extra))
             eps = cal.duct_kappa(case, run) / cal.square_duct_kappa(b) - 1
             name = coll + (" (Λ=3/16)" if extra else "")
-            rows.append({"B": b, "collision": name, "tau": tau, "eps_kappa": eps, "steps": run.steps, "wall_s": wall})
+            rows.append(
+                {"B": b, "collision": name, "tau": tau, "eps_kappa": eps, "steps": run.steps, "wall_s": wall}
+            )
         spread = [r["eps_kappa"] for r in rows if r["collision"] == name and 0.6 <= r["tau"] <= 2.0]
-        print(f"tau study B={b} {name}: eps_kappa over tau in [0.6, 2]: {min(spread):+.3%} … {max(spread):+.3%}",
-              flush=True)
+        print(
+            f"tau study B={b} {name}: eps_kappa over tau in [0.6, 2]: {min(spread):+.3%} … {max(spread):+.3%}",
+            flush=True,
+        )
     return rows
 
 
 def _md_table(rows, keys):
     def fmt(v):
         return f"{v:.6g}" if isinstance(v, float) else str(v)
+
     lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
     lines += ["| " + " | ".join(fmt(r.get(k, "")) for k in keys) + " |" for r in rows]
     return "\n".join(lines)
@@ -132,15 +213,20 @@ def main(argv=None) -> int:
     p.add_argument("--periodic-duct", action="store_true", help="Table 6.2 on a 2-layer periodic duct (fast)")
     p.add_argument("--out", default=".", help="directory for lbm_calibration.json / .md")
     p.add_argument("--quick", action="store_true", help="reduced Table 6.3 box")
-    p.add_argument("--smoke", action="store_true", help="B = 4 only, reduced boxes (CI smoke; no figures to quote)")
+    p.add_argument(
+        "--smoke", action="store_true", help="B = 4 only, reduced boxes (CI smoke; no figures to quote)"
+    )
     args = p.parse_args(argv)
     if args.smoke:
         args.max_b, args.quick = 4, True
     tau_sizes = (4, 4) if args.smoke else (16, 20)
     sizes = [b for b in (4, 8, 16, 32, 64) if b <= args.max_b]
     t0 = time.perf_counter()
-    res = {"table_6_2": table_6_2(sizes, args.periodic_duct), "kappa_errors": kappa_errors(sizes),
-           "shaped_ducts": shaped_ducts([b for b in (8, 16, 32) if b <= args.max_b])}
+    res = {
+        "table_6_2": table_6_2(sizes, args.periodic_duct),
+        "kappa_errors": kappa_errors(sizes),
+        "shaped_ducts": shaped_ducts([b for b in (8, 16, 32) if b <= args.max_b]),
+    }
     res["table_6_3"], steps, wall = table_6_3(args.quick)
     res["tau_study_16"] = tau_study(tau_sizes[0])
     res["tau_study_20"] = tau_study(tau_sizes[1])
@@ -151,17 +237,25 @@ def main(argv=None) -> int:
     tau_rows = {}
     for r in res["tau_study_16"]:
         tau_rows.setdefault(r["collision"], {"collision": r["collision"]})[f"tau={r['tau']}"] = r["eps_kappa"]
-    md = ["# LBM calibration (thesis §6.1.5); shared, loaded 2-core machine", "",
-          "## Table 6.2 (BGK τ̂ = 0.857)",
-          _md_table(res["table_6_2"], ["B", "setup", "eps_v", "eps_v_thesis", "eps_kappa", "steps", "wall_s"]), "",
-          "## ε_κ on periodic square ducts (τ̂ = 0.857)",
-          _md_table(res["kappa_errors"], ["B", "collision", "eps_kappa", "steps"]), "",
-          "## Circular (κ̂ = B²/32) and triangular (κ̂ = B²/80) ducts",
-          _md_table(res["shaped_ducts"], ["shape", "B", "collision", "kappa", "kappa_th", "eps_kappa"]), "",
-          f"## Table 6.3 (B = 7; {steps} steps, {wall:.0f} s)",
-          _md_table(res["table_6_3"], ["method", "kappa", "eps_kappa", "kappa_thesis", "eps_thesis_percent"]), "",
-          "## τ study, square duct B = 16: ε_κ per τ̂",
-          _md_table(list(tau_rows.values()), ["collision"] + [f"tau={t}" for t in TAUS]), ""]
+    md = [
+        "# LBM calibration (thesis §6.1.5); shared, loaded 2-core machine",
+        "",
+        "## Table 6.2 (BGK τ̂ = 0.857)",
+        _md_table(res["table_6_2"], ["B", "setup", "eps_v", "eps_v_thesis", "eps_kappa", "steps", "wall_s"]),
+        "",
+        "## ε_κ on periodic square ducts (τ̂ = 0.857)",
+        _md_table(res["kappa_errors"], ["B", "collision", "eps_kappa", "steps"]),
+        "",
+        "## Circular (κ̂ = B²/32) and triangular (κ̂ = B²/80) ducts",
+        _md_table(res["shaped_ducts"], ["shape", "B", "collision", "kappa", "kappa_th", "eps_kappa"]),
+        "",
+        f"## Table 6.3 (B = 7; {steps} steps, {wall:.0f} s)",
+        _md_table(res["table_6_3"], ["method", "kappa", "eps_kappa", "kappa_thesis", "eps_thesis_percent"]),
+        "",
+        "## τ study, square duct B = 16: ε_κ per τ̂",
+        _md_table(list(tau_rows.values()), ["collision"] + [f"tau={t}" for t in TAUS]),
+        "",
+    ]
     (out / "lbm_calibration.md").write_text("\n".join(md))
     print("\n".join(md))
     return 0

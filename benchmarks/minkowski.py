@@ -23,7 +23,7 @@ from porepipe.minkowski._kernels import _touch_all
 
 
 def best_of(fn, repeat):
-    fn()                                              # compile / warm caches
+    fn()  # compile / warm caches
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
@@ -38,7 +38,7 @@ def numpy_histogram(volume):
     code = np.zeros(tuple(n - 1 for n in v.shape), np.uint8)
     for b in range(8):
         dx, dy, dz = b & 1, (b >> 1) & 1, (b >> 2) & 1
-        code |= v[dx:dx + code.shape[0], dy:dy + code.shape[1], dz:dz + code.shape[2]] << b
+        code |= v[dx : dx + code.shape[0], dy : dy + code.shape[1], dz : dz + code.shape[2]] << b
     return np.bincount(code.ravel(), minlength=256)
 
 
@@ -60,32 +60,61 @@ def main() -> None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
         t_hist = best_of(lambda: configuration_histogram(volume, True), args.repeat)
         t_read = best_of(lambda threads=threads: _touch_all(volume, threads), args.repeat)
-        rows.append({"tool": "porepipe configuration_histogram", "threads": threads, "seconds": t_hist,
-                     "mvox_per_s": nvox / t_hist / 1e6, "read_once_mvox_per_s": nvox / t_read / 1e6})
+        rows.append(
+            {
+                "tool": "porepipe configuration_histogram",
+                "threads": threads,
+                "seconds": t_hist,
+                "mvox_per_s": nvox / t_hist / 1e6,
+                "read_once_mvox_per_s": nvox / t_read / 1e6,
+            }
+        )
     t_np = best_of(lambda: numpy_histogram(volume), 1)
-    rows.append({"tool": "numpy (8 shifted views + bincount)", "threads": 1, "seconds": t_np,
-                 "mvox_per_s": nvox / t_np / 1e6, "read_once_mvox_per_s": None})
+    rows.append(
+        {
+            "tool": "numpy (8 shifted views + bincount)",
+            "threads": 1,
+            "seconds": t_np,
+            "mvox_per_s": nvox / t_np / 1e6,
+            "read_once_mvox_per_s": None,
+        }
+    )
     try:
         from quantimpy import minkowski as qmk
+
         m = min(args.n, 256)
         sub = volume[:m, :m, :m].astype(bool)
         t_q = best_of(lambda: qmk.functionals(sub), 1)
         numba.set_num_threads(1)
         t_ours = best_of(lambda: configuration_histogram(sub, False), args.repeat)
-        rows.append({"tool": f"quantimpy.minkowski.functionals ({m}³)", "threads": 1, "seconds": t_q,
-                     "mvox_per_s": sub.size / t_q / 1e6, "read_once_mvox_per_s": None,
-                     "porepipe_same_volume_mvox_per_s": sub.size / t_ours / 1e6})
+        rows.append(
+            {
+                "tool": f"quantimpy.minkowski.functionals ({m}³)",
+                "threads": 1,
+                "seconds": t_q,
+                "mvox_per_s": sub.size / t_q / 1e6,
+                "read_once_mvox_per_s": None,
+                "porepipe_same_volume_mvox_per_s": sub.size / t_ours / 1e6,
+            }
+        )
     except ImportError:
         rows.append({"tool": "quantimpy not installed", "threads": None, "seconds": None, "mvox_per_s": None})
-    print(f"# minkowski benchmark, {args.n}³ uint8 volume (shared, loaded 2-core machine; best of {args.repeat})\n")
+    print(
+        f"# minkowski benchmark, {args.n}³ uint8 volume (shared, loaded 2-core machine; best of {args.repeat})\n"
+    )
     print("| tool | threads | s | Mvoxel/s | read-once floor Mvoxel/s |")
     print("|---|---|---|---|---|")
     for r in rows:
-        fmt = lambda v, f: "-" if v is None else format(v, f)   # noqa: E731
-        extra = (f" (porepipe on the same volume: {r['porepipe_same_volume_mvox_per_s']:.0f})"
-                 if "porepipe_same_volume_mvox_per_s" in r else "")
-        print(f"| {r['tool']}{extra} | {fmt(r['threads'], 'd')} | {fmt(r['seconds'], '.3f')} | "
-              f"{fmt(r['mvox_per_s'], '.0f')} | {fmt(r.get('read_once_mvox_per_s'), '.0f')} |")
+        fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
+        extra = (
+            f" (porepipe on the same volume: {r['porepipe_same_volume_mvox_per_s']:.0f})"
+            if "porepipe_same_volume_mvox_per_s" in r
+            else ""
+        )
+        print(
+            f"| {r['tool']}{extra} | {fmt(r['threads'], 'd')} | {fmt(r['seconds'], '.3f')} | "
+            f"{fmt(r['mvox_per_s'], '.0f')} | {fmt(r.get('read_once_mvox_per_s'), '.0f')} |"
+        )
     Path(__file__).with_suffix(".json").write_text(json.dumps({"n": args.n, "rows": rows}, indent=1))
 
 

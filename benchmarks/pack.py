@@ -28,7 +28,7 @@ LAMMPS_CHUTE_PER_CORE = 1.1e7
 
 
 def polydisperse(n: int, seed: int = 0):
-    """n spheres, radii log-uniform in [1, 4] µm, random centres at a nominal solid fraction of 0.6."""
+    """N spheres, radii log-uniform in [1, 4] µm, random centres at a nominal solid fraction of 0.6."""
     rng = np.random.default_rng(seed)
     r = np.exp(rng.uniform(np.log(1.0), np.log(4.0), n))
     edge = (np.sum(4 / 3 * np.pi * r**3) / 0.6) ** (1 / 3)
@@ -43,8 +43,14 @@ def time_kernel(x, r, box, nbr, flags, steps, threads):
     types = np.zeros(n, np.int64)
     ids = np.arange(n, dtype=np.int64)
     per = np.ones(3, bool)
-    args = dict(frozen=np.zeros(n, np.uint8), k=np.array([20.0]), sig=np.array([0.3]), cm=np.array([0.9]),
-                cp=np.array([1.1]), fmax=np.zeros(1))
+    args = dict(
+        frozen=np.zeros(n, np.uint8),
+        k=np.array([20.0]),
+        sig=np.array([0.3]),
+        cm=np.array([0.9]),
+        cp=np.array([1.1]),
+        fmax=np.zeros(1),
+    )
     xa, xb = x.copy(), np.empty_like(x)
     v, fa, fb = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
     sig, conv, aux = np.empty(n), np.empty(n, np.uint8), np.empty((n, 3))
@@ -55,8 +61,36 @@ def time_kernel(x, r, box, nbr, flags, steps, threads):
     def one(s):
         # like the engine: positions and forces alternate between two buffers (so does the memory traffic)
         x_old, x_new, f_old, f_new = bufs
-        kernel(x_old, x_new, v, f_old, f_new, r, types, ids, args["frozen"], nbr[0], nbr[1], box, per, *tables,
-               args["sig"], args["cm"], args["cp"], args["fmax"], 1.3, 0.01, 1.0, 7, s, x, r, sig, conv, aux)
+        kernel(
+            x_old,
+            x_new,
+            v,
+            f_old,
+            f_new,
+            r,
+            types,
+            ids,
+            args["frozen"],
+            nbr[0],
+            nbr[1],
+            box,
+            per,
+            *tables,
+            args["sig"],
+            args["cm"],
+            args["cp"],
+            args["fmax"],
+            1.3,
+            0.01,
+            1.0,
+            7,
+            s,
+            x,
+            r,
+            sig,
+            conv,
+            aux,
+        )
         bufs[:] = [x_new, x_old, f_new, f_old]
 
     one(0)  # compile / load from cache
@@ -80,13 +114,28 @@ ENGINE_EFFECTS = {
 def time_engine(xyzr, box, steps, threads, effect="none", repeats=4):
     """Per-step wall time of the whole engine (step loop, reductions, guards, protocol) on the benchmark packing
     (read from ``xyzr``, the same spheres as the kernel runs) with one optional effect switched on (lists built
-    once); the median step of the best of ``repeats`` runs."""
+    once); the median step of the best of ``repeats`` runs.
+    """
     numba.set_num_threads(threads)
-    stage = {"name": "bench", "insert_file": {"path": str(xyzr), "type": "a"}, "steps": steps, "dt": 0.01,
-             "k": {"a": 20}, "damping": {"a": 10}, **ENGINE_EFFECTS[effect]}
-    settings = Settings.model_validate({
-        "types": [{"name": "a", "count": 0, "radius_um": {"min_um": 1.0, "max_um": 4.0}, "max_overlap": 0.3}],
-        "stages": [stage], "rebuild_interval": 10**9, "parallel_min_spheres": 0})
+    stage = {
+        "name": "bench",
+        "insert_file": {"path": str(xyzr), "type": "a"},
+        "steps": steps,
+        "dt": 0.01,
+        "k": {"a": 20},
+        "damping": {"a": 10},
+        **ENGINE_EFFECTS[effect],
+    }
+    settings = Settings.model_validate(
+        {
+            "types": [
+                {"name": "a", "count": 0, "radius_um": {"min_um": 1.0, "max_um": 4.0}, "max_overlap": 0.3}
+            ],
+            "stages": [stage],
+            "rebuild_interval": 10**9,
+            "parallel_min_spheres": 0,
+        }
+    )
     periodic = [True, True, effect != "walls"]
     one = settings.model_copy(update={"stages": [settings.stages[0].model_copy(update={"steps": 2})]})
     pack_spheres(one, box, periodic)  # compile / load caches
@@ -100,54 +149,89 @@ def time_engine(xyzr, box, steps, threads, effect="none", repeats=4):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--small", action="store_true", help="20 000 spheres instead of 10^6 (CI smoke)")
-    ap.add_argument("--smoke", action="store_true", help="2 000 spheres, 3 steps (CI smoke, no figures to quote)")
+    ap.add_argument(
+        "--smoke", action="store_true", help="2 000 spheres, 3 steps (CI smoke, no figures to quote)"
+    )
     ap.add_argument("--steps", type=int, default=None)
     args = ap.parse_args()
     n = 2_000 if args.smoke else 20_000 if args.small else 1_000_000
     steps = args.steps or (10 if args.smoke else 50 if args.small else 10)
     x, r, box = polydisperse(n)
     t0 = time.perf_counter()
-    *nbr, order = build_neighbours(x, r, np.zeros(n, np.int64), box, np.ones(3, bool), np.ones((1, 1), np.uint8),
-                                   1.3, 0.3, reorder=True)
+    *nbr, order = build_neighbours(
+        x, r, np.zeros(n, np.int64), box, np.ones(3, bool), np.ones((1, 1), np.uint8), 1.3, 0.3, reorder=True
+    )
     build_s = time.perf_counter() - t0
-    x, r = x[order], r[order]  # the engine keeps spheres in cell order (memory locality), and so does the benchmark
+    x, r = (
+        x[order],
+        r[order],
+    )  # the engine keeps spheres in cell order (memory locality), and so does the benchmark
     rows = []
-    variants = {"bare (no effects)": (False, False, False), "freezing": (True, False, False),
-                "stochastic forces": (False, True, False), "walls": (False, False, True),
-                "all compiled in, switched off": (True, True, True)}
+    variants = {
+        "bare (no effects)": (False, False, False),
+        "freezing": (True, False, False),
+        "stochastic forces": (False, True, False),
+        "walls": (False, False, True),
+        "all compiled in, switched off": (True, True, True),
+    }
     time_kernel(x, r, box, nbr, (False, False, False), steps, 1)  # warm-up: first touch of every page
     for threads in (1, 2):
         base = None
         for label, flags in variants.items():
             dt_step = min(time_kernel(x, r, box, nbr, flags, steps, threads) for _ in range(4))
             base = dt_step if base is None else base
-            rows.append({"threads": threads, "kernel": label, "s_per_step": dt_step, "sphere_steps_per_s": n / dt_step,
-                         "vs_bare": dt_step / base})
+            rows.append(
+                {
+                    "threads": threads,
+                    "kernel": label,
+                    "s_per_step": dt_step,
+                    "sphere_steps_per_s": n / dt_step,
+                    "vs_bare": dt_step / base,
+                }
+            )
     with tempfile.TemporaryDirectory() as tmp:
         xyzr = Path(tmp) / "bench.xyzr"
         np.savetxt(xyzr, np.column_stack([x, r]), fmt="%.17g")
-        eng = {threads: {e: time_engine(xyzr, box, steps, threads, e) for e in ENGINE_EFFECTS} for threads in (1, 2)}
+        eng = {
+            threads: {e: time_engine(xyzr, box, steps, threads, e) for e in ENGINE_EFFECTS}
+            for threads in (1, 2)
+        }
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     pairs = nbr[1].size / 2 / n
-    print(f"# porepipe pack benchmark: N = {n} polydisperse spheres (r in [1, 4] µm), {pairs:.1f} list pairs per "
-          f"sphere, list build {build_s:.2f} s; best of 4 runs of {steps} steps\n")
-    print("| threads | kernel (compiled effects, none active) | s/step | sphere-steps/s | vs bare | "
-          "vs LAMMPS chute (1.1e7/core) |")
+    print(
+        f"# porepipe pack benchmark: N = {n} polydisperse spheres (r in [1, 4] µm), {pairs:.1f} list pairs per "
+        f"sphere, list build {build_s:.2f} s; best of 4 runs of {steps} steps\n"
+    )
+    print(
+        "| threads | kernel (compiled effects, none active) | s/step | sphere-steps/s | vs bare | "
+        "vs LAMMPS chute (1.1e7/core) |"
+    )
     print("|---|---|---|---|---|---|")
     for row in rows:
         frac = row["sphere_steps_per_s"] / (LAMMPS_CHUTE_PER_CORE * row["threads"])
-        print(f"| {row['threads']} | {row['kernel']} | {row['s_per_step']:.4g} | {row['sphere_steps_per_s']:.3g} | "
-              f"{row['vs_bare']:.3f} | {frac:.2f} |")
+        print(
+            f"| {row['threads']} | {row['kernel']} | {row['s_per_step']:.4g} | {row['sphere_steps_per_s']:.3g} | "
+            f"{row['vs_bare']:.3f} | {frac:.2f} |"
+        )
     print("\n| threads | engine, effect switched on | s/step | vs bare kernel | vs engine without effects |")
     print("|---|---|---|---|---|")
     for threads, per_effect in eng.items():
         bare = next(r_["s_per_step"] for r_ in rows if r_["threads"] == threads)
         for effect, per_step in per_effect.items():
-            print(f"| {threads} | {effect} | {per_step:.4g} | {per_step / bare:.3f} | "
-                  f"{per_step / per_effect['none']:.3f} |")
-    print("\n'none' vs bare kernel = what the engine adds to a scene without optional effects (target <= 1.05).")
-    out = {"n": n, "pairs_per_sphere": pairs, "build_s": build_s, "kernels": rows,
-           "engine_s_per_step": {str(k): v for k, v in eng.items()}}
+            print(
+                f"| {threads} | {effect} | {per_step:.4g} | {per_step / bare:.3f} | "
+                f"{per_step / per_effect['none']:.3f} |"
+            )
+    print(
+        "\n'none' vs bare kernel = what the engine adds to a scene without optional effects (target <= 1.05)."
+    )
+    out = {
+        "n": n,
+        "pairs_per_sphere": pairs,
+        "build_s": build_s,
+        "kernels": rows,
+        "engine_s_per_step": {str(k): v for k, v in eng.items()},
+    }
     if not args.smoke:
         Path(__file__).with_suffix(".json").write_text(json.dumps(out, indent=1))
 

@@ -37,9 +37,16 @@ def run_case(box, n, a, r_min, r_max, threads):
     t_b, g_b = timed(lambda: voxelize(c, r, (box,) * 3, a, method=VoxelizeMethod.boundary))
     t_f, g_f = timed(lambda: voxelize(c, r, (box,) * 3, a, method=VoxelizeMethod.brute), repeat=1)
     assert np.array_equal(g_b, g_f), "boundary-only and brute force differ"
-    return {"threads": threads, "voxel_um": a, "span_voxels": f"{2 * r_min / a:g}-{2 * r_max / a:g}", "mvoxel": nvox / 1e6,
-            "boundary_mvox_s": nvox / t_b / 1e6, "brute_mvox_s": nvox / t_f / 1e6, "speedup": t_f / t_b,
-            "mixed_fraction": float(((g_b > 0) & (g_b < 216)).mean())}
+    return {
+        "threads": threads,
+        "voxel_um": a,
+        "span_voxels": f"{2 * r_min / a:g}-{2 * r_max / a:g}",
+        "mvoxel": nvox / 1e6,
+        "boundary_mvox_s": nvox / t_b / 1e6,
+        "brute_mvox_s": nvox / t_f / 1e6,
+        "speedup": t_f / t_b,
+        "mixed_fraction": float(((g_b > 0) & (g_b < 216)).mean()),
+    }
 
 
 def main():
@@ -52,17 +59,25 @@ def main():
     cases = [(40.0, 12, 1.0)] if args.smoke else [(200.0, 1500, 1.0), (100.0, 188, 0.5), (50.0, 24, 0.25)]
     voxelize(np.zeros((1, 3)), np.ones(1), (4.0,) * 3, 1.0)  # compile
     rows = [run_case(box, n, a, r_min, r_max, threads) for box, n, a in cases for threads in (1, 2)]
-    print(f"voxelize: spheres r = {r_min}-{r_max} µm, ~19 % of the box covered, 6^3 sample points per voxel; "
-          "timings on a shared, loaded machine")
-    print("| a µm | sphere span (voxels) | threads | Mvoxel | boundary-only Mvoxel/s | brute force Mvoxel/s | speed-up |"
-          " mixed voxels |")
+    print(
+        f"voxelize: spheres r = {r_min}-{r_max} µm, ~19 % of the box covered, 6^3 sample points per voxel; "
+        "timings on a shared, loaded machine"
+    )
+    print(
+        "| a µm | sphere span (voxels) | threads | Mvoxel | boundary-only Mvoxel/s | brute force Mvoxel/s | speed-up |"
+        " mixed voxels |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for row in rows:
-        print(f"| {row['voxel_um']} | {row['span_voxels']} | {row['threads']} | {row['mvoxel']:.1f} | "
-              f"{row['boundary_mvox_s']:.1f} | {row['brute_mvox_s']:.2f} | {row['speedup']:.1f}x | "
-              f"{row['mixed_fraction']:.3f} |")
-    print("machine limit: writing a uint8 volume once runs at ~1000+ Mvoxel/s (memory bandwidth); brute force = all "
-          "216 point tests for every voxel in a sphere's bounding box; grey values of both are asserted identical")
+        print(
+            f"| {row['voxel_um']} | {row['span_voxels']} | {row['threads']} | {row['mvoxel']:.1f} | "
+            f"{row['boundary_mvox_s']:.1f} | {row['brute_mvox_s']:.2f} | {row['speedup']:.1f}x | "
+            f"{row['mixed_fraction']:.3f} |"
+        )
+    print(
+        "machine limit: writing a uint8 volume once runs at ~1000+ Mvoxel/s (memory bandwidth); brute force = all "
+        "216 point tests for every voxel in a sphere's bounding box; grey values of both are asserted identical"
+    )
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)

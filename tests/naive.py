@@ -25,7 +25,12 @@ def grey_values_naive(centres, radii, box, a, periodic=True):
 
 def lens_volume(r1, r2, d):
     """Volume of the intersection of two balls of radii r1, r2 at centre distance d (|r1 - r2| < d < r1 + r2)."""
-    return np.pi * (r1 + r2 - d) ** 2 * (d * d + 2 * d * r2 - 3 * r2 * r2 + 2 * d * r1 + 6 * r1 * r2 - 3 * r1 * r1) / (12 * d)
+    return (
+        np.pi
+        * (r1 + r2 - d) ** 2
+        * (d * d + 2 * d * r2 - 3 * r2 * r2 + 2 * d * r1 + 6 * r1 * r2 - 3 * r1 * r1)
+        / (12 * d)
+    )
 
 
 def lens_area_removed(r1, r2, d):

@@ -37,8 +37,10 @@ def _stage_module(package: str, module: str):
         return importlib.import_module(name)
     except ModuleNotFoundError as err:
         if err.name is not None and (name == err.name or name.startswith(err.name + ".")):
-            raise ImportError(f"porepipe._registry.STAGES lists {package!r}, but {name} is missing: add the module "
-                              "or remove the stage from STAGES") from err
+            raise ImportError(
+                f"porepipe._registry.STAGES lists {package!r}, but {name} is missing: add the module "
+                "or remove the stage from STAGES"
+            ) from err
         raise
 
 

@@ -31,14 +31,31 @@ def _validate(args) -> int:
     return 2 if failed else 0
 
 
-def snakemake_command(scene_path, cores: int, dry_run: bool = False, extra: list[str] | None = None) -> list[str]:
+def snakemake_command(
+    scene_path, cores: int, dry_run: bool = False, extra: list[str] | None = None
+) -> list[str]:
     """The Snakemake invocation that runs one scene from the current directory."""
     snakefile = REPO_ROOT / "Snakefile"
     if not snakefile.is_file():
-        raise PorepipeError(f"Snakefile not found at {snakefile}; install porepipe from its repository (pip install -e .)")
-    cmd = [sys.executable, "-m", "snakemake", "--snakefile", str(snakefile), "--directory", os.getcwd(),
-           "--cores", str(cores), "--config", f"scene={Path(scene_path).resolve()}",
-           "--rerun-incomplete", "--printshellcmds", "--show-failed-logs"]
+        raise PorepipeError(
+            f"Snakefile not found at {snakefile}; install porepipe from its repository (pip install -e .)"
+        )
+    cmd = [
+        sys.executable,
+        "-m",
+        "snakemake",
+        "--snakefile",
+        str(snakefile),
+        "--directory",
+        os.getcwd(),
+        "--cores",
+        str(cores),
+        "--config",
+        f"scene={Path(scene_path).resolve()}",
+        "--rerun-incomplete",
+        "--printshellcmds",
+        "--show-failed-logs",
+    ]
     if dry_run:
         cmd.append("--dry-run")
     return cmd + (extra or [])
@@ -52,9 +69,16 @@ def _run(args) -> int:
     result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False)
     if result.returncode == 0 and not (args.dry_run or args.unlock):
         print(f"porepipe: results of scene {scene.name!r} are in {Path('results', scene.name).resolve()}")
-    elif result.returncode != 0 and Path(".snakemake", "locks").is_dir() and any(Path(".snakemake", "locks").iterdir()):
-        print(f"porepipe run: if no other run of this directory is alive (a killed run leaves its lock), "
-              f"`porepipe run {args.scene} --unlock` releases the lock; then run again", file=sys.stderr)
+    elif (
+        result.returncode != 0
+        and Path(".snakemake", "locks").is_dir()
+        and any(Path(".snakemake", "locks").iterdir())
+    ):
+        print(
+            f"porepipe run: if no other run of this directory is alive (a killed run leaves its lock), "
+            f"`porepipe run {args.scene} --unlock` releases the lock; then run again",
+            file=sys.stderr,
+        )
     return result.returncode
 
 
@@ -70,9 +94,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene")
     p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
     p.add_argument("-n", "--dry-run", action="store_true", help="list the jobs only")
-    p.add_argument("--unlock", action="store_true",
-                   help="release the lock a killed run left on this directory (Snakemake --unlock), run nothing")
-    p.epilog = "Arguments after `--` go to Snakemake unchanged, e.g. `porepipe run S.yaml --cores 2 -- --forceall`."
+    p.add_argument(
+        "--unlock",
+        action="store_true",
+        help="release the lock a killed run left on this directory (Snakemake --unlock), run nothing",
+    )
+    p.epilog = (
+        "Arguments after `--` go to Snakemake unchanged, e.g. `porepipe run S.yaml --cores 2 -- --forceall`."
+    )
     p.set_defaults(func=_run, snakemake_args=[])
     for module in stage_cli_modules():
         module.register(sub)
@@ -83,7 +112,7 @@ def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
     """``run … -- ARGS``: the porepipe arguments and the ones after the first ``--`` (for Snakemake)."""
     if argv[:1] == ["run"] and "--" in argv:
         cut = argv.index("--")
-        return argv[:cut], argv[cut + 1:]
+        return argv[:cut], argv[cut + 1 :]
     return argv, []
 
 

@@ -28,8 +28,19 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.yaml_safe import load_yaml
 from porepipe.segment._settings import Segmentation, SegmentationMethod
 
-__all__ = ["Analysis", "Domain", "Scene", "SceneError", "Segmentation", "SegmentationMethod", "Spheres", "grey_stage",
-           "load_scene", "parse_scene", "scene_part"]
+__all__ = [
+    "Analysis",
+    "Domain",
+    "Scene",
+    "SceneError",
+    "Segmentation",
+    "SegmentationMethod",
+    "Spheres",
+    "grey_stage",
+    "load_scene",
+    "parse_scene",
+    "scene_part",
+]
 
 #: relative tolerance when checking that a resolution divides the box
 _DIVIDES_RTOL = 1e-9
@@ -38,15 +49,15 @@ _DIVIDES_RTOL = 1e-9
 class Analysis(str, enum.Enum):
     """Measurements a scene can ask for; only these enter the workflow DAG."""
 
-    segment = "segment"            # binary pore/matrix volumes at every resolution
-    estimate = "estimate"          # grey-value estimators of porosity and specific surface (§7.2, §7.3)
-    minkowski = "minkowski"        # φ, S_V, K_V, T_V of the segmented volume
-    lpt = "lpt"                    # local porosity theory
+    segment = "segment"  # binary pore/matrix volumes at every resolution
+    estimate = "estimate"  # grey-value estimators of porosity and specific surface (§7.2, §7.3)
+    minkowski = "minkowski"  # φ, S_V, K_V, T_V of the segmented volume
+    lpt = "lpt"  # local porosity theory
     permeability = "permeability"  # lattice-Boltzmann permeability
-    diffusion = "diffusion"        # Knudsen diffusion (transmission, Wicke-Kallenbach, msd)
-    acquire = "acquire"            # image statistics, calibrated model scene, model-vs-experiment comparison
-    report = "report"              # resolution sweep, extrapolation and the accuracy-versus-cost report
-    granular = "granular"          # 2-D frictional DEM of convex polygons (gc2d, Schinner 2001)
+    diffusion = "diffusion"  # Knudsen diffusion (transmission, Wicke-Kallenbach, msd)
+    acquire = "acquire"  # image statistics, calibrated model scene, model-vs-experiment comparison
+    report = "report"  # resolution sweep, extrapolation and the accuracy-versus-cost report
+    granular = "granular"  # 2-D frictional DEM of convex polygons (gc2d, Schinner 2001)
 
 
 class _Strict(BaseModel):
@@ -67,13 +78,21 @@ class Spheres(_Strict):
     """Where the spheres (the matrix) come from; exactly one of the four keys."""
 
     pack: bool = Field(False, description="use the packing stage's output (needs a `packing:` section)")
-    hdf5: Path | None = Field(None, description="packing.h5 written by `porepipe pack` (path relative to the scene)")
-    xyzr: Path | None = Field(None, description="text file, one sphere per line: x y z r in µm (PackDEM format)")
-    inline: list[tuple[float, float, float, float]] | None = Field(None, description="[[x, y, z, r], ...] in µm")
+    hdf5: Path | None = Field(
+        None, description="packing.h5 written by `porepipe pack` (path relative to the scene)"
+    )
+    xyzr: Path | None = Field(
+        None, description="text file, one sphere per line: x y z r in µm (PackDEM format)"
+    )
+    inline: list[tuple[float, float, float, float]] | None = Field(
+        None, description="[[x, y, z, r], ...] in µm"
+    )
 
     @model_validator(mode="after")
     def _exactly_one(self):
-        given = [k for k in ("hdf5", "xyzr", "inline") if getattr(self, k) is not None] + (["pack"] if self.pack else [])
+        given = [k for k in ("hdf5", "xyzr", "inline") if getattr(self, k) is not None] + (
+            ["pack"] if self.pack else []
+        )
         if len(given) != 1:
             raise ValueError(f"give exactly one of pack: true, hdf5, xyzr, inline (got {given or 'none'})")
         return self
@@ -93,9 +112,14 @@ class SceneBase(_Strict):
     name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="scene name = results folder")
     seed: int = Field(0, ge=0, strict=True, description="root of every random stream of the scene")
     domain: Domain | None = Field(None, description="the box; required unless the scene starts from an image")
-    spheres: Spheres | None = Field(None, description="the matrix; required unless the scene starts from an image")
-    resolutions_um: list[PositiveUm] = Field(default_factory=list, min_length=1,
-                                             description="voxel sizes a in µm, coarse to fine (none: 2-D granular)")
+    spheres: Spheres | None = Field(
+        None, description="the matrix; required unless the scene starts from an image"
+    )
+    resolutions_um: list[PositiveUm] = Field(
+        default_factory=list,
+        min_length=1,
+        description="voxel sizes a in µm, coarse to fine (none: 2-D granular)",
+    )
     segmentation: Segmentation = Segmentation()
     analyses: list[Analysis] = Field(default_factory=lambda: [Analysis.estimate])
 
@@ -108,8 +132,10 @@ class SceneBase(_Strict):
         if getattr(self, "acquire", None) is None:
             missing = [k for k in ("domain", "spheres") if getattr(self, k) is None]
             if missing:
-                raise ValueError(f"missing {' and '.join(missing)}: a scene needs `domain` and `spheres` unless it "
-                                 "starts from an image (`acquire:` section)")
+                raise ValueError(
+                    f"missing {' and '.join(missing)}: a scene needs `domain` and `spheres` unless it "
+                    "starts from an image (`acquire:` section)"
+                )
         return self
 
     @field_validator("resolutions_um")
@@ -184,7 +210,9 @@ def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
 
 
 def _is_length(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+    return (
+        isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+    )
 
 
 def _machine_bytes() -> int:
@@ -205,23 +233,32 @@ def _size_problems(raw: dict, size, res) -> list[str]:
         if not _is_length(a):
             continue
         edges = [edge for edge in size if _is_length(edge)]
-        bad = [f"{edge!r} ({edge / a:.6g} voxels)" for edge in edges
-               if abs(edge / a - round(edge / a)) > _DIVIDES_RTOL * max(1.0, edge / a)]
+        bad = [
+            f"{edge!r} ({edge / a:.6g} voxels)"
+            for edge in edges
+            if abs(edge / a - round(edge / a)) > _DIVIDES_RTOL * max(1.0, edge / a)
+        ]
         if bad:
-            problems.append(f"resolutions_um[{i}] = {a!r}: does not divide the box edge(s) {', '.join(bad)} of "
-                            "domain.size_um; allowed: a voxel size giving a whole number of voxels per edge")
+            problems.append(
+                f"resolutions_um[{i}] = {a!r}: does not divide the box edge(s) {', '.join(bad)} of "
+                "domain.size_um; allowed: a voxel size giving a whole number of voxels per edge"
+            )
         voxels = math.prod(edge / a for edge in edges) if len(edges) == 3 else 0.0
         if voxels > memory:
-            problems.append(f"resolutions_um[{i}] = {a!r}: the volume would have {voxels:.3g} voxels "
-                            f"({voxels / 2**30:.3g} GiB at 1 byte each), more than this machine's "
-                            f"{memory / 2**30:.0f} GiB of memory")
+            problems.append(
+                f"resolutions_um[{i}] = {a!r}: the volume would have {voxels:.3g} voxels "
+                f"({voxels / 2**30:.3g} GiB at 1 byte each), more than this machine's "
+                f"{memory / 2**30:.0f} GiB of memory"
+            )
     types = _get(raw, ("packing", "types"))
     counts = [t.get("count") for t in types if isinstance(t, dict)] if isinstance(types, list) else []
     spheres = sum(c for c in counts if isinstance(c, (int, float)) and not isinstance(c, bool) and c > 0)
     if math.isfinite(spheres) and spheres * _PACK_BYTES_PER_SPHERE > memory:
-        problems.append(f"packing.types[*].count = {spheres:.3g} spheres in all: the packing engine would need about "
-                        f"{spheres * _PACK_BYTES_PER_SPHERE / 2**30:.3g} GiB, more than this machine's "
-                        f"{memory / 2**30:.0f} GiB of memory")
+        problems.append(
+            f"packing.types[*].count = {spheres:.3g} spheres in all: the packing engine would need about "
+            f"{spheres * _PACK_BYTES_PER_SPHERE / 2**30:.3g} GiB, more than this machine's "
+            f"{memory / 2**30:.0f} GiB of memory"
+        )
     return problems
 
 
@@ -236,7 +273,9 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
     if isinstance(spheres, dict):
         for key in ("hdf5", "xyzr"):
             if isinstance(spheres.get(key), str) and not (base_dir / spheres[key]).is_file():
-                problems.append(f"spheres.{key} = {_short(spheres[key])}: file not found (looked in {base_dir})")
+                problems.append(
+                    f"spheres.{key} = {_short(spheres[key])}: file not found (looked in {base_dir})"
+                )
         if spheres.get("pack") is True and "packing" not in raw:
             problems.append("spheres.pack = True: needs a `packing:` section that says how to pack")
     return problems
@@ -262,7 +301,9 @@ def _resolve_paths(scene, base_dir: Path):
     sph = scene.spheres
     if sph is None:
         return scene
-    update = {k: (base_dir / getattr(sph, k)).resolve() for k in ("hdf5", "xyzr") if getattr(sph, k) is not None}
+    update = {
+        k: (base_dir / getattr(sph, k)).resolve() for k in ("hdf5", "xyzr") if getattr(sph, k) is not None
+    }
     return scene.model_copy(update={"spheres": sph.model_copy(update=update)}) if update else scene
 
 

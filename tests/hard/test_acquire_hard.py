@@ -20,15 +20,22 @@ def _finite(ds: xr.Dataset, names):
 def test_one_grey_value_otsu_is_a_clear_error(tmp_path):
     np.save(tmp_path / "flat.npy", np.full((12, 12, 12), 77, np.uint8))
     settings = Settings(image=tmp_path / "flat.npy", voxel_um=1.0)
-    with pytest.raises(PorepipeError, match=r"1 populated grey value\(s\) \[77.0\].*use acquire.segmentation.method"):
+    with pytest.raises(
+        PorepipeError, match=r"1 populated grey value\(s\) \[77.0\].*use acquire.segmentation.method"
+    ):
         acquire(settings, tmp_path / "s.h5")
     assert not (tmp_path / "s.h5").exists()  # nothing half-written
 
 
 def test_one_grey_value_with_thresholds_is_all_matrix(tmp_path):
     np.save(tmp_path / "flat.npy", np.full((12, 12, 12), 77, np.uint8))
-    settings = Settings.model_validate({"image": str(tmp_path / "flat.npy"), "voxel_um": 1.0,
-                                        "segmentation": {"method": "thresholds", "thresholds": [50]}})
+    settings = Settings.model_validate(
+        {
+            "image": str(tmp_path / "flat.npy"),
+            "voxel_um": 1.0,
+            "segmentation": {"method": "thresholds", "thresholds": [50]},
+        }
+    )
     ds = acquire(settings, tmp_path / "s.h5")[None]
     assert float(ds.porosity) == 0.0
     _finite(ds, ["S_V_per_mm", "K_V_per_mm2", "T_V_per_mm3", "connected_porosity", "grains_per_mm3"])
@@ -39,8 +46,13 @@ def test_one_grey_value_with_thresholds_is_all_matrix(tmp_path):
 def test_all_pore_after_segmentation(tmp_path):
     rng = np.random.default_rng(0)
     np.save(tmp_path / "dark.npy", rng.integers(0, 40, (16, 16, 16)).astype(np.uint8))
-    settings = Settings.model_validate({"image": str(tmp_path / "dark.npy"), "voxel_um": 2.0,
-                                        "segmentation": {"method": "thresholds", "thresholds": [100]}})
+    settings = Settings.model_validate(
+        {
+            "image": str(tmp_path / "dark.npy"),
+            "voxel_um": 2.0,
+            "segmentation": {"method": "thresholds", "thresholds": [100]},
+        }
+    )
     ds = acquire(settings, tmp_path / "s.h5")[None]
     assert float(ds.porosity) == 1.0
     assert ds.sizes["grain"] == 0 and float(ds.grains_per_mm3) == 0.0
@@ -59,7 +71,9 @@ def test_2d_section_where_3d_is_needed(tmp_path):
     np.save(tmp_path / "sem.npy", np.where(rng.random((40, 30)) < 0.3, 40, 200).astype(np.uint8))
     ds = acquire(Settings(image=tmp_path / "sem.npy", voxel_um=0.5), tmp_path / "s.h5")[None]
     assert read_attrs(tmp_path / "s.h5")["is_2d"] == 1
-    assert "S_V_per_mm" not in ds and ds.attrs["skipped_2d"]  # the 3-D-only statistics are left out, and said so
+    assert (
+        "S_V_per_mm" not in ds and ds.attrs["skipped_2d"]
+    )  # the 3-D-only statistics are left out, and said so
     assert np.isnan(float(ds.S_V_chord_per_mm.sel(axis="z")))  # no lines along z in a section
     with pytest.raises(PorepipeError, match="2-D section.*need a 3-D image"):
         write_binary(tmp_path / "s.h5", tmp_path / "b.h5", 0.5)
@@ -73,8 +87,9 @@ def test_nan_in_float_image(tmp_path):
     with pytest.raises(PorepipeError, match=r"2 NaN/Inf voxel\(s\).*first at \(3, 4, 5\)"):
         acquire(Settings(image=tmp_path / "f.npy", voxel_um=1.0), tmp_path / "s.h5")
     # cropping the bad voxels away is the documented remedy
-    ok = Settings.model_validate({"image": str(tmp_path / "f.npy"), "voxel_um": 1.0,
-                                  "crop": {"start": [0, 5, 0], "size": [10, 5, 10]}})
+    ok = Settings.model_validate(
+        {"image": str(tmp_path / "f.npy"), "voxel_um": 1.0, "crop": {"start": [0, 5, 0], "size": [10, 5, 10]}}
+    )
     assert np.isfinite(float(acquire(ok, tmp_path / "s.h5")[None].porosity))
 
 
@@ -101,7 +116,19 @@ def test_radius_fit_degenerate_samples():
 
 def test_cli_reports_bad_raw_clearly(tmp_path, capsys):
     (tmp_path / "v.raw").write_bytes(bytes(100))
-    code = main(["acquire", str(tmp_path / "v.raw"), "--voxel-um", "1", "--raw-shape", "5", "5", "5",
-                 "-o", str(tmp_path / "s.h5")])
+    code = main(
+        [
+            "acquire",
+            str(tmp_path / "v.raw"),
+            "--voxel-um",
+            "1",
+            "--raw-shape",
+            "5",
+            "5",
+            "5",
+            "-o",
+            str(tmp_path / "s.h5"),
+        ]
+    )
     assert code == 2
     assert "has 100 bytes" in capsys.readouterr().err

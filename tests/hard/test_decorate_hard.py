@@ -11,23 +11,33 @@ from porepipe.decorate._settings import Settings
 from tests.unit.decorate.naive_grains import naive_grey
 
 
-@pytest.mark.parametrize("normals, offsets, what", [
-    (np.vstack([np.eye(3), -np.eye(3)[:2]]), np.ones(5), "unbounded"),          # no -z plane
-    (np.vstack([np.eye(3), [[1, 1, 1]]]), np.ones(4), "unbounded"),             # all normals in one half-space
-    (np.vstack([np.eye(3), -np.eye(3)]), np.array([1, 1, 1, -2, 1, 1.0]), "empty"),   # x <= 1 and x >= 2
-    (np.vstack([np.eye(3), -np.eye(3)]), np.array([0, 1, 1, 0, 1, 1.0]), "empty or flat"),  # 0 <= x <= 0
-])
+@pytest.mark.parametrize(
+    "normals, offsets, what",
+    [
+        (np.vstack([np.eye(3), -np.eye(3)[:2]]), np.ones(5), "unbounded"),  # no -z plane
+        (np.vstack([np.eye(3), [[1, 1, 1]]]), np.ones(4), "unbounded"),  # all normals in one half-space
+        (np.vstack([np.eye(3), -np.eye(3)]), np.array([1, 1, 1, -2, 1, 1.0]), "empty"),  # x <= 1 and x >= 2
+        (np.vstack([np.eye(3), -np.eye(3)]), np.array([0, 1, 1, 0, 1, 1.0]), "empty or flat"),  # 0 <= x <= 0
+    ],
+)
 def test_degenerate_plane_sets_name_the_type(normals, offsets, what):
     with pytest.raises(PorepipeError, match=rf"grain type 'bad-one'.*{what}"):
         polyhedron("bad-one", normals, offsets)
 
 
-@pytest.mark.parametrize("normals, offsets, match", [
-    (np.ones((3, 3)), np.ones(3), "need >= 4"),
-    (np.vstack([np.eye(3), -np.eye(3)]) * np.array([[1], [1], [1], [1], [1], [0]]), np.ones(6), "zero normal"),
-    (np.vstack([np.eye(3), -np.eye(3)]), np.array([1, 1, np.nan, 1, 1, 1]), "NaN or Inf"),
-    (np.eye(3), np.ones(4), "need normals"),
-])
+@pytest.mark.parametrize(
+    "normals, offsets, match",
+    [
+        (np.ones((3, 3)), np.ones(3), "need >= 4"),
+        (
+            np.vstack([np.eye(3), -np.eye(3)]) * np.array([[1], [1], [1], [1], [1], [0]]),
+            np.ones(6),
+            "zero normal",
+        ),
+        (np.vstack([np.eye(3), -np.eye(3)]), np.array([1, 1, np.nan, 1, 1, 1]), "NaN or Inf"),
+        (np.eye(3), np.ones(4), "need normals"),
+    ],
+)
 def test_malformed_plane_sets(normals, offsets, match):
     with pytest.raises(PorepipeError, match=rf"'odd'.*{match}"):
         polyhedron("odd", normals, offsets)
@@ -54,7 +64,7 @@ def test_grains_much_smaller_than_a_voxel():
     grey = voxelize_grains(deco, box, 2.0)
     assert np.array_equal(grey, voxelize_grains(deco, box, 2.0, method="brute"))
     assert np.array_equal(grey, naive_grey(deco, box, 2.0))
-    assert grey.max() <= 2     # a body of diameter < 0.3 µm holds at most a few points of a 0.333 µm lattice
+    assert grey.max() <= 2  # a body of diameter < 0.3 µm holds at most a few points of a 0.333 µm lattice
 
 
 def test_grain_crossing_periodic_faces():
@@ -66,8 +76,8 @@ def test_grain_crossing_periodic_faces():
     assert np.array_equal(grey, naive_grey(corner, box, 0.5))
     centred = decorate(np.array([[6.2, 5.9, 6.05]]), np.array([3.0]), Settings(families=fams), seed=2)
     assert np.array_equal(corner.rotations, centred.rotations)
-    v_corner = grey.sum(dtype=np.int64) / 216 * 0.5 ** 3
-    v_centre = voxelize_grains(centred, box, 0.5).sum(dtype=np.int64) / 216 * 0.5 ** 3
+    v_corner = grey.sum(dtype=np.int64) / 216 * 0.5**3
+    v_centre = voxelize_grains(centred, box, 0.5).sum(dtype=np.int64) / 216 * 0.5**3
     exact = 4 / 3 * np.pi * 27
     # different lattice offsets of the same body: both within 1 % of the exact volume (measured ~1e-4 at a/r = 1/6)
     assert v_corner == pytest.approx(exact, rel=1e-2) and v_centre == pytest.approx(exact, rel=1e-2)
@@ -76,21 +86,26 @@ def test_grain_crossing_periodic_faces():
 def test_elongation_zero():
     t = random_type("round", np.random.default_rng(1), facets=36, elongation=0.0)
     ext = np.ptp(t.vertices, axis=0)
-    assert t.n_faces == 36 and ext.max() / ext.min() < 1.3   # near-isotropic tangent polytope of the unit sphere
+    assert (
+        t.n_faces == 36 and ext.max() / ext.min() < 1.3
+    )  # near-isotropic tangent polytope of the unit sphere
     s = Settings(families=[{"name": "q", "generator": "quartz", "count": 2, "elongation": (0.0, 0.0)}])
     deco = decorate(np.array([[5.0, 5.0, 5.0]]), np.array([2.0]), s, seed=0)
     assert deco.library[0].n_faces == 18
 
 
-@pytest.mark.parametrize("section, match", [
-    ({"assign": [{"probabilities": {"nope": 1.0}}]}, "unknown families"),
-    ({"assign": [{"probabilities": {"quartz": 0.5}}]}, "sum to 1"),
-    ({"families": [{"name": "r", "generator": "random", "elongation": (0.5, 0.2)}]}, "reversed"),
-    ({"families": [{"name": "f", "generator": "file"}]}, "give `file`"),
-    ({"families": [{"name": "a"}, {"name": "a"}]}, "distinct"),
-    ({"orientation": {"axis": (0, 0, 0)}}, "non-zero"),
-    ({"scale": "bigger"}, "equal_volume"),
-])
+@pytest.mark.parametrize(
+    "section, match",
+    [
+        ({"assign": [{"probabilities": {"nope": 1.0}}]}, "unknown families"),
+        ({"assign": [{"probabilities": {"quartz": 0.5}}]}, "sum to 1"),
+        ({"families": [{"name": "r", "generator": "random", "elongation": (0.5, 0.2)}]}, "reversed"),
+        ({"families": [{"name": "f", "generator": "file"}]}, "give `file`"),
+        ({"families": [{"name": "a"}, {"name": "a"}]}, "distinct"),
+        ({"orientation": {"axis": (0, 0, 0)}}, "non-zero"),
+        ({"scale": "bigger"}, "equal_volume"),
+    ],
+)
 def test_bad_decoration_sections(section, match):
     with pytest.raises(ValidationError, match=match):
         Settings(**section)

@@ -40,8 +40,13 @@ def test_fully_blocked_sample_returns_zero_at_once():
     pore = np.ones((8, 5, 5), dtype=bool)
     pore[4] = False
     for setup in ("periodic", "chambers"):
-        res = permeability(pore, "z" if False else "x", Settings(setup=setup, inlet_layers=3, force_layers=1),
-                           voxel_um=3.0, progress=False)
+        res = permeability(
+            pore,
+            "z" if False else "x",
+            Settings(setup=setup, inlet_layers=3, force_layers=1),
+            voxel_um=3.0,
+            progress=False,
+        )
         assert res.kappa_lu == 0.0 and res.kappa_mD == 0.0 and res.steps == 0
         assert "no pore path" in res.reason and not np.isnan(res.kappa_m2)
 
@@ -71,8 +76,19 @@ def test_float32_million_steps_without_drift():
     pore[:, :, 1:5] = True
     ref = permeability(pore, "x", Settings(collision="trt", tau=1.0), progress=False)
     # one window of 10⁶ steps: checks at steps 1, 2, 4, …, 2¹⁹ and 10⁶, none of which may stop the run
-    long = permeability(pore, "x", Settings(collision="trt", tau=1.0, precision="float32", max_steps=1_000_000,
-                                            window_steps=1_000_000, accept_unconverged=True), progress=False)
+    long = permeability(
+        pore,
+        "x",
+        Settings(
+            collision="trt",
+            tau=1.0,
+            precision="float32",
+            max_steps=1_000_000,
+            window_steps=1_000_000,
+            accept_unconverged=True,
+        ),
+        progress=False,
+    )
     assert long.steps == 1_000_000
     kappas = long.history["kappa"][long.history["step"] >= 100_000]
     assert np.abs(kappas / ref.kappa_lu - 1).max() < 1e-5

@@ -122,7 +122,9 @@ def test_anisotropic_voxels_are_refused(tmp_path):
     path = tmp_path / "binary_a1.h5"
     write_binary(path, np.ones((8, 8, 8), np.uint8))
     with h5py.File(path, "a") as f:
-        f["volumes/pore"].attrs["voxel_um"] = np.array([2.0, 2.0, 2.0])  # three equal edges are one cubic voxel
+        f["volumes/pore"].attrs["voxel_um"] = np.array(
+            [2.0, 2.0, 2.0]
+        )  # three equal edges are one cubic voxel
     assert read_binary_volume(path)[1].voxel_um == 2.0
     with h5py.File(path, "a") as f:
         f["volumes/pore"].attrs["voxel_um"] = np.array([1.0, 1.0, 2.0])

@@ -43,8 +43,9 @@ def test_single_pore_voxel(adjacency):
     assert float(pore.phi) * window == pytest.approx(1.0, rel=1e-14)
     # Crofton values of a point: 2 transitions on one line per direction; χ = 1 in one plane of each family
     assert float(pore.S_V) * window == pytest.approx(4 * np.sum(G.line_weight / G.line_length_um), rel=1e-14)
-    assert float(pore.K_V) * window == pytest.approx(2 * np.pi * np.sum(G.plane_weight * G.plane_spacing_um),
-                                                     rel=1e-14)
+    assert float(pore.K_V) * window == pytest.approx(
+        2 * np.pi * np.sum(G.plane_weight * G.plane_spacing_um), rel=1e-14
+    )
 
 
 def test_single_voxel_volume():
@@ -63,7 +64,7 @@ def test_periodic_plate_one_voxel_thick():
     ds = minkowski_functionals(v, 0.5, True)
     pore = ds.sel(phase="pore")
     cos_x = np.abs(W.DIRECTIONS[:, 0]) / np.linalg.norm(W.DIRECTIONS, axis=1)
-    expected = 2 / (8 * 0.5) * 2 * np.sum(G.line_weight * cos_x)      # true S_V = 2/(8 a); factor 0.926
+    expected = 2 / (8 * 0.5) * 2 * np.sum(G.line_weight * cos_x)  # true S_V = 2/(8 a); factor 0.926
     assert float(pore.S_V) == pytest.approx(expected, rel=1e-13)
     assert float(pore.K_V) == 0.0
     assert float(pore.chi) == 0.0 and float(ds.chi.sel(phase="matrix")) == 0.0
@@ -80,7 +81,9 @@ def test_plate_and_line_in_a_window():
             ds = minkowski_functionals(v, 1.0, False, adjacency)
             _finite(ds)
             assert float(ds.chi.sel(phase="pore")) == 1.0
-            assert float(ds.phi.sel(phase="pore")) * float(ds.attrs["window_um3"]) == pytest.approx(n, rel=1e-14)
+            assert float(ds.phi.sel(phase="pore")) * float(ds.attrs["window_um3"]) == pytest.approx(
+                n, rel=1e-14
+            )
 
 
 @pytest.mark.parametrize("shape", [(1, 9, 9), (2, 9, 9), (9, 1, 9), (9, 9, 2)])
@@ -112,16 +115,19 @@ def test_beyond_2_to_the_31_voxels_with_64_bit_counts():
     slab[12, ::16, ::16] = 1
     hist, shape = configuration_histogram_slabs((slab for _ in range(17)), periodic=True)
     assert shape == (272, 1024, 8192)
-    assert hist.sum() == 272 * 1024 * 8192 > 2 ** 31
-    assert hist[0] > 2 ** 31
+    assert hist.sum() == 272 * 1024 * 8192 > 2**31
+    assert hist[0] > 2**31
     np.testing.assert_array_equal(hist, 17 * configuration_histogram(slab, True))
 
 
-@pytest.mark.parametrize("bad, match", [
-    (np.zeros((4, 4), np.uint8), "must be 3-D"),
-    (np.zeros((4, 4, 4), np.float32), "uint8 or bool"),
-    (np.zeros((4, 1, 4), np.uint8), "axis y has 1 voxel"),
-])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (np.zeros((4, 4), np.uint8), "must be 3-D"),
+        (np.zeros((4, 4, 4), np.float32), "uint8 or bool"),
+        (np.zeros((4, 1, 4), np.uint8), "axis y has 1 voxel"),
+    ],
+)
 def test_bad_volumes(bad, match):
     with pytest.raises(PorepipeError, match=match):
         minkowski_functionals(bad, 1.0, False)

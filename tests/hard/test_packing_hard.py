@@ -13,7 +13,7 @@ from porepipe.packing import Settings, build_neighbours, pack_spheres, sphere_ov
 from porepipe.packing._api import check_damping
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "packing"))
-from naive_packing import neighbour_pairs  # noqa: E402
+from naive_packing import neighbour_pairs
 
 
 def _one_type(count=20, rmin=40.0, rmax=60.0, **stage):

@@ -16,17 +16,28 @@ resolutions_um: [4, 2]
 BROKEN = {
     "negative radius": ("spheres: {inline: [[10, 10, 10, -5]]}", ["spheres.inline", "radius -5", "r > 0"]),
     "zero box edge": ("domain: {size_um: [100, 0, 100]}", ["domain.size_um[1]", "greater than 0"]),
-    "resolution not dividing": ("resolutions_um: [3, 2]", ["resolutions_um[0] = 3", "does not divide", "33.3333"]),
+    "resolution not dividing": (
+        "resolutions_um: [3, 2]",
+        ["resolutions_um[0] = 3", "does not divide", "33.3333"],
+    ),
     "negative resolution": ("resolutions_um: [-1]", ["resolutions_um[0]", "greater than 0"]),
     "unknown analysis": ("analyses: [segment, porosimetry]", ["analyses[1] = 'porosimetry'", "'minkowski'"]),
-    "missing xyzr file": ("spheres: {xyzr: nowhere.xyzr}", ["spheres.xyzr = 'nowhere.xyzr'", "file not found"]),
+    "missing xyzr file": (
+        "spheres: {xyzr: nowhere.xyzr}",
+        ["spheres.xyzr = 'nowhere.xyzr'", "file not found"],
+    ),
     "two sphere sources": ("spheres: {inline: [[1, 1, 1, 1]], xyzr: a.xyzr}", ["exactly one of"]),
     "misspelt key": ("resolution_um: [2]", ["resolution_um", "unknown key"]),
     "fixed without threshold": ("segmentation: {method: fixed}", ["segmentation", "needs `threshold`"]),
-    "threshold out of range": ("segmentation: {method: fixed, threshold: 216}", ["segmentation.threshold = 216",
-                                                                               "less than or equal to 215"]),
+    "threshold out of range": (
+        "segmentation: {method: fixed, threshold: 216}",
+        ["segmentation.threshold = 216", "less than or equal to 215"],
+    ),
     "bad name": ("name: 'two words'", ["name = 'two words'", "pattern"]),
-    "unknown segmentation method": ("segmentation: {method: kmeans}", ["segmentation.method = 'kmeans'", "'otsu'"]),
+    "unknown segmentation method": (
+        "segmentation: {method: kmeans}",
+        ["segmentation.method = 'kmeans'", "'otsu'"],
+    ),
     "duplicate resolutions": ("resolutions_um: [2, 2]", ["resolutions_um", "distinct"]),
     "pack without packing section": ("spheres: {pack: true}", ["spheres.pack", "packing:"]),
 }
@@ -60,14 +71,16 @@ def test_each_fault_gives_one_clear_message(case, tmp_path, capsys):
 
 def test_all_faults_reported_at_once(tmp_path, capsys):
     path = tmp_path / "scene.yaml"
-    path.write_text(textwrap.dedent("""
+    path.write_text(
+        textwrap.dedent("""
         name: bad
         domain: {size_um: [100, 100, 100]}
         spheres: {inline: [[10, 10, 10, -5]]}
         resolutions_um: [3]
         analyses: [nonsense]
         colour: blue
-    """))
+    """)
+    )
     assert main(["validate", str(path)]) == 2
     err = capsys.readouterr().err
     assert "4 problem(s)" in err

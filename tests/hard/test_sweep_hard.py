@@ -11,7 +11,11 @@ from porepipe.sweep import Status, build_sweep, decide, fit_power, limit_of, pre
 
 def test_converged_constant_data_give_the_value_with_zero_error():
     lim = fit_power([4.0, 2.0, 1.0, 0.5], [0.3] * 4)
-    assert lim.status is Status.ok and lim.q_inf == pytest.approx(0.3, abs=1e-15) and lim.err == pytest.approx(0.0)
+    assert (
+        lim.status is Status.ok
+        and lim.q_inf == pytest.approx(0.3, abs=1e-15)
+        and lim.err == pytest.approx(0.0)
+    )
 
 
 @pytest.mark.parametrize("scale", [1e-300, 1e300])

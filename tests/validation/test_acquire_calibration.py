@@ -31,10 +31,29 @@ LO, HI, ALPHA = 40.0, 80.0, 0.05
 
 
 def _experiment():
-    stage = {"name": "one", "insert": ["a"], "steps": 600, "dt": 0.25, "k": {"a": 400}, "damping": {"a": 4},
-             "freezing": {"lock_step": 10}, "stochastic_forces": {"step_size": 0.05}}
-    settings = PackingSettings.model_validate({"types": [{"name": "a", "count": 150, "max_overlap": 0.3, "radius_um": {
-        "dist": "exponential", "min_um": LO, "max_um": HI, "alpha_per_um": ALPHA}}], "stages": [stage]})
+    stage = {
+        "name": "one",
+        "insert": ["a"],
+        "steps": 600,
+        "dt": 0.25,
+        "k": {"a": 400},
+        "damping": {"a": 4},
+        "freezing": {"lock_step": 10},
+        "stochastic_forces": {"step_size": 0.05},
+    }
+    settings = PackingSettings.model_validate(
+        {
+            "types": [
+                {
+                    "name": "a",
+                    "count": 150,
+                    "max_overlap": 0.3,
+                    "radius_um": {"dist": "exponential", "min_um": LO, "max_um": HI, "alpha_per_um": ALPHA},
+                }
+            ],
+            "stages": [stage],
+        }
+    )
     packing = pack_spheres(settings, BOX_UM, True, seed=4)
     grey = voxelize(packing.centres_um, packing.radii_um, BOX_UM, VOXEL_UM, True)
     return packing, grey
@@ -44,7 +63,9 @@ def _experiment():
 def loop(tmp_path_factory):
     packing, grey = _experiment()
     # the experiment is made of spheres, so the model is too (decoration off)
-    acquire = Settings(calibration=Calibration(max_overlap=0.3, steps=600, porosity_iterations=2, decoration=False))
+    acquire = Settings(
+        calibration=Calibration(max_overlap=0.3, steps=600, porosity_iterations=2, decoration=False)
+    )
     phases = segment_phases(grey, acquire.segmentation)  # the image: grey 0..216 read as an 8-bit scan
     exp = image_statistics(phases, VOXEL_UM, acquire)[None]
     scene = calibrated_scene(exp, acquire.calibration, name="loop-model", seed=9)

@@ -33,10 +33,17 @@ def _spheres(seed=1, count=36, r_lo=5.0, r_hi=10.0):
 def measured(tmp_path_factory):
     centres, radii, solid = _spheres()
     rng = np.random.default_rng(7)
-    grey = np.where(solid, 180, 50).astype(np.int16) + rng.integers(-20, 21, solid.shape)  # noise < half the gap
+    grey = np.where(solid, 180, 50).astype(np.int16) + rng.integers(
+        -20, 21, solid.shape
+    )  # noise < half the gap
     path = tmp_path_factory.mktemp("spheres") / "spheres.tif"
-    tifffile.imwrite(path, grey.astype(np.uint8).transpose(2, 1, 0), imagej=True,
-                     resolution=(1 / VOXEL_UM, 1 / VOXEL_UM), metadata={"spacing": VOXEL_UM, "unit": "um"})
+    tifffile.imwrite(
+        path,
+        grey.astype(np.uint8).transpose(2, 1, 0),
+        imagej=True,
+        resolution=(1 / VOXEL_UM, 1 / VOXEL_UM),
+        metadata={"spacing": VOXEL_UM, "unit": "um"},
+    )
     tables = acquire(Settings(image=path), path.with_name("statistics.h5"))
     return centres, radii, solid, tables[None]
 

@@ -23,7 +23,9 @@ def _planned(scene, cwd, *targets):
 
 def test_image_scene_plans_the_acquisition_chain(tmp_path):
     rules = _planned(SCENE, tmp_path, "all", "results/image-to-model/acquire_compare/comparison.h5")
-    assert {"acquire", "acquire_binary", "acquire_calibrate", "acquire_model", "acquire_compare"} <= set(rules)
+    assert {"acquire", "acquire_binary", "acquire_calibrate", "acquire_model", "acquire_compare"} <= set(
+        rules
+    )
     assert "voxelize" not in rules and "segment" not in rules and "pack" not in rules
 
 

@@ -25,7 +25,7 @@ def _shell_bound(deco, voxel_um):
     t_ = deco.library[0]
     s = deco.scales[0]
     t = np.sqrt(3.0) * voxel_um / 6 / 2
-    return 2 * t_.area * s ** 2 * t + t_.mean_curvature * s * t ** 2 + 4 / 3 * np.pi * t ** 3
+    return 2 * t_.area * s**2 * t + t_.mean_curvature * s * t**2 + 4 / 3 * np.pi * t**3
 
 
 def test_single_grain_volume_converges(grain):
@@ -33,7 +33,7 @@ def test_single_grain_volume_converges(grain):
     errors = {}
     for a in (4.0, 2.0, 1.0, 0.5, 0.25):
         grey = voxelize_grains(grain, BOX1, a, periodic=False)
-        volume = grey.sum(dtype=np.int64) / 216 * a ** 3
+        volume = grey.sum(dtype=np.int64) / 216 * a**3
         errors[a] = (volume - exact) / exact
         assert abs(volume - exact) <= _shell_bound(grain, a)
     print("relative volume error per voxel size a (um):", {a: f"{e:+.2e}" for a, e in errors.items()})
@@ -57,7 +57,7 @@ def test_monte_carlo_agrees_with_grey_values(grain):
     inside = points_in_grains(rng.uniform(0, 24, (n, 3)), grain, BOX1, periodic=False)
     frac = inside.mean()
     sigma = np.prod(BOX1) * np.sqrt(frac * (1 - frac) / n)
-    volume = grey.sum(dtype=np.int64) / 216 * a ** 3
+    volume = grey.sum(dtype=np.int64) / 216 * a**3
     assert abs(frac * np.prod(BOX1) - volume) < 4 * sigma + _shell_bound(grain, a)
 
 
@@ -88,8 +88,9 @@ def test_overlap_minimiser_reduces_mean_overlap():
     centres, radii = rng.uniform(0, 40, (50, 3)), rng.uniform(4, 7, 50)
     fams = [{"name": "q", "generator": "quartz", "count": 6, "elongation": (0.3, 0.8)}]
     random = decorate(centres, radii, Settings(families=fams), seed=2, box_um=box)
-    om = decorate(centres, radii, Settings(families=fams, orientation={"mode": "overlap_minimizer"}), seed=2,
-                  box_um=box)
+    om = decorate(
+        centres, radii, Settings(families=fams, orientation={"mode": "overlap_minimizer"}), seed=2, box_um=box
+    )
     before, after = mean_overlap_volume(random, box), mean_overlap_volume(om, box)
     print(f"mean exact overlap volume per grain: random {before:.1f} um3, minimised {after:.1f} um3")
     assert after < 0.9 * before

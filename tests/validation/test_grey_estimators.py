@@ -25,7 +25,9 @@ def test_table_7_2_regression_gives_thesis_porosity():
     lim = regress_porosity_limit(PHI0, PHI215)
     # the thesis prints φ = 0.134313 ± 0.00001: six digits, so agree to half a unit of the last digit
     assert lim.phi == pytest.approx(0.134313, abs=5e-7)
-    assert lim.phi_err == pytest.approx(1e-5, rel=0.2)  # our standard error 1.12e-5 matches the quoted ±0.00001
+    assert lim.phi_err == pytest.approx(
+        1e-5, rel=0.2
+    )  # our standard error 1.12e-5 matches the quoted ±0.00001
     assert lim.slope == pytest.approx(-0.740, abs=5e-4)  # the digest's recomputed slope
     np.testing.assert_allclose(lim.phi_star, [0.1327418, 0.1339109, 0.1342099, 0.1343110], atol=1e-7)
 
@@ -109,7 +111,9 @@ def test_extrapolated_porosity_within_1e4_of_exact_union(known_union):
 def test_segmented_porosity_converges_to_exact_union(known_union):
     _, res, _, greys, phi, _ = known_union
     err = abs((greys[0.25] <= 107).mean() - phi)
-    assert err < 1e-4  # measured 3.9e-5 at a = 0.25 (boundary errors of a half threshold cancel to first order)
+    assert (
+        err < 1e-4
+    )  # measured 3.9e-5 at a = 0.25 (boundary errors of a half threshold cancel to first order)
 
 
 def test_mean_field_surface_error_against_exact_surface(known_union):

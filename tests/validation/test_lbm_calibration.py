@@ -41,8 +41,9 @@ def test_table_6_2_velocity_error_bgk(b):
     rtol 1e-3: the thesis prints 5 significant digits and stops at its own convergence criterion.
     """
     case = cal.square_duct(b, thesis_chambers=True)
-    settings = Settings(collision="bgk", tau=0.857, window_steps=1000, tolerance_velocity=1e-6,
-                        tolerance_kappa=1e-6)
+    settings = Settings(
+        collision="bgk", tau=0.857, window_steps=1000, tolerance_velocity=1e-6, tolerance_kappa=1e-6
+    )
     run = cal.run_case(case, settings)
     assert run.converged
     eps_v, _ = cal.mid_section_velocity_error(case, run, settings, b)
@@ -59,8 +60,12 @@ def test_square_duct_b16_kappa_error_below_one_percent(collision):
 
 def _tau_series(collision, taus=(0.6, 1.0, 2.0), **extra):
     case = cal.square_duct(16, thesis_chambers=False)
-    return np.array([cal.duct_kappa(case, cal.run_case(case, Settings(collision=collision, tau=t, **extra)))
-                     for t in taus])
+    return np.array(
+        [
+            cal.duct_kappa(case, cal.run_case(case, Settings(collision=collision, tau=t, **extra)))
+            for t in taus
+        ]
+    )
 
 
 def test_trt_and_mrt_are_tau_independent_bgk_drifts():
@@ -95,8 +100,9 @@ def test_slit_trt_magic_is_exact_and_second_order():
     errors = []
     for h in (4, 8, 16):
         case = cal.slit(h)
-        run = cal.run_case(case, Settings(collision="trt", tau=0.8, tolerance_kappa=1e-9,
-                                          tolerance_velocity=1e-8))
+        run = cal.run_case(
+            case, Settings(collision="trt", tau=0.8, tolerance_kappa=1e-9, tolerance_velocity=1e-8)
+        )
         kappa = cal.duct_kappa(case, run)
         assert kappa == pytest.approx((h * h + 0.5) / 12, rel=1e-7)
         errors.append(kappa / cal.slit_kappa(h) - 1)
@@ -141,7 +147,9 @@ def test_zero_body_force_gives_zero_flow():
     with _threads_for(lat.n_nodes):
         step(src, dst, fields, True, 100)
         assert np.count_nonzero(src) == 0 and np.count_nonzero(fields) == 0
-        src[: lat.n_nodes] = 1e-3 * np.random.default_rng(9).standard_normal(lat.n_nodes)  # rest population kick
+        src[: lat.n_nodes] = 1e-3 * np.random.default_rng(9).standard_normal(
+            lat.n_nodes
+        )  # rest population kick
         step(src, dst, fields, True, 3000)
     assert np.abs(fields[1:]).max() < 1e-9  # acoustic/viscous decay from 1e-3 over 3000 steps
 
@@ -155,8 +163,14 @@ def test_chamber_and_periodic_set_ups_agree_on_a_straight_duct():
     pore = np.zeros((24, 10, 10), dtype=bool)
     pore[:, 1:9, 1:9] = True
     periodic = permeability(pore, "x", Settings(collision="trt"), progress=False).kappa_lu
-    chamber = permeability(pore, "x", Settings(collision="trt", setup="chambers", inlet_layers=6, outlet_layers=6,
-                                               force_layers=3, trim_layers=4), progress=False)
+    chamber = permeability(
+        pore,
+        "x",
+        Settings(
+            collision="trt", setup="chambers", inlet_layers=6, outlet_layers=6, force_layers=3, trim_layers=4
+        ),
+        progress=False,
+    )
     assert chamber.estimates["fit_trimmed/mean"] == pytest.approx(periodic, rel=1e-3)
     assert chamber.kappa_lu == pytest.approx(periodic, rel=0.03)
     mirrored = permeability(pore, "x", Settings(collision="trt", mirror=True), progress=False).kappa_lu

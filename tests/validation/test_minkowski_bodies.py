@@ -28,9 +28,13 @@ GEOM = W.geometry((1.0, 1.0, 1.0))
 def _rotation(seed):
     q = np.random.default_rng(seed).normal(size=4)
     a, b, c, d = q / np.linalg.norm(q)
-    return np.array([[a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)],
-                     [2 * (b * c + a * d), a * a - b * b + c * c - d * d, 2 * (c * d - a * b)],
-                     [2 * (b * d - a * c), 2 * (c * d + a * b), a * a - b * b - c * c + d * d]])
+    return np.array(
+        [
+            [a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)],
+            [2 * (b * c + a * d), a * a - b * b + c * c - d * d, 2 * (c * d - a * b)],
+            [2 * (b * d - a * c), 2 * (c * d + a * b), a * a - b * b - c * c + d * d],
+        ]
+    )
 
 
 ROT = _rotation(3)
@@ -51,29 +55,33 @@ def cube(x, y, z, rotation=None):
 
 
 def cylinder(x, y, z):
-    return (x * x + y * y <= CYL_R ** 2) & (np.abs(z) <= CYL_H / 2)
+    return (x * x + y * y <= CYL_R**2) & (np.abs(z) <= CYL_H / 2)
 
 
 def torus(x, y, z):
     p = _body_frame(x, y, z, ROT)
     q = np.hypot(p[..., 0], p[..., 1]) - TOR_R
-    return q * q + p[..., 2] ** 2 <= TOR_RHO ** 2
+    return q * q + p[..., 2] ** 2 <= TOR_RHO**2
 
 
 def hollow_ball(x, y, z):
     d2 = x * x + y * y + z * z
-    return (d2 <= 1.0) & (d2 >= HOLLOW_IN ** 2)
+    return (d2 <= 1.0) & (d2 >= HOLLOW_IN**2)
 
 
 def touching_balls(x, y, z):
-    return ((x - TOUCH_R) ** 2 + y * y + z * z <= TOUCH_R ** 2) | ((x + TOUCH_R) ** 2 + y * y + z * z <= TOUCH_R ** 2)
+    return ((x - TOUCH_R) ** 2 + y * y + z * z <= TOUCH_R**2) | (
+        (x + TOUCH_R) ** 2 + y * y + z * z <= TOUCH_R**2
+    )
 
 
 def _cube_limits(rotation):
     axes = np.eye(3) if rotation is None else rotation
-    width = np.abs(UNIT @ axes).sum(axis=1)                          # Σ_k |u · n_k| for the three face normals
-    return (4 * np.sum(GEOM.line_weight * CUBE_SIDE ** 2 * width),
-            2 * np.pi * np.sum(GEOM.plane_weight * CUBE_SIDE * width))
+    width = np.abs(UNIT @ axes).sum(axis=1)  # Σ_k |u · n_k| for the three face normals
+    return (
+        4 * np.sum(GEOM.line_weight * CUBE_SIDE**2 * width),
+        2 * np.pi * np.sum(GEOM.plane_weight * CUBE_SIDE * width),
+    )
 
 
 def _torus_surface_limit(n=800):
@@ -87,9 +95,11 @@ def _torus_surface_limit(n=800):
 
 def _cylinder_limits():
     uz = np.abs(UNIT[:, 2])
-    side = np.sqrt(1 - uz ** 2)
-    return (4 * np.sum(GEOM.line_weight * (np.pi * CYL_R ** 2 * uz + 2 * CYL_R * CYL_H * side)),
-            2 * np.pi * np.sum(GEOM.plane_weight * (CYL_H * uz + 2 * CYL_R * side)))
+    side = np.sqrt(1 - uz**2)
+    return (
+        4 * np.sum(GEOM.line_weight * (np.pi * CYL_R**2 * uz + 2 * CYL_R * CYL_H * side)),
+        2 * np.pi * np.sum(GEOM.plane_weight * (CYL_H * uz + 2 * CYL_R * side)),
+    )
 
 
 # torus: ∫χ(T ∩ E_t) dt = 4R sin α for a plane normal at angle α to the axis (Morse count of the section), so
@@ -99,15 +109,32 @@ _TOR_SIN = np.sqrt(1 - (UNIT @ ROT[:, 2]) ** 2)
 #: name: (indicator, half extent, (V, S_ref, M_ref, χ), (components, cavities), exact S and M for the record)
 BODIES = {
     "ball": (ball, 1.0, (4 / 3 * np.pi, 4 * np.pi, 4 * np.pi, 1), (1, 0)),
-    "cube": (cube, 0.8, (CUBE_SIDE ** 3, *_cube_limits(None), 1), (1, 0)),
-    "cube_rotated": (lambda x, y, z: cube(x, y, z, ROT), 1.4, (CUBE_SIDE ** 3, *_cube_limits(ROT), 1), (1, 0)),
-    "cylinder": (cylinder, 0.9, (np.pi * CYL_R ** 2 * CYL_H, *_cylinder_limits(), 1), (1, 0)),
-    "torus": (torus, 1.4, (2 * np.pi ** 2 * TOR_R * TOR_RHO ** 2, _torus_surface_limit(),
-                           2 * np.pi * np.sum(GEOM.plane_weight * 4 * TOR_R * _TOR_SIN), 0), (1, 0)),
-    "hollow_ball": (hollow_ball, 1.0, (4 / 3 * np.pi * (1 - HOLLOW_IN ** 3), 4 * np.pi * (1 + HOLLOW_IN ** 2),
-                                       4 * np.pi * (1 - HOLLOW_IN), 2), (1, 1)),
-    "touching_balls": (touching_balls, 1.2, (8 / 3 * np.pi * TOUCH_R ** 3, 8 * np.pi * TOUCH_R ** 2,
-                                             8 * np.pi * TOUCH_R, 1), (1, 0)),
+    "cube": (cube, 0.8, (CUBE_SIDE**3, *_cube_limits(None), 1), (1, 0)),
+    "cube_rotated": (lambda x, y, z: cube(x, y, z, ROT), 1.4, (CUBE_SIDE**3, *_cube_limits(ROT), 1), (1, 0)),
+    "cylinder": (cylinder, 0.9, (np.pi * CYL_R**2 * CYL_H, *_cylinder_limits(), 1), (1, 0)),
+    "torus": (
+        torus,
+        1.4,
+        (
+            2 * np.pi**2 * TOR_R * TOR_RHO**2,
+            _torus_surface_limit(),
+            2 * np.pi * np.sum(GEOM.plane_weight * 4 * TOR_R * _TOR_SIN),
+            0,
+        ),
+        (1, 0),
+    ),
+    "hollow_ball": (
+        hollow_ball,
+        1.0,
+        (4 / 3 * np.pi * (1 - HOLLOW_IN**3), 4 * np.pi * (1 + HOLLOW_IN**2), 4 * np.pi * (1 - HOLLOW_IN), 2),
+        (1, 1),
+    ),
+    "touching_balls": (
+        touching_balls,
+        1.2,
+        (8 / 3 * np.pi * TOUCH_R**3, 8 * np.pi * TOUCH_R**2, 8 * np.pi * TOUCH_R, 1),
+        (1, 0),
+    ),
 }
 
 #: allowed |relative error| of (V, S, ∫H) at a = 1/4, 1/8, 1/16, 1/32 (pore 6-adjacent).
@@ -142,8 +169,18 @@ def topology(volume, adjacency_pore):
     pore_s, back_s = (face, full) if adjacency_pore == 6 else (full, face)
     n_comp = ndimage.label(volume, pore_s)[1]
     labels, n_back = ndimage.label(1 - volume, back_s)
-    outer = np.unique(np.concatenate([labels[0].ravel(), labels[-1].ravel(), labels[:, 0].ravel(),
-                                      labels[:, -1].ravel(), labels[:, :, 0].ravel(), labels[:, :, -1].ravel()]))
+    outer = np.unique(
+        np.concatenate(
+            [
+                labels[0].ravel(),
+                labels[-1].ravel(),
+                labels[:, 0].ravel(),
+                labels[:, -1].ravel(),
+                labels[:, :, 0].ravel(),
+                labels[:, :, -1].ravel(),
+            ]
+        )
+    )
     return n_comp, n_back - len(outer[outer > 0])
 
 
@@ -161,7 +198,9 @@ def test_body_converges(name):
         errors = [m / e - 1 for m, e in zip(measured, exact[:3])]
         rows.append(f"{name} a=1/{k}: " + " ".join(f"{q} {e:+.4f}" for q, e in zip(("V", "S", "∫H"), errors)))
         for quantity, err, tol in zip(("V", "S", "∫H"), errors, TOLERANCES[name]):
-            assert abs(err) <= tol[level], f"{quantity} error {err:+.4f} > {tol[level]} at a=1/{k}\n" + "\n".join(rows)
+            assert abs(err) <= tol[level], (
+                f"{quantity} error {err:+.4f} > {tol[level]} at a=1/{k}\n" + "\n".join(rows)
+            )
         chi = float(pore.chi)
         # independent implementation: scikit-image's Euler number with the same connectivity (6 -> 1)
         assert chi == euler_number(volume, connectivity=1)
@@ -192,7 +231,7 @@ def test_agrees_with_quantimpy():
     volume = np.zeros((40, 40, 40), np.uint8)
     x, y, z = np.meshgrid(*(np.arange(40.0),) * 3, indexing="ij", sparse=True)
     for c in rng.uniform(8, 32, (25, 3)):
-        volume |= ((x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 <= 5.5 ** 2).astype(np.uint8)
+        volume |= ((x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 <= 5.5**2).astype(np.uint8)
     volume = np.pad(volume, 2)
     v, s, h, _ = minkowski.functionals(volume.astype(bool))
     ours = {adj: minkowski_functionals(volume, 1.0, False, adj) for adj in Adjacency}
@@ -200,7 +239,7 @@ def test_agrees_with_quantimpy():
     pore = {adj: ds.sel(phase="pore") for adj, ds in ours.items()}
     assert float(pore[Adjacency.pore6_matrix26].phi) * window == pytest.approx(v, rel=1e-12)
     mean_h = sum(float(p.K_V) for p in pore.values()) / 2 * window
-    assert 2 * np.pi ** 2 * h == pytest.approx(mean_h, rel=1e-9)      # float rounding only
+    assert 2 * np.pi**2 * h == pytest.approx(mean_h, rel=1e-9)  # float rounding only
     assert 8 * s == pytest.approx(float(pore[Adjacency.pore6_matrix26].S_V) * window, rel=0.015)
 
 
@@ -209,9 +248,10 @@ def test_surface_agrees_with_marching_cubes_on_a_fine_ball():
     # image its staircase mesh overestimates by ~9 %, so it meshes the 0.5 level of the image blurred with a
     # Gaussian of σ = 1 voxel (area shift ~σ²/r² ≈ 0.2 % at r = 24 voxels). Both within 1 % of 4πr².
     from skimage.measure import marching_cubes, mesh_surface_area
+
     volume = digitise(ball, 1.0, 1 / 24)
     verts, faces, _, _ = marching_cubes(ndimage.gaussian_filter(volume.astype(float), 1.0), 0.5)
-    mc = mesh_surface_area(verts, faces) / 24 ** 2
+    mc = mesh_surface_area(verts, faces) / 24**2
     ds = minkowski_functionals(volume, 1 / 24, periodic=False)
     ours = float(ds.S_V.sel(phase="pore")) * float(ds.attrs["window_um3"])
     assert ours == pytest.approx(4 * np.pi, rel=0.01)

@@ -59,7 +59,7 @@ from porepipe.minkowski import (
 )
 
 R_UM, BOX_R, K, ETA, REALISATIONS = 1.0, 8, 16, 0.4, 40
-LAM = ETA / (4 / 3 * np.pi * R_UM ** 3)
+LAM = ETA / (4 / 3 * np.pi * R_UM**3)
 NAMES = ("phi", "S_V", "K_V", "chi_V")
 
 
@@ -84,18 +84,22 @@ def _sample():
     box_um, a = BOX_R * R_UM, R_UM / K
     samples = {adj: [] for adj in Adjacency}
     for _ in range(REALISATIONS):
-        centres = rng.uniform(0, box_um, (rng.poisson(LAM * box_um ** 3), 3))
+        centres = rng.uniform(0, box_um, (rng.poisson(LAM * box_um**3), 3))
         hist = configuration_histogram(paint(centres, R_UM, BOX_R * K, a), True)
         for adj in Adjacency:
             ds = minkowski_from_histogram(hist, a, adj, True).sel(phase="pore")
             samples[adj].append([float(ds.phi), float(ds.S_V), float(ds.K_V), float(ds.T_V) / (4 * np.pi)])
-    return {adj: (np.mean(s, axis=0), np.std(s, axis=0, ddof=1) / np.sqrt(REALISATIONS))
-            for adj, s in ((adj, np.asarray(s)) for adj, s in samples.items())}
+    return {
+        adj: (np.mean(s, axis=0), np.std(s, axis=0, ddof=1) / np.sqrt(REALISATIONS))
+        for adj, s in ((adj, np.asarray(s)) for adj, s in samples.items())
+    }
 
 
 def _report(mean, stderr, exact, label):
-    return "\n".join(f"{q}: {m:.5g} ± {e:.2g} ({label} {x:.5g}, {(m - x) / e:+.2f} σ)"
-                     for q, m, e, x in zip(NAMES, mean, stderr, exact))
+    return "\n".join(
+        f"{q}: {m:.5g} ± {e:.2g} ({label} {x:.5g}, {(m - x) / e:+.2f} σ)"
+        for q, m, e, x in zip(NAMES, mean, stderr, exact)
+    )
 
 
 def test_boolean_volume_and_surface_match_miles():
@@ -129,8 +133,10 @@ def test_lattice_gap_of_curvature_does_not_close_with_resolution():
     # The exact lattice expectations at η = 0.4: S_V converges to Miles like a (halving per doubling of r/a),
     # M_V of 6-adjacent balls stays > 4 % low (-8.2 % at r/a = 16, -5.2 % at 64, -4.5 % at 256).
     miles = miles_densities(LAM, R_UM)
-    gap = {k: {q: v / miles[q] - 1 for q, v in boolean_lattice_densities(LAM, R_UM, R_UM / k).items()}
-           for k in (16, 64)}
+    gap = {
+        k: {q: v / miles[q] - 1 for q, v in boolean_lattice_densities(LAM, R_UM, R_UM / k).items()}
+        for k in (16, 64)
+    }
     print(gap)
     assert abs(gap[64]["S_V"]) < abs(gap[16]["S_V"]) / 3
     assert gap[16]["K_V"] < gap[64]["K_V"] < -0.04
@@ -163,8 +169,9 @@ def test_overlapping_pair_matches_closed_form(d, adjacency):
         centre = np.full(3, n * a / 2) + rng.uniform(-0.5, 0.5, 3) * a
         pair = np.zeros((n, n, n), bool)
         for c in (centre - u * d / 2, centre + u * d / 2):
-            pair |= ((x[:, None, None] - c[0]) ** 2 + (x[None, :, None] - c[1]) ** 2
-                     + (x[None, None, :] - c[2]) ** 2 <= R_UM ** 2)
+            pair |= (x[:, None, None] - c[0]) ** 2 + (x[None, :, None] - c[1]) ** 2 + (
+                x[None, None, :] - c[2]
+            ) ** 2 <= R_UM**2
         ds = minkowski_from_histogram(configuration_histogram(pair, False), a, adjacency, False)
         assert float(ds.chi.sel(phase="pore")) == 1.0
         integrals.append(float(ds.K_V.sel(phase="pore")) * ds.attrs["window_um3"])

@@ -16,20 +16,39 @@ from porepipe.packing import Settings, pack_spheres, read_packing, write_packing
 from porepipe.packing._api import HISTORY_TIMING
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "packing"))
-from naive_packing import max_overlaps  # noqa: E402
+from naive_packing import max_overlaps
 
 BOX = [600.0, 600.0, 600.0]
 EXP = {"dist": "exponential", "min_um": 40, "max_um": 80, "alpha_per_um": 0.05}
 
 
 def _settings(n=150, adapt=True, steps=600, **extra):
-    stage = {"name": "one", "insert": ["a"], "steps": steps, "dt": 0.25, "k": {"a": 400}, "damping": {"a": 4},
-             "freezing": {"lock_step": 10}, "stochastic_forces": {"step_size": 0.05}}
+    stage = {
+        "name": "one",
+        "insert": ["a"],
+        "steps": steps,
+        "dt": 0.25,
+        "k": {"a": 400},
+        "damping": {"a": 4},
+        "freezing": {"lock_step": 10},
+        "stochastic_forces": {"step_size": 0.05},
+    }
     if adapt:
-        stage["adaptive_radii"] = {"types": ["a"], "trigger": 0.2, "rate": 0.01, "from_step": 20,
-                                   "to_step": steps - 50, "quiet_steps": 10}
-    return Settings.model_validate({"types": [{"name": "a", "count": n, "radius_um": EXP, "max_overlap": 0.3}],
-                                    "stages": [stage], **extra})
+        stage["adaptive_radii"] = {
+            "types": ["a"],
+            "trigger": 0.2,
+            "rate": 0.01,
+            "from_step": 20,
+            "to_step": steps - 50,
+            "quiet_steps": 10,
+        }
+    return Settings.model_validate(
+        {
+            "types": [{"name": "a", "count": n, "radius_um": EXP, "max_overlap": 0.3}],
+            "stages": [stage],
+            **extra,
+        }
+    )
 
 
 def _assert_valid_packing(p, sigma_max):
@@ -113,30 +132,68 @@ def test_checkpoint_resume_is_bit_identical(tmp_path, monkeypatch):
     resumed = pack_spheres(settings, BOX, True, seed=3, checkpoint_path=ck, resume=True)
     np.testing.assert_array_equal(resumed.centres_um, ref.centres_um)
     np.testing.assert_array_equal(resumed.radii_um, ref.radii_um)
-    for key in set(ref.history) - set(HISTORY_TIMING):   # wall_s is the machine's, not the packing's
+    for key in set(ref.history) - set(HISTORY_TIMING):  # wall_s is the machine's, not the packing's
         np.testing.assert_array_equal(resumed.history[key], ref.history[key])
     assert (resumed.history["wall_s"] > 0).all()
 
 
 def test_two_stage_fill_keeps_frozen_matrix_and_writes_result(tmp_path):
-    settings = Settings.model_validate({
-        "types": [{"name": "big", "count": 60, "radius_um": EXP, "max_overlap": 0.3},
-                  {"name": "small", "count": 300, "radius_um": {"min_um": 8, "max_um": 12, "initial_um": 12},
-                   "max_overlap": 0.25}],
-        "stages": [
-            {"name": "primary", "insert": ["big"], "steps": 400, "dt": 0.25, "k": {"big": 400},
-             "damping": {"big": 4}, "freezing": {"lock_step": 10}, "stochastic_forces": {"step_size": 0.05},
-             "adaptive_radii": {"types": ["big"], "trigger": 0.2, "rate": 0.01, "from_step": 20, "to_step": 350}},
-            # the protocol of §5.6.1 phase 2 (k ramps, damping ramp, radius window), plus deletion of the
-            # unconverged fines at the end
-            {"name": "fill", "insert": ["small"], "steps": 800, "dt": 0.25, "frozen_types": ["big"],
-             "k": {"big": {"start": 400, "end": 1, "from_step": 20, "to_step": 25},
-                   "small": {"start": 1, "end": 20, "from_step": 25, "to_step": 40}},
-             "damping": {"big": 1, "small": {"start": 1, "end": 2, "from_step": 30, "to_step": 40}},
-             "freezing": {"lock_step": 20}, "stochastic_forces": {"step_size": 0.05},
-             "adaptive_radii": {"types": ["small"], "trigger": 0.2, "rate": 0.02, "from_step": 50, "to_step": 700},
-             "delete_unconverged": ["small"]},
-        ]})
+    settings = Settings.model_validate(
+        {
+            "types": [
+                {"name": "big", "count": 60, "radius_um": EXP, "max_overlap": 0.3},
+                {
+                    "name": "small",
+                    "count": 300,
+                    "radius_um": {"min_um": 8, "max_um": 12, "initial_um": 12},
+                    "max_overlap": 0.25,
+                },
+            ],
+            "stages": [
+                {
+                    "name": "primary",
+                    "insert": ["big"],
+                    "steps": 400,
+                    "dt": 0.25,
+                    "k": {"big": 400},
+                    "damping": {"big": 4},
+                    "freezing": {"lock_step": 10},
+                    "stochastic_forces": {"step_size": 0.05},
+                    "adaptive_radii": {
+                        "types": ["big"],
+                        "trigger": 0.2,
+                        "rate": 0.01,
+                        "from_step": 20,
+                        "to_step": 350,
+                    },
+                },
+                # the protocol of §5.6.1 phase 2 (k ramps, damping ramp, radius window), plus deletion of the
+                # unconverged fines at the end
+                {
+                    "name": "fill",
+                    "insert": ["small"],
+                    "steps": 800,
+                    "dt": 0.25,
+                    "frozen_types": ["big"],
+                    "k": {
+                        "big": {"start": 400, "end": 1, "from_step": 20, "to_step": 25},
+                        "small": {"start": 1, "end": 20, "from_step": 25, "to_step": 40},
+                    },
+                    "damping": {"big": 1, "small": {"start": 1, "end": 2, "from_step": 30, "to_step": 40}},
+                    "freezing": {"lock_step": 20},
+                    "stochastic_forces": {"step_size": 0.05},
+                    "adaptive_radii": {
+                        "types": ["small"],
+                        "trigger": 0.2,
+                        "rate": 0.02,
+                        "from_step": 50,
+                        "to_step": 700,
+                    },
+                    "delete_unconverged": ["small"],
+                },
+            ],
+        }
+    )
     p = pack_spheres(settings, BOX, True, seed=4)
     primary = p.snapshots[0]
     assert p.stage_converged[0]

@@ -15,7 +15,9 @@ MINI = ROOT / "config" / "scenes" / "mini.yaml"
 
 
 def _porepipe(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True)
+    return subprocess.run(
+        [sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True
+    )
 
 
 def _planned_rules(scene_path, cwd):
@@ -30,8 +32,18 @@ def test_dry_run_lists_only_the_rules_the_analyses_need(tmp_path):
     rules = _planned_rules(MINI, tmp_path)
     scene = yaml.safe_load(MINI.read_text())
     n_res = len(scene["resolutions_um"])
-    assert rules == {"all": 1, "pack": 1, "voxelize": n_res, "segment": n_res, "estimate": 1, "minkowski": n_res,
-                     "lpt": n_res, "permeability": 1, "sweep": 1, "report": 1}, rules
+    assert rules == {
+        "all": 1,
+        "pack": 1,
+        "voxelize": n_res,
+        "segment": n_res,
+        "estimate": 1,
+        "minkowski": n_res,
+        "lpt": n_res,
+        "permeability": 1,
+        "sweep": 1,
+        "report": 1,
+    }, rules
 
 
 def test_dry_run_without_segmentation_has_no_segment_jobs(tmp_path):

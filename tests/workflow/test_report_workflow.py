@@ -23,15 +23,23 @@ REPORT_CPU_S = 15.0
 
 
 def _porepipe(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True, check=False
+    )
 
 
 def small_scene(analyses):
     """60 random spheres (r 3..5 µm) in a periodic 40 µm box at a = 4, 2, 1 µm."""
     rng = np.random.default_rng(8)
     spheres = np.column_stack([rng.uniform(0, 40, (60, 3)), rng.uniform(3, 5, 60)]).round(3).tolist()
-    return {"name": "small", "seed": 1, "domain": {"size_um": [40, 40, 40], "periodic": True},
-            "spheres": {"inline": spheres}, "resolutions_um": [4, 2, 1], "analyses": analyses}
+    return {
+        "name": "small",
+        "seed": 1,
+        "domain": {"size_um": [40, 40, 40], "periodic": True},
+        "spheres": {"inline": spheres},
+        "resolutions_um": [4, 2, 1],
+        "analyses": analyses,
+    }
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +61,14 @@ def test_dry_run_ends_in_the_report(tmp_path):
     rules = dict(re.findall(r"^(\w+)\s+(\d+)\s*$", out.stdout, flags=re.MULTILINE))
     n = str(len(scene["resolutions_um"]))
     # estimate-only scene: no segmentation jobs; one sweep and one report job
-    assert rules == {"all": "1", "voxelize": n, "estimate": "1", "sweep": "1", "report": "1", "total": rules["total"]}
+    assert rules == {
+        "all": "1",
+        "voxelize": n,
+        "estimate": "1",
+        "sweep": "1",
+        "report": "1",
+        "total": rules["total"],
+    }
 
 
 def test_sweep_holds_every_resolution_with_costs(run):
@@ -86,13 +101,25 @@ def test_report_rule_is_fast(run):
     assert float(row["cpu_time"]) < REPORT_CPU_S, row
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="headless Chromium is not installed here (Debian package `chromium`); "
-                    "CI does not install it, so the browser check runs only where it is present")
+@pytest.mark.skipif(
+    CHROMIUM is None,
+    reason="headless Chromium is not installed here (Debian package `chromium`); "
+    "CI does not install it, so the browser check runs only where it is present",
+)
 def test_report_opens_in_headless_chromium(run, tmp_path):
     res, _ = run
     page = res / "report" / "index.html"
-    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", f"--user-data-dir={tmp_path}",
-           "--enable-logging=stderr", "--v=0", "--dump-dom", page.as_uri()]
+    cmd = [
+        CHROMIUM,
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        f"--user-data-dir={tmp_path}",
+        "--enable-logging=stderr",
+        "--v=0",
+        "--dump-dom",
+        page.as_uri(),
+    ]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
     assert out.returncode == 0, out.stderr[-2000:]
     assert "Error against cost" in out.stdout and "<img" in out.stdout

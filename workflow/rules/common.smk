@@ -232,6 +232,21 @@ def mem_mb(bytes_per_voxel, base_mb=500):
     return lambda wildcards: int(base_mb + bytes_per_voxel * voxels(wildcards) / 2**20)
 
 
+def diffusion_axes(scene):
+    return [axis.value for axis in scene.diffusion.axes]
+
+
+def diffusion_resolutions(scene):
+    chosen = scene.diffusion.resolutions_um or scene.resolutions_um
+    unknown = sorted(set(chosen) - set(scene.resolutions_um))
+    if unknown:
+        raise ValueError(
+            f"scene {scene.name!r}: diffusion.resolutions_um = {unknown} are not among resolutions_um = "
+            f"{scene.resolutions_um}"
+        )
+    return chosen
+
+
 #: analysis name -> function(scene) -> list of final outputs; each rule file registers its analysis here.
 ANALYSIS_TARGETS = {}
 

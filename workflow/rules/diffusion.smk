@@ -1,21 +1,6 @@
 # Knudsen diffusion in the voxel pore space (Mahler 2001, ch. 2-3): one job per resolution and transport axis.
 
 
-def diffusion_axes(scene):
-    return [axis.value for axis in scene.diffusion.axes]
-
-
-def diffusion_resolutions(scene):
-    chosen = scene.diffusion.resolutions_um or scene.resolutions_um
-    unknown = sorted(set(chosen) - set(scene.resolutions_um))
-    if unknown:
-        raise ValueError(
-            f"scene {scene.name!r}: diffusion.resolutions_um = {unknown} are not among resolutions_um = "
-            f"{scene.resolutions_um}"
-        )
-    return chosen
-
-
 rule diffusion:
     input:
         binary=binary_volume,

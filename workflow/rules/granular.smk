@@ -11,14 +11,14 @@ rule granular:
         "results/{scene}/logs/granular.log",
     benchmark:
         "results/{scene}/cost/granular.tsv"
-    params:
-        checkpoint="results/{scene}/granular/checkpoint.npz",
     conda:
         "../envs/porepipe.yaml"
     threads: workflow.cores
     resources:
         mem_mb=2000,
         runtime=240,
+    params:
+        checkpoint="results/{scene}/granular/checkpoint.npz",
     shell:
         "porepipe granular {input.scene:q} -o {output:q} --checkpoint {params.checkpoint:q} --resume"
         " --threads {threads} > {log:q} 2>&1"

@@ -50,8 +50,14 @@ def main(out=Path(__file__).with_name("image-to-model.tif"), seed=2020):
     grey = ndimage.gaussian_filter(np.where(solid, 170.0, 60.0), 0.7) + rng.normal(0, 8, solid.shape)
     grey = np.clip(np.rint(grey), 0, 255).astype(np.uint8)
     # TIFF pages are z, rows y, columns x
-    tifffile.imwrite(out, grey.transpose(2, 1, 0), imagej=True, resolution=(1 / VOXEL_UM, 1 / VOXEL_UM),
-                     metadata={"spacing": VOXEL_UM, "unit": "um"}, compression="zlib")
+    tifffile.imwrite(
+        out,
+        grey.transpose(2, 1, 0),
+        imagej=True,
+        resolution=(1 / VOXEL_UM, 1 / VOXEL_UM),
+        metadata={"spacing": VOXEL_UM, "unit": "um"},
+        compression="zlib",
+    )
     print(f"{out}: porosity {1 - solid.mean():.4f}, {N}^3 voxels of {VOXEL_UM} µm")
 
 

@@ -22,8 +22,14 @@ SUB = 6
 N_SAMPLES = SUB**3
 
 
-def write_grey_volume(writer: ResultWriter, slabs: Iterable[tuple[int, np.ndarray]], shape: Sequence[int],
-                      voxel_um: float, periodic: bool, attrs: dict) -> np.ndarray:
+def write_grey_volume(
+    writer: ResultWriter,
+    slabs: Iterable[tuple[int, np.ndarray]],
+    shape: Sequence[int],
+    voxel_um: float,
+    periodic: bool,
+    attrs: dict,
+) -> np.ndarray:
     """Write volume ``grey`` slab by slab and the grey histogram M(g, a) as the root table.
 
     Parameters
@@ -47,12 +53,23 @@ def write_grey_volume(writer: ResultWriter, slabs: Iterable[tuple[int, np.ndarra
         The histogram M(g, a), g = 0..216.
     """
     hist = np.zeros(N_SAMPLES + 1, dtype=np.int64)
-    dset = writer.create_volume("grey", shape, np.uint8, voxel_um=voxel_um, periodic=(periodic,) * 3,
-                                attrs={"meaning": "number of the 6x6x6 sample points in the matrix (0..216)"})
+    dset = writer.create_volume(
+        "grey",
+        shape,
+        np.uint8,
+        voxel_um=voxel_um,
+        periodic=(periodic,) * 3,
+        attrs={"meaning": "number of the 6x6x6 sample points in the matrix (0..216)"},
+    )
     for i0, slab in slabs:
-        dset[i0:i0 + len(slab)] = slab
+        dset[i0 : i0 + len(slab)] = slab
         hist += np.bincount(slab.ravel(), minlength=N_SAMPLES + 1)
-    writer.write_table(xr.Dataset({"grey_histogram": ("g", hist, {"long_name": "M(g, a)"})},
-                                  coords={"g": np.arange(N_SAMPLES + 1)}, attrs={"voxel_um": voxel_um, **attrs}))
+    writer.write_table(
+        xr.Dataset(
+            {"grey_histogram": ("g", hist, {"long_name": "M(g, a)"})},
+            coords={"g": np.arange(N_SAMPLES + 1)},
+            attrs={"voxel_um": voxel_um, **attrs},
+        )
+    )
     writer.attrs.update(voxel_um=voxel_um, shape=np.asarray(shape), **attrs)
     return hist

@@ -19,12 +19,17 @@ def given_options(args: Any, keys) -> dict:
 def _deep_merge(base: dict, over: dict) -> dict:
     out = dict(base)
     for key, value in over.items():
-        out[key] = _deep_merge(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) \
+        out[key] = (
+            _deep_merge(out[key], value)
+            if isinstance(value, dict) and isinstance(out.get(key), dict)
             else value
+        )
     return out
 
 
-def merge_settings(model: type[BaseModel], base: BaseModel | dict | None, overrides: dict, what: str) -> BaseModel:
+def merge_settings(
+    model: type[BaseModel], base: BaseModel | dict | None, overrides: dict, what: str
+) -> BaseModel:
     """``base`` (a scene section, or None for the defaults) with ``overrides`` laid over it, validated as ``model``.
 
     Parameters

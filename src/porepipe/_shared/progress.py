@@ -37,4 +37,6 @@ class Progress:
         eta = ""
         if self.total and done:
             eta = f", eta {elapsed * (self.total - done) / done:.1f} s"
-        print(f"[{self.label}] {frac} ({elapsed:.1f} s{eta}) {message}".rstrip(), file=self.stream, flush=True)
+        print(
+            f"[{self.label}] {frac} ({elapsed:.1f} s{eta}) {message}".rstrip(), file=self.stream, flush=True
+        )

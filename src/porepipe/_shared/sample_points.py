@@ -17,11 +17,27 @@ from numba import njit
 from porepipe._shared.grey import N_SAMPLES, SUB
 from porepipe._shared.numba_config import FASTMATH
 
-__all__ = ["FULL", "FULL_ROW", "MARGIN", "N_SAMPLES", "PARTIAL", "ROWS_PER_WORD", "SUB", "UNTOUCHED", "WORDS",
-           "axis_range", "grey_from_status", "hull_gap", "or_row", "plane_candidates", "popcount64", "sample_coord"]
+__all__ = [
+    "FULL",
+    "FULL_ROW",
+    "MARGIN",
+    "N_SAMPLES",
+    "PARTIAL",
+    "ROWS_PER_WORD",
+    "SUB",
+    "UNTOUCHED",
+    "WORDS",
+    "axis_range",
+    "grey_from_status",
+    "hull_gap",
+    "or_row",
+    "plane_candidates",
+    "popcount64",
+    "sample_coord",
+]
 
-ROWS_PER_WORD = 10      # 36 rows of 6 sample points, 10 rows (60 bits) per uint64 word
-WORDS = 4               # ceil(36 / 10) words per voxel
+ROWS_PER_WORD = 10  # 36 rows of 6 sample points, 10 rows (60 bits) per uint64 word
+WORDS = 4  # ceil(36 / 10) words per voxel
 FULL_ROW = (1 << SUB) - 1
 #: relative margin on squared distances for the whole-voxel shortcuts; far above rounding (1e-16), far below
 #: any geometric scale, so a voxel whose sample hull is within it of the sphere surface is sampled point by point.

@@ -10,7 +10,9 @@ import numpy as np
 from porepipe._shared.errors import PorepipeError
 
 
-def check_spheres(centres_um: np.ndarray, radii_um: np.ndarray, source: str = "spheres") -> tuple[np.ndarray, np.ndarray]:
+def check_spheres(
+    centres_um: np.ndarray, radii_um: np.ndarray, source: str = "spheres"
+) -> tuple[np.ndarray, np.ndarray]:
     """Return float64 copies of (centres (N, 3), radii (N,)) after checking shapes and values."""
     centres = np.ascontiguousarray(centres_um, dtype=np.float64)
     radii = np.ascontiguousarray(radii_um, dtype=np.float64)

@@ -47,8 +47,9 @@ def hash_of(obj: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def result_hash(stage: str, *, scene_part: Any = None, settings: Any = None, inputs: Sequence = (),
-                **extra: Any) -> str:
+def result_hash(
+    stage: str, *, scene_part: Any = None, settings: Any = None, inputs: Sequence = (), **extra: Any
+) -> str:
     """The hash of what determines a result, made the same way by every stage (root attribute ``scene_hash``).
 
     Parameters
@@ -72,8 +73,13 @@ def result_hash(stage: str, *, scene_part: Any = None, settings: Any = None, inp
     """
     if hasattr(settings, "model_dump"):
         settings = settings.model_dump(mode="json")
-    record = {"stage": stage, "scene": scene_part, "settings": settings,
-              "inputs": [read_attrs(p).get("scene_hash", "") for p in inputs], "extra": extra}
+    record = {
+        "stage": stage,
+        "scene": scene_part,
+        "settings": settings,
+        "inputs": [read_attrs(p).get("scene_hash", "") for p in inputs],
+        "extra": extra,
+    }
     return hash_of(record)
 
 
@@ -115,7 +121,9 @@ class ResultWriter:
     ...     w.attrs["threshold"] = 108
     """
 
-    def __init__(self, path, *, stage: str, scene: str = "", scene_hash: str = "", threads: int | None = None):
+    def __init__(
+        self, path, *, stage: str, scene: str = "", scene_hash: str = "", threads: int | None = None
+    ):
         self.path = Path(path)
         self.tmp_path = temporary_path(self.path)
         self.attrs: dict[str, Any] = {
@@ -169,16 +177,31 @@ class ResultWriter:
             raise RuntimeError("ResultWriter is not open; use it in a with-statement")
         return self._h5
 
-    def create_volume(self, name: str, shape: Sequence[int], dtype, *, voxel_um: float,
-                      origin_um: Sequence[float] = (0.0, 0.0, 0.0), periodic: Sequence[bool] = (True, True, True),
-                      attrs: dict | None = None) -> h5py.Dataset:
+    def create_volume(
+        self,
+        name: str,
+        shape: Sequence[int],
+        dtype,
+        *,
+        voxel_um: float,
+        origin_um: Sequence[float] = (0.0, 0.0, 0.0),
+        periodic: Sequence[bool] = (True, True, True),
+        attrs: dict | None = None,
+    ) -> h5py.Dataset:
         """Create an empty chunked, compressed volume to be filled slab by slab; returns the h5py dataset."""
         shape = tuple(int(s) for s in shape)
         if len(shape) != 3 or min(shape) < 1:
             raise PorepipeError(f"volume {name!r} needs a 3-D shape with positive sizes, got {shape}")
         chunks = tuple(min(s, CHUNK_EDGE) for s in shape)
         dset = self.h5.require_group(VOLUME_GROUP).create_dataset(
-            name, shape=shape, dtype=dtype, chunks=chunks, compression="gzip", compression_opts=1, shuffle=True)
+            name,
+            shape=shape,
+            dtype=dtype,
+            chunks=chunks,
+            compression="gzip",
+            compression_opts=1,
+            shuffle=True,
+        )
         for key, value in {**_volume_attrs(voxel_um, origin_um, periodic), **(attrs or {})}.items():
             dset.attrs[key] = value
         return dset
@@ -304,24 +327,34 @@ def volume_meta(dset: h5py.Dataset, path) -> VolumeMeta:
     attrs = {k: _decode(v) for k, v in dset.attrs.items()}
     missing = [k for k in VOLUME_META_KEYS if k not in attrs]
     if missing:
-        raise PorepipeError(f"{path}: volume {dset.name} lacks the attribute(s) {', '.join(missing)}; a porepipe "
-                            "volume needs voxel_um, origin_um and periodic (rewrite it with a current porepipe)")
+        raise PorepipeError(
+            f"{path}: volume {dset.name} lacks the attribute(s) {', '.join(missing)}; a porepipe "
+            "volume needs voxel_um, origin_um and periodic (rewrite it with a current porepipe)"
+        )
     voxel = np.atleast_1d(np.asarray(attrs["voxel_um"], dtype=np.float64))
     if voxel.size == 3 and np.allclose(voxel, voxel[0], rtol=1e-9, atol=0):
         voxel = voxel[:1]
     if voxel.size != 1 or not np.isfinite(voxel[0]) or voxel[0] <= 0:
         kind = "anisotropic voxels are not supported" if voxel.size == 3 else "not a voxel edge"
-        raise PorepipeError(f"{path}: volume {dset.name} attribute voxel_um = {attrs['voxel_um']!r}: {kind}; "
-                            "allowed: one positive number in µm (cubic voxels; resample anisotropic images first)")
+        raise PorepipeError(
+            f"{path}: volume {dset.name} attribute voxel_um = {attrs['voxel_um']!r}: {kind}; "
+            "allowed: one positive number in µm (cubic voxels; resample anisotropic images first)"
+        )
     origin = np.asarray(attrs["origin_um"], dtype=np.float64).ravel()
     periodic = np.asarray(attrs["periodic"]).ravel()
     if origin.size != 3 or not np.all(np.isfinite(origin)):
-        raise PorepipeError(f"{path}: volume {dset.name} attribute origin_um = {attrs['origin_um']!r}; allowed: "
-                            "3 finite numbers (µm)")
+        raise PorepipeError(
+            f"{path}: volume {dset.name} attribute origin_um = {attrs['origin_um']!r}; allowed: "
+            "3 finite numbers (µm)"
+        )
     if periodic.size != 3 or not np.all(np.isin(periodic, (0, 1))):
-        raise PorepipeError(f"{path}: volume {dset.name} attribute periodic = {attrs['periodic']!r}; allowed: "
-                            "3 flags 0/1 (x, y, z)")
-    return VolumeMeta(float(voxel[0]), tuple(float(o) for o in origin), tuple(bool(p) for p in periodic), attrs)
+        raise PorepipeError(
+            f"{path}: volume {dset.name} attribute periodic = {attrs['periodic']!r}; allowed: "
+            "3 flags 0/1 (x, y, z)"
+        )
+    return VolumeMeta(
+        float(voxel[0]), tuple(float(o) for o in origin), tuple(bool(p) for p in periodic), attrs
+    )
 
 
 def read_binary_volume(path, name: str = "pore") -> tuple[np.ndarray, VolumeMeta]:
@@ -350,6 +383,8 @@ def read_binary_volume(path, name: str = "pore") -> tuple[np.ndarray, VolumeMeta
     with open_volume(path, name) as dset:
         meta = volume_meta(dset, path)
         if dset.ndim != 3 or dset.dtype != np.uint8:
-            raise PorepipeError(f"{path}: volume {name!r} is {dset.ndim}-D {dset.dtype}; a binary volume is 3-D "
-                                "uint8 (1 = pore)")
+            raise PorepipeError(
+                f"{path}: volume {name!r} is {dset.ndim}-D {dset.dtype}; a binary volume is 3-D "
+                "uint8 (1 = pore)"
+            )
         return dset[...], meta

@@ -39,8 +39,14 @@ def open_image(settings: Settings, base_dir: Path | str = ".", image_path=None) 
         raise PorepipeError("acquire.image: no image given (set acquire.image in the scene or pass IMAGE)")
     path = Path(path)
     path = path if path.is_absolute() else Path(base_dir) / path
-    return read_image(path, settings.format, raw=settings.raw, dataset=settings.dataset,
-                      voxel_um=settings.voxel_um, section_um=settings.section_um)
+    return read_image(
+        path,
+        settings.format,
+        raw=settings.raw,
+        dataset=settings.dataset,
+        voxel_um=settings.voxel_um,
+        section_um=settings.section_um,
+    )
 
 
 def prepare(image: Image, settings: Settings) -> Prepared:
@@ -53,8 +59,10 @@ def prepare(image: Image, settings: Settings) -> Prepared:
         voxel = spacing[0]
     elif not np.allclose(spacing, spacing[0], rtol=1e-9):
         if not settings.resample_cubic:
-            raise PorepipeError(f"image {image.source} has anisotropic voxels {spacing} µm; set "
-                                "acquire.resample_cubic: true (the stages need cubic voxels)")
+            raise PorepipeError(
+                f"image {image.source} has anisotropic voxels {spacing} µm; set "
+                "acquire.resample_cubic: true (the stages need cubic voxels)"
+            )
         grey, voxel = resample_cubic(grey, spacing)
     else:
         voxel = spacing[0]
@@ -62,8 +70,15 @@ def prepare(image: Image, settings: Settings) -> Prepared:
     return Prepared(grey, float(voxel), image.source, image.is_2d, spacing)
 
 
-def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_2d: bool = False,
-                     lpt_settings=None, permeability_settings=None) -> dict[str | None, xr.Dataset]:
+def image_statistics(
+    phases: Phases,
+    voxel_um: float,
+    settings: Settings,
+    *,
+    is_2d: bool = False,
+    lpt_settings=None,
+    permeability_settings=None,
+) -> dict[str | None, xr.Dataset]:
     """Every statistic of a segmented image, as Datasets keyed by HDF5 group (None = root).
 
     Root: phase fractions, porosity, thresholds and histogram, S_V/K_V/T_V (3-D), percolation (3-D), two-point
@@ -84,11 +99,19 @@ def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_
     shape = pore.shape
     max_lag = int(round(stats.max_lag_um / voxel_um)) if stats.max_lag_um else max(1, max(shape) // 4)
     parts = [
-        xr.Dataset({"volume_fraction": fractions,
-                    "porosity": ((), porosity, {"units": "1", "long_name": "volume fraction of the pore phases"}),
-                    "threshold": ("threshold_index", phases.thresholds, {"long_name": "class k: t_{k-1} < g <= t_k"}),
-                    "grey_count": ("grey_bin", phases.histogram.counts, {"long_name": "grey histogram"}),
-                    "grey_value": ("grey_bin", phases.histogram.centres)}),
+        xr.Dataset(
+            {
+                "volume_fraction": fractions,
+                "porosity": ((), porosity, {"units": "1", "long_name": "volume fraction of the pore phases"}),
+                "threshold": (
+                    "threshold_index",
+                    phases.thresholds,
+                    {"long_name": "class k: t_{k-1} < g <= t_k"},
+                ),
+                "grey_count": ("grey_bin", phases.histogram.counts, {"long_name": "grey histogram"}),
+                "grey_value": ("grey_bin", phases.histogram.centres),
+            }
+        ),
         xr.Dataset({"two_point": timed("two_point", _stats.two_point_correlation, pore, voxel_um, max_lag)}),
         timed("chords", _stats.chord_lengths, pore, voxel_um),
     ]
@@ -101,27 +124,45 @@ def image_statistics(phases: Phases, voxel_um: float, settings: Settings, *, is_
         parts.append(timed("percolation", _stats.percolation, pore))
         if stats.grains:
             window = central_window(shape, stats.grain_max_voxels)
-            grains = timed("grains", _stats.grain_statistics, _grain_mask(phases, stats.grain_phase)[window],
-                           voxel_um, _min_distance(stats.grain_min_distance_um, voxel_um),
-                           settings.periodic and window == tuple(slice(0, n) for n in shape))
+            grains = timed(
+                "grains",
+                _stats.grain_statistics,
+                _grain_mask(phases, stats.grain_phase)[window],
+                voxel_um,
+                _min_distance(stats.grain_min_distance_um, voxel_um),
+                settings.periodic and window == tuple(slice(0, n) for n in shape),
+            )
             grains.attrs["grain_window_voxels"] = np.asarray([w.stop - w.start for w in window], np.int64)
             grains["grain_window_origin_um"] = ("xyz", np.asarray([w.start for w in window]) * voxel_um)
             parts.append(grains)
     root = xr.merge(parts, combine_attrs="drop_conflicts")
-    root.attrs.update(voxel_um=voxel_um, shape=np.asarray(shape, np.int64), method=phases.method.value,
-                      phases=list(phases.names), pore_phases=[phases.names[i] for i in phases.pore_index],
-                      is_2d=int(is_2d), skipped_2d=",".join(skipped), timing_s=json.dumps(timing))
+    root.attrs.update(
+        voxel_um=voxel_um,
+        shape=np.asarray(shape, np.int64),
+        method=phases.method.value,
+        phases=list(phases.names),
+        pore_phases=[phases.names[i] for i in phases.pore_index],
+        is_2d=int(is_2d),
+        skipped_2d=",".join(skipped),
+        timing_s=json.dumps(timing),
+    )
     out: dict[str | None, xr.Dataset] = {None: root}
     if not is_2d and stats.lpt:
         from porepipe.lpt import local_porosity_analysis
 
-        out["lpt"] = local_porosity_analysis(pore, voxel_um=voxel_um, periodic=(settings.periodic,) * 3,
-                                             settings=lpt_settings, skip_too_large=True)
+        out["lpt"] = local_porosity_analysis(
+            pore,
+            voxel_um=voxel_um,
+            periodic=(settings.periodic,) * 3,
+            settings=lpt_settings,
+            skip_too_large=True,
+        )
     if not is_2d and stats.permeability:
         from porepipe.lbm import permeability
 
-        out["permeability"] = permeability(pore, settings=permeability_settings, voxel_um=voxel_um,
-                                           progress=False).to_dataset()
+        out["permeability"] = permeability(
+            pore, settings=permeability_settings, voxel_um=voxel_um, progress=False
+        ).to_dataset()
     return out
 
 
@@ -147,8 +188,17 @@ def _min_distance(min_distance_um: float | None, voxel_um: float) -> int:
     return 2 if min_distance_um is None else max(1, int(round(min_distance_um / voxel_um)))
 
 
-def acquire(settings: Settings, out, *, base_dir: Path | str = ".", image_path=None, scene_name: str = "",
-            scene_hash: str = "", lpt_settings=None, permeability_settings=None) -> dict[str | None, xr.Dataset]:
+def acquire(
+    settings: Settings,
+    out,
+    *,
+    base_dir: Path | str = ".",
+    image_path=None,
+    scene_name: str = "",
+    scene_hash: str = "",
+    lpt_settings=None,
+    permeability_settings=None,
+) -> dict[str | None, xr.Dataset]:
     """Read, prepare, segment and measure an image; write ``statistics.h5`` (with the phase volume) to ``out``."""
     image = open_image(settings, base_dir, image_path)
     with ResultWriter(out, stage="acquire", scene=scene_name, scene_hash=scene_hash) as w:
@@ -157,16 +207,37 @@ def acquire(settings: Settings, out, *, base_dir: Path | str = ".", image_path=N
         t1 = time.perf_counter()
         phases = segment_phases(prep.grey, settings.segmentation)
         t2 = time.perf_counter()
-        tables = image_statistics(phases, prep.voxel_um, settings, is_2d=prep.is_2d, lpt_settings=lpt_settings,
-                                  permeability_settings=permeability_settings)
-        w.write_volume(PHASES_VOLUME, phases.labels, voxel_um=prep.voxel_um, periodic=(settings.periodic,) * 3,
-                       attrs={"phases": ",".join(phases.names), "pore_index": np.asarray(phases.pore_index),
-                              "thresholds": phases.thresholds, "method": phases.method.value})
+        tables = image_statistics(
+            phases,
+            prep.voxel_um,
+            settings,
+            is_2d=prep.is_2d,
+            lpt_settings=lpt_settings,
+            permeability_settings=permeability_settings,
+        )
+        w.write_volume(
+            PHASES_VOLUME,
+            phases.labels,
+            voxel_um=prep.voxel_um,
+            periodic=(settings.periodic,) * 3,
+            attrs={
+                "phases": ",".join(phases.names),
+                "pore_index": np.asarray(phases.pore_index),
+                "thresholds": phases.thresholds,
+                "method": phases.method.value,
+            },
+        )
         for group, ds in tables.items():
             w.write_table(ds, group)
-        w.attrs.update(source=prep.source, voxel_um=prep.voxel_um, spacing_um=np.asarray(prep.spacing_um),
-                       porosity=float(tables[None].porosity), is_2d=int(prep.is_2d),
-                       timing_read_prepare_s=t1 - t0, timing_segment_s=t2 - t1)
+        w.attrs.update(
+            source=prep.source,
+            voxel_um=prep.voxel_um,
+            spacing_um=np.asarray(prep.spacing_um),
+            porosity=float(tables[None].porosity),
+            is_2d=int(prep.is_2d),
+            timing_read_prepare_s=t1 - t0,
+            timing_segment_s=t2 - t1,
+        )
     return tables
 
 
@@ -174,7 +245,8 @@ def coarsen_pore(pore: np.ndarray, factor: int) -> np.ndarray:
     """Pore indicator at ``factor`` times the voxel edge: a coarse voxel is pore if less than half of its
     ``factor``³ fine voxels are matrix (the image analogue of the segment stage's trivial threshold, pore if
     g <= 107 of 216, i.e. less than half matrix, §4.7.2).
-    Trailing fine voxels that do not fill a whole coarse voxel are dropped."""
+    Trailing fine voxels that do not fill a whole coarse voxel are dropped.
+    """
     n = [s // factor for s in pore.shape]
     if min(n) < 1:
         raise PorepipeError(f"coarsening by {factor} leaves no voxel of the image of shape {pore.shape}")
@@ -186,9 +258,11 @@ def coarsen_pore(pore: np.ndarray, factor: int) -> np.ndarray:
 def _factor(a_um: float, voxel: float, source: str) -> int:
     factor = int(round(a_um / voxel))
     if factor < 1 or not np.isclose(a_um, factor * voxel, rtol=1e-6):
-        raise PorepipeError(f"resolution a = {a_um} µm requested, but the image {source} has voxels of {voxel} µm; "
-                            f"allowed: whole multiples of {voxel:g} µm (e.g. resolutions_um: [{voxel:g}, "
-                            f"{2 * voxel:g}])")
+        raise PorepipeError(
+            f"resolution a = {a_um} µm requested, but the image {source} has voxels of {voxel} µm; "
+            f"allowed: whole multiples of {voxel:g} µm (e.g. resolutions_um: [{voxel:g}, "
+            f"{2 * voxel:g}])"
+        )
     return factor
 
 
@@ -200,8 +274,10 @@ def write_binary(statistics_path, out, a_um: float | None = None) -> float:
     """
     attrs = read_attrs(statistics_path)
     if int(attrs.get("is_2d", 0)):
-        raise PorepipeError(f"{statistics_path} comes from a 2-D section; binary volumes (minkowski, lpt, "
-                            "permeability) need a 3-D image or a stack of serial sections")
+        raise PorepipeError(
+            f"{statistics_path} comes from a 2-D section; binary volumes (minkowski, lpt, "
+            "permeability) need a 3-D image or a stack of serial sections"
+        )
     labels, vattrs = read_volume(statistics_path, PHASES_VOLUME)
     voxel = float(vattrs["voxel_um"])
     factor = 1 if a_um is None else _factor(float(a_um), voxel, str(attrs.get("source")))
@@ -213,14 +289,30 @@ def write_binary(statistics_path, out, a_um: float | None = None) -> float:
         pore = coarsen_pore(pore, factor)
     thresholds = np.atleast_1d(np.asarray(vattrs["thresholds"], dtype=np.float64))
     porosity = float(pore.mean(dtype=np.float64))
-    with ResultWriter(out, stage="acquire", scene=attrs.get("scene", ""), scene_hash=attrs.get("scene_hash", "")) as w:
-        w.write_volume("pore", pore, voxel_um=voxel * factor, origin_um=vattrs.get("origin_um", (0.0, 0.0, 0.0)),
-                       periodic=vattrs.get("periodic", (0, 0, 0)),
-                       attrs={"threshold": float(thresholds[0]), "method": str(vattrs["method"]),
-                              "coarsening": factor,
-                              "meaning": "1 = pore, 0 = matrix (segmented image; coarse voxel pore if less than half "
-                                         "of its fine voxels are matrix)"})
+    with ResultWriter(
+        out, stage="acquire", scene=attrs.get("scene", ""), scene_hash=attrs.get("scene_hash", "")
+    ) as w:
+        w.write_volume(
+            "pore",
+            pore,
+            voxel_um=voxel * factor,
+            origin_um=vattrs.get("origin_um", (0.0, 0.0, 0.0)),
+            periodic=vattrs.get("periodic", (0, 0, 0)),
+            attrs={
+                "threshold": float(thresholds[0]),
+                "method": str(vattrs["method"]),
+                "coarsening": factor,
+                "meaning": "1 = pore, 0 = matrix (segmented image; coarse voxel pore if less than half "
+                "of its fine voxels are matrix)",
+            },
+        )
         w.write_table(xr.Dataset({"porosity": ((), porosity)}, attrs={"threshold": float(thresholds[0])}))
-        w.attrs.update(threshold=float(thresholds[0]), method=str(vattrs["method"]), voxel_um=voxel * factor,
-                       porosity=porosity, source=str(attrs.get("source", "")), coarsening=factor)
+        w.attrs.update(
+            threshold=float(thresholds[0]),
+            method=str(vattrs["method"]),
+            voxel_um=voxel * factor,
+            porosity=porosity,
+            source=str(attrs.get("source", "")),
+            coarsening=factor,
+        )
     return porosity

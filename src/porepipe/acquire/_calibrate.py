@@ -66,8 +66,10 @@ def fit_radius_distribution(radii_um, families: list[Family], discrete_bins: int
     r = np.asarray(radii_um, dtype=np.float64)
     r = r[np.isfinite(r) & (r > 0)]
     if r.size < 2:
-        raise PorepipeError(f"calibration needs at least 2 grain radii, got {r.size}: the image has (almost) no "
-                            "grains; check the segmentation (acquire.segmentation) or the grain phase")
+        raise PorepipeError(
+            f"calibration needs at least 2 grain radii, got {r.size}: the image has (almost) no "
+            "grains; check the segmentation (acquire.segmentation) or the grain phase"
+        )
     lo, hi = float(r.min()), float(r.max())
     if hi <= lo:
         return RadiusFit({"dist": "uniform", "min_um": lo, "max_um": lo}, Family.uniform, {}, {})
@@ -91,16 +93,21 @@ def fit_radius_distribution(radii_um, families: list[Family], discrete_bins: int
     keep = counts > 0
     probs = counts[keep] / counts.sum()
     probs[-1] = 1.0 - probs[:-1].sum()
-    spec = {"dist": "discrete", "values_um": [float(v) for v in 0.5 * (edges[:-1] + edges[1:])[keep]],
-            "probabilities": [float(p) for p in probs]}
+    spec = {
+        "dist": "discrete",
+        "values_um": [float(v) for v in 0.5 * (edges[:-1] + edges[1:])[keep]],
+        "probabilities": [float(p) for p in probs],
+    }
     return RadiusFit(spec, Family.discrete, ks, pval)
 
 
 def grain_radii(stats_ds: xr.Dataset) -> np.ndarray:
     """Radii of the spheres the grains grew from; uncut grains only when there are enough of them."""
     if "inscribed_radius_um" not in stats_ds or stats_ds.sizes.get("grain", 0) == 0:
-        raise PorepipeError("the statistics have no grains (image all pore, or acquire.statistics.grains: false); "
-                            "cannot calibrate a packing")
+        raise PorepipeError(
+            "the statistics have no grains (image all pore, or acquire.statistics.grains: false); "
+            "cannot calibrate a packing"
+        )
     r = stats_ds.inscribed_radius_um.values
     uncut = stats_ds.cut.values == 0
     return r[uncut] if uncut.sum() >= _MIN_UNCUT else r
@@ -115,17 +122,27 @@ def elongation_classes(stats_ds: xr.Dataset, n_classes: int) -> list[dict]:
         return [{"elongation": [float(edges[0]), float(edges[0])], "probability": 1.0}]
     counts, _ = np.histogram(e, bins=edges)
     probs = counts / counts.sum()
-    return [{"elongation": [float(a), float(b)], "probability": float(p)}
-            for a, b, p in zip(edges[:-1], edges[1:], probs) if p > 0]
+    return [
+        {"elongation": [float(a), float(b)], "probability": float(p)}
+        for a, b, p in zip(edges[:-1], edges[1:], probs)
+        if p > 0
+    ]
 
 
 def _decoration(classes: list[dict]) -> dict | None:
     """A decoration section with one random-polyhedron family per elongation class."""
     from porepipe.decorate import Settings as DecorationSettings
 
-    families = [{"name": f"elong{i}", "generator": "random", "count": 8, "facets": 36,
-                 "elongation": [min(c["elongation"][0], 0.9), min(c["elongation"][1], 0.9)]}
-                for i, c in enumerate(classes)]
+    families = [
+        {
+            "name": f"elong{i}",
+            "generator": "random",
+            "count": 8,
+            "facets": 36,
+            "elongation": [min(c["elongation"][0], 0.9), min(c["elongation"][1], 0.9)],
+        }
+        for i, c in enumerate(classes)
+    ]
     probs = {f["name"]: c["probability"] for f, c in zip(families, classes)}
     total = sum(probs.values())
     probs = {k: v / total for k, v in probs.items()}
@@ -146,15 +163,32 @@ def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: st
     count = int(round(density * np.prod(box) * 1e-9))
     if count < 1:
         raise PorepipeError(f"grain density {density:.4g} /mm³ gives no sphere in the model box {box} µm")
-    stage = {"name": "calibrated", "insert": ["grain"], "steps": calibration.steps, "dt": 0.25,
-             "k": {"grain": 400.0}, "damping": {"grain": 4.0}, "freezing": {"lock_step": 10},
-             "stochastic_forces": {"step_size": 0.05}}
+    stage = {
+        "name": "calibrated",
+        "insert": ["grain"],
+        "steps": calibration.steps,
+        "dt": 0.25,
+        "k": {"grain": 400.0},
+        "damping": {"grain": 4.0},
+        "freezing": {"lock_step": 10},
+        "stochastic_forces": {"step_size": 0.05},
+    }
     scene = {
-        "name": name, "seed": int(seed),
+        "name": name,
+        "seed": int(seed),
         "domain": {"size_um": box, "periodic": True},
         "spheres": {"pack": True},
-        "packing": {"types": [{"name": "grain", "count": count, "radius_um": fit.spec,
-                               "max_overlap": calibration.max_overlap}], "stages": [stage]},
+        "packing": {
+            "types": [
+                {
+                    "name": "grain",
+                    "count": count,
+                    "radius_um": fit.spec,
+                    "max_overlap": calibration.max_overlap,
+                }
+            ],
+            "stages": [stage],
+        },
         "resolutions_um": [a],
         "segmentation": {"method": "otsu"},
         "analyses": ["segment", "minkowski", "lpt"],
@@ -164,10 +198,15 @@ def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: st
     if deco is not None:
         scene["decoration"] = deco
     scene["_calibration"] = {
-        "target_porosity": float(stats_ds.porosity), "grains_per_mm3": density,
-        "radius_family": fit.family.value, "ks_statistic": fit.ks, "ks_pvalue": fit.pvalue,
-        "elongation_classes": classes, "source_voxel_um": voxel,
-        "S_V_per_mm": float(stats_ds.S_V_per_mm) if "S_V_per_mm" in stats_ds else None}
+        "target_porosity": float(stats_ds.porosity),
+        "grains_per_mm3": density,
+        "radius_family": fit.family.value,
+        "ks_statistic": fit.ks,
+        "ks_pvalue": fit.pvalue,
+        "elongation_classes": classes,
+        "source_voxel_um": voxel,
+        "S_V_per_mm": float(stats_ds.S_V_per_mm) if "S_V_per_mm" in stats_ds else None,
+    }
     return scene
 
 
@@ -175,7 +214,9 @@ def write_scene_yaml(scene: dict, path) -> Path:
     """Write the calibrated scene; the calibration record goes into a comment block the scene loader ignores."""
     scene = dict(scene)
     record = scene.pop("_calibration", {})
-    header = ["# Calibrated by `porepipe acquire-calibrate` from image statistics (Zauner 2020 §4.7 item 1).",
-              "# Edit freely, then run it with `porepipe run <this file>`. What it was fitted to:"]
+    header = [
+        "# Calibrated by `porepipe acquire-calibrate` from image statistics (Zauner 2020 §4.7 item 1).",
+        "# Edit freely, then run it with `porepipe run <this file>`. What it was fitted to:",
+    ]
     header += [f"#   {line}" for line in yaml.safe_dump(record, sort_keys=False).splitlines()]
     return write_text_atomic(path, "\n".join(header) + "\n" + yaml.safe_dump(scene, sort_keys=False))

@@ -1,5 +1,6 @@
 """``porepipe acquire`` (image -> statistics.h5) and its follow-ups ``acquire-binary``, ``acquire-calibrate``,
-``acquire-model`` and ``acquire-compare``. Argparse only; the work is in ``_run``."""
+``acquire-model`` and ``acquire-compare``. Argparse only; the work is in ``_run``.
+"""
 
 from __future__ import annotations
 
@@ -18,16 +19,29 @@ def settings_from_args(args, scene=None):
     """The scene's ``acquire`` section (or defaults) with the command-line options laid over it."""
     from porepipe.acquire._settings import Settings
 
-    base = scene.acquire.model_dump(exclude_none=True) if scene is not None and scene.acquire is not None else {}
-    over: dict = {k: getattr(args, k) for k in ("voxel_um", "section_um", "format", "dataset", "denoise")
-                  if getattr(args, k) is not None}
+    base = (
+        scene.acquire.model_dump(exclude_none=True) if scene is not None and scene.acquire is not None else {}
+    )
+    over: dict = {
+        k: getattr(args, k)
+        for k in ("voxel_um", "section_um", "format", "dataset", "denoise")
+        if getattr(args, k) is not None
+    }
     if args.raw_shape is not None:
-        over["raw"] = {"dtype": args.raw_dtype, "shape": args.raw_shape, "byte_order": args.raw_byte_order,
-                       "header_bytes": args.raw_header, "order": args.raw_order}
+        over["raw"] = {
+            "dtype": args.raw_dtype,
+            "shape": args.raw_shape,
+            "byte_order": args.raw_byte_order,
+            "header_bytes": args.raw_header,
+            "order": args.raw_order,
+        }
     if args.crop is not None:
         over["crop"] = {"size": args.crop, "centre": True}
-    over["segmentation"] = {k: getattr(args, k) for k in ("method", "phases", "pore_phases", "thresholds")
-                            if getattr(args, k) is not None}
+    over["segmentation"] = {
+        k: getattr(args, k)
+        for k in ("method", "phases", "pore_phases", "thresholds")
+        if getattr(args, k) is not None
+    }
     if args.no_grains:
         over["statistics"] = {"grains": False}
     return merge_settings(Settings, base, over, "acquire settings")
@@ -37,11 +51,19 @@ def _main(args) -> int:
     from porepipe.acquire._run import run
 
     scene = _scene(args.scene)
-    tables = run(settings_from_args(args, scene), args.out, scene=scene, image_path=args.image,
-                 base_dir=Path(args.scene).parent if args.scene else Path("."), threads=args.threads)
+    tables = run(
+        settings_from_args(args, scene),
+        args.out,
+        scene=scene,
+        image_path=args.image,
+        base_dir=Path(args.scene).parent if args.scene else Path("."),
+        threads=args.threads,
+    )
     root = tables[None]
-    print(f"porosity {float(root.porosity):.6g}, thresholds {root.threshold.values.tolist()}, "
-          f"voxel {root.attrs['voxel_um']:g} µm -> {args.out}")
+    print(
+        f"porosity {float(root.porosity):.6g}, thresholds {root.threshold.values.tolist()}, "
+        f"voxel {root.attrs['voxel_um']:g} µm -> {args.out}"
+    )
     return 0
 
 
@@ -64,8 +86,9 @@ def _calibrate(args) -> int:
 def _model(args) -> int:
     from porepipe.acquire._run import run_calibrated_model
 
-    tables = run_calibrated_model(_scene(args.model_scene), args.model_scene, args.out, scene=_scene(args.scene),
-                                  threads=args.threads)
+    tables = run_calibrated_model(
+        _scene(args.model_scene), args.model_scene, args.out, scene=_scene(args.scene), threads=args.threads
+    )
     print(f"model porosity {float(tables[None].porosity):.6g} -> {args.out}")
     return 0
 
@@ -81,10 +104,14 @@ def _compare(args) -> int:
 def register(subparsers) -> None:
     """Add ``acquire`` and its follow-ups to the ``porepipe`` command."""
     p = subparsers.add_parser("acquire", help="statistics of a µ-CT/SEM image (statistics.h5)")
-    p.add_argument("image", nargs="?", default=None, help="image file, TIFF directory or glob (default: the scene's)")
+    p.add_argument(
+        "image", nargs="?", default=None, help="image file, TIFF directory or glob (default: the scene's)"
+    )
     p.add_argument("-o", "--out", required=True, help="output statistics.h5")
     p.add_argument("--scene", default=None, help="scene YAML whose `acquire` section holds the settings")
-    p.add_argument("--voxel-um", type=float, default=None, help="voxel edge in µm (required if not in the file)")
+    p.add_argument(
+        "--voxel-um", type=float, default=None, help="voxel edge in µm (required if not in the file)"
+    )
     p.add_argument("--section-um", type=float, default=None, help="serial-section spacing along z in µm")
     p.add_argument("--format", choices=["auto", "tiff", "raw", "hdf5", "npy"], default=None)
     p.add_argument("--dataset", default=None, help="dataset inside an HDF5 file")
@@ -103,9 +130,13 @@ def register(subparsers) -> None:
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=_main)
 
-    p = subparsers.add_parser("acquire-binary", help="binary_a{a}.h5 of an acquired image (for minkowski/lpt/lbm)")
+    p = subparsers.add_parser(
+        "acquire-binary", help="binary_a{a}.h5 of an acquired image (for minkowski/lpt/lbm)"
+    )
     p.add_argument("statistics", help="statistics.h5 from `porepipe acquire`")
-    p.add_argument("--a", type=float, default=None, help="resolution asked for (must be the image's voxel size)")
+    p.add_argument(
+        "--a", type=float, default=None, help="resolution asked for (must be the image's voxel size)"
+    )
     p.add_argument("-o", "--out", required=True)
     p.set_defaults(func=_binary)
 

@@ -61,10 +61,14 @@ def _table(exp: dict, mod: dict) -> xr.Dataset:
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(e != 0, (m - e) / np.abs(e), np.nan)
     return xr.Dataset(
-        {"experiment": ("quantity", e), "model": ("quantity", m),
-         "difference": ("quantity", m - e, {"long_name": "model - experiment"}),
-         "relative_difference": ("quantity", rel, {"long_name": "(model - experiment) / |experiment|"})},
-        coords={"quantity": names, "label": ("quantity", labels), "unit": ("quantity", units)})
+        {
+            "experiment": ("quantity", e),
+            "model": ("quantity", m),
+            "difference": ("quantity", m - e, {"long_name": "model - experiment"}),
+            "relative_difference": ("quantity", rel, {"long_name": "(model - experiment) / |experiment|"}),
+        },
+        coords={"quantity": names, "label": ("quantity", labels), "unit": ("quantity", units)},
+    )
 
 
 def _on_common_lengths(exp: xr.Dataset, mod: xr.Dataset) -> tuple[xr.Dataset, xr.Dataset, np.ndarray]:
@@ -106,18 +110,26 @@ def compare(experiment_path, model_path) -> xr.Dataset:
         out["two_point_experiment"] = ("lag_um", sel(e2))
         out["two_point_model"] = ("lag_um", sel(m2))
         out = out.assign_coords(lag_um=lag_um)
-    out.attrs.update(experiment=str(experiment_path), model=str(model_path),
-                     layout="Zauner (2020) Table 8.4 (phi, S_V, K_V, T_V), Table 8.5 (kappa), Figs. 8.10-8.12")
+    out.attrs.update(
+        experiment=str(experiment_path),
+        model=str(model_path),
+        layout="Zauner (2020) Table 8.4 (phi, S_V, K_V, T_V), Table 8.5 (kappa), Figs. 8.10-8.12",
+    )
     return out
 
 
 def comparison_markdown(ds: xr.Dataset) -> str:
     """The quantity table as Markdown (the report stage can embed it as is)."""
-    lines = ["| quantity | unit | experiment | model | model − experiment | relative |", "|---|---|---|---|---|---|"]
+    lines = [
+        "| quantity | unit | experiment | model | model − experiment | relative |",
+        "|---|---|---|---|---|---|",
+    ]
     for i in range(ds.sizes["quantity"]):
         row = ds.isel(quantity=i)
-        lines.append(f"| {row.label.item()} | {row.unit.item()} | {float(row.experiment):.6g} | "
-                     f"{float(row.model):.6g} | {float(row.difference):.4g} | {float(row.relative_difference):+.2%} |")
+        lines.append(
+            f"| {row.label.item()} | {row.unit.item()} | {float(row.experiment):.6g} | "
+            f"{float(row.model):.6g} | {float(row.difference):.4g} | {float(row.relative_difference):+.2%} |"
+        )
     return "\n".join(lines)
 
 
@@ -139,8 +151,13 @@ def plot_comparison(ds: xr.Dataset, path) -> Path:
                 phi = ds[f"phi_{side}"].isel(side_L=i).values
                 ok = np.isfinite(phi)
                 inner = ok & (phi > 0) & (phi < 1)  # μ(0), μ(1) are point masses, not density: left out here
-                axes[0, 0].plot(phi[inner], ds[f"mu_{side}"].isel(side_L=i).values[inner], style, color=color,
-                                label=f"{side} L={Ls[i]:g} µm")
+                axes[0, 0].plot(
+                    phi[inner],
+                    ds[f"mu_{side}"].isel(side_L=i).values[inner],
+                    style,
+                    color=color,
+                    label=f"{side} L={Ls[i]:g} µm",
+                )
                 axes[0, 1].plot(phi[ok], ds[f"lambda3_{side}"].isel(side_L=i).values[ok], style, color=color)
         for side, style in (("experiment", "o-"), ("model", "s--")):
             axes[1, 0].plot(Ls, ds[f"p3_{side}"].values, style, label=side)

@@ -12,8 +12,8 @@ import dataclasses
 import glob
 import math
 import struct
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import h5py
 import numpy as np
@@ -25,9 +25,17 @@ from porepipe.acquire._settings import ByteOrder, ImageFormat, MemoryOrder, Raw
 #: µm per unit of the TIFF ResolutionUnit tag (2 = inch, 3 = centimetre) and of ImageJ's `unit` strings
 _TIFF_UNIT_UM = {2: 25400.0, 3: 10000.0}
 _IMAGEJ_UNIT_UM = {"micron": 1.0, "um": 1.0, "µm": 1.0, "\\u00B5m": 1.0, "mm": 1000.0, "nm": 1e-3, "cm": 1e4}
-_SUFFIX_FORMAT = {".tif": ImageFormat.tiff, ".tiff": ImageFormat.tiff, ".raw": ImageFormat.raw,
-                  ".bin": ImageFormat.raw, ".vol": ImageFormat.raw, ".h5": ImageFormat.hdf5,
-                  ".hdf5": ImageFormat.hdf5, ".hdf": ImageFormat.hdf5, ".npy": ImageFormat.npy}
+_SUFFIX_FORMAT = {
+    ".tif": ImageFormat.tiff,
+    ".tiff": ImageFormat.tiff,
+    ".raw": ImageFormat.raw,
+    ".bin": ImageFormat.raw,
+    ".vol": ImageFormat.raw,
+    ".h5": ImageFormat.hdf5,
+    ".hdf5": ImageFormat.hdf5,
+    ".hdf": ImageFormat.hdf5,
+    ".npy": ImageFormat.npy,
+}
 
 
 @dataclasses.dataclass
@@ -57,8 +65,10 @@ def detect_format(path: Path, fmt: ImageFormat = ImageFormat.auto) -> ImageForma
         return ImageFormat.tiff
     suffix = Path(path).suffix.lower()
     if suffix not in _SUFFIX_FORMAT:
-        raise PorepipeError(f"image {path}: cannot tell the format from suffix {suffix!r}; set acquire.format to one "
-                            f"of {[f.value for f in ImageFormat if f is not ImageFormat.auto]}")
+        raise PorepipeError(
+            f"image {path}: cannot tell the format from suffix {suffix!r}; set acquire.format to one "
+            f"of {[f.value for f in ImageFormat if f is not ImageFormat.auto]}"
+        )
     return _SUFFIX_FORMAT[suffix]
 
 
@@ -77,17 +87,28 @@ def read_raw(path, raw: Raw) -> np.ndarray:
     except TypeError as err:
         raise PorepipeError(f"acquire.raw.dtype = {raw.dtype!r} is not a NumPy dtype: {err}") from None
     if base.kind not in "uif" or base.byteorder not in "=|":
-        raise PorepipeError(f"acquire.raw.dtype = {raw.dtype!r}: give a plain integer or float type without byte "
-                            "order (set the order in acquire.raw.byte_order)")
+        raise PorepipeError(
+            f"acquire.raw.dtype = {raw.dtype!r}: give a plain integer or float type without byte "
+            "order (set the order in acquire.raw.byte_order)"
+        )
     dtype = base.newbyteorder("<" if raw.byte_order is ByteOrder.little else ">")
-    expected = raw.header_bytes + math.prod(int(n) for n in raw.shape) * dtype.itemsize  # Python ints: no overflow
+    expected = (
+        raw.header_bytes + math.prod(int(n) for n in raw.shape) * dtype.itemsize
+    )  # Python ints: no overflow
     size = path.stat().st_size
     if size != expected:
         raise PorepipeError(
             f"RAW file {path} has {size} bytes, but header {raw.header_bytes} + shape {tuple(raw.shape)} x "
-            f"{dtype.itemsize} bytes ({raw.dtype}) = {expected} bytes; check acquire.raw.shape/dtype/header_bytes")
-    return np.memmap(path, dtype=dtype, mode="r", offset=raw.header_bytes, shape=tuple(raw.shape),
-                     order="F" if raw.order is MemoryOrder.F else "C")
+            f"{dtype.itemsize} bytes ({raw.dtype}) = {expected} bytes; check acquire.raw.shape/dtype/header_bytes"
+        )
+    return np.memmap(
+        path,
+        dtype=dtype,
+        mode="r",
+        offset=raw.header_bytes,
+        shape=tuple(raw.shape),
+        order="F" if raw.order is MemoryOrder.F else "C",
+    )
 
 
 # -- NumPy, HDF5 ---------------------------------------------------------------------------------------------------
@@ -115,7 +136,9 @@ def read_hdf5(path, dataset: str | None) -> tuple[h5py.Dataset, tuple[float, ...
         raise PorepipeError(f"{path} is not a readable HDF5 file: {err}") from err
     if dataset is None:
         found = []
-        f.visititems(lambda name, obj: found.append(name) if isinstance(obj, h5py.Dataset) and obj.ndim >= 2 else None)
+        f.visititems(
+            lambda name, obj: found.append(name) if isinstance(obj, h5py.Dataset) and obj.ndim >= 2 else None
+        )
         if len(found) != 1:
             raise PorepipeError(f"HDF5 file {path}: set acquire.dataset to one of its image datasets {found}")
         dataset = found[0]
@@ -175,13 +198,17 @@ def _check_tiff_page(tif, name: str) -> None:
     page, series = tif.pages[0], tif.series[0]
     samples = int(getattr(page, "samplesperpixel", 1) or 1)
     if samples > 1 or "S" in series.axes:
-        raise PorepipeError(f"TIFF {name} has {samples} samples per pixel (axes {series.axes!r}, e.g. RGB); expected one "
-                            "grey channel: convert it to grey values first")
+        raise PorepipeError(
+            f"TIFF {name} has {samples} samples per pixel (axes {series.axes!r}, e.g. RGB); expected one "
+            "grey channel: convert it to grey values first"
+        )
     need = int(np.prod(series.shape, dtype=object)) * np.dtype(series.dtype).itemsize
     free = psutil.virtual_memory().available
     if need > free:
-        raise PorepipeError(f"TIFF {name} claims shape {tuple(series.shape)} ({need / 2**30:.1f} GiB), more than the "
-                            f"{free / 2**30:.1f} GiB of free memory")
+        raise PorepipeError(
+            f"TIFF {name} claims shape {tuple(series.shape)} ({need / 2**30:.1f} GiB), more than the "
+            f"{free / 2**30:.1f} GiB of free memory"
+        )
 
 
 def _read_tiff_file(name: str, tifffile) -> tuple[np.ndarray, tuple | None]:
@@ -216,8 +243,10 @@ def read_tiff(path) -> tuple[np.ndarray, tuple | None, bool]:
             for current in files[1:]:
                 section = _read_tiff_file(current, tifffile)[0]
                 if section.shape != arr.shape:
-                    raise PorepipeError(f"TIFF section {current} has shape {section.shape}, the first section "
-                                        f"{files[0]} has {arr.shape}; all sections must have one shape")
+                    raise PorepipeError(
+                        f"TIFF section {current} has shape {section.shape}, the first section "
+                        f"{files[0]} has {arr.shape}; all sections must have one shape"
+                    )
                 sections.append(section)
             arr = np.stack(sections)
     except (tifffile.TiffFileError, *_TIFF_ERRORS) as err:
@@ -225,7 +254,9 @@ def read_tiff(path) -> tuple[np.ndarray, tuple | None, bool]:
     if arr.ndim == 2:
         return arr.T[:, :, None], spacing, len(files) == 1
     if arr.ndim != 3:
-        raise PorepipeError(f"TIFF {path} has shape {arr.shape}; expected one grey channel (2-D or 3-D, no colour)")
+        raise PorepipeError(
+            f"TIFF {path} has shape {arr.shape}; expected one grey channel (2-D or 3-D, no colour)"
+        )
     return arr.transpose(2, 1, 0), spacing, False
 
 
@@ -238,8 +269,15 @@ def _as_volume(arr, source: str) -> tuple[np.ndarray, bool]:
     return arr, False
 
 
-def read_image(path, fmt: ImageFormat = ImageFormat.auto, *, raw: Raw | None = None, dataset: str | None = None,
-               voxel_um: float | None = None, section_um: float | None = None) -> Image:
+def read_image(
+    path,
+    fmt: ImageFormat = ImageFormat.auto,
+    *,
+    raw: Raw | None = None,
+    dataset: str | None = None,
+    voxel_um: float | None = None,
+    section_um: float | None = None,
+) -> Image:
     """Open an image of any supported format as (x, y, z) with its voxel edges.
 
     Parameters
@@ -270,7 +308,9 @@ def read_image(path, fmt: ImageFormat = ImageFormat.auto, *, raw: Raw | None = N
     file_spacing = None
     if fmt is ImageFormat.raw:
         if raw is None:
-            raise PorepipeError(f"RAW image {path}: give acquire.raw (dtype, shape, byte_order, header_bytes)")
+            raise PorepipeError(
+                f"RAW image {path}: give acquire.raw (dtype, shape, byte_order, header_bytes)"
+            )
         data, is_2d = read_raw(path, raw), False
     elif fmt is ImageFormat.npy:
         data, is_2d = _as_volume(read_npy(path), source)
@@ -304,9 +344,13 @@ def _spacing(file_spacing: Sequence | None, voxel_um: float | None, section_um: 
 def require_spacing(image: Image) -> tuple[float, float, float]:
     """The image's voxel edges; a missing voxel size is an error (never a silent 1)."""
     if image.spacing_um is None:
-        raise PorepipeError(f"image {image.source} has no voxel size in its metadata; give it (acquire.voxel_um in "
-                            "the scene, --voxel-um on the command line)")
+        raise PorepipeError(
+            f"image {image.source} has no voxel size in its metadata; give it (acquire.voxel_um in "
+            "the scene, --voxel-um on the command line)"
+        )
     bad = [s for s in image.spacing_um if not np.isfinite(s) or s <= 0]
     if bad:
-        raise PorepipeError(f"image {image.source}: voxel size {image.spacing_um} µm is not positive and finite")
+        raise PorepipeError(
+            f"image {image.source}: voxel size {image.spacing_um} µm is not positive and finite"
+        )
     return image.spacing_um

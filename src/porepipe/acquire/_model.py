@@ -27,8 +27,14 @@ def model_phases(grey: np.ndarray) -> Phases:
     hist = grey_histogram(grey)
     decision = choose_threshold(hist, SegmentationMethod.otsu)
     labels = (grey > decision.value).astype(np.uint8)  # 0 = pore (g <= g_th), 1 = matrix
-    return Phases(labels, np.array([float(decision.value)]), GreyHistogram(hist, np.arange(hist.size, dtype=float)),
-                  ["pore", "matrix"], [0], Method.otsu)
+    return Phases(
+        labels,
+        np.array([float(decision.value)]),
+        GreyHistogram(hist, np.arange(hist.size, dtype=float)),
+        ["pore", "matrix"],
+        [0],
+        Method.otsu,
+    )
 
 
 def model_grey(scene, base_dir: Path | str = "."):
@@ -48,13 +54,22 @@ def model_grey(scene, base_dir: Path | str = "."):
     if getattr(scene, "decoration", None) is not None:
         from porepipe.decorate import decorate, voxelize_grains
 
-        deco = decorate(packing.centres_um, packing.radii_um, scene.decoration, seed=scene.seed, box_um=box,
-                        periodic=per, base_dir=base_dir)
+        deco = decorate(
+            packing.centres_um,
+            packing.radii_um,
+            scene.decoration,
+            seed=scene.seed,
+            box_um=box,
+            periodic=per,
+            base_dir=base_dir,
+        )
         return voxelize_grains(deco, box, a, per), packing, a
     return voxelize(packing.centres_um, packing.radii_um, box, a, per), packing, a
 
 
-def match_porosity(scene_dict: dict, target: float, iterations: int, base_dir: Path | str = ".") -> list[tuple]:
+def match_porosity(
+    scene_dict: dict, target: float, iterations: int, base_dir: Path | str = "."
+) -> list[tuple]:
     """Adjust the sphere count of a calibrated scene (in place) towards a target porosity.
 
     Each iteration packs and voxelises the model and sets n <- n ln(φ_target) / ln(φ_model), the update that is
@@ -77,8 +92,15 @@ def match_porosity(scene_dict: dict, target: float, iterations: int, base_dir: P
     return history
 
 
-def run_model(scene, acquire_settings: Settings, out, *, base_dir: Path | str = ".", lpt_settings=None,
-              permeability_settings=None) -> dict[str | None, xr.Dataset]:
+def run_model(
+    scene,
+    acquire_settings: Settings,
+    out,
+    *,
+    base_dir: Path | str = ".",
+    lpt_settings=None,
+    permeability_settings=None,
+) -> dict[str | None, xr.Dataset]:
     """Pack, voxelise and measure a (calibrated) model scene; write ``model_statistics.h5``.
 
     Parameters
@@ -92,21 +114,37 @@ def run_model(scene, acquire_settings: Settings, out, *, base_dir: Path | str = 
     """
     # measured like the image (same boundary treatment), so that model and experiment are compared like for like
     settings = acquire_settings
-    with ResultWriter(out, stage="acquire-model", scene=scene.name,
-                      scene_hash=hash_of(scene.model_dump(mode="json"))) as w:
+    with ResultWriter(
+        out, stage="acquire-model", scene=scene.name, scene_hash=hash_of(scene.model_dump(mode="json"))
+    ) as w:
         grey, packing, a = model_grey(scene, base_dir)
         phases = model_phases(grey)
         del grey
-        tables = image_statistics(phases, a, settings, lpt_settings=lpt_settings,
-                                  permeability_settings=permeability_settings)
-        w.write_volume(PHASES_VOLUME, phases.labels, voxel_um=a, periodic=(settings.periodic,) * 3,
-                       attrs={"phases": "pore,matrix", "pore_index": np.array([0]), "thresholds": phases.thresholds,
-                              "method": "otsu"})
+        tables = image_statistics(
+            phases, a, settings, lpt_settings=lpt_settings, permeability_settings=permeability_settings
+        )
+        w.write_volume(
+            PHASES_VOLUME,
+            phases.labels,
+            voxel_um=a,
+            periodic=(settings.periodic,) * 3,
+            attrs={
+                "phases": "pore,matrix",
+                "pore_index": np.array([0]),
+                "thresholds": phases.thresholds,
+                "method": "otsu",
+            },
+        )
         w.write_array("sphere_radii_um", packing.radii_um)
         for group, ds in tables.items():
             w.write_table(ds, group)
-        w.attrs.update(voxel_um=a, porosity=float(tables[None].porosity), n_spheres=int(packing.radii_um.size),
-                       packing_converged=int(packing.all_converged),
-                       decoration_applied=int(getattr(scene, "decoration", None) is not None), is_2d=0,
-                       source=f"model scene {scene.name}")
+        w.attrs.update(
+            voxel_um=a,
+            porosity=float(tables[None].porosity),
+            n_spheres=int(packing.radii_um.size),
+            packing_converged=int(packing.all_converged),
+            decoration_applied=int(getattr(scene, "decoration", None) is not None),
+            is_2d=0,
+            source=f"model scene {scene.name}",
+        )
     return tables

@@ -27,7 +27,9 @@ def crop_box(shape, crop: Crop | None) -> tuple[slice, slice, slice]:
         raise PorepipeError(f"acquire.crop.size = {size} exceeds the image shape {tuple(shape)}")
     start = tuple((n - s) // 2 for n, s in zip(shape, size)) if crop.centre else tuple(crop.start)
     if any(b < 0 or b + s > n for b, s, n in zip(start, size, shape)):
-        raise PorepipeError(f"acquire.crop start {start} + size {size} lies outside the image shape {tuple(shape)}")
+        raise PorepipeError(
+            f"acquire.crop start {start} + size {size} lies outside the image shape {tuple(shape)}"
+        )
     return tuple(slice(b, b + s) for b, s in zip(start, size))
 
 
@@ -39,14 +41,18 @@ def load_region(image: Image, crop: Crop | None) -> np.ndarray:
     if region.dtype.kind == "b":
         region = region.astype(np.uint8)
     if region.dtype.kind not in "uif":
-        raise PorepipeError(f"image {image.source} has element type {region.dtype}; expected integers or floats")
+        raise PorepipeError(
+            f"image {image.source} has element type {region.dtype}; expected integers or floats"
+        )
     if region.dtype.kind == "f":
         bad = ~np.isfinite(region)
         n_bad = int(np.count_nonzero(bad))
         if n_bad:
             first = tuple(int(i) for i in np.argwhere(bad)[0])
-            raise PorepipeError(f"image {image.source} has {n_bad} NaN/Inf voxel(s) in the region used (first at "
-                                f"{first}); crop them away (acquire.crop) or fill them before acquisition")
+            raise PorepipeError(
+                f"image {image.source} has {n_bad} NaN/Inf voxel(s) in the region used (first at "
+                f"{first}); crop them away (acquire.crop) or fill them before acquisition"
+            )
     return region
 
 
@@ -66,8 +72,11 @@ def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
     sigma = _noise_sigma(work)
     out = denoise_nl_means(work, h=0.8 * sigma, sigma=sigma, fast_mode=True, patch_size=3, patch_distance=5)
     out = out[:, :, None] if squeeze else out
-    return out.astype(grey.dtype) if grey.dtype.kind == "f" else np.clip(np.rint(out), *_int_range(grey.dtype)).astype(
-        grey.dtype)
+    return (
+        out.astype(grey.dtype)
+        if grey.dtype.kind == "f"
+        else np.clip(np.rint(out), *_int_range(grey.dtype)).astype(grey.dtype)
+    )
 
 
 def _noise_sigma(work: np.ndarray) -> float:
@@ -90,8 +99,9 @@ def resample_cubic(grey: np.ndarray, spacing_um) -> tuple[np.ndarray, float]:
         return grey, edge
     factors = spacing / edge
     shape = np.maximum(1, np.floor(np.asarray(grey.shape) * factors + 1e-9)).astype(int)
-    out = ndimage.zoom(grey.astype(np.float32), shape / np.asarray(grey.shape), order=1, mode="nearest",
-                       grid_mode=True)
+    out = ndimage.zoom(
+        grey.astype(np.float32), shape / np.asarray(grey.shape), order=1, mode="nearest", grid_mode=True
+    )
     if grey.dtype.kind in "ui":
         out = np.clip(np.rint(out), *_int_range(grey.dtype)).astype(grey.dtype)
     return out, edge
@@ -114,7 +124,9 @@ def grey_histogram(grey: np.ndarray, bins: int = 256) -> GreyHistogram:
     if lo == hi:
         return GreyHistogram(np.array([grey.size], np.int64), np.array([lo]))
     if grey.dtype.kind in "ui" and hi - lo + 1 <= bins:
-        counts = np.bincount((grey.ravel() - grey.dtype.type(lo)).astype(np.int64), minlength=int(hi - lo) + 1)
+        counts = np.bincount(
+            (grey.ravel() - grey.dtype.type(lo)).astype(np.int64), minlength=int(hi - lo) + 1
+        )
         return GreyHistogram(counts.astype(np.int64), lo + np.arange(counts.size, dtype=np.float64))
     counts, edges = np.histogram(grey, bins=bins, range=(lo, hi))
     return GreyHistogram(counts.astype(np.int64), 0.5 * (edges[:-1] + edges[1:]))
@@ -153,9 +165,11 @@ def choose_thresholds(hist: GreyHistogram, seg: Segmentation) -> np.ndarray:
     populated = int(np.count_nonzero(hist.counts))
     if populated < n:
         values = hist.centres[hist.counts > 0]
-        raise PorepipeError(f"the image has {populated} populated grey value(s) {values[:5].tolist()}: "
-                            f"{seg.method.value} cannot split it into {n} phases; use acquire.segmentation.method "
-                            "thresholds to say which phase it is")
+        raise PorepipeError(
+            f"the image has {populated} populated grey value(s) {values[:5].tolist()}: "
+            f"{seg.method.value} cannot split it into {n} phases; use acquire.segmentation.method "
+            "thresholds to say which phase it is"
+        )
     from skimage.filters import threshold_multiotsu, threshold_otsu
 
     counts = hist.counts.astype(np.float64)
@@ -174,8 +188,14 @@ def segment_phases(grey: np.ndarray, seg: Segmentation) -> Phases:
     if grey.dtype in (np.uint8, np.uint16):  # one lookup table for every possible grey value
         k = np.searchsorted(thresholds, np.arange(np.iinfo(grey.dtype).max + 1), side="left").astype(np.uint8)
         np.take((n - 1 - k) if seg.invert else k, grey, out=labels)
-        return Phases(labels, thresholds, hist, list(seg.phases), [seg.phases.index(p) for p in seg.pore_phases],
-                      seg.method)
+        return Phases(
+            labels,
+            thresholds,
+            hist,
+            list(seg.phases),
+            [seg.phases.index(p) for p in seg.pore_phases],
+            seg.method,
+        )
     for i in range(grey.shape[0]):  # slab-wise so no int64 copy of the volume is made
         k = np.searchsorted(thresholds, grey[i], side="left").astype(np.uint8)
         labels[i] = (n - 1 - k) if seg.invert else k

@@ -19,8 +19,9 @@ def _section(scene) -> Settings:
     return scene.acquire if scene is not None and scene.acquire is not None else Settings()
 
 
-def run(settings: Settings, out, *, scene=None, image_path=None, base_dir=".",
-        threads: int | None = None) -> dict[str | None, xr.Dataset]:
+def run(
+    settings: Settings, out, *, scene=None, image_path=None, base_dir=".", threads: int | None = None
+) -> dict[str | None, xr.Dataset]:
     """Read, prepare, segment and measure an image; write ``statistics.h5``.
 
     Parameters
@@ -44,10 +45,16 @@ def run(settings: Settings, out, *, scene=None, image_path=None, base_dir=".",
         The tables by group (None = root).
     """
     set_threads(threads)
-    return acquire(settings, out, base_dir=base_dir, image_path=image_path, scene_name=scene.name if scene else "",
-                   scene_hash=result_hash("acquire", settings=settings, image=str(image_path or "")),
-                   lpt_settings=getattr(scene, "lpt", None),
-                   permeability_settings=getattr(scene, "permeability", None))
+    return acquire(
+        settings,
+        out,
+        base_dir=base_dir,
+        image_path=image_path,
+        scene_name=scene.name if scene else "",
+        scene_hash=result_hash("acquire", settings=settings, image=str(image_path or "")),
+        lpt_settings=getattr(scene, "lpt", None),
+        permeability_settings=getattr(scene, "permeability", None),
+    )
 
 
 def run_binary(statistics_path, out, a_um: float | None = None) -> float:
@@ -75,16 +82,22 @@ def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) 
     """
     settings = _section(scene)
     name = name or (f"{scene.name}-model" if scene else "calibrated-model")
-    model = calibrated_scene(read_table(statistics_path), settings.calibration, name=name,
-                             seed=scene.seed if scene else 0)
-    history = match_porosity(model, model["_calibration"]["target_porosity"],
-                             settings.calibration.porosity_iterations, Path(out).parent)
+    model = calibrated_scene(
+        read_table(statistics_path), settings.calibration, name=name, seed=scene.seed if scene else 0
+    )
+    history = match_porosity(
+        model,
+        model["_calibration"]["target_porosity"],
+        settings.calibration.porosity_iterations,
+        Path(out).parent,
+    )
     model["_calibration"]["porosity_matching"] = [{"count": n, "porosity": phi} for n, phi in history]
     return write_scene_yaml(model, out)
 
 
-def run_calibrated_model(model_scene, model_path, out, *, scene=None,
-                         threads: int | None = None) -> dict[str | None, xr.Dataset]:
+def run_calibrated_model(
+    model_scene, model_path, out, *, scene=None, threads: int | None = None
+) -> dict[str | None, xr.Dataset]:
     """Pack, voxelise and measure a calibrated model scene; write ``model_statistics.h5``.
 
     Parameters
@@ -105,9 +118,14 @@ def run_calibrated_model(model_scene, model_path, out, *, scene=None,
     dict of str or None -> xarray.Dataset
     """
     set_threads(threads)
-    return run_model(model_scene, _section(scene), out, base_dir=Path(model_path).parent,
-                     lpt_settings=getattr(scene, "lpt", None),
-                     permeability_settings=getattr(scene, "permeability", None))
+    return run_model(
+        model_scene,
+        _section(scene),
+        out,
+        base_dir=Path(model_path).parent,
+        lpt_settings=getattr(scene, "lpt", None),
+        permeability_settings=getattr(scene, "permeability", None),
+    )
 
 
 def run_compare(experiment_path, model_path, out) -> xr.Dataset:

@@ -25,10 +25,10 @@ class ImageFormat(str, enum.Enum):
     """File formats the readers understand; ``auto`` picks by suffix (a directory is a TIFF stack)."""
 
     auto = "auto"
-    tiff = "tiff"        # one multi-page/3-D TIFF, or a directory / glob of 2-D TIFF sections
-    raw = "raw"          # headerless or fixed-header binary; needs `raw`
-    hdf5 = "hdf5"        # one dataset of an HDF5 file; needs `dataset`
-    npy = "npy"          # NumPy .npy (memory-mapped)
+    tiff = "tiff"  # one multi-page/3-D TIFF, or a directory / glob of 2-D TIFF sections
+    raw = "raw"  # headerless or fixed-header binary; needs `raw`
+    hdf5 = "hdf5"  # one dataset of an HDF5 file; needs `dataset`
+    npy = "npy"  # NumPy .npy (memory-mapped)
 
 
 class ByteOrder(str, enum.Enum):
@@ -46,7 +46,9 @@ class MemoryOrder(str, enum.Enum):
 class Raw(_Strict):
     """What the reader cannot guess about a RAW file."""
 
-    dtype: str = Field("uint8", description="NumPy element type without byte order: uint8, uint16, int16, float32 …")
+    dtype: str = Field(
+        "uint8", description="NumPy element type without byte order: uint8, uint16, int16, float32 …"
+    )
     shape: tuple[PosInt, PosInt, PosInt] = Field((1, 1, 1), description="voxels along x, y, z")
     byte_order: ByteOrder = Field(ByteOrder.little, description="byte order of multi-byte elements")
     header_bytes: int = Field(0, ge=0, description="bytes to skip before the data")
@@ -58,19 +60,21 @@ class Crop(_Strict):
 
     start: tuple[int, int, int] = Field((0, 0, 0), description="first voxel (ignored with centre)")
     size: tuple[PosInt, PosInt, PosInt] = Field(description="voxels along x, y, z")
-    centre: bool = Field(False, description="centre the box in the image (the thesis's Bentheimer crop, §8.1)")
+    centre: bool = Field(
+        False, description="centre the box in the image (the thesis's Bentheimer crop, §8.1)"
+    )
 
 
 class Denoise(str, enum.Enum):
     none = "none"
-    median = "median"          # scipy/scikit-image median filter of a cube of `denoise_size` voxels
-    nl_means = "nl_means"      # scikit-image non-local means (slow; small images or 2-D sections)
+    median = "median"  # scipy/scikit-image median filter of a cube of `denoise_size` voxels
+    nl_means = "nl_means"  # scikit-image non-local means (slow; small images or 2-D sections)
 
 
 class Method(str, enum.Enum):
     """How grey values become phases."""
 
-    otsu = "otsu"              # two phases: pore (dark) and matrix
+    otsu = "otsu"  # two phases: pore (dark) and matrix
     multi_otsu = "multi_otsu"  # len(phases) classes by multi-level Otsu (scikit-image)
     thresholds = "thresholds"  # user thresholds, len(phases) - 1 of them, ascending
 
@@ -79,12 +83,20 @@ class Segmentation(_Strict):
     """Phases in order of increasing grey value; pore if g <= t for the pore class (the thesis's convention)."""
 
     method: Method = Field(Method.otsu, description="otsu, multi_otsu or thresholds")
-    phases: list[str] = Field(default_factory=lambda: ["pore", "matrix"],
-                              description="phase names from darkest to brightest (Table 8.1: pore, clay, cement, grains)")
-    pore_phases: list[str] = Field(default_factory=lambda: ["pore"], description="phases that count as pore space")
-    thresholds: list[float] | None = Field(None, description="method thresholds: class k is t_{k-1} < g <= t_k")
+    phases: list[str] = Field(
+        default_factory=lambda: ["pore", "matrix"],
+        description="phase names from darkest to brightest (Table 8.1: pore, clay, cement, grains)",
+    )
+    pore_phases: list[str] = Field(
+        default_factory=lambda: ["pore"], description="phases that count as pore space"
+    )
+    thresholds: list[float] | None = Field(
+        None, description="method thresholds: class k is t_{k-1} < g <= t_k"
+    )
     bins: int = Field(256, ge=2, le=65536, description="histogram bins for float or 16-bit images")
-    invert: bool = Field(False, description="phases are listed brightest first (pore BRIGHT, e.g. resin-filled SEM)")
+    invert: bool = Field(
+        False, description="phases are listed brightest first (pore BRIGHT, e.g. resin-filled SEM)"
+    )
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -92,13 +104,19 @@ class Segmentation(_Strict):
             raise ValueError(f"phases must name at least two distinct phases, got {self.phases}")
         unknown = sorted(set(self.pore_phases) - set(self.phases))
         if unknown or not self.pore_phases:
-            raise ValueError(f"pore_phases {self.pore_phases} must be a non-empty subset of phases {self.phases}")
+            raise ValueError(
+                f"pore_phases {self.pore_phases} must be a non-empty subset of phases {self.phases}"
+            )
         if self.method is Method.otsu and len(self.phases) != 2:
-            raise ValueError(f"method otsu gives two phases, got {len(self.phases)}; use multi_otsu or thresholds")
+            raise ValueError(
+                f"method otsu gives two phases, got {len(self.phases)}; use multi_otsu or thresholds"
+            )
         if self.method is Method.thresholds:
             t = self.thresholds or []
             if len(t) != len(self.phases) - 1 or any(b <= a for a, b in itertools.pairwise(t)):
-                raise ValueError(f"method thresholds needs {len(self.phases) - 1} ascending thresholds, got {t}")
+                raise ValueError(
+                    f"method thresholds needs {len(self.phases) - 1} ascending thresholds, got {t}"
+                )
         elif self.thresholds is not None:
             raise ValueError("`thresholds` is only used with method thresholds")
         return self
@@ -107,16 +125,30 @@ class Segmentation(_Strict):
 class Statistics(_Strict):
     """What ``statistics.h5`` contains beyond the always-computed fractions, Minkowski and percolation numbers."""
 
-    max_lag_um: PosFloat | None = Field(None, description="largest lag of the two-point correlation (default: 1/4 box)")
-    grains: bool = Field(True, description="watershed grain segmentation: count, radii, elongation, orientation")
+    max_lag_um: PosFloat | None = Field(
+        None, description="largest lag of the two-point correlation (default: 1/4 box)"
+    )
+    grains: bool = Field(
+        True, description="watershed grain segmentation: count, radii, elongation, orientation"
+    )
     grain_min_distance_um: PosFloat | None = Field(
-        None, description="smallest distance between two grain centres (watershed markers); default 2 voxels")
+        None, description="smallest distance between two grain centres (watershed markers); default 2 voxels"
+    )
     grain_max_voxels: int = Field(
-        256**3, ge=0, description="grains are measured in a central sub-box of at most this many voxels (0: whole "
-        "image); number density, radii and shapes are intensive, and the watershed is the costliest statistic")
-    grain_phase: str | None = Field(None, description="phase that forms the grains (default: all non-pore phases)")
-    lpt: bool = Field(False, description="run local porosity theory on the image (uses the scene's `lpt` section)")
-    permeability: bool = Field(False, description="run LBM on the image (uses the scene's `permeability` section)")
+        256**3,
+        ge=0,
+        description="grains are measured in a central sub-box of at most this many voxels (0: whole "
+        "image); number density, radii and shapes are intensive, and the watershed is the costliest statistic",
+    )
+    grain_phase: str | None = Field(
+        None, description="phase that forms the grains (default: all non-pore phases)"
+    )
+    lpt: bool = Field(
+        False, description="run local porosity theory on the image (uses the scene's `lpt` section)"
+    )
+    permeability: bool = Field(
+        False, description="run LBM on the image (uses the scene's `permeability` section)"
+    )
 
 
 class Family(str, enum.Enum):
@@ -130,18 +162,31 @@ class Family(str, enum.Enum):
 class Calibration(_Strict):
     """How statistics become a model scene (packing + decoration) that the user can edit and run."""
 
-    families: list[Family] = Field(default_factory=lambda: [Family.uniform, Family.exponential, Family.discrete],
-                                   description="candidate families; the best Kolmogorov-Smirnov fit wins")
+    families: list[Family] = Field(
+        default_factory=lambda: [Family.uniform, Family.exponential, Family.discrete],
+        description="candidate families; the best Kolmogorov-Smirnov fit wins",
+    )
     discrete_bins: int = Field(12, ge=2, le=200, description="radius classes of the discrete family")
-    max_overlap: float = Field(0.1, gt=0, le=1, description="sigma_max of the calibrated type (Table 8.3: 0.1)")
-    box_um: tuple[PosFloat, PosFloat, PosFloat] | None = Field(None, description="model box (default: the image's)")
+    max_overlap: float = Field(
+        0.1, gt=0, le=1, description="sigma_max of the calibrated type (Table 8.3: 0.1)"
+    )
+    box_um: tuple[PosFloat, PosFloat, PosFloat] | None = Field(
+        None, description="model box (default: the image's)"
+    )
     resolution_um: PosFloat | None = Field(None, description="model voxel size (default: the image's)")
     elongation_classes: int = Field(4, ge=1, le=32, description="elongation classes for the decoration")
-    decoration: bool = Field(True, description="add a `decoration` section (random polyhedra, one family per "
-                             "elongation class, inscribed scaling) and decorate the model run; false: spheres")
+    decoration: bool = Field(
+        True,
+        description="add a `decoration` section (random polyhedra, one family per "
+        "elongation class, inscribed scaling) and decorate the model run; false: spheres",
+    )
     steps: int = Field(400, ge=1, description="DEM step limit of the calibrated packing")
     porosity_iterations: int = Field(
-        2, ge=0, le=10, description="pack-and-measure rounds that adjust the sphere count to the image's porosity")
+        2,
+        ge=0,
+        le=10,
+        description="pack-and-measure rounds that adjust the sphere count to the image's porosity",
+    )
 
 
 class Settings(_Strict):
@@ -152,8 +197,12 @@ class Settings(_Strict):
     raw: Raw | None = Field(None, description="dtype, shape, byte order and header of a RAW file")
     dataset: str | None = Field(None, description="dataset path inside an HDF5 file")
     voxel_um: PosFloat | None = Field(None, description="voxel edge in µm (overrides the file's metadata)")
-    section_um: PosFloat | None = Field(None, description="spacing of serial sections (z) if it differs from voxel_um")
-    resample_cubic: bool = Field(True, description="resample anisotropic (serial-section) stacks to cubic voxels")
+    section_um: PosFloat | None = Field(
+        None, description="spacing of serial sections (z) if it differs from voxel_um"
+    )
+    resample_cubic: bool = Field(
+        True, description="resample anisotropic (serial-section) stacks to cubic voxels"
+    )
     crop: Crop | None = Field(None, description="part of the image to use")
     denoise: Denoise = Field(Denoise.none, description="filter applied before segmentation")
     denoise_size: int = Field(3, ge=1, le=15, description="median filter width in voxels")

@@ -20,8 +20,10 @@ UM_PER_MM = 1000.0
 
 def _require_3d(pore: np.ndarray, what: str) -> None:
     if pore.ndim != 3 or min(pore.shape) < 2:
-        raise PorepipeError(f"{what} needs a 3-D image with at least 2 voxels per axis, got shape {pore.shape} "
-                            "(a 2-D section: stack serial sections into a volume first)")
+        raise PorepipeError(
+            f"{what} needs a 3-D image with at least 2 voxels per axis, got shape {pore.shape} "
+            "(a 2-D section: stack serial sections into a volume first)"
+        )
 
 
 def _axes_of(pore: np.ndarray) -> list[int]:
@@ -33,8 +35,12 @@ def _axes_of(pore: np.ndarray) -> list[int]:
 def volume_fractions(labels: np.ndarray, names: list[str]) -> xr.DataArray:
     """Volume fraction of every phase (Table 8.1), from the label volume."""
     counts = np.bincount(labels.ravel(), minlength=len(names))[: len(names)].astype(np.float64)
-    return xr.DataArray(counts / labels.size, dims="phase", coords={"phase": names},
-                        attrs={"units": "1", "long_name": "volume fraction of the phase (Table 8.1)"})
+    return xr.DataArray(
+        counts / labels.size,
+        dims="phase",
+        coords={"phase": names},
+        attrs={"units": "1", "long_name": "volume fraction of the phase (Table 8.1)"},
+    )
 
 
 # -- Minkowski (via the minkowski stage) ---------------------------------------------------------------------------
@@ -44,9 +50,13 @@ def minkowski_numbers(pore: np.ndarray, voxel_um: float, periodic: bool) -> dict
     from porepipe.minkowski import minkowski_functionals
 
     ds = minkowski_functionals(pore, voxel_um, periodic=periodic).sel(phase="pore")
-    return {"phi_minkowski": float(ds.phi), "S_V_per_mm": float(ds.S_V) * UM_PER_MM,
-            "K_V_per_mm2": float(ds.K_V) * UM_PER_MM**2, "T_V_per_mm3": float(ds.T_V) * UM_PER_MM**3,
-            "chi": float(ds.chi)}
+    return {
+        "phi_minkowski": float(ds.phi),
+        "S_V_per_mm": float(ds.S_V) * UM_PER_MM,
+        "K_V_per_mm2": float(ds.K_V) * UM_PER_MM**2,
+        "T_V_per_mm3": float(ds.T_V) * UM_PER_MM**3,
+        "chi": float(ds.chi),
+    }
 
 
 # -- percolation ----------------------------------------------------------------------------------------------------
@@ -73,14 +83,35 @@ def percolation(pore: np.ndarray) -> xr.Dataset:
     largest = float(sizes[1:].max() / total) if n else 0.0
     largest_perc = float(sizes[spans_any].max() / total) if spans_any.any() else 0.0
     return xr.Dataset(
-        {"connected_porosity": ("axis", connected, {"units": "1", "long_name": "volume fraction of pore clusters "
-                                                    "touching both faces normal to the axis (6-connected)"}),
-         "percolates": ("axis", (connected > 0).astype(np.int8), {"long_name": "1 if a pore cluster spans the axis"}),
-         "largest_cluster": ((), largest, {"units": "1", "long_name": "volume fraction of the largest pore cluster"}),
-         "largest_percolating_cluster": ((), largest_perc, {"units": "1", "long_name": "volume fraction of the "
-                                                            "largest cluster spanning any axis"}),
-         "n_pore_clusters": ((), int(n), {"long_name": "number of 6-connected pore clusters"})},
-        coords={"axis": list(AXES)})
+        {
+            "connected_porosity": (
+                "axis",
+                connected,
+                {
+                    "units": "1",
+                    "long_name": "volume fraction of pore clusters "
+                    "touching both faces normal to the axis (6-connected)",
+                },
+            ),
+            "percolates": (
+                "axis",
+                (connected > 0).astype(np.int8),
+                {"long_name": "1 if a pore cluster spans the axis"},
+            ),
+            "largest_cluster": (
+                (),
+                largest,
+                {"units": "1", "long_name": "volume fraction of the largest pore cluster"},
+            ),
+            "largest_percolating_cluster": (
+                (),
+                largest_perc,
+                {"units": "1", "long_name": "volume fraction of the largest cluster spanning any axis"},
+            ),
+            "n_pore_clusters": ((), int(n), {"long_name": "number of 6-connected pore clusters"}),
+        },
+        coords={"axis": list(AXES)},
+    )
 
 
 # -- two-point correlation ------------------------------------------------------------------------------------------
@@ -91,7 +122,7 @@ def _autocorrelation_counts(pore: np.ndarray, axis: int, max_lag: int, slab: int
     nfft = sfft.next_fast_len(n + max_lag + 1, real=True)
     acc = np.zeros(max_lag + 1)
     for i0 in range(0, moved.shape[0], slab):
-        block = moved[i0:i0 + slab].astype(np.float32)
+        block = moved[i0 : i0 + slab].astype(np.float32)
         spec = sfft.rfft(block, n=nfft, axis=-1)
         power = (spec * spec.conj()).real
         acc += sfft.irfft(power, n=nfft, axis=-1)[..., : max_lag + 1].sum(axis=(0, 1), dtype=np.float64)
@@ -112,9 +143,16 @@ def two_point_correlation(pore: np.ndarray, voxel_um: float, max_lag: int) -> xr
         lines = pore.size // n
         counts = _autocorrelation_counts(pore, ax, lags)
         out[ax, : lags + 1] = counts / (lines * (n - np.arange(lags + 1)))
-    return xr.DataArray(out, dims=("axis", "lag"), coords={"axis": list(AXES), "lag": np.arange(max_lag + 1),
-                                                           "lag_um": ("lag", np.arange(max_lag + 1) * voxel_um)},
-                        attrs={"units": "1", "long_name": "two-point correlation of the pore phase S_2(r)"})
+    return xr.DataArray(
+        out,
+        dims=("axis", "lag"),
+        coords={
+            "axis": list(AXES),
+            "lag": np.arange(max_lag + 1),
+            "lag_um": ("lag", np.arange(max_lag + 1) * voxel_um),
+        },
+        attrs={"units": "1", "long_name": "two-point correlation of the pore phase S_2(r)"},
+    )
 
 
 # -- chord lengths --------------------------------------------------------------------------------------------------
@@ -138,19 +176,37 @@ def chord_lengths(pore: np.ndarray, voxel_um: float) -> xr.Dataset:
     total = counts.sum(axis=2)
     mean = np.where(total > 0, (counts * length).sum(axis=2) / np.maximum(total, 1), np.nan) * voxel_um
     return xr.Dataset(
-        {"chord_count": (("chord_phase", "axis", "chord"), counts,
-                         {"long_name": "number of complete chords of the phase by length"}),
-         "mean_chord_um": (("chord_phase", "axis"), mean, {"units": "µm", "long_name": "mean complete chord length"}),
-         "S_V_chord_per_mm": ("axis", 2.0 * changes * UM_PER_MM,
-                              {"units": "mm^-1", "long_name": "S_V = 2 P_L from phase changes along the axis"})},
-        coords={"chord_phase": ["matrix", "pore"], "axis": list(AXES), "chord": length,
-                "chord_um": ("chord", length * voxel_um)})
+        {
+            "chord_count": (
+                ("chord_phase", "axis", "chord"),
+                counts,
+                {"long_name": "number of complete chords of the phase by length"},
+            ),
+            "mean_chord_um": (
+                ("chord_phase", "axis"),
+                mean,
+                {"units": "µm", "long_name": "mean complete chord length"},
+            ),
+            "S_V_chord_per_mm": (
+                "axis",
+                2.0 * changes * UM_PER_MM,
+                {"units": "mm^-1", "long_name": "S_V = 2 P_L from phase changes along the axis"},
+            ),
+        },
+        coords={
+            "chord_phase": ["matrix", "pore"],
+            "axis": list(AXES),
+            "chord": length,
+            "chord_um": ("chord", length * voxel_um),
+        },
+    )
 
 
 # -- grains ---------------------------------------------------------------------------------------------------------
 def _trim_peaks(peaks: np.ndarray, radius: np.ndarray) -> np.ndarray:
     """Keep the highest distance peaks; drop a peak inside the inscribed sphere of a higher kept one, or a peak whose
-    inscribed sphere overlaps that of a kept one at least twice as large (a bump on a grain, not a grain)."""
+    inscribed sphere overlaps that of a kept one at least twice as large (a bump on a grain, not a grain).
+    """
     from scipy.spatial import cKDTree
 
     order = np.argsort(-radius, kind="stable")
@@ -158,15 +214,21 @@ def _trim_peaks(peaks: np.ndarray, radius: np.ndarray) -> np.ndarray:
     alive = np.ones(len(peaks), bool)
     for p in order:
         if alive[p]:
-            near = np.asarray(tree.query_ball_point(peaks[p], r=max(2.0 * float(radius[p]), 1.0)), dtype=np.int64)
+            near = np.asarray(
+                tree.query_ball_point(peaks[p], r=max(2.0 * float(radius[p]), 1.0)), dtype=np.int64
+            )
             d = np.linalg.norm(peaks[near] - peaks[p], axis=1)
-            drop = (d < max(float(radius[p]), 1.0)) | ((d < radius[p] + radius[near]) & (radius[near] < 0.5 * radius[p]))
+            drop = (d < max(float(radius[p]), 1.0)) | (
+                (d < radius[p] + radius[near]) & (radius[near] < 0.5 * radius[p])
+            )
             alive[near[drop]] = False
             alive[p] = True
     return peaks[alive]
 
 
-def grain_labels(solid: np.ndarray, min_distance: int = 2, periodic: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def grain_labels(
+    solid: np.ndarray, min_distance: int = 2, periodic: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """Watershed grain segmentation of a solid mask: distance transform, trimmed peaks, watershed (scikit-image).
 
     Returns the label volume (int32, 0 = not grain), the distance transform value at each grain's marker (voxel
@@ -179,7 +241,9 @@ def grain_labels(solid: np.ndarray, min_distance: int = 2, periodic: bool = Fals
     if not solid.any():
         return np.zeros(solid.shape, np.int32), np.zeros(0), np.zeros((0, 3), np.int64)
     dist = ndimage.distance_transform_edt(solid).astype(np.float32)
-    peaks = peak_local_max(dist, min_distance=max(1, int(min_distance)), threshold_abs=1.0, exclude_border=False)
+    peaks = peak_local_max(
+        dist, min_distance=max(1, int(min_distance)), threshold_abs=1.0, exclude_border=False
+    )
     if len(peaks) == 0:
         peaks = np.argwhere(dist == dist.max())[:1]
     peaks = _trim_peaks(peaks, dist[tuple(peaks.T)])
@@ -224,7 +288,9 @@ def _on_boundary(points: np.ndarray, shape) -> np.ndarray:
     return ((points[:, live] == 0) | (points[:, live] == shape[live] - 1)).any(axis=1)
 
 
-def grain_statistics(solid: np.ndarray, voxel_um: float, min_distance: int = 2, periodic: bool = False) -> xr.Dataset:
+def grain_statistics(
+    solid: np.ndarray, voxel_um: float, min_distance: int = 2, periodic: bool = False
+) -> xr.Dataset:
     """Grain count per mm³, equivalent and inscribed radii, elongation and orientation of watershed grains.
 
     Elongation = 1 - sqrt(λ_min / λ_max) of the inertia (second-moment) tensor (0 for a ball); orientation = unit
@@ -244,21 +310,46 @@ def grain_statistics(solid: np.ndarray, voxel_um: float, min_distance: int = 2, 
         elong = np.where(ev[:, 2] > 0, 1.0 - np.sqrt(ev[:, 0] / np.where(ev[:, 2] > 0, ev[:, 2], 1.0)), 0.0)
     box_mm3 = solid.size * (voxel_um / UM_PER_MM) ** 3
     return xr.Dataset(
-        {"grain_volume_um3": ("grain", vol_um3, {"units": "µm^3"}),
-         "equivalent_radius_um": ("grain", np.cbrt(3.0 * vol_um3 / (4.0 * np.pi)),
-                                  {"units": "µm", "long_name": "radius of the ball of the grain's volume"}),
-         "inscribed_radius_um": ("grain", (peak_dist + 0.5) * voxel_um,
-                                 {"units": "µm", "long_name": "distance transform at the grain's marker + half a voxel "
-                                  "(the marker voxel centre lies on average 0.48 voxel from the sphere centre): "
-                                  "radius of the sphere the grain grew from (overlapping-sphere model)"}),
-         "elongation": ("grain", elong, {"units": "1", "long_name": "1 - sqrt(lambda_min / lambda_max)"}),
-         "orientation": (("grain", "xyz"), shapes["axes"][:, :, 2], {"long_name": "unit vector of the long axis"}),
-         "centroid_um": (("grain", "xyz"), shapes["centroid_vox"] * voxel_um, {"units": "µm"}),
-         "cut": ("grain", cut.astype(np.int8), {"long_name": "1 if the grain touches the image boundary"}),
-         "counted": ("grain", counted.astype(np.int8), {"long_name": "1 if the grain counts for the number density "
-                                                       "(its marker, the distance-transform peak, is not on the box "
-                                                       "boundary: the sphere centre lies inside the box; a piece of a "
-                                                       "sphere centred outside peaks on the face)"}),
-         "grains_per_mm3": ((), counted.sum() / box_mm3, {"units": "mm^-3", "long_name": "grain number density"})},
-        coords={"grain": np.arange(1, n + 1), "xyz": list(AXES)})
-
+        {
+            "grain_volume_um3": ("grain", vol_um3, {"units": "µm^3"}),
+            "equivalent_radius_um": (
+                "grain",
+                np.cbrt(3.0 * vol_um3 / (4.0 * np.pi)),
+                {"units": "µm", "long_name": "radius of the ball of the grain's volume"},
+            ),
+            "inscribed_radius_um": (
+                "grain",
+                (peak_dist + 0.5) * voxel_um,
+                {
+                    "units": "µm",
+                    "long_name": "distance transform at the grain's marker + half a voxel "
+                    "(the marker voxel centre lies on average 0.48 voxel from the sphere centre): "
+                    "radius of the sphere the grain grew from (overlapping-sphere model)",
+                },
+            ),
+            "elongation": ("grain", elong, {"units": "1", "long_name": "1 - sqrt(lambda_min / lambda_max)"}),
+            "orientation": (
+                ("grain", "xyz"),
+                shapes["axes"][:, :, 2],
+                {"long_name": "unit vector of the long axis"},
+            ),
+            "centroid_um": (("grain", "xyz"), shapes["centroid_vox"] * voxel_um, {"units": "µm"}),
+            "cut": ("grain", cut.astype(np.int8), {"long_name": "1 if the grain touches the image boundary"}),
+            "counted": (
+                "grain",
+                counted.astype(np.int8),
+                {
+                    "long_name": "1 if the grain counts for the number density "
+                    "(its marker, the distance-transform peak, is not on the box "
+                    "boundary: the sphere centre lies inside the box; a piece of a "
+                    "sphere centred outside peaks on the face)"
+                },
+            ),
+            "grains_per_mm3": (
+                (),
+                counted.sum() / box_mm3,
+                {"units": "mm^-3", "long_name": "grain number density"},
+            ),
+        },
+        coords={"grain": np.arange(1, n + 1), "xyz": list(AXES)},
+    )

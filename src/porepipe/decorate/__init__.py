@@ -30,5 +30,5 @@ _EXPORTS = {
     "voxelize_grains": "_api",
     "world_grains": "_api",
 }
-__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

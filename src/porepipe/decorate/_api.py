@@ -10,8 +10,10 @@ import numpy as np
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError, cKDTree
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.rng import stream as rng_stream
 from porepipe._shared.progress import Progress
+from porepipe._shared.rng import stream as rng_stream
+from porepipe._shared.sample_points import SUB
+from porepipe._shared.spheres import check_spheres
 from porepipe.decorate._kernels import KIND_POLYHEDRON, KIND_SPHERE, _points_inside, _voxelize_grains_slab
 from porepipe.decorate._library import (
     GrainType,
@@ -25,8 +27,6 @@ from porepipe.decorate._library import (
 from porepipe.decorate._rotation import anisotropic_rotations, uniform_rotations
 from porepipe.decorate._settings import Generator, OrientationMode, ScaleRule, Settings
 from porepipe.voxelize import VoxelizeMethod, grid_shape
-from porepipe._shared.sample_points import SUB
-from porepipe._shared.spheres import check_spheres
 
 #: sub-streams of the scene seed
 #: sub-streams of the stage's random stream (porepipe._shared.rng, stage name "decorate")
@@ -66,7 +66,7 @@ class Decoration:
 
     def volumes_um3(self) -> np.ndarray:
         """Exact volume of every grain."""
-        return np.array([t.volume for t in self.library])[self.types] * self.scales ** 3
+        return np.array([t.volume for t in self.library])[self.types] * self.scales**3
 
 
 # -- library ---------------------------------------------------------------------------------------------------------
@@ -131,8 +131,18 @@ def scale_factors(library, types, radii, rule: ScaleRule) -> np.ndarray:
     return unit[types] * radii
 
 
-def decorate(centres_um, radii_um, settings: Settings, seed: int = 0, sphere_types=None, box_um=None,
-             periodic: bool = True, base_dir=".", library=None, progress: bool = False) -> Decoration:
+def decorate(
+    centres_um,
+    radii_um,
+    settings: Settings,
+    seed: int = 0,
+    sphere_types=None,
+    box_um=None,
+    periodic: bool = True,
+    base_dir=".",
+    library=None,
+    progress: bool = False,
+) -> Decoration:
     """Give every sphere a grain type, a rotation and a scale (Zauner 2020, §4.7.1 step 3, §8.2.2).
 
     Parameters
@@ -151,7 +161,11 @@ def decorate(centres_um, radii_um, settings: Settings, seed: int = 0, sphere_typ
         A prebuilt library instead of generating one from ``settings``.
     """
     centres, radii = check_spheres(centres_um, radii_um)
-    st = np.zeros(len(radii), dtype=np.int64) if sphere_types is None else np.asarray(sphere_types, dtype=np.int64)
+    st = (
+        np.zeros(len(radii), dtype=np.int64)
+        if sphere_types is None
+        else np.asarray(sphere_types, dtype=np.int64)
+    )
     if st.shape != radii.shape:
         raise PorepipeError(f"sphere types need shape {radii.shape}, got {st.shape}")
     lib, families = library if library is not None else build_library(settings, seed, base_dir)
@@ -167,8 +181,16 @@ def decorate(centres_um, radii_um, settings: Settings, seed: int = 0, sphere_typ
     if orient.mode is OrientationMode.overlap_minimizer:
         if box_um is None:
             raise PorepipeError("decoration.orientation.mode overlap_minimizer needs the box (box_um)")
-        deco = minimise_overlap(deco, box_um, periodic, orient.trials_per_grain, orient.passes,
-                                orient.points_per_grain, _rng(seed, _STREAM_MINIMISER), progress)
+        deco = minimise_overlap(
+            deco,
+            box_um,
+            periodic,
+            orient.trials_per_grain,
+            orient.passes,
+            orient.points_per_grain,
+            _rng(seed, _STREAM_MINIMISER),
+            progress,
+        )
     return deco
 
 
@@ -177,11 +199,11 @@ def decorate(centres_um, radii_um, settings: Settings, seed: int = 0, sphere_typ
 class WorldGrains:
     """Flat arrays the kernels read: per grain kind, radius (sphere r or circumradius), planes (n, d) about c."""
 
-    kind: np.ndarray       # (N,) int64
-    radius: np.ndarray     # (N,)
+    kind: np.ndarray  # (N,) int64
+    radius: np.ndarray  # (N,)
     plane_ptr: np.ndarray  # (N + 1,) int64
-    planes: np.ndarray     # (P, 4): world normal (3), offset d (µm) relative to the grain centre
-    half_um: np.ndarray    # (N, 3) half-edges of a box about the centre that holds the grain
+    planes: np.ndarray  # (P, 4): world normal (3), offset d (µm) relative to the grain centre
+    half_um: np.ndarray  # (N, 3) half-edges of a box about the centre that holds the grain
 
     @property
     def max_planes(self) -> int:
@@ -194,7 +216,9 @@ def _grain_planes(t: GrainType, rotation, scale) -> np.ndarray:
 
 def world_grains(deco: Decoration) -> WorldGrains:
     """Rotated, scaled planes and bounding half-edges of every grain."""
-    kind = np.array([KIND_SPHERE if t.kind is Kind.SPHERE else KIND_POLYHEDRON for t in deco.library])[deco.types]
+    kind = np.array([KIND_SPHERE if t.kind is Kind.SPHERE else KIND_POLYHEDRON for t in deco.library])[
+        deco.types
+    ]
     circ = np.array([t.circumradius for t in deco.library])[deco.types] * deco.scales
     counts = np.array([t.n_faces for t in deco.library], dtype=np.int64)[deco.types]
     ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
@@ -202,14 +226,15 @@ def world_grains(deco: Decoration) -> WorldGrains:
     half = np.repeat(circ[:, None], 3, axis=1)
     for g, (t, rot, s) in enumerate(zip((deco.library[k] for k in deco.types), deco.rotations, deco.scales)):
         if t.kind is Kind.POLYHEDRON:
-            planes[ptr[g]:ptr[g + 1]] = _grain_planes(t, rot, s)
+            planes[ptr[g] : ptr[g + 1]] = _grain_planes(t, rot, s)
             half[g] = np.abs(t.vertices @ rot.T).max(axis=0) * s * (1.0 + 1e-12)
     return WorldGrains(kind.astype(np.int64), circ, ptr, np.ascontiguousarray(planes), half)
 
 
 def grain_images(centres_um, half_um, box_um, periodic: bool) -> tuple[np.ndarray, np.ndarray]:
     """Rows (cx, cy, cz, hx, hy, hz) of every periodic image of every grain box that reaches into the box, and the
-    grain index of each row. Without periodicity, the grains themselves (those reaching into the box)."""
+    grain index of each row. Without periodicity, the grains themselves (those reaching into the box).
+    """
     box = np.asarray(box_um, dtype=np.float64)
     c = np.asarray(centres_um, dtype=np.float64)
     if not periodic:
@@ -230,8 +255,15 @@ def grain_images(centres_um, half_um, box_um, periodic: bool) -> tuple[np.ndarra
 
 
 # -- voxelisation ----------------------------------------------------------------------------------------------------
-def iter_grain_slabs(deco: Decoration, box_um, voxel_um: float, periodic: bool = True,
-                     method: VoxelizeMethod = VoxelizeMethod.boundary, slab_planes: int = 32, progress: bool = False):
+def iter_grain_slabs(
+    deco: Decoration,
+    box_um,
+    voxel_um: float,
+    periodic: bool = True,
+    method: VoxelizeMethod = VoxelizeMethod.boundary,
+    slab_planes: int = 32,
+    progress: bool = False,
+):
     """Yield ``(i0, slab)``: uint8 grey values (sample points in the matrix) of voxel planes ``i0 .. i0 + len(slab)``.
 
     Same sample points and conventions as :func:`porepipe.voxelize.voxelize` (a grain boundary point is matrix);
@@ -251,21 +283,42 @@ def iter_grain_slabs(deco: Decoration, box_um, voxel_um: float, periodic: bool =
         i1 = min(i0 + slab_planes, shape[0])
         slab = np.zeros((i1 - i0, shape[1], shape[2]), dtype=np.uint8)
         if len(img_pos):
-            _voxelize_grains_slab(i0, i1, img_pos, img_grain, order, xmin_sorted, hx_max, world.kind, world.radius,
-                                  world.plane_ptr, world.planes, world.max_planes, h, shape[1], shape[2],
-                                  boundary_only, slab)
+            _voxelize_grains_slab(
+                i0,
+                i1,
+                img_pos,
+                img_grain,
+                order,
+                xmin_sorted,
+                hx_max,
+                world.kind,
+                world.radius,
+                world.plane_ptr,
+                world.planes,
+                world.max_planes,
+                h,
+                shape[1],
+                shape[2],
+                boundary_only,
+                slab,
+            )
         if bar is not None:
             bar.update(i1)
         yield i0, slab
 
 
-def voxelize_grains(deco: Decoration, box_um, voxel_um: float, periodic: bool = True,
-                    method: VoxelizeMethod = VoxelizeMethod.boundary) -> np.ndarray:
+def voxelize_grains(
+    deco: Decoration,
+    box_um,
+    voxel_um: float,
+    periodic: bool = True,
+    method: VoxelizeMethod = VoxelizeMethod.boundary,
+) -> np.ndarray:
     """Grey values (nx, ny, nz) uint8 0..216 of the union of the decorated grains (see :func:`iter_grain_slabs`)."""
     shape = grid_shape(box_um, voxel_um)
     out = np.empty(shape, dtype=np.uint8)
     for i0, slab in iter_grain_slabs(deco, box_um, voxel_um, periodic, method, slab_planes=shape[0]):
-        out[i0:i0 + len(slab)] = slab
+        out[i0 : i0 + len(slab)] = slab
     return out
 
 
@@ -276,8 +329,16 @@ def points_in_grains(points_um, deco: Decoration, box_um, periodic: bool = True)
     img_pos, img_grain = grain_images(deco.centres_um, world.half_um, box_um, periodic)
     hits = np.zeros(len(pts), dtype=np.int64)
     if len(img_pos):
-        _points_inside(pts, np.ascontiguousarray(img_pos[:, :3]), world.kind, world.radius, world.plane_ptr,
-                       world.planes, img_grain, hits)
+        _points_inside(
+            pts,
+            np.ascontiguousarray(img_pos[:, :3]),
+            world.kind,
+            world.radius,
+            world.plane_ptr,
+            world.planes,
+            img_grain,
+            hits,
+        )
     return hits > 0
 
 
@@ -323,7 +384,7 @@ def pair_overlap_volume(deco: Decoration, i: int, j: int, box_um, periodic: bool
     try:
         centre, radius = chebyshev_ball(f"overlap {i}-{j}", normals, offsets)
     except PorepipeError:
-        return 0.0     # empty (or flat) intersection
+        return 0.0  # empty (or flat) intersection
     if radius < 1e-9 * deco.scales[i]:
         return 0.0
     try:
@@ -341,7 +402,7 @@ def mean_overlap_volume(deco: Decoration, box_um, periodic: bool = True) -> floa
 
 
 def _type_points(t: GrainType, n: int, rng) -> np.ndarray:
-    """n points uniform in the unit-scale body of type t (rejection from its bounding box)."""
+    """N points uniform in the unit-scale body of type t (rejection from its bounding box)."""
     if t.kind is Kind.SPHERE:
         v = rng.normal(size=(n, 3))
         return v / np.linalg.norm(v, axis=1)[:, None] * rng.uniform(size=(n, 1)) ** (1.0 / 3.0)
@@ -353,8 +414,16 @@ def _type_points(t: GrainType, n: int, rng) -> np.ndarray:
     return out[:n]
 
 
-def minimise_overlap(deco: Decoration, box_um, periodic: bool = True, trials: int = 5, passes: int = 3,
-                     points_per_grain: int = 512, rng=None, progress: bool = False) -> Decoration:
+def minimise_overlap(
+    deco: Decoration,
+    box_um,
+    periodic: bool = True,
+    trials: int = 5,
+    passes: int = 3,
+    points_per_grain: int = 512,
+    rng=None,
+    progress: bool = False,
+) -> Decoration:
     """Overlap minimiser (§8.2.2): per pass and grain, try ``trials`` − 1 new uniform orientations besides the current
     one and keep the one whose grain overlaps its neighbours least.
 
@@ -378,8 +447,17 @@ def minimise_overlap(deco: Decoration, box_um, periodic: bool = True, trials: in
     for p in range(passes):
         for step, i in enumerate(rng.permutation(len(cur))):
             if nbrs[i]:
-                _best_rotation(cur, world, i, np.array(nbrs[i], dtype=np.int64), local[cur.types[i]], trials, box,
-                               periodic, rng)
+                _best_rotation(
+                    cur,
+                    world,
+                    i,
+                    np.array(nbrs[i], dtype=np.int64),
+                    local[cur.types[i]],
+                    trials,
+                    box,
+                    periodic,
+                    rng,
+                )
             if bar is not None:
                 bar.update(p * len(cur) + step + 1)
     return cur
@@ -393,7 +471,9 @@ def _best_rotation(deco, world, i, nb, local, trials, box, periodic, rng) -> Non
     best, best_count = 0, None
     for c, rot in enumerate(candidates):
         pts = np.ascontiguousarray(local @ rot.T * deco.scales[i])
-        _points_inside(pts, np.ascontiguousarray(d), world.kind, world.radius, world.plane_ptr, world.planes, nb, hits)
+        _points_inside(
+            pts, np.ascontiguousarray(d), world.kind, world.radius, world.plane_ptr, world.planes, nb, hits
+        )
         count = int(hits.sum())
         if best_count is None or count < best_count:
             best, best_count = c, count
@@ -401,6 +481,9 @@ def _best_rotation(deco, world, i, nb, local, trials, box, periodic, rng) -> Non
         deco.rotations[i] = candidates[best]
         t = deco.library[deco.types[i]]
         if t.kind is Kind.POLYHEDRON:
-            world.planes[world.plane_ptr[i]:world.plane_ptr[i + 1]] = _grain_planes(t, candidates[best],
-                                                                                    deco.scales[i])
-            world.half_um[i] = np.abs(t.vertices @ candidates[best].T).max(axis=0) * deco.scales[i] * (1 + 1e-12)
+            world.planes[world.plane_ptr[i] : world.plane_ptr[i + 1]] = _grain_planes(
+                t, candidates[best], deco.scales[i]
+            )
+            world.half_um[i] = (
+                np.abs(t.vertices @ candidates[best].T).max(axis=0) * deco.scales[i] * (1 + 1e-12)
+            )

@@ -24,13 +24,17 @@ def _main_voxelize(args) -> int:
 
 def register(subparsers) -> None:
     """Add ``decorate`` and ``voxelize-grains`` to the ``porepipe`` command."""
-    p = subparsers.add_parser("decorate", help="give every sphere a grain type, rotation and scale (grains.h5)")
+    p = subparsers.add_parser(
+        "decorate", help="give every sphere a grain type, rotation and scale (grains.h5)"
+    )
     p.add_argument("scene", help="scene YAML with a `decoration:` section")
     p.add_argument("-o", "--out", required=True, help="output grains.h5")
     p.add_argument("--packing", help="packing.h5 from the pack stage (when spheres.pack is set)")
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=_main_decorate)
-    p = subparsers.add_parser("voxelize-grains", help="grey volume (0..216) of the decorated grains at one voxel size")
+    p = subparsers.add_parser(
+        "voxelize-grains", help="grey volume (0..216) of the decorated grains at one voxel size"
+    )
     p.add_argument("scene", help="scene YAML")
     p.add_argument("--grains", required=True, help="grains.h5 from `porepipe decorate`")
     p.add_argument("--a", type=float, required=True, help="voxel size in µm")

@@ -37,7 +37,11 @@ def decoration_dataset(deco: Decoration, radii_um) -> xr.Dataset:
         "scale": ("grain", deco.scales, {"long_name": "length scale, um per type unit"}),
         "rotation": (("grain", "row", "col"), deco.rotations, {"long_name": "type frame -> world frame"}),
         "type_name": ("type", np.array([t.name for t in lib], dtype=object)),
-        "kind": ("type", np.array([int(t.kind) for t in lib], dtype=np.int64), {"meaning": "0 sphere, 1 polyhedron"}),
+        "kind": (
+            "type",
+            np.array([int(t.kind) for t in lib], dtype=np.int64),
+            {"meaning": "0 sphere, 1 polyhedron"},
+        ),
         "family": ("type", deco.families.astype(np.int64)),
         "plane_start": ("type", start),
         "plane_count": ("type", counts),
@@ -52,7 +56,9 @@ def decoration_dataset(deco: Decoration, radii_um) -> xr.Dataset:
 def read_grains(path) -> tuple[Decoration, np.ndarray]:
     """(Decoration, sphere radii) from a ``grains.h5``; library types are rebuilt (and re-measured) from the planes."""
     ds = read_table(path)
-    missing = [k for k in ("centre_um", "type", "scale", "rotation", "normal", "offset", "kind") if k not in ds]
+    missing = [
+        k for k in ("centre_um", "type", "scale", "rotation", "normal", "offset", "kind") if k not in ds
+    ]
     if missing:
         raise PorepipeError(f"{path} is not a grains file: missing {missing}")
     lib = []
@@ -62,9 +68,17 @@ def read_grains(path) -> tuple[Decoration, np.ndarray]:
             lib.append(sphere_type(name))
             continue
         s, n = int(ds["plane_start"].values[t]), int(ds["plane_count"].values[t])
-        lib.append(polyhedron(name, ds["normal"].values[s:s + n], ds["offset"].values[s:s + n], centre=False,
-                              unit=True))
-    deco = Decoration(np.ascontiguousarray(ds["centre_um"].values), ds["type"].values.astype(np.int64),
-                      np.ascontiguousarray(ds["rotation"].values), ds["scale"].values.astype(np.float64), lib,
-                      ds["family"].values.astype(np.int64))
+        lib.append(
+            polyhedron(
+                name, ds["normal"].values[s : s + n], ds["offset"].values[s : s + n], centre=False, unit=True
+            )
+        )
+    deco = Decoration(
+        np.ascontiguousarray(ds["centre_um"].values),
+        ds["type"].values.astype(np.int64),
+        np.ascontiguousarray(ds["rotation"].values),
+        ds["scale"].values.astype(np.float64),
+        lib,
+        ds["family"].values.astype(np.int64),
+    )
     return deco, ds["radius_um"].values

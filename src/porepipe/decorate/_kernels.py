@@ -92,7 +92,8 @@ def _extremes(n, lo, hi):
 @njit(cache=True, fastmath=FASTMATH)
 def _xy_bounds(i, j, cx, cy, planes, p0, p1, h, xy):
     """Per plane t = p - p0 of the grain: xy[t, 0] = min, xy[t, 1] = max of (n0*dx + n1*dy) bound over the sample hull
-    of column (i, j), summed in the kernels' order."""
+    of column (i, j), summed in the kernels' order.
+    """
     dxl = sample_coord(i, 0, h) - cx
     dxh = sample_coord(i, SUB - 1, h) - cx
     dyl = sample_coord(j, 0, h) - cy
@@ -108,7 +109,8 @@ def _xy_bounds(i, j, cx, cy, planes, p0, p1, h, xy):
 def _classify_poly(k, cz, planes, p0, p1, h, margin, xy, active):
     """(UNTOUCHED, 0) if the voxel's sample hull is outside some plane, (FULL, 0) if inside all, else (PARTIAL, m)
     with ``active[:m]`` the planes the hull crosses: every sample point satisfies the others, so only these are
-    tested point by point. ``xy`` comes from :func:`_xy_bounds` for the voxel's column."""
+    tested point by point. ``xy`` comes from :func:`_xy_bounds` for the voxel's column.
+    """
     dzl = sample_coord(k, 0, h) - cz
     dzh = sample_coord(k, SUB - 1, h) - cz
     m = 0
@@ -135,8 +137,30 @@ def _classify_sphere(i, j, k, cx, cy, cz, r2, h):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes, h, ny, nz,
-                 boundary_only, status, mask, scratch, partial, active, xy, words, out):
+def _grain_plane(
+    i,
+    img_pos,
+    img_grain,
+    order,
+    xmin_sorted,
+    hx_max,
+    kind,
+    radius,
+    plane_ptr,
+    planes,
+    h,
+    ny,
+    nz,
+    boundary_only,
+    status,
+    mask,
+    scratch,
+    partial,
+    active,
+    xy,
+    words,
+    out,
+):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); the other arrays are this thread's buffers."""
     status[:, :] = UNTOUCHED
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, hx_max)
@@ -188,8 +212,25 @@ def _grain_plane(i, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _voxelize_grains_slab(i0, i1, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes,
-                          max_planes, h, ny, nz, boundary_only, out):
+def _voxelize_grains_slab(
+    i0,
+    i1,
+    img_pos,
+    img_grain,
+    order,
+    xmin_sorted,
+    hx_max,
+    kind,
+    radius,
+    plane_ptr,
+    planes,
+    max_planes,
+    h,
+    ny,
+    nz,
+    boundary_only,
+    out,
+):
     """Grey values of planes i0..i1-1 into ``out`` (i1 - i0, ny, nz), parallel over planes."""
     nplanes = i1 - i0
     nthreads = min(nplanes, 64)
@@ -203,8 +244,30 @@ def _voxelize_grains_slab(i0, i1, img_pos, img_grain, order, xmin_sorted, hx_max
         xy = np.empty((max(max_planes, 1), 2))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
-            _grain_plane(i0 + p, img_pos, img_grain, order, xmin_sorted, hx_max, kind, radius, plane_ptr, planes,
-                         h, ny, nz, boundary_only, status, mask, scratch, partial, active, xy, words, out[p])
+            _grain_plane(
+                i0 + p,
+                img_pos,
+                img_grain,
+                order,
+                xmin_sorted,
+                hx_max,
+                kind,
+                radius,
+                plane_ptr,
+                planes,
+                h,
+                ny,
+                nz,
+                boundary_only,
+                status,
+                mask,
+                scratch,
+                partial,
+                active,
+                xy,
+                words,
+                out[p],
+            )
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)

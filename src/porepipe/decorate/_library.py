@@ -73,27 +73,44 @@ class GrainType:
 
 def sphere_type(name: str = "sphere") -> GrainType:
     """The unit ball as a grain type."""
-    return GrainType(name, Kind.SPHERE, np.zeros((0, 3)), np.zeros(0), 4.0 / 3.0 * np.pi, 4.0 * np.pi, 4.0 * np.pi,
-                     1.0, 1.0, 1.0, np.zeros((0, 3)))
+    return GrainType(
+        name,
+        Kind.SPHERE,
+        np.zeros((0, 3)),
+        np.zeros(0),
+        4.0 / 3.0 * np.pi,
+        4.0 * np.pi,
+        4.0 * np.pi,
+        1.0,
+        1.0,
+        1.0,
+        np.zeros((0, 3)),
+    )
 
 
 def _normalise(name, normals, offsets, unit: bool = False) -> tuple[np.ndarray, np.ndarray]:
     normals = np.asarray(normals, dtype=np.float64)
     offsets = np.asarray(offsets, dtype=np.float64)
     if normals.ndim != 2 or normals.shape[1] != 3 or offsets.shape != (normals.shape[0],):
-        raise PorepipeError(f"grain type {name!r}: need normals (m, 3) and offsets (m,), got {normals.shape} and "
-                            f"{offsets.shape}")
+        raise PorepipeError(
+            f"grain type {name!r}: need normals (m, 3) and offsets (m,), got {normals.shape} and "
+            f"{offsets.shape}"
+        )
     if not (np.isfinite(normals).all() and np.isfinite(offsets).all()):
         raise PorepipeError(f"grain type {name!r}: plane set has NaN or Inf")
     length = np.linalg.norm(normals, axis=1)
     if len(length) < 4:
-        raise PorepipeError(f"grain type {name!r}: {len(length)} planes cannot bound a polyhedron (need >= 4)")
+        raise PorepipeError(
+            f"grain type {name!r}: {len(length)} planes cannot bound a polyhedron (need >= 4)"
+        )
     if (length == 0).any():
         raise PorepipeError(f"grain type {name!r}: plane {int(np.argmin(length))} has a zero normal")
     if unit:
         if not np.allclose(length, 1.0, rtol=0, atol=1e-12):
-            raise PorepipeError(f"grain type {name!r}: normals read as unit vectors have lengths up to "
-                                f"{float(np.abs(length - 1).max()):.3g} away from 1")
+            raise PorepipeError(
+                f"grain type {name!r}: normals read as unit vectors have lengths up to "
+                f"{float(np.abs(length - 1).max()):.3g} away from 1"
+            )
         return normals, offsets
     return normals / length[:, None], offsets / length
 
@@ -104,27 +121,36 @@ def check_bounded(name: str, normals: np.ndarray) -> None:
         hull = ConvexHull(normals)
         inside = hull.equations[:, 3].max() < -1e-9
     except QhullError:
-        inside = False   # coplanar normals: a prism or slab, open along their common perpendicular
+        inside = False  # coplanar normals: a prism or slab, open along their common perpendicular
     if not inside:
-        raise PorepipeError(f"grain type {name!r}: the planes do not bound a polyhedron (unbounded); add planes whose "
-                            "normals surround the origin")
+        raise PorepipeError(
+            f"grain type {name!r}: the planes do not bound a polyhedron (unbounded); add planes whose "
+            "normals surround the origin"
+        )
 
 
 def chebyshev_ball(name: str, normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float]:
     """Centre and radius of the largest ball in {n·x <= d} (linear programme); PorepipeError if unbounded or empty."""
     a_ub = np.column_stack([normals, np.ones(len(offsets))])
-    res = linprog(c=[0, 0, 0, -1.0], A_ub=a_ub, b_ub=offsets, bounds=[(None, None)] * 3 + [(None, None)],
-                  method="highs")
+    res = linprog(
+        c=[0, 0, 0, -1.0], A_ub=a_ub, b_ub=offsets, bounds=[(None, None)] * 3 + [(None, None)], method="highs"
+    )
     if res.status == 3:
-        raise PorepipeError(f"grain type {name!r}: the planes do not bound a polyhedron (unbounded); add planes whose "
-                            "normals surround the origin")
+        raise PorepipeError(
+            f"grain type {name!r}: the planes do not bound a polyhedron (unbounded); add planes whose "
+            "normals surround the origin"
+        )
     if res.status != 0:
-        raise PorepipeError(f"grain type {name!r}: the planes leave no interior (empty polyhedron): {res.message}")
+        raise PorepipeError(
+            f"grain type {name!r}: the planes leave no interior (empty polyhedron): {res.message}"
+        )
     centre, radius = res.x[:3], float(res.x[3])
     scale = max(1.0, float(np.abs(offsets).max()))
     if radius <= _FLAT_RTOL * scale:
-        raise PorepipeError(f"grain type {name!r}: the planes leave no interior (empty or flat polyhedron, "
-                            f"inscribed radius {radius:.3g})")
+        raise PorepipeError(
+            f"grain type {name!r}: the planes leave no interior (empty or flat polyhedron, "
+            f"inscribed radius {radius:.3g})"
+        )
     return centre, radius
 
 
@@ -144,7 +170,9 @@ def _centroid(hull: ConvexHull) -> np.ndarray:
     pts = hull.points
     inner = pts[hull.vertices].mean(axis=0)
     tri = pts[hull.simplices]
-    vol = np.abs(np.einsum("ij,ij->i", np.cross(tri[:, 0] - inner, tri[:, 1] - inner), tri[:, 2] - inner)) / 6.0
+    vol = (
+        np.abs(np.einsum("ij,ij->i", np.cross(tri[:, 0] - inner, tri[:, 1] - inner), tri[:, 2] - inner)) / 6.0
+    )
     cent = (tri.sum(axis=1) + inner) / 4.0
     return (vol[:, None] * cent).sum(axis=0) / vol.sum()
 
@@ -221,9 +249,19 @@ def polyhedron(name: str, normals, offsets, centre: bool = True, *, unit: bool =
     hull = ConvexHull(verts)
     verts = hull.points[hull.vertices]
     _, inradius = chebyshev_ball(name, normals, offsets)
-    return GrainType(name, Kind.POLYHEDRON, np.ascontiguousarray(normals), np.ascontiguousarray(offsets),
-                     float(hull.volume), float(hull.area), mean_curvature_integral(hull), inradius,
-                     float(offsets.min()), float(np.linalg.norm(verts, axis=1).max()), np.ascontiguousarray(verts))
+    return GrainType(
+        name,
+        Kind.POLYHEDRON,
+        np.ascontiguousarray(normals),
+        np.ascontiguousarray(offsets),
+        float(hull.volume),
+        float(hull.area),
+        mean_curvature_integral(hull),
+        inradius,
+        float(offsets.min()),
+        float(np.linalg.norm(verts, axis=1).max()),
+        np.ascontiguousarray(verts),
+    )
 
 
 def _tilt(normals: np.ndarray, angle: np.ndarray, rng) -> np.ndarray:
@@ -245,8 +283,12 @@ def quartz_type(name: str, rng, elongation: float = 0.0, perturbation: float = 0
     alpha = np.deg2rad(QUARTZ_CAP_ANGLE_DEG)
     half = 1.0 + elongation
     prism = np.column_stack([np.cos(theta), np.sin(theta), np.zeros(6)])
-    caps = [np.column_stack([np.cos(theta) * np.sin(alpha), np.sin(theta) * np.sin(alpha),
-                             np.full(6, sign * np.cos(alpha))]) for sign in (1.0, -1.0)]
+    caps = [
+        np.column_stack(
+            [np.cos(theta) * np.sin(alpha), np.sin(theta) * np.sin(alpha), np.full(6, sign * np.cos(alpha))]
+        )
+        for sign in (1.0, -1.0)
+    ]
     normals = np.vstack([prism, *caps])
     # each cap face sits above its prism face, through the prism face's top (bottom) edge at height ±half
     offsets = np.concatenate([np.ones(6), np.full(12, np.sin(alpha) + np.cos(alpha) * half)])
@@ -263,8 +305,9 @@ def _stretch(normals, offsets, elongation):
     return n / length[:, None], offsets / length
 
 
-def random_type(name: str, rng, facets: int, elongation: float = 0.0, perturbation: float = 0.1,
-                attempts: int = 50) -> GrainType:
+def random_type(
+    name: str, rng, facets: int, elongation: float = 0.0, perturbation: float = 0.1, attempts: int = 50
+) -> GrainType:
     """Random convex polyhedron with exactly ``facets`` faces and elongation e = 1 − (short/long axis).
 
     Normals: a Fibonacci sphere of ``facets`` points, randomly rotated and each tilted by up to ``perturbation``
@@ -275,7 +318,7 @@ def random_type(name: str, rng, facets: int, elongation: float = 0.0, perturbati
 
     k = np.arange(facets) + 0.5
     polar = np.arccos(1.0 - 2.0 * k / facets)
-    azim = np.pi * (1.0 + 5.0 ** 0.5) * k
+    azim = np.pi * (1.0 + 5.0**0.5) * k
     base = np.column_stack([np.cos(azim) * np.sin(polar), np.sin(azim) * np.sin(polar), np.cos(polar)])
     for _ in range(attempts):
         normals = base @ uniform_rotations(rng, 1)[0].T
@@ -287,8 +330,10 @@ def random_type(name: str, rng, facets: int, elongation: float = 0.0, perturbati
             continue
         if grain.n_faces == facets:
             return grain
-    raise PorepipeError(f"grain type {name!r}: no polyhedron with {facets} facets found in {attempts} attempts "
-                        f"(perturbation {perturbation} too large?)")
+    raise PorepipeError(
+        f"grain type {name!r}: no polyhedron with {facets} facets found in {attempts} attempts "
+        f"(perturbation {perturbation} too large?)"
+    )
 
 
 def read_plane_file(path) -> list[GrainType]:

@@ -10,11 +10,14 @@ def quaternion_to_matrix(q: np.ndarray) -> np.ndarray:
     q = np.asarray(q, dtype=np.float64)
     q = q / np.linalg.norm(q, axis=1)[:, None]
     w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=-1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=-1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=1)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=-1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=-1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1),
+        ],
+        axis=1,
+    )
 
 
 def uniform_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -34,7 +37,9 @@ def align_z(directions: np.ndarray) -> np.ndarray:
     cross = np.column_stack([-d[:, 1], d[:, 0], np.zeros(len(d))])  # e_z × d
     sin = np.linalg.norm(cross, axis=1)
     angle = np.arctan2(sin, d[:, 2])
-    axis = np.where(sin[:, None] > 1e-300, cross / np.maximum(sin, 1e-300)[:, None], np.array([1.0, 0.0, 0.0]))
+    axis = np.where(
+        sin[:, None] > 1e-300, cross / np.maximum(sin, 1e-300)[:, None], np.array([1.0, 0.0, 0.0])
+    )
     return _axis_rotation(axis, angle)
 
 

@@ -22,7 +22,11 @@ _SCENE_KEYS = ("seed", "domain", "spheres", "decoration")
 
 def _sphere_types(scene, packing_path, n: int) -> np.ndarray:
     """Sphere types from a packing file (dataset ``types``) when the spheres come from one, else all 0."""
-    path = scene.spheres.hdf5 if scene.spheres.hdf5 is not None else (packing_path if scene.spheres.pack else None)
+    path = (
+        scene.spheres.hdf5
+        if scene.spheres.hdf5 is not None
+        else (packing_path if scene.spheres.pack else None)
+    )
     if path is not None:
         with h5py.File(path, "r") as f:
             if "types" in f:
@@ -60,19 +64,35 @@ def run(scene, scene_path, out, *, packing_path=None, threads: int | None = None
     threads = set_threads(threads)
     centres, radii = spheres_from_scene(scene, packing_path)
     types = _sphere_types(scene, packing_path, len(radii))
-    deco = decorate(centres, radii, scene.decoration, scene.seed, types, scene.domain.size_um,
-                    scene.domain.periodic, base_dir=Path(scene_path).parent, progress=progress)
-    digest = result_hash("decorate", scene_part=scene_part(scene, *_SCENE_KEYS), packing=str(packing_path or ""))
+    deco = decorate(
+        centres,
+        radii,
+        scene.decoration,
+        scene.seed,
+        types,
+        scene.domain.size_um,
+        scene.domain.periodic,
+        base_dir=Path(scene_path).parent,
+        progress=progress,
+    )
+    digest = result_hash(
+        "decorate", scene_part=scene_part(scene, *_SCENE_KEYS), packing=str(packing_path or "")
+    )
     with ResultWriter(out, stage="decorate", scene=scene.name, scene_hash=digest, threads=threads) as w:
         w.write_table(decoration_dataset(deco, radii))
-        w.attrs.update(n_grains=len(deco), n_types=len(deco.library), scale_rule=scene.decoration.scale.value,
-                       orientation=scene.decoration.orientation.mode.value,
-                       grain_volume_um3=float(deco.volumes_um3().sum()))
+        w.attrs.update(
+            n_grains=len(deco),
+            n_types=len(deco.library),
+            scale_rule=scene.decoration.scale.value,
+            orientation=scene.decoration.orientation.mode.value,
+            grain_volume_um3=float(deco.volumes_um3().sum()),
+        )
     return deco
 
 
-def run_grey(scene, grains_path, voxel_um: float, out, *, threads: int | None = None,
-             progress: bool = True) -> np.ndarray:
+def run_grey(
+    scene, grains_path, voxel_um: float, out, *, threads: int | None = None, progress: bool = True
+) -> np.ndarray:
     """Write the grey volume ``grey`` (uint8 0..216) of the grain model and its histogram M(g, a), like voxelize.
 
     Parameters
@@ -101,9 +121,12 @@ def run_grey(scene, grains_path, voxel_um: float, out, *, threads: int | None = 
     shape = grid_shape(box, voxel_um)
     method = scene.decoration.method if scene.decoration is not None else "boundary"
     slab = scene.decoration.slab_planes if scene.decoration is not None else 32
-    digest = result_hash("voxelize_grains", scene_part=scene_part(scene, *_SCENE_KEYS), inputs=[grains_path],
-                         voxel_um=voxel_um)
-    with ResultWriter(out, stage="voxelize_grains", scene=scene.name, scene_hash=digest, threads=threads) as w:
+    digest = result_hash(
+        "voxelize_grains", scene_part=scene_part(scene, *_SCENE_KEYS), inputs=[grains_path], voxel_um=voxel_um
+    )
+    with ResultWriter(
+        out, stage="voxelize_grains", scene=scene.name, scene_hash=digest, threads=threads
+    ) as w:
         slabs = iter_grain_slabs(deco, box, voxel_um, scene.domain.periodic, method, slab, progress)
         hist = write_grey_volume(w, slabs, shape, voxel_um, scene.domain.periodic, {"n_grains": len(deco)})
         w.attrs.update(method=str(method))

@@ -26,25 +26,25 @@ class _Strict(BaseModel):
 class Generator(str, enum.Enum):
     """How the types of a family are made."""
 
-    quartz = "quartz"    # hexagonal prism with two hexagonal pyramidal caps (6 + 2·6 = 18 planes), perturbed
-    random = "random"    # random convex polyhedron with a given number of facets and elongation
-    file = "file"        # plane sets read from a text file (one type per name)
-    sphere = "sphere"    # the sphere itself (an undecorated grain)
+    quartz = "quartz"  # hexagonal prism with two hexagonal pyramidal caps (6 + 2·6 = 18 planes), perturbed
+    random = "random"  # random convex polyhedron with a given number of facets and elongation
+    file = "file"  # plane sets read from a text file (one type per name)
+    sphere = "sphere"  # the sphere itself (an undecorated grain)
 
 
 class ScaleRule(str, enum.Enum):
     """How a grain is scaled to its sphere of radius r (the grain centre is the sphere centre)."""
 
-    equal_volume = "equal_volume"    # grain volume = 4/3 π r³
+    equal_volume = "equal_volume"  # grain volume = 4/3 π r³
     circumscribed = "circumscribed"  # grain inside the sphere: max distance of a vertex from the centre = r
-    inscribed = "inscribed"          # grain contains the sphere: min distance of a face plane from the centre = r
+    inscribed = "inscribed"  # grain contains the sphere: min distance of a face plane from the centre = r
 
 
 class OrientationMode(str, enum.Enum):
     """How grains are rotated."""
 
-    uniform = "uniform"                      # uniform (Haar) on SO(3)
-    anisotropic = "anisotropic"              # grain z axis von Mises–Fisher about `axis`, uniform spin about it
+    uniform = "uniform"  # uniform (Haar) on SO(3)
+    anisotropic = "anisotropic"  # grain z axis von Mises–Fisher about `axis`, uniform spin about it
     overlap_minimizer = "overlap_minimizer"  # uniform start, then the §8.2.2 minimiser of neighbour overlap
 
 
@@ -56,9 +56,13 @@ class Family(_Strict):
     count: int = Field(1, ge=1, description="number of types to generate (quartz, random)")
     facets: int = Field(18, ge=4, le=400, description="planes per type (random); quartz always has 18")
     elongation: tuple[NonNegFloat, NonNegFloat] = Field(
-        (0.0, 0.0), description="range [e_min, e_max] of elongation e = 1 − (short/long axis), drawn uniformly; "
-        "quartz: extra prism length in units of the prism radius instead")
-    perturbation: NonNegFloat = Field(0.1, le=0.5, description="relative perturbation of plane normals and offsets")
+        (0.0, 0.0),
+        description="range [e_min, e_max] of elongation e = 1 − (short/long axis), drawn uniformly; "
+        "quartz: extra prism length in units of the prism radius instead",
+    )
+    perturbation: NonNegFloat = Field(
+        0.1, le=0.5, description="relative perturbation of plane normals and offsets"
+    )
     file: Path | None = Field(None, description="plane file for generator file: lines 'type nx ny nz d'")
 
     @model_validator(mode="after")
@@ -94,12 +98,16 @@ class Assignment(_Strict):
 class Orientation(_Strict):
     """Orientation sampling (§4.7.1 step 3) and the overlap minimiser (§8.2.2, Table 8.3)."""
 
-    mode: OrientationMode = Field(OrientationMode.uniform, description="uniform, anisotropic or overlap_minimizer")
+    mode: OrientationMode = Field(
+        OrientationMode.uniform, description="uniform, anisotropic or overlap_minimizer"
+    )
     axis: tuple[float, float, float] = Field((0.0, 0.0, 1.0), description="preferred axis (anisotropic)")
     concentration: NonNegFloat = Field(0.0, description="von Mises–Fisher κ of the grain axis (0 = uniform)")
     trials_per_grain: int = Field(5, ge=1, description="N_K^OM: orientations tried per grain and pass")
     passes: int = Field(3, ge=1, description="N_Z^OM: passes over all grains")
-    points_per_grain: int = Field(512, ge=16, description="quadrature points per grain for the overlap volume")
+    points_per_grain: int = Field(
+        512, ge=16, description="quadrature points per grain for the overlap volume"
+    )
 
     @field_validator("axis")
     @classmethod
@@ -116,13 +124,18 @@ class Settings(BaseModel):
 
     families: list[Family] = Field(
         default_factory=lambda: [Family(name="quartz", generator=Generator.quartz, count=99)],
-        min_length=1, description="grain-type families; default: 99 quartz types of 18 planes (§7.1)")
+        min_length=1,
+        description="grain-type families; default: 99 quartz types of 18 planes (§7.1)",
+    )
     assign: list[Assignment] = Field(
-        default_factory=list, description="rules, first match wins; spheres no rule matches draw a family uniformly")
+        default_factory=list,
+        description="rules, first match wins; spheres no rule matches draw a family uniformly",
+    )
     scale: ScaleRule = Field(ScaleRule.equal_volume, description="equal_volume, circumscribed or inscribed")
     orientation: Orientation = Field(default_factory=Orientation, description="orientation sampling")
-    method: VoxelizeMethod = Field(VoxelizeMethod.boundary,
-                                   description="voxelisation: boundary (fast) or brute; identical grey values")
+    method: VoxelizeMethod = Field(
+        VoxelizeMethod.boundary, description="voxelisation: boundary (fast) or brute; identical grey values"
+    )
     slab_planes: int = Field(32, ge=1, description="voxel planes per slab held in memory at once")
 
     @model_validator(mode="after")

@@ -28,5 +28,5 @@ _EXPORTS = {
     "transport": "_api",
     "wall_area": "_geometry",
 }
-__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

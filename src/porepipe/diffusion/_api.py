@@ -464,7 +464,8 @@ def _derived(v, geom, settings):
 
 def _arrays(tallies, settings, geom, axis):
     """Profiles and maps. ``concentration``: time-averaged particles per voxel volume per simulated particle
-    (transmission: per injected particle, in jiffies/voxel³; WK: species 1 per particle alive)."""
+    (transmission: per injected particle, in jiffies/voxel³; WK: species 1 per particle alive).
+    """
     out = {}
     rows = tallies.rows
     if settings.profile_bins:

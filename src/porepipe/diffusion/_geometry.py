@@ -134,7 +134,8 @@ def pocketed_capillary(
 
 def rough_capillary(a: int, length: int, roughness: float, seed: int = 0) -> PoreVolume:
     """§4.2.3 C: a square channel whose wall layer is uniformly roughened: each voxel of the one-voxel layer along
-    the walls is solid with probability ``roughness`` (many edges and small traps)."""
+    the walls is solid with probability ``roughness`` (many edges and small traps).
+    """
     if not 0.0 <= roughness < 1.0:
         raise PorepipeError(f"roughness must be in [0, 1), got {roughness!r}")
     rng = np.random.default_rng(seed)

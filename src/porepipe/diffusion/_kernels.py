@@ -288,7 +288,7 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
 # directions and speeds
 @njit(cache=True, inline="always")
 def _cos_theta(law, state):
-    """cos of the angle to the normal for a diffuse law; never 0 (no flight parallel to the wall)."""
+    """Cos of the angle to the normal for a diffuse law; never 0 (no flight parallel to the wall)."""
     x, state = _uniform(state)
     if law == LAMBERT:
         return math.sqrt(x), state  # cosine per solid angle: sin^2 uniform

@@ -124,8 +124,10 @@ def run(
         )
     missing = [key for key in VOLUME_META_KEYS if key not in vattrs]
     if missing:  # no silent defaults (voxel_um = 1, non-periodic): the one rule of store.volume_meta
-        raise PorepipeError(f"{binary}: volume 'pore' lacks the attribute(s) {', '.join(missing)}; a porepipe "
-                            "volume needs voxel_um, origin_um and periodic")
+        raise PorepipeError(
+            f"{binary}: volume 'pore' lacks the attribute(s) {', '.join(missing)}; a porepipe "
+            "volume needs voxel_um, origin_um and periodic"
+        )
     # per-axis voxel edges are allowed here (serial sections), so not store.read_binary_volume (cubic only)
     voxel_um = np.broadcast_to(np.asarray(vattrs["voxel_um"], dtype=float), (3,))
     periodic = np.broadcast_to(np.asarray(vattrs["periodic"], dtype=bool), (3,))

@@ -8,6 +8,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 
 class Axis(str, enum.Enum):
+    """Transport axis: particles enter at its low face and leave at its high face."""
+
     x = "x"
     y = "y"
     z = "z"
@@ -44,11 +46,15 @@ class InletLaw(str, enum.Enum):
 
 
 class WallSpeed(str, enum.Enum):
+    """Speed of a particle leaving a wall."""
+
     kept = "kept"  # |v| unchanged at a wall (thesis)
     thermal = "thermal"  # re-emitted with a speed from the flux-weighted Maxwell-Boltzmann law
 
 
 class SpeedDist(str, enum.Enum):
+    """Speed distribution of particles entering at the inlet (or started in the pore space)."""
+
     flux = "flux"  # flux-weighted MB, f ~ v^3 exp(-v^2/2s^2): particles crossing a plane (exact for an inlet)
     maxwell = "maxwell"  # MB f ~ v^2 exp(-v^2/2s^2) (thesis 3.2, its choice also for re-injection)
     mean = "mean"  # every particle at v̄

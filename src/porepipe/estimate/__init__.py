@@ -16,5 +16,5 @@ _EXPORTS = {
     "surface_per_grey": "_api",
     "two_point_line": "_api",
 }
-__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

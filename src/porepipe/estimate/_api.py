@@ -76,8 +76,8 @@ def two_point_line(a_coarse: float, phi_coarse: float, a_fine: float, phi_fine: 
 class PorosityLimit:
     """The a → 0 porosity from the regression of φ* on φ** (§7.2)."""
 
-    phi: float            # intercept at φ** = 0
-    phi_err: float        # its standard error (regression) or the spread estimate, see ``error_method``
+    phi: float  # intercept at φ** = 0
+    phi_err: float  # its standard error (regression) or the spread estimate, see ``error_method``
     slope: float
     phi_star: np.ndarray
     phi_2star: np.ndarray
@@ -116,7 +116,9 @@ def regress_porosity_limit(phi0_lines, phi215_lines) -> PorosityLimit:
     if p0.shape != p1.shape or p0.ndim != 1:
         raise PorepipeError(f"need matching 1-D arrays of intercepts, got shapes {p0.shape} and {p1.shape}")
     if p0.size < 2:
-        raise PorepipeError(f"the φ*/φ** regression needs at least 2 resolution pairs (3 resolutions), got {p0.size}")
+        raise PorepipeError(
+            f"the φ*/φ** regression needs at least 2 resolution pairs (3 resolutions), got {p0.size}"
+        )
     star = 0.5 * (p0 + p1)
     star2 = p1 - p0
     if np.ptp(star2) == 0:
@@ -206,7 +208,9 @@ def estimate_from_histograms(voxel_um, hists) -> xr.Dataset:
     a = np.asarray(voxel_um, dtype=np.float64)
     hists = np.asarray(hists, dtype=np.int64)
     if hists.shape != (a.size, G_MAX + 1):
-        raise PorepipeError(f"need one 217-bin histogram per resolution: {a.size} resolutions, shape {hists.shape}")
+        raise PorepipeError(
+            f"need one 217-bin histogram per resolution: {a.size} resolutions, shape {hists.shape}"
+        )
     order = np.argsort(-a)
     a, hists = a[order], hists[order]
     bounds = np.array([porosity_bounds(h) for h in hists])
@@ -224,9 +228,13 @@ def estimate_from_histograms(voxel_um, hists) -> xr.Dataset:
         attrs={"source": "Zauner (2020) sections 7.2-7.3"},
     )
     if a.size >= 2:
-        lines = np.array([two_point_line(a[i], bounds[i, 0], a[i + 1], bounds[i + 1, 0])
-                          + two_point_line(a[i], bounds[i, 1], a[i + 1], bounds[i + 1, 1])
-                          for i in range(a.size - 1)])  # (pair, [k0, phi0, k215, phi215])
+        lines = np.array(
+            [
+                two_point_line(a[i], bounds[i, 0], a[i + 1], bounds[i + 1, 0])
+                + two_point_line(a[i], bounds[i, 1], a[i + 1], bounds[i + 1, 1])
+                for i in range(a.size - 1)
+            ]
+        )  # (pair, [k0, phi0, k215, phi215])
         ds = ds.assign_coords(pair_coarse_um=("pair", a[:-1]), pair_fine_um=("pair", a[1:]))
         for col, name in enumerate(("k_0", "phi_0", "k_215", "phi_215")):
             ds[name] = ("pair", lines[:, col], {"units": "1/um" if name.startswith("k") else "1"})
@@ -245,14 +253,29 @@ def _add_limits(ds: xr.Dataset, a: np.ndarray, bounds: np.ndarray) -> xr.Dataset
     supported = bool(np.all(width > 0) and np.all(np.diff(width) < 0))
     ds["phi_star"] = ("pair", lim.phi_star)
     ds["phi_2star"] = ("pair", width)
-    ds["phi_regression"] = ((), lim.phi, {"error_method": lim.error_method, "supported": int(supported),
-                                          "why": "" if supported else "bound widths phi** do not shrink "
-                                          "monotonically to 0: the regression has no reliable lever arm"})
+    ds["phi_regression"] = (
+        (),
+        lim.phi,
+        {
+            "error_method": lim.error_method,
+            "supported": int(supported),
+            "why": ""
+            if supported
+            else "bound widths phi** do not shrink "
+            "monotonically to 0: the regression has no reliable lever arm",
+        },
+    )
     ds["phi_regression_err"] = ((), lim.phi_err)
     lower, lower_err = richardson_limit(a, bounds[:, 0])
     upper, upper_err = richardson_limit(a, bounds[:, 1])
-    ds["phi_limit"] = ((), 0.5 * (lower + upper),
-                       {"method": "midpoint of the three-point (quadratic in a) limits of phi(0,a) and phi(215,a)"})
-    ds["phi_limit_err"] = ((), max(0.5 * abs(upper - lower), lower_err, upper_err),
-                           {"method": "max(half gap of the two limits, change from linear to quadratic limit)"})
+    ds["phi_limit"] = (
+        (),
+        0.5 * (lower + upper),
+        {"method": "midpoint of the three-point (quadratic in a) limits of phi(0,a) and phi(215,a)"},
+    )
+    ds["phi_limit_err"] = (
+        (),
+        max(0.5 * abs(upper - lower), lower_err, upper_err),
+        {"method": "max(half gap of the two limits, change from linear to quadratic limit)"},
+    )
     return ds

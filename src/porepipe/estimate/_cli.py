@@ -15,7 +15,9 @@ def main(args) -> int:
 
 def register(subparsers) -> None:
     """Add ``estimate`` to the ``porepipe`` command."""
-    p = subparsers.add_parser("estimate", help="porosity and specific-surface estimators from grey histograms")
+    p = subparsers.add_parser(
+        "estimate", help="porosity and specific-surface estimators from grey histograms"
+    )
     p.add_argument("grey", nargs="+", help="grey_a{a}.h5 files, one per resolution")
     p.add_argument("-o", "--out", required=True, help="output estimate.h5")
     p.set_defaults(func=main)

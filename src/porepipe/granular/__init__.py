@@ -18,5 +18,5 @@ _EXPORTS = {
     "run": "_run",
     "time_step_rule": "_api",
 }
-__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -54,7 +54,8 @@ def _sort_rows(start, idx):
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
 def _sweep_pairs(order, x, rad, active, cut, count_only, counts, offsets, pi, pj):
     """For each position a of the sorted order, the later particles whose padded x-interval starts before a's
-    ends and whose padded circles overlap; counts[a] in the first pass, (pi, pj) at offsets[a] in the second."""
+    ends and whose padded circles overlap; counts[a] in the first pass, (pi, pj) at offsets[a] in the second.
+    """
     n = order.shape[0]
     for a in prange(n):
         i = order[a]
@@ -200,7 +201,8 @@ def _transpose(n_mob, start, nb_j):
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
 def _carry_state(old_start, old_j, old_ft, old_a, old_out, new_start, new_j, new_ft, new_a, new_out):
     """Copy every surviving pair's (spring, previous overlap, last forces) from the old list to the new one
-    (a sorted merge per particle)."""
+    (a sorted merge per particle).
+    """
     for i in prange(new_start.shape[0] - 1):
         a = old_start[i]
         ae = old_start[i + 1]

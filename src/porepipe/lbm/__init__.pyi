@@ -5,18 +5,38 @@ Kept equal to the export table by tests/unit/store/test_stubs.py.
 
 from porepipe.lbm._api import (
     DARCY_M2 as DARCY_M2,
+)
+from porepipe.lbm._api import (
     PermeabilityResult as PermeabilityResult,
+)
+from porepipe.lbm._api import (
     kappa_units as kappa_units,
+)
+from porepipe.lbm._api import (
     permeability as permeability,
 )
 from porepipe.lbm._settings import (
     Axis as Axis,
+)
+from porepipe.lbm._settings import (
     Collision as Collision,
+)
+from porepipe.lbm._settings import (
     Gradient as Gradient,
+)
+from porepipe.lbm._settings import (
     Lateral as Lateral,
+)
+from porepipe.lbm._settings import (
     Precision as Precision,
+)
+from porepipe.lbm._settings import (
     Settings as Settings,
+)
+from porepipe.lbm._settings import (
     Setup as Setup,
+)
+from porepipe.lbm._settings import (
     Velocity as Velocity,
 )
 from porepipe.lbm._solver import (
@@ -24,9 +44,9 @@ from porepipe.lbm._solver import (
 )
 
 __all__ = [
+    "DARCY_M2",
     "Axis",
     "Collision",
-    "DARCY_M2",
     "Gradient",
     "Lateral",
     "PermeabilityResult",

@@ -62,25 +62,46 @@ class PermeabilityResult:
             "kappa_m2": ((), self.kappa_m2, {"units": "m^2"}),
             "kappa_mD": ((), self.kappa_mD, {"units": "mD"}),
             "kappa_D": ((), self.kappa_D, {"units": "D"}),
-            "estimate_lu": ("estimate", np.array([self.estimates[k] for k in est_names], dtype=np.float64),
-                            {"units": "voxel^2", "long_name": "κ̂ by pressure-gradient/velocity method"}),
+            "estimate_lu": (
+                "estimate",
+                np.array([self.estimates[k] for k in est_names], dtype=np.float64),
+                {"units": "voxel^2", "long_name": "κ̂ by pressure-gradient/velocity method"},
+            ),
         }
         for name, values in self.history.items():
             data[f"history_{name}"] = ("check", np.asarray(values, dtype=np.float64))
         attrs = {k: (v.value if hasattr(v, "value") else v) for k, v in self.attrs().items()}
-        return xr.Dataset({k: xr.Variable(*v) for k, v in data.items()},
-                          coords={"estimate": np.array(est_names, dtype=str)}, attrs=attrs)
+        return xr.Dataset(
+            {k: xr.Variable(*v) for k, v in data.items()},
+            coords={"estimate": np.array(est_names, dtype=str)},
+            attrs=attrs,
+        )
 
     def attrs(self) -> dict:
         s = self.settings
         return {
-            "axis": self.axis.value, "voxel_um": self.voxel_um, "method": self.method, "converged": int(self.converged),
-            "steps": self.steps, "reason": self.reason, "mlups": self.mlups, "n_nodes": self.n_nodes,
-            "n_pruned": self.n_pruned, "n_spanning_clusters": self.n_spanning, "porosity": self.porosity,
-            "collision": s.collision.value, "tau": s.tau, "tau_bulk": s.tau_bulk, "magic": s.magic,
+            "axis": self.axis.value,
+            "voxel_um": self.voxel_um,
+            "method": self.method,
+            "converged": int(self.converged),
+            "steps": self.steps,
+            "reason": self.reason,
+            "mlups": self.mlups,
+            "n_nodes": self.n_nodes,
+            "n_pruned": self.n_pruned,
+            "n_spanning_clusters": self.n_spanning,
+            "porosity": self.porosity,
+            "collision": s.collision.value,
+            "tau": s.tau,
+            "tau_bulk": s.tau_bulk,
+            "magic": s.magic,
             "mrt_magic": s.mrt_magic if s.mrt_magic is not None else float("nan"),
-            "precision": s.precision.value, "setup": s.setup.value, "mirror": int(s.mirror),
-            "lateral": s.lateral.value, "body_force_lu": s.body_force, "velocity_kind": "superficial (Darcy)",
+            "precision": s.precision.value,
+            "setup": s.setup.value,
+            "mirror": int(s.mirror),
+            "lateral": s.lateral.value,
+            "body_force_lu": s.body_force,
+            "velocity_kind": "superficial (Darcy)",
         }
 
 
@@ -91,7 +112,9 @@ def _check_pore(pore: np.ndarray) -> np.ndarray:
     if pore.dtype != bool:
         values = np.unique(pore)
         if not np.all(np.isin(values, (0, 1))):
-            raise PorepipeError(f"pore volume must be binary (1 = pore, 0 = matrix), found values {values[:5]}")
+            raise PorepipeError(
+                f"pore volume must be binary (1 = pore, 0 = matrix), found values {values[:5]}"
+            )
         pore = pore.astype(bool)
     return pore
 
@@ -100,10 +123,17 @@ def prepare(pore_internal: np.ndarray, settings: Settings) -> Prepared:
     """Build the set-up the settings ask for (flow along axis 0 of ``pore_internal``)."""
     lateral_periodic = settings.lateral is Lateral.periodic
     if settings.setup is Setup.periodic:
-        return periodic_setup(pore_internal, mirror=settings.mirror, lateral_periodic=lateral_periodic,
-                              prune=settings.prune)
-    return chamber_setup(pore_internal, inlet_layers=settings.inlet_layers, outlet_layers=settings.outlet_layers,
-                         force_layers=settings.force_layers, lateral_periodic=lateral_periodic, prune=settings.prune)
+        return periodic_setup(
+            pore_internal, mirror=settings.mirror, lateral_periodic=lateral_periodic, prune=settings.prune
+        )
+    return chamber_setup(
+        pore_internal,
+        inlet_layers=settings.inlet_layers,
+        outlet_layers=settings.outlet_layers,
+        force_layers=settings.force_layers,
+        lateral_periodic=lateral_periodic,
+        prune=settings.prune,
+    )
 
 
 def _fields_to_sample(prep: Prepared, run: Run, axis: int, sample_shape) -> tuple[np.ndarray, np.ndarray]:
@@ -113,20 +143,27 @@ def _fields_to_sample(prep: Prepared, run: Run, axis: int, sample_shape) -> tupl
     n_s = sample_shape[0]
     internal = np.zeros((4, *lat.shape))
     internal[:, lat.pore] = run.fields
-    internal = internal[:, s0:s0 + n_s]
+    internal = internal[:, s0 : s0 + n_s]
     others = [i for i in range(3) if i != axis]
     velocity = np.zeros((3, *internal.shape[1:]))
     velocity[axis] = internal[1]
     velocity[others[0]] = internal[2]
     velocity[others[1]] = internal[3]
-    pressure = np.where(lat.pore[s0:s0 + n_s], CS2 * (1.0 + internal[0]), np.nan)
+    pressure = np.where(lat.pore[s0 : s0 + n_s], CS2 * (1.0 + internal[0]), np.nan)
     velocity = np.moveaxis(velocity, 1, axis + 1)
     return velocity, np.moveaxis(pressure, 0, axis)
 
 
-def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings | None = None,
-                 voxel_um: float = 1.0, *, checkpoint: Path | None = None, progress: bool = True,
-                 label: str | None = None) -> PermeabilityResult:
+def permeability(
+    pore: np.ndarray,
+    axis: Axis | str = Axis.z,
+    settings: Settings | None = None,
+    voxel_um: float = 1.0,
+    *,
+    checkpoint: Path | None = None,
+    progress: bool = True,
+    label: str | None = None,
+) -> PermeabilityResult:
     """Lattice-Boltzmann permeability of a binary sample along one axis.
 
     Parameters
@@ -166,30 +203,79 @@ def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings
     check_tau(settings)
     internal = np.ascontiguousarray(np.moveaxis(pore, axis.index, 0))
     prep = prepare(internal, settings)
-    base = {"axis": axis, "voxel_um": float(voxel_um), "settings": settings, "porosity": float(pore.mean()),
-                "n_pruned": prep.pruned_nodes, "n_spanning": prep.n_spanning}
+    base = {
+        "axis": axis,
+        "voxel_um": float(voxel_um),
+        "settings": settings,
+        "porosity": float(pore.mean()),
+        "n_pruned": prep.pruned_nodes,
+        "n_spanning": prep.n_spanning,
+    }
     if prep.lattice is None:
-        return PermeabilityResult(**kappa_units(0.0, voxel_um), method="percolation", estimates={}, converged=True,
-                                  steps=0, reason=prep.reason, history={}, mlups=0.0, n_nodes=0, **base)
+        return PermeabilityResult(
+            **kappa_units(0.0, voxel_um),
+            method="percolation",
+            estimates={},
+            converged=True,
+            steps=0,
+            reason=prep.reason,
+            history={},
+            mlups=0.0,
+            n_nodes=0,
+            **base,
+        )
     if prep.lattice.n_wall_links == 0:
-        return PermeabilityResult(**kappa_units(float("inf"), voxel_um), method="no_walls", estimates={},
-                                  converged=True, steps=0, history={}, mlups=0.0, n_nodes=prep.lattice.n_nodes,
-                                  reason="no solid voxel and no wall anywhere: nothing resists the flow, "
-                                         "κ is unbounded (use `lateral: walls` for a duct)", **base)
-    run = solve(prep.lattice, settings, sample_voxels=prep.sample_voxels, sample_area=prep.sample_area,
-                label=label or f"lbm {axis.value}", checkpoint=checkpoint, progress=progress)
-    reason = "converged" if run.converged else f"step limit max_steps={settings.max_steps} reached before convergence"
+        return PermeabilityResult(
+            **kappa_units(float("inf"), voxel_um),
+            method="no_walls",
+            estimates={},
+            converged=True,
+            steps=0,
+            history={},
+            mlups=0.0,
+            n_nodes=prep.lattice.n_nodes,
+            reason="no solid voxel and no wall anywhere: nothing resists the flow, "
+            "κ is unbounded (use `lateral: walls` for a duct)",
+            **base,
+        )
+    run = solve(
+        prep.lattice,
+        settings,
+        sample_voxels=prep.sample_voxels,
+        sample_area=prep.sample_area,
+        label=label or f"lbm {axis.value}",
+        checkpoint=checkpoint,
+        progress=progress,
+    )
+    reason = (
+        "converged"
+        if run.converged
+        else f"step limit max_steps={settings.max_steps} reached before convergence"
+    )
     if not run.converged and not settings.accept_unconverged:
-        raise StabilityError(f"LBM run along {axis.value} not converged after {run.steps} steps "
-                             f"(last δv={run.history['delta_v'][-1]:.3g}, δρ={run.history['delta_rho'][-1]:.3g}, "
-                             f"δκ={run.history['delta_kappa'][-1]:.3g}): raise `max_steps` (the run resumes from "
-                             "its checkpoint) or loosen the tolerances")
+        raise StabilityError(
+            f"LBM run along {axis.value} not converged after {run.steps} steps "
+            f"(last δv={run.history['delta_v'][-1]:.3g}, δρ={run.history['delta_rho'][-1]:.3g}, "
+            f"δκ={run.history['delta_kappa'][-1]:.3g}): raise `max_steps` (the run resumes from "
+            "its checkpoint) or loosen the tolerances"
+        )
     if run.converged and checkpoint is not None:
         Path(checkpoint).unlink(missing_ok=True)
     velocity = pressure = None
     if settings.write_fields or settings.write_vti:
         velocity, pressure = _fields_to_sample(prep, run, axis.index, internal.shape)
-    return PermeabilityResult(**kappa_units(run.kappa, voxel_um), method=run.kappa_key, estimates=run.estimates,
-                              converged=run.converged, steps=run.steps, reason=reason, history=run.history,
-                              mlups=run.mlups, n_nodes=prep.lattice.n_nodes, velocity=velocity, pressure=pressure,
-                              total_mass=run.total_mass, **base)
+    return PermeabilityResult(
+        **kappa_units(run.kappa, voxel_um),
+        method=run.kappa_key,
+        estimates=run.estimates,
+        converged=run.converged,
+        steps=run.steps,
+        reason=reason,
+        history=run.history,
+        mlups=run.mlups,
+        n_nodes=prep.lattice.n_nodes,
+        velocity=velocity,
+        pressure=pressure,
+        total_mass=run.total_mass,
+        **base,
+    )

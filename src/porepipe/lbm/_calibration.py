@@ -26,16 +26,18 @@ def square_duct_kappa(b: float, terms: int = SERIES_TERMS) -> float:
     return b * b / 4 * (1 / 3 - 64 / np.pi**5 * np.sum(np.tanh(k * np.pi / 2) / k**5))
 
 
-def square_duct_velocity(b: float, x1: np.ndarray, x2: np.ndarray, drive: float,
-                         terms: int = SERIES_TERMS) -> np.ndarray:
+def square_duct_velocity(
+    b: float, x1: np.ndarray, x2: np.ndarray, drive: float, terms: int = SERIES_TERMS
+) -> np.ndarray:
     """Velocity in a square duct of side B (thesis Eq. 6.1.27, Wieghardt); ``drive`` = −(∇p)_3 / η̂ (+ b/ν̂)."""
     n = np.arange(terms + 1)[:, None]
     k = 2 * n + 1
     x1 = np.asarray(x1, dtype=np.float64).ravel()[None, :]
     x2 = np.asarray(x2, dtype=np.float64).ravel()[None, :]
     # cosh(k π x1/B)/cosh(k π/2) written with exponentials that cannot overflow for |x1| <= B/2
-    ratio = (np.exp(k * np.pi * (np.abs(x1) / b - 0.5)) + np.exp(-k * np.pi * (np.abs(x1) / b + 0.5))) / \
-        (1 + np.exp(-k * np.pi))
+    ratio = (np.exp(k * np.pi * (np.abs(x1) / b - 0.5)) + np.exp(-k * np.pi * (np.abs(x1) / b + 0.5))) / (
+        1 + np.exp(-k * np.pi)
+    )
     series = np.sum((-1.0) ** n * ratio * np.cos(k * np.pi * x2 / b) / k**3, axis=0)
     return drive / 2 * (b * b / 4 - x2[0] ** 2 - 8 * b * b / np.pi**3 * series)
 
@@ -66,8 +68,9 @@ class Case:
     cross: np.ndarray  # (L1, L2) fluid cross-section
 
 
-def _extrude(cross: np.ndarray, length: int, lateral_periodic: bool, force_layers, sample_layers,
-             window=None) -> Case:
+def _extrude(
+    cross: np.ndarray, length: int, lateral_periodic: bool, force_layers, sample_layers, window=None
+) -> Case:
     pore = np.broadcast_to(cross, (length, *cross.shape)).copy()
     lat = build_lattice(pore, (True, lateral_periodic, lateral_periodic), force_layers, sample_layers, window)
     win = cross if window is None else window
@@ -117,8 +120,14 @@ def duct(cross: np.ndarray, length: int = 2) -> Case:
     return _extrude(cross, length, False, (0, length), (0, length))
 
 
-def pressure_method_case(b: int = 7, width: int = 40, inlet: int = 20, sample: int = 40, outlet: int = 20,
-                         force: tuple[int, int] = (5, 15)) -> Case:
+def pressure_method_case(
+    b: int = 7,
+    width: int = 40,
+    inlet: int = 20,
+    sample: int = 40,
+    outlet: int = 20,
+    force: tuple[int, int] = (5, 15),
+) -> Case:
     """Thesis Eq. 6.1.41: B × B channel through a solid slab between two open chambers (Table 6.3).
 
     Defaults are the thesis's 40 × 40 × 80 box, S = the channel nodes, F = layers 6 … 15 (1-based).
@@ -126,16 +135,21 @@ def pressure_method_case(b: int = 7, width: int = 40, inlet: int = 20, sample: i
     pore = np.ones((inlet + sample + outlet, width, width), dtype=bool)
     lo = (width - b) // 2
     channel = np.zeros((width, width), dtype=bool)
-    channel[lo:lo + b, lo:lo + b] = True
-    pore[inlet:inlet + sample] = channel
+    channel[lo : lo + b, lo : lo + b] = True
+    pore[inlet : inlet + sample] = channel
     lat = build_lattice(pore, (True, True, True), force, (inlet, inlet + sample), window=channel)
     return Case(lat, sample * b * b, b * b, b * b, channel)
 
 
 def run_case(case: Case, settings: Settings, progress: bool = False) -> Run:
     """Solve a calibration case to convergence (or the step limit)."""
-    return solve(case.lattice, settings, sample_voxels=case.sample_voxels, sample_area=case.sample_area,
-                 progress=progress)
+    return solve(
+        case.lattice,
+        settings,
+        sample_voxels=case.sample_voxels,
+        sample_area=case.sample_area,
+        progress=progress,
+    )
 
 
 def duct_kappa(case: Case, run: Run) -> float:

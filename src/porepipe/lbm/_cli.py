@@ -12,9 +12,27 @@ from porepipe._shared.overrides import given_options, merge_settings
 from porepipe.lbm._settings import Axis, Collision, Gradient, Lateral, Precision, Settings, Setup, Velocity
 
 #: CLI flag -> settings key for the options that override the scene
-_OVERRIDES = ("collision", "tau", "tau_bulk", "magic", "setup", "mirror", "lateral", "precision", "body_force",
-              "gradient", "velocity", "max_steps", "window_steps", "tolerance_velocity", "tolerance_density",
-              "tolerance_kappa", "write_fields", "write_vti", "accept_unconverged")
+_OVERRIDES = (
+    "collision",
+    "tau",
+    "tau_bulk",
+    "magic",
+    "setup",
+    "mirror",
+    "lateral",
+    "precision",
+    "body_force",
+    "gradient",
+    "velocity",
+    "max_steps",
+    "window_steps",
+    "tolerance_velocity",
+    "tolerance_density",
+    "tolerance_kappa",
+    "write_fields",
+    "write_vti",
+    "accept_unconverged",
+)
 
 
 def _settings(args) -> Settings:
@@ -30,11 +48,21 @@ def main(args) -> int:
     """Run the subcommand; returns the exit code."""
     from porepipe.lbm._run import run
 
-    for out, r in run(args.binary, _settings(args), args.axis, out=args.out, out_dir=args.out_dir,
-                      threads=args.threads, checkpoint=args.checkpoint, resume=args.resume):
-        print(f"axis {r.axis.value}: kappa = {r.kappa_lu:.6g} voxel^2 = "
-              f"{r.kappa_m2:.6g} m^2 = {r.kappa_mD:.6g} mD ({r.method}, {r.reason}, {r.steps} steps, "
-              f"{r.mlups:.1f} MLUPS) -> {out}")
+    for out, r in run(
+        args.binary,
+        _settings(args),
+        args.axis,
+        out=args.out,
+        out_dir=args.out_dir,
+        threads=args.threads,
+        checkpoint=args.checkpoint,
+        resume=args.resume,
+    ):
+        print(
+            f"axis {r.axis.value}: kappa = {r.kappa_lu:.6g} voxel^2 = "
+            f"{r.kappa_m2:.6g} m^2 = {r.kappa_mD:.6g} mD ({r.method}, {r.reason}, {r.steps} steps, "
+            f"{r.mlups:.1f} MLUPS) -> {out}"
+        )
     return 0
 
 
@@ -50,15 +78,25 @@ def register(subparsers) -> None:
     """Add ``permeability`` to the ``porepipe`` command."""
     p = subparsers.add_parser("permeability", help="lattice-Boltzmann permeability of a binary volume")
     p.add_argument("binary", help="binary_a{a}.h5 (volume 'pore', 1 = pore)")
-    p.add_argument("--axis", action="append", choices=[a.value for a in Axis],
-                   help="flow axis (repeatable); default: the scene's `axes`")
+    p.add_argument(
+        "--axis",
+        action="append",
+        choices=[a.value for a in Axis],
+        help="flow axis (repeatable); default: the scene's `axes`",
+    )
     p.add_argument("-o", "--out", help="output file (one axis); default perm_a{a}_{axis}.h5 beside the input")
     p.add_argument("--out-dir", help="directory for perm_a{a}_{axis}.h5 files")
     p.add_argument("--scene", help="scene YAML whose `permeability` section gives the defaults")
     p.add_argument("--threads", type=int, default=None)
-    p.add_argument("--checkpoint", help="checkpoint file (one axis; default .<out>.checkpoint.h5 beside the result)")
-    p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
-                   help="continue from a matching checkpoint (default); --no-resume starts afresh")
+    p.add_argument(
+        "--checkpoint", help="checkpoint file (one axis; default .<out>.checkpoint.h5 beside the result)"
+    )
+    p.add_argument(
+        "--resume",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="continue from a matching checkpoint (default); --no-resume starts afresh",
+    )
     p.add_argument("--collision", choices=[c.value for c in Collision])
     p.add_argument("--setup", choices=[s.value for s in Setup])
     p.add_argument("--lateral", choices=[s.value for s in Lateral])
@@ -69,8 +107,16 @@ def register(subparsers) -> None:
     p.add_argument("--write-fields", dest="write_fields", type=_bool)
     p.add_argument("--write-vti", dest="write_vti", type=_bool)
     p.add_argument("--accept-unconverged", dest="accept_unconverged", type=_bool)
-    for name, kind in (("tau", float), ("tau-bulk", float), ("magic", float), ("body-force", float),
-                       ("max-steps", int), ("window-steps", int), ("tolerance-velocity", float),
-                       ("tolerance-density", float), ("tolerance-kappa", float)):
+    for name, kind in (
+        ("tau", float),
+        ("tau-bulk", float),
+        ("magic", float),
+        ("body-force", float),
+        ("max-steps", int),
+        ("window-steps", int),
+        ("tolerance-velocity", float),
+        ("tolerance-density", float),
+        ("tolerance-kappa", float),
+    ):
         p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
     p.set_defaults(func=main)

@@ -51,8 +51,17 @@ def _slope(y: np.ndarray) -> float:
     return float(np.polyfit(x, y, 1)[0])
 
 
-def estimates(lat: Lattice, sampler: Sampler, fields: np.ndarray, *, nu: float, body_force: float,
-              sample_voxels: int, sample_area: int, trim_layers: int) -> dict[str, float]:
+def estimates(
+    lat: Lattice,
+    sampler: Sampler,
+    fields: np.ndarray,
+    *,
+    nu: float,
+    body_force: float,
+    sample_voxels: int,
+    sample_area: int,
+    trim_layers: int,
+) -> dict[str, float]:
     """Every applicable κ̂ estimate of the current fields, keyed ``"<gradient>/<velocity>"``.
 
     Parameters
@@ -83,7 +92,7 @@ def estimates(lat: Lattice, sampler: Sampler, fields: np.ndarray, *, nu: float, 
     grads = {
         Gradient.ends.value: (p_layer[s1 - 1] - p_layer[s0]) / (n_s - 1) if n_s > 1 else float("nan"),
         Gradient.fit.value: _slope(p_layer[s0:s1]),
-        Gradient.fit_trimmed.value: _slope(p_layer[s0 + w:s1 - w]),
+        Gradient.fit_trimmed.value: _slope(p_layer[s0 + w : s1 - w]),
         Gradient.outside.value: (p_layer[s1 % lat.shape[0]] - p_layer[s0 - 1]) / (n_s + 1),
     }
     for gname, g in grads.items():

@@ -81,7 +81,7 @@ class Lattice:
             if self.run_offset[r, 0] >= 0:
                 out[:, a:b] = self.run_offset[r][:, None] + np.arange(a, b)
             else:
-                out[:, a:b] = self.gather[:, a + self.run_base[r]:b + self.run_base[r]]
+                out[:, a:b] = self.gather[:, a + self.run_base[r] : b + self.run_base[r]]
         return out
 
     @property
@@ -132,7 +132,7 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
     full = _full_gather(pore, periodic)
     start, offset = _node_runs(full)
     lengths = np.diff(start)
-    irregular = offset[:lengths.size, 0] < 0
+    irregular = offset[: lengths.size, 0] < 0
     base = np.zeros(lengths.size, dtype=np.int64)
     base[irregular] = np.cumsum(lengths * irregular)[irregular] - lengths[irregular] - start[:-1][irregular]
     walls = int(_wall_links(full))
@@ -140,9 +140,19 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
     del full
     counts = np.count_nonzero(pore.reshape(pore.shape[0], -1), axis=1)
     layer_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    return Lattice(pore, tuple(bool(p) for p in periodic), gather, layer_start,
-                   (int(force_layers[0]), int(force_layers[1])), (int(sample_layers[0]), int(sample_layers[1])),
-                   start, offset, base, walls, window)
+    return Lattice(
+        pore,
+        tuple(bool(p) for p in periodic),
+        gather,
+        layer_start,
+        (int(force_layers[0]), int(force_layers[1])),
+        (int(sample_layers[0]), int(sample_layers[1])),
+        start,
+        offset,
+        base,
+        walls,
+        window,
+    )
 
 
 def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:
@@ -156,14 +166,20 @@ def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:
     index_dtype = np.uint32 if 19 * n <= _INT32_LIMIT else np.uint64
     full = np.empty((18, n), dtype=index_dtype)
     if n:
-        _gather_table(ids.reshape(pore.shape), np.array(pore.shape, dtype=np.int64),
-                      np.array([bool(p) for p in periodic]), n, full)
+        _gather_table(
+            ids.reshape(pore.shape),
+            np.array(pore.shape, dtype=np.int64),
+            np.array([bool(p) for p in periodic]),
+            n,
+            full,
+        )
     return full
 
 
 def _irregular_columns(full: np.ndarray, irregular: np.ndarray) -> np.ndarray:
     """The columns of the irregular nodes: compacted in place (no second table) when they are most of the table,
-    else copied so that the full table can be freed."""
+    else copied so that the full table can be freed.
+    """
     k = int(np.count_nonzero(irregular))
     if 2 * k > full.shape[1]:
         _compact_columns(full, irregular)
@@ -177,7 +193,7 @@ def _node_runs(full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     start = np.empty(n + 1, dtype=np.int64)
     regular = np.empty(max(n, 1), dtype=np.bool_)
     r = int(_runs(full, MIN_RUN, start, regular))
-    start, regular = start[:r + 1].copy(), regular[:r]
+    start, regular = start[: r + 1].copy(), regular[:r]
     offset = np.full((max(r, 1), 18), -1, dtype=np.int64)
     heads = start[:r][regular]
     offset[:r][regular] = full[:, heads].T.astype(np.int64) - heads[:, None]
@@ -209,24 +225,49 @@ def periodic_setup(sample: np.ndarray, *, mirror: bool, lateral_periodic: bool, 
     keep, n_span, pruned = _prune(domain, lateral_periodic, True, prune)
     area = domain.shape[1] * domain.shape[2]
     if n_span == 0:
-        return Prepared(None, domain.size, area, 0, 0,
-                        reason="no pore path connects the inlet face to the outlet face: κ = 0")
-    lat = build_lattice(keep, (True, lateral_periodic, lateral_periodic), (0, domain.shape[0]),
-                        (0, domain.shape[0]))
+        return Prepared(
+            None,
+            domain.size,
+            area,
+            0,
+            0,
+            reason="no pore path connects the inlet face to the outlet face: κ = 0",
+        )
+    lat = build_lattice(
+        keep, (True, lateral_periodic, lateral_periodic), (0, domain.shape[0]), (0, domain.shape[0])
+    )
     return Prepared(lat, domain.size, area, n_span, pruned)
 
 
-def chamber_setup(sample: np.ndarray, *, inlet_layers: int, outlet_layers: int, force_layers: int,
-                  lateral_periodic: bool, prune: bool) -> Prepared:
+def chamber_setup(
+    sample: np.ndarray,
+    *,
+    inlet_layers: int,
+    outlet_layers: int,
+    force_layers: int,
+    lateral_periodic: bool,
+    prune: bool,
+) -> Prepared:
     """Thesis §6.1.4: open inlet chamber (force zone in its first layers), sample, open outlet chamber."""
     keep, n_span, pruned = _prune(sample, lateral_periodic, False, prune)
     area = sample.shape[1] * sample.shape[2]
     if n_span == 0:
-        return Prepared(None, sample.size, area, 0, 0,
-                        reason="no pore path connects the inlet face to the outlet face: κ = 0")
+        return Prepared(
+            None,
+            sample.size,
+            area,
+            0,
+            0,
+            reason="no pore path connects the inlet face to the outlet face: κ = 0",
+        )
     cross = sample.shape[1:]
-    domain = np.concatenate([np.ones((inlet_layers, *cross), bool), keep,
-                             np.ones((outlet_layers, *cross), bool)], axis=0)
-    lat = build_lattice(domain, (True, lateral_periodic, lateral_periodic), (0, force_layers),
-                        (inlet_layers, inlet_layers + sample.shape[0]))
+    domain = np.concatenate(
+        [np.ones((inlet_layers, *cross), bool), keep, np.ones((outlet_layers, *cross), bool)], axis=0
+    )
+    lat = build_lattice(
+        domain,
+        (True, lateral_periodic, lateral_periodic),
+        (0, force_layers),
+        (inlet_layers, inlet_layers + sample.shape[0]),
+    )
     return Prepared(lat, sample.size, area, n_span, pruned)

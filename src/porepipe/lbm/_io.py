@@ -12,25 +12,48 @@ from porepipe._shared.store import ResultWriter
 from porepipe.lbm._api import PermeabilityResult
 
 
-def write_result(path, result: PermeabilityResult, *, scene: str = "", scene_hash: str = "",
-                 threads: int | None = None, origin_um=(0.0, 0.0, 0.0)) -> Path:
+def write_result(
+    path,
+    result: PermeabilityResult,
+    *,
+    scene: str = "",
+    scene_hash: str = "",
+    threads: int | None = None,
+    origin_um=(0.0, 0.0, 0.0),
+) -> Path:
     """Write one axis's result atomically (tables at the root, fields under ``/volumes`` if present)."""
     path = Path(path)
     with ResultWriter(path, stage="permeability", scene=scene, scene_hash=scene_hash, threads=threads) as w:
         w.write_table(result.to_dataset())
         w.attrs.update(result.attrs())
-        w.attrs.update(kappa_lu=result.kappa_lu, kappa_m2=result.kappa_m2, kappa_mD=result.kappa_mD,
-                       kappa_D=result.kappa_D)
+        w.attrs.update(
+            kappa_lu=result.kappa_lu,
+            kappa_m2=result.kappa_m2,
+            kappa_mD=result.kappa_mD,
+            kappa_D=result.kappa_D,
+        )
         if result.velocity is not None:
             common = {"voxel_um": result.voxel_um, "origin_um": origin_um, "periodic": (False, False, False)}
             for k, name in enumerate("xyz"):
-                w.write_volume(f"velocity_{name}", result.velocity[k], **common,
-                               attrs={"units": "lattice (voxel per step)", "meaning": "fluid velocity, 0 in solid"})
-            w.write_volume("pressure", result.pressure, **common,
-                           attrs={"units": "lattice (rho/3)", "meaning": "pressure, NaN in solid"})
+                w.write_volume(
+                    f"velocity_{name}",
+                    result.velocity[k],
+                    **common,
+                    attrs={"units": "lattice (voxel per step)", "meaning": "fluid velocity, 0 in solid"},
+                )
+            w.write_volume(
+                "pressure",
+                result.pressure,
+                **common,
+                attrs={"units": "lattice (rho/3)", "meaning": "pressure, NaN in solid"},
+            )
     if result.settings.write_vti and result.velocity is not None:
-        write_vti(path.with_suffix(".vti"), {"velocity": result.velocity, "pressure": result.pressure},
-                  spacing=result.voxel_um, origin=origin_um)
+        write_vti(
+            path.with_suffix(".vti"),
+            {"velocity": result.velocity, "pressure": result.pressure},
+            spacing=result.voxel_um,
+            origin=origin_um,
+        )
     return path
 
 
@@ -59,15 +82,27 @@ def write_vti(path, fields: dict[str, np.ndarray], *, spacing: float, origin=(0.
         # VTK order: x fastest, then y, then z; vector components interleaved per cell
         values = np.stack(list(data), axis=-1).transpose(2, 1, 0, 3) if vector else data.transpose(2, 1, 0)
         ncomp = 3 if vector else 1
-        arrays.append(f'        <DataArray type="Float64" Name="{name}" NumberOfComponents="{ncomp}" '
-                      f'format="binary">\n{_encode(values)}\n        </DataArray>')
+        arrays.append(
+            f'        <DataArray type="Float64" Name="{name}" NumberOfComponents="{ncomp}" '
+            f'format="binary">\n{_encode(values)}\n        </DataArray>'
+        )
     extent = f"0 {shape[0]} 0 {shape[1]} 0 {shape[2]}"
-    text = "\n".join([
-        '<?xml version="1.0"?>',
-        '<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
-        (f'  <ImageData WholeExtent="{extent}" Origin="{origin[0]} {origin[1]} {origin[2]}" '
-         f'Spacing="{spacing} {spacing} {spacing}">'),
-        f'    <Piece Extent="{extent}">',
-        '      <CellData>', *arrays, '      </CellData>',
-        '    </Piece>', '  </ImageData>', '</VTKFile>', ''])
+    text = "\n".join(
+        [
+            '<?xml version="1.0"?>',
+            '<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
+            (
+                f'  <ImageData WholeExtent="{extent}" Origin="{origin[0]} {origin[1]} {origin[2]}" '
+                f'Spacing="{spacing} {spacing} {spacing}">'
+            ),
+            f'    <Piece Extent="{extent}">',
+            "      <CellData>",
+            *arrays,
+            "      </CellData>",
+            "    </Piece>",
+            "  </ImageData>",
+            "</VTKFile>",
+            "",
+        ]
+    )
     return write_text_atomic(path, text)

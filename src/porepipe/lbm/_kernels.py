@@ -61,7 +61,9 @@ def _get(typingctx, arr, idx):
     sig = arr.dtype(arr, idx)
 
     def codegen(context, builder, signature, args):
-        return builder.load(_item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1]))
+        return builder.load(
+            _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
+        )
 
     return sig, codegen
 
@@ -232,7 +234,8 @@ def _ix(q, i):
 @njit(**_NUMERIC)
 def _lanes(cnt):
     """Nodes a tile's collision loop runs over: cnt rounded up to a multiple of 8 (whole vectors, no scalar
-    remainder loop; the extra lanes hold stale scratch values and are never stored)."""
+    remainder loop; the extra lanes hold stale scratch values and are never stored).
+    """
     return (cnt + 7) & -8
 
 
@@ -260,7 +263,8 @@ def _load_segment(src, gather, run_offset, run_base, r, n0, cnt, t, f):
 def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
     """Pull the populations arriving at nodes n0 … n0+cnt-1 into ``f``, run by run (a tile may span several runs,
     so its collision loop has full length however short the runs are). ``r`` is the run holding n0 or an earlier
-    one; returns the run holding the tile's last node."""
+    one; returns the run holding the tile's last node.
+    """
     for i in range(cnt):
         _set(f, i, _get(src, n0 + i))
     t = 0
@@ -298,12 +302,42 @@ def _moments(f, i):
     d = 0.0
     for q in range(19):
         d += _pop(f, q, i)
-    jx = (_pop(f, 1, i) - _pop(f, 2, i) + _pop(f, 7, i) - _pop(f, 8, i) + _pop(f, 9, i) - _pop(f, 10, i)
-          + _pop(f, 11, i) - _pop(f, 12, i) + _pop(f, 13, i) - _pop(f, 14, i))
-    jy = (_pop(f, 3, i) - _pop(f, 4, i) + _pop(f, 7, i) - _pop(f, 8, i) - _pop(f, 9, i) + _pop(f, 10, i)
-          + _pop(f, 15, i) - _pop(f, 16, i) + _pop(f, 17, i) - _pop(f, 18, i))
-    jz = (_pop(f, 5, i) - _pop(f, 6, i) + _pop(f, 11, i) - _pop(f, 12, i) - _pop(f, 13, i) + _pop(f, 14, i)
-          + _pop(f, 15, i) - _pop(f, 16, i) - _pop(f, 17, i) + _pop(f, 18, i))
+    jx = (
+        _pop(f, 1, i)
+        - _pop(f, 2, i)
+        + _pop(f, 7, i)
+        - _pop(f, 8, i)
+        + _pop(f, 9, i)
+        - _pop(f, 10, i)
+        + _pop(f, 11, i)
+        - _pop(f, 12, i)
+        + _pop(f, 13, i)
+        - _pop(f, 14, i)
+    )
+    jy = (
+        _pop(f, 3, i)
+        - _pop(f, 4, i)
+        + _pop(f, 7, i)
+        - _pop(f, 8, i)
+        - _pop(f, 9, i)
+        + _pop(f, 10, i)
+        + _pop(f, 15, i)
+        - _pop(f, 16, i)
+        + _pop(f, 17, i)
+        - _pop(f, 18, i)
+    )
+    jz = (
+        _pop(f, 5, i)
+        - _pop(f, 6, i)
+        + _pop(f, 11, i)
+        - _pop(f, 12, i)
+        - _pop(f, 13, i)
+        + _pop(f, 14, i)
+        + _pop(f, 15, i)
+        - _pop(f, 16, i)
+        - _pop(f, 17, i)
+        + _pop(f, 18, i)
+    )
     return d, jx, jy, jz
 
 
@@ -335,7 +369,8 @@ def _force_coefficient(q, force):
 @njit(inline="always", **_NUMERIC)
 def _equilibria(cj, d, jj, inv, w):
     """Zero-centred equilibria (f̃^eq_p, f̃^eq_p+1) of an opposite pair with c_p·j = cj (thesis Eq. 6.1.11):
-    w [δρ ± 3 c·j + (9/2 (c·j)² − 3/2 j²)/ρ], rounded as the population-by-population formula."""
+    w [δρ ± 3 c·j + (9/2 (c·j)² − 3/2 j²)/ρ], rounded as the population-by-population formula.
+    """
     quad = (4.5 * cj * cj - 1.5 * jj) * inv
     t = 3.0 * cj
     return w * (d + t + quad), w * (d - t + quad)
@@ -436,9 +471,18 @@ def _mrt_even(r, ax, ay, az, a7, a9, a11, a13, a15, a17, jx, jy, jz, jj, inv, s)
     p_ww, pi_ww = s[11] * (aww + dww - pww), s[12] * (dww - 2.0 * aww + 0.5 * pww)
     u1, u2, w1, w2 = p_xx - 2.0 * pi_xx, p_xx + pi_xx, p_ww - 2.0 * pi_ww, p_ww + pi_ww
     axis, diag = -11.0 * e - 4.0 * eps, 8.0 * e + eps
-    return (12.0 * eps - 30.0 * e, axis + 2.0 * u1, axis - u1 + w1, axis - u1 - w1,
-            diag + u2 + w2, diag + u2 - w2, diag - 2.0 * u2,
-            s[13] * (a7 - a9 - jx * jy * inv), s[15] * (a11 - a13 - jx * jz * inv), s[14] * (a15 - a17 - jy * jz * inv))
+    return (
+        12.0 * eps - 30.0 * e,
+        axis + 2.0 * u1,
+        axis - u1 + w1,
+        axis - u1 - w1,
+        diag + u2 + w2,
+        diag + u2 - w2,
+        diag - 2.0 * u2,
+        s[13] * (a7 - a9 - jx * jy * inv),
+        s[15] * (a11 - a13 - jx * jz * inv),
+        s[14] * (a15 - a17 - jy * jz * inv),
+    )
 
 
 @njit(inline="always", **_NUMERIC)
@@ -482,7 +526,9 @@ def _mrt_node(f, i, on, force, s):
     a17, b17 = _pair(f, i, 17)
     rho = 1.0 + (r + (ax + ay + az) + (a7 + a9 + a11 + a13 + a15 + a17))
     jx, jy, jz = bx + b7 + b9 + b11 + b13, by + b7 - b9 + b15 + b17, bz + b11 - b13 + b15 - b17
-    ev = _mrt_even(r, ax, ay, az, a7, a9, a11, a13, a15, a17, jx, jy, jz, jx * jx + jy * jy + jz * jz, 1.0 / rho, s)
+    ev = _mrt_even(
+        r, ax, ay, az, a7, a9, a11, a13, a15, a17, jx, jy, jz, jx * jx + jy * jy + jz * jz, 1.0 / rho, s
+    )
     od = _mrt_odd(bx, by, bz, b7, b9, b11, b13, b15, b17, s)
     rho_on = rho * on
     _set(f, i, r - ev[0])
@@ -516,8 +562,24 @@ def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
-def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force_hi, force, fields, store, n_steps,
-          streaming, omega, rates):
+def _step(
+    op,
+    src,
+    dst,
+    gather,
+    run_start,
+    run_offset,
+    run_base,
+    force_lo,
+    force_hi,
+    force,
+    fields,
+    store,
+    n_steps,
+    streaming,
+    omega,
+    rates,
+):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
     step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
 

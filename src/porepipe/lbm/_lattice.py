@@ -12,10 +12,24 @@ import numpy as np
 C = np.array(
     [
         (0, 0, 0),
-        (1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1),
-        (1, 1, 0), (-1, -1, 0), (1, -1, 0), (-1, 1, 0),
-        (1, 0, 1), (-1, 0, -1), (1, 0, -1), (-1, 0, 1),
-        (0, 1, 1), (0, -1, -1), (0, 1, -1), (0, -1, 1),
+        (1, 0, 0),
+        (-1, 0, 0),
+        (0, 1, 0),
+        (0, -1, 0),
+        (0, 0, 1),
+        (0, 0, -1),
+        (1, 1, 0),
+        (-1, -1, 0),
+        (1, -1, 0),
+        (-1, 1, 0),
+        (1, 0, 1),
+        (-1, 0, -1),
+        (1, 0, -1),
+        (-1, 0, 1),
+        (0, 1, 1),
+        (0, -1, -1),
+        (0, 1, -1),
+        (0, -1, 1),
     ],
     dtype=np.int64,
 )
@@ -39,13 +53,22 @@ def dhumieres_matrix() -> np.ndarray:
         np.ones(Q),
         19 * c2 - 30,
         (21 * c2 * c2 - 53 * c2 + 24) / 2,
-        cx, (5 * c2 - 9) * cx,
-        cy, (5 * c2 - 9) * cy,
-        cz, (5 * c2 - 9) * cz,
-        3 * cx * cx - c2, (3 * c2 - 5) * (3 * cx * cx - c2),
-        cy * cy - cz * cz, (3 * c2 - 5) * (cy * cy - cz * cz),
-        cx * cy, cy * cz, cx * cz,
-        (cy * cy - cz * cz) * cx, (cz * cz - cx * cx) * cy, (cx * cx - cy * cy) * cz,
+        cx,
+        (5 * c2 - 9) * cx,
+        cy,
+        (5 * c2 - 9) * cy,
+        cz,
+        (5 * c2 - 9) * cz,
+        3 * cx * cx - c2,
+        (3 * c2 - 5) * (3 * cx * cx - c2),
+        cy * cy - cz * cz,
+        (3 * c2 - 5) * (cy * cy - cz * cz),
+        cx * cy,
+        cy * cz,
+        cx * cz,
+        (cy * cy - cz * cz) * cx,
+        (cz * cz - cx * cx) * cy,
+        (cx * cx - cy * cy) * cz,
     ]
     return np.array(rows)
 
@@ -58,8 +81,9 @@ def mrt_rates(tau: float, tau_bulk: float, magic: float | None = None) -> np.nda
     """
     s_nu, s_e = 1.0 / tau, 1.0 / tau_bulk
     s_q, s_m = (1.2, 1.98) if magic is None else (1.0 / trt_minus_tau(tau, magic),) * 2
-    return np.array([0.0, s_e, 1.4, 0.0, s_q, 0.0, s_q, 0.0, s_q,
-                     s_nu, 1.4, s_nu, 1.4, s_nu, s_nu, s_nu, s_m, s_m, s_m])
+    return np.array(
+        [0.0, s_e, 1.4, 0.0, s_q, 0.0, s_q, 0.0, s_q, s_nu, 1.4, s_nu, 1.4, s_nu, s_nu, s_nu, s_m, s_m, s_m]
+    )
 
 
 def mrt_operator(tau: float, tau_bulk: float, magic: float | None = None) -> np.ndarray:

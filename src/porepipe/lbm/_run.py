@@ -29,8 +29,17 @@ def default_checkpoint(out) -> Path:
     return out.with_name(f".{out.name}.checkpoint.h5")
 
 
-def run(binary, settings: Settings, axes=None, *, out=None, out_dir=None, threads: int | None = None,
-        checkpoint=None, resume: bool = True) -> list[tuple[Path, PermeabilityResult]]:
+def run(
+    binary,
+    settings: Settings,
+    axes=None,
+    *,
+    out=None,
+    out_dir=None,
+    threads: int | None = None,
+    checkpoint=None,
+    resume: bool = True,
+) -> list[tuple[Path, PermeabilityResult]]:
     """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis.
 
     Parameters
@@ -62,7 +71,9 @@ def run(binary, settings: Settings, axes=None, *, out=None, out_dir=None, thread
     if out and len(axes) != 1:
         raise PorepipeError(f"--out names one file but {len(axes)} axes were asked for; use --out-dir")
     if checkpoint and len(axes) != 1:
-        raise PorepipeError(f"--checkpoint names one file but {len(axes)} axes were asked for; give one --axis")
+        raise PorepipeError(
+            f"--checkpoint names one file but {len(axes)} axes were asked for; give one --axis"
+        )
     threads = set_threads(threads)
     pore, meta = read_binary_volume(binary)
     scene = read_attrs(binary).get("scene", "")

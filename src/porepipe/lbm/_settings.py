@@ -69,7 +69,9 @@ class Settings(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    axes: tuple[Axis, ...] = Field((Axis.z,), min_length=1, description="flow directions; one result file each")
+    axes: tuple[Axis, ...] = Field(
+        (Axis.z,), min_length=1, description="flow directions; one result file each"
+    )
     resolutions_um: list[float] = Field(
         default_factory=list,
         description="run only at these of the scene's resolutions (empty: all); fine lattices cost most",
@@ -77,27 +79,44 @@ class Settings(BaseModel):
     collision: Collision = Field(Collision.mrt, description="bgk, trt or mrt (the thesis's safe choice)")
     tau: float = Field(0.857, gt=0.5, description="relaxation time τ̂ of the shear modes; ν̂ = (τ̂ − ½)/3")
     tau_bulk: float = Field(1.0, gt=0.5, description="MRT only: relaxation time of the energy moment")
-    magic: float = Field(3 / 16, gt=0, description="TRT magic parameter Λ = (τ⁺ − ½)(τ⁻ − ½); 3/16 = exact walls")
+    magic: float = Field(
+        3 / 16, gt=0, description="TRT magic parameter Λ = (τ⁺ − ½)(τ⁻ − ½); 3/16 = exact walls"
+    )
     mrt_magic: float | None = Field(
-        None, gt=0, description="MRT only: tie the q and m rates to τ by this Λ (None = thesis's fixed 1.2, 1.98)")
+        None,
+        gt=0,
+        description="MRT only: tie the q and m rates to τ by this Λ (None = thesis's fixed 1.2, 1.98)",
+    )
     setup: Setup = Field(Setup.periodic, description="periodic (body force everywhere) or chambers (thesis)")
     mirror: bool = Field(False, description="periodic set-up: append the sample mirrored along the flow axis")
     lateral: Lateral = Field(Lateral.periodic, description="boundary across the flow: periodic or walls")
     inlet_layers: int = Field(10, ge=2, description="chambers: inlet chamber length L_I in voxels")
     outlet_layers: int = Field(10, ge=1, description="chambers: outlet chamber length L_O in voxels")
-    force_layers: int = Field(5, ge=1, description="chambers: force zone F = first layers of the inlet chamber")
+    force_layers: int = Field(
+        5, ge=1, description="chambers: force zone F = first layers of the inlet chamber"
+    )
     body_force: float = Field(1e-6, gt=0, description="acceleration b̂ in lattice units (thesis: 1e-6)")
     gradient: Gradient = Field(Gradient.ends, description="chambers: pressure-gradient method (Table 6.3)")
-    trim_layers: int = Field(10, ge=0, description="chambers, gradient fit_trimmed: slices dropped at each end")
-    velocity: Velocity = Field(Velocity.mean, description="superficial velocity: mean over sample or flux form")
+    trim_layers: int = Field(
+        10, ge=0, description="chambers, gradient fit_trimmed: slices dropped at each end"
+    )
+    velocity: Velocity = Field(
+        Velocity.mean, description="superficial velocity: mean over sample or flux form"
+    )
     precision: Precision = Field(Precision.float64, description="population storage (arithmetic is float64)")
     prune: bool = Field(True, description="drop pore clusters that cannot carry flow before the run")
-    tolerance_velocity: float = Field(1e-4, gt=0, description="max relative change of v over a window (6.1.30)")
-    tolerance_density: float = Field(1e-9, gt=0, description="max relative change of ρ over a window (6.1.30)")
+    tolerance_velocity: float = Field(
+        1e-4, gt=0, description="max relative change of v over a window (6.1.30)"
+    )
+    tolerance_density: float = Field(
+        1e-9, gt=0, description="max relative change of ρ over a window (6.1.30)"
+    )
     tolerance_kappa: float = Field(1e-5, gt=0, description="relative change of κ over a window")
     window_steps: int = Field(500, ge=10, description="steps dt between two convergence checks")
     max_steps: int = Field(200_000, ge=10, description="step limit; an unconverged run is an error")
-    accept_unconverged: bool = Field(False, description="write a result (flagged) even if the step limit is hit")
+    accept_unconverged: bool = Field(
+        False, description="write a result (flagged) even if the step limit is hit"
+    )
     mach_max: float = Field(0.1, gt=0, le=0.3, description="stop if max |v|/c_s exceeds this")
     write_fields: bool = Field(False, description="store velocity and pressure fields in the result")
     write_vti: bool = Field(False, description="also export the fields as VTK ImageData (.vti) for ParaView")
@@ -106,6 +125,8 @@ class Settings(BaseModel):
     @model_validator(mode="after")
     def _force_inside_inlet(self):
         if self.force_layers >= self.inlet_layers:
-            raise ValueError(f"force_layers={self.force_layers} must be smaller than inlet_layers="
-                             f"{self.inlet_layers}: the force zone lies inside the inlet chamber")
+            raise ValueError(
+                f"force_layers={self.force_layers} must be smaller than inlet_layers="
+                f"{self.inlet_layers}: the force zone lies inside the inlet chamber"
+            )
         return self

@@ -33,10 +33,25 @@ NODES_PER_THREAD = 32_768
 #: checkpoint stays valid across them (a rerun with more ``max_steps`` resumes). Every other setting — including any
 #: added later — enters the checkpoint key, so the list fails safe: a forgotten entry discards, never misuses, a
 #: checkpoint.
-_RUN_CONTROL_KEYS = frozenset({
-    "axes", "resolutions_um", "gradient", "trim_layers", "velocity", "tolerance_velocity", "tolerance_density",
-    "tolerance_kappa", "window_steps", "max_steps", "accept_unconverged", "mach_max", "write_fields", "write_vti",
-    "checkpoint_every_s"})
+_RUN_CONTROL_KEYS = frozenset(
+    {
+        "axes",
+        "resolutions_um",
+        "gradient",
+        "trim_layers",
+        "velocity",
+        "tolerance_velocity",
+        "tolerance_density",
+        "tolerance_kappa",
+        "window_steps",
+        "max_steps",
+        "accept_unconverged",
+        "mach_max",
+        "write_fields",
+        "write_vti",
+        "checkpoint_every_s",
+    }
+)
 
 
 class StabilityError(PorepipeError):
@@ -65,10 +80,14 @@ class Run:
 def check_tau(settings: Settings) -> None:
     """Refuse τ̂ too close to ½ before anything runs."""
     if settings.tau - 0.5 < TAU_MIN_GAP:
-        raise StabilityError(f"tau={settings.tau} is within {TAU_MIN_GAP} of 1/2 (viscosity → 0, unstable): "
-                             f"increase `tau` to at least {0.5 + TAU_MIN_GAP}")
+        raise StabilityError(
+            f"tau={settings.tau} is within {TAU_MIN_GAP} of 1/2 (viscosity → 0, unstable): "
+            f"increase `tau` to at least {0.5 + TAU_MIN_GAP}"
+        )
     if settings.collision is Collision.mrt and settings.tau_bulk - 0.5 < TAU_MIN_GAP:
-        raise StabilityError(f"tau_bulk={settings.tau_bulk} is within {TAU_MIN_GAP} of 1/2: increase `tau_bulk`")
+        raise StabilityError(
+            f"tau_bulk={settings.tau_bulk} is within {TAU_MIN_GAP} of 1/2: increase `tau_bulk`"
+        )
 
 
 def make_stepper(settings: Settings, lat: Lattice):
@@ -89,12 +108,31 @@ def make_stepper(settings: Settings, lat: Lattice):
         scaled = mrt_rates(tau, settings.tau_bulk, settings.mrt_magic) / (m * m).sum(axis=1)
         rates = tuple(float(x) for x in scaled)
     else:
-        raise PorepipeError(f"permeability.collision = {settings.collision!r}: no stepper for it (steppers exist for "
-                            "bgk, trt and mrt)")
+        raise PorepipeError(
+            f"permeability.collision = {settings.collision!r}: no stepper for it (steppers exist for "
+            "bgk, trt and mrt)"
+        )
 
     def step(src, dst, fields, store, n):
-        K._step(op, src, dst, lat.gather, lat.run_start, lat.run_offset, lat.run_base, lo, hi, force, fields, store, n,
-                K.streams(src), omega, rates)
+        K._step(
+            op,
+            src,
+            dst,
+            lat.gather,
+            lat.run_start,
+            lat.run_offset,
+            lat.run_base,
+            lo,
+            hi,
+            force,
+            fields,
+            store,
+            n,
+            K.streams(src),
+            omega,
+            rates,
+        )
+
     return step
 
 
@@ -103,7 +141,9 @@ def _checkpoint_key(lat: Lattice, settings: Settings) -> str:
     return hash_of({"lattice": lat.key(), **physics})
 
 
-def _save_checkpoint(path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict) -> None:
+def _save_checkpoint(
+    path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict
+) -> None:
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["key"] = key
         f.attrs["step"] = step
@@ -129,12 +169,16 @@ def _guard(fields: np.ndarray, step: int, settings: Settings) -> float:
     """Raise on NaN/Inf or a Mach number above the limit; return the Mach number."""
     finite, u2 = K._finite_and_max_speed2(fields)
     if not finite:
-        raise StabilityError(f"non-finite density or velocity at step {step}: the run is unstable; increase `tau` "
-                             f"(now {settings.tau}) or reduce `body_force` (now {settings.body_force})")
+        raise StabilityError(
+            f"non-finite density or velocity at step {step}: the run is unstable; increase `tau` "
+            f"(now {settings.tau}) or reduce `body_force` (now {settings.body_force})"
+        )
     mach = math.sqrt(u2 / CS2)
     if mach > settings.mach_max:
-        raise StabilityError(f"Mach number {mach:.3g} > mach_max={settings.mach_max} at step {step}: reduce "
-                             f"`body_force` (now {settings.body_force}) or increase `tau` (now {settings.tau})")
+        raise StabilityError(
+            f"Mach number {mach:.3g} > mach_max={settings.mach_max} at step {step}: reduce "
+            f"`body_force` (now {settings.body_force}) or increase `tau` (now {settings.tau})"
+        )
     return mach
 
 
@@ -161,16 +205,39 @@ def _threads_for(n_nodes: int):
         numba.set_num_threads(before)
 
 
-def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str = "lbm",
-          checkpoint: Path | None = None, progress: bool = True) -> Run:
+def solve(
+    lat: Lattice,
+    settings: Settings,
+    *,
+    sample_voxels: int,
+    sample_area: int,
+    label: str = "lbm",
+    checkpoint: Path | None = None,
+    progress: bool = True,
+) -> Run:
     """Run the lattice to a steady state and evaluate κ̂ (see :func:`_solve`)."""
     with _threads_for(lat.n_nodes):
-        return _solve(lat, settings, sample_voxels=sample_voxels, sample_area=sample_area, label=label,
-                      checkpoint=checkpoint, progress=progress)
+        return _solve(
+            lat,
+            settings,
+            sample_voxels=sample_voxels,
+            sample_area=sample_area,
+            label=label,
+            checkpoint=checkpoint,
+            progress=progress,
+        )
 
 
-def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str,
-           checkpoint: Path | None, progress: bool) -> Run:
+def _solve(
+    lat: Lattice,
+    settings: Settings,
+    *,
+    sample_voxels: int,
+    sample_area: int,
+    label: str,
+    checkpoint: Path | None,
+    progress: bool,
+) -> Run:
     """Run the lattice to a steady state and evaluate κ̂.
 
     Converged when, over one window of ``window_steps``, the largest relative change of the flow velocity and of
@@ -188,7 +255,9 @@ def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area:
     nu = viscosity(settings.tau)
     key_name = estimate_key(lat.body_force_everywhere, settings.gradient, settings.velocity)
     ckey = _checkpoint_key(lat, settings)
-    history: dict[str, list] = {k: [] for k in ("step", "kappa", "delta_v", "delta_rho", "delta_kappa", "mach")}
+    history: dict[str, list] = {
+        k: [] for k in ("step", "kappa", "delta_v", "delta_rho", "delta_kappa", "mach")
+    }
     done = 0
     resumed = _load_checkpoint(checkpoint, ckey, src)
     if resumed is not None:
@@ -212,8 +281,16 @@ def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area:
             src, dst = dst, src
         done += n_run
         mach = _guard(fields, done, settings)
-        est = estimates(lat, sampler, fields, nu=nu, body_force=settings.body_force, sample_voxels=sample_voxels,
-                        sample_area=sample_area, trim_layers=settings.trim_layers)
+        est = estimates(
+            lat,
+            sampler,
+            fields,
+            nu=nu,
+            body_force=settings.body_force,
+            sample_voxels=sample_voxels,
+            sample_area=sample_area,
+            trim_layers=settings.trim_layers,
+        )
         kappa = est[key_name]
         dv, drho, dk = (float("inf"),) * 3
         if prev_fields is not None and n_run == window:  # Eq. 6.1.30 compares over a full window dt
@@ -228,19 +305,33 @@ def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area:
         if reporter is not None:
             reporter.update(done, f"κ̂={kappa:.6g} δv={dv:.2e} δρ={drho:.2e} δκ={dk:.2e}")
         prev_fields, prev_kappa = fields.copy(), kappa
-        if dv < settings.tolerance_velocity and drho < settings.tolerance_density and dk < settings.tolerance_kappa:
+        if (
+            dv < settings.tolerance_velocity
+            and drho < settings.tolerance_density
+            and dk < settings.tolerance_kappa
+        ):
             converged = True
             break
         if checkpoint is not None and time.perf_counter() - last_ckpt > settings.checkpoint_every_s:
             _save_checkpoint(checkpoint, ckey, done, src, fields, history)
             last_ckpt = time.perf_counter()
     if converged and not math.isfinite(est[key_name]):
-        raise StabilityError(f"κ̂ estimate {key_name} is not finite at step {done} (no pressure drop across the "
-                             f"sample?): check the set-up or raise `body_force` (now {settings.body_force})")
+        raise StabilityError(
+            f"κ̂ estimate {key_name} is not finite at step {done} (no pressure drop across the "
+            f"sample?): check the set-up or raise `body_force` (now {settings.body_force})"
+        )
     if not converged and checkpoint is not None:
         _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
     mlups = n * (done - start) / max(step_wall, 1e-12) / 1e6
     mass = float(n + np.sum(src, dtype=np.float64))
-    return Run(converged, done, {k: np.asarray(v, dtype=np.float64) for k, v in history.items()}, fields, est,
-               key_name, mlups, step_wall, mass)
-
+    return Run(
+        converged,
+        done,
+        {k: np.asarray(v, dtype=np.float64) for k, v in history.items()},
+        fields,
+        est,
+        key_name,
+        mlups,
+        step_wall,
+        mass,
+    )

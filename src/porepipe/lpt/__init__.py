@@ -19,5 +19,5 @@ _EXPORTS = {
     "percolation_bits": "_api",
     "plot_lpt": "_plot",
 }
-__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -11,8 +11,20 @@ from porepipe._shared.overrides import given_options, merge_settings
 from porepipe.lpt._settings import Connectivity, Direction, Placement, Settings
 
 #: command-line options that override the scene's ``lpt`` section (flag name = settings key)
-_OVERRIDES = ("cell_um", "cell_voxels", "placement", "mu_stride", "lambda_stride", "lambda_max_cells", "connectivity",
-              "directions", "max_bins", "surface", "surface_bins", "plots")
+_OVERRIDES = (
+    "cell_um",
+    "cell_voxels",
+    "placement",
+    "mu_stride",
+    "lambda_stride",
+    "lambda_max_cells",
+    "connectivity",
+    "directions",
+    "max_bins",
+    "surface",
+    "surface_bins",
+    "plots",
+)
 
 
 def settings_from_args(args) -> Settings:

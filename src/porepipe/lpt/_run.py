@@ -16,7 +16,9 @@ from porepipe.lpt._plot import plot_lpt
 from porepipe.lpt._settings import Settings
 
 
-def read_binary(path, subsample_um: float | None = None) -> tuple[np.ndarray, float, tuple[bool, bool, bool], str]:
+def read_binary(
+    path, subsample_um: float | None = None
+) -> tuple[np.ndarray, float, tuple[bool, bool, bool], str]:
     """Pore volume, voxel edge (µm), periodicity and a note; optionally only the corner cube of edge ``subsample_um``.
 
     Parameters
@@ -57,8 +59,15 @@ def read_binary(path, subsample_um: float | None = None) -> tuple[np.ndarray, fl
         return dset[:edge, :edge, :edge], voxel_um, (False, False, False), note
 
 
-def run(binary_path, out, settings: Settings, *, subsample_um: float | None = None, threads: int | None = None,
-        plots: bool | None = None) -> xr.Dataset:
+def run(
+    binary_path,
+    out,
+    settings: Settings,
+    *,
+    subsample_um: float | None = None,
+    threads: int | None = None,
+    plots: bool | None = None,
+) -> xr.Dataset:
     """Write ``lpt_a{a}.h5`` (the Dataset of :func:`local_porosity_analysis` at the root) and its PNG plots.
 
     Parameters
@@ -84,16 +93,26 @@ def run(binary_path, out, settings: Settings, *, subsample_um: float | None = No
     threads = set_threads(threads)
     src = read_attrs(binary_path)
     pore, voxel_um, periodic, note = read_binary(binary_path, subsample_um)
-    is_part = subsample_um is not None or "sample_um" in src  # a sub-sample leaves out the cells that do not fit
+    is_part = (
+        subsample_um is not None or "sample_um" in src
+    )  # a sub-sample leaves out the cells that do not fit
     sizes, _ = cell_sizes(settings, voxel_um, pore.shape)
     progress = Progress("lpt", total=sum(s <= min(pore.shape) for s in sizes))
-    ds = local_porosity_analysis(pore, voxel_um=voxel_um, periodic=periodic, settings=settings,
-                                 skip_too_large=is_part, progress=progress)
+    ds = local_porosity_analysis(
+        pore,
+        voxel_um=voxel_um,
+        periodic=periodic,
+        settings=settings,
+        skip_too_large=is_part,
+        progress=progress,
+    )
     ds.attrs["sample"] = note
     digest = result_hash("lpt", settings=settings, inputs=[binary_path], subsample_um=subsample_um)
     with ResultWriter(out, stage="lpt", scene=src.get("scene", ""), scene_hash=digest, threads=threads) as w:
         w.write_table(ds)
-        w.attrs.update(voxel_um=voxel_um, phi_bar=ds.attrs["phi_bar"], L_star_um=ds.attrs["L_star_um"], sample=note)
+        w.attrs.update(
+            voxel_um=voxel_um, phi_bar=ds.attrs["phi_bar"], L_star_um=ds.attrs["L_star_um"], sample=note
+        )
     if settings.plots if plots is None else plots:
         out = Path(out)
         plot_lpt(ds, out.with_name(out.name.removesuffix(".h5")))

@@ -5,20 +5,44 @@ Kept equal to the export table by tests/unit/store/test_stubs.py.
 
 from porepipe.minkowski._api import (
     configuration_histogram as configuration_histogram,
+)
+from porepipe.minkowski._api import (
     configuration_histogram_slabs as configuration_histogram_slabs,
+)
+from porepipe.minkowski._api import (
     iter_slabs as iter_slabs,
+)
+from porepipe.minkowski._api import (
     matrix_histogram as matrix_histogram,
+)
+from porepipe.minkowski._api import (
     minkowski_from_histogram as minkowski_from_histogram,
+)
+from porepipe.minkowski._api import (
     minkowski_functionals as minkowski_functionals,
+)
+from porepipe.minkowski._api import (
     minkowski_functions_of_threshold as minkowski_functions_of_threshold,
+)
+from porepipe.minkowski._api import (
     n_cells as n_cells,
+)
+from porepipe.minkowski._api import (
     specific_surface_from_histogram as specific_surface_from_histogram,
+)
+from porepipe.minkowski._api import (
     threshold_dataset as threshold_dataset,
+)
+from porepipe.minkowski._api import (
     threshold_histograms as threshold_histograms,
+)
+from porepipe.minkowski._api import (
     threshold_histograms_slabs as threshold_histograms_slabs,
 )
 from porepipe.minkowski._boolean import (
     boolean_lattice_densities as boolean_lattice_densities,
+)
+from porepipe.minkowski._boolean import (
     miles_densities as miles_densities,
 )
 from porepipe.minkowski._settings import (

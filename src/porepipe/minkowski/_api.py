@@ -41,8 +41,11 @@ def _periodic3(periodic) -> tuple[bool, bool, bool]:
 
 def voxel3(voxel_um) -> tuple[float, float, float]:
     """Voxel edge lengths (x, y, z) in µm from one number or three; raises on non-positive or non-finite values."""
-    sizes = np.broadcast_to(np.asarray(voxel_um, dtype=np.float64), (3,)) if np.ndim(voxel_um) == 0 \
+    sizes = (
+        np.broadcast_to(np.asarray(voxel_um, dtype=np.float64), (3,))
+        if np.ndim(voxel_um) == 0
         else np.asarray(voxel_um, dtype=np.float64)
+    )
     if sizes.shape != (3,) or not np.all(np.isfinite(sizes)) or np.any(sizes <= 0):
         raise PorepipeError(f"voxel_um must be one positive number or 3 (x, y, z), got {voxel_um!r}")
     return tuple(float(s) for s in sizes)
@@ -53,7 +56,8 @@ def _check_plane_shape(shape: Sequence[int], periodic: tuple[bool, bool, bool], 
         if n < 1 or (n < 2 and not wrap):
             raise PorepipeError(
                 f"{what} has shape {tuple(shape)}: axis {'xyz'[axis]} has {n} voxel(s), but a non-periodic axis "
-                f"needs at least 2 (a 2x2x2 cell must fit); mark the axis periodic or give a thicker volume")
+                f"needs at least 2 (a 2x2x2 cell must fit); mark the axis periodic or give a thicker volume"
+            )
 
 
 def _as_volume(volume, what: str = "volume") -> np.ndarray:
@@ -117,8 +121,10 @@ def _stream(slabs: Iterable, periodic, count, table_shape, kind: str):
             _check_plane_shape((2,) + plane_shape, flags, f"slab {index}")
             first = slab[:1].copy()
         elif slab.shape[1:] != plane_shape:
-            raise PorepipeError(f"slab {index} has shape {slab.shape}; every slab needs (nx, {plane_shape[0]}, "
-                                f"{plane_shape[1]}) like slab 0")
+            raise PorepipeError(
+                f"slab {index} has shape {slab.shape}; every slab needs (nx, {plane_shape[0]}, "
+                f"{plane_shape[1]}) like slab 0"
+            )
         if last is not None:
             count(np.concatenate([last, slab[:1]]), False, flags[1], flags[2], 1, out)
         count(slab, False, flags[1], flags[2], _blocks(slab.shape[0] - 1), out)
@@ -159,14 +165,16 @@ def iter_slabs(dataset, thickness: int = 64) -> Iterator[np.ndarray]:
     if thickness < 1:
         raise PorepipeError(f"slab thickness must be >= 1 plane, got {thickness}")
     for start in range(0, dataset.shape[0], thickness):
-        yield np.asarray(dataset[start:start + thickness])
+        yield np.asarray(dataset[start : start + thickness])
 
 
 # -- functionals ---------------------------------------------------------------------------------------------------
 def _check_histogram(histogram) -> np.ndarray:
     hist = np.asarray(histogram)
     if hist.shape[-1:] != (_weights.N_CODES,) or not np.issubdtype(hist.dtype, np.integer):
-        raise PorepipeError(f"a configuration histogram is an integer array (..., 256), got {hist.dtype} {hist.shape}")
+        raise PorepipeError(
+            f"a configuration histogram is an integer array (..., 256), got {hist.dtype} {hist.shape}"
+        )
     if np.any(hist < 0) or np.any(hist.sum(axis=-1) <= 0):
         raise PorepipeError("a configuration histogram needs non-negative counts and at least one cell")
     return hist.astype(np.int64, copy=False)
@@ -195,7 +203,7 @@ def specific_surface_from_histogram(histogram, voxel_um) -> np.ndarray | float:
     """
     hist = _check_histogram(histogram)
     geom = _weights.geometry(voxel3(voxel_um))
-    transitions = hist @ _weights.transition_table().T                       # (..., 13) int64, exact
+    transitions = hist @ _weights.transition_table().T  # (..., 13) int64, exact
     cells = hist.sum(axis=-1)[..., None]
     line_density = transitions / (_weights.TRANSITION_DENOMINATOR * cells * geom.line_length_um)
     result = 2.0 * line_density @ geom.line_weight
@@ -206,7 +214,7 @@ def _phase_values(hist: np.ndarray, geom: _weights.Geometry, adjacency: int) -> 
     """φ, S_V, K_V, T_V and χ of the foreground of histogram(s) ``hist`` (..., 256)."""
     cells = hist.sum(axis=-1)
     volume = hist @ _weights.volume_table()
-    section = hist @ _weights.section_euler_table(adjacency).T              # (..., 13) int64, exact
+    section = hist @ _weights.section_euler_table(adjacency).T  # (..., 13) int64, exact
     euler = hist @ _weights.euler_table(adjacency)
     window_um3 = cells * geom.cell_volume_um3
     chi_area = section * geom.plane_spacing_um / (_weights.SECTION_DENOMINATOR * window_um3[..., None])
@@ -225,8 +233,9 @@ def matrix_histogram(histogram) -> np.ndarray:
     return np.asarray(histogram)[..., ::-1]
 
 
-def minkowski_from_histogram(histogram, voxel_um, adjacency: Adjacency | str = Adjacency.pore6_matrix26,
-                             periodic=True) -> xr.Dataset:
+def minkowski_from_histogram(
+    histogram, voxel_um, adjacency: Adjacency | str = Adjacency.pore6_matrix26, periodic=True
+) -> xr.Dataset:
     """φ, S_V, K_V, T_V and χ of pore and matrix from the pore phase's configuration histogram.
 
     Parameters
@@ -252,16 +261,32 @@ def minkowski_from_histogram(histogram, voxel_um, adjacency: Adjacency | str = A
     adjacency = _adjacency(adjacency)
     geom = _weights.geometry(voxel3(voxel_um))
     flags = _periodic3(periodic)
-    per_phase = [_phase_values(h, geom, adjacency.of(p)) for p, h in zip(PHASES, (hist, matrix_histogram(hist)))]
-    data = {name: ("phase", np.array([float(v[name]) for v in per_phase]),
-                   {"units": UNITS[name], "long_name": _DESCRIPTIONS[name]}) for name in UNITS}
-    data["adjacency"] = ("phase", np.array([adjacency.of(p) for p in PHASES], dtype=np.int64),
-                         {"long_name": "voxel adjacency used for the phase's Euler numbers"})
-    data["histogram"] = (("phase", "code"), np.stack([hist, matrix_histogram(hist)]),
-                         {"long_name": "2x2x2 configuration histogram; bit dx + 2 dy + 4 dz = voxel is in the phase"})
+    per_phase = [
+        _phase_values(h, geom, adjacency.of(p)) for p, h in zip(PHASES, (hist, matrix_histogram(hist)))
+    ]
+    data = {
+        name: (
+            "phase",
+            np.array([float(v[name]) for v in per_phase]),
+            {"units": UNITS[name], "long_name": _DESCRIPTIONS[name]},
+        )
+        for name in UNITS
+    }
+    data["adjacency"] = (
+        "phase",
+        np.array([adjacency.of(p) for p in PHASES], dtype=np.int64),
+        {"long_name": "voxel adjacency used for the phase's Euler numbers"},
+    )
+    data["histogram"] = (
+        ("phase", "code"),
+        np.stack([hist, matrix_histogram(hist)]),
+        {"long_name": "2x2x2 configuration histogram; bit dx + 2 dy + 4 dz = voxel is in the phase"},
+    )
     return xr.Dataset(
-        data, coords={"phase": list(PHASES), "code": np.arange(_weights.N_CODES)},
-        attrs=_boundary_attrs(geom, flags, adjacency, int(hist.sum())))
+        data,
+        coords={"phase": list(PHASES), "code": np.arange(_weights.N_CODES)},
+        attrs=_boundary_attrs(geom, flags, adjacency, int(hist.sum())),
+    )
 
 
 def _boundary_attrs(geom: _weights.Geometry, flags, adjacency: Adjacency, cells: int) -> dict:
@@ -275,8 +300,8 @@ def _boundary_attrs(geom: _weights.Geometry, flags, adjacency: Adjacency, cells:
         "n_cells": cells,
         "window_um3": cells * geom.cell_volume_um3,
         "method": "2x2x2 configuration histogram; Crofton over 13 lattice directions with spherical-Voronoi weights "
-                  "(Ohser & Mücklich 2000; Schladitz, Ohser & Nagel 2006); Euler number of the cubical complex of "
-                  "the 6-adjacent phase and its dual for the 26-adjacent phase (Ohser, Nagel & Schladitz 2003)",
+        "(Ohser & Mücklich 2000; Schladitz, Ohser & Nagel 2006); Euler number of the cubical complex of "
+        "the 6-adjacent phase and its dual for the 26-adjacent phase (Ohser, Nagel & Schladitz 2003)",
     }
 
 
@@ -288,8 +313,9 @@ def _adjacency(adjacency) -> Adjacency:
         raise PorepipeError(f"adjacency {adjacency!r} is not one of: {allowed}") from None
 
 
-def minkowski_functionals(volume, voxel_um, periodic=True,
-                          adjacency: Adjacency | str = Adjacency.pore6_matrix26) -> xr.Dataset:
+def minkowski_functionals(
+    volume, voxel_um, periodic=True, adjacency: Adjacency | str = Adjacency.pore6_matrix26
+) -> xr.Dataset:
     """Minkowski functionals of pore (non-zero) and matrix (zero) of a binary volume.
 
     Parameters
@@ -348,7 +374,9 @@ def threshold_histograms(grey, periodic=True, n_levels: int = 256) -> np.ndarray
     vol = _as_grey(grey)
     _check_plane_shape(vol.shape, flags, "grey volume")
     diff = np.zeros((n_levels, _weights.N_CODES), dtype=np.int64)
-    _kernels._threshold_histograms(vol, flags[0], flags[1], flags[2], _blocks(vol.shape[0] - 1 + int(flags[0])), diff)
+    _kernels._threshold_histograms(
+        vol, flags[0], flags[1], flags[2], _blocks(vol.shape[0] - 1 + int(flags[0])), diff
+    )
     return _accumulate(diff, n_cells(vol.shape, flags))
 
 
@@ -360,27 +388,44 @@ def _accumulate(diff: np.ndarray, cells: int) -> np.ndarray:
 
 def threshold_histograms_slabs(slabs: Iterable, periodic=True, n_levels: int = 256):
     """:func:`threshold_histograms` of a grey volume given as consecutive x-slabs; returns (histograms, shape)."""
-    diff, shape = _stream(slabs, periodic, _kernels._threshold_histograms, (n_levels, _weights.N_CODES), "grey")
+    diff, shape = _stream(
+        slabs, periodic, _kernels._threshold_histograms, (n_levels, _weights.N_CODES), "grey"
+    )
     return _accumulate(diff, n_cells(shape, periodic)), shape
 
 
-def threshold_dataset(histograms, voxel_um, periodic=True, adjacency: Adjacency | str = Adjacency.pore6_matrix26,
-                      thresholds: Sequence[int] | None = None) -> xr.Dataset:
+def threshold_dataset(
+    histograms,
+    voxel_um,
+    periodic=True,
+    adjacency: Adjacency | str = Adjacency.pore6_matrix26,
+    thresholds: Sequence[int] | None = None,
+) -> xr.Dataset:
     """Dataset of :func:`minkowski_from_histogram` over a leading dimension ``g_th`` from (n_levels, 256) histograms."""
     hists = _check_histogram(histograms)
     chosen = np.arange(len(hists)) if thresholds is None else np.asarray(thresholds, dtype=np.int64)
     if np.any(chosen < 0) or np.any(chosen >= len(hists)):
         raise PorepipeError(f"thresholds must lie in 0..{len(hists) - 1}, got {list(chosen)}")
     frames = [minkowski_from_histogram(hists[t], voxel_um, adjacency, periodic) for t in chosen]
-    ds = xr.concat(frames, dim=xr.DataArray(chosen, dims="g_th", name="g_th"),
-                   data_vars="all", coords="minimal", compat="override", combine_attrs="override")
+    ds = xr.concat(
+        frames,
+        dim=xr.DataArray(chosen, dims="g_th", name="g_th"),
+        data_vars="all",
+        coords="minimal",
+        compat="override",
+        combine_attrs="override",
+    )
     ds["g_th"].attrs["long_name"] = "threshold: pore = grey <= g_th"
     return ds
 
 
-def minkowski_functions_of_threshold(grey, voxel_um, periodic=True,
-                                     adjacency: Adjacency | str = Adjacency.pore6_matrix26,
-                                     thresholds: Sequence[int] | None = None) -> xr.Dataset:
+def minkowski_functions_of_threshold(
+    grey,
+    voxel_um,
+    periodic=True,
+    adjacency: Adjacency | str = Adjacency.pore6_matrix26,
+    thresholds: Sequence[int] | None = None,
+) -> xr.Dataset:
     """φ, S_V, K_V, T_V, χ of the pore phase ``grey <= g_th`` for every threshold g_th (one pass over the volume).
 
     Parameters
@@ -401,5 +446,6 @@ def minkowski_functions_of_threshold(grey, voxel_um, periodic=True,
     levels = int(vol.max()) + 1 if thresholds is None else int(max(thresholds)) + 1
     if levels > 256 or (thresholds is not None and min(thresholds) < 0):
         raise PorepipeError(f"thresholds must lie in 0..255 for a uint8 grey volume, got {list(thresholds)}")
-    return threshold_dataset(threshold_histograms(vol, periodic, n_levels=levels), voxel_um, periodic, adjacency,
-                             thresholds)
+    return threshold_dataset(
+        threshold_histograms(vol, periodic, n_levels=levels), voxel_um, periodic, adjacency, thresholds
+    )

@@ -74,10 +74,14 @@ def miles_densities(intensity_um3: float, radius_um: float) -> dict[str, float]:
     """
     _check_positive(intensity_um3=intensity_um3, radius_um=radius_um)
     lam, r = intensity_um3, radius_um
-    v, s, m = 4.0 / 3.0 * np.pi * r ** 3, 4.0 * np.pi * r * r, 4.0 * np.pi * r
+    v, s, m = 4.0 / 3.0 * np.pi * r**3, 4.0 * np.pi * r * r, 4.0 * np.pi * r
     q = np.exp(-lam * v)
-    return {"phi": 1.0 - q, "S_V": q * lam * s, "K_V": q * (lam * m - np.pi ** 2 / 32.0 * (lam * s) ** 2),
-            "chi_V": q * (lam - lam * lam * m * s / (4.0 * np.pi) + np.pi / 384.0 * (lam * s) ** 3)}
+    return {
+        "phi": 1.0 - q,
+        "S_V": q * lam * s,
+        "K_V": q * (lam * m - np.pi**2 / 32.0 * (lam * s) ** 2),
+        "chi_V": q * (lam - lam * lam * m * s / (4.0 * np.pi) + np.pi / 384.0 * (lam * s) ** 3),
+    }
 
 
 # -- union of balls --------------------------------------------------------------------------------------------------
@@ -130,8 +134,11 @@ def union_of_discs_area(cx: np.ndarray, cy: np.ndarray, radius: np.ndarray) -> f
         if hidden:
             continue
         for t1, t2 in _exposed_arcs(covered):
-            area += 0.5 * (ri * ri * (t2 - t1) + ri * cx[i] * (np.sin(t2) - np.sin(t1))
-                           - ri * cy[i] * (np.cos(t2) - np.cos(t1)))
+            area += 0.5 * (
+                ri * ri * (t2 - t1)
+                + ri * cx[i] * (np.sin(t2) - np.sin(t1))
+                - ri * cy[i] * (np.cos(t2) - np.cos(t1))
+            )
     return area
 
 
@@ -158,10 +165,12 @@ def union_of_balls_volume(centres_um: np.ndarray, radius_um: float) -> float:
     lo, hi = z.min() - r, z.max() + r
 
     def area(t):
-        return union_of_discs_area(centres[:, 0], centres[:, 1], np.sqrt(np.clip(r * r - (t - z) ** 2, 0.0, None)))
+        return union_of_discs_area(
+            centres[:, 0], centres[:, 1], np.sqrt(np.clip(r * r - (t - z) ** 2, 0.0, None))
+        )
 
     breaks = sorted(set(np.concatenate([z - r, z, z + r]).tolist()) - {lo, hi})
-    value, _ = quad(area, lo, hi, points=breaks or None, epsabs=1e-12 * r ** 3, epsrel=1e-13, limit=800)
+    value, _ = quad(area, lo, hi, points=breaks or None, epsabs=1e-12 * r**3, epsrel=1e-13, limit=800)
     return value
 
 
@@ -189,7 +198,7 @@ def cell_union_volumes(radius_um: float, voxel_um: tuple[float, float, float]) -
             members = [b for b in range(8) if key >> b & 1]
             known[key] = union_of_balls_volume(_weights.VERTICES[members] * np.asarray(voxel_um), radius_um)
         volumes[mask] = known[key]
-    volumes.setflags(write=False)                      # cached: callers must not change it
+    volumes.setflags(write=False)  # cached: callers must not change it
     return volumes
 
 
@@ -214,7 +223,7 @@ def lattice_code_probabilities(intensity_um3: float, radius_um: float, voxel_um)
     probabilities = np.zeros(_weights.N_CODES)
     for code in range(_weights.N_CODES):
         empty, sub = _weights.N_CODES - 1 - code, code
-        while True:                                    # all subsets G of the covered set, (-1)^|G| Q(U ∪ G)
+        while True:  # all subsets G of the covered set, (-1)^|G| Q(U ∪ G)
             probabilities[code] += (-1) ** sub.bit_count() * uncovered[empty | sub]
             if sub == 0:
                 break
@@ -234,16 +243,22 @@ def expected_densities(probabilities: np.ndarray, voxel_um, adjacency: int) -> d
     sections = _weights.section_euler_table(adjacency) @ p
     return {
         "phi": float(p @ _weights.volume_table()) / _weights.VOLUME_DENOMINATOR,
-        "S_V": 2.0 * float(np.sum(geom.line_weight * transitions
-                                  / (_weights.TRANSITION_DENOMINATOR * geom.line_length_um))),
-        "K_V": 2.0 * np.pi * float(np.sum(geom.plane_weight * sections * geom.plane_spacing_um))
+        "S_V": 2.0
+        * float(
+            np.sum(geom.line_weight * transitions / (_weights.TRANSITION_DENOMINATOR * geom.line_length_um))
+        ),
+        "K_V": 2.0
+        * np.pi
+        * float(np.sum(geom.plane_weight * sections * geom.plane_spacing_um))
         / (_weights.SECTION_DENOMINATOR * geom.cell_volume_um3),
-        "chi_V": float(p @ _weights.euler_table(adjacency)) / (_weights.EULER_DENOMINATOR * geom.cell_volume_um3),
+        "chi_V": float(p @ _weights.euler_table(adjacency))
+        / (_weights.EULER_DENOMINATOR * geom.cell_volume_um3),
     }
 
 
-def boolean_lattice_densities(intensity_um3: float, radius_um: float, voxel_um,
-                              adjacency: Adjacency | str = Adjacency.pore6_matrix26) -> dict[str, float]:
+def boolean_lattice_densities(
+    intensity_um3: float, radius_um: float, voxel_um, adjacency: Adjacency | str = Adjacency.pore6_matrix26
+) -> dict[str, float]:
     """Exact expectation of the measured φ, S_V, K_V, χ_V of a digitised Boolean model of balls (pore = balls).
 
     Parameters

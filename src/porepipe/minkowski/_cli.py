@@ -1,5 +1,6 @@
 """``porepipe minkowski``: φ, S_V, K_V, T_V, χ of pore and matrix of a binary volume (and optionally of the grey
-volume at every threshold), written to ``minkowski_a{a}.h5``. Argparse only; the work is in ``_run``."""
+volume at every threshold), written to ``minkowski_a{a}.h5``. Argparse only; the work is in ``_run``.
+"""
 
 from __future__ import annotations
 
@@ -17,14 +18,18 @@ def main(args) -> int:
         from porepipe.scene import load_scene
 
         base = load_scene(args.scene).minkowski
-    settings = merge_settings(Settings, base, given_options(args, ("adjacency", "slab_planes")), "minkowski options")
+    settings = merge_settings(
+        Settings, base, given_options(args, ("adjacency", "slab_planes")), "minkowski options"
+    )
     grey = args.grey if (args.grey or not settings.threshold_functions) else None
     if settings.threshold_functions and not grey:
         raise PorepipeError("minkowski.threshold_functions is on: give the grey volume with --grey GREY.h5")
     table = run(args.binary, args.out, settings, grey, args.threads)
     pore = table.sel(phase="pore")
-    print(f"φ={float(pore.phi):.6f} S_V={float(pore.S_V):.6g} µm^-1 K_V={float(pore.K_V):.6g} µm^-2 "
-          f"T_V={float(pore.T_V):.6g} µm^-3 χ={float(pore.chi):.6g}")
+    print(
+        f"φ={float(pore.phi):.6f} S_V={float(pore.S_V):.6g} µm^-1 K_V={float(pore.K_V):.6g} µm^-2 "
+        f"T_V={float(pore.T_V):.6g} µm^-3 χ={float(pore.chi):.6g}"
+    )
     return 0
 
 

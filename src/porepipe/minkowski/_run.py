@@ -20,7 +20,9 @@ from porepipe.minkowski._settings import Settings
 THRESHOLD_GROUP = "threshold"
 
 
-def run(binary_path, out, settings: Settings | None = None, grey_path=None, threads: int | None = None) -> xr.Dataset:
+def run(
+    binary_path, out, settings: Settings | None = None, grey_path=None, threads: int | None = None
+) -> xr.Dataset:
     """Write ``minkowski_a{a}.h5`` from ``binary_a{a}.h5`` (volume ``pore``), reading it slab by slab.
 
     Parameters
@@ -45,24 +47,34 @@ def run(binary_path, out, settings: Settings | None = None, grey_path=None, thre
     settings = settings or Settings()
     threads = set_threads(threads)
     src = read_attrs(binary_path)
-    digest = result_hash("minkowski", settings=settings, inputs=[binary_path] + ([grey_path] if grey_path else []))
+    digest = result_hash(
+        "minkowski", settings=settings, inputs=[binary_path] + ([grey_path] if grey_path else [])
+    )
     with open_volume(binary_path, "pore") as pore:
         meta = volume_meta(pore, binary_path)
         hist, shape = configuration_histogram_slabs(iter_slabs(pore, settings.slab_planes), meta.periodic)
     table = minkowski_from_histogram(hist, meta.voxel_um, settings.adjacency, meta.periodic)
-    with ResultWriter(out, stage="minkowski", scene=src.get("scene", ""), scene_hash=digest, threads=threads) as w:
+    with ResultWriter(
+        out, stage="minkowski", scene=src.get("scene", ""), scene_hash=digest, threads=threads
+    ) as w:
         w.write_table(table)
         if grey_path:
             with open_volume(grey_path, "grey") as grey:
                 gmeta = volume_meta(grey, grey_path)
                 hists, _ = threshold_histograms_slabs(iter_slabs(grey, settings.slab_planes), gmeta.periodic)
-            all_pore = np.flatnonzero(hists[:, -1] == hists.sum(axis=1))      # thresholds at/above max(grey)
+            all_pore = np.flatnonzero(hists[:, -1] == hists.sum(axis=1))  # thresholds at/above max(grey)
             last = int(all_pore[0]) if len(all_pore) else len(hists) - 1
-            w.write_table(threshold_dataset(hists[: last + 1], gmeta.voxel_um, gmeta.periodic, settings.adjacency),
-                          group=THRESHOLD_GROUP)
+            w.write_table(
+                threshold_dataset(hists[: last + 1], gmeta.voxel_um, gmeta.periodic, settings.adjacency),
+                group=THRESHOLD_GROUP,
+            )
         pore_values = table.sel(phase="pore")
-        w.attrs.update(voxel_um=meta.voxel_um, shape=np.asarray(shape),
-                       periodic=np.asarray(meta.periodic, dtype=np.int8), adjacency=settings.adjacency.value,
-                       boundary=table.attrs["boundary"],
-                       **{f"{k}_pore": float(pore_values[k]) for k in ("phi", "S_V", "K_V", "T_V", "chi")})
+        w.attrs.update(
+            voxel_um=meta.voxel_um,
+            shape=np.asarray(shape),
+            periodic=np.asarray(meta.periodic, dtype=np.int8),
+            adjacency=settings.adjacency.value,
+            boundary=table.attrs["boundary"],
+            **{f"{k}_pore": float(pore_values[k]) for k in ("phi", "S_V", "K_V", "T_V", "chi")},
+        )
     return table

@@ -24,7 +24,10 @@ class Settings(BaseModel):
 
     adjacency: Adjacency = Field(
         Adjacency.pore6_matrix26,
-        description="complementary adjacency pair for the Euler numbers and K_V: pore6_matrix26 or pore26_matrix6")
+        description="complementary adjacency pair for the Euler numbers and K_V: pore6_matrix26 or pore26_matrix6",
+    )
     slab_planes: int = Field(64, ge=1, description="x planes of the volume read into memory at once")
     threshold_functions: bool = Field(
-        False, description="also compute φ, S_V, K_V, T_V, χ of the grey volume at every threshold g_th (one pass)")
+        False,
+        description="also compute φ, S_V, K_V, T_V, χ of the grey volume at every threshold g_th (one pass)",
+    )

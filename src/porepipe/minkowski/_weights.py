@@ -64,15 +64,30 @@ def complement(codes: np.ndarray) -> np.ndarray:
 # -- line directions and plane families (index space) ----------------------------------------------------------------
 #: the 13 lattice directions of the 2x2x2 cell: 3 axes, 6 face diagonals, 4 space diagonals
 DIRECTIONS = np.array(
-    [(1, 0, 0), (0, 1, 0), (0, 0, 1),
-     (1, 1, 0), (1, -1, 0), (1, 0, 1), (1, 0, -1), (0, 1, 1), (0, 1, -1),
-     (1, 1, 1), (1, 1, -1), (1, -1, 1), (-1, 1, 1)], dtype=np.int64)
+    [
+        (1, 0, 0),
+        (0, 1, 0),
+        (0, 0, 1),
+        (1, 1, 0),
+        (1, -1, 0),
+        (1, 0, 1),
+        (1, 0, -1),
+        (0, 1, 1),
+        (0, 1, -1),
+        (1, 1, 1),
+        (1, 1, -1),
+        (1, -1, 1),
+        (-1, 1, 1),
+    ],
+    dtype=np.int64,
+)
 
 
 def _segments(direction: np.ndarray) -> tuple[list[tuple[int, int]], int]:
     """Vertex pairs (u, v) of the cell with v - u = ±direction, and how many cells share each such segment."""
-    pairs = [(u, v) for u in range(8) for v in range(8)
-             if np.array_equal(VERTICES[v] - VERTICES[u], direction)]
+    pairs = [
+        (u, v) for u in range(8) for v in range(8) if np.array_equal(VERTICES[v] - VERTICES[u], direction)
+    ]
     share = 2 ** int(np.sum(direction == 0))
     return pairs, share
 
@@ -124,7 +139,7 @@ def _section_euler6() -> np.ndarray:
     for j, normal in enumerate(DIRECTIONS):
         polygons, share = _section_polygons(normal)
         for poly in polygons:
-            around_vertex = 4 if len(poly) == 4 else 6   # polygons meeting at a vertex of the section lattice
+            around_vertex = 4 if len(poly) == 4 else 6  # polygons meeting at a vertex of the section lattice
             for b in poly:
                 table[j] += _FG[:, b] * (SECTION_DENOMINATOR // (share * around_vertex))
             for u, v in zip(poly, poly[1:] + poly[:1]):
@@ -136,16 +151,16 @@ def _section_euler6() -> np.ndarray:
 @functools.cache
 def _euler6() -> np.ndarray:
     """(256,) int64: Euler contribution × 8 of the cell to the cubical complex K6."""
-    table = _FG.sum(axis=1).copy()                                    # vertices, shared by 8 cells
+    table = _FG.sum(axis=1).copy()  # vertices, shared by 8 cells
     for u, v in itertools.combinations(range(8), 2):
         diff = np.abs(VERTICES[u] - VERTICES[v]).sum()
-        if diff == 1:                                                  # 12 edges, shared by 4 cells
+        if diff == 1:  # 12 edges, shared by 4 cells
             table -= 2 * _FG[:, u] * _FG[:, v]
     for axis in range(3):
-        for side in (0, 1):                                            # 6 faces, shared by 2 cells
+        for side in (0, 1):  # 6 faces, shared by 2 cells
             face = [b for b in range(8) if VERTICES[b][axis] == side]
             table += 4 * _in_complex(face)
-    table -= 8 * _in_complex(list(range(8)))                           # the cube itself
+    table -= 8 * _in_complex(list(range(8)))  # the cube itself
     return table
 
 

@@ -5,13 +5,23 @@ Kept equal to the export table by tests/unit/store/test_stubs.py.
 
 from porepipe.packing._api import (
     Packing as Packing,
+)
+from porepipe.packing._api import (
     pack_spheres as pack_spheres,
+)
+from porepipe.packing._api import (
     schedule_value as schedule_value,
+)
+from porepipe.packing._api import (
     sphere_overlaps as sphere_overlaps,
 )
 from porepipe.packing._io import (
     read_packing as read_packing,
+)
+from porepipe.packing._io import (
     write_packing as write_packing,
+)
+from porepipe.packing._io import (
     write_xyzr_file as write_xyzr_file,
 )
 from porepipe.packing._neighbours import (
@@ -19,7 +29,11 @@ from porepipe.packing._neighbours import (
 )
 from porepipe.packing._settings import (
     Effect as Effect,
+)
+from porepipe.packing._settings import (
     RadiusDist as RadiusDist,
+)
+from porepipe.packing._settings import (
     Settings as Settings,
 )
 from porepipe.packing._setup import (

@@ -39,14 +39,25 @@ from porepipe._shared import rng
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe.packing import _kernels as K
-from porepipe.packing._neighbours import build_neighbours, check_box
 from porepipe.packing._io import load_checkpoint, save_checkpoint
+from porepipe.packing._neighbours import build_neighbours, check_box
 from porepipe.packing._settings import Effect, Ramp, Settings, Stage
 from porepipe.packing._setup import place_type, radius_bounds, read_sphere_file
 from porepipe.packing._types import _HISTORY_INT, EFFECT_BITS, HISTORY_KEYS, HISTORY_TIMING, Packing, State
 
-__all__ = ["EFFECT_BITS", "HISTORY_KEYS", "HISTORY_TIMING", "Packing", "State", "check_damping", "pack_spheres",
-           "pair_tables", "schedule_value", "sphere_overlaps"]
+__all__ = [
+    "EFFECT_BITS",
+    "HISTORY_KEYS",
+    "HISTORY_TIMING",
+    "Packing",
+    "State",
+    "check_damping",
+    "pack_spheres",
+    "pair_tables",
+    "schedule_value",
+    "sphere_overlaps",
+]
+
 
 def schedule_value(sched, step: int, default: float) -> float:
     """Value of a constant or a linear ramp (5.4.1) at stage step ``step``.
@@ -69,8 +80,10 @@ def check_damping(damping: np.ndarray, dt: float, where: str) -> None:
     """Refuse Xi > 2/dt: C- would turn negative and the damping would reverse the motion (§5.3)."""
     bad = np.flatnonzero(damping > 2.0 / dt * (1.0 + 1e-12))
     if bad.size:
-        raise PorepipeError(f"{where}: damping Xi = {damping[bad[0]]} of type {int(bad[0])} exceeds 2/dt = {2.0 / dt}"
-                            "; lower the damping or the time step")
+        raise PorepipeError(
+            f"{where}: damping Xi = {damping[bad[0]]} of type {int(bad[0])} exceeds 2/dt = {2.0 / dt}"
+            "; lower the damping or the time step"
+        )
 
 
 class _Tables:
@@ -111,7 +124,8 @@ class _Tables:
 
 def pair_tables(k_t: np.ndarray, sig_t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per type pair: k_ij = (k_i + k_j)/2, the harmonic coefficient sqrt(k_ij) (1 + k_ij/4), and
-    sigma* = min(sigma_max,i, sigma_max,j) (the step kernel reads these instead of recomputing them per pair)."""
+    sigma* = min(sigma_max,i, sigma_max,j) (the step kernel reads these instead of recomputing them per pair).
+    """
     k = 0.5 * (k_t[:, None] + k_t[None, :])
     return k, np.sqrt(k) * (1.0 + 0.25 * k), np.minimum(sig_t[:, None], sig_t[None, :])
 
@@ -159,19 +173,31 @@ def _append(state: State, centres: np.ndarray, radii: np.ndarray, types: np.ndar
     state.next_id += n
 
 
-def _start_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, periodic: np.ndarray, seed: int,
-                 base_dir: Path) -> None:
+def _start_stage(
+    state: State,
+    settings: Settings,
+    stage: Stage,
+    box: np.ndarray,
+    periodic: np.ndarray,
+    seed: int,
+    base_dir: Path,
+) -> None:
     """Remove and insert types at the start of a stage."""
     names = [t.name for t in settings.types]
     if stage.remove_types:
         gone = np.isin(state.types, [names.index(n) for n in stage.remove_types])
         _keep(state, ~gone)
     if stage.insert_file is not None:
-        _append(state, *read_sphere_file(stage.insert_file, settings, box, periodic, base_dir),
-                settings.initial_velocity)
+        _append(
+            state,
+            *read_sphere_file(stage.insert_file, settings, box, periodic, base_dir),
+            settings.initial_velocity,
+        )
     for name in stage.insert:
         t = names.index(name)
-        centres, radii = place_type(t, settings.types[t], settings, box, _seed_stream(seed, state.stage, t), base_dir)
+        centres, radii = place_type(
+            t, settings.types[t], settings, box, _seed_stream(seed, state.stage, t), base_dir
+        )
         _append(state, centres, radii, np.full(radii.size, t, dtype=np.int64), settings.initial_velocity)
     state.need_rebuild = True
     state.nconv_prev = 0
@@ -183,16 +209,20 @@ def _record(state: State, **row) -> None:
         state.history[key].append(row[key])
 
 
-def _guard(stats, state: State, tables: _Tables, stage: Stage, stage_idx: int, step: int, box, settings) -> None:
+def _guard(
+    stats, state: State, tables: _Tables, stage: Stage, stage_idx: int, step: int, box, settings
+) -> None:
     """Stop a run that has gone unstable, naming the step, the sphere and the likely parameter at fault."""
     nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
     where = f"packing stage {stage_idx} ({stage.name!r}) step {step}"
     if bad >= 0 or not np.isfinite(ke):
         i = int(bad if bad >= 0 else darg)
         t = tables.names[int(state.types[i])] if i >= 0 else "?"
-        raise PorepipeError(f"{where}: non-finite position or velocity of sphere {_sphere_no(state, i)} (type {t!r}); "
-                            f"the time step dt = {stage.dt} is too large for the interaction constant k[{t}] or the "
-                            "damping")
+        raise PorepipeError(
+            f"{where}: non-finite position or velocity of sphere {_sphere_no(state, i)} (type {t!r}); "
+            f"the time step dt = {stage.dt} is too large for the interaction constant k[{t}] or the "
+            "damping"
+        )
     limit = settings.max_step_fraction * float(box.min())
     if dmax > limit:
         i = int(darg)
@@ -201,7 +231,8 @@ def _guard(stats, state: State, tables: _Tables, stage: Stage, stage_idx: int, s
             f"{where}: runaway sphere {_sphere_no(state, i)} (type {t!r}, r = {state.r[i]:.4g} µm) moved {dmax:.4g} µm "
             "in one step "
             f"(limit max_step_fraction * box = {limit:.4g} µm, kinetic energy {ke:.4g}); likely cause: dt = {stage.dt} "
-            f"too large for k[{t}] = {stage.k.get(t, 1.0)} (or a too-strong stochastic force / overlap at start)")
+            f"too large for k[{t}] = {stage.k.get(t, 1.0)} (or a too-strong stochastic force / overlap at start)"
+        )
 
 
 def _sphere_no(state: State, i: int) -> int:
@@ -234,20 +265,38 @@ def _finish_stage(state: State, stage: Stage, tables: _Tables, box, periodic, co
             if not doomed.any():
                 break
             _keep(state, ~doomed)
-            sig, conv = sphere_overlaps(state.x, state.r, state.types, box, periodic, tables.sig, tables.pair_on)
+            sig, conv = sphere_overlaps(
+                state.x, state.r, state.types, box, periodic, tables.sig, tables.pair_on
+            )
     order = _id_order(state)
     state.stage_converged.append(bool(conv.all()))
     state.stage_steps.append(state.step)
-    state.snapshots.append({"name": stage.name, "centres_um": state.x[order], "radii_um": state.r[order],
-                            "types": state.types[order].astype(np.int32), "max_overlap": sig[order],
-                            "converged": conv[order]})
+    state.snapshots.append(
+        {
+            "name": stage.name,
+            "centres_um": state.x[order],
+            "radii_um": state.r[order],
+            "types": state.types[order].astype(np.int32),
+            "max_overlap": sig[order],
+            "converged": conv[order],
+        }
+    )
     state.stage += 1
     state.step = 0
     state.need_rebuild = True
 
 
-def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, periodic: np.ndarray, seed: int,
-               base_dir: Path, checkpoint, progress: bool) -> None:
+def _run_stage(
+    state: State,
+    settings: Settings,
+    stage: Stage,
+    box: np.ndarray,
+    periodic: np.ndarray,
+    seed: int,
+    base_dir: Path,
+    checkpoint,
+    progress: bool,
+) -> None:
     """Run one stage from ``state.step`` until convergence or the step limit."""
     stage_idx = state.stage
     tables = _Tables(settings, stage, base_dir)
@@ -255,7 +304,9 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
     freeze = bool(effects & {Effect.freezing, Effect.frozen_types})
     kernel = K.make_step_kernel(freeze, Effect.stochastic_forces in effects, Effect.walls in effects)
     for s in (0, stage.steps):
-        check_damping(tables.k_and_damping(stage, s)[1], stage.dt, f"packing stage {stage_idx} ({stage.name!r})")
+        check_damping(
+            tables.k_and_damping(stage, s)[1], stage.dt, f"packing stage {stage_idx} ({stage.name!r})"
+        )
     if state.step == 0:
         _start_stage(state, settings, stage, box, periodic, seed, base_dir)
         state.frozen[:] = tables.type_frozen[state.types]
@@ -264,17 +315,23 @@ def _run_stage(state: State, settings: Settings, stage: Stage, box: np.ndarray, 
     if n < settings.parallel_min_spheres:
         numba.set_num_threads(1)
     try:
-        _integrate(state, settings, stage, tables, effects, freeze, kernel, box, periodic, seed, checkpoint, progress)
+        _integrate(
+            state, settings, stage, tables, effects, freeze, kernel, box, periodic, seed, checkpoint, progress
+        )
     finally:
         numba.set_num_threads(threads)
 
 
-def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, periodic, seed, checkpoint, progress):
+def _integrate(
+    state, settings, stage, tables, effects, freeze, kernel, box, periodic, seed, checkpoint, progress
+):
     """The step loop of one stage."""
     stage_idx = state.stage
     n = state.r.size
     if n and not np.isfinite(state.x).all():
-        raise PorepipeError(f"packing stage {stage_idx} ({stage.name!r}): non-finite sphere centres at the start")
+        raise PorepipeError(
+            f"packing stage {stage_idx} ({stage.name!r}): non-finite sphere centres at the start"
+        )
     cseed = _counter_seed(seed, stage_idx)
     x_new = np.empty_like(state.x)
     f_new = np.empty_like(state.f)
@@ -282,7 +339,9 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
     conv = np.zeros(n, dtype=np.uint8)
     aux = np.zeros((n, 3))
     nbr = None
-    prog = Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s) if progress else None
+    prog = (
+        Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s) if progress else None
+    )
     converged = n == 0
     while not converged and state.step < stage.steps:
         s = state.step + 1
@@ -294,8 +353,17 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
                 state.since_build = 0
             skin = settings.skin_rel * float(state.r_build.min())
             check_box(state.r_build, box, periodic, settings.cutoff, skin)
-            *nbr, order = build_neighbours(state.x_build, state.r_build, state.types, box, periodic,
-                                           tables.pair_on, settings.cutoff, skin, reorder=True)
+            *nbr, order = build_neighbours(
+                state.x_build,
+                state.r_build,
+                state.types,
+                box,
+                periodic,
+                tables.pair_on,
+                settings.cutoff,
+                skin,
+                reorder=True,
+            )
             rebuilt = int(state.need_rebuild)
             _keep(state, order)
             state.need_rebuild = False
@@ -304,10 +372,36 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
         k_t, xi_t = tables.k_and_damping(stage, s)
         cm = 1.0 - 0.5 * stage.dt * xi_t
         cp = 1.0 + 0.5 * stage.dt * xi_t
-        kernel(state.x, x_new, state.v, state.f, f_new, state.r, state.types, state.ids, state.frozen, nbr[0], nbr[1],
-               box, periodic, *pair_tables(k_t, tables.sig), tables.sig, cm, cp, tables.fmax, settings.cutoff,
-               stage.dt, settings.mass, cseed, s,
-               state.x_build, state.r_build, sig, conv, aux)
+        kernel(
+            state.x,
+            x_new,
+            state.v,
+            state.f,
+            f_new,
+            state.r,
+            state.types,
+            state.ids,
+            state.frozen,
+            nbr[0],
+            nbr[1],
+            box,
+            periodic,
+            *pair_tables(k_t, tables.sig),
+            tables.sig,
+            cm,
+            cp,
+            tables.fmax,
+            settings.cutoff,
+            stage.dt,
+            settings.mass,
+            cseed,
+            s,
+            state.x_build,
+            state.r_build,
+            sig,
+            conv,
+            aux,
+        )
         stats = _step_stats(sig, conv, aux)
         nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
         _guard(stats, state, tables, stage, stage_idx, s, box, settings)
@@ -319,8 +413,9 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
             if stage.adaptive_radii is not None:
                 ar = stage.adaptive_radii
                 growth = (nconv - state.nconv_prev) / max(nconv, 1)
-                adapting = (ar.from_step < s < ar.to_step and s < stage.steps - ar.quiet_steps
-                            and growth < ar.trigger)
+                adapting = (
+                    ar.from_step < s < ar.to_step and s < stage.steps - ar.quiet_steps and growth < ar.trigger
+                )
                 if adapting:
                     _adapt_radii(state.r, state.types, sig, tables)
             if freeze:
@@ -334,11 +429,20 @@ def _integrate(state, settings, stage, tables, effects, freeze, kernel, box, per
                 state.need_rebuild = stale_now > 0.5 * settings.skin_rel * float(state.r_build.min())
         state.nconv_prev = int(nconv)
         state.step = s
-        _record(state, stage=stage_idx, step=s, n_spheres=n, converged=int(nconv), max_overlap=float(smax),
-                mean_overlap=float(ssum / scnt) if scnt else float("nan"), kinetic_energy=float(ke),
-                max_displacement_um=float(dmax) if not converged else 0.0,
-                effects=_effect_bits(effects, adapting, locking), rebuilt=rebuilt,
-                wall_s=time.perf_counter() - t_step)
+        _record(
+            state,
+            stage=stage_idx,
+            step=s,
+            n_spheres=n,
+            converged=int(nconv),
+            max_overlap=float(smax),
+            mean_overlap=float(ssum / scnt) if scnt else float("nan"),
+            kinetic_energy=float(ke),
+            max_displacement_um=float(dmax) if not converged else 0.0,
+            effects=_effect_bits(effects, adapting, locking),
+            rebuilt=rebuilt,
+            wall_s=time.perf_counter() - t_step,
+        )
         if prog is not None:
             prog.update(s, f"converged {nconv}/{n}, max sigma {smax:.4g}, E_kin {ke:.4g}", force=converged)
         if checkpoint is not None and settings.checkpoint_every and s % settings.checkpoint_every == 0:
@@ -370,7 +474,9 @@ def _staleness(state: State, box, periodic, cutoff) -> float:
     d = state.x - state.x_build
     per = np.asarray(periodic, bool)
     d[:, per] -= box[per] * np.floor(d[:, per] / box[per] + 0.5)
-    return float(np.max(np.sqrt((d * d).sum(1)) + cutoff * np.maximum(0.0, state.r - state.r_build), initial=0.0))
+    return float(
+        np.max(np.sqrt((d * d).sum(1)) + cutoff * np.maximum(0.0, state.r - state.r_build), initial=0.0)
+    )
 
 
 def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t, pair_on=None, cutoff=1.0):
@@ -408,9 +514,36 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     zeros = np.zeros((n, 3))
     ones = np.ones(nt)
     sig_t = np.asarray(max_overlap_t, dtype=np.float64)
-    kernel(x, np.empty_like(x), zeros.copy(), zeros.copy(), zeros.copy(), r, types, np.arange(n), frozen, start, idx,
-           box, per, *pair_tables(ones, sig_t), sig_t, ones, ones, np.zeros(nt), float(cutoff), 1.0, 1.0, 0,
-           0, x, r, sig, conv, np.empty((n, 3)))
+    kernel(
+        x,
+        np.empty_like(x),
+        zeros.copy(),
+        zeros.copy(),
+        zeros.copy(),
+        r,
+        types,
+        np.arange(n),
+        frozen,
+        start,
+        idx,
+        box,
+        per,
+        *pair_tables(ones, sig_t),
+        sig_t,
+        ones,
+        ones,
+        np.zeros(nt),
+        float(cutoff),
+        1.0,
+        1.0,
+        0,
+        0,
+        x,
+        r,
+        sig,
+        conv,
+        np.empty((n, 3)),
+    )
     return sig, conv
 
 
@@ -422,8 +555,17 @@ def _as_box(box_um, periodic) -> tuple[np.ndarray, np.ndarray]:
     return box, per
 
 
-def pack_spheres(settings: Settings, box_um, periodic=True, seed: int = 0, *, base_dir: Path | str = ".",
-                 checkpoint_path: Path | str | None = None, resume: bool = False, progress: bool = False) -> Packing:
+def pack_spheres(
+    settings: Settings,
+    box_um,
+    periodic=True,
+    seed: int = 0,
+    *,
+    base_dir: Path | str = ".",
+    checkpoint_path: Path | str | None = None,
+    resume: bool = False,
+    progress: bool = False,
+) -> Packing:
     """Run the staged DEM protocol of ``settings`` in the box and return the packing.
 
     Parameters
@@ -460,10 +602,21 @@ def pack_spheres(settings: Settings, box_um, periodic=True, seed: int = 0, *, ba
     while state.stage < len(settings.stages):
         _run_stage(state, settings, settings.stages[state.stage], box, per, seed, base_dir, saver, progress)
     last = state.snapshots[-1]
-    history = {k: np.asarray(v, dtype=np.int64 if k in _HISTORY_INT else np.float64)
-               for k, v in state.history.items()}
-    return Packing(centres_um=last["centres_um"].copy(), radii_um=last["radii_um"].copy(), types=last["types"].copy(),
-                   max_overlap=last["max_overlap"], converged=last["converged"],
-                   type_names=[t.name for t in settings.types], box_um=box, periodic=per, history=history,
-                   stage_converged=list(state.stage_converged), stage_steps=list(state.stage_steps),
-                   snapshots=state.snapshots)
+    history = {
+        k: np.asarray(v, dtype=np.int64 if k in _HISTORY_INT else np.float64)
+        for k, v in state.history.items()
+    }
+    return Packing(
+        centres_um=last["centres_um"].copy(),
+        radii_um=last["radii_um"].copy(),
+        types=last["types"].copy(),
+        max_overlap=last["max_overlap"],
+        converged=last["converged"],
+        type_names=[t.name for t in settings.types],
+        box_um=box,
+        periodic=per,
+        history=history,
+        stage_converged=list(state.stage_converged),
+        stage_steps=list(state.stage_steps),
+        snapshots=state.snapshots,
+    )

@@ -7,17 +7,27 @@ def main(args) -> int:
     """Run the subcommand; returns the exit code."""
     from porepipe.packing._run import run
 
-    packing = run(args.scene, args.out, xyzr=args.xyzr, threads=args.threads, checkpoint=args.checkpoint,
-                  resume=args.resume)
+    packing = run(
+        args.scene,
+        args.out,
+        xyzr=args.xyzr,
+        threads=args.threads,
+        checkpoint=args.checkpoint,
+        resume=args.resume,
+    )
     if not packing.all_converged:
-        print(f"porepipe pack: warning: not every sphere converged (stage steps {packing.stage_steps}); "
-              "see the history in the output file")
+        print(
+            f"porepipe pack: warning: not every sphere converged (stage steps {packing.stage_steps}); "
+            "see the history in the output file"
+        )
     return 0
 
 
 def register(subparsers) -> None:
     """Add ``pack`` to the ``porepipe`` command."""
-    p = subparsers.add_parser("pack", help="DEM packing of overlapping spheres (PackDEM protocol) -> packing.h5")
+    p = subparsers.add_parser(
+        "pack", help="DEM packing of overlapping spheres (PackDEM protocol) -> packing.h5"
+    )
     p.add_argument("scene", help="scene YAML with a `packing:` section")
     p.add_argument("-o", "--out", required=True, help="output packing.h5")
     p.add_argument("--xyzr", help="also write the spheres as an 'x y z r' text file (µm)")

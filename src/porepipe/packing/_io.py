@@ -28,8 +28,10 @@ _STATE_INTS = ("since_build", "stage", "step", "nconv_prev", "next_id")
 
 def history_dataset(packing: Packing) -> xr.Dataset:
     """The per-step history as an xarray Dataset along dimension ``row`` (one row per step of every stage)."""
-    return xr.Dataset({k: ("row", np.asarray(v)) for k, v in packing.history.items()},
-                      attrs={"effects_bits": json.dumps({e.value: b for e, b in EFFECT_BITS.items()})})
+    return xr.Dataset(
+        {k: ("row", np.asarray(v)) for k, v in packing.history.items()},
+        attrs={"effects_bits": json.dumps({e.value: b for e, b in EFFECT_BITS.items()})},
+    )
 
 
 def write_packing(writer, packing: Packing) -> None:
@@ -44,15 +46,17 @@ def write_packing(writer, packing: Packing) -> None:
         g = h5.create_group(f"stages/{i}_{snap['name']}")
         for key in _SPHERE_KEYS:
             g.create_dataset(key, data=snap[key])
-    writer.attrs.update({
-        "box_um": np.asarray(packing.box_um, dtype=np.float64),
-        "periodic": np.asarray(packing.periodic, dtype=np.int8),
-        "type_names": json.dumps(packing.type_names),
-        "converged": int(packing.all_converged),
-        "stage_converged": np.asarray(packing.stage_converged, dtype=np.int8),
-        "stage_steps": np.asarray(packing.stage_steps, dtype=np.int64),
-        "n_spheres": int(packing.radii_um.size),
-    })
+    writer.attrs.update(
+        {
+            "box_um": np.asarray(packing.box_um, dtype=np.float64),
+            "periodic": np.asarray(packing.periodic, dtype=np.int8),
+            "type_names": json.dumps(packing.type_names),
+            "converged": int(packing.all_converged),
+            "stage_converged": np.asarray(packing.stage_converged, dtype=np.int8),
+            "stage_steps": np.asarray(packing.stage_steps, dtype=np.int64),
+            "n_spheres": int(packing.radii_um.size),
+        }
+    )
     writer.write_table(history_dataset(packing), group="history")
 
 
@@ -116,6 +120,12 @@ def load_checkpoint(path) -> State:
         for i in range(len(f["snapshots"]) if "snapshots" in f else 0):
             g = f[f"snapshots/{i}"]
             snaps.append({"name": str(g.attrs["name"]), **{k: g[k][...] for k in _SPHERE_KEYS}})
-        return State(**arrays, **ints, need_rebuild=bool(f.attrs["need_rebuild"]), history=history,
-                     stage_converged=[bool(b) for b in f.attrs["stage_converged"]],
-                     stage_steps=[int(s) for s in f.attrs["stage_steps"]], snapshots=snaps)
+        return State(
+            **arrays,
+            **ints,
+            need_rebuild=bool(f.attrs["need_rebuild"]),
+            history=history,
+            stage_converged=[bool(b) for b in f.attrs["stage_converged"]],
+            stage_steps=[int(s) for s in f.attrs["stage_steps"]],
+            snapshots=snaps,
+        )

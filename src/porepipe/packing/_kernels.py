@@ -79,7 +79,7 @@ def _pair_potential(dx, dxeq, k):
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _splitmix(z):
     """SplitMix64 finaliser on a uint64 (counter-based random numbers: same value for any thread count)."""
-    z = (z + np.uint64(0x9E3779B97F4A7C15))
+    z = z + np.uint64(0x9E3779B97F4A7C15)
     z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
     z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
     return z ^ (z >> np.uint64(31))
@@ -88,7 +88,9 @@ def _splitmix(z):
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _uniform(seed, a, b, c):
     """Uniform double in [0, 1) from the counter (seed, a, b, c)."""
-    z = _splitmix(np.uint64(seed) ^ _splitmix(np.uint64(a) ^ _splitmix(np.uint64(b) ^ _splitmix(np.uint64(c)))))
+    z = _splitmix(
+        np.uint64(seed) ^ _splitmix(np.uint64(a) ^ _splitmix(np.uint64(b) ^ _splitmix(np.uint64(c))))
+    )
     return (z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
@@ -113,7 +115,8 @@ def _tie_axis(i, j, axis):
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _min_image(d, length, periodic):
     """Minimum image of a difference of two coordinates that both lie in [0, length) (|d| < length): no
-    division, no floor. The engine keeps periodic coordinates in [0, L); callers wrap external input first."""
+    division, no floor. The engine keeps periodic coordinates in [0, L); callers wrap external input first.
+    """
     if periodic:
         if d > 0.5 * length:
             return d - length
@@ -184,8 +187,26 @@ def _axis_range(xa, reach, side, n, periodic):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic,
-               pair_on, cut, skin, out, write):
+def _scan_half(
+    i,
+    x,
+    r,
+    types,
+    cls,
+    ncls,
+    side,
+    ncell,
+    cell_off,
+    cell_start,
+    cell_items,
+    box,
+    periodic,
+    pair_on,
+    cut,
+    skin,
+    out,
+    write,
+):
     """Partners j of sphere i in the half list: classes <= cls[i], and j > i inside the own class.
 
     A sphere looks *down* the hierarchy: a large sphere scans the fine grids of the smaller classes over its own
@@ -228,26 +249,96 @@ def _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cel
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _half_counts(x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic, pair_on,
-                 cut, skin, counts):
+def _half_counts(
+    x,
+    r,
+    types,
+    cls,
+    ncls,
+    side,
+    ncell,
+    cell_off,
+    cell_start,
+    cell_items,
+    box,
+    periodic,
+    pair_on,
+    cut,
+    skin,
+    counts,
+):
     dummy = np.empty(0, dtype=np.int64)
     for i in prange(x.shape[0]):
-        counts[i] = _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box,
-                               periodic, pair_on, cut, skin, dummy, False)
+        counts[i] = _scan_half(
+            i,
+            x,
+            r,
+            types,
+            cls,
+            ncls,
+            side,
+            ncell,
+            cell_off,
+            cell_start,
+            cell_items,
+            box,
+            periodic,
+            pair_on,
+            cut,
+            skin,
+            dummy,
+            False,
+        )
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _half_fill(x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic, pair_on,
-               cut, skin, half_start, half_idx):
+def _half_fill(
+    x,
+    r,
+    types,
+    cls,
+    ncls,
+    side,
+    ncell,
+    cell_off,
+    cell_start,
+    cell_items,
+    box,
+    periodic,
+    pair_on,
+    cut,
+    skin,
+    half_start,
+    half_idx,
+):
     for i in prange(x.shape[0]):
-        _scan_half(i, x, r, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box, periodic,
-                   pair_on, cut, skin, half_idx[half_start[i]:half_start[i + 1]], True)
+        _scan_half(
+            i,
+            x,
+            r,
+            types,
+            cls,
+            ncls,
+            side,
+            ncell,
+            cell_off,
+            cell_start,
+            cell_items,
+            box,
+            periodic,
+            pair_on,
+            cut,
+            skin,
+            half_idx[half_start[i] : half_start[i + 1]],
+            True,
+        )
 
 
 @njit(cache=True, fastmath=FASTMATH)
 def _full_from_half(half_start, half_idx, nbr_start, nbr_idx):
     """Full (symmetric) CSR list from the half list: own half entries first, then the transposed ones (serial,
-    so the order, and with it every force sum, is the same for any thread count)."""
+    so the order, and with it every force sum, is the same for any thread count).
+    """
     n = half_start.size - 1
     deg = np.zeros(n, dtype=np.int64)
     for i in range(n):
@@ -293,7 +384,8 @@ _REDUCE_CHUNKS = 64
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
 def _step_reductions(sig, conv, aux):
     """One pass over the per-sphere results of a step: (converged count, kinetic energy, max sigma, sum and count of
-    finite sigma, largest step displacement and its sphere, list staleness, first non-finite sphere or -1)."""
+    finite sigma, largest step displacement and its sphere, list staleness, first non-finite sphere or -1).
+    """
     n = sig.size
     part = np.zeros((_REDUCE_CHUNKS, 9))
     for c in prange(_REDUCE_CHUNKS):
@@ -318,7 +410,9 @@ def _step_reductions(sig, conv, aux):
                 dmax = aux[i, 1]
                 darg = i
             stale = max(stale, aux[i, 2])
-            if bad < 0 and not (math.isfinite(aux[i, 0]) and math.isfinite(aux[i, 1]) and math.isfinite(aux[i, 2])):
+            if bad < 0 and not (
+                math.isfinite(aux[i, 0]) and math.isfinite(aux[i, 1]) and math.isfinite(aux[i, 2])
+            ):
                 bad = i
         part[c, 0] = nconv
         part[c, 1] = ke
@@ -379,8 +473,38 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
     FREEZE, STOCH, WALLS = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
-    def _step(x_old, x_new, v, f_prev, f_new, r, types, ids, frozen, nbr_start, nbr_idx, box, periodic, kpair, hcoef,
-              sigp, sig_t, cm_t, cp_t, fmax_t, cut, dt, mass, seed, step, x_build, r_build, sig_max, conv, aux):
+    def _step(
+        x_old,
+        x_new,
+        v,
+        f_prev,
+        f_new,
+        r,
+        types,
+        ids,
+        frozen,
+        nbr_start,
+        nbr_idx,
+        box,
+        periodic,
+        kpair,
+        hcoef,
+        sigp,
+        sig_t,
+        cm_t,
+        cp_t,
+        fmax_t,
+        cut,
+        dt,
+        mass,
+        seed,
+        step,
+        x_build,
+        r_build,
+        sig_max,
+        conv,
+        aux,
+    ):
         n = x_old.shape[0]
         half_dt2_m = 0.5 * dt * dt / mass
         for i in prange(n):

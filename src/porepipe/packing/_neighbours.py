@@ -23,7 +23,9 @@ _MAX_CELLS_PER_SPHERE = 8
 _CELL_PER_REACH = 1.0
 
 
-def check_box(radii_um: np.ndarray, box_um: np.ndarray, periodic: np.ndarray, cutoff: float, skin_um: float) -> None:
+def check_box(
+    radii_um: np.ndarray, box_um: np.ndarray, periodic: np.ndarray, cutoff: float, skin_um: float
+) -> None:
     """Raise if the box is too small for the largest spheres (the minimum-image convention would break)."""
     if radii_um.size == 0:
         return
@@ -34,27 +36,31 @@ def check_box(radii_um: np.ndarray, box_um: np.ndarray, periodic: np.ndarray, cu
         if box_um[axis] < 2.0 * rmax:
             raise PorepipeError(
                 f"box edge {axis} ({'xyz'[axis]}) = {box_um[axis]} µm is smaller than 2 R_max = {2 * rmax} µm: a "
-                "sphere would overlap its own periodic image; enlarge domain.size_um or reduce the radii")
+                "sphere would overlap its own periodic image; enlarge domain.size_um or reduce the radii"
+            )
         if periodic[axis] and box_um[axis] <= 2.0 * reach:
             raise PorepipeError(
                 f"box edge {axis} ({'xyz'[axis]}) = {box_um[axis]} µm is too small for the interaction reach "
                 f"cutoff * (r_1 + r_2) + skin = {reach:.6g} µm of the two largest spheres (needs more than twice "
-                "that with periodic faces); enlarge domain.size_um, lower packing.cutoff or the largest radii")
+                "that with periodic faces); enlarge domain.size_um, lower packing.cutoff or the largest radii"
+            )
 
 
 def _check_in_box(x_um, box_um, periodic) -> None:
     """Refuse periodic coordinates outside [0, L): the kernels' minimum image assumes |x_i - x_j| < L."""
     lo, hi = x_um.min(axis=0), x_um.max(axis=0)
     for axis in np.flatnonzero(np.asarray(periodic, dtype=bool) & ((lo < 0) | (hi >= box_um))):
-        raise PorepipeError(f"sphere centres along periodic axis {'xyz'[axis]} span [{lo[axis]:.6g}, {hi[axis]:.6g}] "
-                            f"µm, outside [0, {box_um[axis]:.6g}) µm; wrap them into the box first (np.mod)")
+        raise PorepipeError(
+            f"sphere centres along periodic axis {'xyz'[axis]} span [{lo[axis]:.6g}, {hi[axis]:.6g}] "
+            f"µm, outside [0, {box_um[axis]:.6g}) µm; wrap them into the box first (np.mod)"
+        )
 
 
 def _class_grids(x, r, box, cutoff, skin):
     cls = np.floor(np.log2(r / r.min())).astype(np.int64)
     np.maximum(cls, 0, out=cls)
     ncls = int(cls.max()) + 1
-    side = np.zeros((ncls, 4))          # cell edge x, y, z; column 3 = R_max of the class (0: empty class)
+    side = np.zeros((ncls, 4))  # cell edge x, y, z; column 3 = R_max of the class (0: empty class)
     ncell = np.ones((ncls, 3), dtype=np.int64)
     members = np.bincount(cls, minlength=ncls)
     rmax_c = np.zeros(ncls)
@@ -106,8 +112,23 @@ def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_
         x_um, r_um, types, cls = x_um[order], r_um[order], types[order], cls[order]
         cell_items = np.arange(n, dtype=np.int64)
     per = np.asarray(periodic, dtype=np.bool_)
-    args = (x_um, r_um, types, cls, ncls, side, ncell, cell_off, cell_start, cell_items, box_um, per, pair_on,
-            float(cutoff), float(skin_um))
+    args = (
+        x_um,
+        r_um,
+        types,
+        cls,
+        ncls,
+        side,
+        ncell,
+        cell_off,
+        cell_start,
+        cell_items,
+        box_um,
+        per,
+        pair_on,
+        float(cutoff),
+        float(skin_um),
+    )
     counts = np.empty(n, dtype=np.int64)
     K._half_counts(*args, counts)
     half_start = np.zeros(n + 1, dtype=np.int64)

@@ -13,8 +13,16 @@ from porepipe.packing._types import Packing
 from porepipe.scene import load_scene, scene_part
 
 
-def run(scene_path, out, *, xyzr=None, threads: int | None = None, checkpoint=None, resume: bool = False,
-        progress: bool = True) -> Packing:
+def run(
+    scene_path,
+    out,
+    *,
+    xyzr=None,
+    threads: int | None = None,
+    checkpoint=None,
+    resume: bool = False,
+    progress: bool = True,
+) -> Packing:
     """Pack the spheres of the scene at ``scene_path`` and write the result file ``out``.
 
     Parameters
@@ -45,9 +53,16 @@ def run(scene_path, out, *, xyzr=None, threads: int | None = None, checkpoint=No
     threads = set_threads(threads)
     digest = result_hash("pack", scene_part=scene_part(scene, "seed", "domain", "packing"))
     with ResultWriter(out, stage="pack", scene=scene.name, scene_hash=digest, threads=threads) as w:
-        packing = pack_spheres(settings, scene.domain.size_um, scene.domain.periodic, scene.seed,
-                               base_dir=Path(scene_path).parent, checkpoint_path=checkpoint, resume=resume,
-                               progress=progress)
+        packing = pack_spheres(
+            settings,
+            scene.domain.size_um,
+            scene.domain.periodic,
+            scene.seed,
+            base_dir=Path(scene_path).parent,
+            checkpoint_path=checkpoint,
+            resume=resume,
+            progress=progress,
+        )
         write_packing(w, packing)
     if xyzr:
         write_xyzr_file(xyzr, packing)

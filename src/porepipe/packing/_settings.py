@@ -24,35 +24,43 @@ class _Strict(BaseModel):
 class RadiusDist(str, enum.Enum):
     """Initial radius distributions of §5.1."""
 
-    discrete = "discrete"        # radii r_j with probabilities P'(r_j) (inline or a `radii_prob` file)
-    uniform = "uniform"          # P(r) = 1/(r_max - r_min) on [r_min, r_max]
+    discrete = "discrete"  # radii r_j with probabilities P'(r_j) (inline or a `radii_prob` file)
+    uniform = "uniform"  # P(r) = 1/(r_max - r_min) on [r_min, r_max]
     exponential = "exponential"  # P(r) ∝ alpha exp(-alpha r) on [r_min, r_max]
 
 
 class Effect(str, enum.Enum):
     """Optional protocols of §5.4; each is compiled in only when a stage switches it on."""
 
-    ramps = "ramps"                        # time-dependent k and Xi (5.4.1, 5.4.2)
+    ramps = "ramps"  # time-dependent k and Xi (5.4.1, 5.4.2)
     stochastic_forces = "stochastic_forces"  # random forces on isolated, unconverged spheres (§5.4.2)
-    adaptive_radii = "adaptive_radii"      # radius protocol (§5.4.3)
-    freezing = "freezing"                  # freeze converged spheres after lock_step (§5.4.4)
-    frozen_types = "frozen_types"          # whole types held fixed (PackDEM `freezetype`)
+    adaptive_radii = "adaptive_radii"  # radius protocol (§5.4.3)
+    freezing = "freezing"  # freeze converged spheres after lock_step (§5.4.4)
+    frozen_types = "frozen_types"  # whole types held fixed (PackDEM `freezetype`)
     interactions_off = "interactions_off"  # type pairs that do not see each other (PackDEM `gww`)
-    deletion = "deletion"                  # remove types / unconverged spheres (PackDEM `delete`)
-    walls = "walls"                        # closed (reflecting) box faces instead of periodic ones
+    deletion = "deletion"  # remove types / unconverged spheres (PackDEM `delete`)
+    walls = "walls"  # closed (reflecting) box faces instead of periodic ones
 
 
 class RadiusSpec(_Strict):
     """Initial radius distribution of one type; ``min_um``/``max_um`` also bound the adaptive-radius protocol."""
 
     dist: RadiusDist = Field(RadiusDist.uniform, description="distribution family")
-    min_um: PosFloat | None = Field(None, description="r_min in µm (uniform, exponential; default: min of values)")
-    max_um: PosFloat | None = Field(None, description="r_max in µm (uniform, exponential; default: max of values)")
-    alpha_per_um: NonNegFloat = Field(0.0, description="alpha of exp(-alpha r) in 1/µm; 0 gives uniform radii")
+    min_um: PosFloat | None = Field(
+        None, description="r_min in µm (uniform, exponential; default: min of values)"
+    )
+    max_um: PosFloat | None = Field(
+        None, description="r_max in µm (uniform, exponential; default: max of values)"
+    )
+    alpha_per_um: NonNegFloat = Field(
+        0.0, description="alpha of exp(-alpha r) in 1/µm; 0 gives uniform radii"
+    )
     values_um: list[PosFloat] | None = Field(None, description="discrete radii r_j in µm")
     probabilities: list[NonNegFloat] | None = Field(None, description="P'(r_j), summing to 1")
     file: Path | None = Field(None, description="`radii_prob` file: one 'radius probability' pair per line")
-    initial_um: PosFloat | None = Field(None, description="start every sphere at this radius (e.g. fines at r_max)")
+    initial_um: PosFloat | None = Field(
+        None, description="start every sphere at this radius (e.g. fines at r_max)"
+    )
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -79,7 +87,8 @@ class SphereType(_Strict):
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_-]*$", description="type name used by the stages")
     count: int | None = Field(None, ge=0, description="number of spheres N_t")
     number_density_per_um3: NonNegFloat | None = Field(
-        None, description="rho_t in spheres per µm³ of the type's region (alternative to count)")
+        None, description="rho_t in spheres per µm³ of the type's region (alternative to count)"
+    )
     radius_um: RadiusSpec = Field(description="initial radius distribution")
     max_overlap: float = Field(0.3, gt=0, le=1, description="sigma_max of the type (§5.1)")
 
@@ -135,25 +144,31 @@ class AdaptiveRadii(_Strict):
 
     types: list[str] = Field(description="types whose radii adapt (PackDEM `radiitype`)")
     trigger: float = Field(0.1, description="t_rc: active while (N_c^s - N_c^{s-1}) / N_c^s < t_rc")
-    rate: PosFloat = Field(0.02, description="delta r: change per step in units of (r_max - r_min) of the type")
+    rate: PosFloat = Field(
+        0.02, description="delta r: change per step in units of (r_max - r_min) of the type"
+    )
     from_step: int = Field(0, ge=0, description="s^0_rchg (exclusive)")
     to_step: int = Field(10**9, ge=0, description="s^1_rchg (exclusive)")
-    quiet_steps: int = Field(10, ge=0, description="s_nrc: no radius change in the last s_nrc steps of the stage")
+    quiet_steps: int = Field(
+        10, ge=0, description="s_nrc: no radius change in the last s_nrc steps of the stage"
+    )
 
 
 class StochasticForces(_Strict):
     """§5.4.2 random forces on spheres that feel no pair force and are not converged."""
 
-    step_size: PosFloat = Field(0.1, description="largest random displacement per step and axis, in own radii")
+    step_size: PosFloat = Field(
+        0.1, description="largest random displacement per step and axis, in own radii"
+    )
     types: list[str] | None = Field(None, description="affected types (default: all)")
 
 
 class SphereFormat(str, enum.Enum):
     """File formats of PackDEM's ``input_file`` (§9.2.3)."""
 
-    auto = "auto"        # by suffix: .h5/.hdf5 -> packing, .dat -> dat, anything else -> xyzr
-    xyzr = "xyzr"        # ASCII 'x y z r' per line (µm)
-    dat = "dat"          # ASCII 'index type x y z r' per line, type = 1-based number of the scene's types
+    auto = "auto"  # by suffix: .h5/.hdf5 -> packing, .dat -> dat, anything else -> xyzr
+    xyzr = "xyzr"  # ASCII 'x y z r' per line (µm)
+    dat = "dat"  # ASCII 'index type x y z r' per line, type = 1-based number of the scene's types
     packing = "packing"  # a porepipe packing.h5 (types by name)
 
 
@@ -162,39 +177,58 @@ class SphereFile(_Strict):
 
     path: Path = Field(description="the file, relative to the scene file")
     format: SphereFormat = Field(SphereFormat.auto, description="file format")
-    type: str | None = Field(None, description="type of every sphere in the file (required for xyzr; for dat and "
-                             "packing files it overrides the types in the file)")
+    type: str | None = Field(
+        None,
+        description="type of every sphere in the file (required for xyzr; for dat and "
+        "packing files it overrides the types in the file)",
+    )
 
 
 class Stage(_Strict):
     """One run of the DEM (a `phase` of §5.6): it starts from the previous stage's spheres."""
 
     name: str = Field("stage", description="label in the history")
-    insert: list[str] = Field(default_factory=list, description="types placed randomly at the start of this stage")
-    insert_file: SphereFile | None = Field(None, description="spheres read from a file at the start of this stage "
-                                           "(before the random inserts)")
-    remove_types: list[str] = Field(default_factory=list, description="types deleted at the start of this stage")
+    insert: list[str] = Field(
+        default_factory=list, description="types placed randomly at the start of this stage"
+    )
+    insert_file: SphereFile | None = Field(
+        None, description="spheres read from a file at the start of this stage (before the random inserts)"
+    )
+    remove_types: list[str] = Field(
+        default_factory=list, description="types deleted at the start of this stage"
+    )
     steps: int = Field(1000, ge=1, description="step limit s_max of the stage (PackDEM `Steps`)")
     dt: PosFloat = Field(0.5, description="time step Delta t")
-    k: dict[str, Schedule] = Field(default_factory=dict, description="interaction constant per type (default 1)")
-    damping: dict[str, Schedule] = Field(default_factory=dict, description="Xi per type (default 1); Xi <= 2/dt")
-    frozen_types: list[str] = Field(default_factory=list, description="types held fixed (PackDEM `freezetype`)")
+    k: dict[str, Schedule] = Field(
+        default_factory=dict, description="interaction constant per type (default 1)"
+    )
+    damping: dict[str, Schedule] = Field(
+        default_factory=dict, description="Xi per type (default 1); Xi <= 2/dt"
+    )
+    frozen_types: list[str] = Field(
+        default_factory=list, description="types held fixed (PackDEM `freezetype`)"
+    )
     interactions_off: list[tuple[str, str]] = Field(
-        default_factory=list, description="type pairs without interaction (forces and overlaps)")
+        default_factory=list, description="type pairs without interaction (forces and overlaps)"
+    )
     freezing: Freezing | None = Field(None, description="freeze converged spheres (§5.4.4)")
     adaptive_radii: AdaptiveRadii | None = Field(None, description="radius protocol (§5.4.3)")
     stochastic_forces: StochasticForces | None = Field(None, description="random forces (§5.4.2)")
     delete_unconverged: list[str] = Field(
-        default_factory=list, description="types whose unconverged spheres are removed at the end of the stage")
+        default_factory=list,
+        description="types whose unconverged spheres are removed at the end of the stage",
+    )
 
     @model_validator(mode="after")
     def _damping_limit(self):
         limit = 2.0 / self.dt
         for name, sched in self.damping.items():
-            for value in ((sched.start, sched.end) if isinstance(sched, Ramp) else (sched,)):
+            for value in (sched.start, sched.end) if isinstance(sched, Ramp) else (sched,):
                 if value > limit:
-                    raise ValueError(f"damping[{name}] = {value} exceeds 2/dt = {limit}: C- = 1 - dt Xi/2 would be "
-                                     "negative and reverse the motion; lower the damping or the time step")
+                    raise ValueError(
+                        f"damping[{name}] = {value} exceeds 2/dt = {limit}: C- = 1 - dt Xi/2 would be "
+                        "negative and reverse the motion; lower the damping or the time step"
+                    )
         return self
 
     def effects(self, periodic: tuple[bool, bool, bool] = (True, True, True)) -> frozenset[Effect]:
@@ -230,15 +264,25 @@ class Settings(_Strict):
     initial_velocity: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="v of every new sphere")
     skin_rel: PosFloat = Field(0.3, description="Verlet skin in units of the smallest radius")
     rebuild_interval: int = Field(
-        0, ge=0, description="0: rebuild neighbour lists by the displacement criterion (exact); n > 0: every n "
-        "steps only (the thesis's multiple-time-step approximation s_mts, may miss partners)")
+        0,
+        ge=0,
+        description="0: rebuild neighbour lists by the displacement criterion (exact); n > 0: every n "
+        "steps only (the thesis's multiple-time-step approximation s_mts, may miss partners)",
+    )
     max_step_fraction: float = Field(
-        0.25, gt=0, le=0.5, description="stability guard: a sphere moving more than this fraction of the smallest box "
-        "edge in one step stops the run")
+        0.25,
+        gt=0,
+        le=0.5,
+        description="stability guard: a sphere moving more than this fraction of the smallest box "
+        "edge in one step stops the run",
+    )
     checkpoint_every: int = Field(0, ge=0, description="write a checkpoint every n steps (0: never)")
     parallel_min_spheres: int = Field(
-        20000, ge=0, description="stages with fewer spheres run on one thread (thread start-up costs more than it "
-        "saves; results are identical for any thread count)")
+        20000,
+        ge=0,
+        description="stages with fewer spheres run on one thread (thread start-up costs more than it "
+        "saves; results are identical for any thread count)",
+    )
     progress_every_s: PosFloat = Field(10.0, description="seconds between progress lines")
 
     @model_validator(mode="after")
@@ -249,10 +293,15 @@ class Settings(_Strict):
             raise ValueError(f"type names must be unique, repeated: {dup}")
         known = set(names)
         for i, st in enumerate(self.stages):
-            refs = {"insert": st.insert, "remove_types": st.remove_types, "k": list(st.k),
-                    "damping": list(st.damping), "frozen_types": st.frozen_types,
-                    "interactions_off": [n for pair in st.interactions_off for n in pair],
-                    "delete_unconverged": st.delete_unconverged}
+            refs = {
+                "insert": st.insert,
+                "remove_types": st.remove_types,
+                "k": list(st.k),
+                "damping": list(st.damping),
+                "frozen_types": st.frozen_types,
+                "interactions_off": [n for pair in st.interactions_off for n in pair],
+                "delete_unconverged": st.delete_unconverged,
+            }
             if st.adaptive_radii is not None:
                 refs["adaptive_radii.types"] = st.adaptive_radii.types
             if st.insert_file is not None and st.insert_file.type is not None:
@@ -262,7 +311,9 @@ class Settings(_Strict):
             for key, used in refs.items():
                 bad = sorted(set(used) - known)
                 if bad:
-                    raise ValueError(f"stages[{i}].{key} names unknown type(s) {bad}; known types: {sorted(known)}")
+                    raise ValueError(
+                        f"stages[{i}].{key} names unknown type(s) {bad}; known types: {sorted(known)}"
+                    )
         if self.regions is not None and self.regions.types is not None:
             bad = sorted(set(self.regions.types) - known)
             if bad:

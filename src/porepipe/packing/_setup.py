@@ -1,5 +1,6 @@
 """Initial state of a packing stage: radius sampling (§5.1), placement by count or density, sub-regions (gfile),
-spheres read from a file (PackDEM ``init = file``)."""
+spheres read from a file (PackDEM ``init = file``).
+"""
 
 from __future__ import annotations
 
@@ -29,7 +30,9 @@ def _discrete_table(spec: RadiusSpec, base_dir: Path) -> tuple[np.ndarray, np.nd
         raise PorepipeError(f"{path}: expected two columns 'radius probability', got shape {data.shape}")
     values, probs = data[:, 0], data[:, 1]
     if (values <= 0).any() or (probs < 0).any() or abs(probs.sum() - 1.0) > 1e-6:
-        raise PorepipeError(f"{path}: radii must be > 0 and probabilities >= 0 summing to 1 (sum {probs.sum()!r})")
+        raise PorepipeError(
+            f"{path}: radii must be > 0 and probabilities >= 0 summing to 1 (sum {probs.sum()!r})"
+        )
     return values, probs
 
 
@@ -42,7 +45,9 @@ def radius_bounds(spec: RadiusSpec, base_dir: Path | str = ".") -> tuple[float, 
     return float(spec.min_um), float(spec.max_um)
 
 
-def sample_radii(spec: RadiusSpec, n: int, rng: np.random.Generator, base_dir: Path | str = ".") -> np.ndarray:
+def sample_radii(
+    spec: RadiusSpec, n: int, rng: np.random.Generator, base_dir: Path | str = "."
+) -> np.ndarray:
     """Draw ``n`` initial radii in µm from the distribution of §5.1 (or ``initial_um`` for all).
 
     The truncated exponential P(r) = alpha exp(-alpha r) / (exp(-alpha r_min) - exp(-alpha r_max)) is sampled by
@@ -62,13 +67,17 @@ def sample_radii(spec: RadiusSpec, n: int, rng: np.random.Generator, base_dir: P
     return np.minimum(lo - np.log1p(-u * (-np.expm1(-a * (hi - lo)))) / a, hi)
 
 
-def region_table(settings: Settings, box_um: np.ndarray, base_dir: Path | str = ".") -> tuple[np.ndarray, np.ndarray]:
+def region_table(
+    settings: Settings, box_um: np.ndarray, base_dir: Path | str = "."
+) -> tuple[np.ndarray, np.ndarray]:
     """Region cubes of `regions` (gfile/gres): (cubes per axis (3,), type index per cube, x fastest)."""
     reg = settings.regions
     names = [t.name for t in settings.types]
     ncube = box_um / reg.cube_um
     if np.any(np.abs(ncube - np.round(ncube)) > 1e-9 * np.maximum(1.0, ncube)):
-        raise PorepipeError(f"packing.regions.cube_um = {reg.cube_um} does not divide the box {box_um.tolist()} µm")
+        raise PorepipeError(
+            f"packing.regions.cube_um = {reg.cube_um} does not divide the box {box_um.tolist()} µm"
+        )
     ncube = np.round(ncube).astype(np.int64)
     if reg.types is not None:
         table = np.array([names.index(t) for t in reg.types], dtype=np.int64)
@@ -80,17 +89,27 @@ def region_table(settings: Settings, box_um: np.ndarray, base_dir: Path | str = 
         try:
             table = np.array(path.read_text().split(), dtype=np.int64) - 1
         except ValueError as err:
-            raise PorepipeError(f"{path}: expected whitespace-separated type numbers 1..{len(names)}") from err
+            raise PorepipeError(
+                f"{path}: expected whitespace-separated type numbers 1..{len(names)}"
+            ) from err
         if table.size and (table.min() < 0 or table.max() >= len(names)):
             raise PorepipeError(f"{path}: type numbers must lie in 1..{len(names)}")
     if table.size != int(np.prod(ncube)):
-        raise PorepipeError(f"packing.regions lists {table.size} cubes, the box holds {int(np.prod(ncube))} "
-                            f"({ncube.tolist()} cubes of {reg.cube_um} µm)")
+        raise PorepipeError(
+            f"packing.regions lists {table.size} cubes, the box holds {int(np.prod(ncube))} "
+            f"({ncube.tolist()} cubes of {reg.cube_um} µm)"
+        )
     return ncube, table
 
 
-def place_type(t: int, stype: SphereType, settings: Settings, box_um: np.ndarray, rng: np.random.Generator,
-               base_dir: Path | str = ".") -> tuple[np.ndarray, np.ndarray]:
+def place_type(
+    t: int,
+    stype: SphereType,
+    settings: Settings,
+    box_um: np.ndarray,
+    rng: np.random.Generator,
+    base_dir: Path | str = ".",
+) -> tuple[np.ndarray, np.ndarray]:
     """Random centres (N, 3) and radii (N,) of type ``t``: uniform in the type's regions (the whole box if none).
 
     The count is ``count``, or ``round(rho * V)`` with V the volume of the type's regions.
@@ -109,7 +128,9 @@ def place_type(t: int, stype: SphereType, settings: Settings, box_um: np.ndarray
     else:
         ncube, mine = cubes
         pick = mine[rng.integers(0, mine.size, size=n)]
-        idx = np.stack([pick % ncube[0], (pick // ncube[0]) % ncube[1], pick // (ncube[0] * ncube[1])], axis=1)
+        idx = np.stack(
+            [pick % ncube[0], (pick // ncube[0]) % ncube[1], pick // (ncube[0] * ncube[1])], axis=1
+        )
         centres = (idx + rng.random((n, 3))) * (box_um / ncube)
     return centres, sample_radii(stype.radius_um, n, rng, base_dir)
 
@@ -134,8 +155,13 @@ def _file_format(spec: SphereFile) -> SphereFormat:
     if spec.format is not SphereFormat.auto:
         return spec.format
     suffix = spec.path.suffix.lower()
-    return SphereFormat.packing if suffix in (".h5", ".hdf5") else SphereFormat.dat if suffix == ".dat" \
+    return (
+        SphereFormat.packing
+        if suffix in (".h5", ".hdf5")
+        else SphereFormat.dat
+        if suffix == ".dat"
         else SphereFormat.xyzr
+    )
 
 
 def _file_types(spec: SphereFile, fmt: SphereFormat, path: Path, raw, n: int, names: list[str]) -> np.ndarray:
@@ -147,20 +173,25 @@ def _file_types(spec: SphereFile, fmt: SphereFormat, path: Path, raw, n: int, na
     if fmt is SphereFormat.dat:
         bad = np.flatnonzero((raw < 1) | (raw > len(names)))
         if bad.size:
-            raise PorepipeError(f"{path}: line {bad[0] + 1} has type number {raw[bad[0]]}; the scene's types are "
-                                f"1..{len(names)} ({names})")
+            raise PorepipeError(
+                f"{path}: line {bad[0] + 1} has type number {raw[bad[0]]}; the scene's types are "
+                f"1..{len(names)} ({names})"
+            )
         return raw - 1
     file_names, numbers = raw
     unknown = sorted({file_names[k] for k in np.unique(numbers)} - set(names))
     if unknown:
-        raise PorepipeError(f"{path}: sphere type(s) {unknown} are not types of this scene ({names}); set "
-                            "insert_file.type to map every sphere to one type")
+        raise PorepipeError(
+            f"{path}: sphere type(s) {unknown} are not types of this scene ({names}); set "
+            "insert_file.type to map every sphere to one type"
+        )
     lookup = np.array([names.index(t) if t in names else -1 for t in file_names], dtype=np.int64)
     return lookup[numbers]
 
 
-def read_sphere_file(spec: SphereFile, settings: Settings, box_um: np.ndarray, periodic: np.ndarray,
-                     base_dir: Path | str = ".") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def read_sphere_file(
+    spec: SphereFile, settings: Settings, box_um: np.ndarray, periodic: np.ndarray, base_dir: Path | str = "."
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Centres (N, 3), radii (N,) and type indices (N,) of the spheres of ``spec`` (PackDEM ``init = file``).
 
     Periodic coordinates are wrapped into [0, L); a centre outside a closed axis, or a radius outside the
@@ -186,13 +217,17 @@ def read_sphere_file(spec: SphereFile, settings: Settings, box_um: np.ndarray, p
     outside = np.flatnonzero(((centres < 0) | (centres > box_um)).any(axis=1))
     if outside.size:
         i = outside[0]
-        raise PorepipeError(f"{path}: sphere {i} at {centres[i].tolist()} µm lies outside the box {box_um.tolist()} "
-                            "µm along a closed (non-periodic) axis")
+        raise PorepipeError(
+            f"{path}: sphere {i} at {centres[i].tolist()} µm lies outside the box {box_um.tolist()} "
+            "µm along a closed (non-periodic) axis"
+        )
     bounds = np.array([radius_bounds(t.radius_um, base_dir) for t in settings.types])
     lo, hi = bounds[types, 0], bounds[types, 1]
     bad = np.flatnonzero((radii < lo * (1 - 1e-12)) | (radii > hi * (1 + 1e-12)))
     if bad.size:
         i = bad[0]
-        raise PorepipeError(f"{path}: sphere {i} has r = {radii[i]} µm outside [{lo[i]}, {hi[i]}] µm of its type "
-                            f"{names[types[i]]!r}; widen that type's radius_um min_um/max_um")
+        raise PorepipeError(
+            f"{path}: sphere {i} has r = {radii[i]} µm outside [{lo[i]}, {hi[i]}] µm of its type "
+            f"{names[types[i]]!r}; widen that type's radius_um min_um/max_um"
+        )
     return centres, radii, types

@@ -14,8 +14,19 @@ from porepipe.packing._settings import Effect
 
 #: bit of each effect in the per-step ``effects`` history column
 EFFECT_BITS = {e: 1 << i for i, e in enumerate(Effect)}
-HISTORY_KEYS = ("stage", "step", "n_spheres", "converged", "max_overlap", "mean_overlap", "kinetic_energy",
-                "max_displacement_um", "effects", "rebuilt", "wall_s")
+HISTORY_KEYS = (
+    "stage",
+    "step",
+    "n_spheres",
+    "converged",
+    "max_overlap",
+    "mean_overlap",
+    "kinetic_energy",
+    "max_displacement_um",
+    "effects",
+    "rebuilt",
+    "wall_s",
+)
 #: history columns that describe the machine, not the packing (they differ between identical runs)
 HISTORY_TIMING = ("wall_s",)
 #: history columns stored as integers
@@ -68,11 +79,11 @@ class State:
     frozen: np.ndarray
     x_build: np.ndarray
     r_build: np.ndarray
-    ids: np.ndarray       # insertion number of each sphere; the arrays are kept in cell order for memory locality
+    ids: np.ndarray  # insertion number of each sphere; the arrays are kept in cell order for memory locality
     next_id: int
     since_build: int
-    stage: int            # index of the stage in progress
-    step: int             # last completed stage-local step (0: stage not started, spheres not inserted)
+    stage: int  # index of the stage in progress
+    step: int  # last completed stage-local step (0: stage not started, spheres not inserted)
     nconv_prev: int
     need_rebuild: bool
     history: dict[str, list]
@@ -83,8 +94,24 @@ class State:
     @classmethod
     def empty(cls) -> State:
         z3 = np.zeros((0, 3))
-        return cls(x=z3, v=z3.copy(), f=z3.copy(), r=np.zeros(0), types=np.zeros(0, dtype=np.int64),
-                   frozen=np.zeros(0, dtype=np.uint8), x_build=z3.copy(), r_build=np.zeros(0),
-                   ids=np.zeros(0, dtype=np.int64), next_id=0, since_build=0,
-                   stage=0, step=0, nconv_prev=0, need_rebuild=True, history={k: [] for k in HISTORY_KEYS},
-                   stage_converged=[], stage_steps=[], snapshots=[])
+        return cls(
+            x=z3,
+            v=z3.copy(),
+            f=z3.copy(),
+            r=np.zeros(0),
+            types=np.zeros(0, dtype=np.int64),
+            frozen=np.zeros(0, dtype=np.uint8),
+            x_build=z3.copy(),
+            r_build=np.zeros(0),
+            ids=np.zeros(0, dtype=np.int64),
+            next_id=0,
+            since_build=0,
+            stage=0,
+            step=0,
+            nconv_prev=0,
+            need_rebuild=True,
+            history={k: [] for k in HISTORY_KEYS},
+            stage_converged=[],
+            stage_steps=[],
+            snapshots=[],
+        )

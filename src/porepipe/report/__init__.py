@@ -3,12 +3,31 @@
 import importlib
 
 #: public name -> submodule; loaded on first use, so importing the CLI does not import matplotlib
-_PUBLIC = {"Reference": "_analysis", "cost_per_digit": "_analysis", "error_cost_table": "_analysis",
-           "pareto_front": "_analysis", "reference_limit": "_analysis", "runs_of": "_analysis",
-           "varying_quantities": "_analysis", "build_report": "_api", "Table": "_thesis", "thesis_tables": "_thesis"}
+_PUBLIC = {
+    "Reference": "_analysis",
+    "cost_per_digit": "_analysis",
+    "error_cost_table": "_analysis",
+    "pareto_front": "_analysis",
+    "reference_limit": "_analysis",
+    "runs_of": "_analysis",
+    "varying_quantities": "_analysis",
+    "build_report": "_api",
+    "Table": "_thesis",
+    "thesis_tables": "_thesis",
+}
 
-__all__ = ["Reference", "Table", "build_report", "cost_per_digit", "error_cost_table", "pareto_front",
-           "reference_limit", "runs_of", "thesis_tables", "varying_quantities"]
+__all__ = [
+    "Reference",
+    "Table",
+    "build_report",
+    "cost_per_digit",
+    "error_cost_table",
+    "pareto_front",
+    "reference_limit",
+    "runs_of",
+    "thesis_tables",
+    "varying_quantities",
+]
 
 
 def __getattr__(name):

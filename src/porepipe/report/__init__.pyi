@@ -5,11 +5,23 @@ Kept equal to the export table by tests/unit/store/test_stubs.py.
 
 from porepipe.report._analysis import (
     Reference as Reference,
+)
+from porepipe.report._analysis import (
     cost_per_digit as cost_per_digit,
+)
+from porepipe.report._analysis import (
     error_cost_table as error_cost_table,
+)
+from porepipe.report._analysis import (
     pareto_front as pareto_front,
+)
+from porepipe.report._analysis import (
     reference_limit as reference_limit,
+)
+from porepipe.report._analysis import (
     runs_of as runs_of,
+)
+from porepipe.report._analysis import (
     varying_quantities as varying_quantities,
 )
 from porepipe.report._api import (
@@ -17,6 +29,8 @@ from porepipe.report._api import (
 )
 from porepipe.report._thesis import (
     Table as Table,
+)
+from porepipe.report._thesis import (
     thesis_tables as thesis_tables,
 )
 

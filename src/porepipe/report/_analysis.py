@@ -20,7 +20,7 @@ class Reference:
     quantity: str
     value: float
     err: float
-    form: str      # 'power', 'linear'
+    form: str  # 'power', 'linear'
     text: str
 
 
@@ -82,9 +82,18 @@ def error_cost_table(ds: xr.Dataset, quantities) -> list[dict]:
         err = np.maximum(np.abs(runs["value"] - ref.value) / abs(ref.value), ERR_FLOOR)
         front = set(pareto_front(runs["cost_s"], err).tolist())
         for i in range(err.size):
-            rows.append({"quantity": q, "a_um": float(runs["a_um"][i]), "sample_um": float(runs["sample_um"][i]),
-                         "value": float(runs["value"][i]), "limit": ref.value, "rel_err": float(err[i]),
-                         "cost_s": float(runs["cost_s"][i]), "pareto": int(i in front)})
+            rows.append(
+                {
+                    "quantity": q,
+                    "a_um": float(runs["a_um"][i]),
+                    "sample_um": float(runs["sample_um"][i]),
+                    "value": float(runs["value"][i]),
+                    "limit": ref.value,
+                    "rel_err": float(err[i]),
+                    "cost_s": float(runs["cost_s"][i]),
+                    "pareto": int(i in front),
+                }
+            )
     return rows
 
 
@@ -94,6 +103,8 @@ def varying_quantities(ds: xr.Dataset, wanted, cap: int) -> list[str]:
     if wanted:
         return [q for q in wanted if q in names]
     full = ds.value.sel(sample_um=FULL) if FULL in ds.sample_um.values else ds.value.isel(sample_um=0)
-    vary = [q for q in names if np.nanmax(full.sel(quantity=q).values) > np.nanmin(full.sel(quantity=q).values)]
+    vary = [
+        q for q in names if np.nanmax(full.sel(quantity=q).values) > np.nanmin(full.sel(quantity=q).values)
+    ]
     vary.sort(key=lambda q: (reference_limit(ds, q) is None, q))
     return vary[:cap]

@@ -13,8 +13,15 @@ def main(args) -> int:
     from porepipe.report._run import run  # matplotlib only when a report is built
     from porepipe.scene import load_scene
 
-    out = run(load_scene(args.scene), args.scene, sweep=args.sweep, out=args.out, grey=args.grey,
-              binary=args.binary, lpt=args.lpt)
+    out = run(
+        load_scene(args.scene),
+        args.scene,
+        sweep=args.sweep,
+        out=args.out,
+        grey=args.grey,
+        binary=args.binary,
+        lpt=args.lpt,
+    )
     print(f"report: written {out}", file=sys.stderr)
     return 0
 
@@ -25,7 +32,9 @@ def register(subparsers) -> None:
     p.add_argument("scene", help="scene YAML file")
     p.add_argument("--sweep", help="sweep.h5 (default results/<scene>/sweep/sweep.h5)")
     p.add_argument("--grey", nargs="*", help="grey_a{a}.h5 files for cross-sections (default: those present)")
-    p.add_argument("--binary", nargs="*", help="binary_a{a}.h5 files for cross-sections (default: those present)")
+    p.add_argument(
+        "--binary", nargs="*", help="binary_a{a}.h5 files for cross-sections (default: those present)"
+    )
     p.add_argument("--lpt", nargs="*", help="lpt_a{a}.h5 files for LPT curves (default: those present)")
     p.add_argument("-o", "--out", help="output index.html (default results/<scene>/report/index.html)")
     p.set_defaults(func=main)

@@ -21,8 +21,12 @@ COLUMNS = 3
 def _figure(n_panels: int, width_in: float = 3.4, height_in: float = 2.7):
     rows = max(1, -(-n_panels // COLUMNS))
     cols = min(COLUMNS, max(1, n_panels))
-    fig = Figure(figsize=(width_in * cols, height_in * rows))  # fixed margins: constrained layout costs seconds
-    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.18 / rows, top=1 - 0.12 / rows, wspace=0.3, hspace=0.55)
+    fig = Figure(
+        figsize=(width_in * cols, height_in * rows)
+    )  # fixed margins: constrained layout costs seconds
+    fig.subplots_adjust(
+        left=0.08, right=0.98, bottom=0.18 / rows, top=1 - 0.12 / rows, wspace=0.3, hspace=0.55
+    )
     FigureCanvasAgg(fig)
     axes = fig.subplots(rows, cols, squeeze=False).ravel()
     for ax in axes[n_panels:]:
@@ -56,16 +60,30 @@ def quantities_figure(ds: xr.Dataset, quantities, path: Path, dpi: int) -> list[
             if not keep.any():
                 continue
             ax.plot(ds.a_um.values[keep], v[keep], "o", label=_sample_label(s))
-            rows += [{"quantity": q, "sample_um": s, "a_um": a, "value": x}
-                     for a, x in zip(ds.a_um.values[keep], v[keep])]
+            rows += [
+                {"quantity": q, "sample_um": s, "a_um": a, "value": x}
+                for a, x in zip(ds.a_um.values[keep], v[keep])
+            ]
         ref = reference_limit(ds, q)
         if ref is not None:
             sel = ds.sel(quantity=q, form=ref.form, sample_um=FULL)
             grid = np.linspace(0.0, a_max, 100)
-            ax.plot(grid, ref.value + float(sel.c) * grid ** float(sel.p), "-", lw=1,
-                    label=f"fit p = {float(sel.p):.2g}")
-            ax.errorbar([0.0], [ref.value], yerr=[ref.err], fmt="s", color="k", capsize=3,
-                        label=f"limit {ref.value:.5g}")
+            ax.plot(
+                grid,
+                ref.value + float(sel.c) * grid ** float(sel.p),
+                "-",
+                lw=1,
+                label=f"fit p = {float(sel.p):.2g}",
+            )
+            ax.errorbar(
+                [0.0],
+                [ref.value],
+                yerr=[ref.err],
+                fmt="s",
+                color="k",
+                capsize=3,
+                label=f"limit {ref.value:.5g}",
+            )
             rows.append({"quantity": q, "sample_um": FULL, "a_um": 0.0, "value": ref.value})
             ax.set_title(q, fontsize=8)
         else:
@@ -94,8 +112,13 @@ def error_cost_figure(rows: list[dict], path: Path, dpi: int) -> list[dict]:
         front = pareto_front(cost, err)
         ax.loglog(cost[front], err[front], "-", color=line.get_color(), lw=1.2)
         ax.loglog(cost[front], err[front], "o", mfc="none", mec="k", ms=7)
-        summary.append({"quantity": q, "front_runs": int(front.size),
-                        "cost_factor_per_digit": cost_per_digit(cost[front], err[front])})
+        summary.append(
+            {
+                "quantity": q,
+                "front_runs": int(front.size),
+                "cost_factor_per_digit": cost_per_digit(cost[front], err[front]),
+            }
+        )
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("cost of the run incl. voxelize + segment [wall s]")
     ax.set_ylabel("|q(a) - q_inf| / |q_inf|")
@@ -133,9 +156,20 @@ def sections_figure(grey_paths: dict, binary_paths: dict, axis: int, path: Path,
             img = _mid_slice(paths[a], name, axis)
             cmap, vmax = ("gray", 216) if name == "grey" else ("binary", 1)  # matrix white in both rows
             ax.imshow(img.T, origin="lower", cmap=cmap, vmin=0, vmax=vmax, interpolation="nearest")
-            ax.set_title(f"{'grey g (white = matrix)' if name == 'grey' else 'binary (black = pore)'}, a = {a:g} um", fontsize=7)
-            rows.append({"volume": name, "a_um": a, "file": str(paths[a]), "axis": axis,
-                         "index": "middle", "pore_or_mean": float(img.mean())})
+            ax.set_title(
+                f"{'grey g (white = matrix)' if name == 'grey' else 'binary (black = pore)'}, a = {a:g} um",
+                fontsize=7,
+            )
+            rows.append(
+                {
+                    "volume": name,
+                    "a_um": a,
+                    "file": str(paths[a]),
+                    "axis": axis,
+                    "index": "middle",
+                    "pore_or_mean": float(img.mean()),
+                }
+            )
     fig.savefig(path, dpi=dpi)
     return rows
 
@@ -153,10 +187,17 @@ def lpt_figure(lpt_paths: dict, path: Path, dpi: int) -> list[dict]:
             var = ds.phi_var.values
         axes[0].plot(L_um, p, "o-", ms=3, label=f"a = {a:g} um")
         axes[1].plot(L_um, var, "o-", ms=3, label=f"a = {a:g} um")
-        rows += [{"a_um": a, "L_um": l, "alpha": alpha, "p": x, "phi_var": v} for l, x, v in zip(L_um, p, var)]
+        rows += [
+            {"a_um": a, "L_um": l, "alpha": alpha, "p": x, "phi_var": v} for l, x, v in zip(L_um, p, var)
+        ]
     axes[0].set(xlabel="cell edge L [um]", ylabel="p_alpha(L)", xscale="log", title="local percolation")
-    axes[1].set(xlabel="cell edge L [um]", ylabel="var of mu(phi, L)", xscale="log", yscale="log",
-                title="local porosity spread")
+    axes[1].set(
+        xlabel="cell edge L [um]",
+        ylabel="var of mu(phi, L)",
+        xscale="log",
+        yscale="log",
+        title="local porosity spread",
+    )
     for ax in axes[:2]:
         ax.legend(fontsize=6)
     fig.savefig(path, dpi=dpi)

@@ -39,10 +39,14 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
     """
     sweep = Path(sweep or Path("results", scene.name, "sweep", "sweep.h5"))
     if not sweep.is_file():
-        raise PorepipeError(f"{sweep} does not exist: run the workflow first (`porepipe run {scene_path}` with "
-                            "`report` in the scene's analyses)")
+        raise PorepipeError(
+            f"{sweep} does not exist: run the workflow first (`porepipe run {scene_path}` with "
+            "`report` in the scene's analyses)"
+        )
     grey = grey if grey is not None else existing(scene, grey_stage(scene) + "/grey_a{a}.h5")
     binary = binary if binary is not None else existing(scene, "segment/binary_a{a}.h5")
     lpt = lpt if lpt is not None else existing(scene, "lpt/lpt_a{a}.h5")
     out = Path(out or Path("results", scene.name, "report", "index.html"))
-    return build_report(sweep, out, settings=scene.report, grey=grey, binary=binary, lpt=lpt, scene_name=scene.name)
+    return build_report(
+        sweep, out, settings=scene.report, grey=grey, binary=binary, lpt=lpt, scene_name=scene.name
+    )

@@ -24,16 +24,28 @@ class Settings(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    quantities: list[str] = Field(default_factory=list, description="sweep quantities to plot against resolution; "
-                                  "empty: all that vary with resolution (up to max_quantities)")
-    max_quantities: int = Field(12, ge=1, description="cap on quantity-versus-resolution figures when "
-                                "`quantities` is empty")
+    quantities: list[str] = Field(
+        default_factory=list,
+        description="sweep quantities to plot against resolution; "
+        "empty: all that vary with resolution (up to max_quantities)",
+    )
+    max_quantities: int = Field(
+        12, ge=1, description="cap on quantity-versus-resolution figures when `quantities` is empty"
+    )
     thesis_tables: list[ThesisTable] = Field(
         default_factory=lambda: [ThesisTable.t6_4, ThesisTable.t7_2],
         description="thesis tables to reproduce; 6.4 and 7.2 check the extrapolation arithmetic on the thesis's own "
-        "numbers, the others compare the scene's values where the scene reproduces the thesis model")
-    thesis_model: str | None = Field(None, description="row label of the thesis model the scene reproduces "
-                                     "(e.g. 'PP' or 'FP' for Tables 5.1/5.2)")
-    slices: bool = Field(True, description="cross-sections of grey and binary volumes at each resolution (Fig. 7.3)")
-    slice_axis: int = Field(2, ge=0, le=2, description="axis normal to the cross-section (0 = x, 1 = y, 2 = z)")
+        "numbers, the others compare the scene's values where the scene reproduces the thesis model",
+    )
+    thesis_model: str | None = Field(
+        None,
+        description="row label of the thesis model the scene reproduces "
+        "(e.g. 'PP' or 'FP' for Tables 5.1/5.2)",
+    )
+    slices: bool = Field(
+        True, description="cross-sections of grey and binary volumes at each resolution (Fig. 7.3)"
+    )
+    slice_axis: int = Field(
+        2, ge=0, le=2, description="axis normal to the cross-section (0 = x, 1 = y, 2 = z)"
+    )
     dpi: int = Field(80, ge=30, le=300, description="PNG resolution")

@@ -19,28 +19,56 @@ from porepipe.sweep import FULL, two_point_limit
 
 A0_UM = 15000.0 / 16384  # §7.1: a0 = 1.5 cm / 16384
 
-T6_4 = [("BGK", 0.688, 608, 559, 510), ("BGK", 0.857, 773, 634, 495), ("MRT", 0.688, 505, 489, 473),
-        ("MRT", 0.857, 558, 518, 478), ("MRT", 1.000, 601, 541, 481)]
+T6_4 = [
+    ("BGK", 0.688, 608, 559, 510),
+    ("BGK", 0.857, 773, 634, 495),
+    ("MRT", 0.688, 505, 489, 473),
+    ("MRT", 0.857, 558, 518, 478),
+    ("MRT", 1.000, 601, 541, 481),
+]
 T7_2_A0 = [8.0, 4.0, 2.0, 1.0, 0.5]
-T7_2_BOUNDS = {"phi0": [0.0921243, 0.1119007, 0.1227767, 0.1284572, 0.1313791],
-               "phi215": [0.1828374, 0.1583219, 0.1462455, 0.1402638, 0.1372924]}
-T7_2_LINES = {"phi0": [0.131677153054625, 0.133652713629999, 0.134137638623542, 0.134301059825200],
-              "phi215": [0.133806445926894, 0.134169143824690, 0.134282116458962, 0.134321011332180]}
+T7_2_BOUNDS = {
+    "phi0": [0.0921243, 0.1119007, 0.1227767, 0.1284572, 0.1313791],
+    "phi215": [0.1828374, 0.1583219, 0.1462455, 0.1402638, 0.1372924],
+}
+T7_2_LINES = {
+    "phi0": [0.131677153054625, 0.133652713629999, 0.134137638623542, 0.134301059825200],
+    "phi215": [0.133806445926894, 0.134169143824690, 0.134282116458962, 0.134321011332180],
+}
 T7_2_LIMIT = 0.134313
 # Table 5.1: model -> [(a_um, phi, S_V 1/um, K_V(P) 1e-3/um^2, T_V(P) 1e-4/um^3)]
-T5_1 = {"PP": [(1.0, 0.182749, 0.039, 1.7449, -2.7909), (0.5, 0.182854, 0.040, 1.7619, -4.3873),
-               (0.25, 0.182844, 0.041, 1.7617, -8.8408)],
-        "FP": [(1.0, 0.165780, 0.055, 2.1476, -64.932), (0.5, 0.166253, 0.066, 2.0549, -275.78),
-               (0.25, 0.166290, 0.072, -0.9055, -498.52)]}
-T5_1_COLS = [("phi", "minkowski.phi[pore]", 1.0), ("S_V [1/um]", "minkowski.S_V[pore]", 1.0),
-             ("K_V(P) [1e-3/um^2]", "minkowski.K_V[pore]", 1e3), ("T_V(P) [1e-4/um^3]", "minkowski.T_V[pore]", 1e4)]
+T5_1 = {
+    "PP": [
+        (1.0, 0.182749, 0.039, 1.7449, -2.7909),
+        (0.5, 0.182854, 0.040, 1.7619, -4.3873),
+        (0.25, 0.182844, 0.041, 1.7617, -8.8408),
+    ],
+    "FP": [
+        (1.0, 0.165780, 0.055, 2.1476, -64.932),
+        (0.5, 0.166253, 0.066, 2.0549, -275.78),
+        (0.25, 0.166290, 0.072, -0.9055, -498.52),
+    ],
+}
+T5_1_COLS = [
+    ("phi", "minkowski.phi[pore]", 1.0),
+    ("S_V [1/um]", "minkowski.S_V[pore]", 1.0),
+    ("K_V(P) [1e-3/um^2]", "minkowski.K_V[pore]", 1e3),
+    ("T_V(P) [1e-4/um^3]", "minkowski.T_V[pore]", 1e4),
+]
 T5_2 = {"PP": [(1.0, 660.2), (0.5, 617.7)], "FP": [(1.0, 200.7), (0.5, 182.5)]}
 # Table 7.3 [1/mm] at a = 8, 4, 2, 1, 0.5 a0
-T7_3 = {"S_max": [20.039, 20.530, 20.774, 20.904, 20.946], "S_mf": [9.6371, 9.8774, 9.9978, 10.061, 10.065],
-        "S_min": [6.0407, 6.1915, 6.2673, 6.3068, 6.3096]}
+T7_3 = {
+    "S_max": [20.039, 20.530, 20.774, 20.904, 20.946],
+    "S_mf": [9.6371, 9.8774, 9.9978, 10.061, 10.065],
+    "S_min": [6.0407, 6.1915, 6.2673, 6.3068, 6.3096],
+}
 T6_2 = [(4, 0.064099), (8, 0.021840), (16, 0.007241), (32, 0.002331), (64, 0.000784)]
-T6_3 = [("method 1", 1.73244, 0.61423), ("method 2 (W=10)", 1.73689, 0.87278), ("method 3", 1.71346, 0.48787),
-        ("method 4", 1.64270, 4.59761)]
+T6_3 = [
+    ("method 1", 1.73244, 0.61423),
+    ("method 2 (W=10)", 1.73689, 0.87278),
+    ("method 3", 1.71346, 0.48787),
+    ("method 4", 1.64270, 4.59761),
+]
 
 
 @dataclasses.dataclass
@@ -62,12 +90,26 @@ def _diff(ours: float, theirs: float) -> list:
 
 
 def table_6_4() -> Table:
-    rows = [[m, tau, lr, hr, ext, two_point_limit(lr, hr), *_diff(two_point_limit(lr, hr), ext)]
-            for m, tau, lr, hr, ext in T6_4]
-    return Table("6.4", "Table 6.4: permeability extrapolated linearly in 1/L_S (mD)",
-                 ["method", "tau", "kappa l.r.", "kappa h.r.", "thesis kappa_extrap", "porepipe 2h.r.-l.r.",
-                  "difference", "relative"], rows,
-                 "porepipe.sweep.two_point_limit on the thesis's l.r./h.r. values (L_S = 300, 600)")
+    rows = [
+        [m, tau, lr, hr, ext, two_point_limit(lr, hr), *_diff(two_point_limit(lr, hr), ext)]
+        for m, tau, lr, hr, ext in T6_4
+    ]
+    return Table(
+        "6.4",
+        "Table 6.4: permeability extrapolated linearly in 1/L_S (mD)",
+        [
+            "method",
+            "tau",
+            "kappa l.r.",
+            "kappa h.r.",
+            "thesis kappa_extrap",
+            "porepipe 2h.r.-l.r.",
+            "difference",
+            "relative",
+        ],
+        rows,
+        "porepipe.sweep.two_point_limit on the thesis's l.r./h.r. values (L_S = 300, 600)",
+    )
 
 
 def table_7_2() -> Table:
@@ -82,10 +124,14 @@ def table_7_2() -> Table:
             rows.append([f"{label}(c = {c:g} a0)", theirs, ours, *_diff(ours, theirs)])
     lim = regress_porosity_limit(lines["phi0"], lines["phi215"])
     rows.append(["phi (regression of phi* on phi**)", T7_2_LIMIT, lim.phi, *_diff(lim.phi, T7_2_LIMIT)])
-    return Table("7.2", "Table 7.2: porosity bounds extrapolated linearly in a, then regressed to phi** = 0",
-                 ["quantity", "thesis", "porepipe", "difference", "relative"], rows,
-                 "two-point lines from the measured bounds implied by the table (7 digits), then "
-                 "porepipe.estimate.regress_porosity_limit")
+    return Table(
+        "7.2",
+        "Table 7.2: porosity bounds extrapolated linearly in a, then regressed to phi** = 0",
+        ["quantity", "thesis", "porepipe", "difference", "relative"],
+        rows,
+        "two-point lines from the measured bounds implied by the table (7 digits), then "
+        "porepipe.estimate.regress_porosity_limit",
+    )
 
 
 def _value(ds: xr.Dataset, quantity: str, a_um: float) -> float:
@@ -104,25 +150,45 @@ def _scene_table(key: str, title: str, columns: list[str], rows: list[list], not
 
 def table_5_1(ds: xr.Dataset, model: str | None) -> Table:
     model = model if model in T5_1 else "FP"
-    rows = [[f"{model} a = {a:g} um", label, theirs, _value(ds, q, a) * scale,
-             *_diff(_value(ds, q, a) * scale, theirs)]
-            for a, *vals in T5_1[model] for (label, q, scale), theirs in zip(T5_1_COLS, vals)]
-    return _scene_table("5.1", f"Table 5.1: Minkowski functionals of the {model} packing",
-                        ["row", "quantity", "thesis", "porepipe", "difference", "relative"], rows,
-                        "minkowski.*[pore] of this scene at the thesis's resolutions")
+    rows = [
+        [
+            f"{model} a = {a:g} um",
+            label,
+            theirs,
+            _value(ds, q, a) * scale,
+            *_diff(_value(ds, q, a) * scale, theirs),
+        ]
+        for a, *vals in T5_1[model]
+        for (label, q, scale), theirs in zip(T5_1_COLS, vals)
+    ]
+    return _scene_table(
+        "5.1",
+        f"Table 5.1: Minkowski functionals of the {model} packing",
+        ["row", "quantity", "thesis", "porepipe", "difference", "relative"],
+        rows,
+        "minkowski.*[pore] of this scene at the thesis's resolutions",
+    )
 
 
 def table_5_2(ds: xr.Dataset, model: str | None) -> Table:
     model = model if model in T5_2 else "FP"
-    kappas = [q for q in ds.quantity.values if str(q).startswith("permeability") and str(q).endswith(".kappa_mD")]
+    kappas = [
+        q for q in ds.quantity.values if str(q).startswith("permeability") and str(q).endswith(".kappa_mD")
+    ]
     rows = []
     for a, theirs in T5_2[model]:
         vals = [_value(ds, q, a) for q in kappas]
         ours = float(np.nanmean(vals)) if any(np.isfinite(vals)) else float("nan")
-        rows.append([f"{model} a = {a:g} um", "kappa [mD] (mean of axes)", theirs, ours, *_diff(ours, theirs)])
-    return _scene_table("5.2", f"Table 5.2: LB permeability of the {model} packing",
-                        ["row", "quantity", "thesis", "porepipe", "difference", "relative"], rows,
-                        "permeability_*.kappa_mD of this scene")
+        rows.append(
+            [f"{model} a = {a:g} um", "kappa [mD] (mean of axes)", theirs, ours, *_diff(ours, theirs)]
+        )
+    return _scene_table(
+        "5.2",
+        f"Table 5.2: LB permeability of the {model} packing",
+        ["row", "quantity", "thesis", "porepipe", "difference", "relative"],
+        rows,
+        "permeability_*.kappa_mD of this scene",
+    )
 
 
 def table_7_3(ds: xr.Dataset) -> Table:
@@ -131,32 +197,56 @@ def table_7_3(ds: xr.Dataset) -> Table:
         for l, theirs in zip(T7_2_A0, values):
             ours = _value(ds, f"estimate.{name}", l * A0_UM) * 1000.0
             rows.append([f"a = {l:g} a0", f"{name} [1/mm]", theirs, ours, *_diff(ours, theirs)])
-    return _scene_table("7.3", "Table 7.3: specific-surface bounds from grey histograms",
-                        ["row", "quantity", "thesis", "porepipe", "difference", "relative"], rows,
-                        "estimate.S_* of this scene at a = l·a0, a0 = 0.91552734 um")
+    return _scene_table(
+        "7.3",
+        "Table 7.3: specific-surface bounds from grey histograms",
+        ["row", "quantity", "thesis", "porepipe", "difference", "relative"],
+        rows,
+        "estimate.S_* of this scene at a = l·a0, a0 = 0.91552734 um",
+    )
 
 
 def table_6_2() -> Table:
     rows = [[b, e, 0.6 * b**-1.6, *_diff(0.6 * b**-1.6, e)] for b, e in T6_2]
-    return Table("6.2", "Table 6.2: mean relative LB velocity error in a square channel",
-                 ["B", "thesis <|eps_v|>", "power law 0.6 B^-1.6", "difference", "relative"], rows,
-                 "the thesis's stated power-law summary against its table; LBM calibration runs are not part of "
-                 "a scene sweep (see the lbm calibration tests)")
+    return Table(
+        "6.2",
+        "Table 6.2: mean relative LB velocity error in a square channel",
+        ["B", "thesis <|eps_v|>", "power law 0.6 B^-1.6", "difference", "relative"],
+        rows,
+        "the thesis's stated power-law summary against its table; LBM calibration runs are not part of "
+        "a scene sweep (see the lbm calibration tests)",
+    )
 
 
 def table_6_3() -> Table:
     ref = 1.72207  # kappa^TH(B = 7), Eq. 6.1.37 (digest verification note)
     rows = [[m, k, e, 100 * abs(k - ref) / ref, *_diff(100 * abs(k - ref) / ref, e)] for m, k, e in T6_3]
-    return Table("6.3", "Table 6.3: pressure-gradient methods, B = 7 channel",
-                 ["method", "thesis kappa", "thesis |eps| [%]", "|eps| from kappa_TH = 1.72207 [%]", "difference",
-                  "relative"], rows,
-                 "the thesis's errors recomputed from its kappa values and Eq. 6.1.37 (0.012 % offset noted in "
-                 "the digest)")
+    return Table(
+        "6.3",
+        "Table 6.3: pressure-gradient methods, B = 7 channel",
+        [
+            "method",
+            "thesis kappa",
+            "thesis |eps| [%]",
+            "|eps| from kappa_TH = 1.72207 [%]",
+            "difference",
+            "relative",
+        ],
+        rows,
+        "the thesis's errors recomputed from its kappa values and Eq. 6.1.37 (0.012 % offset noted in "
+        "the digest)",
+    )
 
 
 def thesis_tables(ds: xr.Dataset, which, model: str | None) -> list[Table]:
     """The thesis tables named in ``which`` (report settings), each with the scene's own values beside them."""
-    builders = {ThesisTable.t5_1: lambda: table_5_1(ds, model), ThesisTable.t5_2: lambda: table_5_2(ds, model),
-                ThesisTable.t6_2: table_6_2, ThesisTable.t6_3: table_6_3, ThesisTable.t6_4: table_6_4,
-                ThesisTable.t7_2: table_7_2, ThesisTable.t7_3: lambda: table_7_3(ds)}
+    builders = {
+        ThesisTable.t5_1: lambda: table_5_1(ds, model),
+        ThesisTable.t5_2: lambda: table_5_2(ds, model),
+        ThesisTable.t6_2: table_6_2,
+        ThesisTable.t6_3: table_6_3,
+        ThesisTable.t6_4: table_6_4,
+        ThesisTable.t7_2: table_7_2,
+        ThesisTable.t7_3: lambda: table_7_3(ds),
+    }
     return [builders[ThesisTable(w)]() for w in which]

@@ -43,7 +43,9 @@ def otsu_threshold(hist: np.ndarray) -> int:
     """
     hist = np.asarray(hist, dtype=np.float64)
     if hist.ndim != 1 or hist.sum() <= 0:
-        raise PorepipeError(f"otsu needs a 1-D histogram with counts, got shape {hist.shape} and sum {hist.sum()}")
+        raise PorepipeError(
+            f"otsu needs a 1-D histogram with counts, got shape {hist.shape} and sum {hist.sum()}"
+        )
     g = np.arange(hist.size, dtype=np.float64)
     w0 = np.cumsum(hist)[:-1]
     w1 = hist.sum() - w0
@@ -70,9 +72,12 @@ def choose_threshold(hist: np.ndarray, method: SegmentationMethod, fixed: int | 
     if populated.size == 1:
         g = int(populated[0])
         phase = "pore" if g <= HALF_THRESHOLD else "matrix"
-        return Threshold(HALF_THRESHOLD, method,
-                         f"single grey value g={g}: Otsu undefined; whole volume is {phase} (pore if g <= "
-                         f"{HALF_THRESHOLD})")
+        return Threshold(
+            HALF_THRESHOLD,
+            method,
+            f"single grey value g={g}: Otsu undefined; whole volume is {phase} (pore if g <= "
+            f"{HALF_THRESHOLD})",
+        )
     return Threshold(otsu_threshold(hist), method)
 
 

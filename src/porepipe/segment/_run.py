@@ -33,21 +33,39 @@ def run(grey_path, out, method, threshold: int | None = None, slab_planes: int =
     src = read_attrs(grey_path)
     hist = read_table(grey_path)["grey_histogram"].values
     decision = choose_threshold(hist, method, threshold)
-    digest = result_hash("segment", inputs=[grey_path], method=str(decision.method.value), threshold=decision.value)
-    with ResultWriter(out, stage="segment", scene=src.get("scene", ""), scene_hash=digest) as w, \
-            open_volume(grey_path, "grey") as grey:
+    digest = result_hash(
+        "segment", inputs=[grey_path], method=str(decision.method.value), threshold=decision.value
+    )
+    with (
+        ResultWriter(out, stage="segment", scene=src.get("scene", ""), scene_hash=digest) as w,
+        open_volume(grey_path, "grey") as grey,
+    ):
         meta = volume_meta(grey, grey_path)
-        pore = w.create_volume("pore", grey.shape, np.uint8, voxel_um=meta.voxel_um, origin_um=meta.origin_um,
-                               periodic=meta.periodic,
-                               attrs={"threshold": decision.value, "method": decision.method.value,
-                                      "meaning": "1 = pore (grey <= threshold), 0 = matrix"})
+        pore = w.create_volume(
+            "pore",
+            grey.shape,
+            np.uint8,
+            voxel_um=meta.voxel_um,
+            origin_um=meta.origin_um,
+            periodic=meta.periodic,
+            attrs={
+                "threshold": decision.value,
+                "method": decision.method.value,
+                "meaning": "1 = pore (grey <= threshold), 0 = matrix",
+            },
+        )
         n_pore = 0
         for i0 in range(0, grey.shape[0], slab_planes):
-            slab = segment(grey[i0:i0 + slab_planes], decision.value)
-            pore[i0:i0 + len(slab)] = slab
+            slab = segment(grey[i0 : i0 + slab_planes], decision.value)
+            pore[i0 : i0 + len(slab)] = slab
             n_pore += int(slab.sum(dtype=np.int64))
         n = int(np.prod(grey.shape, dtype=np.int64))
         w.write_table(xr.Dataset({"porosity": ((), n_pore / n)}, attrs={"threshold": decision.value}))
-        w.attrs.update(threshold=decision.value, method=decision.method.value, note=decision.note,
-                       voxel_um=meta.voxel_um, porosity=n_pore / n)
+        w.attrs.update(
+            threshold=decision.value,
+            method=decision.method.value,
+            note=decision.note,
+            voxel_um=meta.voxel_um,
+            porosity=n_pore / n,
+        )
     return decision

@@ -28,5 +28,5 @@ _EXPORTS = {
     "run_adaptive": "_adaptive",
     "two_point_limit": "_fit",
 }
-__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -65,9 +65,19 @@ def predict_cost(a_um, cost, next_a: float) -> float:
     return float(c[0] * (a[0] / next_a) ** k)
 
 
-def decide(a_um, values, cost, *, target_rel_err: float, budget: float, exponent: float | None = None,
-           confidence: float = 0.95, refine_factor: float = 2.0, rounds_done: int = 0,
-           max_rounds: int | None = None) -> Decision:
+def decide(
+    a_um,
+    values,
+    cost,
+    *,
+    target_rel_err: float,
+    budget: float,
+    exponent: float | None = None,
+    confidence: float = 0.95,
+    refine_factor: float = 2.0,
+    rounds_done: int = 0,
+    max_rounds: int | None = None,
+) -> Decision:
     """Decide whether to stop or to add the next finer resolution.
 
     Parameters
@@ -87,8 +97,10 @@ def decide(a_um, values, cost, *, target_rel_err: float, budget: float, exponent
         ``target_met``, ``budget_spent``, ``max_rounds`` or ``refine`` (with ``next_a`` = finest / refine_factor).
     """
     if not 0 < target_rel_err < 1 or not budget > 0 or not refine_factor > 1:
-        raise PorepipeError(f"adaptive mode needs 0 < target_rel_err < 1, budget > 0 and refine_factor > 1, got "
-                            f"{target_rel_err}, {budget}, {refine_factor}")
+        raise PorepipeError(
+            f"adaptive mode needs 0 < target_rel_err < 1, budget > 0 and refine_factor > 1, got "
+            f"{target_rel_err}, {budget}, {refine_factor}"
+        )
     a = np.asarray(a_um, dtype=np.float64)
     cost = np.asarray(cost, dtype=np.float64)
     if cost.shape != a.shape or np.any(~np.isfinite(cost)) or np.any(cost < 0):
@@ -97,21 +109,38 @@ def decide(a_um, values, cost, *, target_rel_err: float, budget: float, exponent
     spent = float(cost.sum())
     next_a = float(a.min() / refine_factor)
     predicted = predict_cost(a, cost, next_a)
-    state = (f"q_inf = {lim.text()} (rel. err {lim.rel_err:.3g}, target {target_rel_err:.3g}); "
-             f"spent {spent:.4g} of {budget:.4g}")
+    state = (
+        f"q_inf = {lim.text()} (rel. err {lim.rel_err:.3g}, target {target_rel_err:.3g}); "
+        f"spent {spent:.4g} of {budget:.4g}"
+    )
 
     def decision(outcome, nxt, msg):
-        return Decision(outcome, nxt, lim.q_inf, lim.err, lim.rel_err, lim.status.value, spent, predicted, budget,
-                        f"{msg}: {state}")
+        return Decision(
+            outcome,
+            nxt,
+            lim.q_inf,
+            lim.err,
+            lim.rel_err,
+            lim.status.value,
+            spent,
+            predicted,
+            budget,
+            f"{msg}: {state}",
+        )
 
     if lim.supported and lim.rel_err <= target_rel_err:
         return decision(Outcome.target_met, None, "target met")
     if spent + predicted > budget:
-        return decision(Outcome.budget_spent, None,
-                        f"budget spent before the target was met (next run at a = {next_a:g} would cost "
-                        f"~{predicted:.4g}, {budget - spent:.4g} left)")
+        return decision(
+            Outcome.budget_spent,
+            None,
+            f"budget spent before the target was met (next run at a = {next_a:g} would cost "
+            f"~{predicted:.4g}, {budget - spent:.4g} left)",
+        )
     if max_rounds is not None and rounds_done >= max_rounds:
-        return decision(Outcome.max_rounds, None, f"stopped after {rounds_done} refinement round(s), target not met")
+        return decision(
+            Outcome.max_rounds, None, f"stopped after {rounds_done} refinement round(s), target not met"
+        )
     return decision(Outcome.refine, next_a, f"refine to a = {next_a:g}")
 
 
@@ -149,8 +178,10 @@ def _observed(sweep_path: Path, quantity: str, per_voxel: bool):
 
     ds = read_table(sweep_path)
     if quantity not in ds.quantity.values:
-        raise PorepipeError(f"sweep.adaptive.quantity = {quantity!r} is not in {sweep_path}; "
-                            f"quantities there: {ds.quantity.values.tolist()}")
+        raise PorepipeError(
+            f"sweep.adaptive.quantity = {quantity!r} is not in {sweep_path}; "
+            f"quantities there: {ds.quantity.values.tolist()}"
+        )
     sel = ds.sel(quantity=quantity, sample_um=np.inf)
     keep = np.isfinite(sel.value.values)
     if per_voxel:
@@ -173,7 +204,9 @@ def run_adaptive(scene_path, cores: int = 1, runner=None) -> Decision:
     scene = load_scene(scene_path)
     settings = scene.sweep.adaptive
     if settings.quantity is None:
-        raise PorepipeError(f"{scene_path}: sweep.adaptive.quantity is not set; name the quantity to converge")
+        raise PorepipeError(
+            f"{scene_path}: sweep.adaptive.quantity is not set; name the quantity to converge"
+        )
     per_voxel = settings.budget_s is None
     budget = float(settings.budget_voxels if per_voxel else settings.budget_s)
     raw = yaml.safe_load(scene_path.read_text())
@@ -186,12 +219,23 @@ def run_adaptive(scene_path, cores: int = 1, runner=None) -> Decision:
         _scene_copy(raw, scene_path.parent, resolutions, out_dir / f"round{round_no}.yaml")  # the record
         runner(_running_copy(raw, scene_path.parent, resolutions, out_dir / "scene.yaml"), target)
         a, q, cost = _observed(Path(target), settings.quantity, per_voxel)
-        dec = decide(a, q, cost, target_rel_err=settings.target_rel_err, budget=budget,
-                     exponent=exponent_value(scene.sweep.exponent), confidence=scene.sweep.confidence,
-                     refine_factor=settings.refine_factor, rounds_done=round_no, max_rounds=settings.max_rounds)
+        dec = decide(
+            a,
+            q,
+            cost,
+            target_rel_err=settings.target_rel_err,
+            budget=budget,
+            exponent=exponent_value(scene.sweep.exponent),
+            confidence=scene.sweep.confidence,
+            refine_factor=settings.refine_factor,
+            rounds_done=round_no,
+            max_rounds=settings.max_rounds,
+        )
         log.append({"round": round_no, "resolutions_um": resolutions, **dec.as_dict()})
         (out_dir / "decisions.json").write_text(json.dumps(log, indent=1, default=float))
-        print(f"porepipe sweep --adaptive: round {round_no}, a = {resolutions}: {dec.message}", file=sys.stderr)
+        print(
+            f"porepipe sweep --adaptive: round {round_no}, a = {resolutions}: {dec.message}", file=sys.stderr
+        )
         if dec.outcome is not Outcome.refine:
             return dec
         resolutions = resolutions + [dec.next_a]
@@ -205,4 +249,5 @@ def _porepipe_run(cores: int):
         cmd = snakemake_command(scene_copy, cores, extra=[target])
         if subprocess.run(cmd, check=False).returncode != 0:
             raise PorepipeError(f"the workflow failed for {scene_copy} (command: {' '.join(cmd)})")
+
     return run

@@ -16,7 +16,7 @@ _LIMIT_FIELDS = ("q_inf", "err", "err_fit", "err_loo", "c", "p", "n")
 
 
 def exponent_value(exponent: Exponent | str) -> float | None:
-    """p of a scene's ``sweep.exponent`` (None = fitted)."""
+    """P of a scene's ``sweep.exponent`` (None = fitted)."""
     return _P[Exponent(exponent)]
 
 
@@ -28,7 +28,9 @@ def limit_of(a_um, values, exponent: float | None, confidence: float = 0.95) -> 
     return fit_power(a_um[keep], values[keep], exponent=exponent, confidence=confidence)
 
 
-def add_limits(ds: xr.Dataset, exponent: Exponent | str = Exponent.free, confidence: float = 0.95) -> xr.Dataset:
+def add_limits(
+    ds: xr.Dataset, exponent: Exponent | str = Exponent.free, confidence: float = 0.95
+) -> xr.Dataset:
     """Add q∞ and its verdict over (form, quantity, sample_um): ``q_inf``, ``err``, ``status``, ``why`` and more."""
     p_of = {"power": exponent_value(exponent), "linear": 1.0}
     shape = (len(FORMS), ds.sizes["quantity"], ds.sizes["sample_um"])
@@ -48,14 +50,24 @@ def add_limits(ds: xr.Dataset, exponent: Exponent | str = Exponent.free, confide
         out[k] = (dims, arr)
     out["status"] = (dims, status)
     out["why"] = (dims, why)
-    out["err"].attrs["description"] = f"half-width of the {confidence:.0%} interval of q_inf (max of fit and LOO)"
-    out.attrs.update(confidence=confidence, exponent=Exponent(exponent).value,
-                     forms="power: q = q_inf + c*a^p (p from the scene); linear: p = 1 (thesis 7.2.1, Table 6.4)")
+    out["err"].attrs["description"] = (
+        f"half-width of the {confidence:.0%} interval of q_inf (max of fit and LOO)"
+    )
+    out.attrs.update(
+        confidence=confidence,
+        exponent=Exponent(exponent).value,
+        forms="power: q = q_inf + c*a^p (p from the scene); linear: p = 1 (thesis 7.2.1, Table 6.4)",
+    )
     return out
 
 
-def build_sweep(result_paths, volume_paths=(), cost_dir=None, exponent: Exponent | str = Exponent.free,
-                confidence: float = 0.95) -> xr.Dataset:
+def build_sweep(
+    result_paths,
+    volume_paths=(),
+    cost_dir=None,
+    exponent: Exponent | str = Exponent.free,
+    confidence: float = 0.95,
+) -> xr.Dataset:
     """Gather results into quantity × a × sample and extrapolate each quantity to a → 0."""
     return add_limits(gather(result_paths, volume_paths, cost_dir), exponent, confidence)
 
@@ -63,4 +75,7 @@ def build_sweep(result_paths, volume_paths=(), cost_dir=None, exponent: Exponent
 def limit_from_sweep(ds: xr.Dataset, quantity: str, form: str = "power", sample_um: float = FULL) -> dict:
     """One quantity's limit record from a sweep Dataset (for the adaptive driver and the report)."""
     sel = ds.sel(quantity=quantity, form=form, sample_um=sample_um)
-    return {k: (sel[k].item() if k in ("status", "why") else float(sel[k])) for k in (*_LIMIT_FIELDS, "status", "why")}
+    return {
+        k: (sel[k].item() if k in ("status", "why") else float(sel[k]))
+        for k in (*_LIMIT_FIELDS, "status", "why")
+    }

@@ -31,11 +31,21 @@ def _sweep(args) -> int:
         exponent, confidence, scene_name = scene.sweep.exponent, scene.sweep.confidence, scene.name
     from porepipe.sweep._run import run
 
-    ds = run(args.inputs, args.out, volumes=args.volumes, cost_dir=args.cost_dir, exponent=exponent,
-             confidence=confidence, scene_name=scene_name)
+    ds = run(
+        args.inputs,
+        args.out,
+        volumes=args.volumes,
+        cost_dir=args.cost_dir,
+        exponent=exponent,
+        confidence=confidence,
+        scene_name=scene_name,
+    )
     ok = int((ds.status == "ok").sum())
-    print(f"sweep: {ds.sizes['quantity']} quantities x {ds.sizes['a_um']} resolutions x {ds.sizes['sample_um']} "
-          f"samples; {ok} supported limits; written {args.out}", file=sys.stderr)
+    print(
+        f"sweep: {ds.sizes['quantity']} quantities x {ds.sizes['a_um']} resolutions x {ds.sizes['sample_um']} "
+        f"samples; {ok} supported limits; written {args.out}",
+        file=sys.stderr,
+    )
     return 0
 
 
@@ -49,17 +59,27 @@ def _subsample(args) -> int:
 
 def register(subparsers) -> None:
     """Add ``sweep`` and ``subsample`` to the ``porepipe`` command."""
-    p = subparsers.add_parser("sweep", help="gather results over resolutions and sample sizes into sweep.h5 and "
-                              "extrapolate to a -> 0; or --adaptive SCENE: refine until a target error is met")
-    p.add_argument("inputs", nargs="*", help="result files (*_a{a}*.h5, estimate.h5); with --adaptive: the scene")
+    p = subparsers.add_parser(
+        "sweep",
+        help="gather results over resolutions and sample sizes into sweep.h5 and "
+        "extrapolate to a -> 0; or --adaptive SCENE: refine until a target error is met",
+    )
+    p.add_argument(
+        "inputs", nargs="*", help="result files (*_a{a}*.h5, estimate.h5); with --adaptive: the scene"
+    )
     p.add_argument("-o", "--out", help="output sweep.h5")
-    p.add_argument("--volumes", nargs="*", default=[], help="grey/binary volume files (upstream cost, voxel counts)")
+    p.add_argument(
+        "--volumes", nargs="*", default=[], help="grey/binary volume files (upstream cost, voxel counts)"
+    )
     p.add_argument("--cost-dir", help="directory of Snakemake benchmark TSVs (results/<scene>/cost)")
     p.add_argument("--scene", help="scene file: takes sweep.exponent and sweep.confidence from it")
     p.add_argument("--exponent", default="free", choices=[e.value for e in Exponent])
     p.add_argument("--confidence", type=float, default=0.95)
-    p.add_argument("--adaptive", action="store_true",
-                   help="run the scene's adaptive refinement (sweep.adaptive); exit 0 = target met, 3 = stopped first")
+    p.add_argument(
+        "--adaptive",
+        action="store_true",
+        help="run the scene's adaptive refinement (sweep.adaptive); exit 0 = target met, 3 = stopped first",
+    )
     p.add_argument("--cores", type=int, default=1, help="with --adaptive: cores for each workflow run")
     p.set_defaults(func=_sweep)
     p = subparsers.add_parser("subsample", help="cut the corner cube of edge L µm from a binary volume")

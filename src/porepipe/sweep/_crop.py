@@ -15,11 +15,15 @@ def corner_voxels(edge_um: float, voxel_um: float, shape) -> int:
     """Edge of the corner cube in voxels; the edge must be a whole number of voxels and fit in the volume."""
     n = edge_um / voxel_um
     if not edge_um > 0 or abs(n - round(n)) > _WHOLE_RTOL * max(1.0, n):
-        raise PorepipeError(f"sub-sample edge {edge_um} µm is not a whole number of voxels of {voxel_um} µm "
-                            f"({n:.6g}); pick sweep.sample_um as multiples of every resolution")
+        raise PorepipeError(
+            f"sub-sample edge {edge_um} µm is not a whole number of voxels of {voxel_um} µm "
+            f"({n:.6g}); pick sweep.sample_um as multiples of every resolution"
+        )
     n = round(n)
     if n > min(shape):
-        raise PorepipeError(f"sub-sample edge {edge_um} µm = {n} voxels exceeds the volume shape {tuple(shape)}")
+        raise PorepipeError(
+            f"sub-sample edge {edge_um} µm = {n} voxels exceeds the volume shape {tuple(shape)}"
+        )
     return n
 
 
@@ -35,9 +39,19 @@ def crop_corner(binary_path, edge_um: float, out) -> tuple[int, int, int]:
         cube = np.ascontiguousarray(dset[:n, :n, :n])
     extra = {k: v for k, v in vattrs.items() if k not in ("voxel_um", "origin_um", "periodic")}
     extra["sample_um"] = float(edge_um)
-    with ResultWriter(out, stage="subsample", scene=str(root.get("scene", "")),
-                      scene_hash=hash_of([root.get("scene_hash", ""), float(edge_um)])) as w:
-        w.write_volume("pore", cube, voxel_um=float(vattrs["voxel_um"]), origin_um=vattrs["origin_um"],
-                       periodic=(0, 0, 0), attrs=extra)
+    with ResultWriter(
+        out,
+        stage="subsample",
+        scene=str(root.get("scene", "")),
+        scene_hash=hash_of([root.get("scene_hash", ""), float(edge_um)]),
+    ) as w:
+        w.write_volume(
+            "pore",
+            cube,
+            voxel_um=float(vattrs["voxel_um"]),
+            origin_um=vattrs["origin_um"],
+            periodic=(0, 0, 0),
+            attrs=extra,
+        )
         w.attrs.update(sample_um=float(edge_um), source=str(binary_path))
     return cube.shape

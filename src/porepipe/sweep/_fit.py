@@ -128,8 +128,9 @@ def _best_p(x, q, w):
     sse = _linear(x, q, w, grid)[2]
     i = int(np.argmin(sse))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    res = optimize.minimize_scalar(lambda p: float(_linear(x, q, w, p)[2]), bounds=(lo, hi), method="bounded",
-                                   options={"xatol": 1e-10})
+    res = optimize.minimize_scalar(
+        lambda p: float(_linear(x, q, w, p)[2]), bounds=(lo, hi), method="bounded", options={"xatol": 1e-10}
+    )
     return float(res.x) if res.fun <= sse[i] else float(grid[i])
 
 
@@ -167,8 +168,14 @@ def _monotonic(x, q, sigma):
     return significant.size == 0 or np.all(significant == significant[0])
 
 
-def fit_power(a, q, exponent: float | None = None, sigma=None, confidence: float = 0.95,
-              form: str = "q(a) = q_inf + c*a^p") -> Limit:
+def fit_power(
+    a,
+    q,
+    exponent: float | None = None,
+    sigma=None,
+    confidence: float = 0.95,
+    form: str = "q(a) = q_inf + c*a^p",
+) -> Limit:
     """Fit q(a) = q∞ + c·a^p and judge whether the data support the limit a → 0.
 
     Parameters
@@ -208,17 +215,35 @@ def fit_power(a, q, exponent: float | None = None, sigma=None, confidence: float
     def result(q_inf, err_fit, err_loo, c, p, status, why):
         finite = [e for e in (err_fit, err_loo) if np.isfinite(e)]
         err = max(finite) if finite else nan
-        return Limit(float(q_inf) * q_scale, float(err) * q_scale, float(err_fit) * q_scale,
-                     float(err_loo) * q_scale, float(c) * q_scale / x_scale**p, float(p), n, status, why, form,
-                     confidence)
+        return Limit(
+            float(q_inf) * q_scale,
+            float(err) * q_scale,
+            float(err_fit) * q_scale,
+            float(err_loo) * q_scale,
+            float(c) * q_scale / x_scale**p,
+            float(p),
+            n,
+            status,
+            why,
+            form,
+            confidence,
+        )
 
     if n < k:
-        return result(nan, nan, nan, nan, exponent or nan, Status.too_few_points,
-                      f"{n} point(s) for {k} parameters")
+        return result(
+            nan, nan, nan, nan, exponent or nan, Status.too_few_points, f"{n} point(s) for {k} parameters"
+        )
     q_inf, c, p, sse = _fit(x, y, w, exponent)
     if n == k:
-        return result(q_inf, nan, nan, c, p, Status.too_few_points,
-                      f"{n} points for {k} parameters: the curve passes through every point, no error estimate")
+        return result(
+            q_inf,
+            nan,
+            nan,
+            c,
+            p,
+            Status.too_few_points,
+            f"{n} points for {k} parameters: the curve passes through every point, no error estimate",
+        )
     err_fit = _fit_error(x, w, c, p, sse, n - k, s is not None, confidence, exponent is None)
     err_loo = nan
     if n - 1 >= k + 1 or (exponent is not None and n - 1 >= k):
@@ -229,7 +254,10 @@ def fit_power(a, q, exponent: float | None = None, sigma=None, confidence: float
     if not _monotonic(x, y, s):
         status, why = Status.non_monotonic, "the values do not change monotonically with resolution"
     elif s is not None and _chi2_sf(sse, n - k) < MIN_CHI2_PVALUE:
-        status, why = Status.poor_fit, f"chi^2 = {sse:.3g} for {n - k} degrees of freedom: the form does not fit"
+        status, why = (
+            Status.poor_fit,
+            f"chi^2 = {sse:.3g} for {n - k} degrees of freedom: the form does not fit",
+        )
     elif ss_tot > 0 and 1.0 - sse / ss_tot < MIN_R2:
         status, why = Status.poor_fit, "the fit residual is as large as the spread of the data"
     elif exponent is None and not (P_BOUNDS[0] * 1.01 < p < P_BOUNDS[1] / 1.01):
@@ -245,5 +273,6 @@ def fit_inverse_length(length, q, sigma=None, confidence: float = 0.95) -> Limit
     length = np.asarray(length, dtype=np.float64)
     if length.ndim != 1 or np.any(~np.isfinite(length)) or np.any(length <= 0):
         raise PorepipeError(f"sample lengths must be positive and finite, got {length.tolist()}")
-    return fit_power(1.0 / length, q, exponent=1.0, sigma=sigma, confidence=confidence,
-                     form="q(L) = q_inf + c/L")
+    return fit_power(
+        1.0 / length, q, exponent=1.0, sigma=sigma, confidence=confidence, form="q(L) = q_inf + c/L"
+    )

@@ -84,8 +84,11 @@ def file_quantities(ds: xr.Dataset, group: str) -> dict[str, float]:
 def per_a_quantities(ds: xr.Dataset, group: str) -> dict[str, dict[float, float]]:
     """Quantities of a table over all resolutions (dimension ``a_um``): name -> {a: value}."""
     a = ds["a_um"].values.astype(np.float64)
-    return {f"{group}.{name}": dict(zip(a.tolist(), var.values.astype(np.float64).tolist()))
-            for name, var in ds.data_vars.items() if var.dims == ("a_um",) and _is_float(var)}
+    return {
+        f"{group}.{name}": dict(zip(a.tolist(), var.values.astype(np.float64).tolist()))
+        for name, var in ds.data_vars.items()
+        if var.dims == ("a_um",) and _is_float(var)
+    }
 
 
 def read_benchmarks(cost_dir) -> dict[tuple, dict[str, float]]:
@@ -122,7 +125,9 @@ def _volume_record(path) -> tuple[float, float, dict, int]:
         group = f.get(VOLUME_GROUP)
         names = sorted(group.keys()) if group is not None else []
         if not names:
-            raise PorepipeError(f"{path} holds no volume; pass grey_a{{a}}.h5 / binary_a{{a}}.h5 files as volumes")
+            raise PorepipeError(
+                f"{path} holds no volume; pass grey_a{{a}}.h5 / binary_a{{a}}.h5 files as volumes"
+            )
         dset = group[names[0]]
         voxels = int(np.prod(dset.shape, dtype=np.int64))
         a = float(dset.attrs.get("voxel_um", a if a is not None else np.nan))
@@ -153,8 +158,10 @@ def _add_result(table: _Table, path: Path, bench: dict) -> None:
     _, a, sample, tag = parse_name(path.stem)
     group = stage + (f"_{tag}" if tag else "")
     sample_key = "" if sample == FULL else f"s{sample:g}"
-    rec = bench.get((stage, a, sample, tag)) or bench.get((stage, a, FULL, "_".join(filter(None, [sample_key, tag]))))
-    cost = {**_cost(attrs), **(rec or {v: np.nan for v in BENCH_KEYS.values()})}
+    rec = bench.get((stage, a, sample, tag)) or bench.get(
+        (stage, a, FULL, "_".join(filter(None, [sample_key, tag])))
+    )
+    cost = {**_cost(attrs), **(rec or dict.fromkeys(BENCH_KEYS.values(), np.nan))}
     if "a_um" in ds.dims:
         for name, by_a in per_a_quantities(ds, group).items():
             for a_i, value in by_a.items():
@@ -163,7 +170,9 @@ def _add_result(table: _Table, path: Path, bench: dict) -> None:
     if a is None:
         a = _float(attrs.get("voxel_um"))
         if not np.isfinite(a):
-            raise PorepipeError(f"{path}: resolution unknown (no _a{{a}} in the name and no voxel_um attribute)")
+            raise PorepipeError(
+                f"{path}: resolution unknown (no _a{{a}} in the name and no voxel_um attribute)"
+            )
     for name, value in file_quantities(ds, group).items():
         table.add(name, a, sample, value, cost, path.name)
 
@@ -184,8 +193,9 @@ def gather(result_paths, volume_paths=(), cost_dir=None) -> xr.Dataset:
     for path in map(Path, result_paths):
         _add_result(table, path, bench)
     if not table.values:
-        raise PorepipeError("the sweep found no scalar quantity in the result files "
-                            f"{[str(p) for p in result_paths]}")
+        raise PorepipeError(
+            f"the sweep found no scalar quantity in the result files {[str(p) for p in result_paths]}"
+        )
     upstream: dict[tuple, list] = {}
     for path in volume_paths:
         a, sample, cost, voxels = _volume_record(path)
@@ -194,7 +204,9 @@ def gather(result_paths, volume_paths=(), cost_dir=None) -> xr.Dataset:
         up[1] += cost["cpu_s"]
         up[2] = max(up[2], voxels)
     for (a, sample), up in upstream.items():
-        if sample != FULL and (a, FULL) in upstream:  # a sub-sample also cost the whole volume it was cut from
+        if (
+            sample != FULL and (a, FULL) in upstream
+        ):  # a sub-sample also cost the whole volume it was cut from
             up[0] += upstream[(a, FULL)][0]
             up[1] += upstream[(a, FULL)][1]
     return _to_dataset(table, upstream)
@@ -217,15 +229,36 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
     for (a, sample), rec in upstream.items():
         up[:, ai[a], si[sample]] = rec
     dims = ("quantity", "a_um", "sample_um")
-    units = {"wall_s": "s", "cpu_s": "s", "peak_mb": "MB", "bench_s": "s", "bench_cpu_s": "s", "bench_max_rss_mb": "MB"}
+    units = {
+        "wall_s": "s",
+        "cpu_s": "s",
+        "peak_mb": "MB",
+        "bench_s": "s",
+        "bench_cpu_s": "s",
+        "bench_max_rss_mb": "MB",
+    }
     ds = xr.Dataset(
         {name: (dims, arr, {"units": units.get(name, "")}) for name, arr in arrays.items()},
-        coords={"quantity": np.array(quantities, dtype=object), "a_um": np.array(a_um, dtype=np.float64),
-                "sample_um": ("sample_um", np.array(samples, dtype=np.float64),
-                              {"description": "edge of the corner sub-sample; inf = the whole volume"})},
+        coords={
+            "quantity": np.array(quantities, dtype=object),
+            "a_um": np.array(a_um, dtype=np.float64),
+            "sample_um": (
+                "sample_um",
+                np.array(samples, dtype=np.float64),
+                {"description": "edge of the corner sub-sample; inf = the whole volume"},
+            ),
+        },
     )
     ds["source"] = ("quantity", np.array([table.source[q] for q in quantities], dtype=object))
-    ds["upstream_wall_s"] = (("a_um", "sample_um"), up[0], {"units": "s", "description": "voxelize + segment (+ crop)"})
+    ds["upstream_wall_s"] = (
+        ("a_um", "sample_um"),
+        up[0],
+        {"units": "s", "description": "voxelize + segment (+ crop)"},
+    )
     ds["upstream_cpu_s"] = (("a_um", "sample_um"), up[1], {"units": "s"})
-    ds["voxels"] = (("a_um", "sample_um"), up[2], {"description": "voxels of the measured volume (NaN: unknown)"})
+    ds["voxels"] = (
+        ("a_um", "sample_um"),
+        up[2],
+        {"description": "voxels of the measured volume (NaN: unknown)"},
+    )
     return ds

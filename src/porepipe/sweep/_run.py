@@ -10,8 +10,16 @@ from porepipe.sweep._crop import crop_corner
 from porepipe.sweep._settings import Exponent
 
 
-def run(inputs, out, *, volumes=(), cost_dir=None, exponent: Exponent | str = Exponent.free, confidence: float = 0.95,
-        scene_name: str = "") -> xr.Dataset:
+def run(
+    inputs,
+    out,
+    *,
+    volumes=(),
+    cost_dir=None,
+    exponent: Exponent | str = Exponent.free,
+    confidence: float = 0.95,
+    scene_name: str = "",
+) -> xr.Dataset:
     """Gather every result of a scene into ``sweep.h5`` (quantity x resolution x sample size) with the limits a -> 0.
 
     Parameters
@@ -37,7 +45,9 @@ def run(inputs, out, *, volumes=(), cost_dir=None, exponent: Exponent | str = Ex
     """
     exponent = Exponent(exponent)
     ds = build_sweep(inputs, volumes, cost_dir, exponent, confidence)
-    digest = result_hash("sweep", inputs=sorted(inputs, key=str), exponent=exponent.value, confidence=confidence)
+    digest = result_hash(
+        "sweep", inputs=sorted(inputs, key=str), exponent=exponent.value, confidence=confidence
+    )
     with ResultWriter(out, stage="sweep", scene=scene_name, scene_hash=digest) as w:
         w.write_table(ds)
     return ds

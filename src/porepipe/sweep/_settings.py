@@ -24,12 +24,16 @@ class Exponent(str, enum.Enum):
 
 class Adaptive(BaseModel):
     """§7.5 iterative strategy: add the next finer resolution until the limit's error meets the target or the
-    budget is spent."""
+    budget is spent.
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    quantity: str | None = Field(None, description="sweep quantity to converge, e.g. 'estimate.phi_mean_grey' or "
-                                 "'permeability_x.kappa_mD'; None: adaptive mode unused")
+    quantity: str | None = Field(
+        None,
+        description="sweep quantity to converge, e.g. 'estimate.phi_mean_grey' or "
+        "'permeability_x.kappa_mD'; None: adaptive mode unused",
+    )
     target_rel_err: float = Field(0.01, gt=0, lt=1, description="stop when err(q∞)/|q∞| is at or below this")
     budget_s: float | None = Field(None, gt=0, description="wall-seconds budget of all runs of the sweep")
     budget_voxels: int | None = Field(None, ge=1, description="budget in voxels summed over all resolutions")
@@ -49,9 +53,13 @@ class Settings(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     sample_um: list[PositiveUm] = Field(
-        default_factory=list, description="edges L in µm of cubic sub-samples cut at the origin corner of every "
-        "binary volume (binary_a{a}_L{L}.h5); engines that accept them run on each")
-    exponent: Exponent = Field(Exponent.free, description="p in q(a) = q∞ + c·a^p: free, linear (1) or quadratic (2)")
+        default_factory=list,
+        description="edges L in µm of cubic sub-samples cut at the origin corner of every "
+        "binary volume (binary_a{a}_L{L}.h5); engines that accept them run on each",
+    )
+    exponent: Exponent = Field(
+        Exponent.free, description="p in q(a) = q∞ + c·a^p: free, linear (1) or quadratic (2)"
+    )
     confidence: float = Field(0.95, gt=0.5, lt=1, description="coverage of the stated error bars of q∞")
     adaptive: Adaptive = Field(default_factory=Adaptive, description="adaptive refinement (§7.5)")
 

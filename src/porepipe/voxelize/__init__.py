@@ -14,5 +14,5 @@ _EXPORTS = {
     "voxelize": "_api",
     "write_xyzr": "porepipe._shared.spheres",
 }
-__all__ = [*_EXPORTS]  # noqa: PLE0604 (built from the lazy export table)
+__all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

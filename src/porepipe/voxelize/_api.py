@@ -9,9 +9,9 @@ import numpy as np
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.sample_points import N_SAMPLES, SUB
+from porepipe._shared.spheres import check_spheres
 from porepipe.voxelize._kernels import _voxelize_slab
 from porepipe.voxelize._settings import VoxelizeMethod
-from porepipe._shared.spheres import check_spheres
 
 #: relative tolerance for "the voxel size divides the box"
 _DIVIDES_RTOL = 1e-9
@@ -25,7 +25,9 @@ def grid_shape(box_um, voxel_um: float) -> tuple[int, int, int]:
     for axis, edge in enumerate(box_um):
         n = edge / voxel_um
         if abs(n - round(n)) > _DIVIDES_RTOL * max(1.0, n) or round(n) < 1:
-            raise PorepipeError(f"voxel size {voxel_um} µm does not divide box edge {axis} = {edge} µm ({n:.6g})")
+            raise PorepipeError(
+                f"voxel size {voxel_um} µm does not divide box edge {axis} = {edge} µm ({n:.6g})"
+            )
         shape.append(int(round(n)))
     return tuple(shape)
 
@@ -65,8 +67,16 @@ class _Prepared:
         self.r_max = float(self.images[:, 3].max()) if len(self.images) else 0.0
 
 
-def iter_grey_slabs(centres_um, radii_um, box_um, voxel_um: float, periodic: bool = True,
-                    method: VoxelizeMethod = VoxelizeMethod.boundary, slab_planes: int = 32, progress: bool = False):
+def iter_grey_slabs(
+    centres_um,
+    radii_um,
+    box_um,
+    voxel_um: float,
+    periodic: bool = True,
+    method: VoxelizeMethod = VoxelizeMethod.boundary,
+    slab_planes: int = 32,
+    progress: bool = False,
+):
     """Yield ``(i0, slab)`` with ``slab`` the uint8 grey values of voxel planes ``i0 .. i0 + len(slab)``.
 
     Memory stays at one slab (``slab_planes × ny × nz`` bytes plus per-thread buffers), whatever the volume size.
@@ -80,15 +90,32 @@ def iter_grey_slabs(centres_um, radii_um, box_um, voxel_um: float, periodic: boo
         i1 = min(i0 + slab_planes, shape[0])
         slab = np.zeros((i1 - i0, shape[1], shape[2]), dtype=np.uint8)
         if len(prep.images):
-            _voxelize_slab(i0, i1, prep.images, prep.order, prep.xmin_sorted, prep.r_max, h,
-                           shape[1], shape[2], boundary_only, slab)
+            _voxelize_slab(
+                i0,
+                i1,
+                prep.images,
+                prep.order,
+                prep.xmin_sorted,
+                prep.r_max,
+                h,
+                shape[1],
+                shape[2],
+                boundary_only,
+                slab,
+            )
         if bar is not None:
             bar.update(i1)
         yield i0, slab
 
 
-def voxelize(centres_um, radii_um, box_um, voxel_um: float, periodic: bool = True,
-             method: VoxelizeMethod = VoxelizeMethod.boundary) -> np.ndarray:
+def voxelize(
+    centres_um,
+    radii_um,
+    box_um,
+    voxel_um: float,
+    periodic: bool = True,
+    method: VoxelizeMethod = VoxelizeMethod.boundary,
+) -> np.ndarray:
     """Grey values of a union of spheres.
 
     Parameters
@@ -117,8 +144,10 @@ def voxelize(centres_um, radii_um, box_um, voxel_um: float, periodic: bool = Tru
     """
     shape = grid_shape(box_um, voxel_um)
     out = np.empty(shape, dtype=np.uint8)
-    for i0, slab in iter_grey_slabs(centres_um, radii_um, box_um, voxel_um, periodic, method, slab_planes=shape[0]):
-        out[i0:i0 + len(slab)] = slab
+    for i0, slab in iter_grey_slabs(
+        centres_um, radii_um, box_um, voxel_um, periodic, method, slab_planes=shape[0]
+    ):
+        out[i0 : i0 + len(slab)] = slab
     return out
 
 

@@ -14,7 +14,9 @@ def main(args) -> int:
 
 def register(subparsers) -> None:
     """Add ``voxelize`` to the ``porepipe`` command."""
-    p = subparsers.add_parser("voxelize", help="grey volume (0..216) of the scene's spheres at one voxel size")
+    p = subparsers.add_parser(
+        "voxelize", help="grey volume (0..216) of the scene's spheres at one voxel size"
+    )
     p.add_argument("scene", help="scene YAML")
     p.add_argument("--a", type=float, required=True, help="voxel size in µm")
     p.add_argument("-o", "--out", required=True, help="output grey_a{a}.h5")

@@ -68,8 +68,9 @@ def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, words, skip_ro
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, status, mask, scratch, words,
-                    out):
+def _voxelize_plane(
+    i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, status, mask, scratch, words, out
+):
     """Grey values of voxel plane x = i into ``out`` (ny, nz); ``status``/``mask``/``scratch`` are this thread's."""
     status[:, :] = UNTOUCHED
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
@@ -98,8 +99,9 @@ def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_on
                     for w in range(WORDS):
                         mask[j, k, w] = 0
                     status[j, k] = PARTIAL
-                _mark_points(mask, j, k, i, cx, cy, cz, r2, h, scratch[0], scratch[1], scratch[2], words,
-                             boundary_only)
+                _mark_points(
+                    mask, j, k, i, cx, cy, cz, r2, h, scratch[0], scratch[1], scratch[2], words, boundary_only
+                )
     grey_from_status(status, mask, out)
 
 
@@ -115,5 +117,19 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
-            _voxelize_plane(i0 + p, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only,
-                            status, mask, scratch, words, out[p])
+            _voxelize_plane(
+                i0 + p,
+                images,
+                order,
+                xmin_sorted,
+                r_max,
+                h,
+                ny,
+                nz,
+                boundary_only,
+                status,
+                mask,
+                scratch,
+                words,
+                out[p],
+            )

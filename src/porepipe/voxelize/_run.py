@@ -12,8 +12,9 @@ from porepipe.scene import scene_part
 from porepipe.voxelize._api import grid_shape, iter_grey_slabs
 
 
-def run(scene, voxel_um: float, out, *, packing_path=None, threads: int | None = None,
-        progress: bool = True) -> np.ndarray:
+def run(
+    scene, voxel_um: float, out, *, packing_path=None, threads: int | None = None, progress: bool = True
+) -> np.ndarray:
     """Write ``grey_a{a}.h5``: volume ``grey`` (uint8 0..216) and the grey histogram M(g, a) as its table.
 
     Parameters
@@ -40,11 +41,23 @@ def run(scene, voxel_um: float, out, *, packing_path=None, threads: int | None =
     centres, radii = spheres_from_scene(scene, packing_path)
     box = scene.domain.size_um
     shape = grid_shape(box, voxel_um)
-    digest = result_hash("voxelize", scene_part=scene_part(scene, "domain", "spheres"), voxel_um=voxel_um,
-                         packing=str(packing_path or ""))
+    digest = result_hash(
+        "voxelize",
+        scene_part=scene_part(scene, "domain", "spheres"),
+        voxel_um=voxel_um,
+        packing=str(packing_path or ""),
+    )
     with ResultWriter(out, stage="voxelize", scene=scene.name, scene_hash=digest, threads=threads) as w:
-        slabs = iter_grey_slabs(centres, radii, box, voxel_um, scene.domain.periodic, scene.voxelize.method,
-                                scene.voxelize.slab_planes, progress)
+        slabs = iter_grey_slabs(
+            centres,
+            radii,
+            box,
+            voxel_um,
+            scene.domain.periodic,
+            scene.voxelize.method,
+            scene.voxelize.slab_planes,
+            progress,
+        )
         hist = write_grey_volume(w, slabs, shape, voxel_um, scene.domain.periodic, {"n_spheres": len(radii)})
         w.attrs.update(method=scene.voxelize.method.value)
     return hist

@@ -7,7 +7,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 class VoxelizeMethod(str, enum.Enum):
     """``boundary``: sample only voxels a sphere surface crosses; ``brute``: all 216 points of every voxel near a
-    sphere (the thesis's method, kept as oracle and for the benchmark). Both give identical grey values."""
+    sphere (the thesis's method, kept as oracle and for the benchmark). Both give identical grey values.
+    """
 
     boundary = "boundary"
     brute = "brute"
@@ -18,5 +19,7 @@ class Settings(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    method: VoxelizeMethod = Field(VoxelizeMethod.boundary, description="boundary (fast) or brute (216 points/voxel)")
+    method: VoxelizeMethod = Field(
+        VoxelizeMethod.boundary, description="boundary (fast) or brute (216 points/voxel)"
+    )
     slab_planes: int = Field(32, ge=1, description="voxel planes per slab held in memory at once")

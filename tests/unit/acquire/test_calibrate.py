@@ -5,7 +5,12 @@ import pytest
 import yaml
 
 from porepipe.acquire._api import acquire
-from porepipe.acquire._calibrate import calibrated_scene, fit_exponential_alpha, fit_radius_distribution, write_scene_yaml
+from porepipe.acquire._calibrate import (
+    calibrated_scene,
+    fit_exponential_alpha,
+    fit_radius_distribution,
+    write_scene_yaml,
+)
 from porepipe.acquire._compare import comparison_markdown, write_comparison
 from porepipe.acquire._settings import Calibration, Family, Settings
 from porepipe.scene import load_scene
@@ -32,7 +37,9 @@ def test_uniform_sample_picks_uniform_or_flat_exponential():
     fit = fit_radius_distribution(r, ALL)
     assert fit.family in (Family.uniform, Family.exponential)
     assert fit.spec.get("alpha_per_um", 0.0) < 0.02  # flat: alpha ~ 0
-    assert fit.spec["min_um"] == pytest.approx(20, abs=0.05) and fit.spec["max_um"] == pytest.approx(30, abs=0.05)
+    assert fit.spec["min_um"] == pytest.approx(20, abs=0.05) and fit.spec["max_um"] == pytest.approx(
+        30, abs=0.05
+    )
 
 
 def test_bimodal_sample_falls_back_to_discrete():
@@ -55,7 +62,9 @@ def statistics(tmp_path_factory):
         c, r = rng.uniform(0, n, 3), rng.uniform(4, 7)
         solid |= ((grid - c) ** 2).sum(axis=1) <= r * r
     np.save(tmp / "img.npy", np.where(solid.reshape(n, n, n), 200, 40).astype(np.uint8))
-    settings = Settings.model_validate({"image": str(tmp / "img.npy"), "voxel_um": 2.0, "statistics": {"lpt": True}})
+    settings = Settings.model_validate(
+        {"image": str(tmp / "img.npy"), "voxel_um": 2.0, "statistics": {"lpt": True}}
+    )
     acquire(settings, tmp / "statistics.h5")
     return tmp
 
@@ -67,7 +76,9 @@ def test_calibrated_scene_is_a_valid_packing_scene(statistics):
     scene = calibrated_scene(ds, Calibration(), name="m", seed=3)
     path = write_scene_yaml(scene, statistics / "model.yaml")
     loaded = load_scene(path)  # the packer's and (if installed) the decoration's settings accept it
-    assert loaded.spheres.pack and loaded.packing.types[0].count == round(float(ds.grains_per_mm3) * 96**3 * 1e-9)
+    assert loaded.spheres.pack and loaded.packing.types[0].count == round(
+        float(ds.grains_per_mm3) * 96**3 * 1e-9
+    )
     assert loaded.domain.size_um == (96.0, 96.0, 96.0) and loaded.resolutions_um == [2.0]
     assert "target_porosity" in path.read_text()  # the calibration record, as a comment
     assert "_calibration" not in yaml.safe_load(path.read_text())

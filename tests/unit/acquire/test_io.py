@@ -20,8 +20,13 @@ def volume():
 def test_multipage_tiff_with_imagej_spacing(tmp_path, volume):
     path = tmp_path / "v.tif"
     # tifffile stores pages along z: array (z, y, x); resolution in pixels per µm
-    tifffile.imwrite(path, volume.transpose(2, 1, 0), imagej=True, resolution=(1 / 3.7, 1 / 3.7),
-                     metadata={"spacing": 5.0, "unit": "um"})
+    tifffile.imwrite(
+        path,
+        volume.transpose(2, 1, 0),
+        imagej=True,
+        resolution=(1 / 3.7, 1 / 3.7),
+        metadata={"spacing": 5.0, "unit": "um"},
+    )
     img = read_image(path)
     np.testing.assert_array_equal(img.data, volume)
     # rationals of the resolution tag: 1/3.7 is stored as a fraction, exact to ~1e-7 relative
@@ -31,8 +36,13 @@ def test_multipage_tiff_with_imagej_spacing(tmp_path, volume):
 
 def test_tiff_resolution_in_centimetres(tmp_path, volume):
     path = tmp_path / "cm.tif"
-    tifffile.imwrite(path, volume.transpose(2, 1, 0), resolution=(2000.0, 2000.0), resolutionunit="CENTIMETER",
-                     photometric="minisblack")
+    tifffile.imwrite(
+        path,
+        volume.transpose(2, 1, 0),
+        resolution=(2000.0, 2000.0),
+        resolutionunit="CENTIMETER",
+        photometric="minisblack",
+    )
     img = read_image(path)
     np.testing.assert_allclose(img.spacing_um[:2], (5.0, 5.0), rtol=1e-9)  # 10^4 µm / 2000 px
 
@@ -75,7 +85,11 @@ def test_raw_round_trip_with_header(tmp_path, volume, order, byte_order, dtype):
     header = b"HEADER-0123456789" * 3
     with open(path, "wb") as f:
         f.write(header)
-        f.write(data.astype(np.dtype(dtype).newbyteorder("<" if byte_order == "little" else ">")).tobytes(order=order))
+        f.write(
+            data.astype(np.dtype(dtype).newbyteorder("<" if byte_order == "little" else ">")).tobytes(
+                order=order
+            )
+        )
     raw = Raw(dtype=dtype, shape=data.shape, byte_order=byte_order, header_bytes=len(header), order=order)
     img = read_image(path, raw=raw, voxel_um=1.0)
     assert isinstance(img.data, np.memmap)  # never loaded whole

@@ -59,7 +59,9 @@ def test_multi_otsu_three_phases_matches_scikit_image():
     ph = segment_phases(grey, seg)
     np.testing.assert_allclose(ph.thresholds, threshold_multiotsu(grey, classes=3))
     expected = np.digitize(levels, [80, 160])
-    np.testing.assert_array_equal(ph.labels, expected)  # noise 8 << level gap 80: every voxel classified right
+    np.testing.assert_array_equal(
+        ph.labels, expected
+    )  # noise 8 << level gap 80: every voxel classified right
 
 
 def test_user_thresholds_give_table_8_1_fractions_exactly():
@@ -70,8 +72,11 @@ def test_user_thresholds_give_table_8_1_fractions_exactly():
     counts[-1] = n - counts[:-1].sum()
     grey = np.repeat(np.array([30, 90, 140, 220], np.uint8), counts)
     np.random.default_rng(5).shuffle(grey)
-    seg = Segmentation(method="thresholds", phases=["pore", "sedimentation", "cementation", "grains"],
-                       thresholds=[60, 115, 180])
+    seg = Segmentation(
+        method="thresholds",
+        phases=["pore", "sedimentation", "cementation", "grains"],
+        thresholds=[60, 115, 180],
+    )
     ph = segment_phases(grey.reshape(40, 40, 40), seg)
     np.testing.assert_array_equal(np.bincount(ph.labels.ravel(), minlength=4), counts)
 
@@ -96,4 +101,6 @@ def test_non_local_means_reduces_noise_of_a_flat_section():
     grey = np.clip(100 + rng.normal(0, 10, (32, 32, 1)), 0, 255).astype(np.uint8)
     out = denoise(grey, Denoise.nl_means)
     assert out.dtype == np.uint8 and out.shape == grey.shape
-    assert out.std() < 0.5 * grey.std()  # NLM on pure noise averages many similar patches: std drops well below half
+    assert (
+        out.std() < 0.5 * grey.std()
+    )  # NLM on pure noise averages many similar patches: std drops well below half

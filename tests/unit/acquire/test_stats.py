@@ -83,8 +83,8 @@ def test_box_grain_elongation_and_orientation():
 
 def test_percolation_of_a_tube_along_x():
     pore = np.zeros((10, 9, 9), np.uint8)
-    pore[:, 4, 4] = 1          # spans x
-    pore[2:5, 1:3, 1:3] = 1    # isolated blob
+    pore[:, 4, 4] = 1  # spans x
+    pore[2:5, 1:3, 1:3] = 1  # isolated blob
     ds = _stats.percolation(pore)
     np.testing.assert_allclose(ds.connected_porosity.values, [10 / pore.size, 0, 0])
     assert int(ds.n_pore_clusters) == 2
@@ -113,5 +113,5 @@ def test_coarsen_pore_block_rule_against_loops():
     got = coarsen_pore(pore, 2)
     assert got.shape == (4, 4, 3)
     for i, j, k in np.ndindex(got.shape):
-        block = pore[2 * i:2 * i + 2, 2 * j:2 * j + 2, 2 * k:2 * k + 2]
+        block = pore[2 * i : 2 * i + 2, 2 * j : 2 * j + 2, 2 * k : 2 * k + 2]
         assert got[i, j, k] == (block.sum() > 4)  # less than half matrix

@@ -34,7 +34,7 @@ def naive_grey(deco, box_um, voxel_um, periodic=True):
                 hit = (dx * dx + dy * dy) + dz * dz <= r * r
             else:
                 hit = np.ones_like(inside)
-                for n0, n1, n2, d in world.planes[world.plane_ptr[g]:world.plane_ptr[g + 1]]:
+                for n0, n1, n2, d in world.planes[world.plane_ptr[g] : world.plane_ptr[g + 1]]:
                     hit &= (n0 * dx + n1 * dy) + n2 * dz <= d
             inside |= hit
     return inside.reshape(shape[0], 6, shape[1], 6, shape[2], 6).sum(axis=(1, 3, 5)).astype(np.uint8)

@@ -10,10 +10,16 @@ from porepipe.cli import build_parser
 from porepipe.decorate import read_grains, voxelize_grains
 
 SCENE = {
-    "name": "tiny-deco", "seed": 3, "domain": {"size_um": [12, 12, 12], "periodic": True},
+    "name": "tiny-deco",
+    "seed": 3,
+    "domain": {"size_um": [12, 12, 12], "periodic": True},
     "spheres": {"inline": [[2, 3, 4, 2.5], [8, 8, 8, 3.0], [11.5, 0.5, 6, 2.0]]},
-    "decoration": {"families": [{"name": "q", "generator": "quartz", "count": 2},
-                                {"name": "f", "generator": "file", "file": "cube.planes"}]},
+    "decoration": {
+        "families": [
+            {"name": "q", "generator": "quartz", "count": 2},
+            {"name": "f", "generator": "file", "file": "cube.planes"},
+        ]
+    },
     "resolutions_um": [2, 1],
 }
 
@@ -24,15 +30,16 @@ def _run(*argv):
 
 
 def test_decorate_then_voxelize(tmp_path):
-    (tmp_path / "cube.planes").write_text("\n".join(f"box {x} {y} {z} 1" for x, y, z in
-                                                    np.vstack([np.eye(3), -np.eye(3)]).astype(int)) + "\n")
+    (tmp_path / "cube.planes").write_text(
+        "\n".join(f"box {x} {y} {z} 1" for x, y, z in np.vstack([np.eye(3), -np.eye(3)]).astype(int)) + "\n"
+    )
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE))
     grains = tmp_path / "grains.h5"
     assert _run("decorate", scene, "-o", grains, "--threads", "1") == 0
     table = read_table(grains)
-    assert table.sizes["grain"] == 3 and table.sizes["type"] == 3            # 2 quartz + 1 cube from the file
-    assert table["volume"].values[2] == pytest.approx(8.0, rel=1e-12)       # the file's cube, exact
+    assert table.sizes["grain"] == 3 and table.sizes["type"] == 3  # 2 quartz + 1 cube from the file
+    assert table["volume"].values[2] == pytest.approx(8.0, rel=1e-12)  # the file's cube, exact
     assert read_attrs(grains)["stage"] == "decorate"
     out = tmp_path / "grey_a1.h5"
     assert _run("voxelize-grains", scene, "--grains", grains, "--a", 1, "-o", out) == 0
@@ -40,7 +47,7 @@ def test_decorate_then_voxelize(tmp_path):
     deco, _ = read_grains(grains)
     assert np.array_equal(grey, voxelize_grains(deco, (12.0,) * 3, 1.0))
     hist = read_table(out)["grey_histogram"].values
-    assert hist.sum() == 12 ** 3 and np.array_equal(hist, np.bincount(grey.ravel(), minlength=217))
+    assert hist.sum() == 12**3 and np.array_equal(hist, np.bincount(grey.ravel(), minlength=217))
     assert attrs["voxel_um"] == 1.0
 
 

@@ -7,8 +7,10 @@ from porepipe._shared.store import ResultWriter
 from porepipe.decorate import decorate, decoration_dataset, read_grains, world_grains
 from porepipe.decorate._settings import Settings
 
-FAMS = [{"name": "q", "generator": "quartz", "count": 3}, {"name": "r", "generator": "random", "count": 2,
-                                                             "facets": 20}]
+FAMS = [
+    {"name": "q", "generator": "quartz", "count": 3},
+    {"name": "r", "generator": "random", "count": 2, "facets": 20},
+]
 
 
 def _spheres(n=200, seed=0):
@@ -25,28 +27,33 @@ def test_scale_rules(rule):
         t = deco.library[deco.types[g]]
         s = deco.scales[g]
         if rule == "equal_volume":
-            assert t.volume * s ** 3 == pytest.approx(4 / 3 * np.pi * radii[g] ** 3, rel=1e-12)
-        elif rule == "circumscribed":   # farthest vertex on the sphere
+            assert t.volume * s**3 == pytest.approx(4 / 3 * np.pi * radii[g] ** 3, rel=1e-12)
+        elif rule == "circumscribed":  # farthest vertex on the sphere
             verts = t.vertices @ deco.rotations[g].T * s
             assert np.linalg.norm(verts, axis=1).max() == pytest.approx(radii[g], rel=1e-12)
-        else:                           # nearest face plane tangent to the sphere
-            planes = world.planes[world.plane_ptr[g]:world.plane_ptr[g + 1]]
+        else:  # nearest face plane tangent to the sphere
+            planes = world.planes[world.plane_ptr[g] : world.plane_ptr[g + 1]]
             assert planes[:, 3].min() == pytest.approx(radii[g], rel=1e-12)
 
 
 def test_assignment_by_type_and_size_class():
     centres, radii = _spheres(4000, 2)
     sphere_types = np.arange(4000) % 2
-    settings = Settings(families=FAMS, assign=[
-        {"sphere_type": 1, "probabilities": {"r": 1.0}},
-        {"radius_min_um": 4.0, "probabilities": {"q": 0.25, "r": 0.75}},
-    ])
+    settings = Settings(
+        families=FAMS,
+        assign=[
+            {"sphere_type": 1, "probabilities": {"r": 1.0}},
+            {"radius_min_um": 4.0, "probabilities": {"q": 0.25, "r": 0.75}},
+        ],
+    )
     deco = decorate(centres, radii, settings, seed=3, sphere_types=sphere_types)
     fam = deco.families[deco.types]
     assert (fam[sphere_types == 1] == 1).all()
     big = (sphere_types == 0) & (radii >= 4.0)
     small = (sphere_types == 0) & (radii < 4.0)
-    assert (fam[small] == 0).mean() == pytest.approx(0.5, abs=4 * np.sqrt(0.25 / small.sum()))   # no rule: uniform
+    assert (fam[small] == 0).mean() == pytest.approx(
+        0.5, abs=4 * np.sqrt(0.25 / small.sum())
+    )  # no rule: uniform
     assert (fam[big] == 0).mean() == pytest.approx(0.25, abs=4 * np.sqrt(0.25 * 0.75 / big.sum()))
     # types within a family are drawn uniformly: all 3 quartz types are used
     assert set(deco.types[fam == 0]) == {0, 1, 2}

@@ -32,11 +32,26 @@ def _closed_forms():
     return {
         # V, S, M = ½ Σ L ψ, inradius, circumradius
         "cube": (cube(), (8.0, 24.0, 0.5 * 12 * 2 * np.pi / 2, 1.0, np.sqrt(3.0))),
-        "tetrahedron": (tetrahedron(), (a_t ** 3 / (6 * np.sqrt(2)), np.sqrt(3) * a_t ** 2,
-                                        0.5 * 6 * a_t * (np.pi - np.arccos(1 / 3)), a_t / (2 * np.sqrt(6)),
-                                        a_t * np.sqrt(6) / 4)),
-        "octahedron": (octahedron(), (np.sqrt(2) / 3 * a_o ** 3, 2 * np.sqrt(3) * a_o ** 2,
-                                      0.5 * 12 * a_o * (np.pi - np.arccos(-1 / 3)), 1 / np.sqrt(3), 1.0)),
+        "tetrahedron": (
+            tetrahedron(),
+            (
+                a_t**3 / (6 * np.sqrt(2)),
+                np.sqrt(3) * a_t**2,
+                0.5 * 6 * a_t * (np.pi - np.arccos(1 / 3)),
+                a_t / (2 * np.sqrt(6)),
+                a_t * np.sqrt(6) / 4,
+            ),
+        ),
+        "octahedron": (
+            octahedron(),
+            (
+                np.sqrt(2) / 3 * a_o**3,
+                2 * np.sqrt(3) * a_o**2,
+                0.5 * 12 * a_o * (np.pi - np.arccos(-1 / 3)),
+                1 / np.sqrt(3),
+                1.0,
+            ),
+        ),
     }
 
 
@@ -47,7 +62,7 @@ def test_platonic_measures(name):
     assert t.volume == pytest.approx(v, rel=RTOL)
     assert t.area == pytest.approx(s, rel=RTOL)
     assert t.mean_curvature == pytest.approx(m, rel=RTOL)
-    assert t.inradius == pytest.approx(r_in, rel=1e-7)   # LP (HiGHS) optimality tolerance
+    assert t.inradius == pytest.approx(r_in, rel=1e-7)  # LP (HiGHS) optimality tolerance
     assert t.centre_inradius == pytest.approx(r_in, rel=RTOL)
     assert t.circumradius == pytest.approx(r_circ, rel=RTOL)
     assert t.n_faces == len(offsets)
@@ -71,7 +86,7 @@ def test_measures_invariant_under_motion_and_centred(name):
 def test_redundant_and_duplicate_planes_dropped():
     normals, offsets = cube()
     extra_n = np.vstack([normals, [[1, 1, 0]] / np.sqrt(2.0), [[1, 0, 0]]])
-    extra_d = np.concatenate([offsets, [np.sqrt(2.0)], [1.0]])   # touches an edge only; duplicate of x <= 1
+    extra_d = np.concatenate([offsets, [np.sqrt(2.0)], [1.0]])  # touches an edge only; duplicate of x <= 1
     t = polyhedron("cube+", extra_n, extra_d)
     assert t.n_faces == 6
     assert t.mean_curvature == pytest.approx(6 * np.pi, rel=RTOL)
@@ -83,12 +98,12 @@ def test_quartz_unperturbed_closed_form():
     t = quartz_type("q", np.random.default_rng(0), elongation=e, perturbation=0.0)
     h = 1.0 + e
     alpha = np.deg2rad(QUARTZ_CAP_ANGLE_DEG)
-    side = 2 / np.sqrt(3)                       # hexagon edge for inradius 1
+    side = 2 / np.sqrt(3)  # hexagon edge for inradius 1
     hex_area = 2 * np.sqrt(3)
     cap_height = np.tan(alpha)
     volume = hex_area * 2 * h + 2 * hex_area * cap_height / 3
     area = 6 * side * 2 * h + 12 * 0.5 * side / np.cos(alpha)
-    slant_edge = np.hypot(side, cap_height)     # hexagon vertex (radius = side) to apex
+    slant_edge = np.hypot(side, cap_height)  # hexagon vertex (radius = side) to apex
     cap_cap = np.arccos(np.sin(alpha) ** 2 * np.cos(np.pi / 3) + np.cos(alpha) ** 2)
     m = 0.5 * (6 * 2 * h * np.pi / 3 + 12 * side * (np.pi / 2 - alpha) + 12 * slant_edge * cap_cap)
     assert t.n_faces == 18
@@ -109,7 +124,7 @@ def test_perturbed_quartz_volume_by_monte_carlo():
     frac = np.all(pts @ t.normals.T <= t.offsets, axis=1).mean()
     box = np.prod(hi - lo)
     sigma = box * np.sqrt(frac * (1 - frac) / n)
-    assert abs(frac * box - t.volume) < 4 * sigma   # 4σ: false alarm 6e-5
+    assert abs(frac * box - t.volume) < 4 * sigma  # 4σ: false alarm 6e-5
 
 
 def test_random_type_facets_and_elongation_is_affine():
@@ -133,5 +148,5 @@ def test_plane_file(tmp_path):
     path.write_text("\n".join(lines) + "\n")
     types = read_plane_file(path)
     assert [t.name for t in types] == ["box", "tet"]
-    assert types[0].volume == pytest.approx(1.0, rel=RTOL)       # normals of length 2 are normalised with d
+    assert types[0].volume == pytest.approx(1.0, rel=RTOL)  # normals of length 2 are normalised with d
     assert types[1].volume == pytest.approx((2 * np.sqrt(2)) ** 3 / (6 * np.sqrt(2)), rel=RTOL)

@@ -19,9 +19,13 @@ def _packing(n, seed, r=(1.5, 3.0)):
 
 
 def _settings(**kw):
-    fams = kw.pop("families", [{"name": "q", "generator": "quartz", "count": 4, "elongation": (0, 0.5)},
-                               {"name": "r", "generator": "random", "count": 3, "facets": 12,
-                                "elongation": (0.0, 0.4)}])
+    fams = kw.pop(
+        "families",
+        [
+            {"name": "q", "generator": "quartz", "count": 4, "elongation": (0, 0.5)},
+            {"name": "r", "generator": "random", "count": 3, "facets": 12, "elongation": (0.0, 0.4)},
+        ],
+    )
     return Settings(families=fams, **kw)
 
 
@@ -34,7 +38,7 @@ def test_boundary_brute_and_naive_identical(periodic):
     naive = naive_grey(deco, BOX, 1.0, periodic)
     assert np.array_equal(fast, brute)
     assert np.array_equal(fast, naive)
-    assert 0 < (fast == 216).sum() and 0 < ((fast > 0) & (fast < 216)).sum()
+    assert (fast == 216).sum() > 0 and ((fast > 0) & (fast < 216)).sum() > 0
 
 
 def test_sphere_grains_equal_foundation_voxelizer():
@@ -47,8 +51,9 @@ def test_sphere_grains_equal_foundation_voxelizer():
 
 def test_mixed_spheres_and_polyhedra_match_naive():
     centres, radii = _packing(10, 6)
-    settings = _settings(families=[{"name": "ball", "generator": "sphere"},
-                                   {"name": "q", "generator": "quartz", "count": 3}])
+    settings = _settings(
+        families=[{"name": "ball", "generator": "sphere"}, {"name": "q", "generator": "quartz", "count": 3}]
+    )
     deco = decorate(centres, radii, settings, seed=5)
     assert set(deco.families[deco.types]) == {0, 1}
     assert np.array_equal(voxelize_grains(deco, BOX, 1.5), naive_grey(deco, BOX, 1.5))

@@ -20,8 +20,29 @@ def collision_matrix(kind: str, tau: float, magic: float = 3 / 16, tau_bulk: flo
         tau_minus = 0.5 + magic / (tau - 0.5)
         return plus / tau + minus / tau_minus
     m = dhumieres_matrix()
-    s = np.array([0, 1 / tau_bulk, 1.4, 0, 1.2, 0, 1.2, 0, 1.2,
-                  1 / tau, 1.4, 1 / tau, 1.4, 1 / tau, 1 / tau, 1 / tau, 1.98, 1.98, 1.98])
+    s = np.array(
+        [
+            0,
+            1 / tau_bulk,
+            1.4,
+            0,
+            1.2,
+            0,
+            1.2,
+            0,
+            1.2,
+            1 / tau,
+            1.4,
+            1 / tau,
+            1.4,
+            1 / tau,
+            1 / tau,
+            1 / tau,
+            1.98,
+            1.98,
+            1.98,
+        ]
+    )
     return np.linalg.inv(m) @ np.diag(s) @ m
 
 

@@ -49,11 +49,13 @@ def test_fields_follow_the_callers_axes_and_vti_reads_back(tmp_path):
     assert np.isnan(res.pressure[~pore]).all() and np.isfinite(res.pressure[pore]).all()
     path = write_vti(tmp_path / "f.vti", {"velocity": res.velocity, "pressure": res.pressure}, spacing=2.0)
     root = ET.parse(path).getroot()
-    assert root.find("ImageData").get("WholeExtent") == f"0 {pore.shape[0]} 0 {pore.shape[1]} 0 {pore.shape[2]}"
+    assert (
+        root.find("ImageData").get("WholeExtent") == f"0 {pore.shape[0]} 0 {pore.shape[1]} 0 {pore.shape[2]}"
+    )
     for array in root.iter("DataArray"):
         raw = base64.b64decode(array.text.strip())
         n = int(np.frombuffer(raw[:8], "<u8")[0])
-        values = np.frombuffer(raw[8:8 + n], "<f8")
+        values = np.frombuffer(raw[8 : 8 + n], "<f8")
         if array.get("Name") == "velocity":
             back = values.reshape(pore.shape[2], pore.shape[1], pore.shape[0], 3)  # z, y, x, component
             np.testing.assert_array_equal(back[..., 1].transpose(2, 1, 0), res.velocity[1])
@@ -98,7 +100,9 @@ def test_cli_writes_one_file_per_axis_with_units_and_history(tmp_path):
     assert args.func(args) == 0
     out = tmp_path / "perm_a2_x.h5"
     attrs = read_attrs(out)
-    assert attrs["stage"] == "permeability" and attrs["collision"] == "trt" and attrs["precision"] == "float64"
+    assert (
+        attrs["stage"] == "permeability" and attrs["collision"] == "trt" and attrs["precision"] == "float64"
+    )
     assert attrs["kappa_m2"] == pytest.approx(attrs["kappa_lu"] * 4e-12, rel=1e-12)
     with xr.open_dataset(out, engine="h5netcdf") as ds:
         assert ds["history_kappa"].size >= 2 and float(ds["kappa_mD"]) == pytest.approx(attrs["kappa_mD"])
@@ -125,7 +129,9 @@ def test_cli_writes_fields_and_vti(tmp_path):
     out = tmp_path / "perm_a2_z.h5"
     pore_z = np.moveaxis(pore, 0, 2)
     binary = _binary(tmp_path, pore_z, "binary_a2.h5")
-    args = _parse([str(binary), "--axis", "z", "--write-fields", "true", "--write-vti", "true", "-o", str(out)])
+    args = _parse(
+        [str(binary), "--axis", "z", "--write-fields", "true", "--write-vti", "true", "-o", str(out)]
+    )
     args.func(args)
     vz, vattrs = read_volume(out, "velocity_z")
     assert vattrs["voxel_um"] == 2.0 and np.all(vz[pore_z] > 0)

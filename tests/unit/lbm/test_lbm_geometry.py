@@ -68,9 +68,12 @@ def test_periodic_pruning_keeps_dead_ends_attached_through_the_wrap():
 def test_no_path_gives_no_lattice_and_a_reason():
     pore = np.ones((6, 4, 4), dtype=bool)
     pore[3] = False
-    for prep in (periodic_setup(pore, mirror=False, lateral_periodic=True, prune=True),
-                 chamber_setup(pore, inlet_layers=3, outlet_layers=2, force_layers=1, lateral_periodic=True,
-                               prune=True)):
+    for prep in (
+        periodic_setup(pore, mirror=False, lateral_periodic=True, prune=True),
+        chamber_setup(
+            pore, inlet_layers=3, outlet_layers=2, force_layers=1, lateral_periodic=True, prune=True
+        ),
+    ):
         assert prep.lattice is None and "κ = 0" in prep.reason
 
 
@@ -79,7 +82,9 @@ def test_mirror_doubles_the_domain_and_chambers_add_open_layers():
     pore[:, 0, 0] = True
     mirrored = periodic_setup(pore, mirror=True, lateral_periodic=True, prune=False)
     np.testing.assert_array_equal(mirrored.lattice.pore, np.concatenate([pore, pore[::-1]]))
-    ch = chamber_setup(pore, inlet_layers=4, outlet_layers=3, force_layers=2, lateral_periodic=True, prune=False)
+    ch = chamber_setup(
+        pore, inlet_layers=4, outlet_layers=3, force_layers=2, lateral_periodic=True, prune=False
+    )
     assert ch.lattice.shape == (12, 4, 4)
     assert ch.lattice.pore[:4].all() and ch.lattice.pore[9:].all()
     assert ch.lattice.sample_layers == (4, 9) and ch.lattice.force_layers == (0, 2)
@@ -101,8 +106,9 @@ def test_pressure_gradient_methods_agree_on_a_linear_profile():
     fields[0] = 1e-4 - 3e-6 * layer  # δρ falls by 3e-6 per layer: ∇p = −1e-6
     fields[1] = 2e-5
     nu = 0.1
-    est = estimates(lat, sampler, fields, nu=nu, body_force=1e-6, sample_voxels=5 * 9, sample_area=9,
-                    trim_layers=1)
+    est = estimates(
+        lat, sampler, fields, nu=nu, body_force=1e-6, sample_voxels=5 * 9, sample_area=9, trim_layers=1
+    )
     s_nodes = int(np.count_nonzero(pore[3:8]))
     u_mean = 2e-5 * s_nodes / 45
     rho_bar = 1 + 1e-4 - 3e-6 * (3 + 7) / 2
@@ -118,8 +124,9 @@ def test_body_force_estimate_is_nu_u_over_b():
     lat = build_lattice(pore, (True, False, False), (0, 4), (0, 4))
     fields = np.zeros((4, lat.n_nodes))
     fields[1] = 3e-5
-    est = estimates(lat, Sampler.of(lat), fields, nu=0.2, body_force=1e-6, sample_voxels=36, sample_area=9,
-                    trim_layers=0)
+    est = estimates(
+        lat, Sampler.of(lat), fields, nu=0.2, body_force=1e-6, sample_voxels=36, sample_area=9, trim_layers=0
+    )
     assert est["body_force/mean"] == pytest.approx(0.2 * 3e-5 / 1e-6, rel=1e-12)
     assert est["body_force/flux"] == pytest.approx(0.2 * 3e-5 / 1e-6, rel=1e-12)
 

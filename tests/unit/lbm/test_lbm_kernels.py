@@ -71,7 +71,11 @@ def _chunked_pore():
     return pore
 
 
-_GEOMETRIES = {"random": lambda: _random_pore((5, 4, 6), 0.7, seed=2), "open": _open_pore, "chunks": _chunked_pore}
+_GEOMETRIES = {
+    "random": lambda: _random_pore((5, 4, 6), 0.7, seed=2),
+    "open": _open_pore,
+    "chunks": _chunked_pore,
+}
 
 
 @pytest.mark.parametrize("collision", ["bgk", "trt", "mrt"])
@@ -102,7 +106,7 @@ def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, s
     other = np.zeros_like(sparse)
     fields = np.zeros((4, n))
     mask = np.zeros(pore.shape)
-    mask[force_layers[0]:force_layers[1]] = 1
+    mask[force_layers[0] : force_layers[1]] = 1
     a_matrix = collision_matrix(collision, tau)
     for _ in range(5):
         dense, rho, u = step(dense, pore, periodic, a_matrix, (1e-3, 0, 0), mask)
@@ -169,4 +173,6 @@ def test_mrt_with_distinct_rates_equals_dense_moment_transform(monkeypatch):
     rho = 1 + f.sum()
     feq = equilibrium(np.array(rho), C.T @ (f + W) / rho) - W
     phi = 3 * W * rho * C[:, 0] * b
-    np.testing.assert_allclose(dst, f - np.linalg.inv(m) @ (rates * (m @ (f - feq))) + phi, rtol=0, atol=1e-16)
+    np.testing.assert_allclose(
+        dst, f - np.linalg.inv(m) @ (rates * (m @ (f - feq))) + phi, rtol=0, atol=1e-16
+    )

@@ -25,10 +25,21 @@ def _binary(tmp_path):
 
 def test_checkpoint_flag_is_written_on_the_step_limit_and_resumed(tmp_path):
     binary, ckpt, out = _binary(tmp_path), tmp_path / "perm.ckpt.h5", tmp_path / "perm_a2_x.h5"
-    common = [str(binary), "--axis", "x", "--collision", "trt", "--window-steps", "10", "-o", str(out),
-              "--checkpoint", str(ckpt)]
+    common = [
+        str(binary),
+        "--axis",
+        "x",
+        "--collision",
+        "trt",
+        "--window-steps",
+        "10",
+        "-o",
+        str(out),
+        "--checkpoint",
+        str(ckpt),
+    ]
     assert main(["permeability", *common, "--max-steps", "20"]) == 2  # step limit: error, no result ...
-    assert not out.exists() and ckpt.is_file()                           # ... but the checkpoint is kept
+    assert not out.exists() and ckpt.is_file()  # ... but the checkpoint is kept
     with h5py.File(ckpt, "r") as f:
         first = int(f.attrs["step"])
     assert first >= 20
@@ -41,14 +52,33 @@ def test_checkpoint_flag_is_written_on_the_step_limit_and_resumed(tmp_path):
 def test_no_resume_discards_the_checkpoint(tmp_path):
     binary, ckpt, out = _binary(tmp_path), tmp_path / "c.h5", tmp_path / "perm_a2_x.h5"
     ckpt.write_text("not a checkpoint of this run")
-    assert main(["permeability", str(binary), "--axis", "x", "--collision", "trt", "-o", str(out),
-                 "--checkpoint", str(ckpt), "--no-resume"]) == 0
+    assert (
+        main(
+            [
+                "permeability",
+                str(binary),
+                "--axis",
+                "x",
+                "--collision",
+                "trt",
+                "-o",
+                str(out),
+                "--checkpoint",
+                str(ckpt),
+                "--no-resume",
+            ]
+        )
+        == 0
+    )
     assert out.is_file() and not ckpt.exists()
 
 
 def test_checkpoint_with_several_axes_is_refused(tmp_path):
     binary = _binary(tmp_path)
-    assert main(["permeability", str(binary), "--axis", "x", "--axis", "y", "--checkpoint", str(tmp_path / "c")]) == 2
+    assert (
+        main(["permeability", str(binary), "--axis", "x", "--axis", "y", "--checkpoint", str(tmp_path / "c")])
+        == 2
+    )
 
 
 def test_volume_without_voxel_size_is_refused_not_assumed(tmp_path, capsys):
@@ -60,6 +90,8 @@ def test_volume_without_voxel_size_is_refused_not_assumed(tmp_path, capsys):
 
 
 def test_unknown_collision_is_an_error_not_mrt():
-    bogus = Settings().model_copy(update={"collision": "entropic"})  # bypasses validation, as a new enum member would
+    bogus = Settings().model_copy(
+        update={"collision": "entropic"}
+    )  # bypasses validation, as a new enum member would
     with pytest.raises(PorepipeError, match="collision.*entropic"):
         make_stepper(bogus, SimpleNamespace(force_nodes=(0, 0)))

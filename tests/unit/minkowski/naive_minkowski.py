@@ -34,7 +34,9 @@ def euler6_periodic_naive(volume):
     v = (np.asarray(volume) != 0).astype(np.int64)
     e = np.eye(3, dtype=int)
     edges = sum(_and_shift(v, [(0, 0, 0), e[a]]).sum() for a in range(3))
-    squares = sum(_and_shift(v, [(0, 0, 0), e[a], e[b], e[a] + e[b]]).sum() for a, b in ((0, 1), (0, 2), (1, 2)))
+    squares = sum(
+        _and_shift(v, [(0, 0, 0), e[a], e[b], e[a] + e[b]]).sum() for a, b in ((0, 1), (0, 2), (1, 2))
+    )
     cube = [(i, j, k) for i in (0, 1) for j in (0, 1) for k in (0, 1)]
     return int(v.sum() - edges + squares - _and_shift(v, cube).sum())
 
@@ -42,7 +44,7 @@ def euler6_periodic_naive(volume):
 def euler2d_square_naive(image, adjacency8=False):
     """χ of a 2-D image (background outside) with 4- or 8-adjacency, counted on the padded plane complex."""
     a = np.pad((np.asarray(image) != 0).astype(np.int64), 1)
-    if adjacency8:   # 8-adjacency = dual of the 4-complex of the complement (padded frame is one component)
+    if adjacency8:  # 8-adjacency = dual of the 4-complex of the complement (padded frame is one component)
         return 1 - euler2d_square_naive_complex(1 - a)
     return euler2d_square_naive_complex(a)
 
@@ -75,14 +77,14 @@ def section_sums_naive(volume):
     axis8 = sum(euler2d_square_naive(v[i], True) for i in range(nx))
     diag4 = diag8 = 0
     j = np.arange(ny)
-    for m in range(ny + nz - 1):                                      # plane y + z = m: points (x, j, m - j)
+    for m in range(ny + nz - 1):  # plane y + z = m: points (x, j, m - j)
         ok = (m - j >= 0) & (m - j < nz)
         plane = v[:, j[ok], m - j[ok]]
         diag4 += euler2d_square_naive(plane)
         diag8 += euler2d_square_naive(plane, True)
     tri = 0
     ii, jj = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-    for m in range(nx + ny + nz - 2):                                 # plane x + y + z = m: points (i, j, m - i - j)
+    for m in range(nx + ny + nz - 2):  # plane x + y + z = m: points (i, j, m - i - j)
         k = m - ii - jj
         ok = (k >= 0) & (k < nz)
         plane = np.zeros((nx, ny), dtype=np.int64)

@@ -30,8 +30,14 @@ def test_file_matches_api_and_carries_units(volumes):
     ds = xr.open_dataset(out, engine="h5netcdf").load()
     expected = minkowski_functionals(grey <= 120, 2.0, (True, False, True))
     for name in ("phi", "S_V", "K_V", "T_V", "chi", "histogram"):
-        np.testing.assert_array_equal(ds[name].values, expected[name].values)   # same integers, same arithmetic
-    assert (ds.S_V.attrs["units"], ds.K_V.attrs["units"], ds.T_V.attrs["units"]) == ("µm^-1", "µm^-2", "µm^-3")
+        np.testing.assert_array_equal(
+            ds[name].values, expected[name].values
+        )  # same integers, same arithmetic
+    assert (ds.S_V.attrs["units"], ds.K_V.attrs["units"], ds.T_V.attrs["units"]) == (
+        "µm^-1",
+        "µm^-2",
+        "µm^-3",
+    )
     assert ds.attrs["boundary"] == "mixed" and list(ds.attrs["periodic"]) == [1, 0, 1]
     assert ds.attrs["adjacency_pair"] == "pore6_matrix26"
     thr = xr.open_dataset(out, engine="h5netcdf", group=THRESHOLD_GROUP).load()

@@ -5,8 +5,8 @@ import itertools
 import numba
 import numpy as np
 import pytest
-
 from naive_minkowski import histogram_naive
+
 from porepipe.minkowski import (
     configuration_histogram,
     configuration_histogram_slabs,
@@ -67,7 +67,7 @@ def test_threshold_histograms_match_thresholding(periodic):
     # one pass over a grey volume == the binary histogram of grey <= t for every t
     rng = np.random.default_rng(11)
     grey = rng.integers(0, 217, (7, 9, 10)).astype(np.uint8)
-    grey[2:5, 3:7, 1:9] = 216                    # runs of equal values inside cells
+    grey[2:5, 3:7, 1:9] = 216  # runs of equal values inside cells
     grey[0] = 0
     hists = threshold_histograms(grey, periodic, n_levels=217)
     for t in range(217):

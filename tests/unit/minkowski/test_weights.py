@@ -3,9 +3,9 @@ scikit-image's euler_number, the published Crofton direction weights, and the ex
 
 import numpy as np
 import pytest
+from naive_minkowski import euler6_periodic_naive, section_sums_naive
 from skimage.measure import euler_number
 
-from naive_minkowski import euler6_periodic_naive, section_sums_naive
 from porepipe.minkowski import Adjacency, configuration_histogram, matrix_histogram, minkowski_functionals
 from porepipe.minkowski import _weights as W
 
@@ -67,8 +67,12 @@ def test_section_families_are_related_by_lattice_symmetry():
             sign = np.ones(3, int)
             sign[list(flip)] = -1
             for j, d in enumerate(W.DIRECTIONS):
-                image = sign * d[list(perm)]                         # family j of v is family `image` of w
-                k = [i for i, e in enumerate(W.DIRECTIONS) if np.array_equal(e, image) or np.array_equal(e, -image)]
+                image = sign * d[list(perm)]  # family j of v is family `image` of w
+                k = [
+                    i
+                    for i, e in enumerate(W.DIRECTIONS)
+                    if np.array_equal(e, image) or np.array_equal(e, -image)
+                ]
                 assert got[k[0]] == base[j], (perm, flip, d)
 
 
@@ -79,13 +83,13 @@ def test_direction_weights_match_published_values():
     expected = np.r_[[2 * 0.0457778912] * 3, [2 * 0.0369806279] * 6, [2 * 0.0351956398] * 4]
     np.testing.assert_allclose(g.line_weight, expected, atol=2e-6)
     np.testing.assert_allclose(g.plane_weight, expected, atol=2e-6)
-    np.testing.assert_allclose(g.plane_spacing_um, np.r_[[1.0] * 3, [2 ** -0.5] * 6, [3 ** -0.5] * 4], rtol=1e-14)
+    np.testing.assert_allclose(g.plane_spacing_um, np.r_[[1.0] * 3, [2**-0.5] * 6, [3**-0.5] * 4], rtol=1e-14)
 
 
 @pytest.mark.parametrize("voxel", [(1.0, 1.0, 2.0), (0.5, 1.5, 1.0)])
 def test_anisotropic_geometry(voxel):
     g = W.geometry(voxel)
-    assert g.line_weight.sum() == pytest.approx(1.0, abs=1e-12)     # Voronoi cells tile the sphere
+    assert g.line_weight.sum() == pytest.approx(1.0, abs=1e-12)  # Voronoi cells tile the sphere
     assert g.plane_weight.sum() == pytest.approx(1.0, abs=1e-12)
     # axis planes are spaced by the voxel edge; the plane family and its 2-D cell area recover the cell volume
     np.testing.assert_allclose(g.plane_spacing_um[:3], voxel, rtol=1e-14)
@@ -105,6 +109,6 @@ def test_phase_identities_hold_exactly(adjacency, periodic):
     hist = configuration_histogram(v, periodic)
     assert hist @ W.euler_table(26) == matrix_histogram(hist) @ W.euler_table(6)
     assert hist @ W.euler_table(6) == matrix_histogram(hist) @ W.euler_table(26)
-    if periodic:   # on the 3-torus the complementary-adjacency Euler numbers agree: χ(P) = χ(M) (Zauner §4.5)
+    if periodic:  # on the 3-torus the complementary-adjacency Euler numbers agree: χ(P) = χ(M) (Zauner §4.5)
         assert float(pore.chi) == float(matrix.chi)
         assert float(pore.T_V) == float(matrix.T_V)

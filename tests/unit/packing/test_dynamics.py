@@ -27,8 +27,9 @@ class Run:
         self.cm, self.cp = 1 - 0.5 * dt * xi, 1 + 0.5 * dt * xi
         self.dt, self.cut = dt, cut
         skin = self.r.max() * 2 if skin is None else skin
-        self.nbr = build_neighbours(self.x, self.r, self.types, self.box, self.per, np.ones((nt, nt), np.uint8),
-                                    cut, skin)
+        self.nbr = build_neighbours(
+            self.x, self.r, self.types, self.box, self.per, np.ones((nt, nt), np.uint8), cut, skin
+        )
         self.kernel = K.make_step_kernel(False, False, not self.per.all())
         self.sigmax = np.zeros(n)
         self.conv = np.zeros(n, np.uint8)
@@ -37,12 +38,36 @@ class Run:
     def step(self):
         self.s += 1
         xn, fn = np.empty_like(self.x), np.empty_like(self.f)
-        self.kernel(self.x, xn, self.v, self.f, fn, self.r, self.types, np.arange(len(self.r)),
-                    np.zeros(len(self.r), np.uint8),
-                    self.nbr[0], self.nbr[1], self.box, self.per, *pair_tables(self.k, self.sig), self.sig,
-                    self.cm, self.cp,
-                    np.zeros(len(self.k)), self.cut, self.dt, 1.0, 0, self.s, self.x, self.r, self.sigmax, self.conv,
-                    np.empty((len(self.r), 3)))
+        self.kernel(
+            self.x,
+            xn,
+            self.v,
+            self.f,
+            fn,
+            self.r,
+            self.types,
+            np.arange(len(self.r)),
+            np.zeros(len(self.r), np.uint8),
+            self.nbr[0],
+            self.nbr[1],
+            self.box,
+            self.per,
+            *pair_tables(self.k, self.sig),
+            self.sig,
+            self.cm,
+            self.cp,
+            np.zeros(len(self.k)),
+            self.cut,
+            self.dt,
+            1.0,
+            0,
+            self.s,
+            self.x,
+            self.r,
+            self.sigmax,
+            self.conv,
+            np.empty((len(self.r), 3)),
+        )
         self.x, self.f = xn, fn
 
     def kinetic(self):
@@ -105,8 +130,17 @@ def test_damping_decay_of_free_spheres_in_a_closed_box():
 
 def test_damped_interacting_pair_energy_peaks_decrease():
     # an attracting pair in a closed box oscillates about dx_eq; with damping every kinetic-energy peak is lower
-    run = Run([[40.0, 50, 50], [61.0, 50, 50]], [10.0, 10.0], [0, 0], [100.0] * 3, [30.0], [0.3], [0.4], 0.1,
-              periodic=False)
+    run = Run(
+        [[40.0, 50, 50], [61.0, 50, 50]],
+        [10.0, 10.0],
+        [0, 0],
+        [100.0] * 3,
+        [30.0],
+        [0.3],
+        [0.4],
+        0.1,
+        periodic=False,
+    )
     ke = []
     for _ in range(400):
         run.step()
@@ -125,10 +159,12 @@ def test_neighbour_list_equals_all_pairs_reference(periodic):
     r = np.concatenate([rng.uniform(0.3, 0.6, 400), rng.uniform(2, 8, 60), rng.uniform(20, 30, 4)])
     x = rng.random((r.size, 3)) * box
     per = np.full(3, periodic)
-    start, idx = build_neighbours(x, r, np.zeros(r.size, np.int64), box, per, np.ones((1, 1), np.uint8), 1.3, 0.2)
+    start, idx = build_neighbours(
+        x, r, np.zeros(r.size, np.int64), box, per, np.ones((1, 1), np.uint8), 1.3, 0.2
+    )
     got = set()
     for i in range(r.size):
-        js = idx[start[i]:start[i + 1]]
+        js = idx[start[i] : start[i + 1]]
         assert len(set(js.tolist())) == js.size, "duplicate partner"
         got |= {(min(i, j), max(i, j)) for j in js.tolist()}
     assert got == neighbour_pairs(x, r, box, per, 1.3, 0.2)

@@ -35,7 +35,9 @@ def test_continuous_at_equilibrium_with_zero_force(k):
     assert _pair_force(dxeq, dxeq, k) == 0.0
     # the force changes sign at dx_eq: repulsive inside, attractive outside, and tends to 0 from both sides
     assert _pair_force(dxeq - eps, dxeq, k) > 0 and _pair_force(dxeq + eps, dxeq, k) < 0
-    assert abs(_pair_force(dxeq - eps, dxeq, k)) < 1e-6 * k and abs(_pair_force(dxeq + eps, dxeq, k)) < 1e-6 * k
+    assert (
+        abs(_pair_force(dxeq - eps, dxeq, k)) < 1e-6 * k and abs(_pair_force(dxeq + eps, dxeq, k)) < 1e-6 * k
+    )
 
 
 @pytest.mark.parametrize("k", KS)

@@ -12,10 +12,19 @@ from porepipe.packing._settings import SphereFile
 from porepipe.packing._setup import read_sphere_file
 
 BOX = np.array([200.0, 200.0, 200.0])
-TYPES = [{"name": "grain", "count": 12, "max_overlap": 0.3, "radius_um": {"min_um": 20, "max_um": 30}},
-         {"name": "fines", "count": 60, "max_overlap": 0.25, "radius_um": {"min_um": 4, "max_um": 6}}]
-PRIMARY = {"name": "primary", "insert": ["grain"], "steps": 300, "dt": 0.25, "k": {"grain": 400},
-           "damping": {"grain": 4}, "stochastic_forces": {"step_size": 0.05}}
+TYPES = [
+    {"name": "grain", "count": 12, "max_overlap": 0.3, "radius_um": {"min_um": 20, "max_um": 30}},
+    {"name": "fines", "count": 60, "max_overlap": 0.25, "radius_um": {"min_um": 4, "max_um": 6}},
+]
+PRIMARY = {
+    "name": "primary",
+    "insert": ["grain"],
+    "steps": 300,
+    "dt": 0.25,
+    "k": {"grain": 400},
+    "damping": {"grain": 4},
+    "stochastic_forces": {"step_size": 0.05},
+}
 
 
 def _settings(*stages):
@@ -36,12 +45,14 @@ def primary(tmp_path_factory):
     return d, p
 
 
-@pytest.mark.parametrize("name, extra", [("primary.h5", {}), ("primary.dat", {}), ("primary.xyzr", {"type": "grain"})])
+@pytest.mark.parametrize(
+    "name, extra", [("primary.h5", {}), ("primary.dat", {}), ("primary.xyzr", {"type": "grain"})]
+)
 def test_every_format_loads_the_same_spheres(primary, name, extra):
     d, p = primary
     spec = SphereFile(path=d / name, **extra)
     centres, radii, types = read_sphere_file(spec, _settings(PRIMARY), BOX, np.ones(3, bool))
-    np.testing.assert_array_equal(centres, p.centres_um)   # %.17g text round-trips float64 exactly
+    np.testing.assert_array_equal(centres, p.centres_um)  # %.17g text round-trips float64 exactly
     np.testing.assert_array_equal(radii, p.radii_um)
     np.testing.assert_array_equal(types, p.types)
 
@@ -50,9 +61,18 @@ def test_a_fill_stage_started_from_the_saved_primary_packing(primary):
     """Stage 1 reads the grains from the file (frozen) and adds fines: the grains are exactly those of the file,
     and every sphere kept satisfies 0 < max sigma <= sigma_max (checked independently of the engine's flags)."""
     d, p = primary
-    fill = {"name": "fill", "insert_file": {"path": str(d / "primary.h5")}, "insert": ["fines"], "steps": 400,
-            "dt": 0.25, "frozen_types": ["grain"], "k": {"grain": 50, "fines": 20}, "damping": {"fines": 2},
-            "stochastic_forces": {"step_size": 0.05}, "delete_unconverged": ["fines"]}
+    fill = {
+        "name": "fill",
+        "insert_file": {"path": str(d / "primary.h5")},
+        "insert": ["fines"],
+        "steps": 400,
+        "dt": 0.25,
+        "frozen_types": ["grain"],
+        "k": {"grain": 50, "fines": 20},
+        "damping": {"fines": 2},
+        "stochastic_forces": {"step_size": 0.05},
+        "delete_unconverged": ["fines"],
+    }
     out = pack_spheres(_settings(fill), BOX, True, seed=5)
     grains = out.types == 0
     np.testing.assert_array_equal(out.centres_um[grains], p.centres_um)
@@ -65,26 +85,32 @@ def test_a_fill_stage_started_from_the_saved_primary_packing(primary):
 
 def test_relative_paths_are_read_from_the_scene_directory(primary):
     d, p = primary
-    centres, _, _ = read_sphere_file(SphereFile(path="primary.h5"), _settings(PRIMARY), BOX, np.ones(3, bool),
-                                     base_dir=d)
+    centres, _, _ = read_sphere_file(
+        SphereFile(path="primary.h5"), _settings(PRIMARY), BOX, np.ones(3, bool), base_dir=d
+    )
     np.testing.assert_array_equal(centres, p.centres_um)
 
 
 def test_periodic_coordinates_are_wrapped_into_the_box(tmp_path):
     f = tmp_path / "s.xyzr"
     f.write_text("-10 210 100 25\n")
-    centres, _, _ = read_sphere_file(SphereFile(path=f, type="grain"), _settings(PRIMARY), BOX, np.ones(3, bool))
+    centres, _, _ = read_sphere_file(
+        SphereFile(path=f, type="grain"), _settings(PRIMARY), BOX, np.ones(3, bool)
+    )
     np.testing.assert_allclose(centres, [[190.0, 10.0, 100.0]])
 
 
-@pytest.mark.parametrize("text, fmt, kind, message", [
-    (None, "xyzr", None, "does not exist"),
-    ("10 10 10 25\n", "xyzr", None, "has no types; set insert_file.type"),
-    ("0 3 10 10 10 25\n", "dat", None, "type number 3"),
-    ("0 1 10 10 10\n", "dat", None, "expected 6 columns"),
-    ("10 10 10 50\n", "xyzr", "grain", r"r = 50.0 µm outside \[20.0, 30.0\]"),
-    ("10 10 250 25\n", "xyzr", "grain", "outside the box"),
-])
+@pytest.mark.parametrize(
+    "text, fmt, kind, message",
+    [
+        (None, "xyzr", None, "does not exist"),
+        ("10 10 10 25\n", "xyzr", None, "has no types; set insert_file.type"),
+        ("0 3 10 10 10 25\n", "dat", None, "type number 3"),
+        ("0 1 10 10 10\n", "dat", None, "expected 6 columns"),
+        ("10 10 10 50\n", "xyzr", "grain", r"r = 50.0 µm outside \[20.0, 30.0\]"),
+        ("10 10 250 25\n", "xyzr", "grain", "outside the box"),
+    ],
+)
 def test_bad_files_are_refused_naming_the_problem(tmp_path, text, fmt, kind, message):
     f = tmp_path / f"s.{fmt}"
     if text is not None:
@@ -96,8 +122,12 @@ def test_bad_files_are_refused_naming_the_problem(tmp_path, text, fmt, kind, mes
 
 def test_a_packing_file_with_unknown_type_names_is_refused(primary):
     d, _ = primary
-    other = Settings.model_validate({"types": [{"name": "sand", "count": 1, "radius_um": {"min_um": 1, "max_um": 99}}],
-                                     "stages": [{"insert": ["sand"]}]})
+    other = Settings.model_validate(
+        {
+            "types": [{"name": "sand", "count": 1, "radius_um": {"min_um": 1, "max_um": 99}}],
+            "stages": [{"insert": ["sand"]}],
+        }
+    )
     with pytest.raises(PorepipeError, match=r"type\(s\) \['grain'\] are not types of this scene"):
         read_sphere_file(SphereFile(path=d / "primary.h5"), other, BOX, np.ones(3, bool))
 

@@ -17,8 +17,11 @@ def naive_front(cost, err):
     """A run is on the front if no other run is at most as costly and at most as wrong, and better in one."""
     out = []
     for i in range(len(cost)):
-        dominated = any(cost[j] <= cost[i] and err[j] <= err[i] and (cost[j] < cost[i] or err[j] < err[i])
-                        for j in range(len(cost)) if j != i)
+        dominated = any(
+            cost[j] <= cost[i] and err[j] <= err[i] and (cost[j] < cost[i] or err[j] < err[i])
+            for j in range(len(cost))
+            if j != i
+        )
         if not dominated:
             out.append(i)
     return sorted(out)
@@ -45,8 +48,9 @@ def test_thesis_tables_reproduce_the_extrapolation_rules():
     assert all(row[-2] == 0 for row in t64.rows)  # 2·κ_hr − κ_lr on integers: exactly the printed κ_extrap
     diffs = np.array([row[-2] for row in t72.rows])
     assert np.abs(diffs).max() < 5e-7  # 7-digit bounds and the 6-digit printed limit
-    others = thesis_tables(ds, [ThesisTable.t5_1, ThesisTable.t5_2, ThesisTable.t7_3, ThesisTable.t6_2,
-                                ThesisTable.t6_3], "PP")
+    others = thesis_tables(
+        ds, [ThesisTable.t5_1, ThesisTable.t5_2, ThesisTable.t7_3, ThesisTable.t6_2, ThesisTable.t6_3], "PP"
+    )
     assert all("no matching results" in t.note for t in others[:3])
     # Table 6.3 errors recomputed from κ^TH(7) = 1.72207: within the 0.012 % offset the digest notes (~0.01 points)
     assert all(abs(row[-2]) < 0.02 for row in others[4].rows)
@@ -55,7 +59,9 @@ def test_thesis_tables_reproduce_the_extrapolation_rules():
 def _synthetic_sweep(tmp_path):
     paths = []
     for a in (4.0, 2.0, 1.0, 0.5):
-        ds = xr.Dataset({"q": ((), 1.0 + 0.1 * a**1.5 + 1e-4 * (-1) ** int(np.log2(a) + 4)), "r": ((), 2.0 - a)})
+        ds = xr.Dataset(
+            {"q": ((), 1.0 + 0.1 * a**1.5 + 1e-4 * (-1) ** int(np.log2(a) + 4)), "r": ((), 2.0 - a)}
+        )
         with ResultWriter(tmp_path / "eng" / f"eng_a{a:g}.h5", stage="eng", scene="t", threads=2) as w:
             w.write_table(ds)
         paths.append(tmp_path / "eng" / f"eng_a{a:g}.h5")
@@ -77,8 +83,13 @@ def test_report_page_is_self_contained(tmp_path):
     sweep_path, sweep, grey, binary = _synthetic_sweep(tmp_path)
     rows = error_cost_table(sweep, ["eng.q", "eng.r"])
     assert {r["quantity"] for r in rows} == {"eng.q", "eng.r"} and all(r["rel_err"] > 0 for r in rows)
-    out = build_report(sweep_path, tmp_path / "rep" / "index.html", grey=grey, binary=binary,
-                       settings=Settings(thesis_tables=[ThesisTable.t6_4]))
+    out = build_report(
+        sweep_path,
+        tmp_path / "rep" / "index.html",
+        grey=grey,
+        binary=binary,
+        settings=Settings(thesis_tables=[ThesisTable.t6_4]),
+    )
     page = out.read_text()
     links = re.findall(r"(?:src|href)='([^']+)'", page)
     assert {"quantities.png", "error_cost.png", "sections.png", "table_6_4.csv"} <= set(links)

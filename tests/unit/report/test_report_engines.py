@@ -27,8 +27,13 @@ def test_lpt_results_join_the_sweep_and_the_report(tmp_path):
         lpt_paths.append(out)
     crop_corner(binaries[1], 8.0, tmp_path / "binary_a1_L8.h5")
     sub = tmp_path / "lpt_a1_L8.h5"
-    lpt_file(tmp_path / "binary_a1_L8.h5", sub, LptSettings(cell_voxels=[1, 2, 4], surface=False), plots=False,
-             threads=1)
+    lpt_file(
+        tmp_path / "binary_a1_L8.h5",
+        sub,
+        LptSettings(cell_voxels=[1, 2, 4], surface=False),
+        plots=False,
+        threads=1,
+    )
     ds = build_sweep([*lpt_paths, sub], binaries)
     assert {"lpt.phi_bar", "lpt.L_star_um"} <= set(ds.quantity.values)
     # a 2x refinement of the same voxels keeps the porosity exactly: phi_bar(a) is the same number at both a
@@ -38,8 +43,9 @@ def test_lpt_results_join_the_sweep_and_the_report(tmp_path):
     assert float(ds.value.sel(quantity="lpt.phi_bar", a_um=1.0, sample_um=8.0)) == coarse[:4, :4, :4].mean()
     with ResultWriter(tmp_path / "sweep.h5", stage="sweep") as w:
         w.write_table(ds)
-    page = build_report(tmp_path / "sweep.h5", tmp_path / "rep" / "index.html", lpt=lpt_paths,
-                        settings=Settings(slices=False)).read_text()
+    page = build_report(
+        tmp_path / "sweep.h5", tmp_path / "rep" / "index.html", lpt=lpt_paths, settings=Settings(slices=False)
+    ).read_text()
     assert "src='lpt.png'" in page and (tmp_path / "rep" / "lpt.png").is_file()
     with open(tmp_path / "rep" / "lpt.csv") as fh:
         assert len(fh.readlines()) == 1 + 2 * 3  # header + (2 resolutions x 3 cell sizes)

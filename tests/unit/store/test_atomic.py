@@ -50,7 +50,9 @@ def test_kill_mid_write_keeps_the_old_file_whole(tmp_path, writer):
             "    print('writing', flush=True); time.sleep(60)\n"
         )
     before = path.read_bytes()
-    with subprocess.Popen([sys.executable, "-c", "import time\n" + body], stdout=subprocess.PIPE, text=True) as proc:
+    with subprocess.Popen(
+        [sys.executable, "-c", "import time\n" + body], stdout=subprocess.PIPE, text=True
+    ) as proc:
         assert proc.stdout.readline().strip() == "writing"
         assert temporary_path(path).name.startswith(".")  # a hidden name no rule takes for a result
         assert any(p.name.endswith(f".{proc.pid}.tmp") for p in tmp_path.iterdir())  # really mid-write
@@ -61,8 +63,13 @@ def test_kill_mid_write_keeps_the_old_file_whole(tmp_path, writer):
 
 def _binary(path, **attrs):
     with ResultWriter(path, stage="segment") as w:
-        w.write_volume("pore", np.eye(3, dtype=np.uint8)[:, :, None].repeat(2, axis=2), voxel_um=0.5,
-                       origin_um=(1.0, 2.0, 3.0), periodic=(True, False, True))
+        w.write_volume(
+            "pore",
+            np.eye(3, dtype=np.uint8)[:, :, None].repeat(2, axis=2),
+            voxel_um=0.5,
+            origin_um=(1.0, 2.0, 3.0),
+            periodic=(True, False, True),
+        )
     with h5py.File(path, "a") as f:
         for key, value in attrs.items():
             if value is None:
@@ -86,8 +93,10 @@ def test_read_binary_volume_refuses_missing_metadata_naming_file_and_key(tmp_pat
         read_binary_volume(tmp_path / "b.h5")
 
 
-@pytest.mark.parametrize(("key", "value"), [("voxel_um", [1.0, 2.0, 1.0]), ("voxel_um", -1.0),
-                                            ("origin_um", [0.0, 1.0]), ("periodic", [1, 2, 0])])
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [("voxel_um", [1.0, 2.0, 1.0]), ("voxel_um", -1.0), ("origin_um", [0.0, 1.0]), ("periodic", [1, 2, 0])],
+)
 def test_read_binary_volume_refuses_malformed_metadata(tmp_path, key, value):
     _binary(tmp_path / "b.h5", **{key: value})
     with pytest.raises(PorepipeError, match=key):

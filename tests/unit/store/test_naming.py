@@ -8,8 +8,18 @@ import pytest
 from porepipe._shared.naming import TAG_RE, res_tag
 
 
-@pytest.mark.parametrize(("a", "tag"), [(2.0, "2"), (0.5, "0.5"), (1, "1"), (0.1234567, "0.1234567"),
-                                        (1e-5, "0.00001"), (300.0, "300"), (0.1 + 0.2, "0.30000000000000004")])
+@pytest.mark.parametrize(
+    ("a", "tag"),
+    [
+        (2.0, "2"),
+        (0.5, "0.5"),
+        (1, "1"),
+        (0.1234567, "0.1234567"),
+        (1e-5, "0.00001"),
+        (300.0, "300"),
+        (0.1 + 0.2, "0.30000000000000004"),
+    ],
+)
 def test_known_tags(a, tag):
     assert res_tag(a) == tag
 

@@ -18,7 +18,17 @@ def test_result_has_provenance_cost_volume_and_table(tmp_path):
         w.write_volume("v", vol, voxel_um=0.5, origin_um=(1, 2, 3), periodic=(1, 0, 1))
         w.write_table(xr.Dataset({"q": ("a_um", [1.0, 2.0])}, coords={"a_um": [2.0, 1.0]}))
     attrs = read_attrs(path)
-    for key in ("stage", "scene", "scene_hash", "porepipe_version", "created", "wall_s", "cpu_s", "peak_mb", "threads"):
+    for key in (
+        "stage",
+        "scene",
+        "scene_hash",
+        "porepipe_version",
+        "created",
+        "wall_s",
+        "cpu_s",
+        "peak_mb",
+        "threads",
+    ):
         assert key in attrs
     assert attrs["threads"] == 2 and attrs["peak_mb"] > 10
     data, vattrs = read_volume(path, "v")

@@ -13,7 +13,11 @@ STUBS = sorted(ROOT.glob("*/__init__.pyi"))
 
 
 def test_every_package_with_lazy_exports_has_a_stub():
-    lazy = {p.parent.name for p in ROOT.glob("*/__init__.py") if "_EXPORTS" in p.read_text() or "_PUBLIC" in p.read_text()}
+    lazy = {
+        p.parent.name
+        for p in ROOT.glob("*/__init__.py")
+        if "_EXPORTS" in p.read_text() or "_PUBLIC" in p.read_text()
+    }
     assert lazy == {p.parent.name for p in STUBS}
 
 
@@ -21,10 +25,17 @@ def test_every_package_with_lazy_exports_has_a_stub():
 def test_stub_names_are_the_exports_and_resolve_to_the_same_objects(stub):
     package = importlib.import_module(f"porepipe.{stub.parent.name}")
     tree = ast.parse(stub.read_text())
-    imported = {a.asname: (node.module, a.name) for node in tree.body if isinstance(node, ast.ImportFrom)
-                for a in node.names}
-    stub_all = next(ast.literal_eval(n.value) for n in tree.body
-                    if isinstance(n, ast.Assign) and n.targets[0].id == "__all__")
+    imported = {
+        a.asname: (node.module, a.name)
+        for node in tree.body
+        if isinstance(node, ast.ImportFrom)
+        for a in node.names
+    }
+    stub_all = next(
+        ast.literal_eval(n.value)
+        for n in tree.body
+        if isinstance(n, ast.Assign) and n.targets[0].id == "__all__"
+    )
     assert sorted(stub_all) == sorted(package.__all__) == sorted(imported)
     for name, (module, attr) in imported.items():
         assert getattr(importlib.import_module(module), attr) is getattr(package, name), name

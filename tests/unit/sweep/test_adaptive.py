@@ -22,8 +22,16 @@ def loop(target, budget, cost_of=lambda a: (16.0 / a) ** 3, start=(16.0, 8.0, 4.
     a = list(start)
     history = []
     for rounds in range(max_rounds + 1):
-        dec = decide(a, synthetic(a), [cost_of(x) for x in a], target_rel_err=target, budget=budget, exponent=None,
-                     rounds_done=rounds, max_rounds=max_rounds)
+        dec = decide(
+            a,
+            synthetic(a),
+            [cost_of(x) for x in a],
+            target_rel_err=target,
+            budget=budget,
+            exponent=None,
+            rounds_done=rounds,
+            max_rounds=max_rounds,
+        )
         history.append((list(a), dec))
         if dec.outcome is not Outcome.refine:
             return history
@@ -68,8 +76,9 @@ def test_max_rounds_stops_the_loop():
     assert history[-1][1].outcome is Outcome.max_rounds and len(history) == 3
 
 
-@pytest.mark.parametrize("kwargs", [{"target_rel_err": 0.0, "budget": 1.0},
-                                    {"target_rel_err": 0.1, "budget": -1.0}])
+@pytest.mark.parametrize(
+    "kwargs", [{"target_rel_err": 0.0, "budget": 1.0}, {"target_rel_err": 0.1, "budget": -1.0}]
+)
 def test_bad_settings_are_rejected(kwargs):
     with pytest.raises(PorepipeError):
         decide([2.0, 1.0], [1.0, 1.1], [1.0, 1.0], **kwargs)
@@ -79,10 +88,17 @@ def test_driver_refines_until_the_decision_stops(tmp_path, monkeypatch):
     # the driver writes scene copies with growing resolution lists; a fake runner plays the workflow
     monkeypatch.chdir(tmp_path)
     (tmp_path / "s.xyzr").write_text("50 50 50 20\n")
-    scene = {"name": "adapt", "domain": {"size_um": [64, 64, 64]}, "spheres": {"xyzr": "s.xyzr"},
-             "resolutions_um": [16, 8, 4], "analyses": ["estimate"],
-             "sweep": {"exponent": "free", "adaptive": {"quantity": "estimate.q", "target_rel_err": 0.003,
-                                                          "budget_voxels": 10**9}}}
+    scene = {
+        "name": "adapt",
+        "domain": {"size_um": [64, 64, 64]},
+        "spheres": {"xyzr": "s.xyzr"},
+        "resolutions_um": [16, 8, 4],
+        "analyses": ["estimate"],
+        "sweep": {
+            "exponent": "free",
+            "adaptive": {"quantity": "estimate.q", "target_rel_err": 0.003, "budget_voxels": 10**9},
+        },
+    }
     path = tmp_path / "scene.yaml"
     path.write_text(yaml.safe_dump(scene))
     runs = []
@@ -93,12 +109,18 @@ def test_driver_refines_until_the_decision_stops(tmp_path, monkeypatch):
         a = np.array(sorted(raw["resolutions_um"], reverse=True))
         runs.append(a.tolist())
         import xarray as xr
-        ds = xr.Dataset({"value": (("quantity", "a_um", "sample_um"), synthetic(a)[None, :, None]),
-                         "voxels": (("a_um", "sample_um"), ((64 / a) ** 3)[:, None]),
-                         "wall_s": (("quantity", "a_um", "sample_um"), np.ones((1, a.size, 1))),
-                         "upstream_wall_s": (("a_um", "sample_um"), np.ones((a.size, 1)))},
-                        coords={"quantity": ["estimate.q"], "a_um": a, "sample_um": [np.inf]})
+
+        ds = xr.Dataset(
+            {
+                "value": (("quantity", "a_um", "sample_um"), synthetic(a)[None, :, None]),
+                "voxels": (("a_um", "sample_um"), ((64 / a) ** 3)[:, None]),
+                "wall_s": (("quantity", "a_um", "sample_um"), np.ones((1, a.size, 1))),
+                "upstream_wall_s": (("a_um", "sample_um"), np.ones((a.size, 1))),
+            },
+            coords={"quantity": ["estimate.q"], "a_um": a, "sample_um": [np.inf]},
+        )
         from porepipe._shared.store import ResultWriter
+
         with ResultWriter(target, stage="sweep") as w:
             w.write_table(ds)
 

@@ -9,12 +9,15 @@ from porepipe.sweep import Status, fit_inverse_length, fit_power, two_point_limi
 A = np.array([8.0, 4.0, 2.0, 1.0, 0.5])
 
 
-@pytest.mark.parametrize("p_true, exponent, known_sigma", [
-    (1.5, None, False),   # exponent fitted, noise estimated from residuals
-    (1.0, 1.0, False),    # linear in a (thesis 7.2.1)
-    (2.0, 2.0, False),    # quadratic
-    (1.0, None, True),    # exponent fitted, noise known
-])
+@pytest.mark.parametrize(
+    "p_true, exponent, known_sigma",
+    [
+        (1.5, None, False),  # exponent fitted, noise estimated from residuals
+        (1.0, 1.0, False),  # linear in a (thesis 7.2.1)
+        (2.0, 2.0, False),  # quadratic
+        (1.0, None, True),  # exponent fitted, noise known
+    ],
+)
 def test_error_bars_cover_the_true_limit_in_90_percent_of_trials(p_true, exponent, known_sigma):
     # calibration: the stated interval is a 95 % one, so >= 90 % of 200 seeded trials must contain q∞
     # (binomial sd of the hit rate at 200 trials is 1.5 %, so 90 % is 3 sd below 95 %)
@@ -26,7 +29,9 @@ def test_error_bars_cover_the_true_limit_in_90_percent_of_trials(p_true, exponen
         if lim.supported:
             supported += 1
             hits += abs(lim.q_inf - 1.0) <= lim.err
-    assert supported >= 190, supported  # the signal (0.05·a^p) is far above the noise: almost every fit is usable
+    assert supported >= 190, (
+        supported
+    )  # the signal (0.05·a^p) is far above the noise: almost every fit is usable
     assert hits / supported >= 0.90, hits / supported
 
 
@@ -82,8 +87,15 @@ def test_inverse_length_form_is_linear_in_a_for_a_fixed_sample():
     assert by_length.err == pytest.approx(by_a.err, rel=1e-9)
 
 
-@pytest.mark.parametrize("a, q", [([1.0, 1.0, 0.5], [1, 2, 3]), ([1.0, -0.5, 0.25], [1, 2, 3]),
-                                  ([1.0, 0.5], [1.0, np.nan]), ([1.0, 0.5, 0.25], [1.0, 2.0])])
+@pytest.mark.parametrize(
+    "a, q",
+    [
+        ([1.0, 1.0, 0.5], [1, 2, 3]),
+        ([1.0, -0.5, 0.25], [1, 2, 3]),
+        ([1.0, 0.5], [1.0, np.nan]),
+        ([1.0, 0.5, 0.25], [1.0, 2.0]),
+    ],
+)
 def test_bad_input_is_rejected(a, q):
     with pytest.raises(PorepipeError):
         fit_power(a, q)

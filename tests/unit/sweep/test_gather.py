@@ -17,9 +17,16 @@ def _result(path, ds, stage):
 
 def _engine_file(tmp_path, a, value, sample=None):
     """A result of an engine the sweep has never heard of: 0-d, labelled 1-d, curve and integer variables."""
-    ds = xr.Dataset({"kappa": ((), value), "surface": ("phase", [2 * value, 3 * value]),
-                     "curve": ("t", np.arange(20.0)), "count": ((), 7)},
-                    coords={"phase": ["pore", "matrix"]}, attrs={"phi_bar": 0.25, "tau": 0.8})
+    ds = xr.Dataset(
+        {
+            "kappa": ((), value),
+            "surface": ("phase", [2 * value, 3 * value]),
+            "curve": ("t", np.arange(20.0)),
+            "count": ((), 7),
+        },
+        coords={"phase": ["pore", "matrix"]},
+        attrs={"phi_bar": 0.25, "tau": 0.8},
+    )
     tag = f"_L{sample:g}" if sample else ""
     return _result(tmp_path / "newengine" / f"new_a{a:g}{tag}_x.h5", ds, "newengine")
 
@@ -35,8 +42,12 @@ def test_new_engine_joins_without_code_changes(tmp_path):
     paths = [_engine_file(tmp_path, a, 10.0 + a) for a in (4.0, 2.0, 1.0)]
     paths.append(_engine_file(tmp_path, 2.0, 99.0, sample=20))
     ds = gather(paths)
-    assert sorted(ds.quantity.values) == ["newengine_x.kappa", "newengine_x.phi_bar", "newengine_x.surface[matrix]",
-                                          "newengine_x.surface[pore]"]
+    assert sorted(ds.quantity.values) == [
+        "newengine_x.kappa",
+        "newengine_x.phi_bar",
+        "newengine_x.surface[matrix]",
+        "newengine_x.surface[pore]",
+    ]
     full = ds.value.sel(quantity="newengine_x.kappa", sample_um=FULL)
     np.testing.assert_array_equal(full.values, [14.0, 12.0, 11.0])  # copied values: exact
     assert float(ds.value.sel(quantity="newengine_x.surface[matrix]", a_um=2.0, sample_um=20.0)) == 297.0
@@ -48,8 +59,14 @@ def test_new_engine_joins_without_code_changes(tmp_path):
 
 def test_per_resolution_table_and_benchmarks(tmp_path):
     a = np.array([4.0, 2.0, 1.0])
-    est = xr.Dataset({"phi_lower": ("a_um", [0.1, 0.2, 0.25]), "phi_limit": ((), 0.3),
-                      "hist": (("a_um", "g"), np.zeros((3, 5)))}, coords={"a_um": a})
+    est = xr.Dataset(
+        {
+            "phi_lower": ("a_um", [0.1, 0.2, 0.25]),
+            "phi_limit": ((), 0.3),
+            "hist": (("a_um", "g"), np.zeros((3, 5))),
+        },
+        coords={"a_um": a},
+    )
     path = _result(tmp_path / "estimate.h5", est, "estimate")
     cost = tmp_path / "cost"
     cost.mkdir()
@@ -84,8 +101,9 @@ def test_crop_is_the_corner_cube_and_not_periodic(tmp_path):
     rng = np.random.default_rng(5)
     pore = (rng.random((12, 10, 9)) < 0.4).astype(np.uint8)
     with ResultWriter(tmp_path / "binary_a0.5.h5", stage="segment", scene="t") as w:
-        w.write_volume("pore", pore, voxel_um=0.5, origin_um=(1.0, 2.0, 3.0), attrs={"threshold": 108,
-                                                                                     "method": "otsu"})
+        w.write_volume(
+            "pore", pore, voxel_um=0.5, origin_um=(1.0, 2.0, 3.0), attrs={"threshold": 108, "method": "otsu"}
+        )
     crop_corner(tmp_path / "binary_a0.5.h5", 4.0, tmp_path / "binary_a0.5_L4.h5")
     cube, attrs = read_volume(tmp_path / "binary_a0.5_L4.h5", "pore")
     np.testing.assert_array_equal(cube, pore[:8, :8, :8])
@@ -93,7 +111,9 @@ def test_crop_is_the_corner_cube_and_not_periodic(tmp_path):
     assert attrs["threshold"] == 108 and attrs["method"] == "otsu" and attrs["voxel_um"] == 0.5
 
 
-@pytest.mark.parametrize("edge_um", [4.25, 5.0, -1.0])  # not whole voxels; larger than the 9-voxel axis; negative
+@pytest.mark.parametrize(
+    "edge_um", [4.25, 5.0, -1.0]
+)  # not whole voxels; larger than the 9-voxel axis; negative
 def test_crop_rejects_bad_edges(tmp_path, edge_um):
     with ResultWriter(tmp_path / "b.h5", stage="segment") as w:
         w.write_volume("pore", np.zeros((12, 10, 9), np.uint8), voxel_um=0.5)
