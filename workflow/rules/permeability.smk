@@ -8,6 +8,7 @@ def permeability_axes(scene):
 rule permeability:
     input:
         binary="results/{scene}/segment/binary_a{a}.h5",
+        grey=grey_volume,  # sub-voxel wall distances for the interpolated walls (`walls: cli`)
         scene=scene_file,
     output:
         "results/{scene}/permeability/perm_a{a}_{axis}.h5",
@@ -19,7 +20,8 @@ rule permeability:
         axis="[xyz]",
     threads: workflow.cores
     shell:
-        "porepipe permeability {input.binary} --scene {input.scene} --axis {wildcards.axis} -o {output}"
+        "porepipe permeability {input.binary:q} --grey {input.grey:q} --scene {input.scene:q} --axis {wildcards.axis}"
+        " -o {output:q}"
         " --threads {threads} > {log} 2>&1"
 
 

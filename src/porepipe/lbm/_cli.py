@@ -12,12 +12,24 @@ from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import hash_of, read_attrs, read_volume
 from porepipe.lbm._api import permeability
 from porepipe.lbm._io import write_result
-from porepipe.lbm._settings import Axis, Collision, Gradient, Lateral, Precision, Settings, Setup, Velocity
+from porepipe.lbm._settings import (
+    Axis,
+    Collision,
+    Gradient,
+    Lateral,
+    Precision,
+    Settings,
+    Setup,
+    StopRule,
+    Velocity,
+    Walls,
+)
+from porepipe.lbm._walls import geometry_from_files
 
 #: CLI flag -> settings key for the options that override the scene
 _OVERRIDES = ("collision", "tau", "tau_bulk", "magic", "setup", "mirror", "lateral", "precision", "body_force",
               "gradient", "velocity", "max_steps", "window_steps", "tolerance_velocity", "tolerance_density",
-              "tolerance_kappa", "write_fields", "write_vti", "accept_unconverged")
+              "tolerance_kappa", "write_fields", "write_vti", "accept_unconverged", "walls", "stop")
 
 
 def _settings(args) -> Settings:
@@ -55,17 +67,22 @@ def run_file(binary, args) -> list[Path]:
     pore, vattrs = read_volume(binary, "pore")
     src = read_attrs(binary)
     voxel_um = float(vattrs.get("voxel_um", 1.0))
+    geometry = geometry_from_files(pore.shape, voxel_um, vattrs.get("origin_um", (0.0, 0.0, 0.0)),
+                                   packing=args.packing, grey=args.grey, threshold=vattrs.get("threshold"),
+                                   periodic=tuple(np.broadcast_to(vattrs.get("periodic", True), 3)))
     written = []
     for axis in axes:
         out = _output_path(args, binary, axis)
         result = permeability(pore.astype(bool), axis, settings, voxel_um,
-                              checkpoint=out.with_name(f".{out.name}.checkpoint.h5"))
+                              checkpoint=out.with_name(f".{out.name}.checkpoint.h5"), geometry=geometry)
         part = {"binary": src.get("scene_hash", ""), "axis": axis.value, "settings": settings.model_dump(mode="json")}
         write_result(out, result, scene=src.get("scene", ""), scene_hash=hash_of(part), threads=threads,
                      origin_um=tuple(np.asarray(vattrs.get("origin_um", (0.0, 0.0, 0.0)), dtype=float)))
         print(f"axis {axis.value}: kappa = {result.kappa_lu:.6g} voxel^2 = {result.kappa_m2:.6g} m^2 = "
               f"{result.kappa_mD:.6g} mD ({result.method}, {result.reason}, {result.steps} steps, "
-              f"{result.mlups:.1f} MLUPS) -> {out}")
+              f"{result.mlups:.1f} MLUPS, walls {result.walls}) -> {out}")
+        if result.warning:
+            print(f"warning: {result.warning}")
         written.append(out)
     return written
 
@@ -93,6 +110,10 @@ def register(subparsers) -> None:
     p.add_argument("--scene", help="scene YAML whose `permeability` section gives the defaults")
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--collision", choices=[c.value for c in Collision])
+    p.add_argument("--walls", choices=[w.value for w in Walls])
+    p.add_argument("--stop", choices=[r.value for r in StopRule])
+    p.add_argument("--grey", help="grey_a{a}.h5 of the binary volume: sub-voxel wall distances from grey values")
+    p.add_argument("--packing", help="packing.h5 whose spheres the binary volume shows: exact wall distances")
     p.add_argument("--setup", choices=[s.value for s in Setup])
     p.add_argument("--lateral", choices=[s.value for s in Lateral])
     p.add_argument("--precision", choices=[s.value for s in Precision])
