@@ -570,22 +570,22 @@ def _collide_mrt(f, cnt, n0, force_lo, force_hi, force, s):
         _mrt_node(f, i, _force_on(n0 + i, force_lo, force_hi), force, s)
 
 
-# -- interpolated bounce-back: after a tile is pulled, its boundary links (halfway value f*_ō(x) in the scratch)
-#    are replaced by f_p = a f*_ō(x) + b f*_ō(x + c_p) + c f*_p(x) (coefficients per link, see porepipe.lbm._walls).
+# -- interpolated bounce-back: after a tile is pulled, the scratch slot of a boundary link holds the halfway value
+#    h = f*_ō(x), and the slot of population ō holds f*_ō(x + c_p) (pulled from the node behind). The link becomes
+#    f_p = h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h) (porepipe.lbm._walls). Per link only its slot in the tile
+#    (uint16: p · _TILE + i) and b, c (float32) are stored, grouped by tile; the one extra read is f*_p(x).
 @njit(**_NUMERIC)
-def _apply_links(f, src, n0, cnt, n_nodes, k, link_node, link_pop, link_behind, link_coef):
-    """Interpolate the boundary links of tile nodes n0 … n0+cnt-1, starting at link k; returns the next link."""
-    end = n0 + cnt
-    n_links = link_node.size
-    while k < n_links and link_node[k] < end:
-        n = link_node[k]
-        p = link_pop[k]
-        slot = p * _TILE + (n - n0)
-        v = (link_coef[k, 0] * _get(f, slot) + link_coef[k, 1] * _get(src, link_behind[k])
-             + link_coef[k, 2] * _get(src, p * n_nodes + n))
-        _set(f, slot, v)
-        k += 1
-    return k
+def _apply_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c):
+    """Interpolate the boundary links of the tile that starts at node n0 (a multiple of _TILE)."""
+    tile = n0 // _TILE
+    for k in range(tile_start[tile], tile_start[tile + 1]):
+        s = np.int64(slot[k])
+        p = s // _TILE
+        i = s - p * _TILE
+        h = _get(f, s)
+        behind = _get(f, _OPP[p] * _TILE + i)
+        own = _get(src, p * n_nodes + n0 + i)
+        _set(f, s, h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h))
 
 
 # -- the step kernel ------------------------------------------------------------------------------------------------
@@ -605,12 +605,13 @@ def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force_hi, force, fields, store, n_steps,
-          streaming, omega, rates, link_node, link_pop, link_behind, link_coef):
+          streaming, omega, rates, tile_start, link_slot, link_b, link_c):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
     step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
 
     Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, interpolate its boundary links
-    (``link_*``, sorted by node; empty arrays for halfway bounce-back), collide, store.
+    (links of tile t: ``tile_start[t]:tile_start[t + 1]``; an empty ``link_slot`` for halfway bounce-back), collide,
+    store.
     """
     n_nodes = run_start[-1]
     b3 = (force[0], force[1], force[2])
@@ -623,11 +624,11 @@ def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
             r = np.searchsorted(run_start, n0, side="right") - 1
-            k = np.searchsorted(link_node, n0)
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
                 r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
-                k = _apply_links(f, a, n0, cnt, n_nodes, k, link_node, link_pop, link_behind, link_coef)
+                if link_slot.size:
+                    _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
                 if keep:
                     _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields)
                 _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)

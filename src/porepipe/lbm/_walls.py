@@ -3,18 +3,21 @@
 A boundary link is population p of fluid node x whose upstream voxel x − c_p is solid. The wall cuts the link at
 x − q c_p, q ∈ (0, 1] (halfway bounce-back puts it at q = ½ whatever the geometry). The pulled value is
 
-    f_p(x, t + 1) = a f*_ō(x) + b f*_ō(x + c_p) + c f*_p(x)        (ō = opposite of p, f* = post-collision)
+    f_p(x, t + 1) = a f*_ō(x) + b f*_ō(x + c_p) + c f*_p(x),  a = 1 − b − c   (ō = opposite of p, f* = post-collision)
 
-with, for q and the node behind x + c_p fluid,
+(weights summing to 1: a uniform state is reflected unchanged) with, for q and the node behind x + c_p fluid,
 
 * ``bfl`` (Bouzidi, Firdaouss & Lallemand 2001, Phys. Fluids 13, 3452, linear): q < ½: (2q, 1 − 2q, 0);
   q ≥ ½: (1/(2q), 0, 1 − 1/(2q)) — convex weights, so no link amplifies a population;
 * ``cli`` (Ginzburg, Verhaeghe & d'Humières 2008, Commun. Comput. Phys. 3, 427, "central linear
   interpolation"): (1, κ, −κ), κ = (1 − 2q)/(1 + 2q), one formula for all q.
 
-Where the node behind is solid too (a one-voxel gap along the link) both fall back to the local BFL branch for
-q ≥ ½ and to halfway bounce-back for q < ½ (no neighbour to interpolate with). Both are exact for a linear
-profile at any q; with TRT their steady solution depends on τ only through Λ (measured, tests/validation).
+Where the node behind is solid too (a one-voxel gap along the link) ``cli`` falls back to halfway bounce-back;
+``bfl`` uses its local branch for q ≥ ½ and halfway bounce-back for q < ½. Both are exact for a linear profile.
+With TRT, ``cli`` (with halfway fallback) keeps κ̂ τ-independent like halfway bounce-back (sphere array: 1e-5
+for τ = 0.6 … 2; tests/validation/test_lbm_spheres.py); ``bfl`` does not (−7 % from τ = 0.6 to 2 at 10 voxels
+per diameter), and neither does BFL's local branch inside ``cli`` (0.24 % on a porous sample), hence the
+fallback. ``cli`` is the default.
 
 Sources of q, in lattice coordinates (voxel i spans [i, i + 1), its node sits at i + ½):
 
@@ -31,7 +34,7 @@ import dataclasses
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.lbm._kernels import _ray_sphere_fractions
+from porepipe.lbm._kernels import _TILE, _ray_sphere_fractions
 from porepipe.lbm._lattice import C
 from porepipe.lbm._settings import Walls
 
@@ -144,39 +147,59 @@ class GreyWalls:
 
 @dataclasses.dataclass
 class Links:
-    """Interpolated boundary links of one lattice, sorted by node (inputs of the step kernel)."""
+    """Interpolated boundary links of one lattice in the step kernel's layout (links with b = c = 0 — halfway
+    bounce-back — are left out).
 
-    node: np.ndarray  # (K,) int64
-    pop: np.ndarray  # (K,) int64
-    behind: np.ndarray  # (K,) int64 flat index of f*_ō(x + c_p) (any valid index where its weight is 0)
-    coef: np.ndarray  # (K, 3) float64 (a, b, c)
-    q: np.ndarray  # (K,) float64 wall distance used
+    Attributes
+    ----------
+    tile_start : (T + 1,) int64 ndarray
+        Links of tile t (nodes t·_TILE … (t + 1)·_TILE − 1) are ``tile_start[t]:tile_start[t + 1]``.
+    slot : (K,) uint16 ndarray
+        p · _TILE + (node − t·_TILE): population and node of the link in the tile scratch.
+    b, c : (K,) float32 ndarrays
+        Weights of f*_ō(x + c_p) − h and f*_p(x) − h, h = f*_ō(x) the halfway value (a = 1 − b − c).
+    n_boundary : int
+        All boundary links of the lattice, interpolated or not.
+    """
+
+    tile_start: np.ndarray
+    slot: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+    n_boundary: int = 0
 
     @classmethod
     def none(cls) -> Links:
-        e = np.zeros(0, dtype=np.int64)
-        return cls(e, e, e, np.zeros((0, 3)), np.zeros(0))
+        return cls(
+            np.zeros(1, dtype=np.int64),
+            np.zeros(0, dtype=np.uint16),
+            np.zeros(0, dtype=np.float32),
+            np.zeros(0, dtype=np.float32),
+        )
 
     @property
     def size(self) -> int:
-        return int(self.node.size)
+        return int(self.slot.size)
+
+    def nodes_and_populations(self) -> tuple[np.ndarray, np.ndarray]:
+        """(K,) node and (K,) population of every stored link (diagnostics, tests)."""
+        tiles = np.repeat(np.arange(self.tile_start.size - 1), np.diff(self.tile_start))
+        slot = self.slot.astype(np.int64)
+        return tiles * _TILE + slot % _TILE, slot // _TILE
 
 
 def coefficients(q: np.ndarray, has_behind: np.ndarray, scheme: Walls) -> np.ndarray:
-    """(K, 3) weights (a, b, c) of :data:`f*_ō(x)`, f*_ō(x + c_p), f*_p(x) for wall distances ``q``."""
+    """(K, 2) weights (b, c) for wall distances ``q``: f_p = h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h)."""
     q = np.clip(np.asarray(q, dtype=np.float64), Q_MIN, 1.0)
-    coef = np.zeros((q.size, 3))
-    coef[:, 0] = 1.0  # halfway bounce-back
-    far = q >= 0.5
-    coef[far, 0] = 0.5 / q[far]  # local branch (needs no neighbour)
-    coef[far, 2] = 1.0 - 0.5 / q[far]
+    coef = np.zeros((q.size, 2))  # halfway bounce-back
     if scheme is Walls.bfl:
+        far = q >= 0.5
+        coef[far, 1] = 1.0 - 0.5 / q[far]  # local branch (needs no neighbour)
         near = ~far & has_behind
-        coef[near, 0] = 2.0 * q[near]
-        coef[near, 1] = 1.0 - 2.0 * q[near]
+        coef[near, 0] = 1.0 - 2.0 * q[near]
     elif scheme is Walls.cli:
         k = (1.0 - 2.0 * q[has_behind]) / (1.0 + 2.0 * q[has_behind])
-        coef[has_behind] = np.column_stack([np.ones_like(k), k, -k])
+        coef[has_behind] = np.column_stack([k, -k])
     else:
         raise PorepipeError(f"walls={scheme.value!r} has no interpolation coefficients")
     return coef
@@ -194,23 +217,31 @@ def link_geometry(pore: np.ndarray, periodic, node: np.ndarray, pop: np.ndarray)
     return coords, outside
 
 
-def build_links(pore, periodic, node, pop, behind, geometry, scheme: Walls) -> Links:
-    """Interpolated links of a lattice from its raw wall links (node, pop, behind = −1 if solid) and a geometry.
-
-    Links across a non-periodic lattice face (lateral walls, exactly halfway) and links the geometry does not cut
-    within (0, 1] (binary and geometry disagree there) keep q = ½.
-    """
+def link_distances(pore, periodic, node, pop, geometry) -> np.ndarray:
+    """(K,) wall distance q of raw wall links; ½ across a non-periodic lattice face (lateral walls, exactly
+    halfway) and where the geometry does not cut the link within (0, 1] (binary and geometry disagree there)."""
     coords, outside = link_geometry(pore, periodic, node, pop)
     q = np.full(node.size, 0.5)
     inner = ~outside
     if np.any(inner):
         got = geometry.fractions(coords[inner], pop[inner])
         q[inner] = np.where(got > 0, got, 0.5)
-    has_behind = behind >= 0
-    coef = coefficients(q, has_behind, scheme)
+    return q
+
+
+def build_links(pore, periodic, node, pop, behind, geometry, scheme: Walls) -> Links:
+    """Interpolated links of a lattice from its raw wall links (node, pop, behind = −1 if solid; by node)."""
+    q = link_distances(pore, periodic, node, pop, geometry)
+    coef = coefficients(q, behind >= 0, scheme).astype(np.float32)
+    used = (coef[:, 0] != 0) | (coef[:, 1] != 0)
+    node, pop, coef = node[used], pop[used], coef[used]
     n_nodes = int(np.count_nonzero(pore))
-    safe_behind = np.where(has_behind, behind, pop * n_nodes + node)
-    return Links(node.astype(np.int64), pop.astype(np.int64), safe_behind.astype(np.int64), coef, q)
+    n_tiles = (n_nodes + _TILE - 1) // _TILE
+    tile_start = np.searchsorted(node, np.arange(n_tiles + 1) * _TILE).astype(np.int64)
+    slot = (pop * _TILE + node % _TILE).astype(np.uint16)
+    return Links(
+        tile_start, slot, np.ascontiguousarray(coef[:, 0]), np.ascontiguousarray(coef[:, 1]), int(used.size)
+    )
 
 
 def geometry_from_files(
