@@ -35,6 +35,9 @@ NODES_PER_THREAD = 32_768
 _PHYSICS_KEYS = ("collision", "tau", "tau_bulk", "magic", "mrt_magic", "body_force", "precision", "walls")
 #: relative κ̂ changes below this are round-off: the tail estimate of :func:`kappa_error` is not needed.
 ROUND_OFF = 1e-13
+#: κ̂ changes below this fraction of ``tolerance_kappa`` count as noise (a residual oscillation, e.g. of
+#: interpolated walls at large τ on thin plates, ~1e-8): κ̂ is settled to that size even if they do not decay.
+NOISE_FRACTION = 1e-2
 
 
 class StabilityError(PorepipeError):
@@ -104,19 +107,20 @@ def _checkpoint_key(lat: Lattice, settings: Settings, links: Links | None) -> st
     return hash_of({"lattice": lat.key(), "links": q, **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}})
 
 
-def kappa_error(kappas) -> float:
+def kappa_error(kappas, noise: float = ROUND_OFF) -> float:
     """Estimated relative distance of the last κ̂ to the converged one, from the last three checks a window apart.
 
     With successive changes Δ₁, Δ₂ and r = Δ₂/Δ₁: a geometric tail |Δ₂| r/(1 − r) for 0 ≤ r < 1 (exponential
     approach to the steady state), |Δ₂| for r < 0 (an alternating series is within its last term), unbounded for
-    r ≥ 1 (not yet converging) unless Δ₂ is round-off. Relative to |κ̂|; inf with fewer than three checks.
+    r ≥ 1 (not yet converging) unless |Δ₂|/|κ̂| is below ``noise`` (round-off, or a residual oscillation of that
+    size: κ̂ is then known to about |Δ₂|). Relative to |κ̂|; inf with fewer than three checks.
     """
     if len(kappas) < 3 or not all(math.isfinite(k) for k in kappas[-3:]) or kappas[-1] == 0:
         return float("inf")
     k1, k2, k3 = kappas[-3:]
     d1, d2 = k2 - k1, k3 - k2
     rel = abs(d2) / abs(k3)
-    if rel < ROUND_OFF:
+    if rel < max(noise, ROUND_OFF):
         return rel
     r = d2 / d1 if d1 != 0 else float("inf")
     if r < 0:
@@ -282,7 +286,7 @@ def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area:
             drho = _density_change(fields[0, sel], prev_fields[0, sel])
             dk = abs(kappa - prev_kappa) / abs(kappa) if kappa != 0 and math.isfinite(kappa) else float("inf")
             settled = (settled or [prev_kappa])[-2:] + [kappa]
-            err = kappa_error(settled)
+            err = kappa_error(settled, NOISE_FRACTION * settings.tolerance_kappa)
         for name, value in zip(history, (done, kappa, dv, drho, dk, err, mach)):
             history[name].append(value)
         if reporter is not None:

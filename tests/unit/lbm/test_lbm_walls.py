@@ -160,6 +160,7 @@ def test_kappa_error_is_exact_for_a_geometric_approach():
     assert kappa_error(kappas) == pytest.approx(true, rel=1e-12)
     assert kappa_error(kappas[:2]) == float("inf")
     assert kappa_error([1.0, 1.1, 1.3]) == float("inf")  # changes growing: not converging
+    assert kappa_error([1.0, 1.0 + 1e-9, 1.0 + 3e-9], noise=1e-7) == pytest.approx(2e-9, rel=1e-6)  # noise
 
 
 @pytest.mark.parametrize("b", [1, 2, 3, 5])
