@@ -120,3 +120,78 @@ def test_bad_volumes_are_refused():
         permeability(np.ones((4, 4, 4)), "x", voxel_um=-1.0, progress=False)
     with pytest.raises(ValueError):
         permeability(np.ones((4, 4, 4)), "w", progress=False)
+
+
+class _ConstantQ:
+    """Wall geometry with the same q on every link: exact for walls normal to an axis at distance q."""
+
+    def __init__(self, q):
+        self.q = q
+
+    def permuted(self, order):
+        return self
+
+    def fractions(self, nodes, pops):
+        return np.full(len(pops), self.q)
+
+
+class _RandomQ(_ConstantQ):
+    def fractions(self, nodes, pops):
+        return np.random.default_rng(self.q).uniform(1e-6, 1.0, len(pops))
+
+
+def _slit_error(h, q, walls="cli", tau=0.857):
+    """κ̂ of a slit of h nodes between walls q off the outer nodes against the nodal sum of the exact parabola."""
+    pore = np.ones((2, 2, h + 1), dtype=bool)
+    pore[:, :, 0] = False
+    res = permeability(pore, "x", Settings(walls=walls, tau=tau), progress=False, geometry=_ConstantQ(q))
+    width = h - 1 + 2 * q
+    z = q + np.arange(h)
+    assert res.converged and res.walls == walls
+    return res.kappa_lu / (np.sum(z * (width - z) / 2) / (h + 1)) - 1
+
+
+@pytest.mark.parametrize("q", [1e-6, 1.0])
+def test_interpolated_walls_at_q_near_0_and_1_converge_at_second_order(q):
+    """Slit, walls at q → 0 (through the outer nodes) and q = 1 (at the next nodes): converged, τ-independent to
+    1e-5, error ≤ 6 % at h = 8 (measured +3.6 %, −5.0 %; halfway: +54 %, −28 %) and ≥ 3× smaller at h = 16."""
+    e8 = _slit_error(8, q)
+    assert abs(e8) < 0.06
+    assert abs(_slit_error(8, q, tau=0.6) - e8) < 1e-5 and abs(_slit_error(8, q, tau=1.8) - e8) < 1e-5
+    assert abs(_slit_error(16, q)) * 3 < abs(e8)
+    assert abs(_slit_error(8, q, walls="halfway")) > 4 * abs(e8)
+
+
+@pytest.mark.parametrize("geometry", ["throat", "plate"])
+def test_interpolated_walls_do_not_diverge_where_halfway_converges(geometry):
+    """One-voxel throat between two channels, and a one-voxel-thick plate with a 2 × 2 hole; random q ∈ (0, 1]
+    on every link (the worst mix of q → 0 and q → 1), τ = 0.51 … 2: CLI and BFL converge like halfway; CLI's κ̂
+    within a factor 2 of halfway's (measured 0.91-1.0); BFL's is τ-dependent (up to 3× at τ = 2), so only
+    finite and positive."""
+    pore = np.zeros((12, 6, 6), dtype=bool)
+    pore[:, 1:5, 1:5] = True
+    pore[6, 1:5, 1:5] = False
+    if geometry == "throat":
+        pore[6, 2, 2] = True
+    else:
+        pore[:, :, :] = True
+        pore[6] = False
+        pore[6, 2:4, 2:4] = True
+    half = permeability(pore, "x", Settings(walls="halfway", tau=0.6), progress=False).kappa_lu
+    for walls in ("cli", "bfl"):
+        for tau in (0.51, 0.6, 2.0):
+            res = permeability(pore, "x", Settings(walls=walls, tau=tau), progress=False, geometry=_RandomQ(3))
+            assert res.converged and np.isfinite(res.kappa_lu) and res.kappa_lu > 0
+            assert walls == "bfl" or 0.5 < res.kappa_lu / half < 2.0
+
+
+def test_narrow_throats_warn_with_the_expected_error():
+    """A 3 × 3 duct: the narrowest throat is 3 voxels (< 4), the result carries a warning naming the RMS halfway
+    error of circular ducts that wide (27 %, benchmarks/lbm_calibration.py --throats); a 6-wide duct does not."""
+    pore = np.zeros((4, 5, 5), dtype=bool)
+    pore[:, 1:4, 1:4] = True
+    res = permeability(pore, "x", progress=False)
+    assert res.throat_voxels == pytest.approx(3.0) and "±27 %" in res.warning
+    wide = np.zeros((4, 8, 8), dtype=bool)
+    wide[:, 1:7, 1:7] = True
+    assert permeability(wide, "x", progress=False).warning == ""

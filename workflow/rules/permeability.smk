@@ -4,7 +4,8 @@
 
 rule permeability:
     input:
-        binary=whole_binary_volume,
+        binary="results/{scene}/segment/binary_a{a}.h5",
+        grey=grey_volume,  # sub-voxel wall distances for the interpolated walls (`walls: cli`)
         scene=scene_file,
     output:
         "results/{scene}/permeability/perm_a{a}_{axis}.h5",
@@ -22,8 +23,20 @@ rule permeability:
         mem_mb=mem_mb(bytes_per_voxel=400, base_mb=1000),
         runtime=720,
     shell:
-        "porepipe permeability {input.binary:q} --scene {input.scene:q} --axis {wildcards.axis} -o {output:q}"
-        " --resume --threads {threads} > {log:q} 2>&1"
+        "porepipe permeability {input.binary:q} --grey {input.grey:q} --scene {input.scene:q} --axis {wildcards.axis}"
+        " -o {output:q}"
+        " --threads {threads} > {log} 2>&1"
+
+
+def permeability_resolutions(scene):
+    chosen = scene.permeability.resolutions_um or scene.resolutions_um
+    unknown = sorted(set(chosen) - set(scene.resolutions_um))
+    if unknown:
+        raise ValueError(
+            f"scene {scene.name!r}: permeability.resolutions_um = {unknown} are not among resolutions_um = "
+            f"{scene.resolutions_um}"
+        )
+    return chosen
 
 
 ANALYSIS_TARGETS["permeability"] = lambda scene: [

@@ -1,4 +1,4 @@
-"""Lattice-Boltzmann permeability (D3Q19; BGK, TRT, MRT; sparse pore-node storage), thesis chapter 6."""
+"""Lattice-Boltzmann permeability (D3Q19; TRT, BGK, MRT; halfway or interpolated walls; sparse pore nodes), ch. 6."""
 
 from porepipe._shared.lazy import lazy_exports
 
@@ -7,13 +7,17 @@ _EXPORTS = {
     "Collision": "_settings",
     "DARCY_M2": "_api",
     "Gradient": "_settings",
+    "GreyWalls": "_walls",
     "Lateral": "_settings",
     "PermeabilityResult": "_api",
     "Precision": "_settings",
     "Settings": "_settings",
     "Setup": "_settings",
+    "SphereWalls": "_walls",
     "StabilityError": "_solver",
+    "StopRule": "_settings",
     "Velocity": "_settings",
+    "Walls": "_settings",
     "kappa_units": "_api",
     "permeability": "_api",
 }

@@ -11,8 +11,10 @@ import xarray as xr
 from porepipe._shared.errors import PorepipeError
 from porepipe.lbm._domain import Prepared, chamber_setup, periodic_setup
 from porepipe.lbm._lattice import CS2
-from porepipe.lbm._settings import Axis, Lateral, Settings, Setup
+from porepipe.lbm._settings import Axis, Lateral, Settings, Setup, Walls
 from porepipe.lbm._solver import Run, StabilityError, check_tau, solve
+from porepipe.lbm._throats import throat_warning
+from porepipe.lbm._walls import GreyWalls, SphereWalls, build_links
 
 #: 1 darcy in m² (9.869233e-13; thesis §4.4: 1 D = 0.9869 µm²).
 DARCY_M2 = 9.869233e-13
@@ -53,6 +55,12 @@ class PermeabilityResult:
     velocity: np.ndarray | None = None
     pressure: np.ndarray | None = None
     total_mass: float = float("nan")
+    stopped_by: str = ""
+    kappa_error: float = float("nan")
+    walls: str = "halfway"
+    n_links: int = 0
+    throat_voxels: float = float("nan")
+    warning: str = ""
 
     def to_dataset(self) -> xr.Dataset:
         """Tables of the result (κ in all units, estimates, convergence history) as an xarray Dataset."""
@@ -96,12 +104,11 @@ class PermeabilityResult:
             "tau_bulk": s.tau_bulk,
             "magic": s.magic,
             "mrt_magic": s.mrt_magic if s.mrt_magic is not None else float("nan"),
-            "precision": s.precision.value,
-            "setup": s.setup.value,
-            "mirror": int(s.mirror),
-            "lateral": s.lateral.value,
-            "body_force_lu": s.body_force,
-            "velocity_kind": "superficial (Darcy)",
+            "precision": s.precision.value, "setup": s.setup.value, "mirror": int(s.mirror),
+            "lateral": s.lateral.value, "body_force_lu": s.body_force, "velocity_kind": "superficial (Darcy)",
+            "stop": s.stop.value, "stopped_by": self.stopped_by, "kappa_error": self.kappa_error,
+            "walls": self.walls, "n_interpolated_links": self.n_links, "throat_voxels": self.throat_voxels,
+            "warning": self.warning,
         }
 
 
@@ -119,21 +126,14 @@ def _check_pore(pore: np.ndarray) -> np.ndarray:
     return pore
 
 
-def prepare(pore_internal: np.ndarray, settings: Settings) -> Prepared:
+def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool = False) -> Prepared:
     """Build the set-up the settings ask for (flow along axis 0 of ``pore_internal``)."""
     lateral_periodic = settings.lateral is Lateral.periodic
     if settings.setup is Setup.periodic:
-        return periodic_setup(
-            pore_internal, mirror=settings.mirror, lateral_periodic=lateral_periodic, prune=settings.prune
-        )
-    return chamber_setup(
-        pore_internal,
-        inlet_layers=settings.inlet_layers,
-        outlet_layers=settings.outlet_layers,
-        force_layers=settings.force_layers,
-        lateral_periodic=lateral_periodic,
-        prune=settings.prune,
-    )
+        return periodic_setup(pore_internal, mirror=settings.mirror, lateral_periodic=lateral_periodic,
+                              prune=settings.prune, keep_wall_links=keep_wall_links)
+    return chamber_setup(pore_internal, inlet_layers=settings.inlet_layers, outlet_layers=settings.outlet_layers,
+                         force_layers=settings.force_layers, lateral_periodic=lateral_periodic, prune=settings.prune)
 
 
 def _fields_to_sample(prep: Prepared, run: Run, axis: int, sample_shape) -> tuple[np.ndarray, np.ndarray]:
@@ -154,16 +154,26 @@ def _fields_to_sample(prep: Prepared, run: Run, axis: int, sample_shape) -> tupl
     return velocity, np.moveaxis(pressure, 0, axis)
 
 
-def permeability(
-    pore: np.ndarray,
-    axis: Axis | str = Axis.z,
-    settings: Settings | None = None,
-    voxel_um: float = 1.0,
-    *,
-    checkpoint: Path | None = None,
-    progress: bool = True,
-    label: str | None = None,
-) -> PermeabilityResult:
+def _interpolating(settings: Settings, geometry) -> bool:
+    """Whether this run interpolates its walls (refuses the set-ups whose domain is not the sample itself)."""
+    if geometry is None or settings.walls is Walls.halfway:
+        return False
+    if settings.setup is not Setup.periodic or settings.mirror:
+        raise PorepipeError(f"walls={settings.walls.value} with a geometry needs setup=periodic and mirror=false "
+                            f"(got setup={settings.setup.value}, mirror={settings.mirror}); use walls=halfway")
+    return True
+
+
+def _check_geometry(geometry, shape) -> None:
+    if isinstance(geometry, GreyWalls) and geometry.solid.shape != tuple(shape):
+        raise PorepipeError(f"grey volume shape {geometry.solid.shape} differs from the pore volume's {shape}")
+    if isinstance(geometry, SphereWalls) and tuple(geometry.box) != tuple(float(s) for s in shape):
+        raise PorepipeError(f"sphere box {geometry.box} (voxels) differs from the pore volume's shape {shape}")
+
+
+def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings | None = None,
+                 voxel_um: float = 1.0, *, checkpoint: Path | None = None, progress: bool = True,
+                 label: str | None = None, geometry: SphereWalls | GreyWalls | None = None) -> PermeabilityResult:
     """Lattice-Boltzmann permeability of a binary sample along one axis.
 
     Parameters
@@ -179,6 +189,9 @@ def permeability(
     checkpoint : path, optional
         Checkpoint file: written every ``checkpoint_every_s`` and when the step limit is hit; a run with the same
         geometry and physics resumes from it. Removed after a converged run.
+    geometry : SphereWalls or GreyWalls, optional
+        Sub-voxel wall positions for ``walls`` = cli/bfl, in the caller's axis order and the sample's voxel grid
+        (exact spheres, or grey values). Without it the walls are halfway bounce-back (``result.walls``).
 
     Returns
     -------
@@ -192,7 +205,7 @@ def permeability(
 
     Notes
     -----
-    Thesis ch. 6: D3Q19, halfway bounce-back, body force by Ladd-Verberg with h2 = 0 (Eq. 6.1.20), Darcy's law
+    Thesis ch. 6: D3Q19, halfway or interpolated bounce-back (:mod:`porepipe.lbm._walls`), body force by Ladd-Verberg with h2 = 0 (Eq. 6.1.20), Darcy's law
     with the superficial velocity (Eq. 6.1.35), pressure gradient by method 3 (Eq. 6.1.39) in the chamber set-up.
     """
     settings = settings or Settings()
@@ -201,16 +214,14 @@ def permeability(
         raise PorepipeError(f"voxel_um must be a positive number, got {voxel_um}")
     pore = _check_pore(pore)
     check_tau(settings)
+    interpolate = _interpolating(settings, geometry)
+    if interpolate:
+        _check_geometry(geometry, pore.shape)
     internal = np.ascontiguousarray(np.moveaxis(pore, axis.index, 0))
-    prep = prepare(internal, settings)
-    base = {
-        "axis": axis,
-        "voxel_um": float(voxel_um),
-        "settings": settings,
-        "porosity": float(pore.mean()),
-        "n_pruned": prep.pruned_nodes,
-        "n_spanning": prep.n_spanning,
-    }
+    prep = prepare(internal, settings, keep_wall_links=interpolate)
+    throat, warning = throat_warning(internal, settings, interpolate)
+    base = {"axis": axis, "voxel_um": float(voxel_um), "settings": settings, "porosity": float(pore.mean()),
+            "n_pruned": prep.pruned_nodes, "n_spanning": prep.n_spanning, "throat_voxels": throat, "warning": warning}
     if prep.lattice is None:
         return PermeabilityResult(
             **kappa_units(0.0, voxel_um),
@@ -225,33 +236,20 @@ def permeability(
             **base,
         )
     if prep.lattice.n_wall_links == 0:
-        return PermeabilityResult(
-            **kappa_units(float("inf"), voxel_um),
-            method="no_walls",
-            estimates={},
-            converged=True,
-            steps=0,
-            history={},
-            mlups=0.0,
-            n_nodes=prep.lattice.n_nodes,
-            reason="no solid voxel and no wall anywhere: nothing resists the flow, "
-            "κ is unbounded (use `lateral: walls` for a duct)",
-            **base,
-        )
-    run = solve(
-        prep.lattice,
-        settings,
-        sample_voxels=prep.sample_voxels,
-        sample_area=prep.sample_area,
-        label=label or f"lbm {axis.value}",
-        checkpoint=checkpoint,
-        progress=progress,
-    )
-    reason = (
-        "converged"
-        if run.converged
-        else f"step limit max_steps={settings.max_steps} reached before convergence"
-    )
+        return PermeabilityResult(**kappa_units(float("inf"), voxel_um), method="no_walls", estimates={},
+                                  converged=True, steps=0, history={}, mlups=0.0, n_nodes=prep.lattice.n_nodes,
+                                  reason="no solid voxel and no wall anywhere: nothing resists the flow, "
+                                         "κ is unbounded (use `lateral: walls` for a duct)", **base)
+    links = None
+    if interpolate:
+        lat = prep.lattice
+        order = [axis.index] + [k for k in range(3) if k != axis.index]
+        links = build_links(lat.pore, lat.periodic, *lat.wall_links, geometry.permuted(order), settings.walls)
+        lat.wall_links = None
+    run = solve(prep.lattice, settings, sample_voxels=prep.sample_voxels, sample_area=prep.sample_area,
+                label=label or f"lbm {axis.value}", checkpoint=checkpoint, progress=progress, links=links)
+    reason = (f"converged ({run.stopped_by} rule)" if run.converged
+              else f"step limit max_steps={settings.max_steps} reached before convergence")
     if not run.converged and not settings.accept_unconverged:
         raise StabilityError(
             f"LBM run along {axis.value} not converged after {run.steps} steps "
@@ -264,18 +262,9 @@ def permeability(
     velocity = pressure = None
     if settings.write_fields or settings.write_vti:
         velocity, pressure = _fields_to_sample(prep, run, axis.index, internal.shape)
-    return PermeabilityResult(
-        **kappa_units(run.kappa, voxel_um),
-        method=run.kappa_key,
-        estimates=run.estimates,
-        converged=run.converged,
-        steps=run.steps,
-        reason=reason,
-        history=run.history,
-        mlups=run.mlups,
-        n_nodes=prep.lattice.n_nodes,
-        velocity=velocity,
-        pressure=pressure,
-        total_mass=run.total_mass,
-        **base,
-    )
+    return PermeabilityResult(**kappa_units(run.kappa, voxel_um), method=run.kappa_key, estimates=run.estimates,
+                              converged=run.converged, steps=run.steps, reason=reason, history=run.history,
+                              mlups=run.mlups, n_nodes=prep.lattice.n_nodes, velocity=velocity, pressure=pressure,
+                              total_mass=run.total_mass, stopped_by=run.stopped_by, kappa_error=run.kappa_error,
+                              walls=settings.walls.value if interpolate else Walls.halfway.value,
+                              n_links=links.size if links is not None else 0, **base)

@@ -184,3 +184,42 @@ def mid_section_velocity_error(case: Case, run: Run, settings: Settings, b: int)
 def _sample_nodes(lat: Lattice) -> np.ndarray:
     s0, s1 = lat.sample_layers
     return np.arange(lat.layer_start[s0], lat.layer_start[s1])
+
+
+#: Dimensionless drag K = F/(6π μ a U) of a simple-cubic array of spheres (radius a, solid fraction c, U the
+#: superficial velocity), Stokes flow along a lattice axis: Zick & Homsy (1982), J. Fluid Mech. 115, 13-26,
+#: Table 2 (simple cubic), the values also listed by Sangani & Acrivos (1982), Int. J. Multiphase Flow 8, 343.
+#: c = π/6 = 0.5236 is the touching array.
+ZICK_HOMSY_SC = {0.027: 2.008, 0.064: 2.810, 0.125: 4.292, 0.216: 7.442, 0.343: 15.40, 0.45: 28.10, 0.5236: 42.14}
+
+
+def sangani_acrivos_dilute(c: float) -> float:
+    """K(c) of a simple-cubic array from the Hasimoto/Sangani-Acrivos series (1982, Eq. 4.2; good for c ≲ 0.2):
+    K = 1/(1 − 1.7601 c^⅓ + c − 1.5593 c² + 3.9799 c^{8/3} − 3.0734 c^{10/3})."""
+    s = c ** (1 / 3)
+    return 1.0 / (1 - 1.7601 * s + c - 1.5593 * c**2 + 3.9799 * s**8 - 3.0734 * s**10)
+
+
+def sphere_array(cells: int, c: float):
+    """One sphere of solid fraction ``c`` centred in a periodic cube of ``cells`` voxels (a simple-cubic array).
+
+    Returns (pore (cells,)*3 bool: voxel centres outside the sphere, SphereWalls, radius in voxels).
+    """
+    from porepipe.lbm._walls import SphereWalls
+
+    a = cells * (3 * c / (4 * np.pi)) ** (1 / 3)
+    x = np.arange(cells) + 0.5 - cells / 2
+    r2 = x[:, None, None] ** 2 + x[None, :, None] ** 2 + x[None, None, :] ** 2
+    centre = np.full((1, 3), cells / 2)
+    return r2 >= a * a, SphereWalls(centre, np.array([a]), (float(cells),) * 3), a
+
+
+def drag_coefficient(kappa_lu: float, cells: int, a: float) -> float:
+    """K = L³/(6π a κ̂) of a periodic cell of edge L with one sphere of radius a (force balance F = ∇p L³, Darcy
+    U = κ̂ ∇p/μ with the superficial U; the body force on the fluid acts as the mean pressure gradient)."""
+    return cells**3 / (6 * np.pi * a * kappa_lu)
+
+
+def cells_for_diameter(c: float, diameter: float) -> int:
+    """Cell edge (voxels, rounded) that gives spheres of about ``diameter`` voxels at solid fraction c."""
+    return round(diameter / (2 * (3 * c / (4 * np.pi)) ** (1 / 3)))

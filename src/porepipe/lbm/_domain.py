@@ -13,7 +13,14 @@ import hashlib
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.lbm._kernels import _compact_columns, _gather_table, _node_ids, _runs, _wall_links
+from porepipe.lbm._kernels import (
+    _compact_columns,
+    _gather_table,
+    _node_ids,
+    _runs,
+    _wall_link_list,
+    _wall_links,
+)
 from porepipe.lbm._percolation import flow_paths
 
 #: beyond this many populations the gather index needs 64 bits
@@ -55,6 +62,9 @@ class Lattice:
         Number of bounce-back links (populations whose pull source is their own node).
     window : (L1, L2) bool ndarray or None
         Part of the cross-section that belongs to S (None = all of it).
+    wall_links : ((K,), (K,), (K,)) int64 ndarrays or None
+        Node, population and the pull source of the opposite population (−1: solid behind) of every bounce-back
+        link, by node (see :func:`porepipe.lbm._kernels._wall_link_list`); kept only if asked for.
     """
 
     pore: np.ndarray
@@ -68,6 +78,7 @@ class Lattice:
     run_base: np.ndarray = dataclasses.field(repr=False)
     n_wall_links: int = 0
     window: np.ndarray | None = None
+    wall_links: tuple[np.ndarray, np.ndarray, np.ndarray] | None = dataclasses.field(default=None, repr=False)
 
     @property
     def n_nodes(self) -> int:
@@ -112,7 +123,8 @@ class Lattice:
         return h.hexdigest()[:16]
 
 
-def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, window=None) -> Lattice:
+def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, window=None, *,
+                  keep_wall_links: bool = False) -> Lattice:
     """Number the pore nodes and build the pull/bounce-back tables (runs + gather table of the irregular runs).
 
     Parameters
@@ -125,6 +137,8 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
         Half-open layer ranges of the force zone and of the sample.
     window : (L1, L2) bool ndarray, optional
         Lateral part of the sample used for averages.
+    keep_wall_links : bool
+        Also list the bounce-back links (for interpolated walls).
     """
     pore = np.ascontiguousarray(pore, dtype=bool)
     if pore.ndim != 3 or min(pore.shape) < 1:
@@ -136,23 +150,20 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
     base = np.zeros(lengths.size, dtype=np.int64)
     base[irregular] = np.cumsum(lengths * irregular)[irregular] - lengths[irregular] - start[:-1][irregular]
     walls = int(_wall_links(full))
+    links = _list_wall_links(full, walls) if keep_wall_links else None
     gather = _irregular_columns(full, np.repeat(irregular, lengths))
     del full
     counts = np.count_nonzero(pore.reshape(pore.shape[0], -1), axis=1)
     layer_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    return Lattice(
-        pore,
-        tuple(bool(p) for p in periodic),
-        gather,
-        layer_start,
-        (int(force_layers[0]), int(force_layers[1])),
-        (int(sample_layers[0]), int(sample_layers[1])),
-        start,
-        offset,
-        base,
-        walls,
-        window,
-    )
+    return Lattice(pore, tuple(bool(p) for p in periodic), gather, layer_start,
+                   (int(force_layers[0]), int(force_layers[1])), (int(sample_layers[0]), int(sample_layers[1])),
+                   start, offset, base, walls, window, links)
+
+
+def _list_wall_links(full: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    node, pop, behind = (np.empty(count, dtype=np.int64) for _ in range(3))
+    _wall_link_list(full, node, pop, behind)
+    return node, pop, behind
 
 
 def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:
@@ -219,23 +230,17 @@ def _prune(sample: np.ndarray, lateral_periodic: bool, wrap: bool, enabled: bool
     return keep, n_span, int(np.count_nonzero(sample)) - int(np.count_nonzero(keep))
 
 
-def periodic_setup(sample: np.ndarray, *, mirror: bool, lateral_periodic: bool, prune: bool) -> Prepared:
+def periodic_setup(sample: np.ndarray, *, mirror: bool, lateral_periodic: bool, prune: bool,
+                   keep_wall_links: bool = False) -> Prepared:
     """Body force on every node, periodic along the flow (optionally sample + its mirror image)."""
     domain = np.concatenate([sample, sample[::-1]], axis=0) if mirror else sample
     keep, n_span, pruned = _prune(domain, lateral_periodic, True, prune)
     area = domain.shape[1] * domain.shape[2]
     if n_span == 0:
-        return Prepared(
-            None,
-            domain.size,
-            area,
-            0,
-            0,
-            reason="no pore path connects the inlet face to the outlet face: κ = 0",
-        )
-    lat = build_lattice(
-        keep, (True, lateral_periodic, lateral_periodic), (0, domain.shape[0]), (0, domain.shape[0])
-    )
+        return Prepared(None, domain.size, area, 0, 0,
+                        reason="no pore path connects the inlet face to the outlet face: κ = 0")
+    lat = build_lattice(keep, (True, lateral_periodic, lateral_periodic), (0, domain.shape[0]),
+                        (0, domain.shape[0]), keep_wall_links=keep_wall_links)
     return Prepared(lat, domain.size, area, n_span, pruned)
 
 

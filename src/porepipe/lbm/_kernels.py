@@ -218,6 +218,76 @@ def _compact_columns(table, keep):
     return count
 
 
+@njit(cache=True)
+def _wall_link_list(gather, node_out, pop_out, behind_out):
+    """The bounce-back links of a full pull table, ordered by node then population; returns their number.
+
+    Link k: population ``pop_out[k]`` of node ``node_out[k]`` pulls from a solid (or outside) upstream voxel.
+    ``behind_out[k]`` is the pull source of the opposite population, the flat index of f*_ō at x + c_p (the node
+    behind, away from the wall), or −1 if that neighbour is solid too (a one-voxel gap along the link).
+    """
+    n_nodes = gather.shape[1]
+    count = 0
+    for n in range(n_nodes):
+        for q in range(1, 19):
+            if np.int64(gather[q - 1, n]) == _OPP[q] * n_nodes + n:
+                node_out[count] = n
+                pop_out[count] = q
+                back = np.int64(gather[_OPP[q] - 1, n])
+                behind_out[count] = -1 if back == q * n_nodes + n else back
+                count += 1
+    return count
+
+
+@njit(cache=True, parallel=True)
+def _ray_sphere_fractions(points, dirs, centres, radii, box, periodic, cell_n, cell_start, cell_items, out):
+    """First intersection t ∈ (0, 1] of the segments points + t · dirs with a set of (periodic) spheres.
+
+    ``cell_start``/``cell_items`` list the spheres by the cell (edge box/cell_n >= r_max + |d|) of their centre;
+    the 3 × 3 × 3 cells around a point and, on periodic axes, the images ±box of every candidate are tested.
+    ``out[k]`` = −1 where no sphere meets the segment.
+    """
+    for k in prange(points.shape[0]):
+        x0, x1, x2 = points[k, 0], points[k, 1], points[k, 2]
+        d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+        aa = d0 * d0 + d1 * d1 + d2 * d2
+        best = 2.0
+        c0 = min(int(x0 / box[0] * cell_n[0]), cell_n[0] - 1)
+        c1 = min(int(x1 / box[1] * cell_n[1]), cell_n[1] - 1)
+        c2 = min(int(x2 / box[2] * cell_n[2]), cell_n[2] - 1)
+        lo0, hi0 = (c0 - 1, c0 + 2) if cell_n[0] >= 3 else (0, cell_n[0])  # < 3 cells: each one once
+        lo1, hi1 = (c1 - 1, c1 + 2) if cell_n[1] >= 3 else (0, cell_n[1])
+        lo2, hi2 = (c2 - 1, c2 + 2) if cell_n[2] >= 3 else (0, cell_n[2])
+        for a in range(lo0, hi0):
+            for b in range(lo1, hi1):
+                for c in range(lo2, hi2):
+                    if ((a < 0 or a >= cell_n[0]) and not periodic[0]) or \
+                            ((b < 0 or b >= cell_n[1]) and not periodic[1]) or \
+                            ((c < 0 or c >= cell_n[2]) and not periodic[2]):
+                        continue
+                    cell = ((a % cell_n[0]) * cell_n[1] + (b % cell_n[1])) * cell_n[2] + (c % cell_n[2])
+                    for m in range(cell_start[cell], cell_start[cell + 1]):
+                        s = cell_items[m]
+                        rr = radii[s] * radii[s]
+                        for i0 in range(-1 if periodic[0] else 0, 2 if periodic[0] else 1):
+                            for i1 in range(-1 if periodic[1] else 0, 2 if periodic[1] else 1):
+                                for i2 in range(-1 if periodic[2] else 0, 2 if periodic[2] else 1):
+                                    e0 = x0 - (centres[s, 0] + i0 * box[0])
+                                    e1 = x1 - (centres[s, 1] + i1 * box[1])
+                                    e2 = x2 - (centres[s, 2] + i2 * box[2])
+                                    bb = e0 * d0 + e1 * d1 + e2 * d2
+                                    cc = e0 * e0 + e1 * e1 + e2 * e2 - rr
+                                    disc = bb * bb - aa * cc
+                                    if disc < 0.0:
+                                        continue
+                                    t = (-bb - np.sqrt(disc)) / aa
+                                    if t <= 0.0 and cc <= 0.0:
+                                        t = 1e-12  # the point lies inside the sphere: the wall is at the node
+                                    if 0.0 < t < best:
+                                        best = t
+        out[k] = best if best <= 1.0 else -1.0
+
+
 # -- tiles: a parallel chunk of nodes is processed _TILE nodes at a time in a flat float64 scratch
 #    ``f[q * _TILE + i]`` that stays in L1. Loading and storing a tile are contiguous per-population copies; BGK and
 #    TRT collide a tile in one loop over its nodes that vectorises across nodes (the row offsets are compile-time
@@ -546,6 +616,24 @@ def _collide_mrt(f, cnt, n0, force_lo, force_hi, force, s):
         _mrt_node(f, i, _force_on(n0 + i, force_lo, force_hi), force, s)
 
 
+# -- interpolated bounce-back: after a tile is pulled, the scratch slot of a boundary link holds the halfway value
+#    h = f*_ō(x), and the slot of population ō holds f*_ō(x + c_p) (pulled from the node behind). The link becomes
+#    f_p = h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h) (porepipe.lbm._walls). Per link only its slot in the tile
+#    (uint16: p · _TILE + i) and b, c (float32) are stored, grouped by tile; the one extra read is f*_p(x).
+@njit(**_NUMERIC)
+def _apply_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c):
+    """Interpolate the boundary links of the tile that starts at node n0 (a multiple of _TILE)."""
+    tile = n0 // _TILE
+    for k in range(tile_start[tile], tile_start[tile + 1]):
+        s = np.int64(slot[k])
+        p = s // _TILE
+        i = s - p * _TILE
+        h = _get(f, s)
+        behind = _get(f, _OPP[p] * _TILE + i)
+        own = _get(src, p * n_nodes + n0 + i)
+        _set(f, s, h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h))
+
+
 # -- the step kernel ------------------------------------------------------------------------------------------------
 BGK, TRT, MRT = 0, 1, 2
 
@@ -562,28 +650,14 @@ def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
-def _step(
-    op,
-    src,
-    dst,
-    gather,
-    run_start,
-    run_offset,
-    run_base,
-    force_lo,
-    force_hi,
-    force,
-    fields,
-    store,
-    n_steps,
-    streaming,
-    omega,
-    rates,
-):
+def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force_hi, force, fields, store, n_steps,
+          streaming, omega, rates, tile_start, link_slot, link_b, link_c):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
     step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
 
-    Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, collide, store.
+    Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, interpolate its boundary links
+    (links of tile t: ``tile_start[t]:tile_start[t + 1]``; an empty ``link_slot`` for halfway bounce-back), collide,
+    store.
     """
     n_nodes = run_start[-1]
     b3 = (force[0], force[1], force[2])
@@ -599,6 +673,8 @@ def _step(
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
                 r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
+                if link_slot.size:
+                    _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
                 if keep:
                     _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields)
                 _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)

@@ -15,6 +15,21 @@ class Collision(str, enum.Enum):
     mrt = "mrt"  # d'Humières multiple relaxation time with the thesis's rates (Eq. 6.1.14)
 
 
+class Walls(str, enum.Enum):
+    """Solid walls: halfway bounce-back, or interpolated bounce-back at the sub-voxel wall distance q."""
+
+    halfway = "halfway"  # wall halfway between the nodes (staircase, first order on curved walls)
+    cli = "cli"  # Ginzburg's central linear interpolation: one formula for all q, Λ-parametrised with TRT
+    bfl = "bfl"  # Bouzidi-Firdaouss-Lallemand linear interpolation (two branches, convex weights)
+
+
+class StopRule(str, enum.Enum):
+    """Which convergence rule ends the run."""
+
+    kappa = "kappa"  # κ̂ settled: change over a window and the geometric-tail error estimate below tolerance_kappa
+    density = "density"  # thesis Eq. 6.1.30: v and ρ changes over a window (and δκ) below their tolerances
+
+
 class Setup(str, enum.Enum):
     """How the flow is driven."""
 
@@ -76,17 +91,17 @@ class Settings(BaseModel):
         default_factory=list,
         description="run only at these of the scene's resolutions (empty: all); fine lattices cost most",
     )
-    collision: Collision = Field(Collision.mrt, description="bgk, trt or mrt (the thesis's safe choice)")
+    collision: Collision = Field(
+        Collision.trt, description="bgk, trt (default: Λ = magic makes κ̂ τ-independent) or mrt (the thesis's)")
     tau: float = Field(0.857, gt=0.5, description="relaxation time τ̂ of the shear modes; ν̂ = (τ̂ − ½)/3")
     tau_bulk: float = Field(1.0, gt=0.5, description="MRT only: relaxation time of the energy moment")
     magic: float = Field(
         3 / 16, gt=0, description="TRT magic parameter Λ = (τ⁺ − ½)(τ⁻ − ½); 3/16 = exact walls"
     )
     mrt_magic: float | None = Field(
-        None,
-        gt=0,
-        description="MRT only: tie the q and m rates to τ by this Λ (None = thesis's fixed 1.2, 1.98)",
-    )
+        None, gt=0, description="MRT only: tie the q and m rates to τ by this Λ (None = thesis's fixed 1.2, 1.98)")
+    walls: Walls = Field(Walls.cli, description="halfway bounce-back, or cli/bfl interpolated walls at the "
+                         "sub-voxel distance q (needs a geometry: spheres or grey values; else halfway)")
     setup: Setup = Field(Setup.periodic, description="periodic (body force everywhere) or chambers (thesis)")
     mirror: bool = Field(False, description="periodic set-up: append the sample mirrored along the flow axis")
     lateral: Lateral = Field(Lateral.periodic, description="boundary across the flow: periodic or walls")
@@ -105,13 +120,11 @@ class Settings(BaseModel):
     )
     precision: Precision = Field(Precision.float64, description="population storage (arithmetic is float64)")
     prune: bool = Field(True, description="drop pore clusters that cannot carry flow before the run")
-    tolerance_velocity: float = Field(
-        1e-4, gt=0, description="max relative change of v over a window (6.1.30)"
-    )
-    tolerance_density: float = Field(
-        1e-9, gt=0, description="max relative change of ρ over a window (6.1.30)"
-    )
-    tolerance_kappa: float = Field(1e-5, gt=0, description="relative change of κ over a window")
+    tolerance_velocity: float = Field(1e-4, gt=0, description="max relative change of v over a window (6.1.30)")
+    tolerance_density: float = Field(1e-9, gt=0, description="max relative change of ρ over a window (6.1.30)")
+    stop: StopRule = Field(StopRule.kappa, description="kappa: stop when κ̂ has settled; density: thesis Eq. 6.1.30")
+    tolerance_kappa: float = Field(1e-5, gt=0, description="max relative change of κ̂ over a window and max "
+                                   "estimated relative distance to the converged κ̂")
     window_steps: int = Field(500, ge=10, description="steps dt between two convergence checks")
     max_steps: int = Field(200_000, ge=10, description="step limit; an unconverged run is an error")
     accept_unconverged: bool = Field(

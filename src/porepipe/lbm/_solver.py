@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import hashlib
 import math
 import time
 from pathlib import Path
@@ -20,7 +21,8 @@ from porepipe.lbm import _kernels as K
 from porepipe.lbm._darcy import Sampler, estimate_key, estimates
 from porepipe.lbm._domain import Lattice
 from porepipe.lbm._lattice import CS2, dhumieres_matrix, mrt_rates, trt_minus_tau, viscosity
-from porepipe.lbm._settings import Collision, Settings
+from porepipe.lbm._settings import Collision, Settings, StopRule
+from porepipe.lbm._walls import Links
 
 #: τ̂ − ½ below this is refused (ν̂ → 0: the scheme loses stability and the wall position runs away).
 TAU_MIN_GAP = 5e-3
@@ -29,29 +31,13 @@ TAU_MIN_GAP = 5e-3
 VELOCITY_FLOOR = 1e-2
 #: below this many pore nodes per thread a parallel step costs more in thread wake-ups than it saves.
 NODES_PER_THREAD = 32_768
-#: settings that only steer when a run stops, what it reports or writes: they do not change the populations, so a
-#: checkpoint stays valid across them (a rerun with more ``max_steps`` resumes). Every other setting — including any
-#: added later — enters the checkpoint key, so the list fails safe: a forgotten entry discards, never misuses, a
-#: checkpoint.
-_RUN_CONTROL_KEYS = frozenset(
-    {
-        "axes",
-        "resolutions_um",
-        "gradient",
-        "trim_layers",
-        "velocity",
-        "tolerance_velocity",
-        "tolerance_density",
-        "tolerance_kappa",
-        "window_steps",
-        "max_steps",
-        "accept_unconverged",
-        "mach_max",
-        "write_fields",
-        "write_vti",
-        "checkpoint_every_s",
-    }
-)
+#: keys of the settings that change the numbers (checkpoints must match them).
+_PHYSICS_KEYS = ("collision", "tau", "tau_bulk", "magic", "mrt_magic", "body_force", "precision", "walls")
+#: relative κ̂ changes below this are round-off: the tail estimate of :func:`kappa_error` is not needed.
+ROUND_OFF = 1e-13
+#: κ̂ changes below this fraction of ``tolerance_kappa`` count as noise (a residual oscillation, e.g. of
+#: interpolated walls at large τ on thin plates, ~1e-8): κ̂ is settled to that size even if they do not decay.
+NOISE_FRACTION = 1e-2
 
 
 class StabilityError(PorepipeError):
@@ -71,6 +57,8 @@ class Run:
     mlups: float
     step_wall_s: float
     total_mass: float
+    stopped_by: str = "step_limit"  # "kappa", "density" or "step_limit"
+    kappa_error: float = float("inf")  # estimated relative distance of κ̂ to its converged value
 
     @property
     def kappa(self) -> float:
@@ -90,8 +78,10 @@ def check_tau(settings: Settings) -> None:
         )
 
 
-def make_stepper(settings: Settings, lat: Lattice):
-    """``step(src, dst, fields, store, n_steps)`` for the chosen operator (its parameters are fixed once, here)."""
+def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
+    """``step(src, dst, fields, store, n_steps)`` for the chosen operator (its parameters are fixed once, here);
+    ``links``: interpolated boundary links (None: halfway bounce-back everywhere)."""
+    links = links if links is not None else Links.none()
     lo, hi = lat.force_nodes
     force = np.array([settings.body_force, 0.0, 0.0])
     tau = settings.tau
@@ -114,31 +104,37 @@ def make_stepper(settings: Settings, lat: Lattice):
         )
 
     def step(src, dst, fields, store, n):
-        K._step(
-            op,
-            src,
-            dst,
-            lat.gather,
-            lat.run_start,
-            lat.run_offset,
-            lat.run_base,
-            lo,
-            hi,
-            force,
-            fields,
-            store,
-            n,
-            K.streams(src),
-            omega,
-            rates,
-        )
-
+        K._step(op, src, dst, lat.gather, lat.run_start, lat.run_offset, lat.run_base, lo, hi, force, fields, store, n,
+                K.streams(src), omega, rates, links.tile_start, links.slot, links.b, links.c)
     return step
 
 
-def _checkpoint_key(lat: Lattice, settings: Settings) -> str:
-    physics = {k: v for k, v in settings.model_dump(mode="json").items() if k not in _RUN_CONTROL_KEYS}
-    return hash_of({"lattice": lat.key(), **physics})
+def _checkpoint_key(lat: Lattice, settings: Settings, links: Links | None) -> str:
+    q = ""
+    if links is not None and links.size:
+        q = hashlib.sha256(links.slot.tobytes() + links.b.tobytes() + links.c.tobytes()).hexdigest()[:16]
+    return hash_of({"lattice": lat.key(), "links": q, **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}})
+
+
+def kappa_error(kappas, noise: float = ROUND_OFF) -> float:
+    """Estimated relative distance of the last κ̂ to the converged one, from the last three checks a window apart.
+
+    With successive changes Δ₁, Δ₂ and r = Δ₂/Δ₁: a geometric tail |Δ₂| r/(1 − r) for 0 ≤ r < 1 (exponential
+    approach to the steady state), |Δ₂| for r < 0 (an alternating series is within its last term), unbounded for
+    r ≥ 1 (not yet converging) unless |Δ₂|/|κ̂| is below ``noise`` (round-off, or a residual oscillation of that
+    size: κ̂ is then known to about |Δ₂|). Relative to |κ̂|; inf with fewer than three checks.
+    """
+    if len(kappas) < 3 or not all(math.isfinite(k) for k in kappas[-3:]) or kappas[-1] == 0:
+        return float("inf")
+    k1, k2, k3 = kappas[-3:]
+    d1, d2 = k2 - k1, k3 - k2
+    rel = abs(d2) / abs(k3)
+    if rel < max(noise, ROUND_OFF):
+        return rel
+    r = d2 / d1 if d1 != 0 else float("inf")
+    if r < 0:
+        return rel
+    return rel * r / (1 - r) if r < 1 else float("inf")
 
 
 def _save_checkpoint(
@@ -205,44 +201,50 @@ def _threads_for(n_nodes: int):
         numba.set_num_threads(before)
 
 
-def solve(
-    lat: Lattice,
-    settings: Settings,
-    *,
-    sample_voxels: int,
-    sample_area: int,
-    label: str = "lbm",
-    checkpoint: Path | None = None,
-    progress: bool = True,
-) -> Run:
+def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str = "lbm",
+          checkpoint: Path | None = None, progress: bool = True, links: Links | None = None) -> Run:
     """Run the lattice to a steady state and evaluate κ̂ (see :func:`_solve`)."""
     with _threads_for(lat.n_nodes):
-        return _solve(
-            lat,
-            settings,
-            sample_voxels=sample_voxels,
-            sample_area=sample_area,
-            label=label,
-            checkpoint=checkpoint,
-            progress=progress,
-        )
+        return _solve(lat, settings, sample_voxels=sample_voxels, sample_area=sample_area, label=label,
+                      checkpoint=checkpoint, progress=progress, links=links)
 
 
-def _solve(
-    lat: Lattice,
-    settings: Settings,
-    *,
-    sample_voxels: int,
-    sample_area: int,
-    label: str,
-    checkpoint: Path | None,
-    progress: bool,
-) -> Run:
+def _density_change(d_new: np.ndarray, d_old: np.ndarray) -> float:
+    """Largest relative change of ρ/⟨ρ⟩ between two checks (Eq. 6.1.30 without a uniform shift of the level).
+
+    Interpolated walls do not conserve mass exactly (they leak ~1e-8 of it per step; :func:`_restore_mass` puts
+    it back at every check); a uniform change of ρ is no change of the incompressible flow. With halfway walls
+    ⟨ρ⟩ is constant and this is Eq. 6.1.30 itself.
+    """
+    if d_new.size == 0:
+        return 0.0
+    rho_new, rho_old = 1.0 + d_new, 1.0 + d_old
+    return K._max_rel_change(rho_new / np.mean(rho_new), rho_old / np.mean(rho_old), 1e-300)
+
+
+def _restore_mass(pops: np.ndarray, n_nodes: int) -> None:
+    """Put the mass the interpolated walls lost back, spread evenly over the rest populations (ρ° = 1 per node)."""
+    deficit = -float(np.sum(pops, dtype=np.float64))
+    pops[:n_nodes] += deficit / n_nodes
+
+
+def _stop(settings: Settings, dv: float, drho: float, dk: float, err: float) -> str | None:
+    """Name of the rule that declares convergence now, or None."""
+    if settings.stop is StopRule.kappa:
+        return "kappa" if dk < settings.tolerance_kappa and err < settings.tolerance_kappa else None
+    ok = dv < settings.tolerance_velocity and drho < settings.tolerance_density and dk < settings.tolerance_kappa
+    return "density" if ok else None
+
+
+def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str,
+           checkpoint: Path | None, progress: bool, links: Links | None) -> Run:
     """Run the lattice to a steady state and evaluate κ̂.
 
-    Converged when, over one window of ``window_steps``, the largest relative change of the flow velocity and of
-    the density over the sample's pore nodes (thesis Eq. 6.1.30) and the relative change of κ̂ are all below their
-    tolerances. Raises :class:`StabilityError` on NaN/Inf or Mach > ``mach_max``.
+    Checks every ``window_steps`` steps. ``stop: kappa``: converged when the relative change of κ̂ over the last
+    window and the estimated remaining relative error (:func:`kappa_error`, from the last three checks) are both
+    below ``tolerance_kappa``. ``stop: density``: when, over one window, the largest relative change of the flow
+    velocity and of the density over the sample's pore nodes (thesis Eq. 6.1.30) and the relative change of κ̂
+    are all below their tolerances. Raises :class:`StabilityError` on NaN/Inf or Mach > ``mach_max``.
     """
     check_tau(settings)
     dtype = np.dtype(settings.precision.value)
@@ -250,14 +252,13 @@ def _solve(
     src = np.zeros(19 * n, dtype=dtype)  # zero-centred: equilibrium at rest, ρ = 1
     dst = np.zeros_like(src)
     fields = np.zeros((4, n))
-    step = make_stepper(settings, lat)
+    step = make_stepper(settings, lat, links)
     sampler = Sampler.of(lat)
     nu = viscosity(settings.tau)
     key_name = estimate_key(lat.body_force_everywhere, settings.gradient, settings.velocity)
-    ckey = _checkpoint_key(lat, settings)
-    history: dict[str, list] = {
-        k: [] for k in ("step", "kappa", "delta_v", "delta_rho", "delta_kappa", "mach")
-    }
+    ckey = _checkpoint_key(lat, settings, links)
+    names = ("step", "kappa", "delta_v", "delta_rho", "delta_kappa", "kappa_error", "mach")
+    history: dict[str, list] = {k: [] for k in names}
     done = 0
     resumed = _load_checkpoint(checkpoint, ckey, src)
     if resumed is not None:
@@ -270,6 +271,9 @@ def _solve(
     prev_kappa = history["kappa"][-1] if history["kappa"] else float("nan")
     est = {}
     converged = False
+    stopped_by = "step_limit"
+    err = float("inf")
+    settled = [k for k, d in zip(history["kappa"], history["delta_kappa"]) if math.isfinite(d)]
     step_wall = 0.0
     last_ckpt = time.perf_counter()
     while done < settings.max_steps:
@@ -281,16 +285,10 @@ def _solve(
             src, dst = dst, src
         done += n_run
         mach = _guard(fields, done, settings)
-        est = estimates(
-            lat,
-            sampler,
-            fields,
-            nu=nu,
-            body_force=settings.body_force,
-            sample_voxels=sample_voxels,
-            sample_area=sample_area,
-            trim_layers=settings.trim_layers,
-        )
+        if links is not None and links.size:
+            _restore_mass(src, n)
+        est = estimates(lat, sampler, fields, nu=nu, body_force=settings.body_force, sample_voxels=sample_voxels,
+                        sample_area=sample_area, trim_layers=settings.trim_layers)
         kappa = est[key_name]
         dv, drho, dk = (float("inf"),) * 3
         if prev_fields is not None and n_run == window:  # Eq. 6.1.30 compares over a full window dt
@@ -298,19 +296,18 @@ def _solve(
             u_new, u_old = fields[1, sel], prev_fields[1, sel]
             floor = VELOCITY_FLOOR * float(np.max(np.abs(u_new))) if u_new.size else 0.0
             dv = K._max_rel_change(u_new, u_old, max(floor, 1e-300))
-            drho = K._max_rel_change(1.0 + fields[0, sel], 1.0 + prev_fields[0, sel], 1e-300)
+            drho = _density_change(fields[0, sel], prev_fields[0, sel])
             dk = abs(kappa - prev_kappa) / abs(kappa) if kappa != 0 and math.isfinite(kappa) else float("inf")
-        for name, value in zip(history, (done, kappa, dv, drho, dk, mach)):
+            settled = (settled or [prev_kappa])[-2:] + [kappa]
+            err = kappa_error(settled, NOISE_FRACTION * settings.tolerance_kappa)
+        for name, value in zip(history, (done, kappa, dv, drho, dk, err, mach)):
             history[name].append(value)
         if reporter is not None:
-            reporter.update(done, f"κ̂={kappa:.6g} δv={dv:.2e} δρ={drho:.2e} δκ={dk:.2e}")
+            reporter.update(done, f"κ̂={kappa:.6g} δκ={dk:.2e} err={err:.1e} δv={dv:.2e} δρ={drho:.2e}")
         prev_fields, prev_kappa = fields.copy(), kappa
-        if (
-            dv < settings.tolerance_velocity
-            and drho < settings.tolerance_density
-            and dk < settings.tolerance_kappa
-        ):
-            converged = True
+        rule = _stop(settings, dv, drho, dk, err)
+        if rule is not None:
+            converged, stopped_by = True, rule
             break
         if checkpoint is not None and time.perf_counter() - last_ckpt > settings.checkpoint_every_s:
             _save_checkpoint(checkpoint, ckey, done, src, fields, history)
@@ -324,14 +321,6 @@ def _solve(
         _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
     mlups = n * (done - start) / max(step_wall, 1e-12) / 1e6
     mass = float(n + np.sum(src, dtype=np.float64))
-    return Run(
-        converged,
-        done,
-        {k: np.asarray(v, dtype=np.float64) for k, v in history.items()},
-        fields,
-        est,
-        key_name,
-        mlups,
-        step_wall,
-        mass,
-    )
+    return Run(converged, done, {k: np.asarray(v, dtype=np.float64) for k, v in history.items()}, fields, est,
+               key_name, mlups, step_wall, mass, stopped_by, err)
+

@@ -1,0 +1,103 @@
+"""LBM permeability against published Stokes drag of simple-cubic sphere arrays; τ-independence; the κ stop rule.
+
+Reference: Zick & Homsy (1982), J. Fluid Mech. 115, 13, Table 2 (simple cubic), dimensionless drag
+K = F/(6π μ a U) with U the superficial velocity, in ``porepipe.lbm._calibration.ZICK_HOMSY_SC``; checked here
+against the independent dilute series of Sangani & Acrivos (1982). κ̂ = L³/(6π a K) for one sphere of radius a in
+a periodic cell of L voxels (``drag_coefficient``). Interpolated walls (CLI) use the exact ray-sphere distances.
+Tolerances are the issue's accuracy targets (1 % at 16 voxels per diameter, 0.3 % at 32) and, for the
+τ-independence, 0.1 % (TRT with Λ = 3/16 is τ-independent up to the O(Ma²) inertia of the run, ~1e-4 here).
+"""
+
+import numpy as np
+import pytest
+
+from porepipe.lbm import Settings, SphereWalls, permeability
+from porepipe.lbm import _calibration as cal
+
+
+def _drag(c: float, diameter: float, walls: str, tau: float = 0.857) -> float:
+    cells = cal.cells_for_diameter(c, diameter)
+    pore, geometry, a = cal.sphere_array(cells, c)
+    res = permeability(
+        pore, "x", Settings(walls=walls, tau=tau, tolerance_kappa=1e-6), progress=False, geometry=geometry
+    )
+    assert res.converged and res.walls == walls
+    return cal.drag_coefficient(res.kappa_lu, cells, a)
+
+
+def _porous(n: int = 20, count: int = 14, seed: int = 2):
+    """Overlapping spheres (radius 3-4.5 voxels) in a periodic box: porosity 0.65, one-voxel gaps included."""
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(0, n, (count, 3))
+    radii = rng.uniform(3.0, 4.5, count)
+    x = np.arange(n) + 0.5
+    grid = np.stack(np.meshgrid(x, x, x, indexing="ij"), -1)
+    solid = np.zeros((n,) * 3, dtype=bool)
+    for c, r in zip(centres, radii):
+        d = np.abs(grid - c)
+        d = np.minimum(d, n - d)
+        solid |= (d**2).sum(-1) < r * r
+    return ~solid, SphereWalls(centres, radii, (float(n),) * 3)
+
+
+def test_published_drag_agrees_with_the_dilute_series():
+    """Zick & Homsy's K(c) against the Sangani-Acrivos series: 0.1 % for c ≤ 0.125, 1 % at 0.216 (the series is
+    truncated at c^{10/3}; it is the dilute limit, not meant for dense arrays)."""
+    for c in (0.027, 0.064, 0.125):
+        assert cal.sangani_acrivos_dilute(c) == pytest.approx(cal.ZICK_HOMSY_SC[c], rel=1e-3)
+    assert cal.sangani_acrivos_dilute(0.216) == pytest.approx(cal.ZICK_HOMSY_SC[0.216], rel=1e-2)
+
+
+@pytest.mark.parametrize("c", [0.125, 0.343, 0.45])
+def test_interpolated_walls_within_one_percent_at_16_voxels_per_diameter(c):
+    """CLI walls: |K/K_ZH − 1| < 1 % at ~16 voxels per diameter (measured +0.51, +0.88, +0.94 %); halfway
+    bounce-back on the same lattice is worse (+5.9, +4.4, +6.5 %)."""
+    k_cli = _drag(c, 16, "cli")
+    k_half = _drag(c, 16, "halfway")
+    ref = cal.ZICK_HOMSY_SC[c]
+    assert abs(k_cli / ref - 1) < 0.01
+    assert abs(k_half / ref - 1) > 2 * abs(k_cli / ref - 1)
+
+
+def test_interpolated_walls_converge_at_second_order_and_within_0p3_percent_at_32():
+    """c = 0.343 at 15.6 and 32.1 voxels per diameter: error +0.88 % -> +0.17 % (order 2.3; ≥ 1.8 asked) and
+    under 0.3 % at 32."""
+    ref = cal.ZICK_HOMSY_SC[0.343]
+    coarse, fine = (abs(_drag(0.343, d, "cli") / ref - 1) for d in (16, 32))
+    d_coarse = 2 * cal.sphere_array(cal.cells_for_diameter(0.343, 16), 0.343)[2]
+    d_fine = 2 * cal.sphere_array(cal.cells_for_diameter(0.343, 32), 0.343)[2]
+    assert fine < 0.003
+    assert np.log(coarse / fine) / np.log(d_fine / d_coarse) > 1.8
+
+
+@pytest.mark.parametrize("walls", ["halfway", "cli"])
+def test_kappa_is_tau_independent_on_a_sphere_array(walls):
+    """TRT Λ = 3/16: K at τ = 0.6, 1, 2 within 0.1 % (8 voxels per diameter, c = 0.125)."""
+    ks = [_drag(0.125, 8, walls, tau) for tau in (0.6, 1.0, 2.0)]
+    assert (max(ks) - min(ks)) / np.mean(ks) < 1e-3
+
+
+@pytest.mark.parametrize("walls", ["halfway", "cli"])
+def test_kappa_is_tau_independent_on_a_porous_sample(walls):
+    """Random overlapping spheres with one-voxel gaps: κ̂ at τ = 0.6 and 2 within 0.1 % (measured 1.5e-4 and
+    1.0e-4: the inertia of the faster flow at low viscosity, not the walls)."""
+    pore, geometry = _porous()
+    ks = [
+        permeability(pore, "x", Settings(walls=walls, tau=tau), progress=False, geometry=geometry).kappa_lu
+        for tau in (0.6, 2.0)
+    ]
+    assert abs(ks[0] / ks[1] - 1) < 1e-3
+
+
+def test_kappa_stop_ends_early_with_kappa_within_0p1_percent_of_a_tight_run():
+    """stop=kappa (tolerance 1e-5 on the window change and on the tail estimate) against the thesis's density
+    rule (δρ < 1e-9, δv < 1e-4) on the porous sample with CLI walls at τ = 1: far fewer steps (measured
+    1500 vs 13 000), the same κ̂ within 0.1 % (measured 3e-6); each result names the rule that stopped it, and
+    the actual distance to the tight κ̂ stays within 10× the tolerance the error estimate certified."""
+    pore, geometry = _porous()
+    fast = permeability(pore, "x", Settings(tau=1.0), progress=False, geometry=geometry)
+    tight = permeability(pore, "x", Settings(tau=1.0, stop="density"), progress=False, geometry=geometry)
+    assert fast.stopped_by == "kappa" and tight.stopped_by == "density"
+    assert fast.steps * 4 < tight.steps
+    assert abs(fast.kappa_lu / tight.kappa_lu - 1) < 1e-3
+    assert fast.kappa_error < 1e-5 and abs(fast.kappa_lu / tight.kappa_lu - 1) < 1e-4
