@@ -58,10 +58,12 @@ def bandwidth_gbs(threads: int, n: int = 2**25, repeats: int = 7) -> float:
     return best
 
 
-def porous_sample(size: int, porosity: float = 0.2, radius: float = 6.0, seed: int = 11,
-                  spheres: bool = False):
+def porous_sample(
+    size: int, porosity: float = 0.2, radius: float = 6.0, seed: int = 11, spheres: bool = False
+):
     """Pore space of a Boolean model of overlapping spheres (periodic), porosity ≈ ``porosity``; with ``spheres``
-    also the spheres themselves (SphereWalls: centres at the seed voxels' centres, the model's radius)."""
+    also the spheres themselves (SphereWalls: centres at the seed voxels' centres, the model's radius).
+    """
     rng = np.random.default_rng(seed)
     count = int(-np.log(porosity) / (4 / 3 * np.pi * radius**3) * size**3)
     seeds = np.ones((size,) * 3, dtype=bool)
@@ -81,8 +83,9 @@ def regular_fraction(lat) -> float:
     return float(lengths[lat.run_offset[:, 0] >= 0].sum() / max(lat.n_nodes, 1))
 
 
-def time_lattice(lat, collision: str, precision: str, threads: int, steps: int,
-                 repeats: int = 3, links=None) -> tuple[float, float]:
+def time_lattice(
+    lat, collision: str, precision: str, threads: int, steps: int, repeats: int = 3, links=None
+) -> tuple[float, float]:
     """(MLUPS per wall second, MLUPS per CPU second of this process), each the best of ``repeats``.
 
     On a shared machine the CPU-time figure is the robust one: at 1 thread it is what the kernel does when it has
@@ -116,12 +119,22 @@ def wall_cost(size: int, thread_counts, steps: int, repeats: int = 5) -> list[di
         for name, lk in (("halfway", None), ("cli", links)):
             best[name] = time_lattice(lat, "trt", "float64", threads, steps, repeats, links=lk)[1]
         half_ms, cli_ms = (lat.n_nodes / best[k] / 1e3 for k in ("halfway", "cli"))  # CPU ms per step
-        row = {"threads": threads, "nodes": lat.n_nodes, "links": links.size,
-               "links_per_node": links.size / lat.n_nodes, "halfway_ms": half_ms, "cli_ms": cli_ms,
-               "extra": cli_ms / half_ms - 1, "ns_per_link": (cli_ms - half_ms) * 1e6 / max(links.size, 1)}
+        row = {
+            "threads": threads,
+            "nodes": lat.n_nodes,
+            "links": links.size,
+            "links_per_node": links.size / lat.n_nodes,
+            "halfway_ms": half_ms,
+            "cli_ms": cli_ms,
+            "extra": cli_ms / half_ms - 1,
+            "ns_per_link": (cli_ms - half_ms) * 1e6 / max(links.size, 1),
+        }
         out.append(row)
-        print(f"walls porous {threads}t: halfway {half_ms:.2f} ms/step, cli {cli_ms:.2f} ms/step "
-              f"({row['extra']:+.1%}, {row['links_per_node']:.2f} links per node)", flush=True)
+        print(
+            f"walls porous {threads}t: halfway {half_ms:.2f} ms/step, cli {cli_ms:.2f} ms/step "
+            f"({row['extra']:+.1%}, {row['links_per_node']:.2f} links per node)",
+            flush=True,
+        )
     return out
 
 
@@ -185,11 +198,25 @@ def main(argv=None) -> int:
                 for precision in ("float64", "float32"):
                     mlups, cpu = time_lattice(lat, collision, precision, threads, args.steps)
                     bound = bw[threads] * 1e3 / BYTES[precision]
-                    rows.append({"geometry": geometry, "threads": threads, "collision": collision, "precision": precision,
-                                 "regular_fraction": regular_fraction(lat), "nodes": lat.n_nodes, "mlups": mlups,
-                                 "mlups_per_cpu_s": cpu, "bound_mlups": bound, "fraction": mlups / bound})
-                    print(f"{geometry:6s} {threads}t {collision} {precision}: {mlups:7.1f} MLUPS "
-                          f"({cpu:5.1f} per CPU s), bound {bound:6.1f} ({mlups / bound:.0%})", flush=True)
+                    rows.append(
+                        {
+                            "geometry": geometry,
+                            "threads": threads,
+                            "collision": collision,
+                            "precision": precision,
+                            "regular_fraction": regular_fraction(lat),
+                            "nodes": lat.n_nodes,
+                            "mlups": mlups,
+                            "mlups_per_cpu_s": cpu,
+                            "bound_mlups": bound,
+                            "fraction": mlups / bound,
+                        }
+                    )
+                    print(
+                        f"{geometry:6s} {threads}t {collision} {precision}: {mlups:7.1f} MLUPS "
+                        f"({cpu:5.1f} per CPU s), bound {bound:6.1f} ({mlups / bound:.0%})",
+                        flush=True,
+                    )
     walls = wall_cost(size, thread_counts, args.steps)
     peer = []
     if not args.no_lbmpy:
@@ -202,21 +229,41 @@ def main(argv=None) -> int:
             )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "lbm_benchmark.json").write_text(json.dumps({"bandwidth_gbs": bw, "rows": rows, "walls": walls, "lbmpy": peer},
-                                                          indent=1))
-    md = ["# LBM throughput (shared, loaded 2-core machine)", "",
-          "copy bandwidth: " + ", ".join(f"{t} thread(s) {v:.1f} GB/s" for t, v in bw.items()), "",
-          "| geometry | threads | collision | precision | nodes | MLUPS | MLUPS per CPU s | bound | fraction |",
-          "|---" * 9 + "|"]
-    md += [f"| {r['geometry']} | {r['threads']} | {r['collision']} | {r['precision']} | {r['nodes']} | "
-           f"{r['mlups']:.1f} | {r['mlups_per_cpu_s']:.1f} | {r['bound_mlups']:.1f} | {r['fraction']:.0%} |"
-           for r in rows]
-    md += ["", "Interpolated walls (porous sample, TRT float64, CPU time per step; best of the repeats):", "",
-           "| threads | links per node | halfway ms/step | cli ms/step | extra | ns per link |", "|---" * 6 + "|"]
-    md += [f"| {w['threads']} | {w['links_per_node']:.2f} | {w['halfway_ms']:.2f} | {w['cli_ms']:.2f} | "
-           f"{w['extra']:+.1%} | {w['ns_per_link']:.2f} |" for w in walls]
-    md += ["", "lbmpy SRT (dense box): " + ", ".join(
-        f"{r['threads']}t {r['mlups']:.1f} MLUPS" if r["mlups"] else f"{r['threads']}t n/a" for r in peer)]
+    (out / "lbm_benchmark.json").write_text(
+        json.dumps({"bandwidth_gbs": bw, "rows": rows, "walls": walls, "lbmpy": peer}, indent=1)
+    )
+    md = [
+        "# LBM throughput (shared, loaded 2-core machine)",
+        "",
+        "copy bandwidth: " + ", ".join(f"{t} thread(s) {v:.1f} GB/s" for t, v in bw.items()),
+        "",
+        "| geometry | threads | collision | precision | nodes | MLUPS | MLUPS per CPU s | bound | fraction |",
+        "|---" * 9 + "|",
+    ]
+    md += [
+        f"| {r['geometry']} | {r['threads']} | {r['collision']} | {r['precision']} | {r['nodes']} | "
+        f"{r['mlups']:.1f} | {r['mlups_per_cpu_s']:.1f} | {r['bound_mlups']:.1f} | {r['fraction']:.0%} |"
+        for r in rows
+    ]
+    md += [
+        "",
+        "Interpolated walls (porous sample, TRT float64, CPU time per step; best of the repeats):",
+        "",
+        "| threads | links per node | halfway ms/step | cli ms/step | extra | ns per link |",
+        "|---" * 6 + "|",
+    ]
+    md += [
+        f"| {w['threads']} | {w['links_per_node']:.2f} | {w['halfway_ms']:.2f} | {w['cli_ms']:.2f} | "
+        f"{w['extra']:+.1%} | {w['ns_per_link']:.2f} |"
+        for w in walls
+    ]
+    md += [
+        "",
+        "lbmpy SRT (dense box): "
+        + ", ".join(
+            f"{r['threads']}t {r['mlups']:.1f} MLUPS" if r["mlups"] else f"{r['threads']}t n/a" for r in peer
+        ),
+    ]
     (out / "lbm_benchmark.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
     return 0

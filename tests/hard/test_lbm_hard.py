@@ -180,7 +180,9 @@ def test_interpolated_walls_do_not_diverge_where_halfway_converges(geometry):
     half = permeability(pore, "x", Settings(walls="halfway", tau=0.6), progress=False).kappa_lu
     for walls in ("cli", "bfl"):
         for tau in (0.51, 0.6, 2.0):
-            res = permeability(pore, "x", Settings(walls=walls, tau=tau), progress=False, geometry=_RandomQ(3))
+            res = permeability(
+                pore, "x", Settings(walls=walls, tau=tau), progress=False, geometry=_RandomQ(3)
+            )
             assert res.converged and np.isfinite(res.kappa_lu) and res.kappa_lu > 0
             assert walls == "bfl" or 0.5 < res.kappa_lu / half < 2.0
 

@@ -247,6 +247,18 @@ def diffusion_resolutions(scene):
     return chosen
 
 
+def permeability_inputs(wildcards):
+    """The binary volume and scene; with a model's grey volume too (sub-voxel wall distances for `walls: cli`)."""
+    inputs = {"binary": whole_binary_volume(wildcards), "scene": scene_file(wildcards)}
+    if getattr(scene_of(wildcards), "acquire", None) is None:
+        inputs["grey"] = grey_volume(wildcards)
+    return inputs
+
+
+def permeability_grey_arg(wildcards, input):
+    return f"--grey {shlex.quote(input.grey)}" if "grey" in input.keys() else ""
+
+
 #: analysis name -> function(scene) -> list of final outputs; each rule file registers its analysis here.
 ANALYSIS_TARGETS = {}
 

@@ -4,9 +4,7 @@
 
 rule permeability:
     input:
-        binary="results/{scene}/segment/binary_a{a}.h5",
-        grey=grey_volume,  # sub-voxel wall distances for the interpolated walls (`walls: cli`)
-        scene=scene_file,
+        unpack(permeability_inputs),
     output:
         "results/{scene}/permeability/perm_a{a}_{axis}.h5",
     log:
@@ -22,21 +20,11 @@ rule permeability:
         # 19 populations x 2 copies in float64 per node, plus the fields and the index arrays
         mem_mb=mem_mb(bytes_per_voxel=400, base_mb=1000),
         runtime=720,
+    params:
+        grey=permeability_grey_arg,
     shell:
-        "porepipe permeability {input.binary:q} --grey {input.grey:q} --scene {input.scene:q} --axis {wildcards.axis}"
-        " -o {output:q}"
-        " --threads {threads} > {log} 2>&1"
-
-
-def permeability_resolutions(scene):
-    chosen = scene.permeability.resolutions_um or scene.resolutions_um
-    unknown = sorted(set(chosen) - set(scene.resolutions_um))
-    if unknown:
-        raise ValueError(
-            f"scene {scene.name!r}: permeability.resolutions_um = {unknown} are not among resolutions_um = "
-            f"{scene.resolutions_um}"
-        )
-    return chosen
+        "porepipe permeability {input.binary:q} {params.grey} --scene {input.scene:q} --axis {wildcards.axis}"
+        " -o {output:q} --resume --threads {threads} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["permeability"] = lambda scene: [

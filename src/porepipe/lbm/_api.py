@@ -104,10 +104,18 @@ class PermeabilityResult:
             "tau_bulk": s.tau_bulk,
             "magic": s.magic,
             "mrt_magic": s.mrt_magic if s.mrt_magic is not None else float("nan"),
-            "precision": s.precision.value, "setup": s.setup.value, "mirror": int(s.mirror),
-            "lateral": s.lateral.value, "body_force_lu": s.body_force, "velocity_kind": "superficial (Darcy)",
-            "stop": s.stop.value, "stopped_by": self.stopped_by, "kappa_error": self.kappa_error,
-            "walls": self.walls, "n_interpolated_links": self.n_links, "throat_voxels": self.throat_voxels,
+            "precision": s.precision.value,
+            "setup": s.setup.value,
+            "mirror": int(s.mirror),
+            "lateral": s.lateral.value,
+            "body_force_lu": s.body_force,
+            "velocity_kind": "superficial (Darcy)",
+            "stop": s.stop.value,
+            "stopped_by": self.stopped_by,
+            "kappa_error": self.kappa_error,
+            "walls": self.walls,
+            "n_interpolated_links": self.n_links,
+            "throat_voxels": self.throat_voxels,
             "warning": self.warning,
         }
 
@@ -130,10 +138,21 @@ def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool
     """Build the set-up the settings ask for (flow along axis 0 of ``pore_internal``)."""
     lateral_periodic = settings.lateral is Lateral.periodic
     if settings.setup is Setup.periodic:
-        return periodic_setup(pore_internal, mirror=settings.mirror, lateral_periodic=lateral_periodic,
-                              prune=settings.prune, keep_wall_links=keep_wall_links)
-    return chamber_setup(pore_internal, inlet_layers=settings.inlet_layers, outlet_layers=settings.outlet_layers,
-                         force_layers=settings.force_layers, lateral_periodic=lateral_periodic, prune=settings.prune)
+        return periodic_setup(
+            pore_internal,
+            mirror=settings.mirror,
+            lateral_periodic=lateral_periodic,
+            prune=settings.prune,
+            keep_wall_links=keep_wall_links,
+        )
+    return chamber_setup(
+        pore_internal,
+        inlet_layers=settings.inlet_layers,
+        outlet_layers=settings.outlet_layers,
+        force_layers=settings.force_layers,
+        lateral_periodic=lateral_periodic,
+        prune=settings.prune,
+    )
 
 
 def _fields_to_sample(prep: Prepared, run: Run, axis: int, sample_shape) -> tuple[np.ndarray, np.ndarray]:
@@ -159,21 +178,35 @@ def _interpolating(settings: Settings, geometry) -> bool:
     if geometry is None or settings.walls is Walls.halfway:
         return False
     if settings.setup is not Setup.periodic or settings.mirror:
-        raise PorepipeError(f"walls={settings.walls.value} with a geometry needs setup=periodic and mirror=false "
-                            f"(got setup={settings.setup.value}, mirror={settings.mirror}); use walls=halfway")
+        raise PorepipeError(
+            f"walls={settings.walls.value} with a geometry needs setup=periodic and mirror=false "
+            f"(got setup={settings.setup.value}, mirror={settings.mirror}); use walls=halfway"
+        )
     return True
 
 
 def _check_geometry(geometry, shape) -> None:
     if isinstance(geometry, GreyWalls) and geometry.solid.shape != tuple(shape):
-        raise PorepipeError(f"grey volume shape {geometry.solid.shape} differs from the pore volume's {shape}")
+        raise PorepipeError(
+            f"grey volume shape {geometry.solid.shape} differs from the pore volume's {shape}"
+        )
     if isinstance(geometry, SphereWalls) and tuple(geometry.box) != tuple(float(s) for s in shape):
-        raise PorepipeError(f"sphere box {geometry.box} (voxels) differs from the pore volume's shape {shape}")
+        raise PorepipeError(
+            f"sphere box {geometry.box} (voxels) differs from the pore volume's shape {shape}"
+        )
 
 
-def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings | None = None,
-                 voxel_um: float = 1.0, *, checkpoint: Path | None = None, progress: bool = True,
-                 label: str | None = None, geometry: SphereWalls | GreyWalls | None = None) -> PermeabilityResult:
+def permeability(
+    pore: np.ndarray,
+    axis: Axis | str = Axis.z,
+    settings: Settings | None = None,
+    voxel_um: float = 1.0,
+    *,
+    checkpoint: Path | None = None,
+    progress: bool = True,
+    label: str | None = None,
+    geometry: SphereWalls | GreyWalls | None = None,
+) -> PermeabilityResult:
     """Lattice-Boltzmann permeability of a binary sample along one axis.
 
     Parameters
@@ -220,8 +253,16 @@ def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings
     internal = np.ascontiguousarray(np.moveaxis(pore, axis.index, 0))
     prep = prepare(internal, settings, keep_wall_links=interpolate)
     throat, warning = throat_warning(internal, settings, interpolate)
-    base = {"axis": axis, "voxel_um": float(voxel_um), "settings": settings, "porosity": float(pore.mean()),
-            "n_pruned": prep.pruned_nodes, "n_spanning": prep.n_spanning, "throat_voxels": throat, "warning": warning}
+    base = {
+        "axis": axis,
+        "voxel_um": float(voxel_um),
+        "settings": settings,
+        "porosity": float(pore.mean()),
+        "n_pruned": prep.pruned_nodes,
+        "n_spanning": prep.n_spanning,
+        "throat_voxels": throat,
+        "warning": warning,
+    }
     if prep.lattice is None:
         return PermeabilityResult(
             **kappa_units(0.0, voxel_um),
@@ -236,20 +277,40 @@ def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings
             **base,
         )
     if prep.lattice.n_wall_links == 0:
-        return PermeabilityResult(**kappa_units(float("inf"), voxel_um), method="no_walls", estimates={},
-                                  converged=True, steps=0, history={}, mlups=0.0, n_nodes=prep.lattice.n_nodes,
-                                  reason="no solid voxel and no wall anywhere: nothing resists the flow, "
-                                         "κ is unbounded (use `lateral: walls` for a duct)", **base)
+        return PermeabilityResult(
+            **kappa_units(float("inf"), voxel_um),
+            method="no_walls",
+            estimates={},
+            converged=True,
+            steps=0,
+            history={},
+            mlups=0.0,
+            n_nodes=prep.lattice.n_nodes,
+            reason="no solid voxel and no wall anywhere: nothing resists the flow, "
+            "κ is unbounded (use `lateral: walls` for a duct)",
+            **base,
+        )
     links = None
     if interpolate:
         lat = prep.lattice
         order = [axis.index] + [k for k in range(3) if k != axis.index]
         links = build_links(lat.pore, lat.periodic, *lat.wall_links, geometry.permuted(order), settings.walls)
         lat.wall_links = None
-    run = solve(prep.lattice, settings, sample_voxels=prep.sample_voxels, sample_area=prep.sample_area,
-                label=label or f"lbm {axis.value}", checkpoint=checkpoint, progress=progress, links=links)
-    reason = (f"converged ({run.stopped_by} rule)" if run.converged
-              else f"step limit max_steps={settings.max_steps} reached before convergence")
+    run = solve(
+        prep.lattice,
+        settings,
+        sample_voxels=prep.sample_voxels,
+        sample_area=prep.sample_area,
+        label=label or f"lbm {axis.value}",
+        checkpoint=checkpoint,
+        progress=progress,
+        links=links,
+    )
+    reason = (
+        f"converged ({run.stopped_by} rule)"
+        if run.converged
+        else f"step limit max_steps={settings.max_steps} reached before convergence"
+    )
     if not run.converged and not settings.accept_unconverged:
         raise StabilityError(
             f"LBM run along {axis.value} not converged after {run.steps} steps "
@@ -262,9 +323,22 @@ def permeability(pore: np.ndarray, axis: Axis | str = Axis.z, settings: Settings
     velocity = pressure = None
     if settings.write_fields or settings.write_vti:
         velocity, pressure = _fields_to_sample(prep, run, axis.index, internal.shape)
-    return PermeabilityResult(**kappa_units(run.kappa, voxel_um), method=run.kappa_key, estimates=run.estimates,
-                              converged=run.converged, steps=run.steps, reason=reason, history=run.history,
-                              mlups=run.mlups, n_nodes=prep.lattice.n_nodes, velocity=velocity, pressure=pressure,
-                              total_mass=run.total_mass, stopped_by=run.stopped_by, kappa_error=run.kappa_error,
-                              walls=settings.walls.value if interpolate else Walls.halfway.value,
-                              n_links=links.size if links is not None else 0, **base)
+    return PermeabilityResult(
+        **kappa_units(run.kappa, voxel_um),
+        method=run.kappa_key,
+        estimates=run.estimates,
+        converged=run.converged,
+        steps=run.steps,
+        reason=reason,
+        history=run.history,
+        mlups=run.mlups,
+        n_nodes=prep.lattice.n_nodes,
+        velocity=velocity,
+        pressure=pressure,
+        total_mass=run.total_mass,
+        stopped_by=run.stopped_by,
+        kappa_error=run.kappa_error,
+        walls=settings.walls.value if interpolate else Walls.halfway.value,
+        n_links=links.size if links is not None else 0,
+        **base,
+    )

@@ -190,12 +190,21 @@ def _sample_nodes(lat: Lattice) -> np.ndarray:
 #: superficial velocity), Stokes flow along a lattice axis: Zick & Homsy (1982), J. Fluid Mech. 115, 13-26,
 #: Table 2 (simple cubic), the values also listed by Sangani & Acrivos (1982), Int. J. Multiphase Flow 8, 343.
 #: c = π/6 = 0.5236 is the touching array.
-ZICK_HOMSY_SC = {0.027: 2.008, 0.064: 2.810, 0.125: 4.292, 0.216: 7.442, 0.343: 15.40, 0.45: 28.10, 0.5236: 42.14}
+ZICK_HOMSY_SC = {
+    0.027: 2.008,
+    0.064: 2.810,
+    0.125: 4.292,
+    0.216: 7.442,
+    0.343: 15.40,
+    0.45: 28.10,
+    0.5236: 42.14,
+}
 
 
 def sangani_acrivos_dilute(c: float) -> float:
     """K(c) of a simple-cubic array from the Hasimoto/Sangani-Acrivos series (1982, Eq. 4.2; good for c ≲ 0.2):
-    K = 1/(1 − 1.7601 c^⅓ + c − 1.5593 c² + 3.9799 c^{8/3} − 3.0734 c^{10/3})."""
+    K = 1/(1 − 1.7601 c^⅓ + c − 1.5593 c² + 3.9799 c^{8/3} − 3.0734 c^{10/3}).
+    """
     s = c ** (1 / 3)
     return 1.0 / (1 - 1.7601 * s + c - 1.5593 * c**2 + 3.9799 * s**8 - 3.0734 * s**10)
 
@@ -216,7 +225,8 @@ def sphere_array(cells: int, c: float):
 
 def drag_coefficient(kappa_lu: float, cells: int, a: float) -> float:
     """K = L³/(6π a κ̂) of a periodic cell of edge L with one sphere of radius a (force balance F = ∇p L³, Darcy
-    U = κ̂ ∇p/μ with the superficial U; the body force on the fluid acts as the mean pressure gradient)."""
+    U = κ̂ ∇p/μ with the superficial U; the body force on the fluid acts as the mean pressure gradient).
+    """
     return cells**3 / (6 * np.pi * a * kappa_lu)
 
 

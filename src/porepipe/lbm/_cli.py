@@ -8,10 +8,7 @@ from __future__ import annotations
 import argparse
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.numba_config import set_threads
-from porepipe._shared.store import hash_of, read_attrs, read_volume
-from porepipe.lbm._api import permeability
-from porepipe.lbm._io import write_result
+from porepipe._shared.overrides import given_options, merge_settings
 from porepipe.lbm._settings import (
     Axis,
     Collision,
@@ -24,12 +21,31 @@ from porepipe.lbm._settings import (
     Velocity,
     Walls,
 )
-from porepipe.lbm._walls import geometry_from_files
 
 #: CLI flag -> settings key for the options that override the scene
-_OVERRIDES = ("collision", "tau", "tau_bulk", "magic", "setup", "mirror", "lateral", "precision", "body_force",
-              "gradient", "velocity", "max_steps", "window_steps", "tolerance_velocity", "tolerance_density",
-              "tolerance_kappa", "write_fields", "write_vti", "accept_unconverged", "walls", "stop")
+_OVERRIDES = (
+    "collision",
+    "tau",
+    "tau_bulk",
+    "magic",
+    "setup",
+    "mirror",
+    "lateral",
+    "precision",
+    "body_force",
+    "gradient",
+    "velocity",
+    "max_steps",
+    "window_steps",
+    "tolerance_velocity",
+    "tolerance_density",
+    "tolerance_kappa",
+    "write_fields",
+    "write_vti",
+    "accept_unconverged",
+    "walls",
+    "stop",
+)
 
 
 def _settings(args) -> Settings:
@@ -37,54 +53,8 @@ def _settings(args) -> Settings:
     if args.scene:
         from porepipe.scene import load_scene
 
-        base = load_scene(args.scene).permeability.model_dump()
-    for key in _OVERRIDES:
-        value = getattr(args, key, None)
-        if value is not None:
-            base[key] = value
-    try:
-        return Settings(**base)
-    except ValueError as err:
-        raise PorepipeError(f"permeability settings: {err}") from err
-
-
-def _output_path(args, binary: Path, axis: Axis) -> Path:
-    if args.out:
-        return Path(args.out)
-    match = re.search(r"_a([0-9.]+?)\.h5$", binary.name)
-    tag = match.group(1) if match else binary.stem
-    return Path(args.out_dir or binary.parent) / f"perm_a{tag}_{axis.value}.h5"
-
-
-def run_file(binary, args) -> list[Path]:
-    """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis."""
-    binary = Path(binary)
-    settings = _settings(args)
-    axes = tuple(Axis(a) for a in args.axis) if args.axis else settings.axes
-    if args.out and len(axes) != 1:
-        raise PorepipeError(f"--out names one file but {len(axes)} axes were asked for; use --out-dir")
-    threads = set_threads(args.threads)
-    pore, vattrs = read_volume(binary, "pore")
-    src = read_attrs(binary)
-    voxel_um = float(vattrs.get("voxel_um", 1.0))
-    geometry = geometry_from_files(pore.shape, voxel_um, vattrs.get("origin_um", (0.0, 0.0, 0.0)),
-                                   packing=args.packing, grey=args.grey, threshold=vattrs.get("threshold"),
-                                   periodic=tuple(np.broadcast_to(vattrs.get("periodic", True), 3)))
-    written = []
-    for axis in axes:
-        out = _output_path(args, binary, axis)
-        result = permeability(pore.astype(bool), axis, settings, voxel_um,
-                              checkpoint=out.with_name(f".{out.name}.checkpoint.h5"), geometry=geometry)
-        part = {"binary": src.get("scene_hash", ""), "axis": axis.value, "settings": settings.model_dump(mode="json")}
-        write_result(out, result, scene=src.get("scene", ""), scene_hash=hash_of(part), threads=threads,
-                     origin_um=tuple(np.asarray(vattrs.get("origin_um", (0.0, 0.0, 0.0)), dtype=float)))
-        print(f"axis {axis.value}: kappa = {result.kappa_lu:.6g} voxel^2 = {result.kappa_m2:.6g} m^2 = "
-              f"{result.kappa_mD:.6g} mD ({result.method}, {result.reason}, {result.steps} steps, "
-              f"{result.mlups:.1f} MLUPS, walls {result.walls}) -> {out}")
-        if result.warning:
-            print(f"warning: {result.warning}")
-        written.append(out)
-    return written
+        base = load_scene(args.scene).permeability
+    return merge_settings(Settings, base, given_options(args, _OVERRIDES), "permeability settings")
 
 
 def main(args) -> int:
@@ -100,12 +70,16 @@ def main(args) -> int:
         threads=args.threads,
         checkpoint=args.checkpoint,
         resume=args.resume,
+        packing=args.packing,
+        grey=args.grey,
     ):
         print(
             f"axis {r.axis.value}: kappa = {r.kappa_lu:.6g} voxel^2 = "
             f"{r.kappa_m2:.6g} m^2 = {r.kappa_mD:.6g} mD ({r.method}, {r.reason}, {r.steps} steps, "
-            f"{r.mlups:.1f} MLUPS) -> {out}"
+            f"{r.mlups:.1f} MLUPS, walls {r.walls}) -> {out}"
         )
+        if r.warning:
+            print(f"warning: {r.warning}")
     return 0
 
 
@@ -143,7 +117,9 @@ def register(subparsers) -> None:
     p.add_argument("--collision", choices=[c.value for c in Collision])
     p.add_argument("--walls", choices=[w.value for w in Walls])
     p.add_argument("--stop", choices=[r.value for r in StopRule])
-    p.add_argument("--grey", help="grey_a{a}.h5 of the binary volume: sub-voxel wall distances from grey values")
+    p.add_argument(
+        "--grey", help="grey_a{a}.h5 of the binary volume: sub-voxel wall distances from grey values"
+    )
     p.add_argument("--packing", help="packing.h5 whose spheres the binary volume shows: exact wall distances")
     p.add_argument("--setup", choices=[s.value for s in Setup])
     p.add_argument("--lateral", choices=[s.value for s in Lateral])

@@ -123,8 +123,9 @@ class Lattice:
         return h.hexdigest()[:16]
 
 
-def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, window=None, *,
-                  keep_wall_links: bool = False) -> Lattice:
+def build_lattice(
+    pore: np.ndarray, periodic, force_layers, sample_layers, window=None, *, keep_wall_links: bool = False
+) -> Lattice:
     """Number the pore nodes and build the pull/bounce-back tables (runs + gather table of the irregular runs).
 
     Parameters
@@ -155,9 +156,20 @@ def build_lattice(pore: np.ndarray, periodic, force_layers, sample_layers, windo
     del full
     counts = np.count_nonzero(pore.reshape(pore.shape[0], -1), axis=1)
     layer_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    return Lattice(pore, tuple(bool(p) for p in periodic), gather, layer_start,
-                   (int(force_layers[0]), int(force_layers[1])), (int(sample_layers[0]), int(sample_layers[1])),
-                   start, offset, base, walls, window, links)
+    return Lattice(
+        pore,
+        tuple(bool(p) for p in periodic),
+        gather,
+        layer_start,
+        (int(force_layers[0]), int(force_layers[1])),
+        (int(sample_layers[0]), int(sample_layers[1])),
+        start,
+        offset,
+        base,
+        walls,
+        window,
+        links,
+    )
 
 
 def _list_wall_links(full: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -230,17 +242,29 @@ def _prune(sample: np.ndarray, lateral_periodic: bool, wrap: bool, enabled: bool
     return keep, n_span, int(np.count_nonzero(sample)) - int(np.count_nonzero(keep))
 
 
-def periodic_setup(sample: np.ndarray, *, mirror: bool, lateral_periodic: bool, prune: bool,
-                   keep_wall_links: bool = False) -> Prepared:
+def periodic_setup(
+    sample: np.ndarray, *, mirror: bool, lateral_periodic: bool, prune: bool, keep_wall_links: bool = False
+) -> Prepared:
     """Body force on every node, periodic along the flow (optionally sample + its mirror image)."""
     domain = np.concatenate([sample, sample[::-1]], axis=0) if mirror else sample
     keep, n_span, pruned = _prune(domain, lateral_periodic, True, prune)
     area = domain.shape[1] * domain.shape[2]
     if n_span == 0:
-        return Prepared(None, domain.size, area, 0, 0,
-                        reason="no pore path connects the inlet face to the outlet face: κ = 0")
-    lat = build_lattice(keep, (True, lateral_periodic, lateral_periodic), (0, domain.shape[0]),
-                        (0, domain.shape[0]), keep_wall_links=keep_wall_links)
+        return Prepared(
+            None,
+            domain.size,
+            area,
+            0,
+            0,
+            reason="no pore path connects the inlet face to the outlet face: κ = 0",
+        )
+    lat = build_lattice(
+        keep,
+        (True, lateral_periodic, lateral_periodic),
+        (0, domain.shape[0]),
+        (0, domain.shape[0]),
+        keep_wall_links=keep_wall_links,
+    )
     return Prepared(lat, domain.size, area, n_span, pruned)
 
 

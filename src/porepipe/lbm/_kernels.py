@@ -261,9 +261,11 @@ def _ray_sphere_fractions(points, dirs, centres, radii, box, periodic, cell_n, c
         for a in range(lo0, hi0):
             for b in range(lo1, hi1):
                 for c in range(lo2, hi2):
-                    if ((a < 0 or a >= cell_n[0]) and not periodic[0]) or \
-                            ((b < 0 or b >= cell_n[1]) and not periodic[1]) or \
-                            ((c < 0 or c >= cell_n[2]) and not periodic[2]):
+                    if (
+                        ((a < 0 or a >= cell_n[0]) and not periodic[0])
+                        or ((b < 0 or b >= cell_n[1]) and not periodic[1])
+                        or ((c < 0 or c >= cell_n[2]) and not periodic[2])
+                    ):
                         continue
                     cell = ((a % cell_n[0]) * cell_n[1] + (b % cell_n[1])) * cell_n[2] + (c % cell_n[2])
                     for m in range(cell_start[cell], cell_start[cell + 1]):
@@ -650,8 +652,28 @@ def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
-def _step(op, src, dst, gather, run_start, run_offset, run_base, force_lo, force_hi, force, fields, store, n_steps,
-          streaming, omega, rates, tile_start, link_slot, link_b, link_c):
+def _step(
+    op,
+    src,
+    dst,
+    gather,
+    run_start,
+    run_offset,
+    run_base,
+    force_lo,
+    force_hi,
+    force,
+    fields,
+    store,
+    n_steps,
+    streaming,
+    omega,
+    rates,
+    tile_start,
+    link_slot,
+    link_b,
+    link_c,
+):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
     step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
 

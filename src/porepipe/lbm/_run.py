@@ -11,6 +11,7 @@ from porepipe._shared.store import read_attrs, read_binary_volume, result_hash
 from porepipe.lbm._api import PermeabilityResult, permeability
 from porepipe.lbm._io import write_result
 from porepipe.lbm._settings import Axis, Settings
+from porepipe.lbm._walls import geometry_from_files
 
 
 def output_path(binary, axis: Axis, out=None, out_dir=None) -> Path:
@@ -39,6 +40,8 @@ def run(
     threads: int | None = None,
     checkpoint=None,
     resume: bool = True,
+    packing=None,
+    grey=None,
 ) -> list[tuple[Path, PermeabilityResult]]:
     """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis.
 
@@ -61,6 +64,10 @@ def run(
         every ``checkpoint_every_s`` and at the step limit, keyed by the geometry and physics, deleted on success.
     resume : bool
         Continue from a matching checkpoint; False discards an existing one and starts afresh.
+    packing : path-like, optional
+        ``packing.h5`` whose spheres the volume shows: exact sub-voxel wall distances for interpolated walls.
+    grey : path-like, optional
+        ``grey_a{a}.h5`` of the volume: sub-voxel wall distances estimated from the grey values.
 
     Returns
     -------
@@ -77,14 +84,26 @@ def run(
     threads = set_threads(threads)
     pore, meta = read_binary_volume(binary)
     scene = read_attrs(binary).get("scene", "")
+    geometry = geometry_from_files(
+        pore.shape,
+        meta.voxel_um,
+        meta.origin_um,
+        packing=packing,
+        grey=grey,
+        threshold=meta.attrs.get("threshold"),
+        periodic=meta.periodic,
+    )
     written = []
     for axis in axes:
         path = output_path(binary, axis, out, out_dir)
         ckpt = Path(checkpoint) if checkpoint else default_checkpoint(path)
         if not resume:
             ckpt.unlink(missing_ok=True)
-        result = permeability(pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt)
-        digest = result_hash("permeability", settings=settings, inputs=[binary], axis=axis.value)
+        result = permeability(
+            pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt, geometry=geometry
+        )
+        sources = [binary] + [p for p in (packing, grey) if p]
+        digest = result_hash("permeability", settings=settings, inputs=sources, axis=axis.value)
         write_result(path, result, scene=scene, scene_hash=digest, threads=threads, origin_um=meta.origin_um)
         written.append((path, result))
     return written

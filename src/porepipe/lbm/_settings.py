@@ -26,7 +26,9 @@ class Walls(str, enum.Enum):
 class StopRule(str, enum.Enum):
     """Which convergence rule ends the run."""
 
-    kappa = "kappa"  # κ̂ settled: change over a window and the geometric-tail error estimate below tolerance_kappa
+    kappa = (
+        "kappa"  # κ̂ settled: change over a window and the geometric-tail error estimate below tolerance_kappa
+    )
     density = "density"  # thesis Eq. 6.1.30: v and ρ changes over a window (and δκ) below their tolerances
 
 
@@ -92,16 +94,23 @@ class Settings(BaseModel):
         description="run only at these of the scene's resolutions (empty: all); fine lattices cost most",
     )
     collision: Collision = Field(
-        Collision.trt, description="bgk, trt (default: Λ = magic makes κ̂ τ-independent) or mrt (the thesis's)")
+        Collision.trt, description="bgk, trt (default: Λ = magic makes κ̂ τ-independent) or mrt (the thesis's)"
+    )
     tau: float = Field(0.857, gt=0.5, description="relaxation time τ̂ of the shear modes; ν̂ = (τ̂ − ½)/3")
     tau_bulk: float = Field(1.0, gt=0.5, description="MRT only: relaxation time of the energy moment")
     magic: float = Field(
         3 / 16, gt=0, description="TRT magic parameter Λ = (τ⁺ − ½)(τ⁻ − ½); 3/16 = exact walls"
     )
     mrt_magic: float | None = Field(
-        None, gt=0, description="MRT only: tie the q and m rates to τ by this Λ (None = thesis's fixed 1.2, 1.98)")
-    walls: Walls = Field(Walls.cli, description="halfway bounce-back, or cli/bfl interpolated walls at the "
-                         "sub-voxel distance q (needs a geometry: spheres or grey values; else halfway)")
+        None,
+        gt=0,
+        description="MRT only: tie the q and m rates to τ by this Λ (None = thesis's fixed 1.2, 1.98)",
+    )
+    walls: Walls = Field(
+        Walls.cli,
+        description="halfway bounce-back, or cli/bfl interpolated walls at the "
+        "sub-voxel distance q (needs a geometry: spheres or grey values; else halfway)",
+    )
     setup: Setup = Field(Setup.periodic, description="periodic (body force everywhere) or chambers (thesis)")
     mirror: bool = Field(False, description="periodic set-up: append the sample mirrored along the flow axis")
     lateral: Lateral = Field(Lateral.periodic, description="boundary across the flow: periodic or walls")
@@ -120,11 +129,21 @@ class Settings(BaseModel):
     )
     precision: Precision = Field(Precision.float64, description="population storage (arithmetic is float64)")
     prune: bool = Field(True, description="drop pore clusters that cannot carry flow before the run")
-    tolerance_velocity: float = Field(1e-4, gt=0, description="max relative change of v over a window (6.1.30)")
-    tolerance_density: float = Field(1e-9, gt=0, description="max relative change of ρ over a window (6.1.30)")
-    stop: StopRule = Field(StopRule.kappa, description="kappa: stop when κ̂ has settled; density: thesis Eq. 6.1.30")
-    tolerance_kappa: float = Field(1e-5, gt=0, description="max relative change of κ̂ over a window and max "
-                                   "estimated relative distance to the converged κ̂")
+    tolerance_velocity: float = Field(
+        1e-4, gt=0, description="max relative change of v over a window (6.1.30)"
+    )
+    tolerance_density: float = Field(
+        1e-9, gt=0, description="max relative change of ρ over a window (6.1.30)"
+    )
+    stop: StopRule = Field(
+        StopRule.kappa, description="kappa: stop when κ̂ has settled; density: thesis Eq. 6.1.30"
+    )
+    tolerance_kappa: float = Field(
+        1e-5,
+        gt=0,
+        description="max relative change of κ̂ over a window and max "
+        "estimated relative distance to the converged κ̂",
+    )
     window_steps: int = Field(500, ge=10, description="steps dt between two convergence checks")
     max_steps: int = Field(200_000, ge=10, description="step limit; an unconverged run is an error")
     accept_unconverged: bool = Field(

@@ -80,7 +80,8 @@ def check_tau(settings: Settings) -> None:
 
 def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
     """``step(src, dst, fields, store, n_steps)`` for the chosen operator (its parameters are fixed once, here);
-    ``links``: interpolated boundary links (None: halfway bounce-back everywhere)."""
+    ``links``: interpolated boundary links (None: halfway bounce-back everywhere).
+    """
     links = links if links is not None else Links.none()
     lo, hi = lat.force_nodes
     force = np.array([settings.body_force, 0.0, 0.0])
@@ -104,8 +105,29 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
         )
 
     def step(src, dst, fields, store, n):
-        K._step(op, src, dst, lat.gather, lat.run_start, lat.run_offset, lat.run_base, lo, hi, force, fields, store, n,
-                K.streams(src), omega, rates, links.tile_start, links.slot, links.b, links.c)
+        K._step(
+            op,
+            src,
+            dst,
+            lat.gather,
+            lat.run_start,
+            lat.run_offset,
+            lat.run_base,
+            lo,
+            hi,
+            force,
+            fields,
+            store,
+            n,
+            K.streams(src),
+            omega,
+            rates,
+            links.tile_start,
+            links.slot,
+            links.b,
+            links.c,
+        )
+
     return step
 
 
@@ -113,7 +135,9 @@ def _checkpoint_key(lat: Lattice, settings: Settings, links: Links | None) -> st
     q = ""
     if links is not None and links.size:
         q = hashlib.sha256(links.slot.tobytes() + links.b.tobytes() + links.c.tobytes()).hexdigest()[:16]
-    return hash_of({"lattice": lat.key(), "links": q, **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}})
+    return hash_of(
+        {"lattice": lat.key(), "links": q, **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}}
+    )
 
 
 def kappa_error(kappas, noise: float = ROUND_OFF) -> float:
@@ -201,12 +225,29 @@ def _threads_for(n_nodes: int):
         numba.set_num_threads(before)
 
 
-def solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str = "lbm",
-          checkpoint: Path | None = None, progress: bool = True, links: Links | None = None) -> Run:
+def solve(
+    lat: Lattice,
+    settings: Settings,
+    *,
+    sample_voxels: int,
+    sample_area: int,
+    label: str = "lbm",
+    checkpoint: Path | None = None,
+    progress: bool = True,
+    links: Links | None = None,
+) -> Run:
     """Run the lattice to a steady state and evaluate κ̂ (see :func:`_solve`)."""
     with _threads_for(lat.n_nodes):
-        return _solve(lat, settings, sample_voxels=sample_voxels, sample_area=sample_area, label=label,
-                      checkpoint=checkpoint, progress=progress, links=links)
+        return _solve(
+            lat,
+            settings,
+            sample_voxels=sample_voxels,
+            sample_area=sample_area,
+            label=label,
+            checkpoint=checkpoint,
+            progress=progress,
+            links=links,
+        )
 
 
 def _density_change(d_new: np.ndarray, d_old: np.ndarray) -> float:
@@ -232,12 +273,25 @@ def _stop(settings: Settings, dv: float, drho: float, dk: float, err: float) -> 
     """Name of the rule that declares convergence now, or None."""
     if settings.stop is StopRule.kappa:
         return "kappa" if dk < settings.tolerance_kappa and err < settings.tolerance_kappa else None
-    ok = dv < settings.tolerance_velocity and drho < settings.tolerance_density and dk < settings.tolerance_kappa
+    ok = (
+        dv < settings.tolerance_velocity
+        and drho < settings.tolerance_density
+        and dk < settings.tolerance_kappa
+    )
     return "density" if ok else None
 
 
-def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area: int, label: str,
-           checkpoint: Path | None, progress: bool, links: Links | None) -> Run:
+def _solve(
+    lat: Lattice,
+    settings: Settings,
+    *,
+    sample_voxels: int,
+    sample_area: int,
+    label: str,
+    checkpoint: Path | None,
+    progress: bool,
+    links: Links | None,
+) -> Run:
     """Run the lattice to a steady state and evaluate κ̂.
 
     Checks every ``window_steps`` steps. ``stop: kappa``: converged when the relative change of κ̂ over the last
@@ -287,8 +341,16 @@ def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area:
         mach = _guard(fields, done, settings)
         if links is not None and links.size:
             _restore_mass(src, n)
-        est = estimates(lat, sampler, fields, nu=nu, body_force=settings.body_force, sample_voxels=sample_voxels,
-                        sample_area=sample_area, trim_layers=settings.trim_layers)
+        est = estimates(
+            lat,
+            sampler,
+            fields,
+            nu=nu,
+            body_force=settings.body_force,
+            sample_voxels=sample_voxels,
+            sample_area=sample_area,
+            trim_layers=settings.trim_layers,
+        )
         kappa = est[key_name]
         dv, drho, dk = (float("inf"),) * 3
         if prev_fields is not None and n_run == window:  # Eq. 6.1.30 compares over a full window dt
@@ -321,6 +383,16 @@ def _solve(lat: Lattice, settings: Settings, *, sample_voxels: int, sample_area:
         _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
     mlups = n * (done - start) / max(step_wall, 1e-12) / 1e6
     mass = float(n + np.sum(src, dtype=np.float64))
-    return Run(converged, done, {k: np.asarray(v, dtype=np.float64) for k, v in history.items()}, fields, est,
-               key_name, mlups, step_wall, mass, stopped_by, err)
-
+    return Run(
+        converged,
+        done,
+        {k: np.asarray(v, dtype=np.float64) for k, v in history.items()},
+        fields,
+        est,
+        key_name,
+        mlups,
+        step_wall,
+        mass,
+        stopped_by,
+        err,
+    )

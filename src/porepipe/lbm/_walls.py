@@ -86,7 +86,7 @@ class SphereWalls:
         )
 
     def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
-        """q of links from node coordinates (K, 3) (integer voxel indices) along −c_p; −1 where no sphere."""
+        """Q of links from node coordinates (K, 3) (integer voxel indices) along −c_p; −1 where no sphere."""
         points = nodes.astype(np.float64) + 0.5
         dirs = -C[pops].astype(np.float64)
         box = np.array(self.box, dtype=np.float64)
@@ -219,7 +219,8 @@ def link_geometry(pore: np.ndarray, periodic, node: np.ndarray, pop: np.ndarray)
 
 def link_distances(pore, periodic, node, pop, geometry) -> np.ndarray:
     """(K,) wall distance q of raw wall links; ½ across a non-periodic lattice face (lateral walls, exactly
-    halfway) and where the geometry does not cut the link within (0, 1] (binary and geometry disagree there)."""
+    halfway) and where the geometry does not cut the link within (0, 1] (binary and geometry disagree there).
+    """
     coords, outside = link_geometry(pore, periodic, node, pop)
     q = np.full(node.size, 0.5)
     inner = ~outside
