@@ -178,3 +178,42 @@ def test_non_finite_settings_are_refused_by_the_schema(key, value):
         where = "trigger"
     with pytest.raises(ValidationError, match=rf"{where}[\s\S]*finite number"):
         Settings.model_validate(raw)
+
+
+def test_changed_settings_discard_the_old_checkpoint_and_success_deletes_it(tmp_path, capsys):
+    # issue 20, item 1: a changed scene resumed the old checkpoint and wrote its spheres under the new hash
+    from porepipe.packing._api import checkpoint_key
+    from porepipe.packing._io import save_checkpoint
+    from porepipe.packing._types import State
+
+    box = np.array([400.0, 400.0, 400.0])
+    old = _one_type(count=12).model_copy(update={"checkpoint_every": 5})
+    new = _one_type(count=20).model_copy(update={"checkpoint_every": 5})
+    ckpt = tmp_path / "ckpt.h5"
+    pack_spheres(old, box, seed=1, checkpoint_path=ckpt)
+    assert not ckpt.exists()  # deleted on success (before: kept forever)
+    # the checkpoint of a killed run of the old scene, then the new scene run with resume (as pack.smk does)
+    save_checkpoint(ckpt, State.empty(), key=checkpoint_key(old, box, np.array([True] * 3), 1, Path(".")))
+    resumed = pack_spheres(new, box, seed=2, checkpoint_path=ckpt, resume=True)
+    assert "discarding checkpoint" in capsys.readouterr().err
+    fresh = pack_spheres(new, box, seed=2)
+    np.testing.assert_array_equal(
+        resumed.centres_um, fresh.centres_um
+    )  # the new scene's spheres, not the old ones
+    assert len(resumed.radii_um) == 20
+    assert not ckpt.exists()
+
+
+def test_matching_checkpoint_still_resumes(tmp_path):
+    from porepipe.packing._api import checkpoint_key
+
+    settings = _one_type(count=12)
+    key = checkpoint_key(settings, np.array([400.0] * 3), np.array([True] * 3), 1, Path("."))
+    assert key == checkpoint_key(
+        settings.model_copy(update={"checkpoint_every": 7}),
+        np.array([400.0] * 3),
+        np.array([True] * 3),
+        1,
+        Path("."),
+    )  # run control does not enter the key
+    assert key != checkpoint_key(settings, np.array([400.0] * 3), np.array([True] * 3), 2, Path("."))

@@ -118,8 +118,8 @@ def test_checkpoint_resume_is_bit_identical(tmp_path, monkeypatch):
     ck = tmp_path / "ck.h5"
     real_save = engine.save_checkpoint
 
-    def save_then_die(path, state):
-        real_save(path, state)
+    def save_then_die(path, state, key):
+        real_save(path, state, key)
         if state.step >= 28:
             raise KeyboardInterrupt("simulated kill after the checkpoint of step 28")
 
@@ -130,6 +130,7 @@ def test_checkpoint_resume_is_bit_identical(tmp_path, monkeypatch):
     with h5py.File(ck) as f:
         assert f.attrs["step"] == 28
     resumed = pack_spheres(settings, BOX, True, seed=3, checkpoint_path=ck, resume=True)
+    assert not ck.exists()  # a finished run deletes its checkpoint
     np.testing.assert_array_equal(resumed.centres_um, ref.centres_um)
     np.testing.assert_array_equal(resumed.radii_um, ref.radii_um)
     for key in set(ref.history) - set(HISTORY_TIMING):  # wall_s is the machine's, not the packing's

@@ -39,7 +39,10 @@ from porepipe._shared import rng
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe.packing import _kernels as K
-from porepipe.packing._io import load_checkpoint, save_checkpoint
+import sys
+
+from porepipe._shared.store import hash_of
+from porepipe.packing._io import load_checkpoint, read_checkpoint_key, save_checkpoint
 from porepipe.packing._neighbours import build_neighbours, check_box
 from porepipe.packing._settings import Effect, Ramp, Settings, Stage
 from porepipe.packing._setup import place_type, radius_bounds, read_sphere_file
@@ -555,6 +558,50 @@ def _as_box(box_um, periodic) -> tuple[np.ndarray, np.ndarray]:
     return box, per
 
 
+#: settings that change how a run is watched or spread over threads, never its result
+_RUN_CONTROL = ("checkpoint_every", "progress_every_s", "parallel_min_spheres")
+
+
+def checkpoint_key(settings: Settings, box, periodic, seed: int, base_dir: Path) -> str:
+    """Hash of everything that determines a packing: settings (less run control), box, periodicity, seed, files.
+
+    Files named by ``insert_file`` enter by their size and modification time, so an edited file invalidates the key.
+    """
+    dumped = settings.model_dump(mode="json", exclude=set(_RUN_CONTROL))
+    files = sorted({str(st.insert_file.path) for st in settings.stages if st.insert_file is not None})
+    stamps = []
+    for name in files:
+        path = base_dir / name
+        stat = path.stat() if path.is_file() else None
+        stamps.append([name, stat.st_size if stat else -1, stat.st_mtime_ns if stat else -1])
+    return hash_of(
+        {
+            "settings": dumped,
+            "box": np.asarray(box).tolist(),
+            "periodic": np.asarray(periodic).tolist(),
+            "seed": int(seed),
+            "files": stamps,
+        }
+    )
+
+
+def _resumed_state(checkpoint_path, key: str) -> State:
+    """The checkpoint's state if it was written for the same packing; otherwise a fresh start (and say why)."""
+    path = Path(checkpoint_path)
+    if not path.is_file():
+        return State.empty()
+    found = read_checkpoint_key(path)
+    if found != key:
+        print(
+            f"pack: discarding checkpoint {path}: it was written for other settings, box or seed (key "
+            f"{found or 'none'}, this run {key}); starting afresh",
+            file=sys.stderr,
+        )
+        path.unlink()
+        return State.empty()
+    return load_checkpoint(path)
+
+
 def pack_spheres(
     settings: Settings,
     box_um,
@@ -595,12 +642,13 @@ def pack_spheres(
     if not settings.types or not settings.stages:
         raise PorepipeError("packing needs at least one entry in `types` and one in `stages`")
     base_dir = Path(base_dir)
-    state = State.empty()
-    if resume and checkpoint_path is not None and Path(checkpoint_path).is_file():
-        state = load_checkpoint(checkpoint_path)
-    saver = (lambda st: save_checkpoint(checkpoint_path, st)) if checkpoint_path is not None else None
+    key = checkpoint_key(settings, box, per, seed, base_dir)
+    state = _resumed_state(checkpoint_path, key) if resume and checkpoint_path is not None else State.empty()
+    saver = (lambda st: save_checkpoint(checkpoint_path, st, key)) if checkpoint_path is not None else None
     while state.stage < len(settings.stages):
         _run_stage(state, settings, settings.stages[state.stage], box, per, seed, base_dir, saver, progress)
+    if checkpoint_path is not None:
+        Path(checkpoint_path).unlink(missing_ok=True)  # the run is complete: a later run must not resume it
     last = state.snapshots[-1]
     history = {
         k: np.asarray(v, dtype=np.int64 if k in _HISTORY_INT else np.float64)

@@ -82,9 +82,14 @@ def write_xyzr_file(path, packing: Packing) -> None:
     write_xyzr(path, packing.centres_um, packing.radii_um)
 
 
-def save_checkpoint(path, state: State) -> None:
-    """Write the full engine state atomically (temporary name, then rename)."""
+def save_checkpoint(path, state: State, key: str = "") -> None:
+    """Write the full engine state atomically (temporary name, then rename), tagged with ``key``.
+
+    ``key`` is the hash of everything that determines the packing (:func:`porepipe.packing._api.checkpoint_key`);
+    a resume refuses a checkpoint whose key differs.
+    """
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs["key"] = key
         for key in _STATE_ARRAYS:
             f.create_dataset(key, data=getattr(state, key))
         for key in _STATE_INTS:
@@ -100,6 +105,16 @@ def save_checkpoint(path, state: State) -> None:
             g.attrs["name"] = snap["name"]
             for key in _SPHERE_KEYS:
                 g.create_dataset(key, data=snap[key])
+
+
+def read_checkpoint_key(path) -> str:
+    """The key a checkpoint was written with ('' for a checkpoint written before keys existed, or an unreadable one)."""
+    try:
+        with h5py.File(path, "r") as f:
+            value = f.attrs.get("key", "")
+    except OSError:
+        return ""
+    return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def load_checkpoint(path) -> State:
