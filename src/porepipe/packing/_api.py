@@ -29,6 +29,7 @@ Decisions the thesis leaves open (documented here once, used everywhere):
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
@@ -38,10 +39,8 @@ import numpy as np
 from porepipe._shared import rng
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
-from porepipe.packing import _kernels as K
-import sys
-
 from porepipe._shared.store import hash_of
+from porepipe.packing import _kernels as K
 from porepipe.packing._io import load_checkpoint, read_checkpoint_key, save_checkpoint
 from porepipe.packing._neighbours import build_neighbours, check_box
 from porepipe.packing._settings import Effect, Ramp, Settings, Stage
