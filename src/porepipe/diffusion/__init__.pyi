@@ -1,0 +1,56 @@
+"""Type stub of porepipe.diffusion: its lazy exports (``_EXPORTS`` in __init__.py) for IDEs and type checkers.
+
+Kept equal to the export table by tests/unit/store/test_stubs.py.
+"""
+
+from porepipe.diffusion._api import DiffusionResult as DiffusionResult
+from porepipe.diffusion._api import Geometry as Geometry
+from porepipe.diffusion._api import equilibrium as equilibrium
+from porepipe.diffusion._api import prepare as prepare
+from porepipe.diffusion._api import transport as transport
+from porepipe.diffusion._geometry import PoreVolume as PoreVolume
+from porepipe.diffusion._geometry import accessible_pore as accessible_pore
+from porepipe.diffusion._geometry import closed_box as closed_box
+from porepipe.diffusion._geometry import constricted_capillary as constricted_capillary
+from porepipe.diffusion._geometry import cylinder as cylinder
+from porepipe.diffusion._geometry import pocketed_capillary as pocketed_capillary
+from porepipe.diffusion._geometry import rough_capillary as rough_capillary
+from porepipe.diffusion._geometry import slit as slit
+from porepipe.diffusion._geometry import square_capillary as square_capillary
+from porepipe.diffusion._geometry import wall_area as wall_area
+from porepipe.diffusion._settings import Axis as Axis
+from porepipe.diffusion._settings import InletLaw as InletLaw
+from porepipe.diffusion._settings import Settings as Settings
+from porepipe.diffusion._settings import Setup as Setup
+from porepipe.diffusion._settings import SpeedDist as SpeedDist
+from porepipe.diffusion._settings import WallLaw as WallLaw
+from porepipe.diffusion._settings import WallSpeed as WallSpeed
+from porepipe.diffusion._species import SPECIES as SPECIES
+from porepipe.diffusion._species import mean_speed as mean_speed
+
+__all__ = [
+    "SPECIES",
+    "Axis",
+    "DiffusionResult",
+    "Geometry",
+    "InletLaw",
+    "PoreVolume",
+    "Settings",
+    "Setup",
+    "SpeedDist",
+    "WallLaw",
+    "WallSpeed",
+    "accessible_pore",
+    "closed_box",
+    "constricted_capillary",
+    "cylinder",
+    "equilibrium",
+    "mean_speed",
+    "pocketed_capillary",
+    "prepare",
+    "rough_capillary",
+    "slit",
+    "square_capillary",
+    "transport",
+    "wall_area",
+]
