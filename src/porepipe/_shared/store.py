@@ -308,9 +308,11 @@ class VolumeMeta:
     origin_um: tuple[float, float, float]
     periodic: tuple[bool, bool, bool]
     attrs: dict = dataclasses.field(default_factory=dict, compare=False)
+    #: voxel edges along x, y, z (µm): three equal values unless read with ``anisotropic=True``
+    voxel_xyz_um: tuple[float, float, float] = ()
 
 
-def volume_meta(dset: h5py.Dataset, path) -> VolumeMeta:
+def volume_meta(dset: h5py.Dataset, path, anisotropic: bool = False) -> VolumeMeta:
     """The :class:`VolumeMeta` of an open volume; a missing or malformed attribute is an error naming file and key.
 
     Parameters
@@ -319,6 +321,9 @@ def volume_meta(dset: h5py.Dataset, path) -> VolumeMeta:
         An open ``/volumes/<name>`` dataset (from :func:`open_volume`).
     path : path-like
         The file it came from (for the message).
+    anisotropic : bool
+        Accept three different voxel edges (serial sections); ``voxel_xyz_um`` holds them and ``voxel_um`` the x edge.
+        Stages that need cubic voxels leave it False and get a clear error instead.
 
     Returns
     -------
@@ -334,12 +339,17 @@ def volume_meta(dset: h5py.Dataset, path) -> VolumeMeta:
     voxel = np.atleast_1d(np.asarray(attrs["voxel_um"], dtype=np.float64))
     if voxel.size == 3 and np.allclose(voxel, voxel[0], rtol=1e-9, atol=0):
         voxel = voxel[:1]
-    if voxel.size != 1 or not np.isfinite(voxel[0]) or voxel[0] <= 0:
+    if (
+        voxel.size not in ((1, 3) if anisotropic else (1,))
+        or not np.all(np.isfinite(voxel))
+        or np.any(voxel <= 0)
+    ):
         kind = "anisotropic voxels are not supported" if voxel.size == 3 else "not a voxel edge"
         raise PorepipeError(
             f"{path}: volume {dset.name} attribute voxel_um = {attrs['voxel_um']!r}: {kind}; "
             "allowed: one positive number in µm (cubic voxels; resample anisotropic images first)"
         )
+    voxel_xyz = tuple(float(v) for v in np.broadcast_to(voxel, (3,)))
     origin = np.asarray(attrs["origin_um"], dtype=np.float64).ravel()
     periodic = np.asarray(attrs["periodic"]).ravel()
     if origin.size != 3 or not np.all(np.isfinite(origin)):
@@ -353,11 +363,11 @@ def volume_meta(dset: h5py.Dataset, path) -> VolumeMeta:
             "3 flags 0/1 (x, y, z)"
         )
     return VolumeMeta(
-        float(voxel[0]), tuple(float(o) for o in origin), tuple(bool(p) for p in periodic), attrs
+        float(voxel[0]), tuple(float(o) for o in origin), tuple(bool(p) for p in periodic), attrs, voxel_xyz
     )
 
 
-def read_binary_volume(path, name: str = "pore") -> tuple[np.ndarray, VolumeMeta]:
+def read_binary_volume(path, name: str = "pore", anisotropic: bool = False) -> tuple[np.ndarray, VolumeMeta]:
     """Read a binary volume (``binary_a{a}.h5``: uint8, 1 = pore) and its geometry, refusing incomplete metadata.
 
     Parameters
@@ -366,6 +376,8 @@ def read_binary_volume(path, name: str = "pore") -> tuple[np.ndarray, VolumeMeta
         A result file with ``/volumes/<name>``.
     name : str, optional
         The volume's name (default ``pore``).
+    anisotropic : bool
+        Accept per-axis voxel edges (see :func:`volume_meta`).
 
     Returns
     -------
@@ -381,7 +393,7 @@ def read_binary_volume(path, name: str = "pore") -> tuple[np.ndarray, VolumeMeta
         file and the attribute), or the volume is not 3-D uint8.
     """
     with open_volume(path, name) as dset:
-        meta = volume_meta(dset, path)
+        meta = volume_meta(dset, path, anisotropic)
         if dset.ndim != 3 or dset.dtype != np.uint8:
             raise PorepipeError(
                 f"{path}: volume {name!r} is {dset.ndim}-D {dset.dtype}; a binary volume is 3-D "

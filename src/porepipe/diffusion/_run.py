@@ -15,7 +15,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import VOLUME_META_KEYS, ResultWriter, hash_of, read_attrs, read_volume
+from porepipe._shared.store import ResultWriter, read_attrs, read_binary_volume, result_hash
 from porepipe.diffusion import _api
 from porepipe.diffusion._settings import Axis, Settings, Setup
 
@@ -117,20 +117,9 @@ def run(
     axis = Axis(axis)
     binary, out = Path(binary), Path(out)
     src = read_attrs(binary)
-    pore, vattrs = read_volume(binary, "pore")
-    if pore.dtype != np.uint8 or pore.ndim != 3:
-        raise PorepipeError(
-            f"{binary}: volume 'pore' must be 3-D uint8 (1 = pore), got {pore.dtype} {pore.shape}"
-        )
-    missing = [key for key in VOLUME_META_KEYS if key not in vattrs]
-    if missing:  # no silent defaults (voxel_um = 1, non-periodic): the one rule of store.volume_meta
-        raise PorepipeError(
-            f"{binary}: volume 'pore' lacks the attribute(s) {', '.join(missing)}; a porepipe "
-            "volume needs voxel_um, origin_um and periodic"
-        )
-    # per-axis voxel edges are allowed here (serial sections), so not store.read_binary_volume (cubic only)
-    voxel_um = np.broadcast_to(np.asarray(vattrs["voxel_um"], dtype=float), (3,))
-    periodic = np.broadcast_to(np.asarray(vattrs["periodic"], dtype=bool), (3,))
+    pore, meta = read_binary_volume(binary, anisotropic=True)  # serial sections: per-axis voxel edges
+    voxel_um = np.asarray(meta.voxel_xyz_um, dtype=float)
+    periodic = np.asarray(meta.periodic, dtype=bool)
     checkpoint = Path(checkpoint) if checkpoint else out.with_name(f".{out.name}.checkpoint.npz")
     if not resume:
         checkpoint.unlink(missing_ok=True)
@@ -139,15 +128,13 @@ def run(
             f"{binary}: setup msd needs a periodic volume (attribute periodic = "
             f"{periodic.astype(int).tolist()}); use setup transmission for a closed sample"
         )
-    part = {
-        "binary": src.get("scene_hash", ""),
-        "axis": axis.value,
-        "seed": seed,
-        "settings": settings.model_dump(mode="json"),
-    }
     # the writer is opened first, so the recorded wall/CPU time and peak memory include the computation
     with ResultWriter(
-        out, stage="diffusion", scene=scene or src.get("scene", ""), scene_hash=hash_of(part), threads=threads
+        out,
+        stage="diffusion",
+        scene=scene or src.get("scene", ""),
+        scene_hash=result_hash("diffusion", settings=settings, inputs=[binary], axis=axis.value, seed=seed),
+        threads=threads,
     ) as w:
         if settings.setup is Setup.msd:
             result = _api.equilibrium(pore, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint)
@@ -164,7 +151,7 @@ def run(
             setup=settings.setup.value,
             axis=axis.value,
             voxel_um=voxel_um,
-            origin_um=np.asarray(vattrs.get("origin_um", (0.0, 0.0, 0.0)), dtype=float),
+            origin_um=np.asarray(meta.origin_um, dtype=float),
             wall_law=settings.wall_law.value,
             species=settings.species,
             temperature_K=settings.temperature_K,

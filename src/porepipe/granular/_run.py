@@ -22,17 +22,12 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
-from porepipe._shared.store import ResultWriter, hash_of
+from porepipe._shared.store import ResultWriter, result_hash
 from porepipe.granular._api import Frame, Simulation
 from porepipe.granular._settings import Settings
 
 STAGE = "granular"
 _CONTACT_KEYS = ("i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area_m2", "length_m")
-
-
-def result_hash(settings: Settings, seed: int) -> str:
-    """Hash of what determines the result: the ``granular`` section and the scene seed."""
-    return hash_of({"seed": int(seed), "granular": settings.model_dump(mode="json")})
 
 
 def _save_checkpoint(path: Path, key: str, sim: Simulation, frames: list, series: list) -> None:
@@ -115,7 +110,7 @@ def run(
         ``out``.
     """
     out = Path(out)
-    key = result_hash(settings, seed)
+    key = result_hash(STAGE, settings=settings, seed=int(seed))
     with ResultWriter(out, stage=STAGE, scene=scene, scene_hash=key, threads=threads) as w:
         sim, frames, series, rate = _simulate(settings, seed, checkpoint, resume, progress, key)
         _write(w, sim, frames, series)

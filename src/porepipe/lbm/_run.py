@@ -10,7 +10,7 @@ from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import read_attrs, read_binary_volume, result_hash
 from porepipe.lbm._api import PermeabilityResult, permeability
 from porepipe.lbm._io import write_result
-from porepipe.lbm._settings import Axis, Settings
+from porepipe.lbm._settings import Axis, Settings, Walls
 from porepipe.lbm._walls import geometry_from_files
 
 
@@ -84,14 +84,21 @@ def run(
     threads = set_threads(threads)
     pore, meta = read_binary_volume(binary)
     scene = read_attrs(binary).get("scene", "")
-    geometry = geometry_from_files(
-        pore.shape,
-        meta.voxel_um,
-        meta.origin_um,
-        packing=packing,
-        grey=grey,
-        threshold=meta.attrs.get("threshold"),
-        periodic=meta.periodic,
+    interpolated = (
+        settings.walls is not Walls.halfway
+    )  # halfway walls need no sub-voxel geometry: read nothing more
+    geometry = (
+        None
+        if not interpolated
+        else geometry_from_files(
+            pore.shape,
+            meta.voxel_um,
+            meta.origin_um,
+            packing=packing,
+            grey=grey,
+            threshold=meta.attrs.get("threshold"),
+            periodic=meta.periodic,
+        )
     )
     written = []
     for axis in axes:
@@ -102,7 +109,7 @@ def run(
         result = permeability(
             pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt, geometry=geometry
         )
-        sources = [binary] + [p for p in (packing, grey) if p]
+        sources = [binary] + ([p for p in (packing, grey) if p] if interpolated else [])
         digest = result_hash("permeability", settings=settings, inputs=sources, axis=axis.value)
         write_result(path, result, scene=scene, scene_hash=digest, threads=threads, origin_um=meta.origin_um)
         written.append((path, result))

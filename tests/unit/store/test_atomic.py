@@ -101,3 +101,16 @@ def test_read_binary_volume_refuses_malformed_metadata(tmp_path, key, value):
     _binary(tmp_path / "b.h5", **{key: value})
     with pytest.raises(PorepipeError, match=key):
         read_binary_volume(tmp_path / "b.h5")
+
+
+def test_anisotropic_voxels_only_where_a_stage_asks_for_them(tmp_path):
+    _binary(tmp_path / "b.h5", voxel_um=[0.17, 0.17, 1.04])  # serial sections
+    with pytest.raises(PorepipeError, match="anisotropic voxels are not supported"):
+        read_binary_volume(tmp_path / "b.h5")
+    _, meta = read_binary_volume(tmp_path / "b.h5", anisotropic=True)
+    assert meta.voxel_xyz_um == (0.17, 0.17, 1.04)
+    _binary(tmp_path / "c.h5")
+    assert read_binary_volume(tmp_path / "c.h5", anisotropic=True)[1].voxel_xyz_um == (0.5, 0.5, 0.5)
+    with pytest.raises(PorepipeError, match="voxel_um"):
+        _binary(tmp_path / "d.h5", voxel_um=[0.17, -1.0, 1.0])
+        read_binary_volume(tmp_path / "d.h5", anisotropic=True)
