@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from naive import spheres_with_known_union
 
+from porepipe._shared.errors import PorepipeError
 from porepipe.estimate import (
     corner_cut,
     estimate_from_histograms,
@@ -129,9 +130,24 @@ def test_mean_field_surface_error_against_exact_surface(known_union):
     assert all(b["S_min"] <= s_exact <= b["S_max"] for b in bounds)
 
 
-def test_thesis_regression_is_flagged_when_widths_do_not_shrink(known_union):
-    _, res, hists, _, _, _ = known_union
-    ds = estimate_from_histograms(res, hists)
-    assert ds.phi_regression.attrs["supported"] in (0, 1)
-    if not ds.phi_regression.attrs["supported"]:
-        assert "lever arm" in ds.phi_regression.attrs["why"]
+def _histogram_with_width(width, n=100_000, phi_lower=0.12):
+    """A grey histogram whose bounds are φ(0) = phi_lower and φ(215) = phi_lower + width (mixed voxels at g=100)."""
+    h = np.zeros(217, dtype=np.int64)
+    h[0], h[100] = round(phi_lower * n), round(width * n)
+    h[216] = n - h[0] - h[100]
+    return h
+
+
+@pytest.mark.parametrize(
+    ("widths", "supported"), [((0.04, 0.02, 0.01), 1), ((0.02, 0.03, 0.01), 0), ((0.02, 0.02, 0.02), 0)]
+)
+def test_thesis_regression_is_flagged_when_widths_do_not_shrink(widths, supported):
+    # rule (Table 7.2's premise): the φ*/φ** regression is only supported when φ** falls monotonically towards 0
+    hists = [_histogram_with_width(w) for w in widths]
+    if len(set(widths)) == 1:
+        with pytest.raises(PorepipeError, match="lever arm"):
+            estimate_from_histograms([4.0, 2.0, 1.0], hists)
+        return
+    ds = estimate_from_histograms([4.0, 2.0, 1.0], hists)
+    assert ds.phi_regression.attrs["supported"] == supported
+    assert ("lever arm" in ds.phi_regression.attrs["why"]) == (not supported)

@@ -11,8 +11,12 @@ from porepipe.segment._settings import SegmentationMethod
 
 G_MAX = 216
 #: threshold used when the histogram has a single populated grey value (Otsu undefined): pore if the voxel is
-#: less than half matrix, g <= 107 (the thesis's "trivial" threshold, in the g <= g_th convention).
+#: less than half matrix, g <= 107 (g < 216 / 2). This is porepipe's choice, not the thesis's.
 HALF_THRESHOLD = 107
+#: the thesis's trivial threshold: §4.7.2 names g_th = 128 and Fig. 7.3 calls a voxel pore if g < 128; in the
+#: g <= g_th convention that is 127 (the two readings differ by one grey level; we follow Fig. 7.3, whose pictures
+#: were made with it). On the 0..216 scale it is not half matrix: 128/216 = 0.59.
+THESIS_TRIVIAL_THRESHOLD = 127
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,6 +71,10 @@ def choose_threshold(hist: np.ndarray, method: SegmentationMethod, fixed: int | 
         if fixed is None or not 0 <= fixed <= G_MAX - 1:
             raise PorepipeError(f"fixed threshold must be an integer 0..215, got {fixed}")
         return Threshold(int(fixed), method)
+    if method is SegmentationMethod.trivial:
+        return Threshold(
+            THESIS_TRIVIAL_THRESHOLD, method, "the thesis's trivial threshold (Fig. 7.3: pore if g < 128)"
+        )
     if populated.size == 0:
         raise PorepipeError("empty grey histogram: the volume has no voxels")
     if populated.size == 1:

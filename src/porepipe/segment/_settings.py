@@ -6,9 +6,10 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 
 class SegmentationMethod(str, enum.Enum):
-    """How the grey threshold g_th is chosen: Otsu's method on the grey histogram, or a fixed value."""
+    """How the grey threshold g_th is chosen: Otsu's method, the thesis's trivial threshold, or a fixed value."""
 
     otsu = "otsu"
+    trivial = "trivial"
     fixed = "fixed"
 
 
@@ -24,6 +25,6 @@ class Segmentation(BaseModel):
     def _threshold_for_fixed(self):
         if self.method is SegmentationMethod.fixed and self.threshold is None:
             raise ValueError("method fixed needs `threshold` (an integer 0..215)")
-        if self.method is SegmentationMethod.otsu and self.threshold is not None:
+        if self.method is not SegmentationMethod.fixed and self.threshold is not None:
             raise ValueError("`threshold` is only used with method fixed; remove it or set method: fixed")
         return self

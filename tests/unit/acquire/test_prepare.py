@@ -64,21 +64,16 @@ def test_multi_otsu_three_phases_matches_scikit_image():
     )  # noise 8 << level gap 80: every voxel classified right
 
 
-def test_user_thresholds_give_table_8_1_fractions_exactly():
-    # Table 8.1 phases with fractions normalised to 1 (the printed ones sum to 82.9 %)
-    fractions = np.array([21.4, 0.93, 0.97, 59.6]) / 82.9
-    n = 40**3
-    counts = np.floor(fractions * n).astype(int)
-    counts[-1] = n - counts[:-1].sum()
-    grey = np.repeat(np.array([30, 90, 140, 220], np.uint8), counts)
-    np.random.default_rng(5).shuffle(grey)
+def test_user_thresholds_put_a_grey_value_on_a_threshold_in_the_lower_phase():
+    # the g <= g_th convention of §4.7.2, per threshold: t goes to the phase below it, t + 1 to the one above
+    thresholds = [60, 115, 180]
+    grey = np.array([0, 60, 61, 115, 116, 180, 181, 255], np.uint8).reshape(8, 1, 1)
     seg = Segmentation(
         method="thresholds",
         phases=["pore", "sedimentation", "cementation", "grains"],
-        thresholds=[60, 115, 180],
+        thresholds=thresholds,
     )
-    ph = segment_phases(grey.reshape(40, 40, 40), seg)
-    np.testing.assert_array_equal(np.bincount(ph.labels.ravel(), minlength=4), counts)
+    np.testing.assert_array_equal(segment_phases(grey, seg).labels.ravel(), [0, 0, 1, 1, 2, 2, 3, 3])
 
 
 def test_inverted_phases_pore_bright():

@@ -38,3 +38,19 @@ def test_fixed_threshold_range_is_checked():
         choose_threshold(hist, SegmentationMethod.fixed, 216)
     with pytest.raises(PorepipeError, match="217 bins"):
         choose_threshold(np.ones(10), SegmentationMethod.otsu)
+
+
+def test_trivial_threshold_is_the_thesis_fig_7_3_rule():
+    # Zauner (2020) Fig. 7.3: "pore are all voxels with g_i(a) < 128" -- independent of the histogram
+    hist = np.zeros(217, dtype=np.int64)
+    hist[[0, 216]] = 1
+    th = choose_threshold(hist, SegmentationMethod.trivial)
+    grey = np.array([126, 127, 128, 129], dtype=np.uint8)
+    assert segment(grey, th.value).tolist() == [1, 1, 0, 0]
+
+
+def test_trivial_and_otsu_refuse_a_threshold_value():
+    from porepipe.segment._settings import Segmentation
+
+    with pytest.raises(ValueError, match="only used with method fixed"):
+        Segmentation(method="trivial", threshold=100)
