@@ -251,13 +251,17 @@ def _add_limits(ds: xr.Dataset, a: np.ndarray, bounds: np.ndarray) -> xr.Dataset
     width = lim.phi_2star
     # the regression needs bound widths that shrink towards 0 (as in Table 7.2); otherwise it extrapolates noise
     supported = bool(np.all(width > 0) and np.all(np.diff(width) < 0))
+    lower, lower_err = richardson_limit(a, bounds[:, 0])
+    upper, upper_err = richardson_limit(a, bounds[:, 1])
+    phi_limit = float(np.clip(0.5 * (lower + upper), 0.0, 1.0))
+    phi_limit_err = max(0.5 * abs(upper - lower), lower_err, upper_err)
     ds["phi_star"] = ("pair", lim.phi_star)
     ds["phi_2star"] = ("pair", width)
     ds["phi_regression"] = (
         (),
-        lim.phi,
+        float(np.clip(lim.phi, 0.0, 1.0)),
         {
-            "error_method": lim.error_method,
+            "error_method": f"max({lim.error_method}, |phi_regression - phi_limit| + phi_limit_err)",
             "supported": int(supported),
             "why": ""
             if supported
@@ -265,17 +269,18 @@ def _add_limits(ds: xr.Dataset, a: np.ndarray, bounds: np.ndarray) -> xr.Dataset
             "monotonically to 0: the regression has no reliable lever arm",
         },
     )
-    ds["phi_regression_err"] = ((), lim.phi_err)
-    lower, lower_err = richardson_limit(a, bounds[:, 0])
-    upper, upper_err = richardson_limit(a, bounds[:, 1])
+    # the regression is biased high on small samples (φ* is not linear in φ** at coarse a), and its standard
+    # error from 1-2 degrees of freedom is far too small; the distance to the three-point limit plus that limit's
+    # own error bounds the true error by the triangle inequality whenever the limit's bar covers (README: coverage)
+    ds["phi_regression_err"] = ((), max(lim.phi_err, abs(lim.phi - phi_limit) + phi_limit_err))
     ds["phi_limit"] = (
         (),
-        0.5 * (lower + upper),
+        phi_limit,
         {"method": "midpoint of the three-point (quadratic in a) limits of phi(0,a) and phi(215,a)"},
     )
     ds["phi_limit_err"] = (
         (),
-        max(0.5 * abs(upper - lower), lower_err, upper_err),
+        phi_limit_err,
         {"method": "max(half gap of the two limits, change from linear to quadratic limit)"},
     )
     return ds
