@@ -32,7 +32,7 @@ NUMBER_RE = TAG_RE
 wildcard_constraints:
     scene=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
     a=NUMBER_RE,
-    sub=rf"(_L{NUMBER_RE})?",
+    sub=rf"(_L{NUMBER_RE}(_k[0-9]+)?)?",
 
 
 # -- names ------------------------------------------------------------------------------------------------------------
@@ -45,9 +45,20 @@ def per_resolution(scene, pattern):
     return [results(scene, pattern.format(a=res_tag(a))) for a in scene.resolutions_um]
 
 
+def subsample_tags(scene, edge_um):
+    """The L part of the sub-sample names of edge `edge_um`: '<edge>' (origin corner) or '<edge>_k<i>' per cube."""
+    count = scene.sweep.subsamples
+    edge = res_tag(edge_um)
+    return [edge] if count == 1 else [f"{edge}_k{i}" for i in range(count)]
+
+
 def per_subsample(scene, pattern, edge_um):
-    """`pattern` with a = every resolution and L = the sub-sample edge, e.g. 'minkowski/minkowski_a{a}_L{L}.h5'."""
-    return [results(scene, pattern.format(a=res_tag(a), L=res_tag(edge_um))) for a in scene.resolutions_um]
+    """`pattern` with a = every resolution and L = each sub-sample of edge L, e.g. 'minkowski/minkowski_a{a}_L{L}.h5'."""
+    return [
+        results(scene, pattern.format(a=res_tag(a), L=tag))
+        for a in scene.resolutions_um
+        for tag in subsample_tags(scene, edge_um)
+    ]
 
 
 def scene_of(wildcards):
@@ -89,7 +100,7 @@ def binary_volumes(scene):
 
 
 def subsample_volumes(scene, edge_um):
-    """The corner sub-samples of edge `edge_um` of every resolution (rule subsample)."""
+    """The sub-samples of edge `edge_um` of every resolution (rule subsample)."""
     return per_subsample(scene, "subsample/binary_a{a}_L{L}.h5", edge_um)
 
 
@@ -99,6 +110,13 @@ def binary_volume(wildcards):
     if getattr(wildcards, "sub", ""):
         return results(scene, "subsample", f"binary_a{wildcards.a}{wildcards.sub}.h5")
     return results(scene, binary_stage(scene), f"binary_a{wildcards.a}.h5")
+
+
+def subsample_cube_args(wildcards):
+    """`--index i --count n` of rule subsample for wildcard k = '_k<i>' (empty: the origin corner)."""
+    if not wildcards.k:
+        return ""
+    return f"--index {int(wildcards.k[2:])} --count {scene_of(wildcards).sweep.subsamples}"
 
 
 def whole_binary_volume(wildcards):

@@ -1,4 +1,5 @@
-# Resolution and sample-size sweep (thesis §4.6.1, §7.4): corner sub-samples of the binary volumes (rule subsample),
+# Resolution and sample-size sweep (thesis §4.6.1, §7.4): sub-samples of the binary volumes (rule subsample: the origin
+# corner, or with sweep.subsamples = 8 / 64 cube k of a 2³ / 4³ grid, wildcard k = "_k<i>"),
 # and the gather of every result of the scene's analyses into one sweep.h5 (quantity x resolution x sample size, with
 # costs and the extrapolation a -> 0).
 
@@ -7,21 +8,24 @@ rule subsample:
     input:
         whole_binary_volume,
     output:
-        "results/{scene}/subsample/binary_a{a}_L{L}.h5",
+        "results/{scene}/subsample/binary_a{a}_L{L}{k}.h5",
     log:
-        "results/{scene}/logs/subsample_a{a}_L{L}.log",
+        "results/{scene}/logs/subsample_a{a}_L{L}{k}.log",
     benchmark:
-        "results/{scene}/cost/subsample_a{a}_L{L}.tsv"
+        "results/{scene}/cost/subsample_a{a}_L{L}{k}.tsv"
     wildcard_constraints:
         L=NUMBER_RE,
+        k=r"(_k[0-9]+)?",
     conda:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
         mem_mb=mem_mb(bytes_per_voxel=1),
         runtime=10,
+    params:
+        cube=lambda wildcards: subsample_cube_args(wildcards),
     shell:
-        "porepipe subsample {input:q} --edge-um {wildcards.L} -o {output:q} > {log:q} 2>&1"
+        "porepipe subsample {input:q} --edge-um {wildcards.L} {params.cube} -o {output:q} > {log:q} 2>&1"
 
 
 rule sweep:

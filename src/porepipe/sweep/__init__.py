@@ -26,6 +26,7 @@ _EXPORTS = {
     "predict_cost": "_adaptive",
     "read_benchmarks": "_gather",
     "run_adaptive": "_adaptive",
+    "subsample_offsets": "_crop",
     "two_point_limit": "_fit",
 }
 __all__ = [*_EXPORTS]

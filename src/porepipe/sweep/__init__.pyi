@@ -42,6 +42,9 @@ from porepipe.sweep._crop import (
 from porepipe.sweep._crop import (
     crop_corner as crop_corner,
 )
+from porepipe.sweep._crop import (
+    subsample_offsets as subsample_offsets,
+)
 from porepipe.sweep._fit import (
     Limit as Limit,
 )
@@ -100,5 +103,6 @@ __all__ = [
     "predict_cost",
     "read_benchmarks",
     "run_adaptive",
+    "subsample_offsets",
     "two_point_limit",
 ]

@@ -52,8 +52,11 @@ def _sweep(args) -> int:
 def _subsample(args) -> int:
     from porepipe.sweep._run import run_subsample
 
-    shape = run_subsample(args.binary, args.edge_um, args.out)
-    print(f"subsample: corner cube {shape} written to {args.out}", file=sys.stderr)
+    shape = run_subsample(args.binary, args.edge_um, args.out, index=args.index, count=args.count)
+    print(
+        f"subsample: cube {args.index} of {args.count}, {shape} voxels, written to {args.out}",
+        file=sys.stderr,
+    )
     return 0
 
 
@@ -85,5 +88,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("subsample", help="cut the corner cube of edge L µm from a binary volume")
     p.add_argument("binary", help="binary_a{a}.h5")
     p.add_argument("--edge-um", type=float, required=True)
-    p.add_argument("-o", "--out", required=True, help="binary_a{a}_L{L}.h5")
+    p.add_argument("-o", "--out", required=True, help="binary_a{a}_L{L}.h5 (binary_a{a}_L{L}_k{index}.h5)")
+    p.add_argument("--count", type=int, default=1, help="sub-samples per edge: 1 (origin corner), 8 or 64")
+    p.add_argument("--index", type=int, default=0, help="which of the --count cubes (x fastest)")
     p.set_defaults(func=_subsample)

@@ -1,4 +1,7 @@
-"""Corner sub-samples of a binary volume (Zauner 2020 §4.6.1, Table 7.4: refined sub-samples from the same corner)."""
+"""Sub-samples of a binary volume (Zauner 2020 §4.6.1, §7.4): the origin corner cube (Table 7.4: refined sub-samples
+from the same corner), or one of m³ = 8 or 64 cubes spread evenly over the volume (Fig. 7.8: the spread across
+sub-samples of one size is the REV error bar).
+"""
 
 from __future__ import annotations
 
@@ -27,31 +30,49 @@ def corner_voxels(edge_um: float, voxel_um: float, shape) -> int:
     return n
 
 
-def crop_corner(binary_path, edge_um: float, out) -> tuple[int, int, int]:
-    """Write the cube [0, edge_um)^3 at the origin corner of ``binary_path`` (volume ``pore``) to ``out``.
+#: sub-samples per edge the sweep can cut: the origin corner, or a 2³ / 4³ grid of cubes
+SUBSAMPLE_COUNTS = (1, 8, 64)
 
-    The cut faces are not periodic, so ``periodic`` is (0, 0, 0). Returns the shape written.
+
+def subsample_offsets(index: int, count: int, n: int, shape) -> tuple[int, int, int]:
+    """Voxel offset of sub-sample ``index`` of ``count`` (1, 8 or 64) cubes of edge ``n`` in a volume of ``shape``.
+
+    The m = count^(1/3) cubes per axis are spread evenly from the low to the high face: offset_i = round(i (N − n) /
+    (m − 1)), so they are disjoint when N ≥ m n and overlap (evenly) otherwise; index runs x fastest.
+    """
+    if count not in SUBSAMPLE_COUNTS:
+        raise PorepipeError(f"sweep.subsamples must be one of {SUBSAMPLE_COUNTS}, got {count}")
+    if not 0 <= index < count:
+        raise PorepipeError(f"sub-sample index {index} outside 0..{count - 1}")
+    m = round(count ** (1 / 3))
+    ijk = (index % m, (index // m) % m, index // (m * m))
+    if m == 1:
+        return (0, 0, 0)
+    return tuple(round(i * (size - n) / (m - 1)) for i, size in zip(ijk, shape))
+
+
+def crop_corner(binary_path, edge_um: float, out, index: int = 0, count: int = 1) -> tuple[int, int, int]:
+    """Write sub-sample ``index`` of ``count`` cubes of edge ``edge_um`` of ``binary_path`` (volume ``pore``) to ``out``.
+
+    With ``count`` = 1 it is the cube [0, edge_um)^3 at the origin corner. The cut faces are not periodic, so
+    ``periodic`` is (0, 0, 0) and the origin moves with the offset. Returns the shape written.
     """
     root = read_attrs(binary_path)
     with open_volume(binary_path, "pore") as dset:
         vattrs = dict(dset.attrs.items())
-        n = corner_voxels(float(edge_um), float(vattrs["voxel_um"]), dset.shape)
-        cube = np.ascontiguousarray(dset[:n, :n, :n])
+        voxel_um = float(vattrs["voxel_um"])
+        n = corner_voxels(float(edge_um), voxel_um, dset.shape)
+        ox, oy, oz = subsample_offsets(index, count, n, dset.shape)
+        cube = np.ascontiguousarray(dset[ox : ox + n, oy : oy + n, oz : oz + n])
     extra = {k: v for k, v in vattrs.items() if k not in ("voxel_um", "origin_um", "periodic")}
-    extra["sample_um"] = float(edge_um)
+    extra.update(sample_um=float(edge_um), subsample_index=int(index), subsample_count=int(count))
+    origin = np.asarray(vattrs["origin_um"], dtype=np.float64) + voxel_um * np.array([ox, oy, oz])
     with ResultWriter(
         out,
         stage="subsample",
         scene=str(root.get("scene", "")),
-        scene_hash=hash_of([root.get("scene_hash", ""), float(edge_um)]),
+        scene_hash=hash_of([root.get("scene_hash", ""), float(edge_um), int(index), int(count)]),
     ) as w:
-        w.write_volume(
-            "pore",
-            cube,
-            voxel_um=float(vattrs["voxel_um"]),
-            origin_um=vattrs["origin_um"],
-            periodic=(0, 0, 0),
-            attrs=extra,
-        )
+        w.write_volume("pore", cube, voxel_um=voxel_um, origin_um=origin, periodic=(0, 0, 0), attrs=extra)
         w.attrs.update(sample_um=float(edge_um), source=str(binary_path))
     return cube.shape

@@ -2,8 +2,10 @@
 
 Quantities are read generically from each file's root xarray table, so a new engine joins without code changes:
 - a file with an ``a_um`` dimension (e.g. ``estimate.h5``): every float variable over ``a_um`` alone;
-- a per-resolution file (``*_a{a}[_L{L}|_s{s}][_tag].h5``): every 0-d float variable, every float variable over one
-  short labelled dimension (e.g. ``phase``: ``minkowski.S_V[pore]``), and the known scalar attributes below.
+- a per-resolution file (``*_a{a}[_L{L}[_k{i}]|_s{s}][_tag].h5``): every 0-d float variable, every float variable over
+  one short labelled dimension (e.g. ``phase``: ``minkowski.S_V[pore]``), and the known scalar attributes below.
+  Sub-samples ``_k{i}`` of one edge (sweep.subsamples = 8 or 64) are replicas: ``value`` is their mean and
+  ``rev_spread`` their standard deviation (the REV error bar of Zauner 2020 Fig. 7.8).
 Integer variables (counts, flags) and long curves are not quantities.
 """
 
@@ -31,6 +33,7 @@ BENCH_KEYS = {"s": "bench_s", "cpu_time": "bench_cpu_s", "max_rss": "bench_max_r
 
 _NAME = re.compile(r"^(?P<prefix>.+?)_a(?P<a>[0-9]+(?:\.[0-9]+)?)(?:_(?P<rest>.+))?$")
 _SAMPLE = re.compile(r"^(?:L|s)(?P<edge>[0-9]+(?:\.[0-9]+)?)$")
+_REPLICA = re.compile(r"^k[0-9]+$")
 
 
 def parse_name(stem: str) -> tuple[str, float | None, float, str]:
@@ -49,6 +52,8 @@ def parse_name(stem: str) -> tuple[str, float | None, float, str]:
         s = _SAMPLE.match(token)
         if s is not None and sample == FULL:
             sample = float(s["edge"])
+        elif sample != FULL and _REPLICA.match(token):
+            continue  # sub-sample k of this edge: a replica, gathered into mean and spread
         elif token:
             tags.append(token)
     return m["prefix"], float(m["a"]), sample, "_".join(tags)
@@ -138,13 +143,14 @@ class _Table:
     """Accumulates records (quantity, a, sample) -> value and cost, then builds the Dataset."""
 
     def __init__(self):
-        self.values: dict[tuple, float] = {}
+        self.values: dict[tuple, list[float]] = {}
         self.cost: dict[tuple, dict] = {}
         self.source: dict[str, str] = {}
 
     def add(self, quantity, a, sample, value, cost, source):
-        self.values[(quantity, a, sample)] = value
-        self.cost[(quantity, a, sample)] = cost
+        """One value; sub-sample replicas of the same (quantity, a, sample) accumulate."""
+        self.values.setdefault((quantity, a, sample), []).append(value)
+        self.cost.setdefault((quantity, a, sample), cost)
         self.source.setdefault(quantity, source)
 
 
@@ -219,10 +225,13 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
     shape = (len(quantities), len(a_um), len(samples))
     qi, ai, si = ({v: i for i, v in enumerate(vals)} for vals in (quantities, a_um, samples))
     cost_names = list(COST_KEYS) + list(BENCH_KEYS.values())
-    arrays = {name: np.full(shape, np.nan) for name in ["value", *cost_names]}
-    for key, value in table.values.items():
+    arrays = {name: np.full(shape, np.nan) for name in ["value", "rev_spread", *cost_names]}
+    count = np.zeros(shape, dtype=np.int64)
+    for key, values in table.values.items():
         idx = (qi[key[0]], ai[key[1]], si[key[2]])
-        arrays["value"][idx] = value
+        arrays["value"][idx] = np.mean(values)
+        arrays["rev_spread"][idx] = np.std(values, ddof=1) if len(values) > 1 else np.nan
+        count[idx] = len(values)
         for name in cost_names:
             arrays[name][idx] = table.cost[key].get(name, np.nan)
     up = np.full((3, len(a_um), len(samples)), np.nan)
@@ -249,6 +258,10 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
             ),
         },
     )
+    ds["rev_spread"].attrs.update(
+        description="standard deviation of value over the sub-samples of one edge (REV error); NaN: one sample"
+    )
+    ds["rev_count"] = (dims, count, {"description": "sub-samples averaged into value"})
     ds["source"] = ("quantity", np.array([table.source[q] for q in quantities], dtype=object))
     ds["upstream_wall_s"] = (
         ("a_um", "sample_um"),

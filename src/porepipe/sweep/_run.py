@@ -53,6 +53,6 @@ def run(
     return ds
 
 
-def run_subsample(binary, edge_um: float, out) -> tuple[int, int, int]:
-    """Cut the corner cube of edge ``edge_um`` (µm) from ``binary`` into ``out``; returns its shape in voxels."""
-    return crop_corner(binary, edge_um, out)
+def run_subsample(binary, edge_um: float, out, index: int = 0, count: int = 1) -> tuple[int, int, int]:
+    """Cut sub-sample ``index`` of ``count`` cubes of edge ``edge_um`` (µm) from ``binary`` into ``out``; its shape."""
+    return crop_corner(binary, edge_um, out, index=index, count=count)

@@ -7,7 +7,7 @@ Zauner (2020) §4.6.1, §7.4 (Table 7.4: sub-samples cut from the same corner), 
 from __future__ import annotations
 
 import enum
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -54,8 +54,13 @@ class Settings(BaseModel):
 
     sample_um: list[PositiveUm] = Field(
         default_factory=list,
-        description="edges L in µm of cubic sub-samples cut at the origin corner of every "
+        description="edges L in µm of cubic sub-samples cut from every "
         "binary volume (binary_a{a}_L{L}.h5); engines that accept them run on each",
+    )
+    subsamples: Literal[1, 8, 64] = Field(
+        1,
+        description="sub-samples per edge in sample_um: 1 = the origin corner (Table 7.4), 8 or 64 = a 2³ or 4³ "
+        "grid of cubes spread evenly over the volume (Fig. 7.8); sweep.h5 holds their mean and spread (REV error)",
     )
     exponent: Exponent = Field(
         Exponent.free, description="p in q(a) = q∞ + c·a^p: free, linear (1) or quadratic (2)"

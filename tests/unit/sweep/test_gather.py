@@ -6,7 +6,15 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, read_attrs, read_volume
-from porepipe.sweep import FULL, build_sweep, crop_corner, gather, parse_name, read_benchmarks
+from porepipe.sweep import (
+    FULL,
+    build_sweep,
+    crop_corner,
+    gather,
+    parse_name,
+    read_benchmarks,
+    subsample_offsets,
+)
 
 
 def _result(path, ds, stage):
@@ -125,3 +133,38 @@ def test_no_quantities_is_an_error(tmp_path):
     path = _result(tmp_path / "x_a1.h5", xr.Dataset({"n": ((), 3)}), "x")
     with pytest.raises(PorepipeError, match="no scalar quantity"):
         gather([path])
+
+
+@pytest.mark.parametrize(
+    ("count", "shape", "n", "starts"), [(8, (8, 8, 8), 4, [0, 4]), (64, (10, 10, 10), 4, [0, 2, 4, 6])]
+)
+def test_subsample_grid_spreads_cubes_from_face_to_face(count, shape, n, starts):
+    # offsets round(i (N - n) / (m - 1)) per axis, x fastest: the first and last cube touch the low and high faces
+    offsets = [subsample_offsets(k, count, n, shape) for k in range(count)]
+    assert offsets[1] == (starts[1], 0, 0) and offsets[len(starts)] == (0, starts[1], 0)
+    assert sorted(set(offsets)) == sorted((x, y, z) for x in starts for y in starts for z in starts)
+
+
+def test_subsample_replicas_are_averaged_with_their_spread(tmp_path):
+    # 8 disjoint 4³ cubes of an 8³ random volume: the gathered value and rev_spread are numpy's mean and std
+    # (ddof = 1) of the cubes' porosities, which are computed here from the array, not by the code under test
+    rng = np.random.default_rng(9)
+    pore = (rng.random((8, 8, 8)) < 0.3).astype(np.uint8)
+    with ResultWriter(tmp_path / "binary_a1.h5", stage="segment", scene="t") as w:
+        w.write_volume("pore", pore, voxel_um=1.0, origin_um=(10.0, 0.0, 0.0))
+    paths, expected = [], []
+    for k in range(8):
+        crop_corner(tmp_path / "binary_a1.h5", 4.0, tmp_path / f"binary_a1_L4_k{k}.h5", index=k, count=8)
+        cube, attrs = read_volume(tmp_path / f"binary_a1_L4_k{k}.h5", "pore")
+        ox, oy, oz = 4 * (k % 2), 4 * (k // 2 % 2), 4 * (k // 4)
+        np.testing.assert_array_equal(cube, pore[ox : ox + 4, oy : oy + 4, oz : oz + 4])
+        assert attrs["origin_um"] == [10.0 + ox, oy, oz]
+        expected.append(pore[ox : ox + 4, oy : oy + 4, oz : oz + 4].mean())
+        ds = xr.Dataset({"phi": ((), float(cube.mean()))})
+        paths.append(_result(tmp_path / "m" / f"m_a1_L4_k{k}.h5", ds, "m"))
+    ds = gather(paths)
+    sel = {"quantity": "m.phi", "a_um": 1.0, "sample_um": 4.0}
+    assert float(ds.value.sel(sel)) == pytest.approx(np.mean(expected), rel=1e-12)
+    assert float(ds.rev_spread.sel(sel)) == pytest.approx(np.std(expected, ddof=1), rel=1e-12)
+    assert int(ds.rev_count.sel(sel)) == 8
+    assert parse_name("m_a1_L4_k7") == ("m", 1.0, 4.0, "")
