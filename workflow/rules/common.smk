@@ -112,13 +112,6 @@ def binary_volume(wildcards):
     return results(scene, binary_stage(scene), f"binary_a{wildcards.a}.h5")
 
 
-def subsample_cube_args(wildcards):
-    """`--index i --count n` of rule subsample for wildcard k = '_k<i>' (empty: the origin corner)."""
-    if not wildcards.k:
-        return ""
-    return f"--index {int(wildcards.k[2:])} --count {scene_of(wildcards).sweep.subsamples}"
-
-
 def whole_binary_volume(wildcards):
     scene = scene_of(wildcards)
     return results(scene, binary_stage(scene), f"binary_a{wildcards.a}.h5")
