@@ -23,7 +23,7 @@ rule subsample:
         mem_mb=mem_mb(bytes_per_voxel=1),
         runtime=10,
     params:
-        cube=lambda w: f"--index {w.k[2:]} --count {SCENES[w.scene].sweep.subsamples}" if w.k else "",
+        cube=lambda w: f"--index {w.k[2:]} --count {scene_of(w).sweep.subsamples}" if w.k else "",
     shell:
         "porepipe subsample {input:q} --edge-um {wildcards.L} {params.cube} -o {output:q} > {log:q} 2>&1"
 

@@ -45,9 +45,9 @@ def subsample_offsets(index: int, count: int, n: int, shape) -> tuple[int, int, 
     if not 0 <= index < count:
         raise PorepipeError(f"sub-sample index {index} outside 0..{count - 1}")
     m = round(count ** (1 / 3))
-    ijk = (index % m, (index // m) % m, index // (m * m))
     if m == 1:
         return (0, 0, 0)
+    ijk = (index % m, (index // m) % m, index // (m * m))
     return tuple(round(i * (size - n) / (m - 1)) for i, size in zip(ijk, shape))
 
 

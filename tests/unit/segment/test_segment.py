@@ -50,7 +50,7 @@ def test_trivial_threshold_is_the_thesis_fig_7_3_rule():
 
 
 def test_trivial_and_otsu_refuse_a_threshold_value():
-    from porepipe.segment._settings import Segmentation
+    from porepipe.scene import Segmentation
 
     with pytest.raises(ValueError, match="only used with method fixed"):
         Segmentation(method="trivial", threshold=100)
