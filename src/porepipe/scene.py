@@ -108,14 +108,15 @@ class Spheres(_Strict):
         if not_finite:
             faults.append(f"sphere(s) {_index_list(not_finite)} have a non-finite value")
         if not_positive:
-            faults.append(f"sphere(s) {_index_list(not_positive)} have radius <= 0 (allowed: r > 0)")
+            shown = [f"{i} (radius {spheres[i][3]:g})" for i in not_positive]
+            faults.append(f"sphere(s) {_index_list(shown)} have radius <= 0 (allowed: r > 0)")
         if faults:
             raise ValueError("; ".join(faults))
         return spheres or None
 
 
-def _index_list(indices: list[int], most: int = 20) -> str:
-    """``0, 3, 7`` — every index, or the first ``most`` and how many more (the message stays one line)."""
+def _index_list(indices: list, most: int = 20) -> str:
+    """``0, 3, 7``: every index, or the first ``most`` and how many more (the message stays one line)."""
     text = ", ".join(str(i) for i in indices[:most])
     return text + (f" and {len(indices) - most} more" if len(indices) > most else "")
 
@@ -299,9 +300,9 @@ def _raw_path(raw, loc: tuple) -> tuple:
     """The part of an error location that names keys and indices of the raw scene (pydantic adds type tags)."""
     path, value = [], raw
     for part in loc:
-        if isinstance(value, dict) and part in value:
-            value = value[part]
-        elif isinstance(value, list) and isinstance(part, int) and 0 <= part < len(value):
+        if (isinstance(value, dict) and part in value) or (
+            isinstance(value, list) and isinstance(part, int) and 0 <= part < len(value)
+        ):
             value = value[part]
         else:
             break

@@ -74,7 +74,9 @@ class Outcome:
     def clean_error(self) -> bool:
         """Exit code 2 with one line on stderr (warnings before it allowed), no exception escaping."""
         lines = [line for line in self.stderr.strip().splitlines() if "error" in line]
-        return self.exception is None and self.code == 2 and len(lines) == 1 and "Traceback" not in self.stderr
+        return (
+            self.exception is None and self.code == 2 and len(lines) == 1 and "Traceback" not in self.stderr
+        )
 
 
 def run_cli(argv: list[str]) -> Outcome:
@@ -87,7 +89,7 @@ def run_cli(argv: list[str]) -> Outcome:
             code = main(argv)
         except SystemExit as exit_:
             code = exit_.code if isinstance(exit_.code, int) else 1
-        except BaseException as exc:  # noqa: BLE001 - what escapes is the finding
+        except BaseException as exc:
             return Outcome(None, err.getvalue(), exc)
     return Outcome(code, err.getvalue())
 

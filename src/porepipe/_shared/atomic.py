@@ -79,7 +79,9 @@ def prepare_output(path) -> Path:
             f"output {path}: cannot create its directory, a file is in the way ({_first_file(path.parent)})"
         ) from None
     except OSError as err:
-        raise PorepipeError(f"output {path}: cannot create its directory {path.parent}: {err.strerror}") from None
+        raise PorepipeError(
+            f"output {path}: cannot create its directory {path.parent}: {err.strerror}"
+        ) from None
     if not path.parent.is_dir():
         raise PorepipeError(f"output {path}: {path.parent} is a file, not a directory")
     if not os.access(path.parent, os.W_OK | os.X_OK):

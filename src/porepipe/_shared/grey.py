@@ -106,5 +106,7 @@ def read_grey_histogram(path) -> tuple[np.ndarray, float]:
             "grey_histogram with voxel_um); give a grey_a{a}.h5 written by voxelize or voxelize-grains"
         )
     if hist.dtype.kind not in "iu" or np.any(hist < 0):
-        raise PorepipeError(f"{path}: grey_histogram holds {hist.dtype} or negative counts; recompute the file")
+        raise PorepipeError(
+            f"{path}: grey_histogram holds {hist.dtype} or negative counts; recompute the file"
+        )
     return hist.astype(np.int64), float(voxel_um)

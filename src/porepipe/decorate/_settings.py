@@ -82,7 +82,9 @@ class Assignment(_Strict):
 
     sphere_type: int | None = Field(None, ge=0, description="sphere type index (packing `types`); None = any")
     radius_min_um: NonNegFloat = Field(0.0, description="size class: r >= radius_min_um")
-    radius_max_um: float = Field(math.inf, gt=0, allow_inf_nan=True, description="size class: r < radius_max_um")
+    radius_max_um: float = Field(
+        math.inf, gt=0, allow_inf_nan=True, description="size class: r < radius_max_um"
+    )
     probabilities: dict[str, NonNegFloat] = Field(description="family name -> probability (sum 1)")
 
     @field_validator("probabilities")
