@@ -186,7 +186,7 @@ def _domain_geometry(geometry, settings: Settings, axis: int, sample_layers: int
     order = [axis] + [k for k in range(3) if k != axis]
     inner = geometry.permuted(order)
     if settings.setup is Setup.chambers:
-        return ShiftedWalls(inner, settings.inlet_layers)
+        return ShiftedWalls(inner, settings.inlet_layers, sample_layers)
     if settings.mirror:
         return MirroredWalls(inner, sample_layers)
     return inner

@@ -276,14 +276,30 @@ class GreyWalls:
 @dataclasses.dataclass(frozen=True)
 class ShiftedWalls:
     """A sample geometry seen from a domain whose layer ``offset`` along axis 0 is the sample's layer 0 (the chamber
-    set-up: inlet chamber, sample, outlet chamber). Wall links lie in the sample (the chambers are open fluid).
+    set-up: inlet chamber, ``length`` sample layers, outlet chamber; the chambers are open fluid).
+
+    A link from a chamber node into the sample enters the solid no earlier than the sample's face: an exact geometry
+    is cut there (the link is split at the face), a grey one puts the wall halfway (the face itself).
     """
 
     inner: object
     offset: int
+    length: int
 
     def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
-        return self.inner.fractions(nodes - np.array([self.offset, 0, 0]), pops)
+        local = nodes - np.array([self.offset, 0, 0])
+        outside = (local[:, 0] < 0) | (local[:, 0] >= self.length)
+        out = np.full(nodes.shape[0], 0.5)
+        if np.any(~outside):
+            out[~outside] = self.inner.fractions(local[~outside], pops[~outside])
+        if np.any(outside) and hasattr(self.inner, "segment_hits"):
+            start = local[outside].astype(np.float64) + 0.5
+            step = -C[pops[outside]].astype(np.float64)
+            face = np.where(start[:, 0] < 0, 0.0, float(self.length))
+            t_face = (face - start[:, 0]) / step[:, 0]  # a chamber link into the sample crosses its face: c_0 ≠ 0
+            rest = self.inner.segment_hits(start + t_face[:, None] * step, (1.0 - t_face)[:, None] * step)
+            out[outside] = np.where(rest > 0, t_face + (1.0 - t_face) * rest, -1.0)
+        return out
 
 
 def _fold(x0: np.ndarray, length: int) -> tuple[np.ndarray, np.ndarray]:
