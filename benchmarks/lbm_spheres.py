@@ -58,7 +58,9 @@ def main(argv=None) -> int:
     p.add_argument("--fractions", type=float, nargs="+", default=[0.125, 0.343])
     p.add_argument("--diameters", type=float, nargs="+", default=[8, 12, 16, 24, 32])
     p.add_argument("--walls", nargs="+", default=["halfway", "cli"])
-    p.add_argument("--out", default="results/benchmarks", help="folder of lbm_spheres.json (read by the report)")
+    p.add_argument(
+        "--out", default="results/benchmarks", help="folder of lbm_spheres.json (read by the report)"
+    )
     p.add_argument("--smoke", action="store_true", help="c = 0.125, d = 8 only")
     args = p.parse_args(argv)
     if args.smoke:

@@ -328,7 +328,20 @@ def _segment_ball(x0, x1, x2, d0, d1, d2, radius):
 
 @njit(cache=True, parallel=True)
 def _ray_grain_fractions(
-    points, dirs, centres, grain, kind, radius, plane_ptr, planes, lo, edge, cell_n, cell_start, cell_items, out
+    points,
+    dirs,
+    centres,
+    grain,
+    kind,
+    radius,
+    plane_ptr,
+    planes,
+    lo,
+    edge,
+    cell_n,
+    cell_start,
+    cell_items,
+    out,
 ):
     """First intersection t ∈ (0, 1] of the segments points + t · dirs with placed grains (balls or convex
     polyhedra); ``out[k]`` = −1 where none meets the segment.

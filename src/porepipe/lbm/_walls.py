@@ -117,6 +117,7 @@ class SphereWalls:
         )
         return out
 
+
 @dataclasses.dataclass(frozen=True)
 class GrainWalls:
     """Decorated grains (balls and convex polyhedra of ``grains.h5``) in lattice units of the sample's voxel grid.
@@ -200,7 +201,9 @@ class GrainWalls:
         out = np.full(points.shape[0], -1.0)
         if points.shape[0] == 0 or self.centres.shape[0] == 0:
             return out
-        reach_lo = self.centres - self.half - 1.0  # a segment starting in the box grown by 1 can reach the grain
+        reach_lo = (
+            self.centres - self.half - 1.0
+        )  # a segment starting in the box grown by 1 can reach the grain
         reach_hi = self.centres + self.half + 1.0
         lo = points.min(axis=0) - 1.0
         edge = max(2.0, float(np.median(2.0 * self.half.max(axis=1))) + 2.0)
@@ -296,7 +299,9 @@ class ShiftedWalls:
             start = local[outside].astype(np.float64) + 0.5
             step = -C[pops[outside]].astype(np.float64)
             face = np.where(start[:, 0] < 0, 0.0, float(self.length))
-            t_face = (face - start[:, 0]) / step[:, 0]  # a chamber link into the sample crosses its face: c_0 ≠ 0
+            t_face = (face - start[:, 0]) / step[
+                :, 0
+            ]  # a chamber link into the sample crosses its face: c_0 ≠ 0
             rest = self.inner.segment_hits(start + t_face[:, None] * step, (1.0 - t_face)[:, None] * step)
             out[outside] = np.where(rest > 0, t_face + (1.0 - t_face) * rest, -1.0)
         return out

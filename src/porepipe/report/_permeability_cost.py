@@ -83,7 +83,9 @@ def kappa_figure(rows: list[dict], path: Path, dpi: int) -> None:
     fig, axes = _figure(len(fractions))
     for ax, c in zip(axes, fractions):
         for walls in sorted({r["walls"] for r in rows if r["c"] == c}):
-            runs = sorted((r for r in rows if r["c"] == c and r["walls"] == walls), key=lambda r: r["diameter"])
+            runs = sorted(
+                (r for r in rows if r["c"] == c and r["walls"] == walls), key=lambda r: r["diameter"]
+            )
             ax.loglog(
                 [r["diameter"] for r in runs],
                 [max(abs(r["error"]), 1e-6) for r in runs],

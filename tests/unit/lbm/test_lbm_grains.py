@@ -16,7 +16,7 @@ _OCTA = np.array([[a, b, c] for a in (1, -1) for b in (1, -1) for c in (1, -1)])
 
 
 def _pop(c):
-    return int(np.flatnonzero(np.all(C == np.array(c), axis=1))[0])
+    return int(np.flatnonzero(np.all(np.array(c) == C, axis=1))[0])
 
 
 def _grains(types, centres, rotations, scales, shape, periodic=(True, True, True)):
@@ -59,7 +59,9 @@ def test_cube_and_octahedron_wall_distances_by_hand():
         2.5 - 1.3 * np.sqrt(2), abs=1e-12
     )
     og = _grains([octa], [[5, 5, 5]], [np.eye(3)], [2.0], (10, 10, 10))
-    got = og.segment_hits(np.array([[6.5, 5.5, 5.5], [6.5, 5.5, 5.5]]), np.array([[-1.0, 0, 0], [-1.0, 1, 0]]))
+    got = og.segment_hits(
+        np.array([[6.5, 5.5, 5.5], [6.5, 5.5, 5.5]]), np.array([[-1.0, 0, 0], [-1.0, 1, 0]])
+    )
     np.testing.assert_allclose(got, [0.5, -1.0], atol=1e-12)
 
 
@@ -80,7 +82,9 @@ def _plate(h_box, half_thickness, length, periodic=(False, False, True)):
     slab = polyhedron(
         "plate", _CUBE, np.array([60, 60, half_thickness, 60, 60, half_thickness], float), centre=False
     )
-    g = _grains([slab], [[length / 2, length / 2, 0.0]], [np.eye(3)], [1.0], (length, length, h_box), periodic)
+    g = _grains(
+        [slab], [[length / 2, length / 2, 0.0]], [np.eye(3)], [1.0], (length, length, h_box), periodic
+    )
     z = np.arange(h_box) + 0.5
     pore = ~((z < half_thickness) | (z > h_box - half_thickness))
     return np.broadcast_to(pore, (length, length, h_box)).copy(), g
@@ -121,7 +125,9 @@ def test_mirror_fold_equals_an_explicitly_mirrored_packing():
     shape = (9, 8, 7)
     radii = rng.uniform(1.0, 2.5, 6)
     centres = rng.uniform(0, 1, (6, 3)) * shape
-    centres[:, 0] = rng.uniform(radii, shape[0] - radii)  # inside the flow faces: no periodic copy across them
+    centres[:, 0] = rng.uniform(
+        radii, shape[0] - radii
+    )  # inside the flow faces: no periodic copy across them
     x = np.stack(np.meshgrid(*[np.arange(s) + 0.5 for s in shape], indexing="ij"), axis=-1)
     pore = np.ones(shape, bool)
     for c, r in zip(centres, radii):
@@ -136,7 +142,9 @@ def test_mirror_fold_equals_an_explicitly_mirrored_packing():
     mirrored = centres.copy()
     mirrored[:, 0] = 2 * shape[0] - centres[:, 0]
     both = SphereWalls(
-        np.vstack([centres, mirrored]), np.concatenate([radii, radii]), (2.0 * shape[0], *map(float, shape[1:]))
+        np.vstack([centres, mirrored]),
+        np.concatenate([radii, radii]),
+        (2.0 * shape[0], *map(float, shape[1:])),
     )
     want = link_distances(lat.pore, lat.periodic, node, pop, both)
     np.testing.assert_allclose(got, want, atol=1e-12)
