@@ -169,3 +169,42 @@ def test_slit_between_polyhedral_plates_converges_with_exact_walls(fraction):
     assert cli[1] < 5e-3
     assert np.log2(cli[0] / cli[1]) > 1.5
     assert abs(_slit_error(32, fraction, "halfway")) > 0.03
+
+
+def test_cli_reads_grains_file_for_exact_walls(tmp_path):
+    """``porepipe permeability --grains grains.h5 --walls cli``: the plate slit (H = 8 voxels of 2 µm, w = 1.3 voxels)
+    written as a decoration and a binary volume gives the API's κ̂ with the same geometry (rtol 1e-12, same run)
+    and records the interpolated links; a wall geometry given twice is one clear error (exit 2)."""
+    from porepipe._shared.store import ResultWriter, read_attrs
+    from porepipe.cli import main
+    from porepipe.decorate import decoration_dataset
+
+    voxel, h_box, w = 2.0, 8, 1.3
+    slab = polyhedron("plate", _CUBE, np.array([60, 60, w, 60, 60, w]) * voxel, centre=False)
+    deco = Decoration(
+        np.array([[4.0 * voxel / 2, 4.0 * voxel / 2, 0.0]]),
+        np.array([0]),
+        np.eye(3)[None],
+        np.array([1.0]),
+        [slab],
+        np.array([0]),
+    )
+    grains = tmp_path / "grains.h5"
+    with ResultWriter(grains, stage="decorate", scene="t", scene_hash="h") as wr:
+        wr.write_table(decoration_dataset(deco, np.array([1.0])))
+    pore, geometry = _plate(h_box, w, 4)
+    binary = tmp_path / "binary_a2.h5"
+    with ResultWriter(binary, stage="segment", scene="t", scene_hash="h") as wr:
+        wr.write_volume("pore", pore.astype(np.uint8), voxel_um=voxel, periodic=(True, True, True))
+    out = tmp_path / "perm.h5"
+    args = ["permeability", str(binary), "--axis", "x", "--walls", "cli", "-o", str(out)]
+    assert main([*args, "--grains", str(grains)]) == 0
+    attrs = read_attrs(out)
+    periodic_plate = GrainWalls.from_decoration(deco, pore.shape, voxel)
+    want = permeability(pore, "x", Settings(walls="cli"), voxel, progress=False, geometry=periodic_plate)
+    assert attrs["walls"] == "cli" and attrs["n_interpolated_links"] == want.n_links > 0
+    assert attrs["kappa_lu"] == pytest.approx(want.kappa_lu, rel=1e-12)
+    gap = h_box - 2 * w
+    # coarse (5.4-node gap): +4.8 % measured; halfway walls (a 6-node gap) would give +37 %
+    assert attrs["kappa_lu"] == pytest.approx(gap**3 / (12 * h_box), rel=0.06)
+    assert main([*args, "--grains", str(grains), "--grey", str(binary)]) == 2
