@@ -357,7 +357,8 @@ class MirroredWalls:
         return self.inner.segment_hits(folded, reflected)
 
     def _fold_voxels(self, index: np.ndarray) -> np.ndarray:
-        out = index.copy()
+        """Voxel indices of the domain folded into the sample (periodic across the flow)."""
+        out = np.mod(index, np.array(self.inner.solid.shape))
         i = np.mod(index[:, 0], 2 * self.length)
         out[:, 0] = np.where(i >= self.length, 2 * self.length - 1 - i, i)
         return out

@@ -208,3 +208,32 @@ def test_cli_reads_grains_file_for_exact_walls(tmp_path):
     # coarse (5.4-node gap): +4.8 % measured; halfway walls (a 6-node gap) would give +37 %
     assert attrs["kappa_lu"] == pytest.approx(gap**3 / (12 * h_box), rel=0.06)
     assert main([*args, "--grains", str(grains), "--grey", str(binary)]) == 2
+
+
+def test_grey_walls_in_the_mirror_and_chamber_set_ups_read_the_folded_voxels():
+    """Grey walls (random matrix fractions, level ½) in the mirror set-up give the q of the explicitly mirrored grey
+    volume concat(s, s[::-1]) (exact: the same two voxel values per link), and in the chamber set-up the q of the
+    sample's own links; chamber nodes' links into the sample's end faces are halfway (the face)."""
+    from porepipe.lbm import GreyWalls
+
+    rng = np.random.default_rng(5)
+    solid = rng.random((7, 6, 5))
+    pore = solid <= 0.5
+    grey = GreyWalls(solid, 0.5)
+    mirror = Settings(walls="cli", mirror=True, prune=False)
+    lat = prepare(pore, mirror, keep_wall_links=True).lattice
+    node, pop, _ = lat.wall_links
+    got = link_distances(lat.pore, lat.periodic, node, pop, _domain_geometry(grey, mirror, 0, 7))
+    doubled = GreyWalls(np.concatenate([solid, solid[::-1]]), 0.5)
+    np.testing.assert_array_equal(got, link_distances(lat.pore, lat.periodic, node, pop, doubled))
+    chambers = Settings(walls="cli", setup="chambers", prune=False)
+    lat = prepare(pore, chambers, keep_wall_links=True).lattice
+    node, pop, _ = lat.wall_links
+    got = link_distances(lat.pore, lat.periodic, node, pop, _domain_geometry(grey, chambers, 0, 7))
+    coords = np.argwhere(lat.pore)[node]
+    inside = (coords[:, 0] >= 10) & (coords[:, 0] < 17)
+    local = coords[inside] - np.array([10, 0, 0])
+    want = np.where((q := grey.fractions(local, pop[inside])) > 0, q, 0.5)
+    np.testing.assert_array_equal(got[inside], want)
+    np.testing.assert_array_equal(got[~inside], 0.5)
+    assert np.count_nonzero(~inside) > 0
