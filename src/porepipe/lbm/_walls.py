@@ -22,9 +22,15 @@ fallback. ``cli`` is the default.
 Sources of q, in lattice coordinates (voxel i spans [i, i + 1), its node sits at i + ½):
 
 * :class:`SphereWalls`: exact ray–sphere intersection with the (periodic) spheres, e.g. of ``packing.h5``;
+* :class:`GrainWalls`: exact ray–polyhedron (slab clipping against every face plane) and ray–ball intersection with
+  the decorated grains of ``grains.h5`` (type planes rotated and scaled per grain, periodic copies);
 * :class:`GreyWalls`: from the grey volume's matrix fraction s = g/216 of the two voxels of the link, the level
   s = θ located by linear interpolation, θ the segmentation's boundary (pore if g ≤ g_th: θ = (g_th + ½)/216),
   so that q ∈ (0, 1) is consistent with the binary volume. A first-order estimate of the surface position.
+
+Set-ups: the periodic one's domain is the sample; the mirror set-up's links are folded into the sample
+(:class:`MirroredWalls`: a link across a mirror plane is split there and reflected), the chamber set-up's are shifted
+past the inlet chamber (:class:`ShiftedWalls`: a chamber node's link into the sample is cut at the sample's face).
 """
 
 from __future__ import annotations
