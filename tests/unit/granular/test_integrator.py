@@ -81,4 +81,9 @@ def test_time_step_rule():
     )
     # the needle (4 cm x 2 mm) is lighter than the square, and m = pi r_in^2 rho with r_in = 1 mm is lighter still
     assert sim.dt_rule == pytest.approx(0.1 * math.pi * math.sqrt(math.pi * 1e-6 * 5000 / 1e7), rel=1e-12)
-    assert sim.dt == pytest.approx(0.5 * sim.dt_rule)
+    # damping limit: c = gamma sqrt(2 E/m) 2 L/r (a pair of such grains, L = longest edge, r = sqrt(area/pi)) is
+    # largest for the needle (L = 4 cm, m = 0.4 kg, r = 5.05 mm): dt = 0.15/c = 2.7 us < dt_rule/2 = 6.2 us
+    m, r = 5000 * 0.04 * 0.002, math.sqrt(0.04 * 0.002 / math.pi)
+    c = 0.5 * math.sqrt(2 * 1e7 / m) * 2 * 0.04 / r
+    assert sim.dt_damping == pytest.approx(0.15 / c, rel=1e-12)
+    assert sim.dt == pytest.approx(min(0.5 * sim.dt_rule, sim.dt_damping), rel=1e-15) == sim.dt_damping
