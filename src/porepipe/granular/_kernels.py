@@ -222,6 +222,10 @@ def make_stepper(
         kmax = body.shape[1]
         half_dt2 = 0.5 * dt * dt
         wall_vel = np.zeros((n_body, 2))
+        if PIST:
+            for w in range(n_mob, n_body):
+                wall_vel[w, 0] = piston[w, 7] * piston[w, 1]
+                wall_vel[w, 1] = piston[w, 7] * piston[w, 2]
         for step in range(nsteps):
             t = t0 + (step + 1) * dt  # time of the state being computed
             gx = gvec[0]
@@ -260,15 +264,6 @@ def make_stepper(
                     _place(body, nc, G[0, i, 0], G[0, i, 1], G[0, i, 2], wv, aabb, i, sc)
                 else:
                     _place(body, nc, G[0, i, 0], G[0, i, 1], G[0, i, 2], wv, aabb, i)
-            if PIST:
-                for w in range(n_mob, n_body):
-                    if piston[w, 0] == 0.0:
-                        continue
-                    G[0, w, 0] = wall_base[w, 0] + piston[w, 6] * piston[w, 1]
-                    G[0, w, 1] = wall_base[w, 1] + piston[w, 6] * piston[w, 2]
-                    wall_vel[w, 0] = piston[w, 7] * piston[w, 1]
-                    wall_vel[w, 1] = piston[w, 7] * piston[w, 2]
-                    _place(body, nc, G[0, w, 0], G[0, w, 1], G[0, w, 2], wv, aabb, w)
             if VIB:
                 for w in range(n_mob, n_body):
                     kind = int(wall_vib[w, 0])
@@ -418,6 +413,11 @@ def make_stepper(
                     piston[w, 7] = v
                     piston[w, 6] += v * dt
                     far_w = max(far_w, abs(piston[w, 6] - piston[w, 8]))
+                    G[0, w, 0] = wall_base[w, 0] + piston[w, 6] * piston[w, 1]
+                    G[0, w, 1] = wall_base[w, 1] + piston[w, 6] * piston[w, 2]
+                    wall_vel[w, 0] = v * piston[w, 1]
+                    wall_vel[w, 1] = v * piston[w, 2]
+                    _place(body, nc, G[0, w, 0], G[0, w, 1], G[0, w, 2], wv, aabb, w)
             for i in prange(n_mob):
                 if active[i] == 0:
                     continue
