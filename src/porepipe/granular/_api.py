@@ -43,7 +43,7 @@ import numpy as np
 from porepipe._shared.errors import PorepipeError
 from porepipe.granular import _kernels as K
 from porepipe.granular._contact import _contact_frame, _overlap_geometry
-from porepipe.granular._neighbours import _carry_state, _transpose, candidate_pairs
+from porepipe.granular._neighbours import SwapState, _carry_state, _transpose, candidate_pairs
 from porepipe.granular._settings import (
     ApplicationPoint,
     DropMode,
@@ -267,6 +267,7 @@ class Simulation:
         self.gear = s.integrator is Integrator.gear
         self.method = s.neighbour_search.value
         self.order = np.arange(n, dtype=np.int64)
+        self.swap = SwapState(n)
         self.time_s = 0.0
         self.step = 0
         self.rebuilds = 0
@@ -352,7 +353,7 @@ class Simulation:
         x = np.ascontiguousarray(self.G[0, :n, :2])
         rad = self.r_circ * self.size_max if self.size_max != 1.0 else self.r_circ
         start, nb_j = candidate_pairs(
-            self.method, x, rad, self.active[:n], self.skin, self.wall_boxes(), n, self.order
+            self.method, x, rad, self.active[:n], self.skin, self.wall_boxes(), n, self.order, self.swap
         )
         ft, aold, pout = np.zeros(len(nb_j)), np.zeros(len(nb_j)), np.zeros((len(nb_j), len(K.POUT)))
         _carry_state(self.nb_start, self.nb_j, self.ft, self.aold, self.pout, start, nb_j, ft, aold, pout)
@@ -548,4 +549,5 @@ class Simulation:
         self.max_overlap_seen = float(state["max_overlap_seen"][0])
         self.time_s = self.step * self.dt
         self.scratch = np.zeros((self.n_mob, 6))
+        self.swap = SwapState(self.n_mob)  # rebuilt from scratch at the next list build: the same pairs
         self._place_all()

@@ -33,6 +33,7 @@ class Integrator(str, enum.Enum):
 class NeighbourSearch(str, enum.Enum):
     sweep = "sweep"  # sort-and-sweep with insertion sort (§2.4.2)
     cells = "cells"  # uniform cell list
+    swap = "swap"  # incremental sort-and-sweep with gc2d's swap rules (Tabs. 2.1/2.3), no sweep pass
 
 
 class ShapeKind(str, enum.Enum):
