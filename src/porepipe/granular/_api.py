@@ -182,7 +182,10 @@ class Simulation:
         rho, E = s.material.density_kg_m2, s.material.young_N_m
         # Eq. 2.9 with the lightest mass and, for elongated grains, m = pi r_min² rho (inscribed radius)
         self.dt_rule = time_step_rule(min(self.mass.min(), math.pi * self.r_in.min() ** 2 * rho), E)
-        edge = [np.linalg.norm(np.roll(p["vertices_m"], -1, axis=0) - p["vertices_m"], axis=1).max() for p in props]
+        edge = [
+            np.linalg.norm(np.roll(p["vertices_m"], -1, axis=0) - p["vertices_m"], axis=1).max()
+            for p in props
+        ]
         rate = damping_rate(self.mass, 1.0 / self.inv_r[:n], edge, E, s.material.damping, n > 1)
         self.dt_damping = DAMPING_DT[s.integrator] / rate if rate > 0 else math.inf
         self.dt = s.dt_s if s.dt_s is not None else min(0.5 * self.dt_rule, self.dt_damping)

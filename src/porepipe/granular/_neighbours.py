@@ -252,7 +252,8 @@ def _endpoint_values(x, rad, active, cut, axis, ep_id, ep_val, lo, hi):
 @njit(cache=True, fastmath=FASTMATH)
 def _swap_sort(ep_id, ep_val, olo, ohi, n, pairs):
     """Insertion sort of one axis's end points; each adjacent swap applies the swap rule of Tab. 2.3 to ``pairs``
-    (key i * n + j, i < j), with the other axis's intervals (olo, ohi). Returns the number of swaps."""
+    (key i * n + j, i < j), with the other axis's intervals (olo, ohi). Returns the number of swaps.
+    """
     swaps = 0
     for a in range(1, ep_id.shape[0]):
         e = ep_id[a]
@@ -267,9 +268,8 @@ def _swap_sort(ep_id, ep_val, olo, ohi, n, pairs):
                 if (e & 1) == 0 and (f & 1) == 1:  # begin of pe moves before end of pf: overlap starts
                     if olo[pe] <= ohi[pf] and olo[pf] <= ohi[pe]:
                         pairs[key] = 1
-                elif (e & 1) == 1 and (f & 1) == 0:  # end of pe moves before begin of pf: overlap ends
-                    if key in pairs:
-                        del pairs[key]
+                elif (e & 1) == 1 and (f & 1) == 0 and key in pairs:  # end passes begin: overlap ends
+                    del pairs[key]
             ep_id[b + 1] = f
             ep_val[b + 1] = ep_val[b]
             b -= 1
@@ -298,7 +298,7 @@ def _box_pairs_init(order, xlo, xhi, ylo, yhi, n, pairs):
 def _swap_candidates(pairs, n, x, rad, active, cut):
     """The set's pairs whose padded circles overlap, as CSR by i (rows sorted by j)."""
     counts = np.zeros(n + 1, np.int64)
-    for key in pairs.keys():
+    for key in pairs:
         i = key // n
         j = key - i * n
         if active[i] == 0 or active[j] == 0:
@@ -312,7 +312,7 @@ def _swap_candidates(pairs, n, x, rad, active, cut):
         counts[k + 1] += counts[k]
     fill = counts[:-1].copy()
     pj = np.empty(counts[n], np.int64)
-    for key in pairs.keys():
+    for key in pairs:
         i = key // n
         j = key - i * n
         if active[i] == 0 or active[j] == 0:
@@ -371,7 +371,15 @@ def _csr_from_pairs(n, pi, pj):
 
 
 def candidate_pairs(
-    method: str, x, rad, active, skin_m: float, wall_box, n_mob: int, order=None, swap: SwapState | None = None
+    method: str,
+    x,
+    rad,
+    active,
+    skin_m: float,
+    wall_box,
+    n_mob: int,
+    order=None,
+    swap: SwapState | None = None,
 ):
     """Candidate pair list (CSR by i, sorted by j) of the mobile particles and walls.
 
