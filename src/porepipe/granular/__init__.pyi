@@ -31,6 +31,9 @@ from porepipe.granular._shapes import ellipse_polygon as ellipse_polygon
 from porepipe.granular._shapes import polygon_properties as polygon_properties
 from porepipe.granular._shapes import rectangle as rectangle
 from porepipe.granular._shapes import regular_polygon as regular_polygon
+from porepipe.granular._silo import THESIS_SILO as THESIS_SILO
+from porepipe.granular._silo import analyse_heap as analyse_heap
+from porepipe.granular._silo import analyse_silo as analyse_silo
 from porepipe.granular._theory import closure_ife as closure_ife
 from porepipe.granular._theory import closure_linear as closure_linear
 from porepipe.granular._theory import fit_janssen as fit_janssen
@@ -47,11 +50,14 @@ from porepipe.granular._theory import stepped_silo as stepped_silo
 from porepipe.granular._theory import wedge_stress as wedge_stress
 
 __all__ = [
+    "THESIS_SILO",
     "AngleMode",
     "Dist",
     "Frame",
     "Settings",
     "Simulation",
+    "analyse_heap",
+    "analyse_silo",
     "check_convex",
     "closure_ife",
     "closure_linear",

@@ -238,6 +238,7 @@ def pressure_profile(
     centres=None,
     half_width: float | None = None,
     contacts_per_window: float = 15.0,
+    extent: tuple[float, float] | None = None,
 ) -> dict[str, np.ndarray | float]:
     """Mean pressure and the sliding-window profile p(u) = (1/2b) sum F_n Theta(|u_i - u| <= b) (Eqs. 2.36-2.40).
 
@@ -256,6 +257,9 @@ def pressure_profile(
         (the thesis's rule of thumb is 10-20).
     contacts_per_window : float
         Used when ``half_width`` is not given.
+    extent : (float, float), optional
+        Where the wall is in contact with grains (e.g. floor to fill height): a window reaching past it is
+        divided by its length inside the extent only (else profiles droop within b of the ends).
 
     Returns
     -------
@@ -278,7 +282,11 @@ def pressure_profile(
         centres = np.linspace(u.min(), u.max(), 200)
     centres = np.asarray(centres, dtype=np.float64)
     inside = np.abs(u[None, :] - centres[:, None]) <= b
-    p = (inside * fn[None, :]).sum(axis=1) / (2 * b)
+    width = np.full(len(centres), 2 * b)
+    if extent is not None:
+        width = np.minimum(centres + b, extent[1]) - np.maximum(centres - b, extent[0])
+        width = np.where(width > 0, width, np.nan)
+    p = (inside * fn[None, :]).sum(axis=1) / width
     step = np.median(np.diff(centres)) if len(centres) > 1 else b
     m = max(int(round(b / step)), 1) if step > 0 else 1
     kernel = np.ones(2 * m + 1) / (2 * m + 1)
