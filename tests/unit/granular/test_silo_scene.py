@@ -23,17 +23,17 @@ def silo(tmp_path_factory):
     out = run(
         scene.granular, tmp_path_factory.mktemp("silo") / "granular.h5", seed=scene.seed, progress=False
     )
-    return analyse_silo(read_granular(out)), scene.granular.material.friction
+    return analyse_silo(read_granular(out)), scene.granular.material.friction, out
 
 
 def test_ci_silo_force_balance(silo):
-    a, _ = silo
+    a = silo[0]
     # residual kinetic energy at the end is ~1e-6 of the potential energy; 2 % covers the remaining vibration
     assert a["floor_share"] + a["wall_share"] == pytest.approx(1.0, abs=0.02)
 
 
 def test_ci_silo_wall_pressure_saturates(silo):
-    a, _ = silo
+    a = silo[0]
     z, p = a["depth_m"], a["wall_pressure"]
     h = a["fill_height_m"]
     top = z < 0.25 * h
@@ -46,7 +46,7 @@ def test_ci_silo_wall_pressure_saturates(silo):
 
 
 def test_ci_silo_k_and_mu_j(silo):
-    a, mu = silo
+    a, mu, _ = silo
     b = lateral_pressure_bounds(mu)
     assert b["rankine_active"] < a["k"] < b["rankine_passive"]
     # the fitted wall friction is the mobilised one (both ~0.1 here, well below the grains' mu = 0.4); 20 %
@@ -55,3 +55,17 @@ def test_ci_silo_k_and_mu_j(silo):
     assert (
         0.6 < a["rho_rel"] < 0.91
     )  # between random loose packing and the hexagonal disk packing pi/sqrt(12)
+
+
+def test_ci_silo_report_page(silo, tmp_path):
+    """The granular report section: page, figures and their data; the network CSV has one row per contact."""
+    from porepipe.granular import frame_contacts
+    from porepipe.report._granular import granular_report
+
+    a, mu, out = silo
+    page = granular_report(out, tmp_path / "index.html", scene_name="granular-silo-ci", mu=mu).read_text()
+    assert "0.64 ± 0.19" in page and f"{a['k']:.2f} ± {a['k_std']:.2f}" in page
+    for name in ("granular_wall_pressure", "granular_directions", "granular_network"):
+        assert (tmp_path / f"{name}.png").stat().st_size > 1000
+    rows = (tmp_path / "granular_network.csv").read_text().strip().splitlines()
+    assert len(rows) - 1 == len(frame_contacts(read_granular(out), -1)["i"])
