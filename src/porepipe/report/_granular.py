@@ -111,7 +111,12 @@ def network_figure(tables: dict, path: Path, dpi: int = 130, frame: int = -1) ->
     polys = [p for p, a in zip(parts["polygons"], act, strict=True) if a]
     allv = np.concatenate(polys)
     span = np.ptp(allv, axis=0)
-    fig = Figure(figsize=(min(8.0, 3 + 6 * span[0] / max(span[1], 1e-9)), 6.0))
+    aspect = span[1] / max(span[0], 1e-300)
+    fig = Figure(
+        figsize=(8.0, min(max(1.2 + 8.0 * aspect, 2.5), 10.0))
+        if aspect < 1
+        else (min(max(1.5 + 7.0 / aspect, 2.5), 8.0), 7.0)
+    )
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(111)
     ages = np.nonzero(act)[0]
