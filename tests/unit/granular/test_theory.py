@@ -108,6 +108,7 @@ def test_parabolic_xi_and_r_p():
             lambda u: (dr(u) ** 2 + k) / (r(u) * (1 + dr(u) ** 2) ** 1.5), 0, zz, epsabs=0, epsrel=1e-13
         )[0]
         assert T.parabolic_xi(zz, a, b, k) - T.parabolic_xi(0.0, a, b, k) == pytest.approx(direct, rel=RTOL)
+        assert T.silo_xi(zz, r, dr, k)[0] == pytest.approx(direct, rel=RTOL)
     # r_P is k/xi'(0) (Eq. 3.22 without the extra k)
     xi_prime0 = (dr(0) ** 2 + k) / (r(0) * (1 + dr(0) ** 2) ** 1.5)
     assert T.parabolic_r_p(a, b, k) == pytest.approx(k / xi_prime0, rel=1e-12)
