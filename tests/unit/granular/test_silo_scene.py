@@ -69,3 +69,10 @@ def test_ci_silo_report_page(silo, tmp_path):
         assert (tmp_path / f"{name}.png").stat().st_size > 1000
     rows = (tmp_path / "granular_network.csv").read_text().strip().splitlines()
     assert len(rows) - 1 == len(frame_contacts(read_granular(out), -1)["i"])
+
+
+def test_analyse_silo_names_a_missing_wall(silo):
+    from porepipe._shared.errors import PorepipeError
+
+    with pytest.raises(PorepipeError, match="no wall 'chute'"):
+        analyse_silo(read_granular(silo[2]), walls=("chute", "box right"))
