@@ -22,7 +22,7 @@ Vec2 = tuple[Finite, Finite]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
 
 class Integrator(str, enum.Enum):
