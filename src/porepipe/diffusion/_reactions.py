@@ -109,3 +109,14 @@ def profile_phi(z_over_l, c_over_c0) -> float:
             lo = a
         a, b = hi - g * (hi - lo), lo + g * (hi - lo)
     return 0.5 * (lo + hi)
+
+
+def eta_slab_mouth(phi, length: float, d: float, vmean: float):
+    """η of a one-face-fed slab whose mouth meets a Knudsen reservoir: tanh Φ/Φ / (1 + (2D/v̄)(Φ/L) tanh Φ).
+
+    The reservoir at c₀ feeds the pore through a Marshak (Robin) condition c(0) − (2D/v̄)·c'(0) = c₀ instead of
+    c(0) = c₀: the net flux through the mouth is the difference of the one-way fluxes v̄c/4 ± (D/2)c'. The
+    correction is of order (D/v̄)·Φ/L, i.e. channel width over decay length, and vanishes for long pores.
+    """
+    phi = np.asarray(phi, dtype=float)
+    return eta_of_phi(phi) / (1.0 + 2.0 * d / vmean * phi / length * np.tanh(phi))
