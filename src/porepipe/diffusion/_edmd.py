@@ -34,7 +34,12 @@ from porepipe.diffusion._species import R_GAS, SPECIES
 STAGE = "diffusion"
 #: 1 m/s in nm/ps
 _M_S = 1e-3
-_LAW = {"specular": K.SPECULAR, "lambert": K.LAMBERT, "cosine_dtheta": K.COSINE_DTHETA, "isotropic": K.ISOTROPIC}
+_LAW = {
+    "specular": K.SPECULAR,
+    "lambert": K.LAMBERT,
+    "cosine_dtheta": K.COSINE_DTHETA,
+    "isotropic": K.ISOTROPIC,
+}
 
 
 def speed_scale(species: str, temperature_K: float) -> float:
@@ -116,7 +121,9 @@ def _species_table(counts: dict) -> tuple[tuple, np.ndarray]:
     return names, np.repeat(np.arange(len(names), dtype=np.int64), [int(counts[s]) for s in names])
 
 
-def _subdivision(voxel_nm: float, n_voxels: int, n_particles: int, diameter: float, per_cell: float = 2.0) -> int:
+def _subdivision(
+    voxel_nm: float, n_voxels: int, n_particles: int, diameter: float, per_cell: float = 0.7
+) -> int:
     """Sub-cells per voxel edge: cells hold about ``per_cell`` particles, never narrower than the largest diameter."""
     most = max(1, int(math.floor(voxel_nm / diameter * (1 - 1e-12))))
     if n_particles == 0:
@@ -151,7 +158,9 @@ def make_gas(
     """
     pore = np.asarray(pore)
     if pore.ndim != 3 or not pore.any():
-        raise PorepipeError(f"the pore volume must be 3-D with at least one pore voxel, got shape {pore.shape}")
+        raise PorepipeError(
+            f"the pore volume must be 3-D with at least one pore voxel, got shape {pore.shape}"
+        )
     if not (voxel_nm > 0 and math.isfinite(voxel_nm)):
         raise PorepipeError(f"voxel_nm must be positive, got {voxel_nm!r}")
     if not temperature_K > 0:
@@ -200,7 +209,9 @@ def make_gas(
         pos = np.array(positions, dtype=float).reshape(-1, 3)
         vel = np.array(velocities, dtype=float).reshape(-1, 3)
         if pos.shape != vel.shape or pos.shape[0] != sp.size:
-            raise PorepipeError(f"positions {pos.shape}, velocities {vel.shape} and {sp.size} species disagree")
+            raise PorepipeError(
+                f"positions {pos.shape}, velocities {vel.shape} and {sp.size} species disagree"
+            )
         pos = _check_positions(pos, cells, h)
     gas = Gas(pos, vel, sp, names, float(temperature_K), cells, h, per, state=int(state))
     _check_overlap(gas)
@@ -221,13 +232,16 @@ def _velocities(names, sp, temperature_K, speed, seed) -> np.ndarray:
 
 def _check_positions(pos: np.ndarray, cells: np.ndarray, h: float) -> np.ndarray:
     """Every particle in a pore cell; one exactly on a face between its (solid) cell and a pore cell below it is
-    moved into that pore cell by keeping the coordinate (the face belongs to both)."""
+    moved into that pore cell by keeping the coordinate (the face belongs to both).
+    """
     if not np.all(np.isfinite(pos)):
         raise PorepipeError("particle positions must be finite")
     ext = np.array(cells.shape) * h
     if np.any(pos < 0) or np.any(pos > ext):
         bad = int(np.argmax(np.any((pos < 0) | (pos > ext), axis=1)))
-        raise PorepipeError(f"particle {bad} at {pos[bad].tolist()} nm lies outside the volume {ext.tolist()} nm")
+        raise PorepipeError(
+            f"particle {bad} at {pos[bad].tolist()} nm lies outside the volume {ext.tolist()} nm"
+        )
     for i, p in enumerate(pos):
         idx = np.minimum((p / h).astype(np.int64), np.array(cells.shape) - 1)
         if cells[tuple(idx)]:
@@ -238,7 +252,9 @@ def _check_positions(pos: np.ndarray, cells: np.ndarray, h: float) -> np.ndarray
                 alt = idx.copy()
                 alt[d] -= 1
                 if cells[tuple(alt)]:
-                    pos[i, d] = np.nextafter(idx[d] * h, -np.inf)  # inside the pore cell, on the face to round-off
+                    pos[i, d] = np.nextafter(
+                        idx[d] * h, -np.inf
+                    )  # inside the pore cell, on the face to round-off
                     fixed = True
                     break
         if not fixed:
@@ -253,7 +269,9 @@ def _check_overlap(gas: Gas) -> None:
     nxt, prv, cell = (np.empty(n, np.int64) for _ in range(3))
     cidx = np.empty((n, 3), np.int64)
     E.build_cells(gas.pos, gas.cell_nm, shape, head, nxt, prv, cell, cidx)
-    i, j = E.first_overlap(gas.pos, gas.species, gas.radius, gas.cell_nm, shape, gas.periodic, head, nxt, cidx)
+    i, j = E.first_overlap(
+        gas.pos, gas.species, gas.radius, gas.cell_nm, shape, gas.periodic, head, nxt, cidx
+    )
     if i >= 0:
         raise PorepipeError(
             f"particles {i} and {j} overlap at the start (distance < r_i + r_j); place them further apart"
@@ -341,7 +359,9 @@ def chapman_enskog_d(n: float, d: float, species: str, temperature_K: float, chi
     return 1.019 * d1 / (enskog_chi(n, d) if chi else 1.0)
 
 
-def measure(gas: Gas, duration_ps: float, samples: int = 20, physics: Physics | None = None, groups: int = 8) -> dict:
+def measure(
+    gas: Gas, duration_ps: float, samples: int = 20, physics: Physics | None = None, groups: int = 8
+) -> dict:
     """Run ``gas`` for ``duration_ps`` in ``samples`` steps; collision rate, λ_eff, msd D (periodic axes) with
     batch errors over ``groups`` particle groups, and the event cost.
     """
@@ -484,3 +504,110 @@ def reactive_pore(
     if z_bins:
         out["z_react"] = zhist.sum(axis=0)
     return out
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# the stage's modes (setup edmd / reaction)
+def edmd_result(pore, settings, voxel_um, periodic, seed: int = 0):
+    """Setup ``edmd``: the gas of ``settings.gas`` in the pore space, run and measured (a DiffusionResult).
+
+    Values: Z (collision rate, 1/ps) next to Enskog's, λ_eff and λ_M (nm), Kn = λ_M/(4V/S), D_self (nm²/ps and
+    m²/s, periodic axes) next to Chapman-Enskog (first species), the final speeds' KS test against MB at the
+    temperature of the (conserved) energy, energy drift, events and events/s. Arrays: msd curve, speed histogram.
+    """
+    from scipy import stats
+
+    from porepipe.diffusion._api import DiffusionResult
+    from porepipe.diffusion._geometry import wall_area
+
+    g = settings.gas
+    voxel = np.broadcast_to(np.asarray(voxel_um, dtype=float), (3,))
+    if not np.allclose(voxel, voxel[0]):
+        raise PorepipeError(f"setup edmd needs cubic voxels, got {voxel.tolist()} µm")
+    voxel_nm = g.voxel_nm or float(voxel[0]) * 1e3
+    gas = make_gas(
+        pore,
+        voxel_nm,
+        dict(g.particles),
+        periodic=periodic,
+        temperature_K=settings.temperature_K,
+        speed=g.initial_speed,
+        seed=seed,
+    )
+    physics = Physics(
+        pairs=g.collisions,
+        wall_law=settings.wall_law.value,
+        accommodation=settings.accommodation,
+        thermal_wall=settings.wall_speed.value == "thermal",
+    )
+    e0 = gas.kinetic_energy()
+    m = measure(gas, g.duration_ps, samples=g.samples, physics=physics)
+    n_part = gas.pos.shape[0]
+    first = gas.names[0]
+    d = 2.0 * SPECIES[first][0]
+    n = n_part / gas.pore_volume
+    keep = (np.asarray(pore) > 0).astype(np.uint8)
+    chord = 4.0 * gas.pore_volume / max(wall_area(keep, np.full(3, voxel_nm), gas.periodic), 1e-300)
+    mine = gas.species == 0
+    speeds = np.linalg.norm(gas.vel[mine], axis=1)
+    scale = math.sqrt(np.mean(speeds**2) / 3.0)
+    ks = stats.kstest(speeds / scale, stats.maxwell.cdf)
+    v = {
+        "particles": n_part,
+        "number_density_nm3": n,
+        "collision_rate": m["collision_rate"],
+        "collision_rate_enskog": collision_rate(n, d, float(np.mean(gas.vmean[gas.species]))),
+        "lambda_eff_nm": m["lambda_eff_nm"],
+        "lambda_M_nm": maxwell_free_path(n, d),
+        "mean_chord_nm": chord,
+        "Kn": maxwell_free_path(n, d) / chord,
+        "pair_collisions": m["pair_collisions"],
+        "wall_hits": m["wall_hits"],
+        "events": m["events"],
+        "stale_events": m["stale_events"],
+        "events_per_s": m["events_per_s"],
+        "energy_rel_drift": gas.kinetic_energy() / e0 - 1.0,
+        "ks_statistic": float(ks.statistic),
+        "ks_pvalue": float(ks.pvalue),
+        "duration_ps": g.duration_ps,
+        "voxel_nm": voxel_nm,
+        "cell_nm": gas.cell_nm,
+    }
+    if "D_self_nm2_ps" in m:
+        v["D_self_nm2_ps"] = m["D_self_nm2_ps"]
+        v["D_self_err_nm2_ps"] = m["D_self_err_nm2_ps"]
+        v["D_self_m2_s"] = m["D_self_nm2_ps"] * 1e-6
+        v["D_self_err_m2_s"] = m["D_self_err_nm2_ps"] * 1e-6
+        v["D_chapman_enskog_m2_s"] = chapman_enskog_d(n, d, first, settings.temperature_K) * 1e-6
+    hist, edges = np.histogram(speeds, bins=g.speed_bins, range=(0.0, 4.0 * scale))
+    arrays = {
+        "msd_nm2": m["msd"],
+        "msd_time_ps": m["msd_time_ps"],
+        "speed_histogram": hist.astype(float),
+        "speed_bin_edges_nm_ps": edges,
+    }
+    return DiffusionResult("edmd", "".join("xyz"[k] for k in range(3) if gas.periodic[k]) or "-", v, arrays)
+
+
+def reaction_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0):
+    """Setup ``reaction``: :func:`reactive_pore` with ``settings.reactions`` along ``axis`` (a DiffusionResult)."""
+    from porepipe.diffusion._api import DiffusionResult
+
+    rs = settings.reactions
+    out = reactive_pore(
+        pore,
+        axis,
+        rs.w,
+        w_reverse=rs.w_reverse,
+        w_follow=rs.w_follow,
+        wall_law=settings.wall_law.value,
+        voxel_um=voxel_um,
+        periodic=periodic,
+        particles=rs.particles,
+        batches=settings.batches,
+        max_hits=settings.max_hits_per_particle,
+        z_bins=rs.z_bins,
+        seed=seed,
+    )
+    arrays = {"z_react": out.pop("z_react")} if "z_react" in out else {}
+    return DiffusionResult("reaction", "xyz"[axis], out, arrays)

@@ -7,9 +7,9 @@ moved only when the particle takes part in an event, so one event costs O(log N)
 
 Events (one binary heap, lazy invalidation):
 
-- pair collision (i, j): predicted exactly, one root test (spec §4.5: the thesis's two tests are one condition);
-  kept only if it happens before both partners' next cell crossing, since the later of the two crossings predicts
-  the pair again (this keeps the calendar small);
+- pair collision (i, j): predicted exactly, one root test (spec §4.5: the thesis's two tests are one condition),
+  against the 27 neighbour cells after a velocity change and against the 9 newly adjacent cells after a crossing
+  (a pair that collides is adjacent then, and it became so at a velocity change or a crossing of one partner);
 - cell crossing (i, -1): the particle reaches a face of its cell; the next cell is pore (move the particle between
   the cell lists), solid or the closed outside (a wall hit: exact, no wall can be missed), or wraps periodically.
 
@@ -265,8 +265,12 @@ def _crossing(pos, vel, cidx, h, i, t):
 
 
 @njit(cache=True)
-def _predict_pairs(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap):
-    """Push the collisions of i with every particle of its 27 neighbour cells that happen before both crossings."""
+def _predict_pairs(
+    pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t, heap, layer, step
+):
+    """Push the collisions of i with the particles of its 27 neighbour cells (``layer`` >= 0: only the 9 cells at
+    offset ``step`` along axis ``layer``, the ones a crossing has just made neighbours).
+    """
     ht, hi, hj, hci, hcj, n = heap
     e0, e1, e2 = shape[0] * h, shape[1] * h, shape[2] * h
     xi = pos[i, 0] + (t - tp[i]) * vel[i, 0]
@@ -274,15 +278,15 @@ def _predict_pairs(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, he
     zi = pos[i, 2] + (t - tp[i]) * vel[i, 2]
     for a in range(-1, 2):
         k0 = cidx[i, 0] + a
-        if not _wrap_ok(k0, shape[0], periodic[0]):
+        if (layer == 0 and a != step) or not _wrap_ok(k0, shape[0], periodic[0]):
             continue
         for b in range(-1, 2):
             k1 = cidx[i, 1] + b
-            if not _wrap_ok(k1, shape[1], periodic[1]):
+            if (layer == 1 and b != step) or not _wrap_ok(k1, shape[1], periodic[1]):
                 continue
             for c in range(-1, 2):
                 k2 = cidx[i, 2] + c
-                if not _wrap_ok(k2, shape[2], periodic[2]):
+                if (layer == 2 and c != step) or not _wrap_ok(k2, shape[2], periodic[2]):
                     continue
                 j = head[_flat(k0 % shape[0], k1 % shape[1], k2 % shape[2], shape[1], shape[2])]
                 while j >= 0:
@@ -300,24 +304,30 @@ def _predict_pairs(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, he
                             vel[i, 2] - vel[j, 2],
                             radius[sp[i]] + radius[sp[j]],
                         )
-                        if t + dt <= min(tcross[i], tcross[j]):
-                            ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, 1, cnt)
+                        if dt < np.inf:
+                            if n >= ht.shape[0]:
+                                ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, 1, cnt)
                             n = _heap_push(ht, hi, hj, hci, hcj, n, t + dt, i, j, cnt[i], cnt[j])
                     j = nxt[j]
     return ht, hi, hj, hci, hcj, n
 
 
 @njit(cache=True)
-def _predict(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap, pairs):
-    """New crossing of i (always) and its pair collisions (when gas-gas collisions are on)."""
+def _predict(
+    pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap, pairs, layer, step
+):
+    """New crossing of i (always) and its pair collisions (when gas-gas collisions are on; see _predict_pairs)."""
     ht, hi, hj, hci, hcj, n = heap
     tc, _, _ = _crossing(pos, vel, cidx, h, i, t)
     tcross[i] = tc
-    ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, 1, cnt)
+    if n >= ht.shape[0]:
+        ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, 1, cnt)
     n = _heap_push(ht, hi, hj, hci, hcj, n, tc, i, -1, cnt[i], 0)
     heap = (ht, hi, hj, hci, hcj, n)
     if pairs:
-        heap = _predict_pairs(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap)
+        heap = _predict_pairs(
+            pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t, heap, layer, step
+        )
     return heap
 
 
@@ -411,11 +421,31 @@ def advance(
     )
     # crossings first (the pair filter needs both partners' crossing times), then the pairs
     for i in range(n_part):
-        heap = _predict(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t_start, heap, False)
+        heap = _predict(
+            pos,
+            vel,
+            tp,
+            sp,
+            radius,
+            cnt,
+            tcross,
+            h,
+            shape,
+            periodic,
+            head,
+            nxt,
+            cidx,
+            i,
+            t_start,
+            heap,
+            False,
+            -1,
+            0,
+        )
     if pairs:
         for i in range(n_part):
             heap = _predict_pairs(
-                pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t_start, heap
+                pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t_start, heap, -1, 0
             )
     u = np.empty(3)
     react = False
@@ -445,10 +475,54 @@ def advance(
             tally[E_PAIRS] += 1
             pair_counts[sp[i], sp[j]] += 1
             pair_counts[sp[j], sp[i]] += 1
-            heap = _predict(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap, False)
-            heap = _predict(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, j, t, heap, False)
-            heap = _predict_pairs(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap)
-            heap = _predict_pairs(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, j, t, heap)
+            heap = _predict(
+                pos,
+                vel,
+                tp,
+                sp,
+                radius,
+                cnt,
+                tcross,
+                h,
+                shape,
+                periodic,
+                head,
+                nxt,
+                cidx,
+                i,
+                t,
+                heap,
+                False,
+                -1,
+                0,
+            )
+            heap = _predict(
+                pos,
+                vel,
+                tp,
+                sp,
+                radius,
+                cnt,
+                tcross,
+                h,
+                shape,
+                periodic,
+                head,
+                nxt,
+                cidx,
+                j,
+                t,
+                heap,
+                False,
+                -1,
+                0,
+            )
+            heap = _predict_pairs(
+                pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t, heap, -1, 0
+            )
+            heap = _predict_pairs(
+                pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, j, t, heap, -1, 0
+            )
             continue
         # crossing of a face of i's cell
         _sync(pos, vel, tp, i, t)
@@ -489,7 +563,27 @@ def advance(
             cnt[i] += 1
             tally[E_WALLS] += 1
             wall_counts[sp[i]] += 1
-            heap = _predict(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap, pairs)
+            heap = _predict(
+                pos,
+                vel,
+                tp,
+                sp,
+                radius,
+                cnt,
+                tcross,
+                h,
+                shape,
+                periodic,
+                head,
+                nxt,
+                cidx,
+                i,
+                t,
+                heap,
+                pairs,
+                -1,
+                0,
+            )
             continue
         if wrapped:
             pos[i, d] -= s * ext[d]
@@ -498,7 +592,27 @@ def advance(
         cidx[i, d] = k
         _link(head, nxt, prv, cell, i, _flat(cidx[i, 0], cidx[i, 1], cidx[i, 2], n1, n2))
         tally[E_CROSSINGS] += 1
-        heap = _predict(pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap, pairs)
+        heap = _predict(
+            pos,
+            vel,
+            tp,
+            sp,
+            radius,
+            cnt,
+            tcross,
+            h,
+            shape,
+            periodic,
+            head,
+            nxt,
+            cidx,
+            i,
+            t,
+            heap,
+            pairs,
+            d,
+            s,
+        )
     for i in range(n_part):
         _sync(pos, vel, tp, i, t_stop)
     return state
@@ -555,12 +669,16 @@ def insert_spheres(cells, h, shape, periodic, sp, radius, pos, state, tries):
 # ---------------------------------------------------------------------------------------------------------------------
 # wall reactions in the Knudsen regime (thesis §4.1): one-face feed, specular back wall (RUECKWAND)
 #: columns of the per-batch reaction tally
-R_PARTICLES, R_OUT_A, R_OUT_P, R_OUT_S, R_TRUNC, R_HITS, R_TIME, R_REACT, R_FOLLOW, R_REVERSE, R_BACKWALL = range(11)
+R_PARTICLES, R_OUT_A, R_OUT_P, R_OUT_S, R_TRUNC, R_HITS, R_TIME, R_REACT, R_FOLLOW, R_REVERSE, R_BACKWALL = (
+    range(11)
+)
 N_RTALLY = 11
 _RCACHE: dict = {}
 
 
-def make_reactive_kernel(wall: tuple, inlet_law: int, inlet_speed: int, reverse: bool, follow: bool, zmap: bool):
+def make_reactive_kernel(
+    wall: tuple, inlet_law: int, inlet_speed: int, reverse: bool, follow: bool, zmap: bool
+):
     """Kernel of the one-face-fed pore with reactive walls; each effect is compiled in only when named.
 
     A particle enters as reactant A at the low face of the axis (a uniform point of an open inlet pixel, direction
@@ -577,7 +695,9 @@ def make_reactive_kernel(wall: tuple, inlet_law: int, inlet_speed: int, reverse:
     LAW, MIXED, WSPEED, INLET, INSPEED, REVERSE, FOLLOW, ZMAP = key
 
     @njit(cache=True, fastmath=K_FASTMATH, parallel=True)
-    def _reactive(geom, h, periodic, axis, inlet_cells, seed, first, per_batch, max_hits, vmean, alpha, w, tally, zhist):
+    def _reactive(
+        geom, h, periodic, axis, inlet_cells, seed, first, per_batch, max_hits, vmean, alpha, w, tally, zhist
+    ):
         n_batches = tally.shape[0]
         length_ax = geom.shape[axis] * h[axis]
         bin_w = length_ax / zhist.shape[1]

@@ -63,7 +63,9 @@ def test_pair_time_exact_and_grazing():
         else:
             assert t == math.inf
     assert E.pair_time(2.0, 0.0, 0.0, 1.0, 0.0, 0.0, sigma) == math.inf  # receding
-    assert E.pair_time(-0.4999, 0.0, 0.0, 1.0, 0.0, 0.0, sigma) == 0.0  # overlapping by round-off, approaching
+    assert (
+        E.pair_time(-0.4999, 0.0, 0.0, 1.0, 0.0, 0.0, sigma) == 0.0
+    )  # overlapping by round-off, approaching
 
 
 def test_simultaneous_collisions_and_grazing_pair_in_a_run():
@@ -85,7 +87,9 @@ def test_overlapping_start_is_refused_and_solid_start_too():
     pore = np.zeros((2, 1, 1), np.uint8)
     pore[0] = 1
     with pytest.raises(PorepipeError, match="solid"):
-        D.make_gas(pore, 2.0, {"N2": 0}, positions=[[3.0, 1.0, 1.0]], velocities=[[1.0, 0, 0]], species=["N2"])
+        D.make_gas(
+            pore, 2.0, {"N2": 0}, positions=[[3.0, 1.0, 1.0]], velocities=[[1.0, 0, 0]], species=["N2"]
+        )
 
 
 def test_particle_exactly_on_a_pore_solid_face_is_kept_in_the_pore():
@@ -93,7 +97,9 @@ def test_particle_exactly_on_a_pore_solid_face_is_kept_in_the_pore():
     pore, flies back and hits the walls at the exact rate of a 1-D specular bouncer (4 nm round trip at 1 nm/ps)."""
     pore = np.zeros((2, 1, 1), np.uint8)
     pore[0] = 1
-    gas = D.make_gas(pore, 2.0, {"N2": 0}, positions=[[2.0, 1.0, 1.0]], velocities=[[-1.0, 0, 0]], species=["N2"])
+    gas = D.make_gas(
+        pore, 2.0, {"N2": 0}, positions=[[2.0, 1.0, 1.0]], velocities=[[-1.0, 0, 0]], species=["N2"]
+    )
     D.advance(gas, 9.5)
     assert gas.tally[E.E_WALLS] == 4  # at t = 2, 4, 6, 8 (it leaves the face it starts on: no hit at t = 0)
     assert 0.0 <= gas.pos[0, 0] <= 2.0
