@@ -1,5 +1,6 @@
 """Knudsen diffusion in the voxel pore space: exact flights, wall laws, transmission, D_eff (Mahler 2001, ch. 2-3);
-the event-driven hard-sphere gas and wall reactions (ch. 3-4)."""
+the event-driven hard-sphere gas and wall reactions (ch. 3-4).
+"""
 
 from porepipe._shared.lazy import lazy_exports
 
