@@ -38,6 +38,17 @@ def test_cost_rows_recover_exact_power_laws():
     assert np.isnan(got["cli"]["d_for_target_measured"])
 
 
+def test_no_extrapolation_without_convergence():
+    """A staircase-like error that does not fall with d (5, 3, 6, 4 % at d = 8 … 24: fitted order < 0.5) gives no
+    fitted resolution for 1 % (NaN), rather than an absurd extrapolation."""
+    rows = [
+        {"c": 0.125, "diameter": d, "walls": "halfway", "error": e, "cpu_s": 1.0}
+        for d, e in zip((8, 12, 16, 24), (0.05, 0.03, 0.06, 0.04))
+    ]
+    (row,) = cost_rows(rows)
+    assert row["order"] < 0.5 and np.isnan(row["d_for_target_fit"])
+
+
 def test_measured_resolution_needs_every_finer_run_within_the_target():
     """Errors +3, −0.5, +2, +0.4, −0.3 % at d = 8 … 32: the 0.5 % run at d = 12 is a chance crossing; from d = 24 on
     every run is within 1 %, so the measured answer is d = 24 and its time."""
