@@ -245,13 +245,14 @@ def _ray_sphere_fractions(points, dirs, centres, radii, box, periodic, cell_n, c
 
     ``cell_start``/``cell_items`` list the spheres by the cell (edge box/cell_n >= r_max + |d|) of their centre;
     the 3 × 3 × 3 cells around a point and, on periodic axes, the images ±box of every candidate are tested.
-    ``out[k]`` = −1 where no sphere meets the segment.
+    ``out[k]`` = −1 where no sphere meets the segment, 0 where the point itself lies in a sphere.
     """
     for k in prange(points.shape[0]):
         x0, x1, x2 = points[k, 0], points[k, 1], points[k, 2]
         d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
         aa = d0 * d0 + d1 * d1 + d2 * d2
         best = 2.0
+        inside = False
         c0 = min(int(x0 / box[0] * cell_n[0]), cell_n[0] - 1)
         c1 = min(int(x1 / box[1] * cell_n[1]), cell_n[1] - 1)
         c2 = min(int(x2 / box[2] * cell_n[2]), cell_n[2] - 1)
@@ -283,17 +284,17 @@ def _ray_sphere_fractions(points, dirs, centres, radii, box, periodic, cell_n, c
                                     if disc < 0.0:
                                         continue
                                     t = (-bb - np.sqrt(disc)) / aa
-                                    if t <= 0.0 and cc <= 0.0:
-                                        t = 1e-12  # the point lies inside the sphere: the wall is at the node
+                                    if cc <= 0.0:
+                                        inside = True  # the point itself lies in the sphere
                                     if 0.0 < t < best:
                                         best = t
-        out[k] = best if best <= 1.0 else -1.0
+        out[k] = 0.0 if inside else (best if best <= 1.0 else -1.0)
 
 
 @njit(cache=True, inline="always")
 def _segment_polyhedron(x0, x1, x2, d0, d1, d2, planes, p0, p1):
     """First t of the segment x + t d inside the convex body {n·y <= o} of planes p0..p1 (rows n0 n1 n2 o, about
-    the body's centre at the origin: x is relative to it); 2.0 where the line misses it, a tiny t if x is inside.
+    the body's centre at the origin: x is relative to it); 2.0 where the segment misses it, 0 if x is inside.
     """
     t_in, t_out = -1e300, 1e300
     for p in range(p0, p1):
@@ -308,17 +309,17 @@ def _segment_polyhedron(x0, x1, x2, d0, d1, d2, planes, p0, p1):
             t_out = min(t_out, -a / b)
     if t_in > t_out or t_out <= 0.0:
         return 2.0
-    return t_in if t_in > 0.0 else 1e-12
+    return t_in if t_in > 0.0 else 0.0
 
 
 @njit(cache=True, inline="always")
 def _segment_ball(x0, x1, x2, d0, d1, d2, radius):
-    """First t of the segment x + t d inside the ball of ``radius`` about the origin; 2.0 if it misses."""
+    """First t of the segment x + t d inside the ball of ``radius`` about the origin; 2.0 if it misses, 0 if x is in."""
     aa = d0 * d0 + d1 * d1 + d2 * d2
     bb = x0 * d0 + x1 * d1 + x2 * d2
     cc = x0 * x0 + x1 * x1 + x2 * x2 - radius * radius
     if cc <= 0.0:
-        return 1e-12
+        return 0.0
     disc = bb * bb - aa * cc
     if disc < 0.0:
         return 2.0
@@ -344,7 +345,7 @@ def _ray_grain_fractions(
     out,
 ):
     """First intersection t ∈ (0, 1] of the segments points + t · dirs with placed grains (balls or convex
-    polyhedra); ``out[k]`` = −1 where none meets the segment.
+    polyhedra); ``out[k]`` = −1 where none meets the segment, 0 where the point itself lies in a grain.
 
     ``centres`` (M, 3) are the placed copies (periodic images) of grain ``grain[m]``; ``cell_start``/``cell_items``
     list, per cell of edge ``edge`` of a grid from ``lo``, every copy whose reach (its box grown by the segment length)
@@ -371,6 +372,8 @@ def _ray_grain_fractions(
                 )
             if t < best:
                 best = t
+            if t == 0.0:
+                break
         out[k] = best if best <= 1.0 else -1.0
 
 

@@ -39,7 +39,7 @@ def _rot_z(angle):
 def test_cube_and_octahedron_wall_distances_by_hand():
     """Hand-computed q (1e-12). Cube of half-edge 1.3 at (5, 5, 5): from the node (6, 4, 4) (centre (6.5, 4.5, 4.5))
     the face x = 6.3 lies at q = 0.2 along −x and along (−1, −1, 0) (y = 4.5 + t stays within 3.7..6.3); along +y
-    the link stays at x = 6.5, outside: no wall; a node inside the cube gets q ≈ 0. The cube turned 45° about z
+    the link stays at x = 6.5, outside: no wall; a node inside the cube gets 0 (binary and geometry disagree). The cube turned 45° about z
     has a vertical edge at x = 5 + 1.3 √2 on the line y = 5: from x = 7.5 along −x, q = 2.5 − 1.3 √2. Octahedron
     |x| + |y| + |z| ≤ 2 about (5, 5, 5): from (6.5, 5.5, 5.5) along −x the face is at x − 5 = 1, q = 0.5; along
     (−1, 1, 0) the sum |1.5 − t| + |0.5 + t| + 0.5 stays 2.5 > 2 for t ≤ 1: a miss.
@@ -51,9 +51,9 @@ def test_cube_and_octahedron_wall_distances_by_hand():
     pops = np.array([_pop([1, 0, 0]), _pop([1, 1, 0]), _pop([0, 1, 0]), _pop([1, 0, 0]), _pop([1, 0, 0])])
     q = g.fractions(nodes, pops)
     # (6,4,4) along −y runs from y = 4.5 to 3.5 at x = 6.5 outside the cube: no wall; (3,3,3) to (2,3,3): none;
-    # (5,5,5) lies inside: the wall is at the node (tiny q)
+    # (5,5,5) lies inside: 0, which link_distances turns into halfway bounce-back
     np.testing.assert_allclose(q[:4], [0.2, 0.2, -1.0, -1.0], atol=1e-12)
-    assert 0 < q[4] < 1e-9
+    assert q[4] == 0.0
     turned = _grains([cube], [[5, 5, 5]], [_rot_z(np.pi / 4)], [1.3], (10, 10, 10))
     assert turned.segment_hits(np.array([[7.5, 5.0, 5.5]]), np.array([[-1.0, 0, 0]]))[0] == pytest.approx(
         2.5 - 1.3 * np.sqrt(2), abs=1e-12
@@ -237,3 +237,20 @@ def test_grey_walls_in_the_mirror_and_chamber_set_ups_read_the_folded_voxels():
     np.testing.assert_array_equal(got[inside], want)
     np.testing.assert_array_equal(got[~inside], 0.5)
     assert np.count_nonzero(~inside) > 0
+
+
+def test_a_pore_node_inside_the_exact_solid_falls_back_to_halfway():
+    """Binary and geometry disagree (a segmented image): cube of half-edge 1.8 about (5, 5, 5) spans 3.2..6.8, the
+    binary's only solid voxel is (6, 5, 5). The pore node (7, 5, 5) (centre 7.5) reaches the face 6.8 along −x at
+    q = 0.7; the pore node (5, 5, 5) lies inside the cube, so its link to (6, 5, 5) is halfway (q = ½), as for a
+    link the geometry misses."""
+    cube = polyhedron("cube", _CUBE, np.ones(6))
+    g = _grains([cube], [[5, 5, 5]], [np.eye(3)], [1.8], (10, 10, 10))
+    pore = np.ones((10, 10, 10), bool)
+    pore[6, 5, 5] = False
+    nodes = np.array([[7, 5, 5], [5, 5, 5]])
+    pops = np.array([_pop([1, 0, 0]), _pop([-1, 0, 0])])
+    ids = np.flatnonzero(pore.ravel())
+    node_index = np.searchsorted(ids, np.ravel_multi_index(nodes.T, pore.shape))
+    q = link_distances(pore, (True, True, True), node_index, pops, g)
+    np.testing.assert_allclose(q, [0.7, 0.5], atol=1e-12)

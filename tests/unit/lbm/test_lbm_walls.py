@@ -116,7 +116,7 @@ def test_coefficients_reduce_to_halfway_at_one_half_and_follow_the_published_sch
 
 
 def test_ray_sphere_fractions_match_brute_force_with_periodic_images():
-    """q of random links against a numpy loop over all spheres and all 27 images (1e-12)."""
+    """q of random links against a numpy loop over all spheres and all 27 images (1e-12); 0 for a node in a sphere."""
     rng = np.random.default_rng(7)
     shape = (13, 11, 9)
     centres = rng.uniform(0, 1, (15, 3)) * shape
@@ -128,6 +128,7 @@ def test_ray_sphere_fractions_match_brute_force_with_periodic_images():
     x = nodes + 0.5
     d = -C[pops].astype(float)
     best = np.full(400, 2.0)
+    inside = np.zeros(400, dtype=bool)
     shifts = np.array(np.meshgrid(*[[-1, 0, 1]] * 3, indexing="ij")).reshape(3, -1).T * shape
     for c, r in zip(centres, radii):
         for s in shifts:
@@ -135,9 +136,9 @@ def test_ray_sphere_fractions_match_brute_force_with_periodic_images():
             a, b, cc = np.sum(d * d, 1), np.sum(e * d, 1), np.sum(e * e, 1) - r * r
             disc = b * b - a * cc
             t = np.where(disc >= 0, (-b - np.sqrt(np.maximum(disc, 0))) / a, 2.0)
-            t = np.where(cc <= 0, 1e-12, t)
+            inside |= cc <= 0
             best = np.where((t > 0) & (t < best), t, best)
-    want = np.where(best <= 1, best, -1.0)
+    want = np.where(inside, 0.0, np.where(best <= 1, best, -1.0))
     np.testing.assert_allclose(got, want, atol=1e-12)
     assert np.count_nonzero(want > 0) > 20
 
