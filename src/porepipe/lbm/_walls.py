@@ -93,7 +93,8 @@ class SphereWalls:
 
     def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
         """Q of links from node coordinates (K, 3) (integer voxel indices) along −c_p; −1 where no sphere, 0 where
-        the node lies in one."""
+        the node lies in one.
+        """
         return self.segment_hits(nodes.astype(np.float64) + 0.5, -C[pops].astype(np.float64))
 
     def segment_hits(self, points: np.ndarray, dirs: np.ndarray) -> np.ndarray:
@@ -199,7 +200,8 @@ class GrainWalls:
 
     def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
         """Q of links from node coordinates (K, 3) (integer voxel indices) along −c_p; −1 where no grain, 0 where
-        the node lies in one."""
+        the node lies in one.
+        """
         return self.segment_hits(nodes.astype(np.float64) + 0.5, -C[pops].astype(np.float64))
 
     def segment_hits(self, points: np.ndarray, dirs: np.ndarray) -> np.ndarray:
@@ -346,7 +348,9 @@ class MirroredWalls:
         plane = np.maximum(np.floor(start[:, 0] / self.length), np.floor(end0 / self.length)) * self.length
         t_cross = np.where(crossing, (plane - start[:, 0]) / np.where(step[:, 0] == 0, 1.0, step[:, 0]), 1.0)
         first = self._hits(start, step * t_cross[:, None], start[:, 0])
-        out = np.where(first > 0, t_cross * first, first)  # −1: no hit before the plane; 0: the node is inside
+        out = np.where(
+            first > 0, t_cross * first, first
+        )  # −1: no hit before the plane; 0: the node is inside
         more = crossing & (out < 0)
         if np.any(more):
             at = start[more] + t_cross[more, None] * step[more]
