@@ -13,6 +13,7 @@ from porepipe._shared.sample_points import (
     FULL,
     FULL_ROW,
     MARGIN,
+    N_SAMPLES,
     PARTIAL,
     SUB,
     UNTOUCHED,
@@ -22,6 +23,7 @@ from porepipe._shared.sample_points import (
     hull_gap,
     or_row,
     plane_candidates,
+    popcount64,
     sample_coord,
 )
 
@@ -105,31 +107,222 @@ def _voxelize_plane(
     grey_from_status(status, mask, out)
 
 
+#: voxel state of the chord method beyond those of :mod:`porepipe._shared.sample_points`: two or more spheres reach
+#: into the voxel (its grey value is the popcount of the union mask, not the chord count)
+MULTI = 3
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _inside(dxy, zs, h, cz, r2):
+    """Whether sample ``zs`` (global index along z) of a row with squared (x, y) distance ``dxy`` is in the ball.
+
+    The exact predicate of :func:`_mark_points`: ``(dx*dx + dy*dy) + dz*dz <= r*r`` with ``dz`` from the same
+    sample coordinate, so every decision is the brute-force one.
+    """
+    dz = (zs + 0.5) * h - cz
+    return dxy + dz * dz <= r2
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _chord(dxy, h, cz, r2):
+    """Samples ``lo .. hi`` (global z indices; empty when lo > hi) of a row inside the ball, decided exactly.
+
+    Along a row ``dz*dz`` falls then rises with the sample index (rounding is monotone), so the samples that pass
+    the exact predicate form one interval around the sample nearest the centre. The square root only guesses its
+    ends; each end is then moved sample by sample until the predicate says it is the last one inside.
+    """
+    if dxy > r2:
+        return 1, 0
+    zc = cz / h - 0.5
+    half = np.sqrt(r2 - dxy) / h
+    m = int(np.floor(zc + 0.5))
+    if not _inside(dxy, m, h, cz, r2):
+        if _inside(dxy, m - 1, h, cz, r2):
+            m -= 1
+        elif _inside(dxy, m + 1, h, cz, r2):
+            m += 1
+        else:
+            return 1, 0  # the sample nearest the centre is out, so all are
+    lo = min(int(np.ceil(zc - half)), m)
+    while not _inside(dxy, lo, h, cz, r2):
+        lo += 1
+    while _inside(dxy, lo - 1, h, cz, r2):
+        lo -= 1
+    hi = max(int(np.floor(zc + half)), m)
+    while not _inside(dxy, hi, h, cz, r2):
+        hi -= 1
+    while _inside(dxy, hi + 1, h, cz, r2):
+        hi += 1
+    return lo, hi
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _add_chord(counts, j, lo, hi):
+    """Add the samples ``lo .. hi`` (global z indices) of one row to the per-voxel counts of voxel row ``j``.
+
+    ``counts[j]`` is a difference array along z (its prefix sum is the count per voxel): the two end voxels get their
+    part of the chord, every voxel between them all SUB samples, in four updates whatever the chord's length.
+    """
+    k_lo = lo // SUB
+    k_hi = hi // SUB
+    if k_lo == k_hi:
+        n = hi - lo + 1
+        counts[j, k_lo] += n
+        counts[j, k_lo + 1] -= n
+        return
+    first = SUB * (k_lo + 1) - lo
+    last = hi - SUB * k_hi + 1
+    counts[j, k_lo] += first
+    counts[j, k_lo + 1] += SUB - first
+    counts[j, k_hi] += last - SUB
+    counts[j, k_hi + 1] -= last
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask):
+    """Mark the voxels of plane ``i`` that one ball reaches: FULL (whole sample hull inside), else one more sphere.
+
+    A voxel's first reaching sphere makes it PARTIAL, a second one MULTI (its union mask is then cleared for
+    :func:`_or_chords`); FULL wins over both. The reach test is the brute-force one (hull distance with a margin).
+    """
+    r2 = r * r
+    nx_, fx_ = hull_gap(cx, i, h)
+    j0, j1 = axis_range(cy, r, h, ny)
+    k0, k1 = axis_range(cz, r, h, nz)
+    for j in range(j0, j1):
+        ny_, fy_ = hull_gap(cy, j, h)
+        for k in range(k0, k1):
+            st = status[j, k]
+            if st == FULL:
+                continue
+            nz_, fz_ = hull_gap(cz, k, h)
+            if nx_ * nx_ + ny_ * ny_ + nz_ * nz_ > r2 * (1.0 + MARGIN):
+                continue
+            if fx_ * fx_ + fy_ * fy_ + fz_ * fz_ <= r2 * (1.0 - MARGIN):
+                status[j, k] = FULL
+            elif st == UNTOUCHED:
+                status[j, k] = PARTIAL
+            elif st == PARTIAL:
+                status[j, k] = MULTI
+                for w in range(WORDS):
+                    mask[j, k, w] = 0
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords):
+    """Chords of one ball through the sample rows of plane ``i``: counted into ``counts``, kept in ``chords``.
+
+    ``chords[sx, ys]`` = (lo, hi) global z sample indices of row (sx, ys), clipped to the grid; rows outside the
+    ball's y range are left untouched (callers read only rows of voxels the ball reaches).
+    """
+    r2 = r * r
+    j0, j1 = axis_range(cy, r, h, ny)
+    z_last = SUB * nz - 1
+    for sx in range(SUB):
+        dx = sample_coord(i, sx, h) - cx
+        dx2 = dx * dx
+        for ys in range(SUB * j0, SUB * j1):
+            dy = (ys + 0.5) * h - cy
+            lo, hi = _chord(dx2 + dy * dy, h, cz, r2)
+            lo = max(lo, 0)
+            hi = min(hi, z_last)
+            chords[sx, ys, 0] = lo
+            chords[sx, ys, 1] = hi
+            if lo <= hi:
+                _add_chord(counts, ys // SUB, lo, hi)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _or_chords(cy, cz, r, h, ny, nz, status, mask, chords, words):
+    """OR one ball's chords (from :func:`_sphere_chords`) into the masks of the MULTI voxels it can reach."""
+    j0, j1 = axis_range(cy, r, h, ny)
+    k0, k1 = axis_range(cz, r, h, nz)
+    for j in range(j0, j1):
+        for k in range(k0, k1):
+            if status[j, k] != MULTI:
+                continue
+            for w in range(WORDS):
+                words[w] = 0
+            z0 = SUB * k
+            for sx in range(SUB):
+                for sy in range(SUB):
+                    lo = max(chords[sx, SUB * j + sy, 0] - z0, 0)
+                    hi = min(chords[sx, SUB * j + sy, 1] - z0, SUB - 1)
+                    if lo <= hi:
+                        or_row(words, sx, sy, ((1 << (hi + 1)) - 1) ^ ((1 << lo) - 1))
+            for w in range(WORDS):
+                mask[j, k, w] |= words[w]
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _grey_from_chords(status, mask, counts, out):
+    """Grey values of a plane: 216 (FULL), the chord count (one sphere), the union mask's popcount (MULTI), 0."""
+    for j in range(status.shape[0]):
+        count = 0
+        for k in range(status.shape[1]):
+            count += counts[j, k]
+            st = status[j, k]
+            if st == FULL:
+                out[j, k] = N_SAMPLES
+            elif st == PARTIAL:
+                out[j, k] = count
+            elif st == MULTI:
+                bits = 0
+                for w in range(WORDS):
+                    bits += popcount64(mask[j, k, w])
+                out[j, k] = bits
+            else:
+                out[j, k] = 0
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _chord_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, words, out):
+    """Grey values of plane x = i by chords in sample-row space (bit-identical to :func:`_voxelize_plane`).
+
+    First every ball marks the voxels it reaches (:func:`_classify`); then each ball's chords are counted into the
+    per-voxel counts (right wherever one ball alone reaches a voxel) and ORed into the masks of voxels two or more
+    balls reach, so a sample counts once if it is in any ball.
+    """
+    status[:, :] = UNTOUCHED
+    counts[:, :] = 0
+    plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
+    for q in range(first, last):
+        s = order[q]
+        if images[s, 0] + images[s, 3] >= plane_lo:
+            _classify(i, images[s, 0], images[s, 1], images[s, 2], images[s, 3], h, ny, nz, status, mask)
+    for q in range(first, last):
+        s = order[q]
+        cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
+        if cx + r < plane_lo:
+            continue
+        _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords)
+        _or_chords(cy, cz, r, h, ny, nz, status, mask, chords, words)
+    _grey_from_chords(status, mask, counts, out)
+
+
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
 def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, out):
-    """Grey values of planes i0..i1-1 into ``out`` (i1 - i0, ny, nz), parallel over planes."""
+    """Grey values of planes i0..i1-1 into ``out`` (i1 - i0, ny, nz), parallel over planes.
+
+    ``boundary_only`` selects the chord method (:func:`_chord_plane`), else brute force (216 tests per voxel).
+    """
     nplanes = i1 - i0
     nthreads = min(nplanes, 64)
     per = (nplanes + nthreads - 1) // nthreads
     for t in prange(nthreads):
         status = np.empty((ny, nz), dtype=np.uint8)
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
+        counts = np.empty((ny, nz + 1), dtype=np.int32)
+        chords = np.empty((SUB, SUB * ny, 2), dtype=np.int64)
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
-            _voxelize_plane(
-                i0 + p,
-                images,
-                order,
-                xmin_sorted,
-                r_max,
-                h,
-                ny,
-                nz,
-                boundary_only,
-                status,
-                mask,
-                scratch,
-                words,
-                out[p],
-            )
+            i = i0 + p
+            if boundary_only:
+                _chord_plane(
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, words, out[p]
+                )
+            else:
+                _voxelize_plane(
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, False, status, mask, scratch, words, out[p]
+                )
