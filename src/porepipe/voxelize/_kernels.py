@@ -113,50 +113,6 @@ MULTI = 3
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _inside(dxy, zs, h, cz, r2):
-    """Whether sample ``zs`` (global index along z) of a row with squared (x, y) distance ``dxy`` is in the ball.
-
-    The exact predicate of :func:`_mark_points`: ``(dx*dx + dy*dy) + dz*dz <= r*r`` with ``dz`` from the same
-    sample coordinate, so every decision is the brute-force one.
-    """
-    dz = (zs + 0.5) * h - cz
-    return dxy + dz * dz <= r2
-
-
-@njit(cache=True, fastmath=FASTMATH)
-def _chord(dxy, h, cz, r2):
-    """Samples ``lo .. hi`` (global z indices; empty when lo > hi) of a row inside the ball, decided exactly.
-
-    Along a row ``dz*dz`` falls then rises with the sample index (rounding is monotone), so the samples that pass
-    the exact predicate form one interval around the sample nearest the centre. The square root only guesses its
-    ends; each end is then moved sample by sample until the predicate says it is the last one inside.
-    """
-    if dxy > r2:
-        return 1, 0
-    zc = cz / h - 0.5
-    half = np.sqrt(r2 - dxy) / h
-    m = int(np.floor(zc + 0.5))
-    if not _inside(dxy, m, h, cz, r2):
-        if _inside(dxy, m - 1, h, cz, r2):
-            m -= 1
-        elif _inside(dxy, m + 1, h, cz, r2):
-            m += 1
-        else:
-            return 1, 0  # the sample nearest the centre is out, so all are
-    lo = min(int(np.ceil(zc - half)), m)
-    while not _inside(dxy, lo, h, cz, r2):
-        lo += 1
-    while _inside(dxy, lo - 1, h, cz, r2):
-        lo -= 1
-    hi = max(int(np.floor(zc + half)), m)
-    while not _inside(dxy, hi, h, cz, r2):
-        hi -= 1
-    while _inside(dxy, hi + 1, h, cz, r2):
-        hi += 1
-    return lo, hi
-
-
-@njit(cache=True, fastmath=FASTMATH, inline="always")
 def _add_chord(counts, j, lo, hi):
     """Add the samples ``lo .. hi`` (global z indices) of one row to the per-voxel counts of voxel row ``j``.
 
@@ -209,27 +165,70 @@ def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords):
+def _z_table(cz, r, h, nz, dz2):
+    """``dz2[t] = dz*dz`` of the grid's z samples ``z0 + t`` near the ball, and the ``t`` where it is smallest.
+
+    Returns (z0, n, t_min); n = 0 when the ball misses the grid along z. Samples outside the window are more than
+    one sample spacing beyond the ball, so no rounding can put them inside.
+    """
+    z0 = max(int(np.floor((cz - r) / h - 0.5)) - 1, 0)
+    z1 = min(int(np.floor((cz + r) / h - 0.5)) + 2, SUB * nz - 1)
+    n = z1 - z0 + 1
+    t_min = 0
+    for t in range(max(n, 0)):
+        dz = (z0 + t + 0.5) * h - cz  # = sample_coord of global sample z0 + t
+        dz2[t] = dz * dz
+        if dz2[t] < dz2[t_min]:
+            t_min = t
+    return z0, max(n, 0), t_min
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2, dz2):
     """Chords of one ball through the sample rows of plane ``i``: counted into ``counts``, kept in ``chords``.
 
-    ``chords[sx, ys]`` = (lo, hi) global z sample indices of row (sx, ys), clipped to the grid; rows outside the
-    ball's y range are left untouched (callers read only rows of voxels the ball reaches).
+    ``chords[sx, ys]`` = (lo, hi): the global z samples of row (sx, ys) inside the ball (empty when lo > hi), for the
+    rows of the ball's y range. Each is decided by the exact predicate ``(dx*dx + dy*dy) + dz*dz <= r*r`` of
+    :func:`_mark_points`: along a row ``dz*dz`` falls then rises (rounding is monotone), so the samples inside form one
+    interval around the smallest ``dz*dz``, and its ends move little from row to row; each end is walked from the
+    previous row's until the predicate says it is the last sample inside.
     """
     r2 = r * r
     j0, j1 = axis_range(cy, r, h, ny)
-    z_last = SUB * nz - 1
+    z0, n, t_min = _z_table(cz, r, h, nz, dz2)
+    for ys in range(SUB * j0, SUB * j1):
+        dy = (ys + 0.5) * h - cy  # = sample_coord of global sample ys
+        dy2[ys] = dy * dy
     for sx in range(SUB):
         dx = sample_coord(i, sx, h) - cx
         dx2 = dx * dx
-        for ys in range(SUB * j0, SUB * j1):
-            dy = (ys + 0.5) * h - cy
-            lo, hi = _chord(dx2 + dy * dy, h, cz, r2)
-            lo = max(lo, 0)
-            hi = min(hi, z_last)
-            chords[sx, ys, 0] = lo
-            chords[sx, ys, 1] = hi
-            if lo <= hi:
-                _add_chord(counts, ys // SUB, lo, hi)
+        chords[sx, SUB * j0 : SUB * j1, 0] = 1  # empty unless a chord is found below
+        chords[sx, SUB * j0 : SUB * j1, 1] = 0
+        if n == 0 or dx2 > r2:
+            continue
+        # rows whose y distance alone is over r (with one sample to spare for rounding) hold no sample inside
+        half = np.sqrt(r2 - dx2) / h
+        ys_lo = max(int(np.floor(cy / h - 0.5 - half)) - 1, SUB * j0)
+        ys_hi = min(int(np.floor(cy / h - 0.5 + half)) + 2, SUB * j1)
+        lo = t_min
+        hi = t_min
+        for ys in range(ys_lo, ys_hi):
+            dxy = dx2 + dy2[ys]
+            if dxy + dz2[t_min] > r2:
+                continue
+            lo = min(lo, t_min)
+            while dxy + dz2[lo] > r2:
+                lo += 1
+            while lo > 0 and dxy + dz2[lo - 1] <= r2:
+                lo -= 1
+            hi = max(hi, t_min)
+            while dxy + dz2[hi] > r2:
+                hi -= 1
+            while hi < n - 1 and dxy + dz2[hi + 1] <= r2:
+                hi += 1
+            chords[sx, ys, 0] = z0 + lo
+            chords[sx, ys, 1] = z0 + hi
+            _add_chord(counts, ys // SUB, z0 + lo, z0 + hi)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -276,7 +275,9 @@ def _grey_from_chords(status, mask, counts, out):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _chord_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, words, out):
+def _chord_plane(
+    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, dy2, dz2, words, out
+):
     """Grey values of plane x = i by chords in sample-row space (bit-identical to :func:`_voxelize_plane`).
 
     First every ball marks the voxels it reaches (:func:`_classify`); then each ball's chords are counted into the
@@ -295,7 +296,7 @@ def _chord_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, 
         cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
         if cx + r < plane_lo:
             continue
-        _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords)
+        _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2, dz2)
         _or_chords(cy, cz, r, h, ny, nz, status, mask, chords, words)
     _grey_from_chords(status, mask, counts, out)
 
@@ -314,13 +315,15 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
         counts = np.empty((ny, nz + 1), dtype=np.int32)
         chords = np.empty((SUB, SUB * ny, 2), dtype=np.int64)
+        dy2 = np.empty(SUB * ny)
+        dz2 = np.empty(SUB * nz)
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             i = i0 + p
             if boundary_only:
                 _chord_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, words, out[p]
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, dy2, dz2, words, out[p]
                 )
             else:
                 _voxelize_plane(
