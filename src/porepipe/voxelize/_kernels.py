@@ -164,38 +164,90 @@ def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask):
                     mask[j, k, w] = 0
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _z_table(cz, r, h, nz, dz2):
-    """``dz2[t] = dz*dz`` of the grid's z samples ``z0 + t`` near the ball, and the ``t`` where it is smallest.
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _inside(dxy, zs, h, cz, r2):
+    """Whether sample ``zs`` (global index along z) of a row with squared (x, y) distance ``dxy`` is in the ball.
 
-    Returns (z0, n, t_min); n = 0 when the ball misses the grid along z. Samples outside the window are more than
-    one sample spacing beyond the ball, so no rounding can put them inside.
+    The exact predicate of :func:`_mark_points`, ``(dx*dx + dy*dy) + dz*dz <= r*r``, with ``dz`` from the same
+    sample coordinate (:func:`porepipe._shared.sample_points.sample_coord` of global sample ``zs``).
     """
-    z0 = max(int(np.floor((cz - r) / h - 0.5)) - 1, 0)
-    z1 = min(int(np.floor((cz + r) / h - 0.5)) + 2, SUB * nz - 1)
-    n = z1 - z0 + 1
-    t_min = 0
-    for t in range(max(n, 0)):
-        dz = (z0 + t + 0.5) * h - cz  # = sample_coord of global sample z0 + t
-        dz2[t] = dz * dz
-        if dz2[t] < dz2[t_min]:
-            t_min = t
-    return z0, max(n, 0), t_min
+    dz = (zs + 0.5) * h - cz
+    return dxy + dz * dz <= r2
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2, dz2):
+def _chord_walk(dxy, h, cz, r2, lo, hi):
+    """Samples ``lo .. hi`` (global z indices; empty when lo > hi) of a row inside the ball, by walking.
+
+    Along a row ``dz*dz`` falls then rises with the sample index (rounding is monotone), so the samples that pass
+    the exact predicate form one interval, which holds the sample nearest the centre if it is not empty. Its ends
+    are walked from the guesses ``lo``/``hi`` until the predicate says each is the last sample inside.
+    """
+    m = int(np.floor(cz / h))  # the sample nearest the centre, or one of its neighbours
+    best = m
+    for t in (m - 1, m + 1):
+        dt = (t + 0.5) * h - cz
+        db = (best + 0.5) * h - cz
+        if dt * dt < db * db:
+            best = t
+    if not _inside(dxy, best, h, cz, r2):
+        return 1, 0
+    lo = min(lo, best)
+    while not _inside(dxy, lo, h, cz, r2):
+        lo += 1
+    while _inside(dxy, lo - 1, h, cz, r2):
+        lo -= 1
+    hi = max(hi, best)
+    while not _inside(dxy, hi, h, cz, r2):
+        hi -= 1
+    while _inside(dxy, hi + 1, h, cz, r2):
+        hi += 1
+    return lo, hi
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _chord_end(dxy, g, step, h, cz, r2):
+    """The last sample inside the ball going from the centre in direction ``step`` (±1), near the guess ``g``.
+
+    Accepted only where the exact predicate proves it (the sample is inside, its outer neighbour is not); returns
+    (end, proven). Rounding leaves the true end at ``g`` nearly always, else one sample off.
+    """
+    in_g = _inside(dxy, g, h, cz, r2)
+    in_out = _inside(dxy, g + step, h, cz, r2)
+    if in_g and not in_out:
+        return g, True
+    if in_out:
+        return g + step, not _inside(dxy, g + 2 * step, h, cz, r2)
+    return g - step, _inside(dxy, g - step, h, cz, r2)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _chord(dxy, h, cz, r2, zc, inv_h):
+    """Samples ``lo .. hi`` (global z indices; empty when lo > hi) of a row inside the ball, decided exactly.
+
+    ``zc = cz/h - 0.5`` and ``inv_h = 1/h`` only shape the square-root guess of each end; each end is accepted only
+    where the exact predicate proves it (:func:`_chord_end`), else :func:`_chord_walk` decides the row.
+    """
+    half = np.sqrt(r2 - dxy) * inv_h
+    lo, ok_lo = _chord_end(dxy, int(np.ceil(zc - half)), -1, h, cz, r2)
+    hi, ok_hi = _chord_end(dxy, int(np.floor(zc + half)), 1, h, cz, r2)
+    if ok_lo and ok_hi and lo <= hi:
+        return lo, hi
+    return _chord_walk(dxy, h, cz, r2, lo, hi)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2):
     """Chords of one ball through the sample rows of plane ``i``: counted into ``counts``, kept in ``chords``.
 
-    ``chords[sx, ys]`` = (lo, hi): the global z samples of row (sx, ys) inside the ball (empty when lo > hi), for the
-    rows of the ball's y range. Each is decided by the exact predicate ``(dx*dx + dy*dy) + dz*dz <= r*r`` of
-    :func:`_mark_points`: along a row ``dz*dz`` falls then rises (rounding is monotone), so the samples inside form one
-    interval around the smallest ``dz*dz``, and its ends move little from row to row; each end is walked from the
-    previous row's until the predicate says it is the last sample inside.
+    ``chords[sx, ys]`` = (lo, hi): the global z samples of row (sx, ys) inside the ball and the grid (empty when
+    lo > hi), for the rows of the ball's y range, each decided by the exact predicate (:func:`_chord`).
     """
     r2 = r * r
     j0, j1 = axis_range(cy, r, h, ny)
-    z0, n, t_min = _z_table(cz, r, h, nz, dz2)
+    z_last = SUB * nz - 1
+    zc = cz / h - 0.5
+    inv_h = 1.0 / h
     for ys in range(SUB * j0, SUB * j1):
         dy = (ys + 0.5) * h - cy  # = sample_coord of global sample ys
         dy2[ys] = dy * dy
@@ -204,31 +256,23 @@ def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2, dz2):
         dx2 = dx * dx
         chords[sx, SUB * j0 : SUB * j1, 0] = 1  # empty unless a chord is found below
         chords[sx, SUB * j0 : SUB * j1, 1] = 0
-        if n == 0 or dx2 > r2:
+        if dx2 > r2:
             continue
         # rows whose y distance alone is over r (with one sample to spare for rounding) hold no sample inside
         half = np.sqrt(r2 - dx2) / h
         ys_lo = max(int(np.floor(cy / h - 0.5 - half)) - 1, SUB * j0)
         ys_hi = min(int(np.floor(cy / h - 0.5 + half)) + 2, SUB * j1)
-        lo = t_min
-        hi = t_min
         for ys in range(ys_lo, ys_hi):
             dxy = dx2 + dy2[ys]
-            if dxy + dz2[t_min] > r2:
-                continue
-            lo = min(lo, t_min)
-            while dxy + dz2[lo] > r2:
-                lo += 1
-            while lo > 0 and dxy + dz2[lo - 1] <= r2:
-                lo -= 1
-            hi = max(hi, t_min)
-            while dxy + dz2[hi] > r2:
-                hi -= 1
-            while hi < n - 1 and dxy + dz2[hi + 1] <= r2:
-                hi += 1
-            chords[sx, ys, 0] = z0 + lo
-            chords[sx, ys, 1] = z0 + hi
-            _add_chord(counts, ys // SUB, z0 + lo, z0 + hi)
+            if dxy > r2:
+                continue  # rounding is monotone: dxy + dz*dz >= dxy > r*r for every sample of the row
+            lo, hi = _chord(dxy, h, cz, r2, zc, inv_h)
+            lo = max(lo, 0)
+            hi = min(hi, z_last)
+            if lo <= hi:
+                chords[sx, ys, 0] = lo
+                chords[sx, ys, 1] = hi
+                _add_chord(counts, ys // SUB, lo, hi)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -296,7 +340,7 @@ def _chord_plane(
         cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
         if cx + r < plane_lo:
             continue
-        _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2, dz2)
+        _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2)
         _or_chords(cy, cz, r, h, ny, nz, status, mask, chords, words)
     _grey_from_chords(status, mask, counts, out)
 
