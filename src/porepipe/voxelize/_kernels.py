@@ -1,8 +1,14 @@
 """Numba kernels of the grey-value voxelisation (§4.7.2): 6x6x6 sample points per voxel, counted in the matrix.
 
 Sample point k (0..5) of voxel i along an axis sits at ``(6*i + k + 0.5) * (a/6)``: every kernel computes it with
-:func:`porepipe._shared.sample_points.sample_coord`, and a point is in the matrix when ``dx*dx + dy*dy + dz*dz <= r*r`` for some sphere image, in
-exactly this order of operations — that is what makes the boundary-only method bit-identical to brute force.
+:func:`porepipe._shared.sample_points.sample_coord`, and a point is in the matrix when
+``dx*dx + dy*dy + dz*dz <= r*r`` for some sphere image, in exactly this order of operations — that is what makes the
+chord method bit-identical to brute force.
+
+Brute force (:func:`_voxelize_plane`) tests all 216 points of every voxel near a sphere. The chord method
+(:func:`_chord_plane`) works in sample-row space: along a row of samples in z the points inside a ball form one
+interval (the chord), whose two ends are found from a square root and proven by the exact predicate; the chords are
+counted per voxel in O(1) each, and ORed as bit masks only into voxels that two or more balls reach.
 """
 
 import numpy as np
@@ -11,7 +17,6 @@ from numba import njit, prange
 from porepipe._shared.numba_config import FASTMATH
 from porepipe._shared.sample_points import (
     FULL,
-    FULL_ROW,
     MARGIN,
     N_SAMPLES,
     PARTIAL,
@@ -29,12 +34,11 @@ from porepipe._shared.sample_points import (
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, words, skip_rows):
-    """OR into ``mask[j, k]`` the sample points of voxel (i, j, k) inside the ball (cx, cy, cz, r2).
+def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, words):
+    """OR into ``mask[j, k]`` the sample points of voxel (i, j, k) inside the ball (cx, cy, cz, r2): all 216 tested.
 
     Bit layout as in :func:`porepipe._shared.sample_points.or_row`. ``dx2``/``dy2``/``dz2`` (length 6) and
-    ``words`` (uint64, length 4) are scratch. With ``skip_rows`` a row whose (x, y) distance alone exceeds r is
-    skipped; without it (brute force) all 216 points are tested.
+    ``words`` (uint64, length 4) are scratch.
     """
     for s in range(SUB):
         dx = sample_coord(i, s, h) - cx
@@ -45,22 +49,9 @@ def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, words, skip_ro
         dz2[s] = dz * dz
     for w in range(WORDS):
         words[w] = 0
-    dz2_min = dz2[0]
-    dz2_max = dz2[0]
-    for s in range(1, SUB):
-        dz2_min = min(dz2_min, dz2[s])
-        dz2_max = max(dz2_max, dz2[s])
     for sx in range(SUB):
         for sy in range(SUB):
             dxy = dx2[sx] + dy2[sy]
-            if skip_rows:
-                # rounding is monotone, so dxy + dz2_min/max bound dxy + dz2[sz] exactly: whole rows are decided
-                # without a per-point test and without changing any decision
-                if dxy + dz2_min > r2:
-                    continue
-                if dxy + dz2_max <= r2:
-                    or_row(words, sx, sy, FULL_ROW)
-                    continue
             row = 0
             for sz in range(SUB):
                 row |= int(dxy + dz2[sz] <= r2) << sz  # branch-free
@@ -70,10 +61,11 @@ def _mark_points(mask, j, k, i, cx, cy, cz, r2, h, dx2, dy2, dz2, words, skip_ro
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _voxelize_plane(
-    i, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, status, mask, scratch, words, out
-):
-    """Grey values of voxel plane x = i into ``out`` (ny, nz); ``status``/``mask``/``scratch`` are this thread's."""
+def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, scratch, words, out):
+    """Brute-force grey values of voxel plane x = i into ``out`` (ny, nz); ``status``/``mask``/``scratch`` are scratch.
+
+    Every voxel whose sample hull comes within r of a ball gets all 216 points tested (:func:`_mark_points`).
+    """
     status[:, :] = UNTOUCHED
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
     for q in range(first, last):
@@ -82,28 +74,20 @@ def _voxelize_plane(
         if cx + r < plane_lo:
             continue
         r2 = r * r
-        nx_, fx_ = hull_gap(cx, i, h)
+        nx_, _ = hull_gap(cx, i, h)
         j0, j1 = axis_range(cy, r, h, ny)
         k0, k1 = axis_range(cz, r, h, nz)
         for j in range(j0, j1):
-            ny_, fy_ = hull_gap(cy, j, h)
+            ny_, _ = hull_gap(cy, j, h)
             for k in range(k0, k1):
-                if status[j, k] == FULL:
-                    continue
-                nz_, fz_ = hull_gap(cz, k, h)
-                near2 = nx_ * nx_ + ny_ * ny_ + nz_ * nz_
-                if near2 > r2 * (1.0 + MARGIN):
-                    continue
-                if boundary_only and fx_ * fx_ + fy_ * fy_ + fz_ * fz_ <= r2 * (1.0 - MARGIN):
-                    status[j, k] = FULL
+                nz_, _ = hull_gap(cz, k, h)
+                if nx_ * nx_ + ny_ * ny_ + nz_ * nz_ > r2 * (1.0 + MARGIN):
                     continue
                 if status[j, k] == UNTOUCHED:
                     for w in range(WORDS):
                         mask[j, k, w] = 0
                     status[j, k] = PARTIAL
-                _mark_points(
-                    mask, j, k, i, cx, cy, cz, r2, h, scratch[0], scratch[1], scratch[2], words, boundary_only
-                )
+                _mark_points(mask, j, k, i, cx, cy, cz, r2, h, scratch[0], scratch[1], scratch[2], words)
     grey_from_status(status, mask, out)
 
 
@@ -367,9 +351,24 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
             i = i0 + p
             if boundary_only:
                 _chord_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, dy2, dz2, words, out[p]
+                    i,
+                    images,
+                    order,
+                    xmin_sorted,
+                    r_max,
+                    h,
+                    ny,
+                    nz,
+                    status,
+                    mask,
+                    counts,
+                    chords,
+                    dy2,
+                    dz2,
+                    words,
+                    out[p],
                 )
             else:
                 _voxelize_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, False, status, mask, scratch, words, out[p]
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, scratch, words, out[p]
                 )
