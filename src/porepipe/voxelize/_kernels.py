@@ -221,12 +221,43 @@ def _chord(dxy, h, cz, r2, zc, inv_h):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2):
+def _guess_rows(dxy, n, h, cz, r2, ends, proven):
+    """Square-root guesses of the chord ends of rows ``dxy[:n]`` into ``ends`` (2, n), and whether both are proven.
+
+    Branch-free, so the loop vectorises: the guessed low end is proven when its sample is inside and the one below
+    is not, the high end likewise, by the exact predicate (the same arithmetic as :func:`_inside`, with integral
+    float sample indices). Rows not proven (a guess one sample off, rare; or no sample inside) are left to callers.
+    """
+    zc = cz / h - 0.5
+    inv_h = 1.0 / h
+    for t in range(n):
+        d = dxy[t]
+        half = np.sqrt(max(r2 - d, 0.0)) * inv_h
+        lo = np.ceil(zc - half)
+        hi = np.floor(zc + half)
+        dz_lo = (lo + 0.5) * h - cz
+        dz_below = (lo - 0.5) * h - cz
+        dz_hi = (hi + 0.5) * h - cz
+        dz_above = (hi + 1.5) * h - cz
+        ends[0, t] = lo
+        ends[1, t] = hi
+        proven[t] = (
+            (d + dz_lo * dz_lo <= r2)
+            & (d + dz_below * dz_below > r2)
+            & (d + dz_hi * dz_hi <= r2)
+            & (d + dz_above * dz_above > r2)
+        )
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, rowbuf, proven):
     """Chords of one ball through the sample rows of plane ``i``: counted into ``counts``, kept in ``chords``.
 
     ``chords[sx, ys]`` = (lo, hi): the global z samples of row (sx, ys) inside the ball and the grid (empty when
-    lo > hi), for the rows of the ball's y range, each decided by the exact predicate (:func:`_chord`).
+    lo > hi), for the rows of the ball's y range, each decided by the exact predicate: proven square-root guesses
+    (:func:`_guess_rows`), else :func:`_chord`. ``rowbuf`` (4, SUB * ny) and ``proven`` (SUB * ny) are scratch.
     """
+    dy2, rows, ends = rowbuf[0], rowbuf[1], rowbuf[2:4]
     r2 = r * r
     j0, j1 = axis_range(cy, r, h, ny)
     z_last = SUB * nz - 1
@@ -246,14 +277,23 @@ def _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2):
         half = np.sqrt(r2 - dx2) / h
         ys_lo = max(int(np.floor(cy / h - 0.5 - half)) - 1, SUB * j0)
         ys_hi = min(int(np.floor(cy / h - 0.5 + half)) + 2, SUB * j1)
-        for ys in range(ys_lo, ys_hi):
-            dxy = dx2 + dy2[ys]
+        n = max(ys_hi - ys_lo, 0)
+        for t in range(n):
+            rows[t] = dx2 + dy2[ys_lo + t]
+        _guess_rows(rows, n, h, cz, r2, ends, proven)
+        for t in range(n):
+            dxy = rows[t]
             if dxy > r2:
                 continue  # rounding is monotone: dxy + dz*dz >= dxy > r*r for every sample of the row
-            lo, hi = _chord(dxy, h, cz, r2, zc, inv_h)
+            if proven[t]:
+                lo = int(ends[0, t])
+                hi = int(ends[1, t])
+            else:
+                lo, hi = _chord(dxy, h, cz, r2, zc, inv_h)
             lo = max(lo, 0)
             hi = min(hi, z_last)
             if lo <= hi:
+                ys = ys_lo + t
                 chords[sx, ys, 0] = lo
                 chords[sx, ys, 1] = hi
                 _add_chord(counts, ys // SUB, lo, hi)
@@ -304,7 +344,7 @@ def _grey_from_chords(status, mask, counts, out):
 
 @njit(cache=True, fastmath=FASTMATH)
 def _chord_plane(
-    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, dy2, dz2, words, out
+    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, counts, chords, rowbuf, proven, words, out
 ):
     """Grey values of plane x = i by chords in sample-row space (bit-identical to :func:`_voxelize_plane`).
 
@@ -324,7 +364,7 @@ def _chord_plane(
         cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
         if cx + r < plane_lo:
             continue
-        _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, dy2)
+        _sphere_chords(i, cx, cy, cz, r, h, ny, nz, counts, chords, rowbuf, proven)
         _or_chords(cy, cz, r, h, ny, nz, status, mask, chords, words)
     _grey_from_chords(status, mask, counts, out)
 
@@ -343,8 +383,8 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
         counts = np.empty((ny, nz + 1), dtype=np.int32)
         chords = np.empty((SUB, SUB * ny, 2), dtype=np.int64)
-        dy2 = np.empty(SUB * ny)
-        dz2 = np.empty(SUB * nz)
+        rowbuf = np.empty((4, SUB * ny))
+        proven = np.empty(SUB * ny, dtype=np.bool_)
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
@@ -363,8 +403,8 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
                     mask,
                     counts,
                     chords,
-                    dy2,
-                    dz2,
+                    rowbuf,
+                    proven,
                     words,
                     out[p],
                 )
