@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from porepipe._shared.naming import TAG_RE, res_tag
+from porepipe.diffusion._capillary import check_resolutions as check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH
@@ -91,6 +92,8 @@ def grey_volume(wildcards):
 
 def binary_stage(scene):
     """Folder (= the writing rule) of the scene's whole binary volumes; the image's own, or the segmented model."""
+    if getattr(scene.diffusion, "geometry", None) is not None:
+        return "capillary"  # a synthetic capillary of diffusion.geometry (rule capillary)
     return "acquire_binary" if is_acquire_scene(scene) else "segment"
 
 
@@ -255,6 +258,8 @@ def diffusion_resolutions(scene):
             f"scene {scene.name!r}: diffusion.resolutions_um = {unknown} are not among resolutions_um = "
             f"{scene.resolutions_um}"
         )
+    if scene.diffusion.geometry is not None:  # every size a whole number of voxels at each resolution
+        check_capillary_resolutions(scene.diffusion.geometry, chosen)
     return chosen
 
 

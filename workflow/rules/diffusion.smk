@@ -1,4 +1,5 @@
 # Knudsen diffusion in the voxel pore space (Mahler 2001, ch. 2-3): one job per resolution and transport axis.
+# A scene with diffusion.geometry gets its binary volumes from rule capillary (a synthetic capillary per resolution).
 
 
 rule diffusion:
@@ -23,6 +24,19 @@ rule diffusion:
     shell:
         "porepipe diffusion {input.binary:q} --scene {input.scene:q} --axis {wildcards.axis} -o {output:q}"
         " --threads {threads} > {log:q} 2>&1"
+
+
+rule capillary:
+    input:
+        scene=scene_file,
+    output:
+        "results/{scene}/capillary/binary_a{a}.h5",
+    log:
+        "results/{scene}/logs/capillary_a{a}.log",
+    conda:
+        "../envs/porepipe.yaml"
+    shell:
+        "porepipe diffusion-capillary --scene {input.scene:q} --a {wildcards.a} -o {output:q} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["diffusion"] = lambda scene: [

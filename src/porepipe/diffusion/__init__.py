@@ -4,6 +4,8 @@ from porepipe._shared.lazy import lazy_exports
 
 _EXPORTS = {
     "Axis": "_settings",
+    "CapillaryGeometry": "_capillary",
+    "CapillaryKind": "_capillary",
     "DiffusionResult": "_api",
     "Geometry": "_api",
     "InletLaw": "_settings",
@@ -15,6 +17,7 @@ _EXPORTS = {
     "WallLaw": "_settings",
     "WallSpeed": "_settings",
     "accessible_pore": "_geometry",
+    "build_capillary": "_capillary",
     "closed_box": "_geometry",
     "constricted_capillary": "_geometry",
     "cylinder": "_geometry",
@@ -27,6 +30,7 @@ _EXPORTS = {
     "square_capillary": "_geometry",
     "transport": "_api",
     "wall_area": "_geometry",
+    "write_capillary": "_capillary",
 }
 __all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -8,6 +8,10 @@ from porepipe.diffusion._api import Geometry as Geometry
 from porepipe.diffusion._api import equilibrium as equilibrium
 from porepipe.diffusion._api import prepare as prepare
 from porepipe.diffusion._api import transport as transport
+from porepipe.diffusion._capillary import CapillaryGeometry as CapillaryGeometry
+from porepipe.diffusion._capillary import CapillaryKind as CapillaryKind
+from porepipe.diffusion._capillary import build_capillary as build_capillary
+from porepipe.diffusion._capillary import write_capillary as write_capillary
 from porepipe.diffusion._geometry import PoreVolume as PoreVolume
 from porepipe.diffusion._geometry import accessible_pore as accessible_pore
 from porepipe.diffusion._geometry import closed_box as closed_box
@@ -31,6 +35,8 @@ from porepipe.diffusion._species import mean_speed as mean_speed
 __all__ = [
     "SPECIES",
     "Axis",
+    "CapillaryGeometry",
+    "CapillaryKind",
     "DiffusionResult",
     "Geometry",
     "InletLaw",
@@ -41,6 +47,7 @@ __all__ = [
     "WallLaw",
     "WallSpeed",
     "accessible_pore",
+    "build_capillary",
     "closed_box",
     "constricted_capillary",
     "cylinder",
@@ -53,4 +60,5 @@ __all__ = [
     "square_capillary",
     "transport",
     "wall_area",
+    "write_capillary",
 ]

@@ -100,11 +100,13 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
     per = np.array([bool(p) for p in np.broadcast_to(periodic, (3,))])
     if axis is not None:
         per[axis] = False
-    keep = accessible_pore(pore, axis, per)
-    codes = np.empty(keep.shape, dtype=np.uint8)
-    K._chessboard_codes(keep, codes)
+    # memory: the 1-byte work copy of the flood fill becomes the distance codes in place (the raster pass reads each
+    # voxel's own 0/1 before writing its code), so beyond ``pore`` only one byte per voxel and the fill's front
+    codes = accessible_pore(pore, axis, per)
     h = voxel / voxel.min()
-    n_acc = int(np.count_nonzero(keep))
+    n_acc = int(np.count_nonzero(codes))
+    area = wall_area(codes, h, per, open_axis=axis)
+    K._chessboard_codes(codes, codes)
     return Geometry(
         codes=codes,
         h=h,
@@ -114,7 +116,7 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
         total_porosity=float(np.count_nonzero(pore)) / pore.size,
         accessible_porosity=n_acc / pore.size,
         pore_volume=n_acc * float(np.prod(h)),
-        wall_area=wall_area(keep, h, per, open_axis=axis),
+        wall_area=area,
     )
 
 
@@ -384,7 +386,10 @@ def transport(
 def _pore_hash(codes: np.ndarray) -> str:
     import hashlib
 
-    return hashlib.sha256(np.ascontiguousarray(codes > 0).tobytes()).hexdigest()[:16] + str(codes.shape)
+    digest = hashlib.sha256()
+    for layer in codes:  # the bytes of (codes > 0) layer by layer: no full-size temporary
+        digest.update(np.ascontiguousarray(layer > 0).tobytes())
+    return digest.hexdigest()[:16] + str(codes.shape)
 
 
 def _estimate(rows: np.ndarray, wk: bool) -> tuple[float, float]:

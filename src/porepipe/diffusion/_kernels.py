@@ -657,3 +657,39 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
 
     _CACHE[key] = _equilibrium
     return _equilibrium
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# geometry: the voxel wall area without full-size temporaries
+@njit(cache=True)
+def _wall_faces(pore, periodic, open_axis):
+    """(3,) int64: pore-solid voxel faces normal to x, y, z; the outside counts as solid, except across periodic axes
+    (wrap to the opposite layer) and ``open_axis`` (-1: none), where it is open.
+    """
+    n = np.array(pore.shape, dtype=np.int64)
+    faces = np.zeros(3, dtype=np.int64)
+    idx = np.empty(3, dtype=np.int64)
+    for i in range(n[0]):
+        for j in range(n[1]):
+            for k in range(n[2]):
+                p = pore[i, j, k] != 0
+                idx[0], idx[1], idx[2] = i, j, k
+                for d in range(3):
+                    if idx[d] + 1 < n[d]:
+                        nxt = idx.copy()
+                        nxt[d] += 1
+                        q = pore[nxt[0], nxt[1], nxt[2]] != 0
+                        if p != q:
+                            faces[d] += 1
+                        continue
+                    # the last layer of axis d: its high face, and the low face of layer 0 on the same line
+                    if periodic[d]:
+                        first = idx.copy()
+                        first[d] = 0
+                        if p != (pore[first[0], first[1], first[2]] != 0):
+                            faces[d] += 1
+                    elif d != open_axis:
+                        first = idx.copy()
+                        first[d] = 0
+                        faces[d] += int(p) + int(pore[first[0], first[1], first[2]] != 0)
+    return faces

@@ -6,6 +6,8 @@ import enum
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from porepipe.diffusion._capillary import CapillaryGeometry
+
 
 class Axis(str, enum.Enum):
     """Transport axis: particles enter at its low face and leave at its high face."""
@@ -106,6 +108,12 @@ class Settings(BaseModel):
         ge=0,
         description="bins of cos(angle to the axis) in the flight-orientation histogram "
         "(azimuth gets 2x as many); 0 = off",
+    )
+
+    geometry: CapillaryGeometry | None = Field(
+        None,
+        description="a synthetic capillary built per resolution instead of a segmented volume "
+        "(kind: square|cylinder|slit|constricted|pocketed|rough, sizes in voxels or *_um)",
     )
 
     @field_validator("species")
