@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from porepipe._shared.naming import TAG_RE, res_tag
-from porepipe.diffusion._capillary import check_resolutions as check_capillary_resolutions
+from porepipe.diffusion import check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH

@@ -18,6 +18,7 @@ _EXPORTS = {
     "WallSpeed": "_settings",
     "accessible_pore": "_geometry",
     "build_capillary": "_capillary",
+    "check_capillary_resolutions": "_capillary",
     "closed_box": "_geometry",
     "constricted_capillary": "_geometry",
     "cylinder": "_geometry",

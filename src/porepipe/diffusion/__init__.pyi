@@ -11,6 +11,7 @@ from porepipe.diffusion._api import transport as transport
 from porepipe.diffusion._capillary import CapillaryGeometry as CapillaryGeometry
 from porepipe.diffusion._capillary import CapillaryKind as CapillaryKind
 from porepipe.diffusion._capillary import build_capillary as build_capillary
+from porepipe.diffusion._capillary import check_capillary_resolutions as check_capillary_resolutions
 from porepipe.diffusion._capillary import write_capillary as write_capillary
 from porepipe.diffusion._geometry import PoreVolume as PoreVolume
 from porepipe.diffusion._geometry import accessible_pore as accessible_pore
@@ -48,6 +49,7 @@ __all__ = [
     "WallSpeed",
     "accessible_pore",
     "build_capillary",
+    "check_capillary_resolutions",
     "closed_box",
     "constricted_capillary",
     "cylinder",

@@ -119,7 +119,7 @@ class CapillaryGeometry(BaseModel):
         return out
 
 
-def check_resolutions(geometry: CapillaryGeometry, resolutions_um) -> None:
+def check_capillary_resolutions(geometry: CapillaryGeometry, resolutions_um) -> None:
     """Raise a :class:`PorepipeError` naming the key if a size is not a whole number of voxels at some resolution."""
     for a in resolutions_um:
         geometry.voxel_sizes(float(a))
