@@ -13,6 +13,7 @@ a surface, so it is small at any size). Writes diffusion_memory.json in the work
 from __future__ import annotations
 
 import argparse
+import functools
 import gc
 import json
 import threading
@@ -70,11 +71,16 @@ def main() -> None:
     parser.add_argument("--smoke", action="store_true", help="96^3 only")
     args = parser.parse_args()
     edge = 96 if args.smoke else args.edge
-    prepare(np.ones((8, 8, 8), dtype=np.uint8), 1.0, (True, True, False), 2)  # compile outside the measurement
+    prepare(
+        np.ones((8, 8, 8), dtype=np.uint8), 1.0, (True, True, False), 2
+    )  # compile outside the measurement
     rows = []
-    for name, make in (("Boolean spheres", boolean_spheres), ("open box", lambda e: np.ones((e,) * 3, np.uint8))):
+    for name, make in (
+        ("Boolean spheres", boolean_spheres),
+        ("open box", lambda e: np.ones((e,) * 3, np.uint8)),
+    ):
         pore = make(edge)
-        extra, seconds = peak_above_baseline(lambda: prepare(pore, 1.0, (True, True, False), 2))
+        extra, seconds = peak_above_baseline(functools.partial(prepare, pore, 1.0, (True, True, False), 2))
         per_voxel = extra / pore.size
         rows.append(
             {

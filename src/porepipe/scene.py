@@ -132,7 +132,9 @@ class SceneBase(_Strict):
         if getattr(getattr(self, "diffusion", None), "geometry", None) is not None:
             other = sorted(a.value for a in set(self.analyses) - {Analysis.diffusion, Analysis.report})
             if other:  # a synthetic capillary (diffusion.geometry) has a binary volume only, no grey one
-                raise ValueError(f"diffusion.geometry: a synthetic capillary scene runs diffusion only, not {other}")
+                raise ValueError(
+                    f"diffusion.geometry: a synthetic capillary scene runs diffusion only, not {other}"
+                )
             return self
         if getattr(self, "acquire", None) is None:
             missing = [k for k in ("domain", "spheres") if getattr(self, k) is None]

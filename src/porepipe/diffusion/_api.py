@@ -380,7 +380,31 @@ def transport(
     v["D_eff_err"] = d_err * a_open / area_total
     _derived(v, geom, settings)
     res.arrays = _arrays(tallies, settings, geom, axis)
+    # D_eff = factor x (W, or the WK FLUSS rate per particle time), as above
+    factor = (
+        (vmean * length / 4.0 if not wk else length * geom.pore_volume / (2.0 * a_open)) * a_open / area_total
+    )
+    res.arrays["history"] = _history(rows, b, lambda part: tuple(factor * x for x in _estimate(part, wk)))
     return res
+
+
+def _history(rows: np.ndarray, batches: int, estimate) -> np.ndarray:
+    """(rounds, 6): after each round, the cumulative particles, flights, wall hits, voxel crossings and the headline
+    D_eff with its batch-means error from the batches run so far (``estimate(rows) -> (D_eff, err)``).
+
+    The cost of each further digit of D_eff: the error falls as (particles x flights)^-1/2 once the batches are many.
+    """
+    rounds = rows.shape[0] // batches
+    out = np.zeros((rounds, len(HISTORY_FIELDS)))
+    for r in range(rounds):
+        part = rows[: (r + 1) * batches]
+        out[r, :4] = part[:, [K.T_PARTICLES, K.T_FLIGHTS, K.T_HITS, K.T_CROSS]].sum(axis=0)
+        out[r, 4:] = estimate(part)
+    return out
+
+
+#: columns of the ``history`` array (one row per round)
+HISTORY_FIELDS = ("particles", "flights", "wall_hits", "voxel_crossings", "D_eff", "D_eff_err")
 
 
 def _pore_hash(codes: np.ndarray) -> str:
@@ -465,6 +489,10 @@ def _derived(v, geom, settings):
     eps = geom.accessible_porosity
     psi = v["D_eff"] / v["D_ref"]
     v.update(psi=psi, labyrinth_factor=psi / eps, tortuosity=eps / psi if psi > 0 else float("inf"))
+    # V and S are exact counts, so Ψ, χ and τ carry the relative statistical error of D_eff (τ to first order)
+    rel = v["D_eff_err"] / v["D_eff"] if v["D_eff"] > 0 else float("inf")
+    for k in ("psi", "labyrinth_factor", "tortuosity"):
+        v[f"{k}_err"] = abs(v[k]) * rel
 
 
 def _arrays(tallies, settings, geom, axis):
@@ -603,6 +631,14 @@ def equilibrium(
         v["D_eff"] = geom.accessible_porosity * dmean
         v["D_eff_err"] = geom.accessible_porosity * v["D_err"]
         _derived(v, geom, settings)
+
+        def d_eff(part):
+            rounds = part.shape[0] // b
+            d_p, err_p = _msd_fit(Tallies(part, None, None, None, tallies.msd[: rounds * b]), t_samples)
+            eps = geom.accessible_porosity
+            return eps * float(np.mean(d_p[per])), eps * float(np.sqrt(np.sum(err_p[per] ** 2)) / per.sum())
+
+        res.arrays["history"] = _history(tallies.rows, b, d_eff)
     return res
 
 

@@ -62,7 +62,9 @@ class CapillaryGeometry(BaseModel):
     length_um: _Size = Field(**_SIZE_FIELD, description="length along z in µm")
     width: _Size = Field(**_SIZE_FIELD, description="slit width between the plates, voxels")
     width_um: _Size = Field(**_SIZE_FIELD, description="slit width in µm")
-    depth: _Size = Field(**_SIZE_FIELD, description="slit extent across its periodic axis y, voxels (default 4)")
+    depth: _Size = Field(
+        **_SIZE_FIELD, description="slit extent across its periodic axis y, voxels (default 4)"
+    )
     depth_um: _Size = Field(**_SIZE_FIELD, description="slit extent across y in µm")
     throat_radius: _Size = Field(**_SIZE_FIELD, description="constriction radius, voxels")
     throat_radius_um: _Size = Field(**_SIZE_FIELD, description="constriction radius in µm")
@@ -84,7 +86,9 @@ class CapillaryGeometry(BaseModel):
         for key in _ALL_SIZES:
             given = [k for k in (key, f"{key}_um") if getattr(self, k) is not None]
             if key not in needed and given:
-                problems.append(f"{given[0]} is not a size of kind {self.kind.value} (its sizes: {', '.join(needed)})")
+                problems.append(
+                    f"{given[0]} is not a size of kind {self.kind.value} (its sizes: {', '.join(needed)})"
+                )
             elif key in needed and len(given) == 2:
                 problems.append(f"give {key} (voxels) or {key}_um (µm), not both")
             elif key in needed and not given and key not in _OPTIONAL:

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from porepipe._shared.clusters import spanning_clusters
 from porepipe._shared.errors import PorepipeError
 from porepipe.diffusion import _kernels as K

@@ -1,6 +1,7 @@
 """Which pore voxels can carry flow along the flow axis (axis 0): percolation and pruning.
 
-Connectivity is the D3Q19 link set (faces and edges, 18-neighbourhood), found by the shared in-place flood fill\n(:mod:`porepipe._shared.clusters`). A cluster *spans* the sample if it
+Connectivity is the D3Q19 link set (faces and edges, 18-neighbourhood), found by the shared in-place flood fill
+(:mod:`porepipe._shared.clusters`). A cluster *spans* the sample if it
 touches the first and the last layer. With a body force on every node (periodic set-up) a cluster that does
 not wind around the periodic flow axis is static in steady Stokes flow (the uniform force is the gradient of a
 single-valued potential on it), so dropping it is exact; such a component winds iff it contains a spanning
