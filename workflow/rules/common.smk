@@ -206,7 +206,7 @@ def sweep_results(wildcards):
 def sweep_volumes(wildcards):
     """Grey and binary volumes behind the results (their cost is the upstream cost of every run)."""
     scene = scene_of(wildcards)
-    out = [] if is_acquire_scene(scene) else grey_volumes(scene)
+    out = [] if is_acquire_scene(scene) or binary_stage(scene) == "capillary" else grey_volumes(scene)
     measured = {a.value for a in scene.analyses} - SWEEP_SKIP - {"estimate"}
     if measured or any(a.value == "segment" for a in scene.analyses):
         out += binary_volumes(scene)
@@ -222,7 +222,7 @@ def report_inputs(wildcards):
     inputs = {
         "sweep": results(scene, "sweep", "sweep.h5"),
         "scene": scene_file(wildcards),
-        "grey": grey_volumes(scene) if scene.report.slices else [],
+        "grey": grey_volumes(scene) if scene.report.slices and binary_stage(scene) != "capillary" else [],
         "binary": [],
         "lpt": per_resolution(scene, "lpt/lpt_a{a}.h5") if "lpt" in names else [],
     }

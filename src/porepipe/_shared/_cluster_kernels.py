@@ -105,9 +105,22 @@ def flood(state, seed, take, to_value, offsets, periodic, axis, queue):
 def spanning(state, offsets, periodic, axis, keep_all, queue):
     """Mark the clusters of value-1 voxels that join layer 0 and the last layer of ``axis`` (or, axis -1, the largest).
 
-    ``keep_all``: every spanning cluster gets value 3; else only the largest one (ties: the first met). Every other
-    visited cluster gets 4; clusters never reached keep 1 (they do not touch layer 0). Returns the number of spanning
-    clusters (axis -1: of clusters).
+    Parameters
+    ----------
+    state : (n0, n1, n2) uint8 C-contiguous ndarray
+        0 = solid, 1 = pore; changed in place: the kept cluster(s) get 3, every other visited cluster 4, clusters
+        never reached keep 1 (they do not touch layer 0).
+    offsets, periodic, queue
+        As for :func:`flood`.
+    axis : int
+        Axis to span; -1: no spanning condition (keep the largest cluster).
+    keep_all : bool
+        Every spanning cluster gets 3; else only the largest one (ties: the first met).
+
+    Returns
+    -------
+    int
+        Spanning clusters (axis -1: clusters).
     """
     n0, n1, n2 = state.shape
     flat = state.reshape(-1)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -131,6 +132,7 @@ class Tallies:
     orientation: np.ndarray
     msd: np.ndarray
     rounds: int = 0
+    round_cpu_s: dict = field(default_factory=dict)  # round -> CPU s of its kernel call (not checkpointed)
 
     def add(self, rows, profile, hitmap, orientation, msd):
         self.rows = np.concatenate([self.rows, rows])
@@ -223,7 +225,9 @@ def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> 
             break
         if tallies.rows[:, K.T_HITS].sum() >= settings.max_wall_hits:
             break
+        cpu0 = time.process_time()
         run_round(tallies)
+        tallies.round_cpu_s[tallies.rounds - 1] = time.process_time() - cpu0
         if checkpoint:
             _save_checkpoint(checkpoint, key, tallies)
         progress.update(
@@ -384,27 +388,30 @@ def transport(
     factor = (
         (vmean * length / 4.0 if not wk else length * geom.pore_volume / (2.0 * a_open)) * a_open / area_total
     )
-    res.arrays["history"] = _history(rows, b, lambda part: tuple(factor * x for x in _estimate(part, wk)))
+    res.arrays["history"] = _history(tallies, b, lambda part: tuple(factor * x for x in _estimate(part, wk)))
     return res
 
 
-def _history(rows: np.ndarray, batches: int, estimate) -> np.ndarray:
-    """(rounds, 6): after each round, the cumulative particles, flights, wall hits, voxel crossings and the headline
-    D_eff with its batch-means error from the batches run so far (``estimate(rows) -> (D_eff, err)``).
+def _history(tallies: Tallies, batches: int, estimate) -> np.ndarray:
+    """(rounds, 7): after each round, the cumulative particles, flights, wall hits, voxel crossings, the headline
+    D_eff with its batch-means error from the batches run so far (``estimate(rows) -> (D_eff, err)``), and the
+    round's own kernel CPU seconds (NaN for rounds loaded from a checkpoint; the first includes the compilation).
 
     The cost of each further digit of D_eff: the error falls as (particles x flights)^-1/2 once the batches are many.
     """
+    rows = tallies.rows
     rounds = rows.shape[0] // batches
     out = np.zeros((rounds, len(HISTORY_FIELDS)))
     for r in range(rounds):
         part = rows[: (r + 1) * batches]
         out[r, :4] = part[:, [K.T_PARTICLES, K.T_FLIGHTS, K.T_HITS, K.T_CROSS]].sum(axis=0)
-        out[r, 4:] = estimate(part)
+        out[r, 4:6] = estimate(part)
+        out[r, 6] = tallies.round_cpu_s.get(r, math.nan)
     return out
 
 
 #: columns of the ``history`` array (one row per round)
-HISTORY_FIELDS = ("particles", "flights", "wall_hits", "voxel_crossings", "D_eff", "D_eff_err")
+HISTORY_FIELDS = ("particles", "flights", "wall_hits", "voxel_crossings", "D_eff", "D_eff_err", "round_cpu_s")
 
 
 def _pore_hash(codes: np.ndarray) -> str:
@@ -638,7 +645,7 @@ def equilibrium(
             eps = geom.accessible_porosity
             return eps * float(np.mean(d_p[per])), eps * float(np.sqrt(np.sum(err_p[per] ** 2)) / per.sum())
 
-        res.arrays["history"] = _history(tallies.rows, b, d_eff)
+        res.arrays["history"] = _history(tallies, b, d_eff)
     return res
 
 

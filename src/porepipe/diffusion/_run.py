@@ -79,7 +79,8 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
         data["time"] = xr.Variable(("time",), arr["msd_time"], {"units": "jiffie"})
     if "history" in arr:  # statistical error against cost, one row per round (see _api.HISTORY_FIELDS)
         for k, name in enumerate(_api.HISTORY_FIELDS):
-            data[f"history_{name}"] = xr.Variable(("round",), arr["history"][:, k], {"meaning": "cumulative"})
+            meaning = "this round's kernel CPU s" if name == "round_cpu_s" else "cumulative after the round"
+            data[f"history_{name}"] = xr.Variable(("round",), arr["history"][:, k], {"meaning": meaning})
     ds = xr.Dataset(data)
     ds.attrs["definitions"] = _api.__doc__.split("Definitions (also written into every result)")[1].strip()
     ds.attrs["settings"] = json.dumps(settings.model_dump(mode="json"), sort_keys=True)

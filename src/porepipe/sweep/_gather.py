@@ -142,8 +142,8 @@ def _volume_record(path) -> tuple[float, float, dict, int]:
 
 
 def split_errors(quantities: dict[str, float]) -> tuple[dict[str, float], dict[str, float]]:
-    """Separate statistical error bars from values: ``g.X_err`` (or ``g.X_err[lab]``) is the 1-σ error of ``g.X``
-    (``g.X[lab]``) when that exists (e.g. the diffusion stage's W_err, D_eff_err, tortuosity_err).
+    """Separate statistical error bars from values: ``g.X_err`` (``g.X_err[lab]``, ``g.X_err_m2_s``) is the 1-σ
+    error of ``g.X`` (``g.X[lab]``, ``g.X_m2_s``) when that exists (e.g. the diffusion stage's W_err, D_eff_err_m2_s).
 
     Returns
     -------
@@ -154,7 +154,7 @@ def split_errors(quantities: dict[str, float]) -> tuple[dict[str, float], dict[s
     """
     values, errors = {}, {}
     for name, value in quantities.items():
-        base = re.sub(r"_err(\[[^\]]*\])?$", r"\1", name)
+        base = re.sub(r"_err(_m2_s)?(\[[^\]]*\])?$", r"\1\2", name)
         if base != name and base in quantities:
             errors[base] = value
         else:
