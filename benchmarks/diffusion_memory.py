@@ -7,7 +7,8 @@
 The volume is made and loaded first, then ``prepare`` runs in this process while a thread samples the resident set
 (psutil, every millisecond); the peak above the resident set just before ``prepare`` is what the preparation needs
 beyond its 1-byte input. Printed as bytes per voxel and extrapolated linearly to 1000^3 (the fill's front grows like
-a surface, so it is small at any size). Writes diffusion_memory.json in the working directory.
+a surface, so it is small at any size). Writes ``diffusion_memory.json`` into ``--out`` (default
+``results/benchmarks/``) and a markdown table to stdout.
 """
 
 from __future__ import annotations
@@ -15,12 +16,12 @@ from __future__ import annotations
 import argparse
 import functools
 import gc
-import json
 import threading
 import time
 
 import numpy as np
 import psutil
+from _common import add_out_argument, write_record
 
 from porepipe.diffusion._api import prepare
 
@@ -69,6 +70,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--edge", type=int, default=320)
     parser.add_argument("--smoke", action="store_true", help="96^3 only")
+    add_out_argument(parser)
     args = parser.parse_args()
     edge = 96 if args.smoke else args.edge
     prepare(
@@ -100,8 +102,7 @@ def main() -> None:
             f"| {r['sample']} | {r['edge']}³ | {r['porosity']:.3f} | {r['peak_extra_bytes_per_voxel']:.2f} | "
             f"{r['prepare_s']:.1f} | {r['extrapolated_1000_cubed_GB']:.2f} |"
         )
-    with open("diffusion_memory.json", "w") as fh:
-        json.dump(rows, fh, indent=1)
+    write_record(args.out, "diffusion_memory.json", rows)
 
 
 if __name__ == "__main__":
