@@ -56,6 +56,10 @@ def flood(state, seed, take, to_value, offsets, periodic, axis, queue):
     dims = np.array([n0, n1, n2], dtype=np.int64)
     cur = np.empty(3, dtype=np.int64)
     value = np.uint8(to_value)
+    n_off = offsets.shape[0]
+    step = np.empty(n_off, dtype=np.int64)  # flat steps, valid away from the box faces
+    for m in range(n_off):
+        step[m] = (offsets[m, 0] * n1 + offsets[m, 1]) * n2 + offsets[m, 2]
     flat[seed] = value
     queue[0] = seed
     head, count = 0, 1
@@ -74,7 +78,18 @@ def flood(state, seed, take, to_value, offsets, periodic, axis, queue):
                 low = True
             if cur[axis] == dims[axis] - 1:
                 high = True
-        for m in range(offsets.shape[0]):
+        if 0 < cur[0] < n0 - 1 and 0 < cur[1] < n1 - 1 and 0 < cur[2] < n2 - 1:  # interior: no wrap, no bounds
+            for m in range(n_off):
+                g = f + step[m]
+                if take[flat[g]]:
+                    flat[g] = value
+                    if count == queue.size:
+                        queue = _grow(queue, head, count)
+                        head = 0
+                    queue[(head + count) % queue.size] = g
+                    count += 1
+            continue
+        for m in range(n_off):
             i = cur[0] + offsets[m, 0]
             j = cur[1] + offsets[m, 1]
             k = cur[2] + offsets[m, 2]
@@ -109,7 +124,7 @@ def spanning(state, offsets, periodic, axis, keep_all, queue):
     ----------
     state : (n0, n1, n2) uint8 C-contiguous ndarray
         0 = solid, 1 = pore; changed in place: the kept cluster(s) get 3, every other visited cluster 4, clusters
-        never reached keep 1 (they do not touch layer 0).
+        never reached keep 1 (they do not touch layer 0, or axis -1 and none is left).
     offsets, periodic, queue
         As for :func:`flood`.
     axis : int
@@ -126,10 +141,8 @@ def spanning(state, offsets, periodic, axis, keep_all, queue):
     flat = state.reshape(-1)
     fresh = np.zeros(256, dtype=np.bool_)
     fresh[1] = True
-    mine = np.zeros(256, dtype=np.bool_)
-    mine[2] = True
-    best = np.zeros(256, dtype=np.bool_)
-    best[3] = True
+    kept = np.zeros(256, dtype=np.bool_)
+    kept[3] = True
     best_size, best_seed, found = 0, -1, 0
     for f in range(flat.size):
         if flat[f] != 1:
@@ -138,17 +151,19 @@ def spanning(state, offsets, periodic, axis, keep_all, queue):
             break
         if (axis == 1 and (f // n2) % n1 != 0) or (axis == 2 and f % n2 != 0):
             continue
-        size, low, high, queue = flood(state, f, fresh, 2, offsets, periodic, axis, queue)
+        # fill straight into "kept" (3); a cluster that is not kept after all is refilled to 4. Distinct clusters
+        # never touch, so a fill over value 3 from a seed stays in that seed's cluster. The large (spanning) cluster
+        # is filled once; only losers and a dethroned best are filled twice.
+        size, low, high, queue = flood(state, f, fresh, 3, offsets, periodic, axis, queue)
         joins = high if axis >= 0 else True
         if joins:
             found += 1
         if joins and (keep_all or size > best_size):
             if not keep_all and best_seed >= 0:
-                queue = flood(state, best_seed, best, 4, offsets, periodic, axis, queue)[3]
-            queue = flood(state, f, mine, 3, offsets, periodic, axis, queue)[3]
+                queue = flood(state, best_seed, kept, 4, offsets, periodic, axis, queue)[3]
             best_size, best_seed = size, f
         else:
-            queue = flood(state, f, mine, 4, offsets, periodic, axis, queue)[3]
+            queue = flood(state, f, kept, 4, offsets, periodic, axis, queue)[3]
     return found
 
 
