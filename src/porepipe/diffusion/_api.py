@@ -559,7 +559,9 @@ def equilibrium(
     ext = np.array(geom.codes.shape) * geom.h
     t_end = t_end or settings.msd_time_jiffies or 50.0 * float(ext.max())
     t_samples = np.linspace(t_end / settings.msd_samples, t_end, settings.msd_samples)
-    cells = geom.cells()
+    cells = np.zeros(
+        (0, 3), dtype=np.int64
+    )  # start points by rejection over the codes: no 24-byte list per voxel
     b, per_b = settings.batches, settings.batch_particles
     seed_k = kernel_seed(seed, STAGE, 2)
     key = hash_of(

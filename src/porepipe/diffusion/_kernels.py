@@ -358,6 +358,23 @@ def _uniform_in_pore(cells, h, pos, idx, state):
     return state
 
 
+@njit(cache=True)
+def _uniform_in_codes(geom, h, pos, idx, state):
+    """Uniform position in the pore space of ``geom`` (code > 0) by rejection over the box: no voxel list, 1/ε tries."""
+    n0, n1, n2 = geom.shape
+    flat = geom.reshape(n0 * n1 * n2)
+    while True:
+        x, state = _uniform(state)
+        f = min(int(x * flat.size), flat.size - 1)
+        if flat[f] > 0:
+            break
+    idx[0], idx[1], idx[2] = f // (n1 * n2), (f // n2) % n1, f % n2
+    for d in range(3):
+        y, state = _uniform(state)
+        pos[d] = (idx[d] + 1.0 - y) * h[d]
+    return state
+
+
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _reflect(law, mixed, wall_speed, event, u, speed_now, vmean, alpha, state):
     """Reflect ``u`` at wall face ``event`` by ``law``; returns (speed, state).
@@ -574,7 +591,8 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
 
     Closed pores (``msd=False``): counts wall hits and path length (mean flight = path / hits -> 4V/S for diffuse
     Lambert walls). Periodic medium (``msd=True``): also the squared unwrapped displacement per axis at the
-    sample times ``t_samples``, summed per batch into ``msd_out[b, k, axis]``.
+    sample times ``t_samples``, summed per batch into ``msd_out[b, k, axis]``. Start points: uniform over ``cells``
+    ((m, 3) voxel list), or with an empty list by rejection over the codes (no per-voxel list in memory).
     """
     key = ("equilibrium", *wall, speed_dist, bool(msd))
     if key in _CACHE:
@@ -613,7 +631,10 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
             for q in range(per_batch):
                 pid = first + b * per_batch + q
                 state = _stream_state(seed, pid)
-                state = _uniform_in_pore(cells, h, pos, idx, state)
+                if cells.shape[0] > 0:
+                    state = _uniform_in_pore(cells, h, pos, idx, state)
+                else:
+                    state = _uniform_in_codes(geom, h, pos, idx, state)
                 state = _isotropic(u, state)
                 speed, state = _speed(SPEED, vmean, state)
                 for d in range(3):
