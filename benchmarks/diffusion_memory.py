@@ -6,7 +6,7 @@
 
 The volume is made and loaded first, then ``prepare`` runs in this process while a thread samples the resident set
 (psutil, every millisecond); the peak above the resident set just before ``prepare`` is what the preparation needs
-beyond its 1-byte input. Printed as bytes per voxel and extrapolated linearly to 1000^3 (the fill's front grows like
+beyond its 1-byte input (``in_place``: as ``porepipe diffusion`` runs it, the input becomes the codes). Printed as bytes per voxel and extrapolated linearly to 1000^3 (the fill's front grows like
 a surface, so it is small at any size). Writes ``diffusion_memory.json`` into ``--out`` (default
 ``results/benchmarks/``) and a markdown table to stdout.
 """
@@ -77,18 +77,23 @@ def main() -> None:
         np.ones((8, 8, 8), dtype=np.uint8), 1.0, (True, True, False), 2
     )  # compile outside the measurement
     rows = []
-    for name, make in (
-        ("Boolean spheres", boolean_spheres),
-        ("open box", lambda e: np.ones((e,) * 3, np.uint8)),
-    ):
+    cases = (
+        ("Boolean spheres", boolean_spheres, False),
+        ("open box", lambda e: np.ones((e,) * 3, np.uint8), False),
+        ("Boolean spheres, in place (porepipe diffusion)", boolean_spheres, True),
+    )
+    for name, make, in_place in cases:
         pore = make(edge)
-        extra, seconds = peak_above_baseline(functools.partial(prepare, pore, 1.0, (True, True, False), 2))
+        porosity = float(pore.mean())
+        extra, seconds = peak_above_baseline(
+            functools.partial(prepare, pore, 1.0, (True, True, False), 2, in_place=in_place)
+        )
         per_voxel = extra / pore.size
         rows.append(
             {
                 "sample": name,
                 "edge": edge,
-                "porosity": float(pore.mean()),
+                "porosity": porosity,
                 "peak_extra_bytes_per_voxel": per_voxel,
                 "prepare_s": seconds,
                 "extrapolated_1000_cubed_GB": (1.0 + per_voxel) * 1e9 / 1e9,

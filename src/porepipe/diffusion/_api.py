@@ -78,7 +78,13 @@ class Geometry:
         return np.insert(found, self.axis, layer % n, axis=1)
 
 
-def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis: int | None = 2) -> Geometry:
+def prepare(
+    pore: np.ndarray,
+    voxel_um=1.0,
+    periodic=(False, False, False),
+    axis: int | None = 2,
+    in_place: bool = False,
+) -> Geometry:
     """Check a binary volume, keep its accessible cluster and build the distance codes.
 
     Parameters
@@ -91,6 +97,9 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
         Axes that wrap; the transport axis never does.
     axis : int or None
         Transport axis (0, 1, 2), or None for the periodic medium (largest cluster kept).
+    in_place : bool
+        Turn ``pore`` (a writeable C-contiguous uint8 array the caller gives up) into the codes: no second volume,
+        so a 1000³ image needs about 1 GB in all.
     """
     pore = np.asarray(pore)
     if pore.ndim != 3:
@@ -103,7 +112,8 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
         per[axis] = False
     # memory: the 1-byte work copy of the flood fill becomes the distance codes in place (the raster pass reads each
     # voxel's own 0/1 before writing its code), so beyond ``pore`` only one byte per voxel and the fill's front
-    codes = accessible_pore(pore, axis, per)
+    n_total = int(np.count_nonzero(pore))
+    codes = accessible_pore(pore, axis, per, in_place=in_place)
     h = voxel / voxel.min()
     n_acc = int(np.count_nonzero(codes))
     area = wall_area(codes, h, per, open_axis=axis)
@@ -114,7 +124,7 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
         periodic=per,
         voxel_um=voxel,
         axis=axis,
-        total_porosity=float(np.count_nonzero(pore)) / pore.size,
+        total_porosity=n_total / pore.size,
         accessible_porosity=n_acc / pore.size,
         pore_volume=n_acc * float(np.prod(h)),
         wall_area=area,

@@ -147,6 +147,10 @@ def run(
                 result.values["D"] = result.values[f"D_{name}"]
                 result.values["D_err"] = result.values[f"D_{name}_err"]
         else:
+            # the volume read here is ours: it becomes the distance codes in place (1 byte per voxel in all)
+            pore = _api.prepare(
+                np.ascontiguousarray(pore, np.uint8), voxel_um, periodic, axis.index, in_place=True
+            )
             result = _api.transport(
                 pore, axis.index, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint
             )
