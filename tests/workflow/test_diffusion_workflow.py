@@ -11,14 +11,18 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "config" / "scenes" / "mini-diffusion.yaml"
 
 
-def _planned(scene_path, cwd):
-    out = subprocess.run(
+def _dry_run(scene_path, cwd):
+    return subprocess.run(
         [sys.executable, "-m", "porepipe.cli", "run", str(scene_path), "--cores", "1", "-n"],
         cwd=cwd,
         capture_output=True,
         check=False,
         text=True,
     )
+
+
+def _planned(scene_path, cwd):
+    out = _dry_run(scene_path, cwd)
     assert out.returncode == 0, out.stderr + out.stdout
     table = re.findall(r"^(\w+)\s+(\d+)\s*$", out.stdout, flags=re.MULTILINE)
     return {name: int(count) for name, count in table if name != "total"}, out.stdout
@@ -51,12 +55,6 @@ def test_capillary_size_that_is_no_whole_voxel_count_stops_the_dry_run(tmp_path)
     scene["diffusion"]["geometry"] = {"kind": "square", "a_um": 1.25, "length": 30}
     path = tmp_path / "s.yaml"
     path.write_text(yaml.safe_dump(scene))
-    out = subprocess.run(
-        [sys.executable, "-m", "porepipe.cli", "run", str(path), "--cores", "1", "-n"],
-        cwd=tmp_path,
-        capture_output=True,
-        check=False,
-        text=True,
-    )
+    out = _dry_run(path, tmp_path)
     assert out.returncode != 0
     assert "diffusion.geometry.a_um = 1.25 is 1.25 voxels" in out.stdout + out.stderr

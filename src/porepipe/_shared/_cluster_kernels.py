@@ -20,6 +20,16 @@ def _grow(queue, head, count):
     return bigger
 
 
+@njit(cache=True, inline="always")
+def _push(queue, head, count, g):
+    """Append ``g`` to the ring (growing it when full); returns (queue, head, count)."""
+    if count == queue.size:
+        queue = _grow(queue, head, count)
+        head = 0
+    queue[(head + count) % queue.size] = g
+    return queue, head, count + 1
+
+
 @njit(cache=True)
 def flood(state, seed, take, to_value, offsets, periodic, axis, queue):
     """Relabel to ``to_value`` the cluster of ``seed`` over voxels whose value ``v`` has ``take[v]`` set.
@@ -78,16 +88,14 @@ def flood(state, seed, take, to_value, offsets, periodic, axis, queue):
                 low = True
             if cur[axis] == dims[axis] - 1:
                 high = True
-        if 0 < cur[0] < n0 - 1 and 0 < cur[1] < n1 - 1 and 0 < cur[2] < n2 - 1:  # interior: no wrap, no bounds
+        if (
+            0 < cur[0] < n0 - 1 and 0 < cur[1] < n1 - 1 and 0 < cur[2] < n2 - 1
+        ):  # interior: no wrap, no bounds
             for m in range(n_off):
                 g = f + step[m]
                 if take[flat[g]]:
                     flat[g] = value
-                    if count == queue.size:
-                        queue = _grow(queue, head, count)
-                        head = 0
-                    queue[(head + count) % queue.size] = g
-                    count += 1
+                    queue, head, count = _push(queue, head, count, g)
             continue
         for m in range(n_off):
             i = cur[0] + offsets[m, 0]
@@ -108,11 +116,7 @@ def flood(state, seed, take, to_value, offsets, periodic, axis, queue):
             g = (i * n1 + j) * n2 + k
             if take[flat[g]]:
                 flat[g] = value
-                if count == queue.size:
-                    queue = _grow(queue, head, count)
-                    head = 0
-                queue[(head + count) % queue.size] = g
-                count += 1
+                queue, head, count = _push(queue, head, count, g)
     return size, low, high, queue
 
 

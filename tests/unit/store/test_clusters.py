@@ -149,3 +149,16 @@ def test_connectivity_must_be_known():
     assert {tuple(s) for s in neighbour_offsets(6)} == {
         s for s in itertools.product((-1, 0, 1), repeat=3) if sum(map(abs, s)) == 1
     }
+
+
+def test_prepare_in_place_gives_the_same_geometry():
+    from porepipe.diffusion import prepare
+
+    pore = (np.random.default_rng(8).random((20, 18, 24)) < 0.65).astype(np.uint8)
+    ref = prepare(pore.copy(), (1.0, 1.0, 2.0), (True, False, False), 2)
+    work = pore.copy()
+    got = prepare(work, (1.0, 1.0, 2.0), (True, False, False), 2, in_place=True)
+    assert got.codes is work
+    np.testing.assert_array_equal(got.codes, ref.codes)
+    for key in ("total_porosity", "accessible_porosity", "pore_volume", "wall_area"):
+        assert getattr(got, key) == getattr(ref, key)
