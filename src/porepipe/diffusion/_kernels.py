@@ -142,6 +142,7 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     crossings = 0
     u0, u1, u2 = u[0], u[1], u[2]
     h0, h1, h2 = h[0], h[1], h[2]
+    ih0, ih1, ih2 = 1.0 / h0, 1.0 / h1, 1.0 / h2  # floor(p * ih) in the jump: no division per jump
     s0 = 1 if u0 > 0.0 else (-1 if u0 < 0.0 else 0)
     s1 = 1 if u1 > 0.0 else (-1 if u1 < 0.0 else 0)
     s2 = 1 if u2 > 0.0 else (-1 if u2 < 0.0 else 0)
@@ -154,7 +155,7 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     i0, i1, i2 = idx[0], idx[1], idx[2]
     p0, p1, p2 = pos[0], pos[1], pos[2]
     while True:
-        r = np.int64(geom[i0, i1, i2]) - 1
+        r = np.int64(flat[(i0 * n1 + i1) * n2 + i2]) - 1  # flat load: no negative-index wraparound checks
         if r >= 2:
             # jump to the surface of the all-pore cube [i - r, i + r] (index space)
             t = _INF
@@ -175,9 +176,9 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
             p1 += t * u1
             p2 += t * u2
             length += t
-            i0 = min(max(np.int64(math.floor(p0 / h0)), i0 - r), i0 + r)
-            i1 = min(max(np.int64(math.floor(p1 / h1)), i1 - r), i1 + r)
-            i2 = min(max(np.int64(math.floor(p2 / h2)), i2 - r), i2 + r)
+            i0 = min(max(np.int64(math.floor(p0 * ih0)), i0 - r), i0 + r)
+            i1 = min(max(np.int64(math.floor(p1 * ih1)), i1 - r), i1 + r)
+            i2 = min(max(np.int64(math.floor(p2 * ih2)), i2 - r), i2 + r)
         # voxel walk from the segment start (p0, p1, p2) in voxel (i0, i1, i2)
         t0 = (((i0 + 1) * h0 - p0) * iu0 if s0 > 0 else (i0 * h0 - p0) * iu0) if s0 != 0 else _INF
         t1 = (((i1 + 1) * h1 - p1) * iu1 if s1 > 0 else (i1 * h1 - p1) * iu1) if s1 != 0 else _INF
