@@ -437,11 +437,12 @@ def reactive_pore(
     Returns the counts and, with k = w·ν_wall (ν_wall = wall hits per particle per jiffie, measured):
     ``eta`` = product rate/(k·N) = products/(w·wall hits) (4.5; η → 1 as w → 0), ``eta_err`` (batch means),
     ``phi`` by bisection (4.7), ``r_eff`` = products per particle-jiffie, ``k0_max`` = ν_wall (4.4: the w → 0 limit of
-    r_eff/w per particle), ``D_R`` (4.12, voxel²/jiffie) and ``z_react`` (reactive hits per axial bin).
+    r_eff/w per particle), ``D_R`` (4.12, voxel²/jiffie); with ``z_bins``: ``z_react`` (reactive hits per axial
+    bin), ``reactant_profile`` (c_A/c₀ per bin) and ``phi_profile`` (Φ fitted to it by (4.11)).
     Lengths in units of the smallest voxel edge, times in jiffies (v̄ = 1 voxel/jiffie).
     """
     from porepipe.diffusion._api import _ratio, prepare
-    from porepipe.diffusion._reactions import diffusion_under_reaction, phi_of_eta
+    from porepipe.diffusion._reactions import diffusion_under_reaction, phi_of_eta, profile_phi
 
     for name, value in (("w", w), ("w_reverse", w_reverse), ("w_follow", w_follow)):
         if not 0.0 <= value <= 1.0:
@@ -459,7 +460,7 @@ def reactive_pore(
     )
     per = max(1, particles // batches)
     tally = np.zeros((batches, E.N_RTALLY))
-    zhist = np.zeros((batches, max(z_bins, 1)))
+    zhist = np.zeros((batches, 3, max(z_bins, 1)))
     kernel(
         geom.codes,
         geom.h,
@@ -502,7 +503,13 @@ def reactive_pore(
             phi = phi_of_eta(eta)
             out.update(phi=phi, D_R=diffusion_under_reaction(phi, out["length"], w * nu))
     if z_bins:
-        out["z_react"] = zhist.sum(axis=0)
+        maps = zhist.sum(axis=0)
+        out["z_react"] = maps[0]
+        out["z_time_reactant"] = maps[1]
+        profile = np.divide(maps[1], maps[2], out=np.zeros(z_bins), where=maps[2] > 0)
+        out["reactant_profile"] = profile
+        z = (np.arange(z_bins) + 0.5) / z_bins
+        out["phi_profile"] = profile_phi(z[maps[2] > 0], profile[maps[2] > 0])
     return out
 
 
@@ -609,5 +616,5 @@ def reaction_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0
         z_bins=rs.z_bins,
         seed=seed,
     )
-    arrays = {"z_react": out.pop("z_react")} if "z_react" in out else {}
+    arrays = {k: out.pop(k) for k in ("z_react", "z_time_reactant", "reactant_profile") if k in out}
     return DiffusionResult("reaction", "xyz"[axis], out, arrays)

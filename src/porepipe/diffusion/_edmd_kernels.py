@@ -30,6 +30,7 @@ from porepipe.diffusion._kernels import (
     EXIT_LOW,
     _emit,
     _fly,
+    _profile_add,
     _reflect,
     _speed,
     _stream_state,
@@ -687,7 +688,9 @@ def make_reactive_kernel(
     into P with probability ``w[0]``; with ``reverse`` P turns back into A with ``w[1]``; with ``follow`` P turns
     into S with ``w[2]`` (A → P → S). Leaving through the inlet ends the history: A = REFLEX (R_OUT_A), P or S =
     FLUSS products (R_OUT_P, R_OUT_S). In steady state with N particles in the pore each entering particle is one
-    history, so rates per particle-time are counts over R_TIME. ``zmap``: reactive hits A → P per axial bin.
+    history, so rates per particle-time are counts over R_TIME. ``zmap``: per axial bin ``zhist[b, 0]`` the reactive
+    hits A → P, ``zhist[b, 1]`` the time spent there as A and ``zhist[b, 2]`` by all species (the total density is
+    uniform, so their ratio is the reactant profile c_A/c₀ of (4.11)).
     """
     key = (*wall, int(inlet_law), int(inlet_speed), bool(reverse), bool(follow), bool(zmap))
     if key in _RCACHE:
@@ -700,7 +703,7 @@ def make_reactive_kernel(
     ):
         n_batches = tally.shape[0]
         length_ax = geom.shape[axis] * h[axis]
-        bin_w = length_ax / zhist.shape[1]
+        bin_w = length_ax / zhist.shape[2]
         for b in prange(n_batches):
             pos = np.empty(3)
             u = np.empty(3)
@@ -717,8 +720,13 @@ def make_reactive_kernel(
                 hits = 0
                 t_now = 0.0
                 while True:
+                    p_ax = pos[axis]
                     ev, ln, _ = _fly(geom, h, periodic, axis, pos, idx, u, img)
                     t_now += ln / speed
+                    if ZMAP:
+                        _profile_add(zhist[b, 2], p_ax, u[axis], ln, speed, bin_w)
+                        if species == 0:
+                            _profile_add(zhist[b, 1], p_ax, u[axis], ln, speed, bin_w)
                     if ev == EXIT_HIGH:
                         u[axis] = -u[axis]
                         acc[R_BACKWALL] += 1
@@ -733,7 +741,7 @@ def make_reactive_kernel(
                             species = 1
                             acc[R_REACT] += 1
                             if ZMAP:
-                                zhist[b, min(int(pos[axis] / bin_w), zhist.shape[1] - 1)] += 1
+                                zhist[b, 0, min(int(pos[axis] / bin_w), zhist.shape[2] - 1)] += 1
                     elif species == 1:
                         if REVERSE and x < w[1]:
                             species = 0
