@@ -618,3 +618,83 @@ def reaction_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0
     )
     arrays = {k: out.pop(k) for k in ("z_react", "z_time_reactant", "reactant_profile") if k in out}
     return DiffusionResult("reaction", "xyz"[axis], out, arrays)
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# transition regime: D against particle number (pressure) and the Bosanquet line (3.48-3.50)
+def bosanquet_fit(counts, d, d_err) -> dict:
+    """Weighted straight line 1/D = a + b·N (3.50) through (N, D ± D_err): intercept a = 1/D_Kn, slope b (the gas
+    resistance per particle), their standard errors, and χ²/dof of the fit.
+    """
+    counts, d, d_err = (np.asarray(x, float) for x in (counts, d, d_err))
+    if (
+        counts.size < 2
+        or not (counts.shape == d.shape == d_err.shape)
+        or np.any(d <= 0)
+        or np.any(d_err <= 0)
+    ):
+        raise PorepipeError("the Bosanquet fit needs >= 2 points with D > 0 and D_err > 0")
+    y = 1.0 / d
+    sy = d_err / d**2  # error of 1/D
+    wgt = 1.0 / sy**2
+    a_mat = np.stack([np.ones_like(counts), counts], axis=1)
+    cov = np.linalg.inv(a_mat.T @ (wgt[:, None] * a_mat))
+    a, b = cov @ (a_mat.T @ (wgt * y))
+    resid = y - (a + b * counts)
+    dof = max(counts.size - 2, 1)
+    return {
+        "intercept": float(a),
+        "intercept_err": float(math.sqrt(cov[0, 0])),
+        "slope": float(b),
+        "slope_err": float(math.sqrt(cov[1, 1])),
+        "chi2_dof": float(np.sum(wgt * resid**2) / dof),
+    }
+
+
+def pressure_series(
+    pore,
+    voxel_nm: float,
+    axis: int,
+    counts,
+    duration_ps: float,
+    *,
+    species: str = "N2",
+    wall_law: str = "lambert",
+    temperature_K: float = 298.15,
+    samples: int = 16,
+    seed: int = 0,
+) -> dict:
+    """Self-diffusion along ``axis`` of a pore periodic along that axis for each particle number in ``counts``
+    (N = 0 entries are not allowed; the Knudsen limit comes from the intercept), then the Bosanquet fit.
+
+    Returns ``counts``, ``D`` and ``D_err`` (nm²/ps, batch means over 8 particle groups), ``Kn`` (λ_M over the mean
+    chord 4V/S) and the :func:`bosanquet_fit` entries. Compare the intercept with 1/D of the Knudsen engine and the
+    slope with V/(n·D_CE)/V² (the bulk resistance per particle).
+    """
+    from porepipe.diffusion._geometry import wall_area
+
+    per = [False, False, False]
+    per[axis] = True
+    keep = (np.asarray(pore) > 0).astype(np.uint8)
+    volume = float(keep.sum()) * voxel_nm**3
+    chord = 4.0 * volume / wall_area(keep, np.full(3, voxel_nm), np.array(per))
+    d_sp = 2.0 * SPECIES[species][0]
+    out_d, out_err, kn = [], [], []
+    for k, n_part in enumerate(counts):
+        if n_part < 8:
+            raise PorepipeError(f"each point of the pressure series needs >= 8 particles, got {n_part}")
+        gas = make_gas(
+            pore, voxel_nm, {species: int(n_part)}, periodic=per, temperature_K=temperature_K, seed=seed + k
+        )
+        m = measure(gas, duration_ps, samples=samples, physics=Physics(wall_law=wall_law), groups=8)
+        out_d.append(m["D_self_nm2_ps"])
+        out_err.append(m["D_self_err_nm2_ps"])
+        kn.append(maxwell_free_path(n_part / volume, d_sp) / chord)
+    fit = bosanquet_fit(counts, out_d, out_err)
+    return {
+        "counts": np.asarray(counts),
+        "D": np.array(out_d),
+        "D_err": np.array(out_err),
+        "Kn": np.array(kn),
+        **fit,
+    }
