@@ -429,6 +429,7 @@ def reactive_pore(
     batches: int = 16,
     max_hits: int = 10**7,
     z_bins: int = 0,
+    sites=None,
     seed: int = 0,
 ) -> dict:
     """First-order wall reaction A → P (optionally reversible, or consecutive P → S) in a pore fed from its low face
@@ -439,6 +440,8 @@ def reactive_pore(
     ``phi`` by bisection (4.7), ``r_eff`` = products per particle-jiffie, ``k0_max`` = ν_wall (4.4: the w → 0 limit of
     r_eff/w per particle), ``D_R`` (4.12, voxel²/jiffie); with ``z_bins``: ``z_react`` (reactive hits per axial
     bin), ``reactant_profile`` (c_A/c₀ per bin) and ``phi_profile`` (Φ fitted to it by (4.11)).
+    ``sites``: an array of the pore's shape (>= 0) that multiplies every reaction probability at a wall hit from
+    that pore voxel (active-site distribution); η then still uses the mean w (products/(w·hits)).
     Lengths in units of the smallest voxel edge, times in jiffies (v̄ = 1 voxel/jiffie).
     """
     from porepipe.diffusion._api import _ratio, prepare
@@ -450,6 +453,10 @@ def reactive_pore(
     if wall_law not in _LAW:
         raise PorepipeError(f"wall_law must be one of {', '.join(_LAW)}, got {wall_law!r}")
     geom = prepare(pore, voxel_um, periodic, axis)
+    if sites is not None:
+        sites = np.asarray(sites, dtype=float)
+        if sites.shape != np.shape(pore) or not np.all(np.isfinite(sites)) or np.any(sites < 0):
+            raise PorepipeError(f"sites must be finite, >= 0 and of the pore's shape {np.shape(pore)}")
     kernel = E.make_reactive_kernel(
         K.wall_flags(_LAW[wall_law], 1.0, False),
         K.LAMBERT,
@@ -457,6 +464,7 @@ def reactive_pore(
         w_reverse > 0,
         w_follow > 0,
         z_bins > 0,
+        sites is not None,
     )
     per = max(1, particles // batches)
     tally = np.zeros((batches, E.N_RTALLY))
@@ -474,6 +482,7 @@ def reactive_pore(
         1.0,
         1.0,
         np.array([w, w_reverse, w_follow], float),
+        sites if sites is not None else np.ones((1, 1, 1)),
         tally,
         zhist,
     )

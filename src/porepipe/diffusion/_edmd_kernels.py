@@ -678,7 +678,13 @@ _RCACHE: dict = {}
 
 
 def make_reactive_kernel(
-    wall: tuple, inlet_law: int, inlet_speed: int, reverse: bool, follow: bool, zmap: bool
+    wall: tuple,
+    inlet_law: int,
+    inlet_speed: int,
+    reverse: bool,
+    follow: bool,
+    zmap: bool,
+    sites: bool = False,
 ):
     """Kernel of the one-face-fed pore with reactive walls; each effect is compiled in only when named.
 
@@ -690,16 +696,31 @@ def make_reactive_kernel(
     FLUSS products (R_OUT_P, R_OUT_S). In steady state with N particles in the pore each entering particle is one
     history, so rates per particle-time are counts over R_TIME. ``zmap``: per axial bin ``zhist[b, 0]`` the reactive
     hits A → P, ``zhist[b, 1]`` the time spent there as A and ``zhist[b, 2]`` by all species (the total density is
-    uniform, so their ratio is the reactant profile c_A/c₀ of (4.11)).
+    uniform, so their ratio is the reactant profile c_A/c₀ of (4.11)). ``sites``: every reaction probability at a
+    wall hit is multiplied by ``site_w`` of the pore voxel hit (an active-site distribution, thesis §4.1).
     """
-    key = (*wall, int(inlet_law), int(inlet_speed), bool(reverse), bool(follow), bool(zmap))
+    key = (*wall, int(inlet_law), int(inlet_speed), bool(reverse), bool(follow), bool(zmap), bool(sites))
     if key in _RCACHE:
         return _RCACHE[key]
-    LAW, MIXED, WSPEED, INLET, INSPEED, REVERSE, FOLLOW, ZMAP = key
+    LAW, MIXED, WSPEED, INLET, INSPEED, REVERSE, FOLLOW, ZMAP, SITES = key
 
     @njit(cache=True, fastmath=K_FASTMATH, parallel=True)
     def _reactive(
-        geom, h, periodic, axis, inlet_cells, seed, first, per_batch, max_hits, vmean, alpha, w, tally, zhist
+        geom,
+        h,
+        periodic,
+        axis,
+        inlet_cells,
+        seed,
+        first,
+        per_batch,
+        max_hits,
+        vmean,
+        alpha,
+        w,
+        site_w,
+        tally,
+        zhist,
     ):
         n_batches = tally.shape[0]
         length_ax = geom.shape[axis] * h[axis]
@@ -736,6 +757,10 @@ def make_reactive_kernel(
                         break
                     hits += 1
                     x, state = _uniform(state)
+                    if SITES:
+                        x = x / max(
+                            site_w[idx[0], idx[1], idx[2]], 1e-300
+                        )  # active-site factor of this voxel
                     if species == 0:
                         if x < w[0]:
                             species = 1
