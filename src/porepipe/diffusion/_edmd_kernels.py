@@ -757,21 +757,18 @@ def make_reactive_kernel(
                         break
                     hits += 1
                     x, state = _uniform(state)
-                    if SITES:
-                        x = x / max(
-                            site_w[idx[0], idx[1], idx[2]], 1e-300
-                        )  # active-site factor of this voxel
+                    f = site_w[idx[0], idx[1], idx[2]] if SITES else 1.0  # active-site factor of this voxel
                     if species == 0:
-                        if x < w[0]:
+                        if x < f * w[0]:
                             species = 1
                             acc[R_REACT] += 1
                             if ZMAP:
                                 zhist[b, 0, min(int(pos[axis] / bin_w), zhist.shape[2] - 1)] += 1
                     elif species == 1:
-                        if REVERSE and x < w[1]:
+                        if REVERSE and x < f * w[1]:
                             species = 0
                             acc[R_REVERSE] += 1
-                        elif FOLLOW and x >= 1.0 - w[2]:
+                        elif FOLLOW and x >= 1.0 - f * w[2]:
                             species = 2
                             acc[R_FOLLOW] += 1
                     if hits >= max_hits:
