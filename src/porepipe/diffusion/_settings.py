@@ -124,7 +124,7 @@ class ReactionSettings(BaseModel):
 class Settings(BaseModel):
     """Knudsen (free-molecular) diffusion: point particles, exact voxel flights, diffuse or specular walls."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False)
+    model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False, allow_inf_nan=False)
 
     setup: Setup = Field(Setup.transmission, description="transmission, wicke_kallenbach or msd")
     axes: list[Axis] = Field(
