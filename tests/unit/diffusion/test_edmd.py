@@ -210,3 +210,29 @@ def test_bosanquet_line_in_a_periodic_capillary():
     assert (
         r["slope_err"] < 0.4 * bulk
     )  # measured 0.25: a weak check of the slope, the bulk D test is the strong one
+
+
+def test_mixture_of_unequal_masses_reaches_equipartition():
+    """He (4 u) started 4x hotter than Ar (40 u) in a periodic box: after ~15 collisions per particle both species
+    carry the same mean kinetic energy (equipartition), within 4 σ of the per-particle scatter (σ_KE/KE = √(2/3)
+    for a Maxwell gas); the total energy stays conserved to 1e-12. Their speeds then pass a KS test against MB at
+    the common temperature (p > 0.01 each)."""
+    gas = D.make_gas(BOX, 20.0, {"He": 400, "Ar": 400}, periodic=(True, True, True), seed=13)
+    he = gas.species == 0
+    gas.vel[he] *= 2.0
+    e0 = gas.kinetic_energy()
+    ke = 0.5 * gas.mass[gas.species] * np.sum(gas.vel**2, axis=1)
+    assert ke[he].mean() / ke[~he].mean() > 3.0
+    n = 800 / 8000.0
+    d_mix = 0.1278 + 0.1771
+    z = D.collision_rate(n, d_mix, D.mean_speed_nm_ps("Ar", 298.15))  # a lower bound of the mixture rate
+    D.advance(gas, 15.0 / z)
+    assert gas.kinetic_energy() == pytest.approx(e0, rel=1e-12)
+    ke = 0.5 * gas.mass[gas.species] * np.sum(gas.vel**2, axis=1)
+    sigma = math.sqrt(2 / 3) * ke.mean() * math.sqrt(1 / 400 + 1 / 400)
+    assert abs(ke[he].mean() - ke[~he].mean()) <= 4 * sigma
+    kt = 2.0 / 3.0 * ke.mean()  # amu nm²/ps²
+    for k in range(2):
+        sel = gas.species == k
+        scale = math.sqrt(kt / gas.mass[k])
+        assert stats.kstest(np.linalg.norm(gas.vel[sel], axis=1) / scale, stats.maxwell.cdf).pvalue > 0.01
