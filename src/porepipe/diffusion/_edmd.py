@@ -430,6 +430,8 @@ def reactive_pore(
     max_hits: int = 10**7,
     z_bins: int = 0,
     sites=None,
+    poisoning: float = 0.0,
+    rounds: int = 1,
     seed: int = 0,
 ) -> dict:
     """First-order wall reaction A → P (optionally reversible, or consecutive P → S) in a pore fed from its low face
@@ -441,7 +443,9 @@ def reactive_pore(
     r_eff/w per particle), ``D_R`` (4.12, voxel²/jiffie); with ``z_bins``: ``z_react`` (reactive hits per axial
     bin), ``reactant_profile`` (c_A/c₀ per bin) and ``phi_profile`` (Φ fitted to it by (4.11)).
     ``sites``: an array of the pore's shape (>= 0) that multiplies every reaction probability at a wall hit from
-    that pore voxel (active-site distribution); η then still uses the mean w (products/(w·hits)).
+    that pore voxel (active-site distribution); η then still uses the mean w (products/(w·hits)). ``poisoning`` > 0
+    runs ``rounds`` rounds of ``particles`` histories and after each multiplies a voxel's site factor by
+    exp(−poisoning·reactions there) (quasi-static deactivation); ``r_eff_rounds`` holds each round's rate.
     Lengths in units of the smallest voxel edge, times in jiffies (v̄ = 1 voxel/jiffie).
     """
     from porepipe.diffusion._api import _ratio, prepare
@@ -453,8 +457,12 @@ def reactive_pore(
     if wall_law not in _LAW:
         raise PorepipeError(f"wall_law must be one of {', '.join(_LAW)}, got {wall_law!r}")
     geom = prepare(pore, voxel_um, periodic, axis)
+    if poisoning < 0 or rounds < 1:
+        raise PorepipeError(f"poisoning must be >= 0 and rounds >= 1, got {poisoning!r}, {rounds!r}")
+    if poisoning > 0 and sites is None:
+        sites = np.ones(np.shape(pore))
     if sites is not None:
-        sites = np.asarray(sites, dtype=float)
+        sites = np.array(sites, dtype=float)
         if sites.shape != np.shape(pore) or not np.all(np.isfinite(sites)) or np.any(sites < 0):
             raise PorepipeError(f"sites must be finite, >= 0 and of the pore's shape {np.shape(pore)}")
     kernel = E.make_reactive_kernel(
@@ -469,23 +477,34 @@ def reactive_pore(
     per = max(1, particles // batches)
     tally = np.zeros((batches, E.N_RTALLY))
     zhist = np.zeros((batches, 3, max(z_bins, 1)))
-    kernel(
-        geom.codes,
-        geom.h,
-        geom.periodic,
-        axis,
-        geom.cells(0),
-        kernel_seed(seed, STAGE, 18),
-        0,
-        per,
-        max_hits,
-        1.0,
-        1.0,
-        np.array([w, w_reverse, w_follow], float),
-        sites if sites is not None else np.ones((1, 1, 1)),
-        tally,
-        zhist,
-    )
+    counts = np.zeros((batches, *np.shape(pore)) if poisoning > 0 else (0, 1, 1, 1), np.int64)
+    seed_k = kernel_seed(seed, STAGE, 18)
+    rates = []
+    for k in range(rounds):
+        part = np.zeros((batches, E.N_RTALLY))
+        counts[:] = 0
+        kernel(
+            geom.codes,
+            geom.h,
+            geom.periodic,
+            axis,
+            geom.cells(0),
+            seed_k,
+            k * batches * per,
+            per,
+            max_hits,
+            1.0,
+            1.0,
+            np.array([w, w_reverse, w_follow], float),
+            sites if sites is not None else np.ones((1, 1, 1)),
+            counts,
+            part,
+            zhist,
+        )
+        tally += part
+        rates.append(part[:, E.R_OUT_P].sum() / max(part[:, E.R_TIME].sum(), 1e-300))
+        if poisoning > 0:
+            sites *= np.exp(-poisoning * counts.sum(axis=0))
     col = tally.sum(axis=0)
     products = tally[:, E.R_OUT_P]
     out = {
@@ -505,6 +524,10 @@ def reactive_pore(
     nu, _ = _ratio(tally[:, E.R_HITS], tally[:, E.R_TIME])
     rate, rate_err = _ratio(products, tally[:, E.R_TIME])
     out.update(k0_max=nu, r_eff=rate, r_eff_err=rate_err, w=w, w_reverse=w_reverse, w_follow=w_follow)
+    if rounds > 1:
+        out["r_eff_rounds"] = np.array(rates)
+    if poisoning > 0:
+        out["sites"] = sites
     if w > 0:
         eta, eta_err = _ratio(products, w * tally[:, E.R_HITS])
         out.update(eta=eta, eta_err=eta_err)

@@ -697,7 +697,8 @@ def make_reactive_kernel(
     history, so rates per particle-time are counts over R_TIME. ``zmap``: per axial bin ``zhist[b, 0]`` the reactive
     hits A → P, ``zhist[b, 1]`` the time spent there as A and ``zhist[b, 2]`` by all species (the total density is
     uniform, so their ratio is the reactant profile c_A/c₀ of (4.11)). ``sites``: every reaction probability at a
-    wall hit is multiplied by ``site_w`` of the pore voxel hit (an active-site distribution, thesis §4.1).
+    wall hit is multiplied by ``site_w`` of the pore voxel hit (an active-site distribution, thesis §4.1); when
+    ``site_count`` has one layer per batch, the reactions A → P per voxel are counted into it (for poisoning).
     """
     key = (*wall, int(inlet_law), int(inlet_speed), bool(reverse), bool(follow), bool(zmap), bool(sites))
     if key in _RCACHE:
@@ -719,6 +720,7 @@ def make_reactive_kernel(
         alpha,
         w,
         site_w,
+        site_count,
         tally,
         zhist,
     ):
@@ -762,6 +764,8 @@ def make_reactive_kernel(
                         if x < f * w[0]:
                             species = 1
                             acc[R_REACT] += 1
+                            if SITES and site_count.shape[0] == n_batches:  # poisoning: reactions per voxel
+                                site_count[b, idx[0], idx[1], idx[2]] += 1
                             if ZMAP:
                                 zhist[b, 0, min(int(pos[axis] / bin_w), zhist.shape[2] - 1)] += 1
                     elif species == 1:
