@@ -432,6 +432,9 @@ def reactive_pore(
     sites=None,
     poisoning: float = 0.0,
     rounds: int = 1,
+    adsorption: float = 0.0,
+    residence: float = 0.0,
+    residence_law: str = "fixed",
     seed: int = 0,
 ) -> dict:
     """First-order wall reaction A → P (optionally reversible, or consecutive P → S) in a pore fed from its low face
@@ -446,6 +449,9 @@ def reactive_pore(
     that pore voxel (active-site distribution); η then still uses the mean w (products/(w·hits)). ``poisoning`` > 0
     runs ``rounds`` rounds of ``particles`` histories and after each multiplies a voxel's site factor by
     exp(−poisoning·reactions there) (quasi-static deactivation); ``r_eff_rounds`` holds each round's rate.
+    ``adsorption`` > 0: probability that a wall hit adsorbs the particle for ``residence`` jiffies (``residence_law``
+    fixed or exponential); ``adsorbed_fraction`` = residence time over particle time (beyond the thesis, which
+    designed but never ran adsorption).
     Lengths in units of the smallest voxel edge, times in jiffies (v̄ = 1 voxel/jiffie).
     """
     from porepipe.diffusion._api import _ratio, prepare
@@ -457,6 +463,11 @@ def reactive_pore(
     if wall_law not in _LAW:
         raise PorepipeError(f"wall_law must be one of {', '.join(_LAW)}, got {wall_law!r}")
     geom = prepare(pore, voxel_um, periodic, axis)
+    if not 0.0 <= adsorption <= 1.0 or residence < 0 or residence_law not in ("fixed", "exponential"):
+        raise PorepipeError(
+            f"adsorption must lie in [0, 1], residence >= 0 and residence_law fixed or exponential; got "
+            f"{adsorption!r}, {residence!r}, {residence_law!r}"
+        )
     if poisoning < 0 or rounds < 1:
         raise PorepipeError(f"poisoning must be >= 0 and rounds >= 1, got {poisoning!r}, {rounds!r}")
     if poisoning > 0 and sites is None:
@@ -473,6 +484,7 @@ def reactive_pore(
         w_follow > 0,
         z_bins > 0,
         sites is not None,
+        adsorption > 0,
     )
     per = max(1, particles // batches)
     tally = np.zeros((batches, E.N_RTALLY))
@@ -495,7 +507,7 @@ def reactive_pore(
             max_hits,
             1.0,
             1.0,
-            np.array([w, w_reverse, w_follow], float),
+            np.array([w, w_reverse, w_follow, adsorption, residence, float(residence_law == "exponential")]),
             sites if sites is not None else np.ones((1, 1, 1)),
             counts,
             part,
@@ -526,6 +538,11 @@ def reactive_pore(
     out.update(k0_max=nu, r_eff=rate, r_eff_err=rate_err, w=w, w_reverse=w_reverse, w_follow=w_follow)
     if rounds > 1:
         out["r_eff_rounds"] = np.array(rates)
+    if adsorption > 0:
+        out.update(
+            adsorptions=int(col[E.R_ADSORB]),
+            adsorbed_fraction=float(col[E.R_ADS_TIME] / max(col[E.R_TIME], 1e-300)),
+        )
     if poisoning > 0:
         out["sites"] = sites
     if w > 0:

@@ -673,7 +673,8 @@ def insert_spheres(cells, h, shape, periodic, sp, radius, pos, state, tries):
 R_PARTICLES, R_OUT_A, R_OUT_P, R_OUT_S, R_TRUNC, R_HITS, R_TIME, R_REACT, R_FOLLOW, R_REVERSE, R_BACKWALL = (
     range(11)
 )
-N_RTALLY = 11
+R_ADSORB, R_ADS_TIME = 11, 12
+N_RTALLY = 13
 _RCACHE: dict = {}
 
 
@@ -685,6 +686,7 @@ def make_reactive_kernel(
     follow: bool,
     zmap: bool,
     sites: bool = False,
+    adsorb: bool = False,
 ):
     """Kernel of the one-face-fed pore with reactive walls; each effect is compiled in only when named.
 
@@ -699,11 +701,23 @@ def make_reactive_kernel(
     uniform, so their ratio is the reactant profile c_A/c₀ of (4.11)). ``sites``: every reaction probability at a
     wall hit is multiplied by ``site_w`` of the pore voxel hit (an active-site distribution, thesis §4.1); when
     ``site_count`` has one layer per batch, the reactions A → P per voxel are counted into it (for poisoning).
+    ``adsorb``: after the reaction step a wall hit adsorbs the particle with probability ``w[3]`` for a residence
+    time ``w[4]`` (fixed) or drawn from an exponential law of that mean (``w[5]`` = 1); it then desorbs by the wall
+    law. The residence time counts in the particle time (R_TIME) and in R_ADS_TIME.
     """
-    key = (*wall, int(inlet_law), int(inlet_speed), bool(reverse), bool(follow), bool(zmap), bool(sites))
+    key = (
+        *wall,
+        int(inlet_law),
+        int(inlet_speed),
+        bool(reverse),
+        bool(follow),
+        bool(zmap),
+        bool(sites),
+        bool(adsorb),
+    )
     if key in _RCACHE:
         return _RCACHE[key]
-    LAW, MIXED, WSPEED, INLET, INSPEED, REVERSE, FOLLOW, ZMAP, SITES = key
+    LAW, MIXED, WSPEED, INLET, INSPEED, REVERSE, FOLLOW, ZMAP, SITES, ADSORB = key
 
     @njit(cache=True, fastmath=K_FASTMATH, parallel=True)
     def _reactive(
@@ -775,6 +789,16 @@ def make_reactive_kernel(
                         elif FOLLOW and x >= 1.0 - f * w[2]:
                             species = 2
                             acc[R_FOLLOW] += 1
+                    if ADSORB:
+                        y, state = _uniform(state)
+                        if y < w[3]:
+                            stay = w[4]
+                            if w[5] > 0.0:
+                                z, state = _uniform(state)
+                                stay = -w[4] * math.log(z)
+                            t_now += stay
+                            acc[R_ADSORB] += 1
+                            acc[R_ADS_TIME] += stay
                     if hits >= max_hits:
                         acc[R_TRUNC] += 1
                         break
