@@ -663,9 +663,15 @@ def reaction_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0
         batches=settings.batches,
         max_hits=settings.max_hits_per_particle,
         z_bins=rs.z_bins,
+        poisoning=rs.poisoning,
+        rounds=rs.rounds,
+        adsorption=rs.adsorption,
+        residence=rs.residence_jiffies,
+        residence_law=rs.residence_law,
         seed=seed,
     )
-    arrays = {k: out.pop(k) for k in ("z_react", "z_time_reactant", "reactant_profile") if k in out}
+    keys = ("z_react", "z_time_reactant", "reactant_profile", "r_eff_rounds", "sites")
+    arrays = {k: out.pop(k) for k in keys if k in out}
     return DiffusionResult("reaction", "xyz"[axis], out, arrays)
 
 
