@@ -236,3 +236,20 @@ def test_mixture_of_unequal_masses_reaches_equipartition():
         sel = gas.species == k
         scale = math.sqrt(kt / gas.mass[k])
         assert stats.kstest(np.linalg.norm(gas.vel[sel], axis=1) / scale, stats.maxwell.cdf).pvalue > 0.01
+
+
+def test_thermal_walls_bring_a_hot_gas_to_the_wall_temperature():
+    """Closed 10 nm box, 300 N2 started at twice the wall temperature, diffuse Lambert walls that re-emit with the
+    flux-weighted MB law of 298.15 K, gas-gas collisions on: after ~40 wall hits per particle the mean kinetic
+    energy is 3/2·kT within 4 σ (σ = √(2/3)·KE/√N), and the speeds pass a KS test against MB at T (p > 0.01)."""
+    gas = D.make_gas(BOX, 10.0, {"N2": 300}, seed=17)
+    gas.vel *= math.sqrt(2.0)
+    phys = D.Physics(wall_law="lambert", thermal_wall=True)
+    vbar = D.mean_speed_nm_ps("N2", 298.15)
+    D.advance(gas, 40.0 * 10.0 / vbar, phys)  # mean chord 4V/S = 2L/3; 40 crossings of the box ≈ 60 hits each
+    assert gas.tally[E.E_WALLS] / 300 > 30
+    ke = 0.5 * gas.mass[0] * np.sum(gas.vel**2, axis=1)
+    kt = gas.mass[0] * D.speed_scale("N2", 298.15) ** 2
+    assert ke.mean() == pytest.approx(1.5 * kt, abs=4 * math.sqrt(2 / 3) * 1.5 * kt / math.sqrt(300))
+    speeds = np.linalg.norm(gas.vel, axis=1) / D.speed_scale("N2", 298.15)
+    assert stats.kstest(speeds, stats.maxwell.cdf).pvalue > 0.01
