@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import copy
 import math
-import time
 import resource
+import time
 from pathlib import Path
 
 import pytest
@@ -107,7 +107,9 @@ def mutated_scene(draw, bases=tuple(BASES)):
         if not paths:
             break
         path = draw(st.sampled_from(paths))
-        op = draw(st.sampled_from(["odd", "scale", "negate", "delete", "unknown", "wrap", "duplicate", "nest"]))
+        op = draw(
+            st.sampled_from(["odd", "scale", "negate", "delete", "unknown", "wrap", "duplicate", "nest"])
+        )
         value = _get(tree, path)
         if op == "odd":
             _set(tree, path, copy.deepcopy(draw(st.sampled_from(ODD_VALUES))))
@@ -186,10 +188,18 @@ def _shrink(tree: dict) -> dict:
     packing = tree.get("packing")
     if isinstance(packing, dict):
         for kind in packing.get("types") or []:
-            if isinstance(kind, dict) and isinstance(kind.get("count"), int) and not isinstance(kind["count"], bool):
+            if (
+                isinstance(kind, dict)
+                and isinstance(kind.get("count"), int)
+                and not isinstance(kind["count"], bool)
+            ):
                 kind["count"] = min(kind["count"], 20)
         for stage in packing.get("stages") or []:
-            if isinstance(stage, dict) and isinstance(stage.get("steps"), int) and not isinstance(stage["steps"], bool):
+            if (
+                isinstance(stage, dict)
+                and isinstance(stage.get("steps"), int)
+                and not isinstance(stage["steps"], bool)
+            ):
                 stage["steps"] = min(stage["steps"], 20)
     granular = tree.get("granular")
     if isinstance(granular, dict) and isinstance(granular.get("dt_s"), float):
@@ -217,7 +227,11 @@ def _first_stage(scene, path: Path, out: Path) -> list[str] | None:
     derandomize=True,
     database=None,
     deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much],
+    suppress_health_check=[
+        HealthCheck.too_slow,
+        HealthCheck.function_scoped_fixture,
+        HealthCheck.filter_too_much,
+    ],
 )
 @given(case=mutated_scene(bases=("tiny", "granular-box", "mini", "rough-walls-ci")))
 def test_accepted_scenes_run_their_first_stage_or_fail_cleanly(case, tmp_path_factory):
@@ -249,7 +263,9 @@ def test_accepted_scenes_run_their_first_stage_or_fail_cleanly(case, tmp_path_fa
         COUNTS["run refused"] += 1
         return
     COUNTS["bad"] += 1
-    pytest.fail(f"{argv[0]} on a mutated {name}: code {outcome.code}, {outcome.exception!r}, {outcome.stderr[-500:]}")
+    pytest.fail(
+        f"{argv[0]} on a mutated {name}: code {outcome.code}, {outcome.exception!r}, {outcome.stderr[-500:]}"
+    )
 
 
 def _loads(text: str) -> bool:

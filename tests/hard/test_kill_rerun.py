@@ -23,7 +23,7 @@ import numpy as np
 import yaml
 
 DATA = Path(__file__).parent / "data" / "tiny"
-#: attributes that differ between two runs by nature (cost and provenance of the run, not its result)
+#: attributes (and datasets) that differ between two runs by nature (cost and provenance of the run, not its result)
 TIMING_ATTRS = {"wall_s", "cpu_s", "peak_mb", "created", "threads", "porepipe_version", "source"}
 #: netCDF dimension-scale links: HDF5 object addresses, which depend on the write order, not on the result
 ADDRESS_ATTRS = {"REFERENCE_LIST", "DIMENSION_LIST"}
@@ -44,7 +44,9 @@ def _scene(tmp_path: Path) -> Path:
 
 def _env() -> dict:
     env = dict(os.environ)
-    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"  # the rules call `porepipe`
+    env["PATH"] = (
+        f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"  # the rules call `porepipe`
+    )
     return env
 
 
@@ -92,16 +94,22 @@ def _run_until(scene: Path, cwd: Path, ready) -> bool:
     return False
 
 
+def _bytes(value) -> bytes:
+    """The exact content of an array or attribute (strings by value: an object array's bytes are pointers)."""
+    arr = np.asarray(value)
+    return repr(arr.tolist()).encode() if arr.dtype.kind == "O" else arr.dtype.str.encode() + arr.tobytes()
+
+
 def _content(path: Path) -> dict:
     """Every dataset's bytes and every attribute (timings aside) of an HDF5 file, by name."""
     out = {}
     with h5py.File(path, "r") as f:
 
         def visit(name, obj):
-            attrs = {k: np.asarray(v).tobytes() for k, v in obj.attrs.items() if k not in TIMING_ATTRS | ADDRESS_ATTRS}
-            out[name + "@attrs"] = attrs
-            if isinstance(obj, h5py.Dataset):
-                out[name] = np.asarray(obj[...]).tobytes()
+            skip = TIMING_ATTRS | ADDRESS_ATTRS
+            out[name + "@attrs"] = {k: _bytes(v) for k, v in obj.attrs.items() if k not in skip}
+            if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in TIMING_ATTRS:
+                out[name] = _bytes(obj[...])  # pack's history/wall_s is a timing too
 
         visit("/", f)
         f.visititems(visit)
@@ -138,6 +146,8 @@ def test_killed_workflow_reruns_to_bit_identical_results(tmp_path):
         changed = [key for key in a if a[key] != b[key]]
         assert not changed, f"{name}: {changed} differ from the uninterrupted run"
     leftovers = [
-        p for p in (killed / "results").rglob("*") if p.name.endswith(".tmp") or p.name.startswith("checkpoint")
+        p
+        for p in (killed / "results").rglob("*")
+        if p.name.endswith(".tmp") or p.name.startswith("checkpoint")
     ]
     assert not leftovers, leftovers
