@@ -16,7 +16,7 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, read_attrs, read_binary_volume, result_hash
-from porepipe.diffusion import _api
+from porepipe.diffusion import _api, _edmd
 from porepipe.diffusion._settings import Axis, Settings, Setup
 
 #: units of the scalars written to the result (others are counts or dimensionless)
@@ -74,9 +74,16 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
                 "azimuth about it in [-pi, pi)"
             },
         )
+    for key in sorted(arr.keys() - {"profile", "concentration", "hit_map", "orientation", "msd", "msd_time"}):
+        value = np.asarray(arr[key])  # setups edmd / reaction: arrays named with their unit
+        data[key] = xr.Variable(tuple(f"{key}_{k}" for k in range(value.ndim)), value)
     if "msd" in arr:
         data["msd"] = xr.Variable(("time", "xyz"), arr["msd"], {"units": "voxel^2"})
         data["time"] = xr.Variable(("time",), arr["msd_time"], {"units": "jiffie"})
+    if "history" in arr:  # statistical error against cost, one row per round (see _api.HISTORY_FIELDS)
+        for k, name in enumerate(_api.HISTORY_FIELDS):
+            meaning = "this round's kernel CPU s" if name == "round_cpu_s" else "cumulative after the round"
+            data[f"history_{name}"] = xr.Variable(("round",), arr["history"][:, k], {"meaning": meaning})
     ds = xr.Dataset(data)
     ds.attrs["definitions"] = _api.__doc__.split("Definitions (also written into every result)")[1].strip()
     ds.attrs["settings"] = json.dumps(settings.model_dump(mode="json"), sort_keys=True)
@@ -136,13 +143,21 @@ def run(
         scene_hash=result_hash("diffusion", settings=settings, inputs=[binary], axis=axis.value, seed=seed),
         threads=threads,
     ) as w:
-        if settings.setup is Setup.msd:
+        if settings.setup is Setup.edmd:
+            result = _edmd.edmd_result(pore, settings, voxel_um, periodic, seed=seed)
+        elif settings.setup is Setup.reaction:
+            result = _edmd.reaction_result(pore, settings, axis.index, voxel_um, periodic, seed=seed)
+        elif settings.setup is Setup.msd:
             result = _api.equilibrium(pore, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint)
             name = axis.value * 2
             if f"D_{name}" in result.values:
                 result.values["D"] = result.values[f"D_{name}"]
                 result.values["D_err"] = result.values[f"D_{name}_err"]
         else:
+            # the volume read here is ours: it becomes the distance codes in place (1 byte per voxel in all)
+            pore = _api.prepare(
+                np.ascontiguousarray(pore, np.uint8), voxel_um, periodic, axis.index, in_place=True
+            )
             result = _api.transport(
                 pore, axis.index, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint
             )

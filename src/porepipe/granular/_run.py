@@ -133,6 +133,7 @@ def run(
                 "steps": sim.step,
                 "dt_s": sim.dt,
                 "dt_rule_s": sim.dt_rule,
+                "dt_damping_s": sim.dt_damping,
                 "rebuilds": sim.rebuilds,
                 "integrator": settings.integrator.value,
                 "neighbour_search": settings.neighbour_search.value,
