@@ -12,8 +12,6 @@ from porepipe import __version__
 from porepipe._registry import stage_cli_modules
 from porepipe._shared.errors import PorepipeError
 
-#: the repository root holding the Snakefile (src layout: <root>/src/porepipe/cli.py)
-REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 def _validate(args) -> int:
@@ -35,11 +33,9 @@ def snakemake_command(
     scene_path, cores: int, dry_run: bool = False, extra: list[str] | None = None
 ) -> list[str]:
     """The Snakemake invocation that runs one scene from the current directory."""
-    snakefile = REPO_ROOT / "Snakefile"
-    if not snakefile.is_file():
-        raise PorepipeError(
-            f"Snakefile not found at {snakefile}; install porepipe from its repository (pip install -e .)"
-        )
+    from porepipe._shared.resources import workflow_root
+
+    snakefile = workflow_root() / "Snakefile"
     cmd = [
         sys.executable,
         "-m",
@@ -62,8 +58,10 @@ def snakemake_command(
 
 
 def _run(args) -> int:
+    from porepipe._shared.resources import scene_path
     from porepipe.scene import load_scene
 
+    args.scene = str(scene_path(args.scene))
     scene = load_scene(args.scene)  # fail fast, with every problem listed
     extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
     result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False)
