@@ -9,9 +9,8 @@ import sys
 from pathlib import Path
 
 from porepipe import __version__
-from porepipe._registry import stage_cli_modules
+from porepipe._registry import STAGES, stage_cli_modules, stage_settings
 from porepipe._shared.errors import PorepipeError
-
 
 
 def _validate(args) -> int:
@@ -86,24 +85,49 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"porepipe {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("validate", help="check scene files; list every problem")
-    p.add_argument("scene", nargs="+")
+    p.add_argument("scene", nargs="+", help="scene YAML files")
     p.set_defaults(func=_validate)
     p = sub.add_parser("run", help="run the whole workflow of a scene with Snakemake")
-    p.add_argument("scene")
-    p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
-    p.add_argument("-n", "--dry-run", action="store_true", help="list the jobs only")
+    p.add_argument("scene", help="scene YAML file, or the name of a shipped scene (mini, granular-box, …)")
+    p.add_argument(
+        "--cores", type=int, default=os.cpu_count() or 1, help="cores Snakemake may use (default: all)"
+    )
+    p.add_argument(
+        "-n", "--dry-run", action=argparse.BooleanOptionalAction, default=False, help="list the jobs only"
+    )
     p.add_argument(
         "--unlock",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=False,
         help="release the lock a killed run left on this directory (Snakemake --unlock), run nothing",
     )
     p.epilog = (
         "Arguments after `--` go to Snakemake unchanged, e.g. `porepipe run S.yaml --cores 2 -- --forceall`."
     )
     p.set_defaults(func=_run, snakemake_args=[])
-    for module in stage_cli_modules():
+    settings = stage_settings()
+    for (_package, key), module in zip(STAGES, stage_cli_modules()):
+        before = set(sub.choices)
         module.register(sub)
+        for name in set(sub.choices) - before:
+            _help_from_settings(sub.choices[name], settings.get(key))
     return parser
+
+
+#: help of options many commands share, where a command gives none
+_COMMON_HELP = {"threads": "numba threads (default: every core numba sees; NUMBA_NUM_THREADS caps it)"}
+
+
+def _help_from_settings(parser: argparse.ArgumentParser, model) -> None:
+    """Give each option of a stage command that overrides a scene setting (of ``model``, a stage's Settings or None)
+    that setting's description as help, and shared options their common help.
+    """
+    for action in parser._actions:
+        if action.help is None and action.dest in _COMMON_HELP:
+            action.help = _COMMON_HELP[action.dest]
+        field = model.model_fields.get(action.dest) if model is not None else None
+        if action.help is None and field is not None and field.description:
+            action.help = f"{field.description} (default: the scene's, else {field.default!r})"
 
 
 def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:

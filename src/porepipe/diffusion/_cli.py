@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import re
 from pathlib import Path
 
@@ -100,7 +101,12 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, help="override the scene seed")
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--checkpoint", help="checkpoint file (default .{out}.checkpoint.npz)")
-    p.add_argument("--resume", action="store_true", help="continue from a matching checkpoint")
+    p.add_argument(
+        "--resume",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="continue from a matching checkpoint",
+    )
     for name, enum in (
         ("setup", Setup),
         ("wall-law", WallLaw),

@@ -130,7 +130,7 @@ def test_cli_writes_fields_and_vti(tmp_path):
     pore_z = np.moveaxis(pore, 0, 2)
     binary = _binary(tmp_path, pore_z, "binary_a2.h5")
     args = _parse(
-        [str(binary), "--axis", "z", "--write-fields", "true", "--write-vti", "true", "-o", str(out)]
+        [str(binary), "--axis", "z", "--write-fields", "--write-vti", "-o", str(out)]
     )
     args.func(args)
     vz, vattrs = read_volume(out, "velocity_z")
