@@ -63,7 +63,9 @@ def _run(args) -> int:
     args.scene = str(scene_path(args.scene))
     scene = load_scene(args.scene)  # fail fast, with every problem listed
     extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
-    result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False)
+    result = subprocess.run(
+        snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False, env=_job_environment()
+    )
     if result.returncode == 0 and not (args.dry_run or args.unlock):
         print(f"porepipe: results of scene {scene.name!r} are in {Path('results', scene.name).resolve()}")
     elif (
@@ -77,6 +79,16 @@ def _run(args) -> int:
             file=sys.stderr,
         )
     return result.returncode
+
+
+def _job_environment() -> dict:
+    """The environment of the Snakemake run: on a terminal, the jobs also write sparse progress lines to it."""
+    from porepipe._shared.progress import CONSOLE_ENV
+
+    env = dict(os.environ)
+    if sys.stderr.isatty() and not env.get("CI") and os.path.exists("/dev/tty"):
+        env[CONSOLE_ENV] = "/dev/tty"
+    return env
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -144,6 +156,10 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(own)
     if args.command == "run":
         args.snakemake_args = passthrough
+    if args.command not in ("run", "validate"):
+        from porepipe._shared.progress import watch_compilation
+
+        watch_compilation()  # "compiling kernels (first run only)" and its time apart
     try:
         return int(args.func(args) or 0)
     except PorepipeError as err:

@@ -106,6 +106,7 @@ def run(
         skip_too_large=is_part,
         progress=progress,
     )
+    progress.close(f"local porosity distributions for {progress.total} cell sizes")
     ds.attrs["sample"] = note
     digest = result_hash("lpt", settings=settings, inputs=[binary_path], subsample_um=subsample_um)
     with ResultWriter(out, stage="lpt", scene=src.get("scene", ""), scene_hash=digest, threads=threads) as w:
