@@ -33,6 +33,7 @@ class BuildPyWithWorkflow(build_py):
     """``build_py`` that also puts the workflow into ``porepipe/_workflow`` (not in editable mode)."""
 
     def run(self):
+        """Build the package as usual, then copy the workflow beside it."""
         super().run()
         if not getattr(self, "editable_mode", False):
             copy_workflow(HERE, Path(self.build_lib, "porepipe", "_workflow"))

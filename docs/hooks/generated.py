@@ -20,9 +20,11 @@ ROOT = Path(__file__).resolve().parents[2]
 #: wall time of a whole `porepipe run SCENE --cores N`, measured (see the README's table for the conditions)
 MEASURED = {
     "mini": "223 s the first time (numba compiles every kernel), 66 s with a warm cache; 2 cores, quiet machine",
-    "filled-packing-ci": "41 s (1 core, shared loaded machine, warm numba cache)",
-    "rough-walls-ci": "35 s (1 core, shared loaded machine, warm numba cache)",
-    "granular-box": "26 s (1 core, shared loaded machine, warm numba cache)",
+    "filled-packing-ci": "41 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
+    "rough-walls-ci": "35 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
+    "granular-box": "26 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
+    "mini-diffusion": "81 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
+    "image-to-model": "131 s (`--cores 1`, shared loaded 2-core machine, numba cache partly warm)",
     "filled-packing": "3.1 min and 1.1 GB for `porepipe pack` (2 cores)",
     "rough-walls": "6.6 min and 1.3 GB for `porepipe pack` (2 cores)",
 }

@@ -7,7 +7,6 @@ import re
 from pathlib import Path
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.numba_config import set_threads
 from porepipe.diffusion._settings import Axis, InletLaw, Settings, Setup, SpeedDist, WallLaw, WallSpeed
 
 #: CLI option -> settings key, for the options that override the scene
@@ -65,6 +64,8 @@ def main(args) -> int:
     from porepipe.diffusion._run import run
 
     settings, seed, scene = _settings(args)
+    from porepipe._shared.numba_config import set_threads
+
     threads = set_threads(args.threads)
     binary = Path(args.binary)
     out = _output(args, binary, args.axis)

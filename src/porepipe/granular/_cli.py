@@ -6,7 +6,6 @@ import argparse
 import os
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.numba_config import set_threads
 
 
 def main(args) -> int:
@@ -22,6 +21,8 @@ def main(args) -> int:
         raise PorepipeError(
             f"{args.scene}: the scene has no `granular:` section with particles, blocks or drop_sources"
         )
+    from porepipe._shared.numba_config import set_threads
+
     threads = set_threads(args.threads)
     run(
         settings,

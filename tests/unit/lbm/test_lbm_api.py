@@ -129,9 +129,7 @@ def test_cli_writes_fields_and_vti(tmp_path):
     out = tmp_path / "perm_a2_z.h5"
     pore_z = np.moveaxis(pore, 0, 2)
     binary = _binary(tmp_path, pore_z, "binary_a2.h5")
-    args = _parse(
-        [str(binary), "--axis", "z", "--write-fields", "--write-vti", "-o", str(out)]
-    )
+    args = _parse([str(binary), "--axis", "z", "--write-fields", "--write-vti", "-o", str(out)])
     args.func(args)
     vz, vattrs = read_volume(out, "velocity_z")
     assert vattrs["voxel_um"] == 2.0 and np.all(vz[pore_z] > 0)
