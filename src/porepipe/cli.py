@@ -14,12 +14,13 @@ from porepipe._shared.errors import PorepipeError
 
 
 def _validate(args) -> int:
+    from porepipe._shared.resources import scene_path
     from porepipe.scene import SceneError, load_scene
 
     failed = 0
     for path in args.scene:
         try:
-            scene = load_scene(path)
+            scene = load_scene(scene_path(path))
         except SceneError as err:
             failed += 1
             print(err, file=sys.stderr)
@@ -97,7 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"porepipe {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("validate", help="check scene files; list every problem")
-    p.add_argument("scene", nargs="+", help="scene YAML files")
+    p.add_argument("scene", nargs="+", help="scene YAML files, or names of shipped scenes (mini, …)")
     p.set_defaults(func=_validate)
     p = sub.add_parser("run", help="run the whole workflow of a scene with Snakemake")
     p.add_argument("scene", help="scene YAML file, or the name of a shipped scene (mini, granular-box, …)")

@@ -64,3 +64,30 @@ def test_a_key_unlike_any_gets_no_suggestion():
         parse_scene({"name": "t", "domain": {"size_um": [8, 8, 8]}, "resolutions_um": [4], "zzqqxx": 1})
     (line,) = [p for p in err.value.problems if "zzqqxx" in p]
     assert "did you mean" not in line
+
+
+class _Terminal:
+    def isatty(self):
+        return True
+
+    def write(self, text):
+        return len(text)
+
+    def flush(self):
+        pass
+
+
+def test_run_names_its_terminal_to_the_jobs_only_on_a_terminal_outside_ci(monkeypatch):
+    import sys
+
+    from porepipe import cli
+    from porepipe._shared.progress import CONSOLE_ENV
+
+    monkeypatch.delenv("CI", raising=False)
+    monkeypatch.delenv(CONSOLE_ENV, raising=False)
+    assert CONSOLE_ENV not in cli._job_environment()  # pytest's stderr is no terminal
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    monkeypatch.setattr(cli.os.path, "exists", lambda path: path == "/dev/tty")
+    assert cli._job_environment()[CONSOLE_ENV] == "/dev/tty"
+    monkeypatch.setenv("CI", "1")
+    assert CONSOLE_ENV not in cli._job_environment()
