@@ -20,6 +20,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures
 from porepipe.report._analysis import error_cost_table, varying_quantities
+from porepipe.report._permeability_cost import permeability_cost_parts
 from porepipe.report._settings import Settings
 from porepipe.report._thesis import Table, thesis_tables
 from porepipe.sweep import FULL, parse_name
@@ -187,6 +188,7 @@ def build_report(
         parts.append(
             "<p>No quantity has a supported limit yet, so no errors can be shown: add resolutions.</p>"
         )
+    parts += permeability_cost_parts(out_dir, settings.dpi)  # results/benchmarks/lbm_spheres.json, if run
     parts.append("<h2>Thesis tables</h2>")
     parts += [
         _thesis_html(t, out_dir) for t in thesis_tables(ds, settings.thesis_tables, settings.thesis_model)
