@@ -266,6 +266,15 @@ def check_binary_values(values: np.ndarray, path, name: str = BINARY_VOLUME) -> 
 
     One rule for every stage: a "binary" volume with other values (a label image, a grey volume under the wrong
     name) is refused, never read as "anything non-zero is pore" by one stage and refused by another.
+
+    Parameters
+    ----------
+    values : ndarray
+        The volume (or a slab of it).
+    path : path-like
+        The file it came from (named in the error).
+    name : str
+        The volume's name in the file.
     """
     values = np.asarray(values)
     if values.size and values.dtype == np.uint8 and int(values.max()) > 1:
@@ -326,6 +335,13 @@ def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
 
     The binary volume (``name`` ``pore``) comes wrapped so that every read refuses values other than 0 and 1; damaged
     HDF5 content read inside the block is one :class:`PorepipeError` naming the file.
+
+    Parameters
+    ----------
+    path : path-like
+        The result file.
+    name : str
+        The volume under ``/volumes``.
     """
     path = _check_file(path)
     with open_h5(path) as f:
