@@ -25,6 +25,8 @@ MEASURED = {
     "granular-box": "26 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
     "mini-diffusion": "81 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
     "image-to-model": "131 s (`--cores 1`, shared loaded 2-core machine, numba cache partly warm)",
+    "granular-heap-ci": "30 s (`--cores 1`, shared loaded 2-core machine, numba cache partly warm)",
+    "granular-silo-ci": "66 s (`--cores 1`, shared loaded 2-core machine, numba cache partly warm)",
     "filled-packing": "3.1 min and 1.1 GB for `porepipe pack` (2 cores)",
     "rough-walls": "6.6 min and 1.3 GB for `porepipe pack` (2 cores)",
 }
