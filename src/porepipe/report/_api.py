@@ -20,6 +20,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures
 from porepipe.report._analysis import error_cost_table, varying_quantities
+from porepipe.report._diffusion import section as diffusion_section
 from porepipe.report._permeability_cost import permeability_cost_parts
 from porepipe.report._settings import Settings
 from porepipe.report._thesis import Table, thesis_tables
@@ -188,6 +189,7 @@ def build_report(
         parts.append(
             "<p>No quantity has a supported limit yet, so no errors can be shown: add resolutions.</p>"
         )
+    parts += diffusion_section(ds, sweep_path, out_dir, settings.dpi)
     parts += permeability_cost_parts(out_dir, settings.dpi)  # results/benchmarks/lbm_spheres.json, if run
     parts.append("<h2>Thesis tables</h2>")
     parts += [
