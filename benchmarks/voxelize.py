@@ -64,7 +64,7 @@ def main():
         "timings on a shared, loaded machine"
     )
     print(
-        "| a µm | sphere span (voxels) | threads | Mvoxel | boundary-only Mvoxel/s | brute force Mvoxel/s | speed-up |"
+        "| a µm | sphere span (voxels) | threads | Mvoxel | chord method Mvoxel/s | brute force Mvoxel/s | speed-up |"
         " mixed voxels |"
     )
     print("|---|---|---|---|---|---|---|---|")
