@@ -303,7 +303,9 @@ def table_6_3(record: dict | None = None) -> Table:
             "source and cost",
         ],
         rows,
-        _run_note(record, "Eq. 6.1.41 box; eps against kappa_TH(7) of Eq. 6.1.37"),
+        _run_note(
+            record, "Eq. 6.1.41 box; eps against kappa_TH(7) of Eq. 6.1.37, signed (the thesis prints |eps|)"
+        ),
     )
 
 
