@@ -47,7 +47,9 @@ def test_table_6_2_velocity_error_bgk(b):
     not the printed 1e-6 — the same decade slip as the table's B column (printed 40 … 640 for B = 4 … 64). The
     tolerance is one unit of the last printed digit (0.001 of the printed number: 0.3 % at B = 4, 1.5 % at
     B = 16) because we stop at δv < 1e-6 where the thesis ran to a fixed t_end. No reading reproduces B = 8:
-    there the thesis prints 0.114 where 10 × ours is 0.139 (ratio 0.820, measured); the test pins that ratio
+    there the thesis prints 0.114 where 10 × ours is 0.139 (ratio 0.820, measured; a duct of L3 = 39 instead
+    of 4B = 32 layers, i.e. a drive 32/39 as large, gives 0.1140 with ε_v unchanged, but no stated set-up has it);
+    the test pins that ratio
     (± 0.005, three printed digits) so that a change of the solver or of the definition shows up.
     """
     case = cal.square_duct(b, thesis_chambers=True)
