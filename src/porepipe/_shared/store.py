@@ -6,8 +6,13 @@ Layout of a result file
   ``peak_mb``, ``threads`` and whatever the stage adds;
 - root group: at most one xarray Dataset of tables and curves (netCDF4 layout, so
   ``xarray.open_dataset(path, engine="h5netcdf")`` reads it); further Datasets go into named groups;
-- ``/volumes/<name>``: chunked, compressed 3-D arrays with ``voxel_um``, ``origin_um`` and ``periodic`` attributes;
-- ``/arrays/<name>``: other plain arrays.
+- ``/volumes/<name>``: chunked, compressed 3-D arrays with ``voxel_um``, ``origin_um`` and ``periodic`` attributes,
+  whose axes are HDF5 dimension scales ``x_um``, ``y_um``, ``z_um`` (voxel centres in µm), so
+  ``xarray.open_dataset(path, engine="h5netcdf", group="volumes")`` gives named dimensions with coordinates;
+- ``/arrays/<name>``: other plain arrays (named dimensions where the writer gives them).
+
+Every variable carries ``units`` in the one spelling of :mod:`porepipe._shared.units`; :func:`open_result` returns
+the whole file as one :class:`xarray.Dataset`.
 
 The file is written under a hidden temporary name in the target directory and renamed only when complete
 (:mod:`porepipe._shared.atomic`: fsync, then rename), so a killed job never leaves a file that Snakemake or
@@ -34,9 +39,12 @@ import xarray as xr
 from porepipe import __version__
 from porepipe._shared.atomic import commit, temporary_path
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.units import DIMENSIONLESS, MICROMETRE, annotate, canonical, centres_um, units_of
 
 VOLUME_GROUP = "volumes"
 ARRAY_GROUP = "arrays"
+#: names of the coordinate (dimension-scale) datasets of a volume's axes
+AXIS_NAMES = ("x_um", "y_um", "z_um")
 #: Edge of a volume chunk in voxels (64^3 bytes = 256 KiB for uint8).
 CHUNK_EDGE = 64
 
@@ -202,8 +210,13 @@ class ResultWriter:
             compression_opts=1,
             shuffle=True,
         )
-        for key, value in {**_volume_attrs(voxel_um, origin_um, periodic), **(attrs or {})}.items():
+        geometry = _volume_attrs(voxel_um, origin_um, periodic)
+        units, lattice = canonical((attrs or {}).get("units", DIMENSIONLESS))
+        for key, value in {**geometry, **(attrs or {}), "units": units}.items():
             dset.attrs[key] = value
+        if lattice is not None:
+            dset.attrs["lattice_units"] = lattice
+        _attach_axes(self.h5[VOLUME_GROUP], dset, voxel_um, geometry["origin_um"])
         return dset
 
     def write_volume(self, name: str, data: np.ndarray, **kwargs) -> h5py.Dataset:
@@ -212,18 +225,90 @@ class ResultWriter:
         dset[...] = data
         return dset
 
-    def write_array(self, name: str, data: np.ndarray, attrs: dict | None = None) -> h5py.Dataset:
-        """Write a plain array under ``/arrays``."""
-        dset = self.h5.require_group(ARRAY_GROUP).create_dataset(name, data=np.asarray(data))
-        for key, value in (attrs or {}).items():
+    def write_array(
+        self, name: str, data: np.ndarray, attrs: dict | None = None, dims: Sequence[str] = ()
+    ) -> h5py.Dataset:
+        """Write a plain array under ``/arrays``; ``dims`` names its axes (index coordinates), units from the name."""
+        group = self.h5.require_group(ARRAY_GROUP)
+        dset = group.create_dataset(name, data=np.asarray(data))
+        units, lattice = units_of(name, dset.dtype, (attrs or {}).get("units"))
+        for key, value in {**(attrs or {}), **({"units": units} if units else {})}.items():
             dset.attrs[key] = value
+        if lattice is not None:
+            dset.attrs["lattice_units"] = lattice
+        if dims:
+            label_dims(group, {name: dims})
         return dset
 
     def write_table(self, ds: xr.Dataset, group: str | None = None) -> None:
-        """Queue an xarray Dataset for the root group (``group=None``) or a named group; written on completion."""
+        """Queue an xarray Dataset for the root group (``group=None``) or a named group; written on completion.
+
+        Its variables get ``units`` in porepipe's spelling on the way (:func:`porepipe._shared.units.annotate`).
+        """
         if any(g == group for _, g in self._tables):
             raise RuntimeError(f"a table for group {group!r} was already written; merge the Datasets first")
-        self._tables.append((ds, group))
+        self._tables.append((annotate(ds), group))
+
+
+# -- named dimensions for plain HDF5 datasets ---------------------------------------------------------------------------
+def _is_scale(dset) -> bool:
+    return isinstance(dset, h5py.Dataset) and dset.is_scale
+
+
+def _scale(group: h5py.Group, name: str, values: np.ndarray, units: str | None) -> h5py.Dataset:
+    """The dimension-scale dataset ``name`` of ``group`` holding ``values``; created if missing."""
+    if name in group:
+        return group[name]
+    dset = group.create_dataset(name, data=values)
+    if units:
+        dset.attrs["units"] = units
+    dset.make_scale(name)
+    return dset
+
+
+def _attach_axes(group: h5py.Group, dset: h5py.Dataset, voxel_um, origin_um) -> None:
+    """Attach coordinate scales x_um, y_um, z_um (voxel centres, µm) to a volume's three axes.
+
+    Volumes of one file with the same grid share the scales; a volume on another grid gets its own
+    (``x_um_<name>`` …), since one dimension name has one length.
+    """
+    voxel = np.broadcast_to(np.asarray(voxel_um, dtype=np.float64).ravel(), (3,))
+    for axis, base in enumerate(AXIS_NAMES):
+        coords = centres_um(dset.shape[axis], origin_um[axis], voxel[axis])
+        name = base
+        if name in group and not (
+            group[name].shape == coords.shape and np.allclose(group[name][...], coords, rtol=1e-12, atol=0)
+        ):
+            name = f"{base}_{dset.name.rsplit('/', 1)[-1]}"
+        dset.dims[axis].attach_scale(_scale(group, name, coords, MICROMETRE))
+
+
+def label_dims(group: h5py.Group, dims_of: dict[str, Sequence[str]], coords: dict | None = None) -> None:
+    """Name the axes of plain datasets of ``group`` by HDF5 dimension scales, so xarray reads them with named dims.
+
+    Parameters
+    ----------
+    group : h5py.Group
+        Where the datasets and their scales live.
+    dims_of : dict of dataset name -> sequence of str
+        The dimension name of each axis of each dataset (e.g. ``{"centres_um": ("sphere", "xyz")}``).
+    coords : dict of dimension name -> array_like, optional
+        Coordinate values of a dimension (e.g. ``{"xyz": ["x", "y", "z"]}``); others get 0, 1, 2 …
+    """
+    coords = coords or {}
+    for name, dims in dims_of.items():
+        dset = group[name]
+        if len(dims) != dset.ndim:
+            raise PorepipeError(f"dataset {name!r} has {dset.ndim} axes but {len(dims)} dimension names {dims}")
+        for axis, dim in enumerate(dims):
+            values = coords.get(dim)
+            if values is None:
+                values = np.arange(dset.shape[axis], dtype=np.int64)
+            values = np.asarray(values)
+            if values.dtype.kind == "U":
+                values = values.astype(h5py.string_dtype())
+            units = DIMENSIONLESS if values.dtype.kind in "iuf" else None
+            dset.dims[axis].attach_scale(_scale(group, dim, values, units))
 
 
 # -- readers -----------------------------------------------------------------------------------------------------------
@@ -232,6 +317,17 @@ def _check_file(path) -> Path:
     if not path.is_file():
         raise PorepipeError(f"result file {path} does not exist")
     return path
+
+
+#: attributes HDF5 dimension scales and netCDF keep for themselves (not metadata of the data)
+_INTERNAL_ATTRS = frozenset(
+    {"DIMENSION_LIST", "REFERENCE_LIST", "CLASS", "NAME", "_Netcdf4Dimid", "_Netcdf4Coordinates"}
+)
+
+
+def dataset_attrs(dset) -> dict:
+    """The attributes of an h5py dataset, decoded, without the dimension-scale bookkeeping."""
+    return {k: _decode(v) for k, v in dset.attrs.items() if k not in _INTERNAL_ATTRS}
 
 
 def _decode(value):
@@ -263,16 +359,21 @@ def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
     path = _check_file(path)
     with h5py.File(path, "r") as f:
         group = f.get(VOLUME_GROUP)
-        if group is None or name not in group:
-            have = sorted(group.keys()) if group is not None else []
+        if group is None or name not in group or _is_scale(group[name]):
+            have = volume_names(group) if group is not None else []
             raise PorepipeError(f"{path} has no volume {name!r} (volumes present: {have or 'none'})")
         yield group[name]
+
+
+def volume_names(group: h5py.Group) -> list[str]:
+    """Names of the volumes in an open ``/volumes`` group (its coordinate scales left out), sorted."""
+    return sorted(k for k, v in group.items() if isinstance(v, h5py.Dataset) and not v.is_scale)
 
 
 def read_volume(path, name: str) -> tuple[np.ndarray, dict]:
     """Read a whole volume and its attributes (``voxel_um``, ``origin_um``, ``periodic`` …)."""
     with open_volume(path, name) as dset:
-        return dset[...], {k: _decode(v) for k, v in dset.attrs.items()}
+        return dset[...], dataset_attrs(dset)
 
 
 def read_array(path, name: str) -> np.ndarray:
@@ -283,6 +384,36 @@ def read_array(path, name: str) -> np.ndarray:
         if group is None or name not in group:
             raise PorepipeError(f"{path} has no array {name!r}")
         return group[name][...]
+
+
+def open_result(path) -> xr.Dataset:
+    """The whole result file as one lazily loaded :class:`xarray.Dataset`, whatever stage wrote it.
+
+    Parameters
+    ----------
+    path : path-like
+        Any porepipe result (``packing.h5``, ``grey_a2.h5``, ``binary_a2.h5``, ``minkowski_a1.h5``, ``sweep.h5`` …).
+
+    Returns
+    -------
+    xarray.Dataset
+        The root table, the volumes (dims ``x_um``, ``y_um``, ``z_um`` with voxel-centre coordinates in µm) and the
+        named arrays, merged; the file's provenance and cost (stage, scene, wall_s, cpu_s …) as ``attrs``. Further
+        tables of named groups (``history``, ``lpt`` …) stay where they are: ``read_table(path, group)``.
+        Volumes are read only when their values are used.
+
+    Raises
+    ------
+    PorepipeError
+        The file is missing or not a porepipe result.
+    """
+    attrs = read_attrs(path)
+    with h5py.File(path, "r") as f:
+        groups = [None] + [g for g in (VOLUME_GROUP, ARRAY_GROUP) if g in f]
+    parts = [xr.open_dataset(path, engine="h5netcdf", group=g, phony_dims="sort") for g in groups]
+    ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="drop_conflicts")
+    ds.attrs = {**ds.attrs, **attrs}
+    return ds
 
 
 def read_table(path, group: str | None = None) -> xr.Dataset:
@@ -329,7 +460,7 @@ def volume_meta(dset: h5py.Dataset, path, anisotropic: bool = False) -> VolumeMe
     -------
     VolumeMeta
     """
-    attrs = {k: _decode(v) for k, v in dset.attrs.items()}
+    attrs = dataset_attrs(dset)
     missing = [k for k in VOLUME_META_KEYS if k not in attrs]
     if missing:
         raise PorepipeError(

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import VOLUME_GROUP, read_attrs, read_table
+from porepipe._shared.store import VOLUME_GROUP, read_attrs, read_table, volume_names
 
 #: scalar Dataset attributes that are measured quantities (not settings)
 KNOWN_ATTRS = ("phi_bar", "L_star_um")
@@ -128,7 +128,7 @@ def _volume_record(path) -> tuple[float, float, dict, int]:
     _, a, sample, _ = parse_name(Path(path).stem)
     with h5py.File(path, "r") as f:
         group = f.get(VOLUME_GROUP)
-        names = sorted(group.keys()) if group is not None else []
+        names = volume_names(group) if group is not None else []
         if not names:
             raise PorepipeError(
                 f"{path} holds no volume; pass grey_a{{a}}.h5 / binary_a{{a}}.h5 files as volumes"
