@@ -299,7 +299,9 @@ def label_dims(group: h5py.Group, dims_of: dict[str, Sequence[str]], coords: dic
     for name, dims in dims_of.items():
         dset = group[name]
         if len(dims) != dset.ndim:
-            raise PorepipeError(f"dataset {name!r} has {dset.ndim} axes but {len(dims)} dimension names {dims}")
+            raise PorepipeError(
+                f"dataset {name!r} has {dset.ndim} axes but {len(dims)} dimension names {dims}"
+            )
         for axis, dim in enumerate(dims):
             values = coords.get(dim)
             if values is None:

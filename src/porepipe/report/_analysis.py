@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
+from porepipe.report import _labels
 from porepipe.sweep import FULL
 
 #: floor of a relative error on a log axis (a run that hits the limit to round-off)
@@ -98,13 +99,54 @@ def error_cost_table(ds: xr.Dataset, quantities) -> list[dict]:
 
 
 def varying_quantities(ds: xr.Dataset, wanted, cap: int) -> list[str]:
-    """The quantities to plot: those asked for, else those that change with resolution, supported limits first."""
+    """The quantities to plot: those asked for, else porosity, χ and κ wherever measured, then those that change
+    with resolution (supported limits first), without pore/matrix twins or κ in a second unit; at most ``cap``.
+    """
     names = [str(q) for q in ds.quantity.values]
     if wanted:
         return [q for q in wanted if q in names]
     full = ds.value.sel(sample_um=FULL) if FULL in ds.sample_um.values else ds.value.isel(sample_um=0)
-    vary = [
-        q for q in names if np.nanmax(full.sel(quantity=q).values) > np.nanmin(full.sel(quantity=q).values)
-    ]
+    candidates = _labels.distinct(names)
+
+    def measured(q):
+        return bool(np.isfinite(full.sel(quantity=q).values).any())
+
+    def varies(q):
+        v = full.sel(quantity=q).values
+        return measured(q) and np.nanmax(v) > np.nanmin(v)
+
+    core = [q for q in candidates if _labels.is_core(q) and measured(q)]
+    vary = [q for q in candidates if q not in core and varies(q)]
     vary.sort(key=lambda q: (reference_limit(ds, q) is None, q))
-    return vary[:cap]
+    return (core + vary)[:cap]
+
+
+def startup_table(ds: xr.Dataset) -> list[dict]:
+    """Per stage: jobs, the computations' wall time (result files) and the jobs' wall time (Snakemake benchmarks).
+
+    The difference is what a job spends outside the computation: interpreter start-up, imports, loading compiled
+    kernels, reading and writing files. Quantities of one result file share one cost, so each (stage, a, sample)
+    counts once.
+    """
+    seen: dict[tuple, tuple[float, float]] = {}
+    for q in ds.quantity.values:
+        group = _labels.parts(str(q))[0] or str(q)
+        sel = ds.sel(quantity=q)
+        for i, a in enumerate(ds.a_um.values):
+            for j, s in enumerate(ds.sample_um.values):
+                wall, bench = float(sel.wall_s.values[i, j]), float(sel.bench_s.values[i, j])
+                if np.isfinite(wall) and np.isfinite(bench):
+                    seen[(group, float(a), float(s))] = (wall, bench)
+    rows = []
+    for group in sorted({k[0] for k in seen}):
+        pairs = np.array([v for k, v in seen.items() if k[0] == group])
+        rows.append(
+            {
+                "stage": group,
+                "jobs": int(len(pairs)),
+                "compute_wall_s": float(pairs[:, 0].sum()),
+                "job_wall_s": float(pairs[:, 1].sum()),
+                "startup_s_per_job": float(np.median(pairs[:, 1] - pairs[:, 0])),
+            }
+        )
+    return rows

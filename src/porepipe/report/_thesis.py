@@ -80,6 +80,8 @@ class Table:
     columns: list[str]
     rows: list[list]
     note: str = ""
+    #: True when the porepipe column holds this scene's own results (not a re-derivation of the thesis's numbers)
+    scene_values: bool = False
 
 
 def _diff(ours: float, theirs: float) -> list:
@@ -145,7 +147,9 @@ def _value(ds: xr.Dataset, quantity: str, a_um: float) -> float:
 
 def _scene_table(key: str, title: str, columns: list[str], rows: list[list], note: str) -> Table:
     found = any(np.isfinite(r[-3]) for r in rows if isinstance(r[-3], float))
-    return Table(key, title, columns, rows, note if found else note + " — this scene has no matching results")
+    return Table(
+        key, title, columns, rows, note if found else note + " — this scene has no matching results", found
+    )
 
 
 def table_5_1(ds: xr.Dataset, model: str | None) -> Table:
@@ -236,6 +240,19 @@ def table_6_3() -> Table:
         "the thesis's errors recomputed from its kappa values and Eq. 6.1.37 (0.012 % offset noted in "
         "the digest)",
     )
+
+
+def scene_tables(ds: xr.Dataset, which, model: str | None) -> tuple[list[Table], list[Table]]:
+    """The tables of ``which`` this scene produced numbers for, and the others (shown only as a list).
+
+    Tables 5.1 and 5.2 count only when the scene names the thesis model it reproduces (``report.thesis_model``);
+    a match of resolutions alone would compare a different packing with the thesis's.
+    """
+    shown, skipped = [], []
+    for t in thesis_tables(ds, which, model):
+        produced = t.scene_values and (model is not None or t.key not in ("5.1", "5.2"))
+        (shown if produced else skipped).append(t)
+    return shown, skipped
 
 
 def thesis_tables(ds: xr.Dataset, which, model: str | None) -> list[Table]:

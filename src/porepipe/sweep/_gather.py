@@ -21,9 +21,11 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import VOLUME_GROUP, read_attrs, read_table, volume_names
+from porepipe._shared.units import DIMENSIONLESS, MEBIBYTE, SECOND, units_of
 
-#: scalar Dataset attributes that are measured quantities (not settings)
+#: scalar Dataset attributes that are measured quantities (not settings), with their units
 KNOWN_ATTRS = ("phi_bar", "L_star_um")
+_ATTR_UNITS = {"phi_bar": DIMENSIONLESS, "L_star_um": "µm"}
 #: a labelled dimension at most this long is unrolled into one quantity per label
 MAX_LABELS = 8
 #: sample_um of a run on the whole volume
@@ -83,6 +85,26 @@ def file_quantities(ds: xr.Dataset, group: str) -> dict[str, float]:
         value = ds.attrs.get(key)
         if isinstance(value, (int, float, np.number)) and not isinstance(value, bool):
             out[f"{group}.{key}"] = float(value)
+    return out
+
+
+def _var_units(name: str, var: xr.DataArray) -> str:
+    units, _ = units_of(name, var.dtype, var.attrs.get("units"))
+    return units or ""
+
+
+def quantity_units(ds: xr.Dataset, group: str) -> dict[str, str]:
+    """Units of the quantities :func:`file_quantities` and :func:`per_a_quantities` find ('' where unstated)."""
+    out = {}
+    for name, var in ds.data_vars.items():
+        if not _is_float(var):
+            continue
+        units = _var_units(str(name), var)
+        if var.ndim == 0 or var.dims == ("a_um",):
+            out[f"{group}.{name}"] = units
+        elif var.ndim == 1 and (labels := _labelled(ds, var.dims[0])) is not None:
+            out.update({f"{group}.{name}[{lab}]": units for lab in labels})
+    out.update({f"{group}.{key}": _ATTR_UNITS[key] for key in KNOWN_ATTRS if key in ds.attrs})
     return out
 
 
@@ -146,12 +168,14 @@ class _Table:
         self.values: dict[tuple, list[float]] = {}
         self.cost: dict[tuple, dict] = {}
         self.source: dict[str, str] = {}
+        self.units: dict[str, str] = {}
 
-    def add(self, quantity, a, sample, value, cost, source):
+    def add(self, quantity, a, sample, value, cost, source, units=""):
         """One value; sub-sample replicas of the same (quantity, a, sample) accumulate."""
         self.values.setdefault((quantity, a, sample), []).append(value)
         self.cost.setdefault((quantity, a, sample), cost)
         self.source.setdefault(quantity, source)
+        self.units.setdefault(quantity, units)
 
 
 def _add_result(table: _Table, path: Path, bench: dict) -> None:
@@ -168,10 +192,11 @@ def _add_result(table: _Table, path: Path, bench: dict) -> None:
         (stage, a, FULL, "_".join(filter(None, [sample_key, tag])))
     )
     cost = {**_cost(attrs), **(rec or dict.fromkeys(BENCH_KEYS.values(), np.nan))}
+    units = quantity_units(ds, group)
     if "a_um" in ds.dims:
         for name, by_a in per_a_quantities(ds, group).items():
             for a_i, value in by_a.items():
-                table.add(name, a_i, sample, value, cost, path.name)
+                table.add(name, a_i, sample, value, cost, path.name, units.get(name, ""))
         return
     if a is None:
         a = _float(attrs.get("voxel_um"))
@@ -180,7 +205,7 @@ def _add_result(table: _Table, path: Path, bench: dict) -> None:
                 f"{path}: resolution unknown (no _a{{a}} in the name and no voxel_um attribute)"
             )
     for name, value in file_quantities(ds, group).items():
-        table.add(name, a, sample, value, cost, path.name)
+        table.add(name, a, sample, value, cost, path.name, units.get(name, ""))
 
 
 def gather(result_paths, volume_paths=(), cost_dir=None) -> xr.Dataset:
@@ -239,17 +264,26 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
         up[:, ai[a], si[sample]] = rec
     dims = ("quantity", "a_um", "sample_um")
     units = {
-        "wall_s": "s",
-        "cpu_s": "s",
-        "peak_mb": "MB",
-        "bench_s": "s",
-        "bench_cpu_s": "s",
-        "bench_max_rss_mb": "MB",
+        "wall_s": SECOND,
+        "cpu_s": SECOND,
+        "peak_mb": MEBIBYTE,
+        "bench_s": SECOND,
+        "bench_cpu_s": SECOND,
+        "bench_max_rss_mb": MEBIBYTE,
     }
+    per_quantity = {"units_from": "unit", "description": "in the unit of its quantity (coordinate `unit`)"}
     ds = xr.Dataset(
-        {name: (dims, arr, {"units": units.get(name, "")}) for name, arr in arrays.items()},
+        {
+            name: (dims, arr, {"units": units[name]} if name in units else per_quantity)
+            for name, arr in arrays.items()
+        },
         coords={
             "quantity": np.array(quantities, dtype=object),
+            "unit": (
+                "quantity",
+                np.array([table.units.get(q, "") for q in quantities], dtype=object),
+                {"description": "unit of each quantity (pint spelling; '' = not stated by its result file)"},
+            ),
             "a_um": np.array(a_um, dtype=np.float64),
             "sample_um": (
                 "sample_um",
@@ -261,17 +295,23 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
     ds["rev_spread"].attrs.update(
         description="standard deviation of value over the sub-samples of one edge (REV error); NaN: one sample"
     )
-    ds["rev_count"] = (dims, count, {"description": "sub-samples averaged into value"})
+    ds["rev_count"] = (
+        dims,
+        count,
+        {"units": DIMENSIONLESS, "description": "sub-samples averaged into value"},
+    )
     ds["source"] = ("quantity", np.array([table.source[q] for q in quantities], dtype=object))
     ds["upstream_wall_s"] = (
         ("a_um", "sample_um"),
         up[0],
-        {"units": "s", "description": "voxelize + segment (+ crop)"},
+        {"units": SECOND, "description": "voxelize + segment (+ crop)"},
     )
-    ds["upstream_cpu_s"] = (("a_um", "sample_um"), up[1], {"units": "s"})
+    ds["upstream_cpu_s"] = (("a_um", "sample_um"), up[1], {"units": SECOND})
     ds["voxels"] = (
         ("a_um", "sample_um"),
         up[2],
-        {"description": "voxels of the measured volume (NaN: unknown)"},
+        {"units": DIMENSIONLESS, "description": "voxels of the measured volume (NaN: unknown)"},
     )
+    ds["a_um"].attrs.update(units="µm", long_name="voxel edge a")
+    ds["sample_um"].attrs["units"] = "µm"
     return ds
