@@ -27,7 +27,7 @@ from porepipe.sweep import FULL, parse_name
 
 _CSS = """body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}
 table{border-collapse:collapse;font-size:12px;margin:.5em 0}td,th{border:1px solid #bbb;padding:2px 6px;
-text-align:right}th{background:#eee}td.l,th.l{text-align:left}img{max-width:100%;border:1px solid #ddd}
+text-align:right}th{background:#eee}td.l,th.l{text-align:left}img{max-width:100%;border:1px solid #ddd;display:block}
 .note{color:#555;font-size:12px}h2{border-bottom:1px solid #ccc}ul.headline{font-size:15px;line-height:1.5}"""
 
 
@@ -197,6 +197,13 @@ def section_limits(ctx: Context) -> list[str]:
     ]
 
 
+def times(factor: float) -> str:
+    """A cost factor for a sentence: ``31.6``, ``1,000``, ``2.5e+06``."""
+    if factor >= 1e6:
+        return f"{factor:.2g}"
+    return f"{factor:,.0f}" if factor >= 100 else f"{factor:.3g}"
+
+
 def _headline(row: dict) -> str:
     name = _labels.title(row["quantity"])
     factor = row["cost_factor_per_digit"]
@@ -207,7 +214,7 @@ def _headline(row: dict) -> str:
         )
     cost, err = row["front_cost_s"], row["front_rel_err"]
     return (
-        f"One more correct digit of <b>{html.escape(name)}</b> costs <b>×{factor:.3g}</b> in compute time "
+        f"One more correct digit of <b>{html.escape(name)}</b> costs <b>×{times(factor)}</b> in compute time "
         f"(Pareto front: error {err[0]:.2g} for {cost[0]:.3g} s → {err[-1]:.2g} for {cost[-1]:.3g} s)."
     )
 

@@ -117,7 +117,7 @@ def error_cost_figure(rows: list[dict], path: Path, dpi: int) -> list[dict]:
     Each quantity has its own colour and marker; the legend sits right of the axes, off the data. Returns one
     summary row per quantity with the cost factor of one more correct digit.
     """
-    fig = Figure(figsize=(8.6, 4.4))
+    fig = Figure(figsize=(9.0, 4.4))
     fig.subplots_adjust(left=0.1, right=0.6, bottom=0.13, top=0.92)
     FigureCanvasAgg(fig)
     ax = fig.subplots()
@@ -153,10 +153,10 @@ def error_cost_figure(rows: list[dict], path: Path, dpi: int) -> list[dict]:
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("compute cost of the run incl. its voxelize + segment [s, wall]")
     ax.set_ylabel("relative error |q(a) − q∞| / |q∞|")
-    ax.set_title("What accuracy costs (joined: Pareto front; faint: other runs)", fontsize=9)
+    ax.set_title("What accuracy costs (joined: Pareto front; faint: other runs)", fontsize=10)
     ax.grid(True, which="major", lw=0.4, alpha=0.5)
     if rows:
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, frameon=False)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, frameon=False)
     else:
         ax.text(
             0.5,
@@ -188,7 +188,7 @@ def _scale_bar(ax, span_um: float) -> None:
         color="tab:red",
         frameon=True,
         size_vertical=span_um / 60.0,
-        fontproperties={"size": 7},
+        fontproperties={"size": 8},
     )
     bar.patch.set_alpha(0.75)
     ax.add_artist(bar)
@@ -233,7 +233,7 @@ def sections_figure(grey_paths: dict, binary_paths: dict, axis: int, path: Path,
             _scale_bar(ax, width_um)
             ax.set_title(
                 f"{'grey g (white = matrix)' if name == 'grey' else 'binary (black = pore)'}, a = {a:g} µm",
-                fontsize=7,
+                fontsize=8,
             )
             rows.append(
                 {

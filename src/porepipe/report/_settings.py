@@ -49,4 +49,4 @@ class Settings(BaseModel):
     slice_axis: int = Field(
         2, ge=0, le=2, description="axis normal to the cross-section (0 = x, 1 = y, 2 = z)"
     )
-    dpi: int = Field(80, ge=30, le=300, description="PNG resolution")
+    dpi: int = Field(100, ge=30, le=300, description="PNG resolution")
