@@ -153,7 +153,8 @@ def section_machine(ctx: Context) -> list[str]:
 
 def section_quantities(ctx: Context) -> list[str]:
     """Each quantity against resolution with its fit and limit."""
-    if not ctx.quantities:
+    if not ctx.quantities:  # the figure still exists: the workflow's report() lists it
+        _figures.message_figure("no quantity changes with resolution", ctx.out_dir / "quantities.png")
         return ["<h2>Quantities against resolution</h2><p>No quantity changes with resolution.</p>"]
     rows = _figures.quantities_figure(
         ctx.ds, ctx.quantities, ctx.out_dir / "quantities.png", ctx.settings.dpi

@@ -170,6 +170,15 @@ def error_cost_figure(rows: list[dict], path: Path, dpi: int) -> list[dict]:
     return summary
 
 
+def message_figure(text: str, path: Path, dpi: int = 60) -> Path:
+    """A small figure that says ``text`` (where a figure the workflow expects has nothing to show)."""
+    fig = Figure(figsize=(4.0, 1.0))
+    FigureCanvasAgg(fig)
+    fig.text(0.5, 0.5, text, ha="center", va="center")
+    fig.savefig(path, dpi=dpi)
+    return path
+
+
 def nice_length(span: float) -> float:
     """A round length (1, 2 or 5 × 10^k) near a quarter of ``span``, for a scale bar."""
     target = span / 4.0
