@@ -1,6 +1,6 @@
 """porepipe: digital models of granular porous rock, built and measured."""
 
-__version__ = "0.1.0"
+from porepipe._version import __version__ as __version__
 
 
 def open_result(path):

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from porepipe import __version__
 from porepipe._registry import stage_cli_modules
+from porepipe._shared.cost import mark_compute_start
 from porepipe._shared.errors import PorepipeError
 
 #: the repository root holding the Snakefile (src layout: <root>/src/porepipe/cli.py)
@@ -122,6 +123,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(own)
     if args.command == "run":
         args.snakemake_args = passthrough
+    mark_compute_start(
+        args.func
+    )  # result files count their cost from here; start-up (interpreter, imports) apart
     try:
         return int(args.func(args) or 0)
     except PorepipeError as err:

@@ -15,6 +15,8 @@ permeabilities are written ``millidarcy`` and ``darcy``. Memory is ``MiB`` (2^20
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import xarray as xr
 
@@ -84,6 +86,13 @@ SUFFIXES = (
 )
 
 
+#: names that are dimensionless by definition wherever a stage writes them: porosities and their bounds (phi…,
+#: porosity), LPT's distributions and fractions (mu…, lambda, p), Euler numbers (chi…), relative changes (delta_…)
+DIMENSIONLESS_NAME = re.compile(
+    r"^(phi|porosity|mu|lambda|p|chi|delta|history_delta|history_mach|history_step)(_|$)"
+)
+
+
 def canonical(units: str) -> tuple[str, str | None]:
     """The spelling porepipe writes for ``units``, and the lattice unit it stands for (None if physical).
 
@@ -119,9 +128,22 @@ def from_name(name: str) -> str | None:
 
 
 def units_of(name: str, dtype, given: str | None = None) -> tuple[str | None, str | None]:
-    """Units for one variable: the writer's (respelled), else from its name, else ``"1"`` for integers and flags.
+    """Units for one variable: the writer's (respelled), else from its name, else ``"1"`` for integers, flags and the
+    names :data:`DIMENSIONLESS_NAME` matches.
 
-    Returns ``(units, lattice_units)``; ``units`` is None for text and for floats whose unit nothing states.
+    Parameters
+    ----------
+    name : str
+        The variable's name (``kappa_mD``, ``L_um``, ``phi_lower`` …).
+    dtype : numpy dtype
+        Its data type (integers and booleans are counts and flags: ``"1"``).
+    given : str, optional
+        The unit its writer gave.
+
+    Returns
+    -------
+    (str or None, str or None)
+        ``(units, lattice_units)``; ``units`` is None for floats whose unit nothing states.
     """
     if given is not None:
         return canonical(given)
@@ -129,7 +151,7 @@ def units_of(name: str, dtype, given: str | None = None) -> tuple[str | None, st
     if named is not None:
         return named, None
     kind = np.dtype(dtype).kind
-    return (DIMENSIONLESS if kind in "biu" else None), None
+    return (DIMENSIONLESS if kind in "biu" or DIMENSIONLESS_NAME.match(name) else None), None
 
 
 def annotate(ds: xr.Dataset) -> xr.Dataset:

@@ -21,7 +21,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures, _labels
 from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
-from porepipe.report._settings import Settings
+from porepipe.report._settings import Clock, Settings
 from porepipe.report._thesis import Table, scene_tables
 from porepipe.sweep import FULL, parse_name
 
@@ -215,15 +215,16 @@ def _headline(row: dict) -> str:
         )
     cost, err = row["front_cost_s"], row["front_rel_err"]
     return (
-        f"One more correct digit of <b>{html.escape(name)}</b> costs <b>×{times(factor)}</b> in compute time "
+        f"One more correct digit of <b>{html.escape(name)}</b> costs <b>×{times(factor)}</b> in {row['clock']} time "
         f"(Pareto front: error {err[0]:.2g} for {cost[0]:.3g} s → {err[-1]:.2g} for {cost[-1]:.3g} s)."
     )
 
 
 def section_error_cost(ctx: Context) -> list[str]:
     """Relative error against compute cost per run, the headline cost of a digit per quantity."""
-    err_rows = error_cost_table(ctx.ds, ctx.quantities)
-    summary = _figures.error_cost_figure(err_rows, ctx.out_dir / "error_cost.png", ctx.settings.dpi)
+    clock = Clock(ctx.settings.cost_clock).value
+    err_rows = error_cost_table(ctx.ds, ctx.quantities, clock)
+    summary = _figures.error_cost_figure(err_rows, ctx.out_dir / "error_cost.png", ctx.settings.dpi, clock)
     _figures.write_csv(ctx.out_dir / "error_cost.csv", err_rows)
     parts = ["<h2>What accuracy costs</h2>"]
     if summary:
@@ -236,8 +237,9 @@ def section_error_cost(ctx: Context) -> list[str]:
         _figure_html(
             "error_cost.png",
             "relative error against compute cost",
-            "One point per run; cost = the computation's wall time recorded in its result file plus the "
-            "voxelisation and segmentation of the volume it measured (interpreter start-up excluded, see below); "
+            f"One point per run; cost = the computation's {clock} time recorded in its result file plus the "
+            "voxelisation and segmentation of the volume it measured (interpreter start-up and imports excluded, "
+            "see below; the scene's report.cost_clock chooses CPU or wall time); "
             "error relative to the supported limit. The cost of a digit comes from a straight line through the "
             "Pareto front in log–log. Data: <a href='error_cost.csv'>error_cost.csv</a>",
         )
@@ -251,17 +253,34 @@ def section_startup(ctx: Context) -> list[str]:
     if not rows:
         return []
     _figures.write_csv(ctx.out_dir / "startup.csv", rows)
-    cells = [
-        [r["stage"], r["jobs"], r["compute_wall_s"], r["job_wall_s"], r["startup_s_per_job"]] for r in rows
+    keys = [
+        "stage",
+        "jobs",
+        "compute_wall_s",
+        "startup_s_per_job",
+        "job_wall_s",
+        "job_minus_compute_s_per_job",
     ]
+    cells = [[r[k] for k in keys] for r in rows]
     return [
         "<h3>Compute and start-up</h3>",
         _table_html(
-            ["stage", "jobs", "compute [s]", "whole jobs [s]", "start-up etc. per job [s, median]"], cells, 1
+            [
+                "stage",
+                "jobs",
+                "compute [s]",
+                "start-up per job [s, median]",
+                "whole jobs [s]",
+                "whole job − compute per job [s, median]",
+            ],
+            cells,
+            1,
         ),
-        "<p class=note>Compute: wall time of the computation as its result file records it (wall_s). Whole "
-        "jobs: Snakemake's benchmark of the same jobs, which also holds Python start-up, imports, loading compiled "
-        "kernels and file I/O. The costs above use compute only. Data: <a href='startup.csv'>startup.csv</a></p>",
+        "<p class=note>Compute: wall time of the computations as their result files record them (wall_s: "
+        "reading inputs, compiling kernels on a first run, computing, writing). Start-up: interpreter start-up "
+        "and imports before that (startup_s). Whole jobs: Snakemake's benchmarks of the same jobs, which hold "
+        "both and Snakemake's own overhead. The costs above use compute only. "
+        "Data: <a href='startup.csv'>startup.csv</a></p>",
     ]
 
 

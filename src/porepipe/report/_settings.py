@@ -19,6 +19,13 @@ class ThesisTable(str, enum.Enum):
     t7_3 = "7.3"
 
 
+class Clock(str, enum.Enum):
+    """The clock a run's cost is read on."""
+
+    cpu = "cpu"  # CPU seconds of the computation (all threads): what it costs, whatever else runs on the machine
+    wall = "wall"  # wall seconds of the computation: what a user waits, on this machine at this load
+
+
 class Settings(BaseModel):
     """Contents of ``results/<scene>/report/index.html``."""
 
@@ -48,5 +55,11 @@ class Settings(BaseModel):
     )
     slice_axis: int = Field(
         2, ge=0, le=2, description="axis normal to the cross-section (0 = x, 1 = y, 2 = z)"
+    )
+    cost_clock: Clock = Field(
+        Clock.cpu,
+        description="cost of a run in the accuracy-against-cost plot and headlines: `cpu` (CPU seconds of the "
+        "computation, all threads; robust to other load on the machine) or `wall` (wall seconds); both exclude "
+        "start-up",
     )
     dpi: int = Field(100, ge=30, le=300, description="PNG resolution")

@@ -30,7 +30,7 @@ _ATTR_UNITS = {"phi_bar": DIMENSIONLESS, "L_star_um": "µm"}
 MAX_LABELS = 8
 #: sample_um of a run on the whole volume
 FULL = np.inf
-COST_KEYS = ("wall_s", "cpu_s", "peak_mb", "threads")
+COST_KEYS = ("wall_s", "cpu_s", "startup_s", "peak_mb", "threads")
 BENCH_KEYS = {"s": "bench_s", "cpu_time": "bench_cpu_s", "max_rss": "bench_max_rss_mb"}
 
 _NAME = re.compile(r"^(?P<prefix>.+?)_a(?P<a>[0-9]+(?:\.[0-9]+)?)(?:_(?P<rest>.+))?$")
@@ -266,6 +266,7 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
     units = {
         "wall_s": SECOND,
         "cpu_s": SECOND,
+        "startup_s": SECOND,
         "peak_mb": MEBIBYTE,
         "bench_s": SECOND,
         "bench_cpu_s": SECOND,
