@@ -97,14 +97,21 @@ def cost_per_digit(cost, err) -> float:
 
 
 def error_cost_table(ds: xr.Dataset, quantities, clock: str = "wall") -> list[dict]:
-    """One row per run of every quantity with a supported limit: relative error against total cost (``clock``)."""
+    """One row per run of every quantity with a supported limit: relative error against total cost (``clock``).
+
+    A run closer to the limit than the limit's own error bar has an unknown error: its ``rel_err`` is that bar and
+    ``resolved`` is 0.
+    """
     rows = []
     for q in quantities:
         ref = reference_limit(ds, q)
         if ref is None or ref.value == 0:
             continue
         runs = runs_of(ds, q, clock)
-        err = np.maximum(np.abs(runs["value"] - ref.value) / abs(ref.value), ERR_FLOOR)
+        diff = np.abs(runs["value"] - ref.value) / abs(ref.value)
+        # an error below the limit's own error bar is not known: shown at that bar, left out of the cost of a digit
+        bar = ref.err / abs(ref.value) if np.isfinite(ref.err) else 0.0
+        err = np.maximum(np.maximum(diff, bar), ERR_FLOOR)
         front = set(pareto_front(runs["cost_s"], err).tolist())
         for i in range(err.size):
             rows.append(
@@ -115,6 +122,7 @@ def error_cost_table(ds: xr.Dataset, quantities, clock: str = "wall") -> list[di
                     "value": float(runs["value"][i]),
                     "limit": ref.value,
                     "rel_err": float(err[i]),
+                    "resolved": int(diff[i] > bar),
                     "cost_s": float(runs["cost_s"][i]),
                     "pareto": int(i in front),
                 }

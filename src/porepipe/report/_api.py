@@ -198,6 +198,10 @@ def section_limits(ctx: Context) -> list[str]:
     ]
 
 
+#: a Pareto front whose dearest run costs less than this multiple of its cheapest is called overhead-bound
+OVERHEAD_BOUND = 2.0
+
+
 def times(factor: float) -> str:
     """A cost factor for a sentence: ``31.6``, ``1,000``, ``2.5e+06``."""
     if factor >= 1e6:
@@ -210,14 +214,20 @@ def _headline(row: dict) -> str:
     factor = row["cost_factor_per_digit"]
     if not np.isfinite(factor):
         return (
-            f"{html.escape(name)}: no cost per digit yet ({row['front_runs']} run(s) on the Pareto front, "
-            "too few or no gain in accuracy)."
+            f"{html.escape(name)}: no cost per digit yet ({row['front_runs']} run(s) with a known error on the "
+            "Pareto front: add resolutions)."
         )
     cost, err = row["front_cost_s"], row["front_rel_err"]
-    return (
+    text = (
         f"One more correct digit of <b>{html.escape(name)}</b> costs <b>×{times(factor)}</b> in {row['clock']} time "
         f"(Pareto front: error {err[0]:.2g} for {cost[0]:.3g} s → {err[-1]:.2g} for {cost[-1]:.3g} s)."
     )
+    if cost[-1] < OVERHEAD_BOUND * cost[0]:
+        text += (
+            f" These runs are overhead-bound: the finest cost only ×{cost[-1] / cost[0]:.2g} the coarsest, so fixed "
+            "costs per run (loading compiled kernels, reading files) dominate the computation at this size."
+        )
+    return text
 
 
 def section_error_cost(ctx: Context) -> list[str]:
@@ -228,7 +238,8 @@ def section_error_cost(ctx: Context) -> list[str]:
     _figures.write_csv(ctx.out_dir / "error_cost.csv", err_rows)
     parts = ["<h2>What accuracy costs</h2>"]
     if summary:
-        parts.append("<ul class=headline>" + "".join(f"<li>{_headline(r)}</li>" for r in summary) + "</ul>")
+        ordered = sorted(summary, key=lambda r: not np.isfinite(r["cost_factor_per_digit"]))  # known costs first
+        parts.append("<ul class=headline>" + "".join(f"<li>{_headline(r)}</li>" for r in ordered) + "</ul>")
     else:
         parts.append(
             "<p>No quantity has a supported limit yet, so no errors can be shown: add resolutions.</p>"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import textwrap
 
 import numpy as np
 import xarray as xr
@@ -27,9 +28,11 @@ NAMES = {
     "S_min": ("S_min", "specific surface, lower bound"),
     "S_mf": ("S_mf", "specific surface, mean-field estimate"),
     "S_max": ("S_max", "specific surface, upper bound"),
+    "phi_mean_grey": ("φ_grey", "porosity from the mean grey value"),
+    "estimate_lu": ("κ̂", "permeability estimate (lattice units)"),
 }
 #: same quantity in another unit: only the first of each family is plotted and tabled
-SAME_AS = {"kappa_m2": "kappa_mD", "kappa_D": "kappa_mD", "kappa_lu": "kappa_mD"}
+SAME_AS = {"kappa_m2": "kappa_mD", "kappa_D": "kappa_mD", "kappa_lu": "kappa_mD", "estimate_lu": "kappa_mD"}
 #: the matrix phase repeats the pore phase (S_V equal, K_V opposite, φ complementary): only pore is shown
 SHADOW_LABEL = "matrix"
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -47,12 +50,25 @@ def symbol(quantity: str) -> str:
     return NAMES.get(parts(quantity)[1], (parts(quantity)[1], ""))[0]
 
 
-def title(quantity: str) -> str:
-    """A readable title: ``minkowski.S_V[pore]`` -> ``specific surface S_V (minkowski, pore)``."""
+def title(quantity: str, width: int | None = None) -> str:
+    """A readable title: ``minkowski.S_V[pore]`` -> ``specific surface S_V (minkowski, pore)``.
+
+    Parameters
+    ----------
+    quantity : str
+        A sweep quantity (``group.var[label]``).
+    width : int, optional
+        Wrap into lines of at most this many characters (figure titles and legends).
+
+    Returns
+    -------
+    str
+    """
     group, var, label = parts(quantity)
     sym, what = NAMES.get(var, (var, ""))
     where = ", ".join(x for x in (group.replace("_", " "), label) if x)
-    return f"{what} {sym}".strip() + (f" ({where})" if where else "")
+    text = f"{what} {sym}".strip() + (f" ({where})" if where else "")
+    return "\n".join(textwrap.wrap(text, width)) if width else text
 
 
 def pretty_unit(units: str) -> str:
@@ -80,7 +96,7 @@ def is_duplicate(quantity: str, names) -> bool:
     names = set(map(str, names))
     if label == SHADOW_LABEL and f"{group}.{var}[pore]" in names:
         return True
-    return var in SAME_AS and f"{group}.{SAME_AS[var]}" + (f"[{label}]" if label else "") in names
+    return var in SAME_AS and bool({f"{group}.{SAME_AS[var]}", f"{group}.{SAME_AS[var]}[{label}]"} & names)
 
 
 def is_core(quantity: str) -> bool:

@@ -78,7 +78,9 @@ def write_results(root: Path) -> tuple[list[Path], list[Path], list[Path]]:
             with ResultWriter(path, stage=kind, scene="tiny") as w:
                 w.write_volume(name, data, voxel_um=a)
             with h5py.File(path, "a") as f:
-                f.attrs["wall_s"] = f.attrs["cpu_s"] = 0.0  # upstream cost left out: the cost law above is exact
+                f.attrs["wall_s"] = f.attrs["cpu_s"] = (
+                    0.0  # upstream cost left out: the cost law above is exact
+                )
             files.append(path)
     return results, grey, binary
 
