@@ -4,7 +4,7 @@ The image: overlapping spheres (radii 8..16 voxels, porosity ~0.3) voxelised by 
 grey values with Gaussian noise, written as a headerless RAW (read back memory-mapped). The child process runs
 ``porepipe acquire``; its wall time and peak RSS are measured from outside (getrusage of the children), the
 per-part times come from the statistics file. Acceptance (issue 9): 512³ in under 5 minutes, peak under 8 GB.
-Timings are taken on a shared, loaded 2-core machine. Writes benchmarks/results/acquire_N.json and a Markdown table.
+Timings are taken on a shared, loaded 2-core machine. Writes acquire_N.json into --out (default results/benchmarks/) and a Markdown table.
 
     python benchmarks/acquire.py [--n 512] [--no-grains]     (--smoke: 64³, the CI configuration)
 """
@@ -23,6 +23,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+from _common import add_out_argument, write_record
 
 
 def make_image(n: int, path: Path, seed: int = 0) -> float:
@@ -47,7 +48,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--n", type=int, default=512)
     ap.add_argument("--no-grains", action="store_true")
-    ap.add_argument("--smoke", action="store_true", help="64³, results in the current directory (CI)")
+    ap.add_argument("--smoke", action="store_true", help="64³ (CI)")
+    add_out_argument(ap)
     args = ap.parse_args()
     n = 64 if args.smoke else args.n
     with tempfile.TemporaryDirectory(dir=os.environ.get("TMPDIR", "/tmp")) as tmp:
@@ -102,9 +104,7 @@ def main() -> int:
         "note": "shared, loaded 2-core machine (several agents); wall includes interpreter start and numba "
         "cache load",
     }
-    results = Path("benchmark-results") if args.smoke else Path(__file__).with_name("results")
-    results.mkdir(exist_ok=True)
-    (results / f"acquire_{n}.json").write_text(json.dumps(record, indent=2))
+    write_record(args.out, f"acquire_{n}.json", record)
     rows = ["| part | seconds |", "|---|---|"] + [f"| {k} | {v:.2f} |" for k, v in parts.items()]
     print(
         f"acquire benchmark {n}³ uint8 ({n**3 / 1e6:.2f} Mvoxels): wall {wall:.1f} s (limit 300), peak RSS "

@@ -15,7 +15,7 @@ Timings come from a shared, loaded 2-core machine: treat them as lower bounds of
 gives MLUPS per CPU second of the process (best of the repeats), which other jobs on the machine disturb far less.
 
 Usage: python benchmarks/lbm.py [--size 128] [--steps 10] [--out DIR]
-Writes lbm_benchmark.json and lbm_benchmark.md into --out (default: current directory).
+Writes lbm_benchmark.json and lbm_benchmark.md into --out (default: results/benchmarks/ of the checkout).
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
+from _common import add_out_argument
 from numba import njit, prange
 from scipy import ndimage
 
@@ -167,7 +168,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--size", type=int, default=128)
     p.add_argument("--steps", type=int, default=10)
-    p.add_argument("--out", default=".")
+    add_out_argument(p)
     p.add_argument("--no-lbmpy", action="store_true")
     p.add_argument(
         "--smoke", action="store_true", help="24^3, 2 steps, no lbmpy (CI smoke; no figures to quote)"

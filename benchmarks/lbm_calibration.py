@@ -1,6 +1,6 @@
 """LBM calibration suite of thesis §6.1.5, full size, with the thesis's numbers beside ours.
 
-Writes ``lbm_calibration.json`` and ``lbm_calibration.md`` into ``--out`` (default: current directory):
+Writes ``lbm_calibration.json`` and ``lbm_calibration.md`` into ``--out`` (default: ``results/benchmarks/``):
   1. Table 6.2: square ducts B = 4 … 64 in the thesis set-up (Eq. 6.1.26, BGK τ̂ = 0.857): ⟨|ε_v|⟩ on the middle
      cross-section and ε_κ against the series (6.1.37);
   2. ε_κ of BGK / MRT / TRT on periodic square ducts B = 4 … 64;
@@ -20,6 +20,8 @@ import argparse
 import json
 import time
 from pathlib import Path
+
+from _common import add_out_argument
 
 from porepipe.lbm import Settings
 from porepipe.lbm import _calibration as cal
@@ -211,7 +213,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--max-b", type=int, default=32, help="largest duct (64 is the thesis's)")
     p.add_argument("--periodic-duct", action="store_true", help="Table 6.2 on a 2-layer periodic duct (fast)")
-    p.add_argument("--out", default=".", help="directory for lbm_calibration.json / .md")
+    add_out_argument(p)
     p.add_argument("--quick", action="store_true", help="reduced Table 6.3 box")
     p.add_argument(
         "--smoke", action="store_true", help="B = 4 only, reduced boxes (CI smoke; no figures to quote)"

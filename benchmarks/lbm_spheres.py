@@ -1,7 +1,8 @@
 """Simple-cubic sphere arrays against the published drag (Zick & Homsy 1982): κ̂ against resolution, halfway and
 interpolated (CLI) walls, TRT Λ = 3/16, flow along x.
 
-Writes ``lbm_spheres.json`` into ``--out`` (default: current directory) and prints one row per run: solid fraction
+Writes ``lbm_spheres.json`` into ``--out`` (default: results/benchmarks, where the report's permeability-cost
+section reads it) and prints one row per run: solid fraction
 c, voxels per diameter d, walls, K = L³/(6π a κ̂), its error against ZICK_HOMSY_SC, steps and CPU seconds.
 The order of convergence between two resolutions is log(e₁/e₂)/log(d₂/d₁) of |error|.
 
@@ -57,7 +58,9 @@ def main(argv=None) -> int:
     p.add_argument("--fractions", type=float, nargs="+", default=[0.125, 0.343])
     p.add_argument("--diameters", type=float, nargs="+", default=[8, 12, 16, 24, 32])
     p.add_argument("--walls", nargs="+", default=["halfway", "cli"])
-    p.add_argument("--out", default=".")
+    p.add_argument(
+        "--out", default="results/benchmarks", help="folder of lbm_spheres.json (read by the report)"
+    )
     p.add_argument("--smoke", action="store_true", help="c = 0.125, d = 8 only")
     args = p.parse_args(argv)
     if args.smoke:
@@ -77,6 +80,7 @@ def main(argv=None) -> int:
                     flush=True,
                 )
     out = Path(args.out) / "lbm_spheres.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(rows, indent=1))
     print(f"-> {out}")
     return 0

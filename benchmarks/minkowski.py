@@ -3,7 +3,7 @@
 Prints Mvoxel/s on a 512³ binary volume at 1 and 2 threads, next to the time to merely read the volume once
 (memory-bandwidth floor), a plain numpy configuration histogram, and a peer tool (quantimpy, if installed) on a
 smaller volume. Timings come from a shared, loaded machine (several agents on 2 cores): best of ``--repeat`` runs.
-Writes ``benchmarks/minkowski.json`` and a markdown table to stdout.
+Writes ``minkowski.json`` into ``--out`` (default ``results/benchmarks/``) and a markdown table to stdout.
 
     python benchmarks/minkowski.py [--n 512] [--repeat 3]
 """
@@ -11,12 +11,11 @@ Writes ``benchmarks/minkowski.json`` and a markdown table to stdout.
 from __future__ import annotations
 
 import argparse
-import json
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
+from _common import add_out_argument, write_record
 
 from porepipe.minkowski import configuration_histogram
 from porepipe.minkowski._kernels import _touch_all
@@ -46,6 +45,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=512)
     parser.add_argument("--repeat", type=int, default=3)
+    add_out_argument(parser)
     parser.add_argument("--smoke", action="store_true", help="64^3, one repeat (CI)")
     args = parser.parse_args()
     if args.smoke:
@@ -115,7 +115,7 @@ def main() -> None:
             f"| {r['tool']}{extra} | {fmt(r['threads'], 'd')} | {fmt(r['seconds'], '.3f')} | "
             f"{fmt(r['mvox_per_s'], '.0f')} | {fmt(r.get('read_once_mvox_per_s'), '.0f')} |"
         )
-    Path(__file__).with_suffix(".json").write_text(json.dumps({"n": args.n, "rows": rows}, indent=1))
+    write_record(args.out, "minkowski.json", {"n": args.n, "rows": rows})
 
 
 if __name__ == "__main__":

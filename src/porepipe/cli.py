@@ -117,6 +117,15 @@ def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
     return argv, []
 
 
+def _check_outputs(args) -> None:
+    """Every subcommand's output names (``-o``, ``--xyzr``) are checked before it computes anything."""
+    from porepipe._shared.atomic import prepare_output
+
+    for option in ("out", "xyzr"):
+        if getattr(args, option, None):
+            prepare_output(getattr(args, option))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``porepipe`` command; returns the exit code (2 on bad input, with one line on stderr)."""
     own, passthrough = _split_passthrough(list(sys.argv[1:] if argv is None else argv))
@@ -127,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
         args.func
     )  # result files count their cost from here; start-up (interpreter, imports) apart
     try:
+        _check_outputs(args)
         return int(args.func(args) or 0)
     except PorepipeError as err:
         print(f"porepipe {args.command}: error: {err}", file=sys.stderr)

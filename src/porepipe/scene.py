@@ -6,6 +6,7 @@ naming the key, the bad value and what is allowed. Lengths are in micrometres th
 
 from __future__ import annotations
 
+import copy
 import enum
 import math
 import os
@@ -100,12 +101,24 @@ class Spheres(_Strict):
     @field_validator("inline")
     @classmethod
     def _radii_positive(cls, spheres):
-        for i, (x, y, z, r) in enumerate(spheres or []):
-            if not all(math.isfinite(v) for v in (x, y, z, r)):
-                raise ValueError(f"sphere {i} = {[x, y, z, r]} has a non-finite value")
-            if r <= 0:
-                raise ValueError(f"sphere {i} has radius {r}; allowed: r > 0")
-        return spheres
+        spheres = spheres or []
+        not_finite = [i for i, sphere in enumerate(spheres) if not all(math.isfinite(v) for v in sphere)]
+        not_positive = [i for i, sphere in enumerate(spheres) if i not in not_finite and sphere[3] <= 0]
+        faults = []
+        if not_finite:
+            faults.append(f"sphere(s) {_index_list(not_finite)} have a non-finite value")
+        if not_positive:
+            shown = [f"{i} (radius {spheres[i][3]:g})" for i in not_positive]
+            faults.append(f"sphere(s) {_index_list(shown)} have radius <= 0 (allowed: r > 0)")
+        if faults:
+            raise ValueError("; ".join(faults))
+        return spheres or None
+
+
+def _index_list(indices: list, most: int = 20) -> str:
+    """``0, 3, 7``: every index, or the first ``most`` and how many more (the message stays one line)."""
+    text = ", ".join(str(i) for i in indices[:most])
+    return text + (f" and {len(indices) - most} more" if len(indices) > most else "")
 
 
 class SceneBase(_Strict):
@@ -205,6 +218,8 @@ def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
         msg = e["msg"].removeprefix("Value error, ")
         if e["type"] == "extra_forbidden":
             msg = "unknown key (misspelt?)"
+        elif e["type"] == "finite_number":
+            msg = "NaN or inf; every setting must be a finite number"
         problems.append(f"{_loc(loc)} = {_short(_get(raw, loc))}: {msg[:300]}")
     return problems
 
@@ -281,6 +296,81 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
     return problems
 
 
+def _raw_path(raw, loc: tuple) -> tuple:
+    """The part of an error location that names keys and indices of the raw scene (pydantic adds type tags)."""
+    path, value = [], raw
+    for part in loc:
+        if (isinstance(value, dict) and part in value) or (
+            isinstance(value, list) and isinstance(part, int) and 0 <= part < len(value)
+        ):
+            value = value[part]
+        else:
+            break
+        path.append(part)
+    return tuple(path)
+
+
+def _without(raw, paths: list[tuple]):
+    """A copy of ``raw`` with the mapping keys at ``paths`` (from :func:`_key_path`) removed."""
+    pruned = copy.deepcopy(raw)
+    for path in paths:
+        parent = pruned
+        for part in path[:-1]:
+            try:
+                parent = parent[part]
+            except (KeyError, IndexError, TypeError):
+                parent = None  # an enclosing key went already
+                break
+        if isinstance(parent, dict):
+            parent.pop(path[-1], None)
+    return pruned
+
+
+def _key_path(raw, loc: tuple) -> tuple:
+    """The mapping key a faulty value sits under (a bad list item or tuple entry: the list's own key)."""
+    path = _raw_path(raw, loc)
+    while path and not isinstance(path[-1], str):
+        path = path[:-1]
+    return path
+
+
+def _checks_hidden_by(raw: dict, err: ValidationError) -> list[str]:
+    """Problems pydantic skipped because of ``err``.
+
+    The checks across keys of a model run only once all its fields are valid, so validate once more with every
+    faulty key removed (its default in its place) and keep the new problems, except those at or below a removed key
+    and those of a check that names a removed key (it would judge the default, not what the file says).
+    """
+    removed = {_key_path(raw, e["loc"]) for e in err.errors() if e["type"] != "missing"} - {()}
+    if not removed:
+        return []
+    try:
+        Scene.model_validate(_without(raw, sorted(removed, key=len)))
+    except ValidationError as again:
+        hidden = [e for e in again.errors() if not any(_about_removed(raw, e, p) for p in removed)]
+        seen = set(_pydantic_problems(raw, err))
+        return [problem for problem in _pydantic_problems(raw, _Errors(hidden)) if problem not in seen]
+    return []
+
+
+def _about_removed(raw, error: dict, path: tuple) -> bool:
+    """Whether a second-pass error concerns the removed key ``path``: it lies below it, or names it from above."""
+    loc = _raw_path(raw, error["loc"])
+    if loc[: len(path)] == path:
+        return True
+    return path[: len(loc)] == loc and str(path[-1]) in error["msg"]
+
+
+class _Errors:
+    """A filtered list of pydantic errors with the ``errors()`` method :func:`_pydantic_problems` reads."""
+
+    def __init__(self, errors: list):
+        self._errors = errors
+
+    def errors(self) -> list:
+        return self._errors
+
+
 def parse_scene(raw: Any, base_dir: Path | str = ".", source: str = "scene") -> BaseModel:
     """Validate a scene given as a dict; raise :class:`SceneError` with every problem found."""
     base_dir = Path(base_dir)
@@ -291,7 +381,7 @@ def parse_scene(raw: Any, base_dir: Path | str = ".", source: str = "scene") -> 
     try:
         scene = Scene.model_validate(raw)
     except ValidationError as err:
-        problems = _pydantic_problems(raw, err) + problems
+        problems = _pydantic_problems(raw, err) + _checks_hidden_by(raw, err) + problems
     if problems:
         raise SceneError(source, problems)
     return _resolve_paths(scene, base_dir)

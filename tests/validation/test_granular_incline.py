@@ -20,7 +20,7 @@ E = 1e7  # the thesis's particle modulus (§4.3.3)
 RHO = 1000.0
 
 
-def _tilted(theta_deg, poly, mu, steps, dt, damping=0.5, y0=None):
+def _tilted(theta_deg, poly, mu, steps, dt, damping=0.5, y0=None, point="midpoint"):
     th = math.radians(theta_deg)
     lo = np.min(np.asarray(poly)[:, 1])
     sim = simulation(
@@ -28,7 +28,13 @@ def _tilted(theta_deg, poly, mu, steps, dt, damping=0.5, y0=None):
         [floor(width=2.0)],
         dt_s=dt,
         gravity_m_s2=(G * math.sin(th), -G * math.cos(th)),
-        material={"young_N_m": E, "density_kg_m2": RHO, "damping": damping, "friction": mu},
+        material={
+            "young_N_m": E,
+            "density_kg_m2": RHO,
+            "damping": damping,
+            "friction": mu,
+            "application_point": point,
+        },
     )
     sim.advance(steps)
     return sim
@@ -36,35 +42,38 @@ def _tilted(theta_deg, poly, mu, steps, dt, damping=0.5, y0=None):
 
 @pytest.mark.parametrize("theta_deg", [24, 25, 26, 27, 28, 29])
 def test_block_rests_until_tan_theta_equals_mu(theta_deg):
-    # mu = 0.5: arctan mu = 26.57 deg. Below, the block stays within 5e-5 m (0.25 % of its length) over 0.2 s;
-    # it is not perfectly still: with the force applied at the midpoint of c1c2 a flat face has no restoring torque
-    # until a corner lifts, so the block chatters (rocks by ~1e-4 rad) and creeps by ~1e-4 m/s, less for stiffer E
-    # (measured: 1.8e-5 m at 26 deg). Above, it slides with a = g (sin - mu cos) within 5 %
-    # (27 deg: 2 mm in 0.2 s).
+    # mu = 0.5: arctan mu = 26.57 deg. Below, the block must not creep: with the force at the overlap centroid a
+    # flat face is restored when it tilts (at the midpoint of c1c2 it is not, and the block rocks and creeps by
+    # ~1e-5-1e-4 m/s), so after the initial elastic settling (< 0.3 um measured) it is at rest: drift over the
+    # second 0.1 s below 1e-9 m/s (measured ~1e-19, round-off). Above, it slides with a = g (sin - mu cos) within
+    # 2 % (measured 1.3 % at 27 deg, 0.4 % at 28 deg: the settling transient), flat (|phi| < 1e-5 rad).
     mu = 0.5
-    sim = _tilted(theta_deg, rectangle(0.02, 0.005), mu, 20000, 1e-5)
+    sim = _tilted(theta_deg, rectangle(0.02, 0.005), mu, 10000, 1e-5, point="centroid")
+    x0 = sim.position[0, 0]
+    sim.advance(10000)
     v = sim.velocity[0, 0]
     th = math.radians(theta_deg)
     if math.tan(th) < mu:
-        assert abs(sim.position[0, 0]) < 5e-5
+        assert abs(sim.position[0, 0] - x0) / 0.1 < 1e-9
+        assert abs(sim.position[0, 0]) < 1e-6
     else:
         a = G * (math.sin(th) - mu * math.cos(th))
         t = sim.time_s
-        assert v == pytest.approx(a * t, rel=0.05, abs=2e-4)
-        assert abs(sim.position[0, 2]) < 1e-3  # slides flat (it chatters, see above), does not tip (b/h = 4)
+        assert v == pytest.approx(a * t, rel=0.02)
+        assert abs(sim.position[0, 2]) < 1e-5
 
 
 @pytest.mark.parametrize(("theta_deg", "tips"), [(12, False), (18, True)])
 def test_tall_block_tips_when_tan_theta_exceeds_b_over_h(theta_deg, tips):
     # b/h = 0.25 -> 14.0 deg; mu = 0.9 so it cannot slide first (tan^-1 0.9 = 42 deg)
-    sim = _tilted(theta_deg, rectangle(0.005, 0.02), 0.9, 15000, 1e-5)
+    sim = _tilted(theta_deg, rectangle(0.005, 0.02), 0.9, 15000, 1e-5, point="centroid")
     angle = abs(sim.position[0, 2])
     if tips:
         assert angle > 0.1  # rotating away about its downhill corner (0.1 rad within 0.15 s at 18 deg)
     else:
-        # it rocks on its downhill corner (the midpoint contact gives a flat face no restoring torque until a
-        # corner lifts), by ~0.01 rad, far from the 0.245 rad (arctan b/h) beyond which it would topple
-        assert angle < 0.03
+        # it leans on a wedge-shaped overlap at its downhill corner, by ~1e-3 rad (static estimate 9e-4 rad,
+        # measured 3.4e-3 rad at 0.15 s, still settling), far from the 0.245 rad (arctan b/h) of toppling
+        assert angle < 0.01
 
 
 @pytest.mark.parametrize(("theta_deg", "rolls"), [(12, True), (22, False)])
@@ -93,8 +102,10 @@ def test_pull_threshold_is_mu_Fn_for_any_contact_area(shape):
     # §2.5.1: 100 g shapes with contact lengths 10, 20, 40 and 7.2 mm pulled by a drag spring (DRAG_K = 100 N/m,
     # free end at 0.01 m/s: the force rises by 1 N/s); mu = 0.3, so the threshold mu m g = 0.294 N whatever the
     # contact area. Onset = the first displacement beyond 1 um (5x the elastic tangential deflection of the
-    # contact spring at the threshold, 0.2 um). The onset force lies within 6 % of mu m g (the force rises 0.34 %
-    # per ms; measured onsets 0.95 (the thin strip chatters most and creeps early) to 1.03).
+    # contact spring at the threshold, 0.2 um). Force at the overlap centroid and the default dt (which keeps the
+    # strip's damping rate c dt <= 0.15; at dt = 1e-5 s its c dt = 0.36 is past the Gear's stability bound and
+    # it rang and crept early, at 0.92-0.95 mu m g). The onset force lies in [1, 1.04] mu m g: never before the
+    # threshold, after it by the detection lag (the force rises 0.34 % per ms; measured 1.026-1.031).
     mu, k, v = 0.3, 100.0, 0.01
     polys = {
         "square": rectangle(0.01, 0.01),
@@ -107,9 +118,14 @@ def test_pull_threshold_is_mu_Fn_for_any_contact_area(shape):
     sim = simulation(
         [{"vertices_m": [tuple(p) for p in poly], "position_m": (0.0, -lo)}],
         [floor(width=2.0)],
-        dt_s=1e-5,
         gravity_m_s2=(0.0, -G),
-        material={"young_N_m": E, "density_kg_m2": RHO, "damping": 0.5, "friction": mu},
+        material={
+            "young_N_m": E,
+            "density_kg_m2": RHO,
+            "damping": 0.5,
+            "friction": mu,
+            "application_point": "centroid",
+        },
         drag_springs=[{"particle": 0, "k_N_m": k, "velocity_m_s": (v, 0.0)}],
     )
     assert sim.mass[0] == pytest.approx(0.1, rel=1e-9)
@@ -122,4 +138,4 @@ def test_pull_threshold_is_mu_Fn_for_any_contact_area(shape):
         if moved > 1e-6:
             break
         assert sim.time_s < 0.4
-    assert force == pytest.approx(threshold, rel=0.06)
+    assert threshold <= force <= 1.04 * threshold

@@ -259,14 +259,20 @@ def diffusion_resolutions(scene):
 
 
 def permeability_inputs(wildcards):
-    """The binary volume and scene; with a model's grey volume too (sub-voxel wall distances for `walls: cli`)."""
+    """The binary volume and scene; with a model's wall geometry for `walls: cli`: a decorated scene's grains.h5
+    (exact polyhedra), else the grey volume (sub-voxel wall distances from grey values)."""
+    scene = scene_of(wildcards)
     inputs = {"binary": whole_binary_volume(wildcards), "scene": scene_file(wildcards)}
-    if getattr(scene_of(wildcards), "acquire", None) is None:
+    if getattr(scene, "decoration", None) is not None:
+        inputs["grains"] = results(scene, "decorate", "grains.h5")
+    elif getattr(scene, "acquire", None) is None:
         inputs["grey"] = grey_volume(wildcards)
     return inputs
 
 
 def permeability_grey_arg(wildcards, input):
+    if "grains" in input.keys():
+        return f"--grains {shlex.quote(input.grains)}"
     return f"--grey {shlex.quote(input.grey)}" if "grey" in input.keys() else ""
 
 

@@ -10,16 +10,92 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_path", "commit", "temporary_path", "write_text_atomic"]
+from porepipe._shared.errors import PorepipeError
+
+__all__ = [
+    "atomic_path",
+    "commit",
+    "prepare_output",
+    "remove_stale_temporaries",
+    "temporary_path",
+    "write_text_atomic",
+]
 
 
 def temporary_path(path) -> Path:
     """The hidden temporary name beside ``path`` that this process writes before :func:`commit`."""
     path = Path(path)
     return path.with_name(f".{path.name}.{os.getpid()}.tmp")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's live process
+    return True
+
+
+def remove_stale_temporaries(path) -> list[Path]:
+    """Delete the ``.<name>.<pid>.tmp`` files beside ``path`` whose process is gone (a killed job's leftovers).
+
+    A live writer's temporary file (its process still exists) is left alone. Returns the files removed.
+    """
+    path = Path(path)
+    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.tmp$")
+    removed = []
+    try:
+        candidates = list(path.parent.iterdir())
+    except OSError:
+        return removed
+    for candidate in candidates:
+        match = pattern.match(candidate.name)
+        if match and int(match.group(1)) != os.getpid() and not _alive(int(match.group(1))):
+            candidate.unlink(missing_ok=True)
+            removed.append(candidate)
+    return removed
+
+
+def prepare_output(path) -> Path:
+    """Check an output name before any work is done: create its directory, refuse what cannot be written.
+
+    Refuses (one :class:`PorepipeError` naming the path) an existing directory under the output name, a file in the
+    way of the directory, and a directory this process cannot write; removes temporaries of killed earlier runs.
+    Called by the CLI for ``-o`` before computing, so a long run never fails at its end for want of a directory.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise PorepipeError(f"output {path} is a directory; give a file name (e.g. {path / 'result.h5'})")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise PorepipeError(
+            f"output {path}: cannot create its directory, a file is in the way ({_first_file(path.parent)})"
+        ) from None
+    except OSError as err:
+        raise PorepipeError(
+            f"output {path}: cannot create its directory {path.parent}: {err.strerror}"
+        ) from None
+    if not path.parent.is_dir():
+        raise PorepipeError(f"output {path}: {path.parent} is a file, not a directory")
+    if not os.access(path.parent, os.W_OK | os.X_OK):
+        raise PorepipeError(f"output {path}: directory {path.parent} is not writable")
+    remove_stale_temporaries(path)
+    return path
+
+
+def _first_file(directory: Path) -> Path:
+    """The first ancestor of ``directory`` (itself included) that exists but is not a directory."""
+    for parent in [directory, *directory.parents]:
+        if parent.exists() and not parent.is_dir():
+            return parent
+    return directory
 
 
 def _fsync(path: Path, *, directory: bool = False) -> None:
@@ -61,8 +137,7 @@ def atomic_path(path) -> Iterator[Path]:
     >>> with atomic_path("table.csv") as tmp:  # doctest: +SKIP
     ...     tmp.write_text(text)
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path = prepare_output(path)
     tmp = temporary_path(path)
     try:
         yield tmp

@@ -12,9 +12,10 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import xarray as xr
 
-from porepipe._shared.store import ResultWriter
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.store import ResultWriter, read_attrs, read_table
 
-__all__ = ["N_SAMPLES", "SUB", "write_grey_volume"]
+__all__ = ["N_SAMPLES", "SUB", "read_grey_histogram", "write_grey_volume"]
 
 #: sample points per voxel edge
 SUB = 6
@@ -73,3 +74,39 @@ def write_grey_volume(
     )
     writer.attrs.update(voxel_um=voxel_um, shape=np.asarray(shape), **attrs)
     return hist
+
+
+def read_grey_histogram(path) -> tuple[np.ndarray, float]:
+    """The grey histogram M(g, a) and voxel edge a (µm) of a grey volume file, refusing any other file by name.
+
+    Parameters
+    ----------
+    path : path-like
+        A ``grey_a{a}.h5`` written by :func:`write_grey_volume`.
+
+    Returns
+    -------
+    hist : (217,) ndarray of int64
+        M(g, a), g = 0..216.
+    voxel_um : float
+        The voxel edge a in µm.
+
+    Raises
+    ------
+    PorepipeError
+        The file is unreadable, or another stage's result, or lacks the histogram or ``voxel_um``.
+    """
+    attrs = read_attrs(path)
+    table = read_table(path)
+    hist = table["grey_histogram"].values if "grey_histogram" in table else None
+    voxel_um = attrs.get("voxel_um")
+    if hist is None or hist.shape != (N_SAMPLES + 1,) or not isinstance(voxel_um, (int, float)):
+        raise PorepipeError(
+            f"{path} is not a grey volume file (stage {attrs.get('stage')!r}, no {N_SAMPLES + 1}-bin "
+            "grey_histogram with voxel_um); give a grey_a{a}.h5 written by voxelize or voxelize-grains"
+        )
+    if hist.dtype.kind not in "iu" or np.any(hist < 0):
+        raise PorepipeError(
+            f"{path}: grey_histogram holds {hist.dtype} or negative counts; recompute the file"
+        )
+    return hist.astype(np.int64), float(voxel_um)

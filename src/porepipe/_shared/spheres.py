@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import h5py
 import numpy as np
 
+from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.store import open_h5
 
 
 def check_spheres(
@@ -52,7 +53,8 @@ def read_xyzr(path) -> tuple[np.ndarray, np.ndarray]:
 def write_xyzr(path, centres_um: np.ndarray, radii_um: np.ndarray) -> None:
     """Write spheres as ``x y z r`` lines (µm, full float64 precision)."""
     data = np.column_stack([centres_um, radii_um])
-    np.savetxt(path, data, fmt="%.17g", header="x_um y_um z_um r_um")
+    with atomic_path(path) as tmp:  # a kill mid-write must not leave a short file that looks finished
+        np.savetxt(tmp, data, fmt="%.17g", header="x_um y_um z_um r_um")
 
 
 def read_packing_h5(path) -> tuple[np.ndarray, np.ndarray]:
@@ -60,7 +62,7 @@ def read_packing_h5(path) -> tuple[np.ndarray, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise PorepipeError(f"packing file {path} does not exist")
-    with h5py.File(path, "r") as f:
+    with open_h5(path) as f:
         missing = [k for k in ("centres_um", "radii_um") if k not in f]
         if missing:
             raise PorepipeError(f"{path} is not a packing file: missing dataset(s) {missing}")

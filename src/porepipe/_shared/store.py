@@ -39,7 +39,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared import cost as _cost
-from porepipe._shared.atomic import commit, temporary_path
+from porepipe._shared.atomic import commit, prepare_output, temporary_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.units import DIMENSIONLESS, MICROMETRE, annotate, canonical, centres_um, units_of
 from porepipe._version import __version__
@@ -149,7 +149,7 @@ class ResultWriter:
 
     # -- context -------------------------------------------------------------------------------------------------
     def __enter__(self) -> ResultWriter:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        prepare_output(self.path)
         self._t0 = time.perf_counter()
         self._c0 = time.process_time()
         self._startup = float("nan")
@@ -357,26 +357,102 @@ def _decode(value):
 def read_attrs(path) -> dict:
     """Root attributes of a result file (the provenance and cost record)."""
     path = _check_file(path)
-    try:
-        with h5py.File(path, "r") as f:
+    with open_h5(path) as f:
+        try:
             attrs = {k: _decode(v) for k, v in f.attrs.items()}
-    except OSError as err:
-        raise PorepipeError(f"{path} is not a readable HDF5 file: {err}") from err
+        except (OSError, RuntimeError, KeyError, TypeError, ValueError) as err:
+            raise _damaged(path, err) from None
     if "stage" not in attrs:
         raise PorepipeError(f"{path} is not a porepipe result (no 'stage' attribute)")
     return attrs
 
 
+#: the name of a binary volume (``binary_a{a}.h5``: uint8, 1 = pore, 0 = matrix)
+BINARY_VOLUME = "pore"
+
+
+def check_binary_values(values: np.ndarray, path, name: str = BINARY_VOLUME) -> np.ndarray:
+    """Return ``values`` if it holds only 0 and 1; otherwise an error naming the file and the values found.
+
+    One rule for every stage: a "binary" volume with other values (a label image, a grey volume under the wrong
+    name) is refused, never read as "anything non-zero is pore" by one stage and refused by another.
+    """
+    values = np.asarray(values)
+    if values.size and values.dtype == np.uint8 and int(values.max()) > 1:
+        found = np.flatnonzero(np.bincount(values.ravel(), minlength=256))
+        shown = ", ".join(str(v) for v in found[:8]) + (", …" if found.size > 8 else "")
+        raise PorepipeError(
+            f"{path}: binary volume {name!r} holds the values {{{shown}}}; allowed: 0 (matrix) and 1 (pore) "
+            "only (segment a grey or label volume first)"
+        )
+    return values
+
+
+class _BinaryDataset:
+    """An open binary volume whose every read is checked by :func:`check_binary_values` (else as h5py.Dataset)."""
+
+    def __init__(self, dset: h5py.Dataset, path):
+        self._dset, self._path = dset, path
+
+    def __getattr__(self, attr):
+        return getattr(self._dset, attr)
+
+    def __getitem__(self, key):
+        return check_binary_values(self._dset[key], self._path, self._dset.name.rsplit("/", 1)[-1])
+
+    def __len__(self) -> int:
+        return len(self._dset)
+
+
+@contextlib.contextmanager
+def open_h5(path) -> Iterator[h5py.File]:
+    """Open an HDF5 file for reading; a damaged file is one :class:`PorepipeError` naming it.
+
+    Covers the file that HDF5 cannot open (truncated, not HDF5) and h5py's errors from damaged metadata met inside
+    the block (OSError, RuntimeError, KeyError from a broken object header), each with the file's name.
+    """
+    try:
+        f = h5py.File(path, "r")
+    except OSError as err:
+        raise PorepipeError(f"{path} is not a readable HDF5 file (truncated or damaged?): {err}") from None
+    with f:
+        try:
+            yield f
+        except (OSError, RuntimeError, KeyError) as err:
+            raise _damaged(path, err) from None
+
+
+def _damaged(path, err: Exception, what: str = "HDF5 content") -> PorepipeError:
+    """One line for a file whose ``what`` h5py or xarray could not read (damaged, or written by something else)."""
+    text = " ".join(str(err).split())[:200]
+    return PorepipeError(
+        f"{path}: cannot read its {what} ({type(err).__name__}: {text}); is it damaged, or another stage's file?"
+    )
+
+
 @contextlib.contextmanager
 def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
-    """Open ``/volumes/<name>`` of a result file for chunked reading."""
+    """Open ``/volumes/<name>`` of a result file for chunked reading.
+
+    The binary volume (``name`` ``pore``) comes wrapped so that every read refuses values other than 0 and 1; damaged
+    HDF5 content read inside the block is one :class:`PorepipeError` naming the file.
+    """
     path = _check_file(path)
-    with h5py.File(path, "r") as f:
-        group = f.get(VOLUME_GROUP)
-        if group is None or name not in group or _is_scale(group[name]):
-            have = volume_names(group) if group is not None else []
-            raise PorepipeError(f"{path} has no volume {name!r} (volumes present: {have or 'none'})")
-        yield group[name]
+    with open_h5(path) as f:
+        try:
+            group = f.get(VOLUME_GROUP)
+            if not isinstance(group, h5py.Group) or name not in group or _is_scale(group[name]):
+                have = volume_names(group) if isinstance(group, h5py.Group) else []
+                raise PorepipeError(f"{path} has no volume {name!r} (volumes present: {have or 'none'})")
+            dset = group[name]
+            if not isinstance(dset, h5py.Dataset):
+                raise PorepipeError(f"{path}: /{VOLUME_GROUP}/{name} is not a dataset")
+        except (OSError, RuntimeError, KeyError, TypeError, ValueError) as err:
+            raise _damaged(path, err) from None
+        try:
+            yield _BinaryDataset(dset, path) if name == BINARY_VOLUME else dset
+        except (OSError, RuntimeError) as err:  # h5py's own read errors (a damaged chunk, a bad filter)
+            raise _damaged(path, err) from None
 
 
 def volume_names(group: h5py.Group) -> list[str]:
@@ -393,11 +469,14 @@ def read_volume(path, name: str) -> tuple[np.ndarray, dict]:
 def read_array(path, name: str) -> np.ndarray:
     """Read ``/arrays/<name>``."""
     path = _check_file(path)
-    with h5py.File(path, "r") as f:
-        group = f.get(ARRAY_GROUP)
-        if group is None or name not in group:
-            raise PorepipeError(f"{path} has no array {name!r}")
-        return group[name][...]
+    with open_h5(path) as f:
+        try:
+            group = f.get(ARRAY_GROUP)
+            if not isinstance(group, h5py.Group) or name not in group:
+                raise PorepipeError(f"{path} has no array {name!r}")
+            return group[name][...]
+        except (OSError, RuntimeError, KeyError, TypeError, ValueError) as err:
+            raise _damaged(path, err) from None
 
 
 def open_result(path) -> xr.Dataset:
@@ -434,8 +513,11 @@ def open_result(path) -> xr.Dataset:
 def read_table(path, group: str | None = None) -> xr.Dataset:
     """Load the xarray Dataset of the root group (or of ``group``) into memory."""
     path = _check_file(path)
-    with xr.open_dataset(path, engine="h5netcdf", group=group, phony_dims="sort") as ds:
-        return ds.load()
+    try:
+        with xr.open_dataset(path, engine="h5netcdf", group=group, phony_dims="sort") as ds:
+            return ds.load()
+    except (OSError, RuntimeError, KeyError, TypeError, ValueError) as err:
+        raise _damaged(path, err, f"table{f' {group!r}' if group else ''}") from None
 
 
 # -- the metadata of a volume, read one way ---------------------------------------------------------------------------
@@ -545,4 +627,4 @@ def read_binary_volume(path, name: str = "pore", anisotropic: bool = False) -> t
                 f"{path}: volume {name!r} is {dset.ndim}-D {dset.dtype}; a binary volume is 3-D "
                 "uint8 (1 = pore)"
             )
-        return dset[...], meta
+        return check_binary_values(dset[...], path, name), meta

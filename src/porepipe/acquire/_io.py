@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import glob
+import logging
 import math
 import struct
 from collections.abc import Sequence
@@ -116,7 +117,7 @@ def read_npy(path) -> np.ndarray:
     """Memory-map a ``.npy`` file (axes taken as x, y[, z])."""
     try:
         return np.load(path, mmap_mode="r", allow_pickle=False)
-    except (ValueError, OSError) as err:
+    except (ValueError, OSError, EOFError) as err:  # EOFError: an empty file
         raise PorepipeError(f"{path} is not a readable .npy file: {err}") from err
 
 
@@ -134,6 +135,13 @@ def read_hdf5(path, dataset: str | None) -> tuple[h5py.Dataset, tuple[float, ...
         f = h5py.File(path, "r")
     except OSError as err:
         raise PorepipeError(f"{path} is not a readable HDF5 file: {err}") from err
+    try:
+        return _hdf5_image(f, path, dataset)
+    except (KeyError, RuntimeError, OSError, TypeError, ValueError) as err:  # damaged metadata
+        raise PorepipeError(f"HDF5 file {path} is damaged: {type(err).__name__}: {err}") from None
+
+
+def _hdf5_image(f: h5py.File, path, dataset: str | None) -> tuple[h5py.Dataset, tuple[float, ...] | None]:
     if dataset is None:
         found = []
         f.visititems(
@@ -211,10 +219,40 @@ def _check_tiff_page(tif, name: str) -> None:
         )
 
 
+class _LoggedErrors(logging.Handler):
+    """Collects what tifffile logs at ERROR level: it reports a broken page chain there and reads on with fewer
+    pages (a 97 % truncated stack came back with fewer sections and no exception).
+    """
+
+    def __init__(self):
+        super().__init__(logging.ERROR)
+        self.messages: list[str] = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+
 def _read_tiff_file(name: str, tifffile) -> tuple[np.ndarray, tuple | None]:
-    with tifffile.TiffFile(name) as tif:
-        _check_tiff_page(tif, name)
-        return tif.series[0].asarray(), _tiff_spacing(tif)
+    logger, errors = logging.getLogger("tifffile"), _LoggedErrors()
+    logger.addHandler(errors)
+    try:
+        with tifffile.TiffFile(name) as tif:
+            _check_tiff_page(tif, name)
+            data, spacing = tif.series[0].asarray(), _tiff_spacing(tif)
+            size = tif.filehandle.size
+            for page in tif.pages:
+                ends = [o + c for o, c in zip(page.dataoffsets, page.databytecounts, strict=False)]
+                if ends and max(ends) > size:
+                    errors.messages.append(
+                        f"page data end at byte {max(ends)} beyond the file's {size} bytes"
+                    )
+    finally:
+        logger.removeHandler(errors)
+    if errors.messages:
+        raise PorepipeError(
+            f"TIFF {name} is damaged or truncated: {' '.join(errors.messages[0].split())[:200]}"
+        )
+    return data, spacing
 
 
 def read_tiff(path) -> tuple[np.ndarray, tuple | None, bool]:

@@ -20,7 +20,7 @@ NonNegFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
 
 class Generator(str, enum.Enum):
@@ -82,7 +82,9 @@ class Assignment(_Strict):
 
     sphere_type: int | None = Field(None, ge=0, description="sphere type index (packing `types`); None = any")
     radius_min_um: NonNegFloat = Field(0.0, description="size class: r >= radius_min_um")
-    radius_max_um: float = Field(math.inf, gt=0, description="size class: r < radius_max_um")
+    radius_max_um: float = Field(
+        math.inf, gt=0, allow_inf_nan=True, description="size class: r < radius_max_um"
+    )
     probabilities: dict[str, NonNegFloat] = Field(description="family name -> probability (sum 1)")
 
     @field_validator("probabilities")
@@ -120,7 +122,7 @@ class Orientation(_Strict):
 class Settings(BaseModel):
     """Decoration of a sphere packing with polyhedral grains (section present = decoration on)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     families: list[Family] = Field(
         default_factory=lambda: [Family(name="quartz", generator=Generator.quartz, count=99)],

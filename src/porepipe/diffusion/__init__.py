@@ -1,13 +1,17 @@
-"""Knudsen diffusion in the voxel pore space: exact flights, wall laws, transmission, D_eff (Mahler 2001, ch. 2-3)."""
+"""Knudsen diffusion in the voxel pore space: exact flights, wall laws, transmission, D_eff (Mahler 2001, ch. 2-3);
+the event-driven hard-sphere gas and wall reactions (ch. 3-4).
+"""
 
 from porepipe._shared.lazy import lazy_exports
 
 _EXPORTS = {
     "Axis": "_settings",
     "DiffusionResult": "_api",
+    "GasSettings": "_settings",
     "Geometry": "_api",
     "InletLaw": "_settings",
     "PoreVolume": "_geometry",
+    "ReactionSettings": "_settings",
     "SPECIES": "_species",
     "Settings": "_settings",
     "Setup": "_settings",
@@ -19,9 +23,13 @@ _EXPORTS = {
     "constricted_capillary": "_geometry",
     "cylinder": "_geometry",
     "equilibrium": "_api",
+    "eta_of_phi": "_reactions",
+    "make_gas": "_edmd",
     "mean_speed": "_species",
+    "phi_of_eta": "_reactions",
     "pocketed_capillary": "_geometry",
     "prepare": "_api",
+    "reactive_pore": "_edmd",
     "rough_capillary": "_geometry",
     "slit": "_geometry",
     "square_capillary": "_geometry",

@@ -8,6 +8,8 @@ from porepipe.diffusion._api import Geometry as Geometry
 from porepipe.diffusion._api import equilibrium as equilibrium
 from porepipe.diffusion._api import prepare as prepare
 from porepipe.diffusion._api import transport as transport
+from porepipe.diffusion._edmd import make_gas as make_gas
+from porepipe.diffusion._edmd import reactive_pore as reactive_pore
 from porepipe.diffusion._geometry import PoreVolume as PoreVolume
 from porepipe.diffusion._geometry import accessible_pore as accessible_pore
 from porepipe.diffusion._geometry import closed_box as closed_box
@@ -18,8 +20,12 @@ from porepipe.diffusion._geometry import rough_capillary as rough_capillary
 from porepipe.diffusion._geometry import slit as slit
 from porepipe.diffusion._geometry import square_capillary as square_capillary
 from porepipe.diffusion._geometry import wall_area as wall_area
+from porepipe.diffusion._reactions import eta_of_phi as eta_of_phi
+from porepipe.diffusion._reactions import phi_of_eta as phi_of_eta
 from porepipe.diffusion._settings import Axis as Axis
+from porepipe.diffusion._settings import GasSettings as GasSettings
 from porepipe.diffusion._settings import InletLaw as InletLaw
+from porepipe.diffusion._settings import ReactionSettings as ReactionSettings
 from porepipe.diffusion._settings import Settings as Settings
 from porepipe.diffusion._settings import Setup as Setup
 from porepipe.diffusion._settings import SpeedDist as SpeedDist
@@ -32,9 +38,11 @@ __all__ = [
     "SPECIES",
     "Axis",
     "DiffusionResult",
+    "GasSettings",
     "Geometry",
     "InletLaw",
     "PoreVolume",
+    "ReactionSettings",
     "Settings",
     "Setup",
     "SpeedDist",
@@ -45,9 +53,13 @@ __all__ = [
     "constricted_capillary",
     "cylinder",
     "equilibrium",
+    "eta_of_phi",
+    "make_gas",
     "mean_speed",
+    "phi_of_eta",
     "pocketed_capillary",
     "prepare",
+    "reactive_pore",
     "rough_capillary",
     "slit",
     "square_capillary",

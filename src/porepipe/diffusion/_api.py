@@ -21,12 +21,12 @@ Definitions (also written into every result)
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.rng import kernel_seed
@@ -140,8 +140,10 @@ class Tallies:
 
 
 def _save_checkpoint(path: Path, key: str, tallies: Tallies) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as f:
+    with (
+        atomic_path(path) as tmp,
+        open(tmp, "wb") as f,
+    ):  # fsync, then rename: a kill leaves the old checkpoint
         np.savez(
             f,
             key=np.array(key),
@@ -152,7 +154,6 @@ def _save_checkpoint(path: Path, key: str, tallies: Tallies) -> None:
             msd=tallies.msd,
             rounds=np.array(tallies.rounds),
         )
-    os.replace(tmp, path)
 
 
 def _load_checkpoint(path: Path, key: str) -> Tallies | None:
@@ -165,7 +166,7 @@ def _load_checkpoint(path: Path, key: str) -> Tallies | None:
                 print(f"[diffusion] checkpoint {path} is for another input; discarded", flush=True)
                 return None
             return Tallies(z["rows"], z["profile"], z["hitmap"], z["orientation"], z["msd"], int(z["rounds"]))
-    except (OSError, ValueError, KeyError):
+    except (OSError, ValueError, KeyError, EOFError):
         print(f"[diffusion] checkpoint {path} is unreadable; discarded", flush=True)
         return None
 

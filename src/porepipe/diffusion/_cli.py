@@ -46,10 +46,57 @@ def _settings(args) -> tuple[Settings, int, str]:
             base[key] = value
     if args.seed is not None:
         seed = args.seed
+    _nested_overrides(args, base)
     try:
         return Settings(**base), seed, name
     except ValueError as err:
         raise PorepipeError(f"diffusion settings: {err}".replace("\n", "; ")) from err
+
+
+#: CLI option -> (nested section, key) for the event-driven gas and the wall reactions
+_NESTED = (
+    ("duration_ps", "gas", "duration_ps"),
+    ("reaction_w", "reactions", "w"),
+    ("reaction_w_reverse", "reactions", "w_reverse"),
+    ("reaction_w_follow", "reactions", "w_follow"),
+    ("reaction_particles", "reactions", "particles"),
+)
+
+
+def _nested_overrides(args, base: dict) -> None:
+    for option, section, key in _NESTED:
+        value = getattr(args, option, None)
+        if value is not None:
+            base.setdefault(section, {})
+            base[section] = {**dict(base[section]), key: value}
+    if getattr(args, "gas_particles", None):
+        counts = {}
+        for item in args.gas_particles.split(","):
+            name, _, number = item.partition("=")
+            if not number.strip().isdigit():
+                raise PorepipeError(
+                    f"--gas-particles wants SPECIES=N[,SPECIES=N], got {args.gas_particles!r}"
+                )
+            counts[name.strip()] = int(number)
+        base.setdefault("gas", {})
+        base["gas"] = {**dict(base["gas"]), "particles": counts}
+    if getattr(args, "no_collisions", False):
+        base.setdefault("gas", {})
+        base["gas"] = {**dict(base["gas"]), "collisions": False}
+
+
+def _summary(v, settings: Settings) -> str:
+    """One line of the headline figures of the setups edmd and reaction."""
+    if settings.setup is Setup.edmd:
+        d = f", D_self = {float(v['D_self_m2_s']):.4g} m^2/s" if "D_self_m2_s" in v else ""
+        return (
+            f"Z = {float(v['collision_rate']):.4g}/ps (Enskog {float(v['collision_rate_enskog']):.4g}), "
+            f"lambda_eff = {float(v['lambda_eff_nm']):.4g} nm, Kn = {float(v['Kn']):.3g}{d}, "
+            f"{int(v['events'])} events"
+        )
+    eta = f"eta = {float(v['eta']):.4g} ± {float(v['eta_err']):.2g}, " if "eta" in v else ""
+    phi = f"Phi = {float(v['phi']):.4g}, " if "phi" in v else ""
+    return f"{eta}{phi}{int(v['products'])} products, {int(v['wall_hits'])} wall hits"
 
 
 def _output(args, binary: Path, axis: str) -> Path:
@@ -81,6 +128,9 @@ def main(args) -> int:
     from porepipe._shared.store import read_table
 
     v = read_table(out)
+    if settings.setup in (Setup.edmd, Setup.reaction):
+        print(f"diffusion {args.axis} ({settings.setup.value}): {_summary(v, settings)} -> {out}")
+        return 0
     head = f"W = {float(v['W']):.5g} ± {float(v['W_err']):.2g}, " if "W" in v else ""
     print(
         f"diffusion {args.axis} ({settings.setup.value}): {head}D = {float(v['D_m2_s']):.5g} "
@@ -124,6 +174,16 @@ def register(subparsers) -> None:
         ("orientation-bins", int),
         ("wk-time-jiffies", float),
         ("msd-time-jiffies", float),
+    ):
+        p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
+    p.add_argument("--gas-particles", help="setup edmd: particles per species, e.g. N2=1000,He=200")
+    p.add_argument("--no-collisions", action="store_true", help="setup edmd: gas-gas collisions off")
+    for name, kind in (
+        ("duration-ps", float),
+        ("reaction-w", float),
+        ("reaction-w-reverse", float),
+        ("reaction-w-follow", float),
+        ("reaction-particles", int),
     ):
         p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
     p.set_defaults(func=main)

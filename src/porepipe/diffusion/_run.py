@@ -16,7 +16,7 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, read_attrs, read_binary_volume, result_hash
-from porepipe.diffusion import _api
+from porepipe.diffusion import _api, _edmd
 from porepipe.diffusion._settings import Axis, Settings, Setup
 
 #: units of the scalars written to the result (others are counts or dimensionless)
@@ -74,6 +74,9 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
                 "azimuth about it in [-pi, pi)"
             },
         )
+    for key in sorted(arr.keys() - {"profile", "concentration", "hit_map", "orientation", "msd", "msd_time"}):
+        value = np.asarray(arr[key])  # setups edmd / reaction: arrays named with their unit
+        data[key] = xr.Variable(tuple(f"{key}_{k}" for k in range(value.ndim)), value)
     if "msd" in arr:
         data["msd"] = xr.Variable(("time", "xyz"), arr["msd"], {"units": "voxel^2"})
         data["time"] = xr.Variable(("time",), arr["msd_time"], {"units": "jiffie"})
@@ -136,7 +139,11 @@ def run(
         scene_hash=result_hash("diffusion", settings=settings, inputs=[binary], axis=axis.value, seed=seed),
         threads=threads,
     ) as w:
-        if settings.setup is Setup.msd:
+        if settings.setup is Setup.edmd:
+            result = _edmd.edmd_result(pore, settings, voxel_um, periodic, seed=seed)
+        elif settings.setup is Setup.reaction:
+            result = _edmd.reaction_result(pore, settings, axis.index, voxel_um, periodic, seed=seed)
+        elif settings.setup is Setup.msd:
             result = _api.equilibrium(pore, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint)
             name = axis.value * 2
             if f"D_{name}" in result.values:

@@ -27,6 +27,12 @@ class Setup(str, enum.Enum):
         "wicke_kallenbach"  # two-species counter-diffusion, REFLEX/FLUSS with swap (§3.6.3, 3.45)
     )
     msd = "msd"  # periodic medium, mean-square displacement -> D_eff tensor (xx, yy, zz)
+    edmd = (
+        "edmd"  # event-driven hard-sphere gas in the pore space (§3.3-3.6): collisions, λ_eff, Kn, D_self, MB
+    )
+    reaction = (
+        "reaction"  # wall reaction A -> P (-> S) in a one-face-fed pore, Knudsen regime (§4.1-4.2): η, Φ
+    )
 
 
 class WallLaw(str, enum.Enum):
@@ -60,10 +66,65 @@ class SpeedDist(str, enum.Enum):
     mean = "mean"  # every particle at v̄
 
 
+class GasSettings(BaseModel):
+    """``diffusion.gas``: the event-driven hard-sphere gas of setup ``edmd`` (Mahler 2001 §3.3-3.6)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    particles: dict[str, int] = Field(
+        default_factory=lambda: {"N2": 1000}, description="particles per species (Table 3.1 names)"
+    )
+    voxel_nm: float = Field(0.0, ge=0, description="voxel edge in nm; 0 = the volume's voxel_um")
+    duration_ps: float = Field(200.0, gt=0, description="simulated time in ps")
+    samples: int = Field(20, ge=4, description="sample times of the msd curve")
+    collisions: bool = Field(True, description="gas-gas collisions (off = Knudsen regime, point particles)")
+    initial_speed: str = Field(
+        "maxwell", description="maxwell, or mean (all at v̄: the §3.6.2 relaxation test)"
+    )
+    speed_bins: int = Field(40, ge=1, description="bins of the final speed histogram")
+
+    @field_validator("particles")
+    @classmethod
+    def _species(cls, value):
+        from porepipe.diffusion._species import SPECIES
+
+        for name, n in value.items():
+            if name not in SPECIES:
+                raise ValueError(f"unknown species {name!r}; allowed: {', '.join(SPECIES)}")
+            if n < 0:
+                raise ValueError(f"particle count of {name} must be >= 0, got {n}")
+        if sum(value.values()) < 1:
+            raise ValueError("the gas needs at least one particle")
+        return value
+
+    @field_validator("initial_speed")
+    @classmethod
+    def _speed(cls, value):
+        if value not in ("maxwell", "mean"):
+            raise ValueError(f"initial_speed must be maxwell or mean, got {value!r}")
+        return value
+
+
+class ReactionSettings(BaseModel):
+    """``diffusion.reactions``: wall reactions of setup ``reaction`` (§4.1-4.2); each effect is compiled in only
+    when its probability is > 0.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    w: float = Field(0.01, ge=0, le=1, description="probability that a wall hit turns A into P")
+    w_reverse: float = Field(0.0, ge=0, le=1, description="probability that a wall hit turns P back into A")
+    w_follow: float = Field(
+        0.0, ge=0, le=1, description="probability that a wall hit turns P into S (A -> P -> S)"
+    )
+    particles: int = Field(20000, ge=2, description="reactant histories (each enters at the inlet face)")
+    z_bins: int = Field(32, ge=0, description="axial bins of the reactive-hit map z_R(z) (0 = off)")
+
+
 class Settings(BaseModel):
     """Knudsen (free-molecular) diffusion: point particles, exact voxel flights, diffuse or specular walls."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False)
+    model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False, allow_inf_nan=False)
 
     setup: Setup = Field(Setup.transmission, description="transmission, wicke_kallenbach or msd")
     axes: list[Axis] = Field(
@@ -106,6 +167,10 @@ class Settings(BaseModel):
         ge=0,
         description="bins of cos(angle to the axis) in the flight-orientation histogram "
         "(azimuth gets 2x as many); 0 = off",
+    )
+    gas: GasSettings = Field(default_factory=GasSettings, description="event-driven gas (setup edmd)")
+    reactions: ReactionSettings = Field(
+        default_factory=ReactionSettings, description="wall reactions (setup reaction)"
     )
 
     @field_validator("species")

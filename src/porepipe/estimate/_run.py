@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import xarray as xr
 
-from porepipe._shared.store import ResultWriter, read_attrs, read_table, result_hash
+from porepipe._shared.grey import read_grey_histogram
+from porepipe._shared.store import ResultWriter, read_attrs, result_hash
 from porepipe.estimate._api import estimate_from_histograms
 
 
@@ -24,8 +25,8 @@ def run(grey_paths, out) -> xr.Dataset:
         The estimators (:func:`porepipe.estimate.estimate_from_histograms`).
     """
     attrs = [read_attrs(p) for p in grey_paths]
-    hists = [read_table(p)["grey_histogram"].values for p in grey_paths]
-    ds = estimate_from_histograms([a["voxel_um"] for a in attrs], hists)
+    hists, voxels = zip(*(read_grey_histogram(p) for p in grey_paths), strict=True)
+    ds = estimate_from_histograms(list(voxels), list(hists))
     digest = result_hash("estimate", inputs=sorted(grey_paths, key=str))
     with ResultWriter(out, stage="estimate", scene=attrs[0].get("scene", ""), scene_hash=digest) as w:
         w.write_table(ds)

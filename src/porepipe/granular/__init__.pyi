@@ -7,6 +7,20 @@ from porepipe.granular._api import Frame as Frame
 from porepipe.granular._api import Simulation as Simulation
 from porepipe.granular._api import polygon_overlap as polygon_overlap
 from porepipe.granular._api import time_step_rule as time_step_rule
+from porepipe.granular._measure import contact_persistence as contact_persistence
+from porepipe.granular._measure import coordination as coordination
+from porepipe.granular._measure import force_directions as force_directions
+from porepipe.granular._measure import force_magnitudes as force_magnitudes
+from porepipe.granular._measure import frame_contacts as frame_contacts
+from porepipe.granular._measure import frame_particles as frame_particles
+from porepipe.granular._measure import packing_fraction as packing_fraction
+from porepipe.granular._measure import polygon_area as polygon_area
+from porepipe.granular._measure import pressure_profile as pressure_profile
+from porepipe.granular._measure import repose_angle_fit as repose_angle_fit
+from porepipe.granular._measure import repose_angle_integral as repose_angle_integral
+from porepipe.granular._measure import stress_tensor as stress_tensor
+from porepipe.granular._measure import surface_profile as surface_profile
+from porepipe.granular._measure import wall_contacts as wall_contacts
 from porepipe.granular._run import read_granular as read_granular
 from porepipe.granular._run import run as run
 from porepipe.granular._settings import Settings as Settings
@@ -17,20 +31,68 @@ from porepipe.granular._shapes import ellipse_polygon as ellipse_polygon
 from porepipe.granular._shapes import polygon_properties as polygon_properties
 from porepipe.granular._shapes import rectangle as rectangle
 from porepipe.granular._shapes import regular_polygon as regular_polygon
+from porepipe.granular._silo import THESIS_SILO as THESIS_SILO
+from porepipe.granular._silo import analyse_heap as analyse_heap
+from porepipe.granular._silo import analyse_silo as analyse_silo
+from porepipe.granular._theory import closure_ife as closure_ife
+from porepipe.granular._theory import closure_linear as closure_linear
+from porepipe.granular._theory import fit_janssen as fit_janssen
+from porepipe.granular._theory import hopper_sigma_zz as hopper_sigma_zz
+from porepipe.granular._theory import janssen as janssen
+from porepipe.granular._theory import lateral_pressure_bounds as lateral_pressure_bounds
+from porepipe.granular._theory import parabolic_r_p as parabolic_r_p
+from porepipe.granular._theory import parabolic_sigma_zz as parabolic_sigma_zz
+from porepipe.granular._theory import parabolic_xi as parabolic_xi
+from porepipe.granular._theory import principal_angle as principal_angle
+from porepipe.granular._theory import silo_sigma_zz as silo_sigma_zz
+from porepipe.granular._theory import silo_xi as silo_xi
+from porepipe.granular._theory import stepped_silo as stepped_silo
+from porepipe.granular._theory import wedge_stress as wedge_stress
 
 __all__ = [
+    "THESIS_SILO",
     "AngleMode",
     "Dist",
     "Frame",
     "Settings",
     "Simulation",
+    "analyse_heap",
+    "analyse_silo",
     "check_convex",
+    "closure_ife",
+    "closure_linear",
+    "contact_persistence",
+    "coordination",
     "ellipse_polygon",
+    "fit_janssen",
+    "force_directions",
+    "force_magnitudes",
+    "frame_contacts",
+    "frame_particles",
+    "hopper_sigma_zz",
+    "janssen",
+    "lateral_pressure_bounds",
+    "packing_fraction",
+    "parabolic_r_p",
+    "parabolic_sigma_zz",
+    "parabolic_xi",
+    "polygon_area",
     "polygon_overlap",
     "polygon_properties",
+    "pressure_profile",
+    "principal_angle",
     "read_granular",
     "rectangle",
     "regular_polygon",
+    "repose_angle_fit",
+    "repose_angle_integral",
     "run",
+    "silo_sigma_zz",
+    "silo_xi",
+    "stepped_silo",
+    "stress_tensor",
+    "surface_profile",
     "time_step_rule",
+    "wall_contacts",
+    "wedge_stress",
 ]

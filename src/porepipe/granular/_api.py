@@ -21,6 +21,15 @@ Decisions the thesis leaves open or prints damaged (each is tested in tests/unit
   when the boundaries do not cross twice (one polygon inside the other, coincident polygons) it falls back to the
   centroid direction (+y if the centroids coincide), s to the overlap centroid and L to the overlap's width.
 - **Angles** are counter-clockwise (gc2d's are clockwise, Eq. 2.35).
+- **Application point** (``material.application_point``): the midpoint of c1c2 (Fig. 2.4) gives a flat face
+  lying on a flat surface no restoring torque until a corner lifts, so a block below the friction threshold rocks
+  and creeps (~1e-4 m/s); the overlap centroid moves towards the deeper end and restores it (creep < 1e-9 m/s).
+- **Damping time step**: the normal damping uses dA/dt as the backward difference of the predicted overlaps, and
+  the linear stability of that scheme (tests/unit/granular/test_integrator.py) bounds the damping rate c of a
+  contact, c = gamma sqrt(E/m_n) L/l for a line of length L: Gear with one correction is unstable beyond
+  c dt = 0.24-0.35 (damping ratio 0.25-4) and rings (spectral radius -> 1) near it, velocity Verlet beyond
+  c dt = 0.78-2. Flat faces of long grains (L > l) reach it at the rule's dt; the default dt keeps c dt <= 0.15
+  (Gear) or 0.4 (Verlet) for the longest edge of any grain.
 """
 
 from __future__ import annotations
@@ -34,13 +43,22 @@ import numpy as np
 from porepipe._shared.errors import PorepipeError
 from porepipe.granular import _kernels as K
 from porepipe.granular._contact import _contact_frame, _overlap_geometry
-from porepipe.granular._neighbours import _carry_state, _transpose, candidate_pairs
-from porepipe.granular._settings import DropMode, GravityKind, Integrator, Settings, Waveform
+from porepipe.granular._neighbours import SwapState, _carry_state, _transpose, candidate_pairs
+from porepipe.granular._settings import (
+    ApplicationPoint,
+    DropMode,
+    GravityKind,
+    Integrator,
+    Settings,
+    Waveform,
+)
 from porepipe.granular._shapes import check_convex, inscribed_radius
 from porepipe.granular._system import collect_bodies, particle_properties, wall_polygons
 
 #: fewest particles per thread worth a parallel region
 PARTICLES_PER_THREAD = 1000
+#: largest damping rate x dt the default dt allows (Gear: unstable beyond 0.24-0.35; Verlet: beyond 0.78-2)
+DAMPING_DT = {Integrator.gear: 0.15, Integrator.verlet: 0.4}
 _WAVE = {Waveform.cosinus: 1, Waveform.sawtooth: 2, Waveform.tapping: 3, Waveform.triangle: 4}
 _GKIND = {GravityKind.constant: 0, GravityKind.linear: 1, GravityKind.step: 2, GravityKind.smooth_step: 3}
 
@@ -91,6 +109,18 @@ def polygon_overlap(p, q):
 def time_step_rule(min_mass_kg: float, young_N_m: float) -> float:
     """The upper bound dt = (pi/10) sqrt(m_min / E) of Eq. 2.9 (1/10 of the contact half-period), in s."""
     return 0.1 * math.pi * math.sqrt(min_mass_kg / young_N_m)
+
+
+def damping_rate(mass, radius, longest_edge, young_N_m: float, damping: float, pairs: bool) -> float:
+    """Largest normal damping rate c = F_damp / (m_n h') of any contact, in 1/s.
+
+    A contact of line length L between i and j damps with gamma sqrt(E m_n) (1/l) dA/dt = gamma sqrt(E m_n) (L/l)
+    h', i.e. c = gamma sqrt(E/m_n) L/l, with 1/m_n = 1/m_i + 1/m_j and 1/l = 1/r_i + 1/r_j. L is at most the
+    longest edge of the smaller grain, so c <= gamma sqrt(2 E/m_k) 2 L_k/r_k over grains k (particle pairs) or
+    gamma sqrt(E/m_k) L_k/r_k (a grain on a wall).
+    """
+    per = np.sqrt(young_N_m / np.asarray(mass)) * np.asarray(longest_edge) / np.asarray(radius)
+    return float(damping * per.max() * (2.0 * math.sqrt(2.0) if pairs else 1.0))
 
 
 @dataclasses.dataclass
@@ -152,7 +182,13 @@ class Simulation:
         rho, E = s.material.density_kg_m2, s.material.young_N_m
         # Eq. 2.9 with the lightest mass and, for elongated grains, m = pi r_min² rho (inscribed radius)
         self.dt_rule = time_step_rule(min(self.mass.min(), math.pi * self.r_in.min() ** 2 * rho), E)
-        self.dt = s.dt_s if s.dt_s is not None else 0.5 * self.dt_rule
+        edge = [
+            np.linalg.norm(np.roll(p["vertices_m"], -1, axis=0) - p["vertices_m"], axis=1).max()
+            for p in props
+        ]
+        rate = damping_rate(self.mass, 1.0 / self.inv_r[:n], edge, E, s.material.damping, n > 1)
+        self.dt_damping = DAMPING_DT[s.integrator] / rate if rate > 0 else math.inf
+        self.dt = s.dt_s if s.dt_s is not None else min(0.5 * self.dt_rule, self.dt_damping)
         self.skin = s.skin_m if s.skin_m is not None else 0.3 * float(self.r_circ.min())
         self.insert_s = bodies.insert_s
         self.drop = bodies.drop
@@ -165,6 +201,14 @@ class Simulation:
             self.G[0, n + k, :2] = p["centroid_m"]
         self.active = np.concatenate([(self.insert_s <= 0).astype(np.uint8), np.ones(nw, np.uint8)])
         self.wall_names = [name for name, _, _ in walls]
+        self.heat = np.zeros(5)
+        if s.size_change is not None:
+            h = s.size_change
+            if h.time_s[1] < h.time_s[0]:
+                raise PorepipeError(f"granular.size_change.time_s {h.time_s}: t2 must not precede t1")
+            self.heat[:] = (h.amplitude, h.frequency_hz, h.slope, h.time_s[0], h.time_s[1])
+        # the broad phase pads the circumradius for the largest size s(t) reaches, max(1, 1 + a)
+        self.size_max = max(1.0, 1.0 + self.heat[0])
         self._wall_setup(walls)
         self.mat = np.array(
             [
@@ -176,6 +220,7 @@ class Simulation:
                 s.material.weakening_v_min_m_s,
                 s.guard.max_overlap,
                 s.guard.max_move * float(self.r_in.min()),
+                float(s.material.application_point is ApplicationPoint.centroid),
             ]
         )
         self.gvec = np.asarray(s.gravity_m_s2, dtype=np.float64)
@@ -218,11 +263,14 @@ class Simulation:
             "variable_gravity": g is not None,
             "drag_springs": len(s.drag_springs) > 0,
             "surface_velocity": bool((self.surf != 0).any()),
+            "piston": bool((self.piston[:, 0] != 0).any()),
+            "size_change": s.size_change is not None,
         }
         self._stepper = K.make_stepper(*self.effects.values())
         self.gear = s.integrator is Integrator.gear
         self.method = s.neighbour_search.value
         self.order = np.arange(n, dtype=np.int64)
+        self.swap = SwapState(n)
         self.time_s = 0.0
         self.step = 0
         self.rebuilds = 0
@@ -242,6 +290,7 @@ class Simulation:
         n, nw = self.n_mob, self.n_walls
         self.wall_base = np.zeros((n + nw, 2))
         self.wall_vib = np.zeros((n + nw, 7))
+        self.piston = np.zeros((n + nw, K.PISTON_COLS))
         self.surf = np.zeros(n + nw)
         pad = np.zeros(n + nw)
         for k, (_, _, w) in enumerate(walls):
@@ -261,12 +310,36 @@ class Simulation:
                     v.to_s,
                 )
                 pad[n + k] = v.amplitude_m
+            if w.piston is not None:
+                pc = w.piston
+                d = (math.cos(pc.angle_rad), math.sin(pc.angle_rad))
+                self.piston[n + k, :6] = (1.0, d[0], d[1], pc.force_N, 1.0 / pc.mass_kg, pc.v_max_m_s)
+                pad[n + k] = 0.5 * self.skin  # its travel between list builds (a build follows skin/2)
         self.wall_pad = pad
 
+    def size_scale(self, t: float | None = None) -> float:
+        """The particles' size factor s(t) (1 without ``size_change``) at t (default: now)."""
+        if not self.effects["size_change"]:
+            return 1.0
+        return float(K._size_scale(self.heat, self.time_s if t is None else t))
+
     def _place_all(self):
+        n = self.n_mob
+        for w in range(n, self.nc.shape[0]):
+            if self.piston[w, 0] != 0:
+                self.G[0, w, :2] = self.wall_base[w] + self.piston[w, 6] * self.piston[w, 1:3]
+        sc = self.size_scale()
         for i in range(self.nc.shape[0]):
             K._place(
-                self.body, self.nc, self.G[0, i, 0], self.G[0, i, 1], self.G[0, i, 2], self.wv, self.aabb, i
+                self.body,
+                self.nc,
+                self.G[0, i, 0],
+                self.G[0, i, 1],
+                self.G[0, i, 2],
+                self.wv,
+                self.aabb,
+                i,
+                sc if i < n else 1.0,
             )
 
     def wall_boxes(self) -> np.ndarray:
@@ -281,8 +354,9 @@ class Simulation:
         """Rebuild the candidate list at the current positions, carrying every contact's state over."""
         n = self.n_mob
         x = np.ascontiguousarray(self.G[0, :n, :2])
+        rad = self.r_circ * self.size_max if self.size_max != 1.0 else self.r_circ
         start, nb_j = candidate_pairs(
-            self.method, x, self.r_circ, self.active[:n], self.skin, self.wall_boxes(), n, self.order
+            self.method, x, rad, self.active[:n], self.skin, self.wall_boxes(), n, self.order, self.swap
         )
         ft, aold, pout = np.zeros(len(nb_j)), np.zeros(len(nb_j)), np.zeros((len(nb_j), len(K.POUT)))
         _carry_state(self.nb_start, self.nb_j, self.ft, self.aold, self.pout, start, nb_j, ft, aold, pout)
@@ -290,6 +364,7 @@ class Simulation:
         self.tr_start, self.tr_p = _transpose(n, start, nb_j)
         self.x_build = x.copy()
         self.scratch = np.zeros((n, 6))
+        self.piston[:, 8] = self.piston[:, 6]
         self.rebuilds += 1
 
     # -- time stepping ---------------------------------------------------------------------------------------------
@@ -373,6 +448,8 @@ class Simulation:
                 0.5 * self.skin,
                 self.gear,
                 diag,
+                self.piston,
+                self.heat,
             )
             self.step += int(done)
             self.time_s = self.step * self.dt
@@ -445,7 +522,20 @@ class Simulation:
         return p, float(lz)
 
     # -- checkpoint --------------------------------------------------------------------------------------------------
-    STATE = ("G", "active", "nb_start", "nb_j", "ft", "aold", "x_build", "order", "tr_start", "tr_p", "pout")
+    STATE = (
+        "G",
+        "active",
+        "nb_start",
+        "nb_j",
+        "ft",
+        "aold",
+        "x_build",
+        "order",
+        "tr_start",
+        "tr_p",
+        "pout",
+        "piston",
+    )
 
     def state(self) -> dict:
         """Everything that determines the continuation (arrays copied), for checkpoints."""
@@ -462,4 +552,5 @@ class Simulation:
         self.max_overlap_seen = float(state["max_overlap_seen"][0])
         self.time_s = self.step * self.dt
         self.scratch = np.zeros((self.n_mob, 6))
+        self.swap = SwapState(self.n_mob)  # rebuilt from scratch at the next list build: the same pairs
         self._place_all()

@@ -31,10 +31,10 @@ G0, G1, G2, G3, G4, G5 = GEAR_C
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _place(body, nc, x, y, phi, wv, aabb, i):
-    """World corners (CCW rotation by phi, then shift) and bounding box of body i."""
-    c = math.cos(phi)
-    s = math.sin(phi)
+def _place(body, nc, x, y, phi, wv, aabb, i, scale=1.0):
+    """World corners (scaled about the centroid, CCW rotation by phi, then shift) and bounding box of body i."""
+    c = math.cos(phi) * scale
+    s = math.sin(phi) * scale
     lox = 1e300
     hix = -1e300
     loy = 1e300
@@ -102,6 +102,16 @@ def _gravity_scale(gp, t):
     return g1 + (g2 - g1) * min(level / n, 1.0)
 
 
+@njit(cache=True, fastmath=FASTMATH)
+def _size_scale(hp, t):
+    """s(t) = 1 + a (1/2 - 1/2 tanh(S cos(2 pi f t))) of Eq. B.1, t clamped to [t1, t2]; hp = (a, f, S, t1, t2)."""
+    tt = min(max(t, hp[3]), hp[4])
+    return 1.0 + hp[0] * (0.5 - 0.5 * math.tanh(hp[2] * math.cos(2.0 * math.pi * hp[1] * tt)))
+
+
+#: columns of the piston array: flag, direction (x, y), force N, 1/mass, v_max, displacement s, speed, s at build
+PISTON_COLS = 9
+
 _STEPPERS: dict = {}
 
 
@@ -112,6 +122,8 @@ def make_stepper(
     variable_gravity: bool,
     drag: bool,
     surface_velocity: bool,
+    piston: bool = False,
+    size_change: bool = False,
 ):
     """Return the step-loop kernel compiled with exactly the requested effects (closure constants).
 
@@ -132,6 +144,10 @@ def make_stepper(
         Drag springs on particles (App. B.1.4.2).
     surface_velocity : bool
         Walls with a tangential surface velocity (conveyor belt, drum).
+    piston : bool
+        Force-controlled piston walls (App. B.1.5.1), integrated by symplectic Euler with a speed cap.
+    size_change : bool
+        Global particle size s(t) (Eqs. 2.30-2.32): corners x s, l x s, moment of inertia x s².
 
     Returns
     -------
@@ -145,10 +161,12 @@ def make_stepper(
         bool(variable_gravity),
         bool(drag),
         bool(surface_velocity),
+        bool(piston),
+        bool(size_change),
     )
     if key in _STEPPERS:
         return _STEPPERS[key]
-    COH, WEAK, VIB, VARG, DRAG, SURF = key
+    COH, WEAK, VIB, VARG, DRAG, SURF, PIST, SIZE = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
     def _steps(
@@ -185,6 +203,8 @@ def make_stepper(
         skin_half,
         gear,
         diag,
+        piston,
+        heat,
     ):
         n_body = nc.shape[0]
         E = mat[0]
@@ -195,20 +215,30 @@ def make_stepper(
         vmin = mat[5]
         guard_ov = mat[6]
         guard_move = mat[7]
+        centroid = mat[8] != 0.0  # force at the overlap centroid instead of the midpoint of c1c2
         kt = 2.0 / 7.0 * E
         sqE = math.sqrt(E)
         n_blocks = (n_mob + BLOCK - 1) // BLOCK
         kmax = body.shape[1]
         half_dt2 = 0.5 * dt * dt
         wall_vel = np.zeros((n_body, 2))
+        if PIST:
+            for w in range(n_mob, n_body):
+                wall_vel[w, 0] = piston[w, 7] * piston[w, 1]
+                wall_vel[w, 1] = piston[w, 7] * piston[w, 2]
         for step in range(nsteps):
             t = t0 + (step + 1) * dt  # time of the state being computed
             gx = gvec[0]
             gy = gvec[1]
+            sc = 1.0
+            isc2 = 1.0
+            if SIZE:
+                sc = _size_scale(heat, t)
+                isc2 = 1.0 / (sc * sc)
             if VARG:
-                sc = _gravity_scale(gpar, t)
-                gx *= sc
-                gy *= sc
+                gs = _gravity_scale(gpar, t)
+                gx *= gs
+                gy *= gs
             # 1. predictor and placement of the mobile particles
             for i in prange(n_mob):
                 if active[i] == 0:
@@ -230,7 +260,10 @@ def make_stepper(
                     for d in range(3):
                         G[0, i, d] += G[1, i, d] + G[2, i, d]
                         G[1, i, d] += G[2, i, d]  # v(t + dt/2) dt
-                _place(body, nc, G[0, i, 0], G[0, i, 1], G[0, i, 2], wv, aabb, i)
+                if SIZE:
+                    _place(body, nc, G[0, i, 0], G[0, i, 1], G[0, i, 2], wv, aabb, i, sc)
+                else:
+                    _place(body, nc, G[0, i, 0], G[0, i, 1], G[0, i, 2], wv, aabb, i)
             if VIB:
                 for w in range(n_mob, n_body):
                     kind = int(wall_vib[w, 0])
@@ -285,8 +318,12 @@ def make_stepper(
                         nx, ny, L = _contact_frame(geo, xi, yi, xj, yj, wall, buf_a)
                         tx = -ny
                         ty = nx
-                        sx = geo[5]
-                        sy = geo[6]
+                        if centroid:
+                            sx = geo[7]
+                            sy = geo[8]
+                        else:
+                            sx = geo[5]
+                            sy = geo[6]
                         rix = sx - xi
                         riy = sy - yi
                         rjx = sx - xj
@@ -306,6 +343,8 @@ def make_stepper(
                             vjy = G[1, j, 1] / dt + wj * rjx
                         vt = (vix - vjx) * tx + (viy - vjy) * ty
                         ell = 1.0 / (inv_r[i] + inv_r[j])
+                        if SIZE:
+                            ell *= sc
                         fel = E * A / ell
                         m_n = 1.0 / (inv_m[i] + inv_m[j])
                         damp = gam * sqE * math.sqrt(m_n) * (A - aold[p]) / (ell * dt)
@@ -315,7 +354,7 @@ def make_stepper(
                         # tangential: Cundall-Strack spring 2/7 E, damping sqrt(2/7 E m_t), Coulomb cap
                         ai = rix * nx + riy * ny  # lever arm of a tangential force: r x t = r . n
                         aj = rjx * nx + rjy * ny
-                        m_t = 1.0 / (inv_m[i] + inv_m[j] + ai * ai * inv_I[i] + aj * aj * inv_I[j])
+                        m_t = 1.0 / (inv_m[i] + inv_m[j] + (ai * ai * inv_I[i] + aj * aj * inv_I[j]) * isc2)
                         cap = mu * fel
                         if WEAK:
                             cap *= max(abs(vt), vmin) ** -0.1
@@ -339,7 +378,7 @@ def make_stepper(
                         pout[p, 7] = f_t
                         pout[p, 8] = A
                         pout[p, 9] = L
-                        ov = A * max(inv_r[i], inv_r[j]) ** 2  # overlap relative to the smaller particle
+                        ov = A * max(inv_r[i], inv_r[j]) ** 2 * isc2  # overlap relative to the smaller one
                         scratch[i, 4] = max(scratch[i, 4], ov)
             # 3. forces on each particle (fixed summation order: own pairs, then pairs where it is j), corrector
             if DRAG:
@@ -357,6 +396,28 @@ def make_stepper(
                     scratch[k, 0] += fx
                     scratch[k, 1] += fy
                     scratch[k, 2] += (ax - G[0, k, 0]) * fy - (ay - G[0, k, 1]) * fx
+            if PIST:
+                far_w = 0.0
+                for w in range(n_mob, n_body):
+                    if piston[w, 0] == 0.0:
+                        continue
+                    f = piston[w, 3]
+                    for i in range(n_mob):  # the wall's pairs close each row (walls have the top indices)
+                        p = nb_start[i + 1] - 1
+                        while p >= nb_start[i] and nb_j[p] >= n_mob:
+                            if nb_j[p] == w:
+                                f -= pout[p, 0] * piston[w, 1] + pout[p, 1] * piston[w, 2]
+                            p -= 1
+                    v = piston[w, 7] + f * piston[w, 4] * dt
+                    v = min(max(v, -piston[w, 5]), piston[w, 5])
+                    piston[w, 7] = v
+                    piston[w, 6] += v * dt
+                    far_w = max(far_w, abs(piston[w, 6] - piston[w, 8]))
+                    G[0, w, 0] = wall_base[w, 0] + piston[w, 6] * piston[w, 1]
+                    G[0, w, 1] = wall_base[w, 1] + piston[w, 6] * piston[w, 2]
+                    wall_vel[w, 0] = v * piston[w, 1]
+                    wall_vel[w, 1] = v * piston[w, 2]
+                    _place(body, nc, G[0, w, 0], G[0, w, 1], G[0, w, 2], wv, aabb, w)
             for i in prange(n_mob):
                 if active[i] == 0:
                     continue
@@ -374,7 +435,7 @@ def make_stepper(
                     tq += pout[p, 3]
                 acc0 = half_dt2 * (fx * inv_m[i] + gx)
                 acc1 = half_dt2 * (fy * inv_m[i] + gy)
-                acc2 = half_dt2 * tq * inv_I[i]
+                acc2 = half_dt2 * tq * inv_I[i] * isc2
                 for d in range(3):
                     a = acc0 if d == 0 else (acc1 if d == 1 else acc2)
                     if gear:
@@ -431,6 +492,9 @@ def make_stepper(
                 return step + 1, GUARD_MOVE
             if far > skin_half * skin_half:
                 return step + 1, REBUILD
+            if PIST:
+                if far_w > skin_half:  # the wall boxes are padded by skin/2 for the piston's travel
+                    return step + 1, REBUILD
         return nsteps, DONE
 
     _STEPPERS[key] = _steps

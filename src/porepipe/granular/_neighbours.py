@@ -7,7 +7,11 @@ some particle has moved by more than half the skin since the build. Two ways to 
 - ``cells``: a uniform cell list with cells of edge 2 max R + skin;
 - ``sweep``: sort-and-sweep on the x-extents of the padded boxes, with the persistent order re-sorted by
   insertion sort at each rebuild (nearly sorted, so O(N), the thesis's argument for insertion sort), then a sweep
-  that tests the y-extents and the circle distance.
+  that tests the y-extents and the circle distance;
+- ``swap``: gc2d's incremental sort-and-sweep (§2.4.2, Tabs. 2.1/2.3): the begin/end points of the padded boxes
+  are kept sorted per axis by insertion sort, and every adjacent swap updates a persistent set of box-overlapping
+  pairs (end passes begin: remove; begin passes end: add if the boxes overlap on the other axis); no sweep.
+  The candidates are the set's pairs whose padded circles overlap, i.e. the same list as the other two.
 
 Walls are tested against every particle's padded box (there are few walls). The list is CSR by the lower index i,
 sorted by j (walls, which have the highest indices, come last), so per-contact state can be carried over to the
@@ -17,7 +21,8 @@ next list by merging.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.typed import Dict
 
 from porepipe._shared.numba_config import FASTMATH
 
@@ -222,6 +227,142 @@ def _carry_state(old_start, old_j, old_ft, old_a, old_out, new_start, new_j, new
                     new_out[p, c] = 0.0
 
 
+#: box half-widths are padded by this relative amount so that box overlap contains circle overlap despite rounding
+_BOX_PAD = 1e-9
+#: begin/end points of particles not in the simulation (they overlap nothing that is)
+_FAR = 1e300
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _endpoint_values(x, rad, active, cut, axis, ep_id, ep_val, lo, hi):
+    """Current begin (id 2p) and end (id 2p + 1) points of the padded boxes on one axis, in sorted-list order."""
+    for p in range(x.shape[0]):
+        if active[p] == 0:
+            lo[p] = _FAR
+            hi[p] = _FAR
+        else:
+            r = (rad[p] + cut) * (1.0 + _BOX_PAD)
+            lo[p] = x[p, axis] - r
+            hi[p] = x[p, axis] + r
+    for k in range(ep_id.shape[0]):
+        p = ep_id[k] >> 1
+        ep_val[k] = hi[p] if ep_id[k] & 1 else lo[p]
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _swap_sort(ep_id, ep_val, olo, ohi, n, pairs):
+    """Insertion sort of one axis's end points; each adjacent swap applies the swap rule of Tab. 2.3 to ``pairs``
+    (key i * n + j, i < j), with the other axis's intervals (olo, ohi). Returns the number of swaps.
+    """
+    swaps = 0
+    for a in range(1, ep_id.shape[0]):
+        e = ep_id[a]
+        v = ep_val[a]
+        pe = e >> 1
+        b = a - 1
+        while b >= 0 and ep_val[b] > v:
+            f = ep_id[b]
+            pf = f >> 1
+            if pe != pf:
+                key = min(pe, pf) * n + max(pe, pf)
+                if (e & 1) == 0 and (f & 1) == 1:  # begin of pe moves before end of pf: overlap starts
+                    if olo[pe] <= ohi[pf] and olo[pf] <= ohi[pe]:
+                        pairs[key] = 1
+                elif (e & 1) == 1 and (f & 1) == 0 and key in pairs:  # end passes begin: overlap ends
+                    del pairs[key]
+            ep_id[b + 1] = f
+            ep_val[b + 1] = ep_val[b]
+            b -= 1
+            swaps += 1
+        ep_id[b + 1] = e
+        ep_val[b + 1] = v
+    return swaps
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _box_pairs_init(order, xlo, xhi, ylo, yhi, n, pairs):
+    """All pairs of overlapping boxes from scratch (particles sorted by xlo): the set's starting state."""
+    for a in range(order.shape[0]):
+        i = order[a]
+        if xlo[i] >= _FAR:
+            break
+        for b in range(a + 1, order.shape[0]):
+            j = order[b]
+            if xlo[j] > xhi[i]:
+                break
+            if ylo[i] <= yhi[j] and ylo[j] <= yhi[i]:
+                pairs[min(i, j) * n + max(i, j)] = 1
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _swap_candidates(pairs, n, x, rad, active, cut):
+    """The set's pairs whose padded circles overlap, as CSR by i (rows sorted by j)."""
+    counts = np.zeros(n + 1, np.int64)
+    for key in pairs:
+        i = key // n
+        j = key - i * n
+        if active[i] == 0 or active[j] == 0:
+            continue
+        rr = rad[i] + rad[j] + 2.0 * cut
+        dx = x[j, 0] - x[i, 0]
+        dy = x[j, 1] - x[i, 1]
+        if dx * dx + dy * dy <= rr * rr:
+            counts[i + 1] += 1
+    for k in range(n):
+        counts[k + 1] += counts[k]
+    fill = counts[:-1].copy()
+    pj = np.empty(counts[n], np.int64)
+    for key in pairs:
+        i = key // n
+        j = key - i * n
+        if active[i] == 0 or active[j] == 0:
+            continue
+        rr = rad[i] + rad[j] + 2.0 * cut
+        dx = x[j, 0] - x[i, 0]
+        dy = x[j, 1] - x[i, 1]
+        if dx * dx + dy * dy <= rr * rr:
+            pj[fill[i]] = j
+            fill[i] += 1
+    _sort_rows(counts, pj)
+    return counts, pj
+
+
+class SwapState:
+    """Persistent state of the ``swap`` broad phase: sorted end points per axis and the box-overlap pair set."""
+
+    def __init__(self, n: int):
+        self.n = n
+        self.ready = False
+        self.ep_id = [np.arange(2 * n, dtype=np.int64) for _ in range(2)]
+        self.ep_val = [np.zeros(2 * n) for _ in range(2)]
+        self.lo = [np.zeros(n) for _ in range(2)]
+        self.hi = [np.zeros(n) for _ in range(2)]
+        self.pairs = Dict.empty(key_type=types.int64, value_type=types.int64)
+        self.swaps = 0
+
+    def update(self, x, rad, active, cut):
+        """Bring the end points and the pair set to the current boxes (from scratch on the first call)."""
+        for axis in range(2):
+            _endpoint_values(
+                x, rad, active, cut, axis, self.ep_id[axis], self.ep_val[axis], self.lo[axis], self.hi[axis]
+            )
+        if not self.ready:
+            for axis in range(2):
+                o = np.argsort(self.ep_val[axis], kind="stable")
+                self.ep_id[axis] = np.ascontiguousarray(self.ep_id[axis][o])
+                self.ep_val[axis] = np.ascontiguousarray(self.ep_val[axis][o])
+            self.pairs.clear()
+            order = np.argsort(self.lo[0], kind="stable")
+            _box_pairs_init(order, self.lo[0], self.hi[0], self.lo[1], self.hi[1], self.n, self.pairs)
+            self.ready = True
+            return
+        for axis in range(2):
+            other = 1 - axis
+            self.swaps += _swap_sort(
+                self.ep_id[axis], self.ep_val[axis], self.lo[other], self.hi[other], self.n, self.pairs
+            )
+
+
 def _csr_from_pairs(n, pi, pj):
     order = np.lexsort((pj, pi))
     start = np.zeros(n + 1, np.int64)
@@ -229,12 +370,22 @@ def _csr_from_pairs(n, pi, pj):
     return np.cumsum(start), pj[order].astype(np.int64)
 
 
-def candidate_pairs(method: str, x, rad, active, skin_m: float, wall_box, n_mob: int, order=None):
+def candidate_pairs(
+    method: str,
+    x,
+    rad,
+    active,
+    skin_m: float,
+    wall_box,
+    n_mob: int,
+    order=None,
+    swap: SwapState | None = None,
+):
     """Candidate pair list (CSR by i, sorted by j) of the mobile particles and walls.
 
     Parameters
     ----------
-    method : {"cells", "sweep"}
+    method : {"cells", "sweep", "swap"}
         Broad-phase algorithm.
     x : (n_mob, 2) ndarray
         Centroids in m.
@@ -250,6 +401,8 @@ def candidate_pairs(method: str, x, rad, active, skin_m: float, wall_box, n_mob:
         Number of mobile particles (wall w has body index n_mob + w).
     order : (n_mob,) int64 ndarray, optional
         The sweep's persistent order (updated in place by insertion sort).
+    swap : SwapState, optional
+        The ``swap`` method's persistent end points and pair set (updated in place).
 
     Returns
     -------
@@ -261,6 +414,11 @@ def candidate_pairs(method: str, x, rad, active, skin_m: float, wall_box, n_mob:
     counts = np.zeros(n, np.int64)
     if n == 0:
         start_p, pj_p = np.zeros(1, np.int64), np.zeros(0, np.int64)
+    elif method == "swap":
+        if swap is None or swap.n != n:
+            swap = SwapState(n)
+        swap.update(x, rad, active, cut)
+        start_p, pj_p = _swap_candidates(swap.pairs, n, x, rad, active, cut)
     elif method == "sweep":
         _insertion_sort(order, x[:, 0] - rad)
         offsets = np.zeros(n, np.int64)

@@ -14,12 +14,15 @@ Result layout (``xarray.open_dataset(path, engine="h5netcdf")`` reads the root; 
 
 from __future__ import annotations
 
+import pickle
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import ResultWriter, result_hash
@@ -32,8 +35,7 @@ _CONTACT_KEYS = ("i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area
 
 def _save_checkpoint(path: Path, key: str, sim: Simulation, frames: list, series: list) -> None:
     state = sim.state()
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "wb") as fh:
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:  # fsync, then rename
         np.savez(
             fh,
             key=np.array(key),
@@ -41,7 +43,6 @@ def _save_checkpoint(path: Path, key: str, sim: Simulation, frames: list, series
             series=np.asarray(series, dtype=np.float64).reshape(-1, 5),
             **state,
         )
-    tmp.replace(path)
 
 
 def _pack_frames(frames: list) -> list:
@@ -52,16 +53,29 @@ def _load_checkpoint(path: Path, key: str):
     """(state, frames, series) of a checkpoint with the same key, else None (a stale one is discarded)."""
     if not path.is_file():
         return None
-    with np.load(path, allow_pickle=True) as z:
-        if str(z["key"]) != key:
-            print(
-                f"porepipe granular: checkpoint {path} is for another scene (key mismatch); starting afresh"
-            )
-            path.unlink()
-            return None
-        state = {k: z[k] for k in (*Simulation.STATE, "scalars", "max_overlap_seen")}
-        frames = [Frame(*f) for f in z["frames"]]
-        series = [tuple(r) for r in z["series"]]
+    try:
+        with np.load(path, allow_pickle=True) as z:
+            if str(z["key"]) != key:
+                print(
+                    f"porepipe granular: checkpoint {path} is for another scene (key mismatch); starting afresh"
+                )
+                path.unlink()
+                return None
+            state = {k: z[k] for k in (*Simulation.STATE, "scalars", "max_overlap_seen")}
+            frames = [Frame(*f) for f in z["frames"]]
+            series = [tuple(r) for r in z["series"]]
+    except (
+        OSError,
+        ValueError,
+        KeyError,
+        EOFError,
+        TypeError,
+        pickle.UnpicklingError,
+        zipfile.BadZipFile,
+    ) as err:
+        raise PorepipeError(
+            f"granular checkpoint {path} is damaged ({type(err).__name__}: {err}); delete it to start afresh"
+        ) from None
     return state, frames, series
 
 
@@ -119,6 +133,7 @@ def run(
                 "steps": sim.step,
                 "dt_s": sim.dt,
                 "dt_rule_s": sim.dt_rule,
+                "dt_damping_s": sim.dt_damping,
                 "rebuilds": sim.rebuilds,
                 "integrator": settings.integrator.value,
                 "neighbour_search": settings.neighbour_search.value,

@@ -123,7 +123,10 @@ def collect_bodies(settings: Settings, seed: int) -> Bodies:
         gen = _rng.stream(seed, STAGE, 2, k)
         times = np.arange(src.from_s, src.to_s + 1e-12 * src.every_s, src.every_s)
         shapes, phis = generate_shapes(src.shape, len(times), gen)
-        xs = src.x_m + src.width_m * (gen.uniform(0.0, 1.0, len(times)) - 0.5)
+        width = np.full(len(times), src.width_m)
+        if src.shrink and src.to_s > src.from_s:  # line source of layered heaps: width -> 0 at to_s
+            width *= 1.0 - (times - src.from_s) / (src.to_s - src.from_s)
+        xs = src.x_m + width * (gen.uniform(0.0, 1.0, len(times)) - 0.5)
         for t, v, phi, x in zip(times, shapes, phis, xs, strict=True):
             add(v, (x, src.y_m), phi, src.velocity_m_s, 0.0, float(t), k)
     n = len(verts)

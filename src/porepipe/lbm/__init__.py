@@ -7,6 +7,7 @@ _EXPORTS = {
     "Collision": "_settings",
     "DARCY_M2": "_api",
     "Gradient": "_settings",
+    "GrainWalls": "_walls",
     "GreyWalls": "_walls",
     "Lateral": "_settings",
     "PermeabilityResult": "_api",

@@ -18,6 +18,7 @@ from porepipe.lbm._settings import StopRule as StopRule
 from porepipe.lbm._settings import Velocity as Velocity
 from porepipe.lbm._settings import Walls as Walls
 from porepipe.lbm._solver import StabilityError as StabilityError
+from porepipe.lbm._walls import GrainWalls as GrainWalls
 from porepipe.lbm._walls import GreyWalls as GreyWalls
 from porepipe.lbm._walls import SphereWalls as SphereWalls
 
@@ -26,6 +27,7 @@ __all__ = [
     "Axis",
     "Collision",
     "Gradient",
+    "GrainWalls",
     "GreyWalls",
     "Lateral",
     "PermeabilityResult",

@@ -14,7 +14,7 @@ from porepipe.lbm._lattice import CS2
 from porepipe.lbm._settings import Axis, Lateral, Settings, Setup, Walls
 from porepipe.lbm._solver import Run, StabilityError, check_tau, solve
 from porepipe.lbm._throats import throat_warning
-from porepipe.lbm._walls import GreyWalls, SphereWalls, build_links
+from porepipe.lbm._walls import GrainWalls, GreyWalls, MirroredWalls, ShiftedWalls, SphereWalls, build_links
 
 #: 1 darcy in m² (9.869233e-13; thesis §4.4: 1 D = 0.9869 µm²).
 DARCY_M2 = 9.869233e-13
@@ -153,6 +153,7 @@ def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool
         force_layers=settings.force_layers,
         lateral_periodic=lateral_periodic,
         prune=settings.prune,
+        keep_wall_links=keep_wall_links,
     )
 
 
@@ -175,15 +176,21 @@ def _fields_to_sample(prep: Prepared, run: Run, axis: int, sample_shape) -> tupl
 
 
 def _interpolating(settings: Settings, geometry) -> bool:
-    """Whether this run interpolates its walls (refuses the set-ups whose domain is not the sample itself)."""
-    if geometry is None or settings.walls is Walls.halfway:
-        return False
-    if settings.setup is not Setup.periodic or settings.mirror:
-        raise PorepipeError(
-            f"walls={settings.walls.value} with a geometry needs setup=periodic and mirror=false "
-            f"(got setup={settings.setup.value}, mirror={settings.mirror}); use walls=halfway"
-        )
-    return True
+    """Whether this run interpolates its walls."""
+    return geometry is not None and settings.walls is not Walls.halfway
+
+
+def _domain_geometry(geometry, settings: Settings, axis: int, sample_layers: int):
+    """The sample's wall geometry in the internal axis order and the domain of the set-up (chambers before the
+    sample, or the sample's mirror image after it).
+    """
+    order = [axis] + [k for k in range(3) if k != axis]
+    inner = geometry.permuted(order)
+    if settings.setup is Setup.chambers:
+        return ShiftedWalls(inner, settings.inlet_layers, sample_layers)
+    if settings.mirror:
+        return MirroredWalls(inner, sample_layers)
+    return inner
 
 
 def _check_geometry(geometry, shape) -> None:
@@ -206,7 +213,7 @@ def permeability(
     checkpoint: Path | None = None,
     progress: bool = True,
     label: str | None = None,
-    geometry: SphereWalls | GreyWalls | None = None,
+    geometry: SphereWalls | GrainWalls | GreyWalls | None = None,
 ) -> PermeabilityResult:
     """Lattice-Boltzmann permeability of a binary sample along one axis.
 
@@ -223,9 +230,10 @@ def permeability(
     checkpoint : path, optional
         Checkpoint file: written every ``checkpoint_every_s`` and when the step limit is hit; a run with the same
         geometry and physics resumes from it. Removed after a converged run.
-    geometry : SphereWalls or GreyWalls, optional
+    geometry : SphereWalls, GrainWalls or GreyWalls, optional
         Sub-voxel wall positions for ``walls`` = cli/bfl, in the caller's axis order and the sample's voxel grid
-        (exact spheres, or grey values). Without it the walls are halfway bounce-back (``result.walls``).
+        (exact spheres, exact decorated grains, or grey values); every set-up (periodic, mirror, chamber) takes them.
+        Without it the walls are halfway bounce-back (``result.walls``).
 
     Returns
     -------
@@ -294,8 +302,8 @@ def permeability(
     links = None
     if interpolate:
         lat = prep.lattice
-        order = [axis.index] + [k for k in range(3) if k != axis.index]
-        links = build_links(lat.pore, lat.periodic, *lat.wall_links, geometry.permuted(order), settings.walls)
+        domain = _domain_geometry(geometry, settings, axis.index, internal.shape[0])
+        links = build_links(lat.pore, lat.periodic, *lat.wall_links, domain, settings.walls)
         lat.wall_links = None
     run = solve(
         prep.lattice,

@@ -72,6 +72,7 @@ def main(args) -> int:
         resume=args.resume,
         packing=args.packing,
         grey=args.grey,
+        grains=args.grains,
     ):
         print(
             f"axis {r.axis.value}: kappa = {r.kappa_lu:.6g} voxel^2 = "
@@ -121,6 +122,9 @@ def register(subparsers) -> None:
         "--grey", help="grey_a{a}.h5 of the binary volume: sub-voxel wall distances from grey values"
     )
     p.add_argument("--packing", help="packing.h5 whose spheres the binary volume shows: exact wall distances")
+    p.add_argument(
+        "--grains", help="grains.h5 whose decorated grains the binary volume shows: exact wall distances"
+    )
     p.add_argument("--setup", choices=[s.value for s in Setup])
     p.add_argument("--lateral", choices=[s.value for s in Lateral])
     p.add_argument("--precision", choices=[s.value for s in Precision])

@@ -276,6 +276,7 @@ def chamber_setup(
     force_layers: int,
     lateral_periodic: bool,
     prune: bool,
+    keep_wall_links: bool = False,
 ) -> Prepared:
     """Thesis §6.1.4: open inlet chamber (force zone in its first layers), sample, open outlet chamber."""
     keep, n_span, pruned = _prune(sample, lateral_periodic, False, prune)
@@ -298,5 +299,6 @@ def chamber_setup(
         (True, lateral_periodic, lateral_periodic),
         (0, force_layers),
         (inlet_layers, inlet_layers + sample.shape[0]),
+        keep_wall_links=keep_wall_links,
     )
     return Prepared(lat, sample.size, area, n_span, pruned)

@@ -290,6 +290,90 @@ def _ray_sphere_fractions(points, dirs, centres, radii, box, periodic, cell_n, c
         out[k] = best if best <= 1.0 else -1.0
 
 
+@njit(cache=True, inline="always")
+def _segment_polyhedron(x0, x1, x2, d0, d1, d2, planes, p0, p1):
+    """First t of the segment x + t d inside the convex body {n·y <= o} of planes p0..p1 (rows n0 n1 n2 o, about
+    the body's centre at the origin: x is relative to it); 2.0 where the line misses it, a tiny t if x is inside.
+    """
+    t_in, t_out = -1e300, 1e300
+    for p in range(p0, p1):
+        a = planes[p, 0] * x0 + planes[p, 1] * x1 + planes[p, 2] * x2 - planes[p, 3]
+        b = planes[p, 0] * d0 + planes[p, 1] * d1 + planes[p, 2] * d2
+        if b == 0.0:
+            if a > 0.0:
+                return 2.0
+        elif b < 0.0:
+            t_in = max(t_in, -a / b)
+        else:
+            t_out = min(t_out, -a / b)
+    if t_in > t_out or t_out <= 0.0:
+        return 2.0
+    return t_in if t_in > 0.0 else 1e-12
+
+
+@njit(cache=True, inline="always")
+def _segment_ball(x0, x1, x2, d0, d1, d2, radius):
+    """First t of the segment x + t d inside the ball of ``radius`` about the origin; 2.0 if it misses."""
+    aa = d0 * d0 + d1 * d1 + d2 * d2
+    bb = x0 * d0 + x1 * d1 + x2 * d2
+    cc = x0 * x0 + x1 * x1 + x2 * x2 - radius * radius
+    if cc <= 0.0:
+        return 1e-12
+    disc = bb * bb - aa * cc
+    if disc < 0.0:
+        return 2.0
+    t = (-bb - np.sqrt(disc)) / aa
+    return t if t > 0.0 else 2.0
+
+
+@njit(cache=True, parallel=True)
+def _ray_grain_fractions(
+    points,
+    dirs,
+    centres,
+    grain,
+    kind,
+    radius,
+    plane_ptr,
+    planes,
+    lo,
+    edge,
+    cell_n,
+    cell_start,
+    cell_items,
+    out,
+):
+    """First intersection t ∈ (0, 1] of the segments points + t · dirs with placed grains (balls or convex
+    polyhedra); ``out[k]`` = −1 where none meets the segment.
+
+    ``centres`` (M, 3) are the placed copies (periodic images) of grain ``grain[m]``; ``cell_start``/``cell_items``
+    list, per cell of edge ``edge`` of a grid from ``lo``, every copy whose reach (its box grown by the segment length)
+    overlaps the cell, so a point tests the copies of its own cell only.
+    """
+    for k in prange(points.shape[0]):
+        best = 2.0
+        cell = 0
+        for ax in range(3):
+            i = int((points[k, ax] - lo[ax]) / edge)
+            i = min(max(i, 0), cell_n[ax] - 1)
+            cell = cell * cell_n[ax] + i
+        for m in range(cell_start[cell], cell_start[cell + 1]):
+            c = cell_items[m]
+            g = grain[c]
+            x0 = points[k, 0] - centres[c, 0]
+            x1 = points[k, 1] - centres[c, 1]
+            x2 = points[k, 2] - centres[c, 2]
+            if kind[g] == 0:
+                t = _segment_ball(x0, x1, x2, dirs[k, 0], dirs[k, 1], dirs[k, 2], radius[g])
+            else:
+                t = _segment_polyhedron(
+                    x0, x1, x2, dirs[k, 0], dirs[k, 1], dirs[k, 2], planes, plane_ptr[g], plane_ptr[g + 1]
+                )
+            if t < best:
+                best = t
+        out[k] = best if best <= 1.0 else -1.0
+
+
 # -- tiles: a parallel chunk of nodes is processed _TILE nodes at a time in a flat float64 scratch
 #    ``f[q * _TILE + i]`` that stays in L1. Loading and storing a tile are contiguous per-population copies; BGK and
 #    TRT collide a tile in one loop over its nodes that vectorises across nodes (the row offsets are compile-time

@@ -42,6 +42,7 @@ def run(
     resume: bool = True,
     packing=None,
     grey=None,
+    grains=None,
 ) -> list[tuple[Path, PermeabilityResult]]:
     """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis.
 
@@ -68,6 +69,8 @@ def run(
         ``packing.h5`` whose spheres the volume shows: exact sub-voxel wall distances for interpolated walls.
     grey : path-like, optional
         ``grey_a{a}.h5`` of the volume: sub-voxel wall distances estimated from the grey values.
+    grains : path-like, optional
+        ``grains.h5`` whose decorated grains the volume shows: exact sub-voxel wall distances (ray–polyhedron).
 
     Returns
     -------
@@ -98,6 +101,7 @@ def run(
             grey=grey,
             threshold=meta.attrs.get("threshold"),
             periodic=meta.periodic,
+            grains=grains,
         )
     )
     written = []
@@ -109,7 +113,7 @@ def run(
         result = permeability(
             pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt, geometry=geometry
         )
-        sources = [binary] + ([p for p in (packing, grey) if p] if interpolated else [])
+        sources = [binary] + ([p for p in (packing, grey, grains) if p] if interpolated else [])
         digest = result_hash("permeability", settings=settings, inputs=sources, axis=axis.value)
         write_result(path, result, scene=scene, scene_hash=digest, threads=threads, origin_um=meta.origin_um)
         written.append((path, result))

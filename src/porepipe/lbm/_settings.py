@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 
 class Collision(str, enum.Enum):
@@ -81,10 +81,20 @@ class Velocity(str, enum.Enum):
     flux = "flux"  # mass flux through the cross-sections / (ρ̄ · area), thesis Eq. 6.1.24-25
 
 
+#: largest relaxation time accepted. Bounce-back walls sit off their nominal place by an error that grows as
+#: (τ̂ − ½)² with BGK and MRT, the run needs ~L²/ν̂ steps only while ν̂ = (τ̂ − ½)/3 stays O(1), and the thesis works
+#: at τ̂ ≤ 2; τ̂ = inf used to run the whole step limit for nothing.
+TAU_MAX = 5.0
+#: largest TRT/MRT magic parameter Λ. τ⁻ = ½ + Λ/(τ⁺ − ½) grows with Λ, and with it the wall-slip error of halfway
+#: bounce-back (exact only at Λ = 3/16): Λ = 1e9 "converged" to a κ 4× too high. Ginzburg's stable, accurate range
+#: is 1/12 … 1/4; 1/2 leaves room for studies of the Λ dependence.
+MAGIC_MAX = 0.5
+
+
 class Settings(BaseModel):
     """Lattice-Boltzmann permeability. Lattice units: voxel = Δx, step = Δt, ρ° = 1."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     axes: tuple[Axis, ...] = Field(
         (Axis.z,), min_length=1, description="flow directions; one result file each"
@@ -96,10 +106,18 @@ class Settings(BaseModel):
     collision: Collision = Field(
         Collision.trt, description="bgk, trt (default: Λ = magic makes κ̂ τ-independent) or mrt (the thesis's)"
     )
-    tau: float = Field(0.857, gt=0.5, description="relaxation time τ̂ of the shear modes; ν̂ = (τ̂ − ½)/3")
-    tau_bulk: float = Field(1.0, gt=0.5, description="MRT only: relaxation time of the energy moment")
+    tau: float = Field(
+        0.857,
+        gt=0.5,
+        description="relaxation time τ̂ of the shear modes; ν̂ = (τ̂ − ½)/3 (0.5 < τ̂ ≤ 5)",
+    )
+    tau_bulk: float = Field(
+        1.0, gt=0.5, description="MRT only: relaxation time of the energy moment (0.5 < τ̂ ≤ 5)"
+    )
     magic: float = Field(
-        3 / 16, gt=0, description="TRT magic parameter Λ = (τ⁺ − ½)(τ⁻ − ½); 3/16 = exact walls"
+        3 / 16,
+        gt=0,
+        description="TRT magic parameter Λ = (τ⁺ − ½)(τ⁻ − ½); 3/16 = exact walls (0 < Λ ≤ 1/2)",
     )
     mrt_magic: float | None = Field(
         None,
@@ -153,6 +171,26 @@ class Settings(BaseModel):
     write_fields: bool = Field(False, description="store velocity and pressure fields in the result")
     write_vti: bool = Field(False, description="also export the fields as VTK ImageData (.vti) for ParaView")
     checkpoint_every_s: float = Field(600.0, gt=0, description="wall seconds between checkpoints")
+
+    @field_validator("tau", "tau_bulk")
+    @classmethod
+    def _tau_bounded(cls, value: float) -> float:
+        if value > TAU_MAX:
+            raise ValueError(
+                f"{value} is above {TAU_MAX}: bounce-back walls drift off their place as (τ̂ − ½)², so κ̂ "
+                "would be wrong; allowed: 0.5 < τ̂ ≤ 5 (the thesis uses τ̂ ≤ 2)"
+            )
+        return value
+
+    @field_validator("magic", "mrt_magic")
+    @classmethod
+    def _magic_bounded(cls, value: float | None) -> float | None:
+        if value is not None and value > MAGIC_MAX:
+            raise ValueError(
+                f"{value} is above {MAGIC_MAX}: τ⁻ grows with Λ and halfway walls slip (Λ = 1e9 gave κ 4× too "
+                "high); allowed: 0 < Λ ≤ 1/2 (3/16 = exact walls, 1/4 = most stable)"
+            )
+        return value
 
     @model_validator(mode="after")
     def _force_inside_inlet(self):

@@ -16,7 +16,7 @@ import numpy as np
 from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
-from porepipe._shared.store import hash_of
+from porepipe._shared.store import hash_of, open_h5
 from porepipe.lbm import _kernels as K
 from porepipe.lbm._darcy import Sampler, estimate_key, estimates
 from porepipe.lbm._domain import Lattice
@@ -177,12 +177,19 @@ def _load_checkpoint(path: Path, key: str, pops: np.ndarray):
     """(step, fields, history) from a matching checkpoint, or None."""
     if path is None or not path.is_file():
         return None
-    with h5py.File(path, "r") as f:
-        if f.attrs.get("key") != key or f["populations"].shape != pops.shape:
-            return None
-        pops[...] = f["populations"][...]
-        history = {name: list(f[f"history/{name}"][...]) for name in f["history"]} if "history" in f else {}
-        return int(f.attrs["step"]), f["fields"][...], history
+    try:
+        with open_h5(path) as f:
+            if f.attrs.get("key") != key or f["populations"].shape != pops.shape:
+                return None
+            pops[...] = f["populations"][...]
+            history = (
+                {name: list(f[f"history/{name}"][...]) for name in f["history"]} if "history" in f else {}
+            )
+            return int(f.attrs["step"]), f["fields"][...], history
+    except (PorepipeError, KeyError, ValueError, TypeError) as err:
+        raise PorepipeError(
+            f"LBM checkpoint {path} is damaged ({err}); delete it to start afresh, or rerun with --no-resume"
+        ) from None
 
 
 def _guard(fields: np.ndarray, step: int, settings: Settings) -> float:

@@ -22,9 +22,15 @@ fallback. ``cli`` is the default.
 Sources of q, in lattice coordinates (voxel i spans [i, i + 1), its node sits at i + ½):
 
 * :class:`SphereWalls`: exact ray–sphere intersection with the (periodic) spheres, e.g. of ``packing.h5``;
+* :class:`GrainWalls`: exact ray–polyhedron (slab clipping against every face plane) and ray–ball intersection with
+  the decorated grains of ``grains.h5`` (type planes rotated and scaled per grain, periodic copies);
 * :class:`GreyWalls`: from the grey volume's matrix fraction s = g/216 of the two voxels of the link, the level
   s = θ located by linear interpolation, θ the segmentation's boundary (pore if g ≤ g_th: θ = (g_th + ½)/216),
   so that q ∈ (0, 1) is consistent with the binary volume. A first-order estimate of the surface position.
+
+Set-ups: the periodic one's domain is the sample; the mirror set-up's links are folded into the sample
+(:class:`MirroredWalls`: a link across a mirror plane is split there and reflected), the chamber set-up's are shifted
+past the inlet chamber (:class:`ShiftedWalls`: a chamber node's link into the sample is cut at the sample's face).
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import dataclasses
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.lbm._kernels import _TILE, _ray_sphere_fractions
+from porepipe.lbm._kernels import _TILE, _ray_grain_fractions, _ray_sphere_fractions
 from porepipe.lbm._lattice import C
 from porepipe.lbm._settings import Walls
 
@@ -87,8 +93,12 @@ class SphereWalls:
 
     def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
         """Q of links from node coordinates (K, 3) (integer voxel indices) along −c_p; −1 where no sphere."""
-        points = nodes.astype(np.float64) + 0.5
-        dirs = -C[pops].astype(np.float64)
+        return self.segment_hits(nodes.astype(np.float64) + 0.5, -C[pops].astype(np.float64))
+
+    def segment_hits(self, points: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+        """First t ∈ (0, 1] of each segment points + t · dirs (lattice units, |dirs| <= √2) in a sphere; −1 if none."""
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        dirs = np.ascontiguousarray(dirs, dtype=np.float64)
         box = np.array(self.box, dtype=np.float64)
         reach = float(self.radii.max(initial=0.0)) + np.sqrt(2.0)
         cell_n = np.maximum(1, np.floor(box / reach)).astype(np.int64)
@@ -97,6 +107,8 @@ class SphereWalls:
         order = np.argsort(flat, kind="stable")
         start = np.searchsorted(flat[order], np.arange(int(np.prod(cell_n)) + 1)).astype(np.int64)
         out = np.empty(points.shape[0])
+        if points.shape[0] == 0:
+            return out
         _ray_sphere_fractions(
             points,
             dirs,
@@ -107,6 +119,128 @@ class SphereWalls:
             cell_n,
             start,
             order.astype(np.int64),
+            out,
+        )
+        return out
+
+
+@dataclasses.dataclass(frozen=True)
+class GrainWalls:
+    """Decorated grains (balls and convex polyhedra of ``grains.h5``) in lattice units of the sample's voxel grid.
+
+    Every periodic copy of a grain that comes within one voxel of the sample is listed, so a link is tested against
+    the copies that can reach it only (a cell list), by exact ray–plane / ray–sphere intersection.
+
+    Attributes
+    ----------
+    centres : (M, 3) float ndarray
+        Centres of the grain copies in voxels, the sample's corner at 0.
+    half : (M, 3) float ndarray
+        Half-edges (voxels) of a box about each copy's centre that holds the copy.
+    grain : (M,) int64 ndarray
+        Grain of each copy (row of ``kind``, ``radius``, ``plane_ptr``).
+    kind : (N,) int64 ndarray
+        0 ball, 1 convex polyhedron.
+    radius : (N,) float ndarray
+        Ball radius (voxels); for a polyhedron its circumradius.
+    plane_ptr : (N + 1,) int64 ndarray
+        Planes of grain g are rows ``plane_ptr[g]:plane_ptr[g + 1]`` of ``planes``.
+    planes : (P, 4) float ndarray
+        Outward unit normal and offset (voxels) of every face plane, n·(y − centre) <= offset.
+    """
+
+    centres: np.ndarray
+    half: np.ndarray
+    grain: np.ndarray
+    kind: np.ndarray
+    radius: np.ndarray
+    plane_ptr: np.ndarray
+    planes: np.ndarray
+
+    @classmethod
+    def from_decoration(cls, deco, shape, voxel_um: float, origin_um=(0.0, 0.0, 0.0), periodic=(True,) * 3):
+        """The grains of a :class:`porepipe.decorate.Decoration` (µm, box corner at ``origin_um``) on a grid of
+        ``shape`` voxels of ``voxel_um``; copies across the faces of ``periodic`` axes included.
+        """
+        from porepipe.decorate import grain_images, world_grains
+
+        world = world_grains(deco)
+        box_um = np.asarray(shape, dtype=np.float64) * voxel_um
+        centres_um = np.asarray(deco.centres_um, dtype=np.float64) - np.asarray(origin_um, dtype=np.float64)
+        # one voxel of margin: a node's link reaches one voxel beyond the sample
+        rows, ids = grain_images(centres_um, world.half_um + voxel_um, box_um, any(periodic))
+        shift = rows[:, :3] - centres_um[ids]
+        own = np.all(np.isclose(shift[:, [not p for p in periodic]], 0.0), axis=1)
+        rows, ids = rows[own], ids[own]
+        planes = world.planes.copy()
+        planes[:, 3] /= voxel_um
+        return cls(
+            np.ascontiguousarray(rows[:, :3] / voxel_um),
+            np.ascontiguousarray(rows[:, 3:] / voxel_um),
+            ids.astype(np.int64),
+            world.kind.astype(np.int64),
+            world.radius / voxel_um,
+            world.plane_ptr.astype(np.int64),
+            np.ascontiguousarray(planes),
+        )
+
+    def permuted(self, order) -> GrainWalls:
+        """The same grains with the axes reordered (``order[k]`` = caller's axis that becomes axis k)."""
+        order = list(order)
+        planes = self.planes.copy()
+        planes[:, :3] = self.planes[:, order]
+        return dataclasses.replace(
+            self,
+            centres=np.ascontiguousarray(self.centres[:, order]),
+            half=np.ascontiguousarray(self.half[:, order]),
+            planes=planes,
+        )
+
+    def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
+        """Q of links from node coordinates (K, 3) (integer voxel indices) along −c_p; −1 where no grain."""
+        return self.segment_hits(nodes.astype(np.float64) + 0.5, -C[pops].astype(np.float64))
+
+    def segment_hits(self, points: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+        """First t ∈ (0, 1] of each segment points + t · dirs (|dirs| per axis <= 1) in a grain; −1 if none."""
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        dirs = np.ascontiguousarray(dirs, dtype=np.float64)
+        out = np.full(points.shape[0], -1.0)
+        if points.shape[0] == 0 or self.centres.shape[0] == 0:
+            return out
+        reach_lo = (
+            self.centres - self.half - 1.0
+        )  # a segment starting in the box grown by 1 can reach the grain
+        reach_hi = self.centres + self.half + 1.0
+        lo = points.min(axis=0) - 1.0
+        edge = max(2.0, float(np.median(2.0 * self.half.max(axis=1))) + 2.0)
+        cell_n = np.maximum(1, np.ceil((points.max(axis=0) + 1.0 - lo) / edge)).astype(np.int64)
+        first = np.clip(np.floor((reach_lo - lo) / edge), 0, cell_n - 1).astype(np.int64)
+        last = np.clip(np.floor((reach_hi - lo) / edge), 0, cell_n - 1).astype(np.int64)
+        inside = np.all((reach_hi >= lo) & (reach_lo <= lo + cell_n * edge), axis=1)
+        cells, items = [], []
+        for m in np.flatnonzero(inside):
+            ranges = [np.arange(first[m, a], last[m, a] + 1) for a in range(3)]
+            flat = ((ranges[0][:, None, None] * cell_n[1] + ranges[1][None, :, None]) * cell_n[2]) + ranges[2]
+            cells.append(flat.ravel())
+            items.append(np.full(flat.size, m, dtype=np.int64))
+        cells = np.concatenate(cells) if cells else np.zeros(0, dtype=np.int64)
+        items = np.concatenate(items) if items else np.zeros(0, dtype=np.int64)
+        order = np.argsort(cells, kind="stable")
+        start = np.searchsorted(cells[order], np.arange(int(np.prod(cell_n)) + 1)).astype(np.int64)
+        _ray_grain_fractions(
+            points,
+            dirs,
+            self.centres,
+            self.grain,
+            self.kind,
+            self.radius,
+            self.plane_ptr,
+            self.planes,
+            lo,
+            edge,
+            cell_n,
+            start,
+            items[order],
             out,
         )
         return out
@@ -136,13 +270,104 @@ class GreyWalls:
         return GreyWalls(np.ascontiguousarray(np.transpose(self.solid, list(order))), self.level)
 
     def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
-        shape = np.array(self.solid.shape)
-        up = np.mod(nodes - C[pops], shape)
+        """Q of links from node coordinates (K, 3) (integer voxel indices) along −c_p; −1 where no level crossing."""
+        return self.pair_fractions(nodes, np.mod(nodes - C[pops], np.array(self.solid.shape)))
+
+    def pair_fractions(self, nodes: np.ndarray, up: np.ndarray) -> np.ndarray:
+        """Q between the voxels ``nodes`` (K, 3) (pore) and ``up`` (K, 3) (matrix); −1 where no level crossing."""
         s_x = self.solid[tuple(nodes.T)]
         s_y = self.solid[tuple(up.T)]
         with np.errstate(invalid="ignore", divide="ignore"):
             q = (self.level - s_x) / (s_y - s_x)
         return np.where((s_y > self.level) & (s_x <= self.level) & np.isfinite(q), q, -1.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class ShiftedWalls:
+    """A sample geometry seen from a domain whose layer ``offset`` along axis 0 is the sample's layer 0 (the chamber
+    set-up: inlet chamber, ``length`` sample layers, outlet chamber; the chambers are open fluid).
+
+    A link from a chamber node into the sample enters the solid no earlier than the sample's face: an exact geometry
+    is cut there (the link is split at the face), a grey one puts the wall halfway (the face itself).
+    """
+
+    inner: object
+    offset: int
+    length: int
+
+    def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
+        local = nodes - np.array([self.offset, 0, 0])
+        outside = (local[:, 0] < 0) | (local[:, 0] >= self.length)
+        out = np.full(nodes.shape[0], 0.5)
+        if np.any(~outside):
+            out[~outside] = self.inner.fractions(local[~outside], pops[~outside])
+        if np.any(outside) and hasattr(self.inner, "segment_hits"):
+            start = local[outside].astype(np.float64) + 0.5
+            step = -C[pops[outside]].astype(np.float64)
+            face = np.where(start[:, 0] < 0, 0.0, float(self.length))
+            t_face = (face - start[:, 0]) / step[
+                :, 0
+            ]  # a chamber link into the sample crosses its face: c_0 ≠ 0
+            rest = self.inner.segment_hits(start + t_face[:, None] * step, (1.0 - t_face)[:, None] * step)
+            out[outside] = np.where(rest > 0, t_face + (1.0 - t_face) * rest, -1.0)
+        return out
+
+
+def _fold(x0: np.ndarray, length: int) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-0 coordinate of the sample + mirror domain (period 2L) folded into the sample [0, L], and the sign of
+    the direction there (−1 in a mirror half).
+    """
+    y = np.mod(x0, 2 * length)
+    mirrored = y > length
+    return np.where(mirrored, 2 * length - y, y), np.where(mirrored, -1.0, 1.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class MirroredWalls:
+    """A sample geometry seen from the mirror set-up's domain (sample, then its mirror image along axis 0, periodic
+    over 2L): a link is folded into the sample, and a link that crosses a mirror plane (axis-0 coordinate 0 or L) is
+    split there, its second part reflected. Exact geometries (``segment_hits``) give the exact q of the reflected
+    wall; grey walls read the two folded voxels of the link.
+    """
+
+    inner: object
+    length: int
+
+    def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
+        if not hasattr(self.inner, "segment_hits"):
+            up = nodes - C[pops]
+            return self.inner.pair_fractions(self._fold_voxels(nodes), self._fold_voxels(up))
+        start = nodes.astype(np.float64) + 0.5
+        step = -C[pops].astype(np.float64)
+        end0 = start[:, 0] + step[:, 0]
+        crossing = np.floor(start[:, 0] / self.length) != np.floor(end0 / self.length)
+        plane = np.maximum(np.floor(start[:, 0] / self.length), np.floor(end0 / self.length)) * self.length
+        t_cross = np.where(crossing, (plane - start[:, 0]) / np.where(step[:, 0] == 0, 1.0, step[:, 0]), 1.0)
+        first = self._hits(start, step * t_cross[:, None], start[:, 0])
+        out = np.where(first > 0, t_cross * first, -1.0)
+        more = crossing & (out < 0)
+        if np.any(more):
+            at = start[more] + t_cross[more, None] * step[more]
+            rest = (1.0 - t_cross[more])[:, None] * step[more]
+            second = self._hits(at, rest, end0[more])
+            out[more] = np.where(second > 0, t_cross[more] + (1.0 - t_cross[more]) * second, -1.0)
+        return out
+
+    def _hits(self, points: np.ndarray, dirs: np.ndarray, side: np.ndarray) -> np.ndarray:
+        """Hits of segments that stay on one side of the mirror planes; ``side``: an axis-0 coordinate on it."""
+        folded = points.copy()
+        folded[:, 0], _ = _fold(points[:, 0], self.length)
+        _, sign = _fold(side, self.length)
+        reflected = dirs.copy()
+        reflected[:, 0] *= sign
+        return self.inner.segment_hits(folded, reflected)
+
+    def _fold_voxels(self, index: np.ndarray) -> np.ndarray:
+        """Voxel indices of the domain folded into the sample (periodic across the flow)."""
+        out = np.mod(index, np.array(self.inner.solid.shape))
+        i = np.mod(index[:, 0], 2 * self.length)
+        out[:, 0] = np.where(i >= self.length, 2 * self.length - 1 - i, i)
+        return out
 
 
 @dataclasses.dataclass
@@ -254,8 +479,10 @@ def geometry_from_files(
     grey=None,
     threshold: int | None = None,
     periodic=(True, True, True),
+    grains=None,
 ):
-    """The wall geometry of a binary volume from ``packing.h5`` (exact spheres) or ``grey_a{a}.h5`` (grey values).
+    """The wall geometry of a binary volume from ``packing.h5`` (exact spheres), ``grains.h5`` (exact decorated
+    grains) or ``grey_a{a}.h5`` (grey values).
 
     Parameters
     ----------
@@ -269,8 +496,14 @@ def geometry_from_files(
     from porepipe._shared.store import read_volume
     from porepipe.voxelize import read_packing_h5
 
-    if packing is not None and grey is not None:
-        raise PorepipeError("give either a packing file or a grey volume for the wall geometry, not both")
+    given = [name for name, v in (("packing", packing), ("grains", grains), ("grey", grey)) if v is not None]
+    if len(given) > 1:
+        raise PorepipeError(f"give one wall geometry (packing, grains or grey), got {' and '.join(given)}")
+    if grains is not None:
+        from porepipe.decorate import read_grains
+
+        deco, _ = read_grains(grains)
+        return GrainWalls.from_decoration(deco, shape, voxel_um, origin_um, periodic)
     if packing is not None:
         centres, radii = read_packing_h5(packing)
         return SphereWalls.from_packing(

@@ -43,7 +43,7 @@ PositiveUm = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 class Settings(BaseModel):
     """Local porosity distribution μ(φ, L), local S_V distribution and local percolation λ_α(φ, L), p_α(L)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False)
+    model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False, allow_inf_nan=False)
 
     cell_um: list[PositiveUm] = Field(
         default_factory=list,

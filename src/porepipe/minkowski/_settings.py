@@ -20,7 +20,7 @@ class Adjacency(str, enum.Enum):
 class Settings(BaseModel):
     """How the Minkowski functionals of the segmented volumes are measured (Zauner 2020, §4.5)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     adjacency: Adjacency = Field(
         Adjacency.pore6_matrix26,

@@ -408,7 +408,10 @@ def _integrate(
         nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
         _guard(stats, state, tables, stage, stage_idx, s, box, settings)
         converged = nconv == n
-        adapting = locking = False
+        adapting = False
+        # §5.4.4: "for s > s_lock, converged spheres are frozen" — frozen during step s are the spheres converged
+        # after step s - 1, so the set decided here applies from step s_lock + 1 on (not one step later)
+        locking = freeze and stage.freezing is not None and s > stage.freezing.lock_step
         if not converged:
             state.x, x_new = x_new, state.x
             state.f, f_new = f_new, state.f
@@ -421,8 +424,8 @@ def _integrate(
                 if adapting:
                     _adapt_radii(state.r, state.types, sig, tables)
             if freeze:
-                locking = stage.freezing is not None and s > stage.freezing.lock_step
-                state.frozen[:] = tables.type_frozen[state.types] | (conv if locking else 0)
+                lock_next = stage.freezing is not None and s + 1 > stage.freezing.lock_step
+                state.frozen[:] = tables.type_frozen[state.types] | (conv if lock_next else 0)
             state.since_build += 1
             if settings.rebuild_interval > 0:
                 state.need_rebuild = state.since_build >= settings.rebuild_interval

@@ -21,6 +21,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures, _labels
 from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
+from porepipe.report._permeability_cost import permeability_cost_parts
 from porepipe.report._settings import Clock, Settings
 from porepipe.report._thesis import Table, scene_tables
 from porepipe.sweep import FULL, parse_name
@@ -238,7 +239,9 @@ def section_error_cost(ctx: Context) -> list[str]:
     _figures.write_csv(ctx.out_dir / "error_cost.csv", err_rows)
     parts = ["<h2>What accuracy costs</h2>"]
     if summary:
-        ordered = sorted(summary, key=lambda r: not np.isfinite(r["cost_factor_per_digit"]))  # known costs first
+        ordered = sorted(
+            summary, key=lambda r: not np.isfinite(r["cost_factor_per_digit"])
+        )  # known costs first
         parts.append("<ul class=headline>" + "".join(f"<li>{_headline(r)}</li>" for r in ordered) + "</ul>")
     else:
         parts.append(
@@ -295,6 +298,11 @@ def section_startup(ctx: Context) -> list[str]:
     ]
 
 
+def section_permeability_cost(ctx: Context) -> list[str]:
+    """κ error against cost of the LBM sphere benchmark (results/benchmarks/lbm_spheres.json), if it was run."""
+    return permeability_cost_parts(ctx.out_dir, ctx.settings.dpi)
+
+
 def section_thesis(ctx: Context) -> list[str]:
     """The thesis tables this scene produced numbers for; the others named in one line."""
     shown, skipped = scene_tables(ctx.ds, ctx.settings.thesis_tables, ctx.settings.thesis_model)
@@ -349,6 +357,7 @@ SECTIONS = [
     section_machine,
     section_error_cost,
     section_startup,
+    section_permeability_cost,
     section_quantities,
     section_limits,
     section_thesis,

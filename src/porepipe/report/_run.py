@@ -38,6 +38,12 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
         The page written.
     """
     sweep = Path(sweep or Path("results", scene.name, "sweep", "sweep.h5"))
+    granular = Path("results", scene.name, "granular", "granular.h5")
+    if not sweep.is_file() and getattr(scene, "granular", None) is not None and granular.is_file():
+        from porepipe.report._granular import granular_report  # a 2-D granular scene has no sweep
+
+        out = Path(out or Path("results", scene.name, "report", "index.html"))
+        return granular_report(granular, out, scene_name=scene.name, mu=scene.granular.material.friction)
     if not sweep.is_file():
         raise PorepipeError(
             f"{sweep} does not exist: run the workflow first (`porepipe run {scene_path}` with "

@@ -29,7 +29,7 @@ class Clock(str, enum.Enum):
 class Settings(BaseModel):
     """Contents of ``results/<scene>/report/index.html``."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     quantities: list[str] = Field(
         default_factory=list,

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from porepipe._shared.store import ResultWriter, open_volume, read_attrs, read_table, result_hash, volume_meta
+from porepipe._shared.grey import read_grey_histogram
+from porepipe._shared.store import ResultWriter, open_volume, read_attrs, result_hash, volume_meta
 from porepipe.segment._api import Threshold, choose_threshold, segment
 
 
@@ -31,7 +32,7 @@ def run(grey_path, out, method, threshold: int | None = None, slab_planes: int =
         The threshold chosen, its method and a note.
     """
     src = read_attrs(grey_path)
-    hist = read_table(grey_path)["grey_histogram"].values
+    hist, _ = read_grey_histogram(grey_path)
     decision = choose_threshold(hist, method, threshold)
     digest = result_hash(
         "segment", inputs=[grey_path], method=str(decision.method.value), threshold=decision.value

@@ -27,7 +27,7 @@ class Adaptive(BaseModel):
     budget is spent.
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     quantity: str | None = Field(
         None,
@@ -50,7 +50,7 @@ class Adaptive(BaseModel):
 class Settings(BaseModel):
     """Resolution and sample-size sweep gathered into ``sweep.h5``, with extrapolation to a → 0."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     sample_um: list[PositiveUm] = Field(
         default_factory=list,

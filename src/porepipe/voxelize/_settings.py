@@ -17,7 +17,7 @@ class VoxelizeMethod(str, enum.Enum):
 class Settings(BaseModel):
     """How grey volumes are computed (the values never depend on it: both methods are bit-identical)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     method: VoxelizeMethod = Field(
         VoxelizeMethod.boundary, description="boundary (fast) or brute (216 points/voxel)"

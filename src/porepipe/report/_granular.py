@@ -1,0 +1,297 @@
+"""Granular section of the report: silo pressure profiles with Janssen fits, heap floor pressure, P(alpha), force
+network, each figure with its data as CSV and the thesis's numbers beside ours (Schinner 2001, ch. 3-4).
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection, PolyCollection
+from matplotlib.figure import Figure
+
+from porepipe._shared.atomic import write_text_atomic
+from porepipe._shared.store import read_attrs
+from porepipe.granular import (
+    THESIS_SILO,
+    analyse_heap,
+    analyse_silo,
+    force_directions,
+    frame_contacts,
+    frame_particles,
+    janssen,
+    lateral_pressure_bounds,
+    read_granular,
+)
+from porepipe.report._figures import write_csv
+
+
+def _fig(w=5.0, h=4.0, polar=False):
+    fig = Figure(figsize=(w, h))
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(111, projection="polar" if polar else None)
+    return fig, ax
+
+
+def _kind(tables) -> str:
+    names = [str(v) for v in tables["frames"]["wall_name"].values]
+    if not {"box left", "box right", "box floor"} <= set(names):
+        return "heap"
+    wv = tables["frames"]["wall_vertices_m"].values
+    x0 = np.nanmax(wv[names.index("box left")][:, 0])
+    x1 = np.nanmin(wv[names.index("box right")][:, 0])
+    pos = tables["frames"]["position"].values[-1]
+    act = tables["frames"]["active"].values[-1].astype(bool)
+    y0 = np.nanmax(wv[names.index("box floor")][:, 1])
+    return "silo" if pos[act, 1].max() - y0 > 2 * (x1 - x0) else "heap"
+
+
+def silo_pressure_figure(a: dict, path: Path, dpi: int = 110) -> list[dict]:
+    """Wall pressure against depth with the fitted Janssen curve and the thesis's (k 0.64, mu_j 0.33) beside."""
+    fig, ax = _fig()
+    z = a["depth_m"]
+    ax.plot(a["wall_pressure"], z, "k.", ms=3, label="measured (windows)")
+    ax.plot(a["wall_running_mean"], z, "k-", lw=0.8, label="running mean")
+    zz = np.linspace(0, a["fill_height_m"], 200)
+    r, rg = a["half_width_m"], a["rho_g"]
+    fit = a["fit"]
+    ax.plot(
+        janssen(zz, r, fit["k"], fit["mu_j"], rg)[1],
+        zz,
+        "C0-",
+        label=f"Janssen fit k {fit['k']:.2f}, mu_j {fit['mu_j']:.3f}",
+    )
+    fk = a["fit_k_fixed"]
+    ax.plot(
+        janssen(zz, r, fk["k"], fk["mu_j"], rg)[1],
+        zz,
+        "C2--",
+        label=f"k = {fk['k']:.2f} (stress), mu_j {fk['mu_j']:.3f}",
+    )
+    th = THESIS_SILO
+    ax.plot(janssen(zz, r, th["k"], th["mu_j"], rg)[1], zz, "C3:", label="thesis k 0.64, mu_j 0.33")
+    ax.axhline(a["fit_depth_max_m"], color="0.6", lw=0.6)
+    ax.invert_yaxis()
+    ax.set_xlabel("wall pressure sigma_xx [N/m²]")
+    ax.set_ylabel("depth below the fill surface [m]")
+    ax.legend(fontsize=7, loc="lower left")
+    fig.savefig(path, dpi=dpi)
+    return [
+        {"depth_m": float(d), "wall_pressure_N_m2": float(p), "running_mean_N_m2": float(m)}
+        for d, p, m in zip(z, a["wall_pressure"], a["wall_running_mean"], strict=True)
+    ]
+
+
+def direction_figure(directions: dict, path: Path, dpi: int = 110) -> list[dict]:
+    """P(alpha) as a polar plot, mirrored to [0, 2 pi) (P(alpha) = P(alpha + pi))."""
+    fig, ax = _fig(4.0, 4.0, polar=True)
+    e, d = directions["edges"], directions["density"]
+    centres = 0.5 * (e[:-1] + e[1:])
+    ang = np.concatenate([centres, centres + np.pi, centres[:1]])
+    val = np.concatenate([d, d, d[:1]])
+    ax.plot(ang, val, "k-")
+    ax.set_title("P(alpha): contact-force directions", fontsize=9)
+    fig.savefig(path, dpi=dpi)
+    return [
+        {"alpha_deg": float(math.degrees(c)), "density_per_rad": float(v)}
+        for c, v in zip(centres, d, strict=True)
+    ]
+
+
+def network_figure(tables: dict, path: Path, dpi: int = 130, frame: int = -1) -> list[dict]:
+    """Force network: a line from each particle's centroid to each of its contacts' application points, width
+    proportional to |F| (thesis §2.3.2); particles coloured by index (= age for poured scenes).
+    """
+    parts = frame_particles(tables, frame)
+    c = frame_contacts(tables, frame)
+    act = parts["active"]
+    polys = [p for p, a in zip(parts["polygons"], act, strict=True) if a]
+    allv = np.concatenate(polys)
+    span = np.ptp(allv, axis=0)
+    aspect = span[1] / max(span[0], 1e-300)
+    fig = Figure(
+        figsize=(8.0, min(max(1.2 + 8.0 * aspect, 2.5), 10.0))
+        if aspect < 1
+        else (min(max(1.5 + 7.0 / aspect, 2.5), 8.0), 7.0)
+    )
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(111)
+    ages = np.nonzero(act)[0]
+    pc = PolyCollection(polys, array=ages, cmap="viridis", alpha=0.35, edgecolors="none")
+    ax.add_collection(pc)
+    cen = parts["centroid"]
+    n = len(cen)
+    f = np.hypot(c["fx_N"], c["fy_N"])
+    s = np.column_stack([c["sx_m"], c["sy_m"]])
+    segs = [np.array([cen[i], s[k]]) for k, i in enumerate(c["i"])]
+    segs += [np.array([cen[j], s[k]]) for k, j in enumerate(c["j"]) if j < n]
+    fw = np.concatenate([f, f[c["j"] < n]])
+    width = 3.0 * fw / max(fw.max(), 1e-300)
+    ax.add_collection(LineCollection(segs, linewidths=width, colors="k"))
+    ax.set_xlim(allv[:, 0].min(), allv[:, 0].max())
+    ax.set_ylim(allv[:, 1].min(), allv[:, 1].max())
+    ax.set_aspect("equal")
+    ax.set_title("force network (line width ∝ |F|), grains coloured by age", fontsize=9)
+    fig.savefig(path, dpi=dpi)
+    return [
+        {"i": int(i), "j": int(j), "F_N_m": float(ff), "sx_m": float(p[0]), "sy_m": float(p[1])}
+        for i, j, ff, p in zip(c["i"], c["j"], f, s, strict=True)
+    ]
+
+
+def heap_floor_figure(h: dict, path: Path, dpi: int = 110) -> list[dict]:
+    """Floor pressure of a heap, scaled by rho g h against x/base (the thesis's Figs. 4.9, 4.21)."""
+    fig, ax = _fig(5.0, 3.2)
+    ax.plot(h["floor_x_m"], h["floor_pressure"], "k.", ms=3, label="windows (~15 contacts)")
+    ax.plot(h["floor_x_m"], h["floor_running_mean"], "k-", lw=0.8, label="running mean")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("floor pressure [N/m²]")
+    ax.legend(fontsize=7)
+    fig.savefig(path, dpi=dpi)
+    return [
+        {"x_m": float(x), "pressure_N_m2": float(p)}
+        for x, p in zip(h["floor_x_m"], h["floor_pressure"], strict=True)
+    ]
+
+
+def _table(columns, rows) -> str:
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in r) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "auto", dpi: int = 110) -> str:
+    """HTML of the granular section for one ``granular.h5`` (figures and CSVs written into ``out_dir``).
+
+    Parameters
+    ----------
+    result : path-like
+        The granular result file.
+    out_dir : path-like
+        Directory of the page.
+    mu : float, optional
+        Grain friction (for the Rankine/Jaky bounds).
+    kind : {"auto", "silo", "heap"}
+        Read-out; auto: a silo when the fill is more than twice as tall as the box is wide.
+    dpi : int
+        Figure resolution.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    tables = read_granular(result)
+    attrs = read_attrs(result)
+    kind = _kind(tables) if kind == "auto" else kind
+    parts = []
+    cost = (
+        f"{int(attrs.get('n_particles', 0))} particles, {int(attrs.get('steps', 0))} steps of "
+        f"{float(attrs.get('dt_s', 0)):.3g} s, {float(attrs.get('particle_steps_per_s', 0)):.3g} particle-steps/s"
+    )
+    if kind == "silo":
+        a = analyse_silo(tables)
+        write_csv(
+            out_dir / "granular_wall_pressure.csv",
+            silo_pressure_figure(a, out_dir / "granular_wall_pressure.png", dpi),
+        )
+        th = THESIS_SILO
+        rows = [
+            [
+                "k = sigma_xx/sigma_zz (slab stress tensors)",
+                f"{a['k']:.2f} ± {a['k_std']:.2f}",
+                f"{th['k']} ± {th['k_err']}",
+            ],
+            ["k (Janssen fit, k and mu_j free)", f"{a['fit']['k']:.2f} ± {a['fit']['k_err']:.2f}", "–"],
+            [
+                "mu_j (Janssen fit, k free)",
+                f"{a['fit']['mu_j']:.3f} ± {a['fit']['mu_j_err']:.3f}",
+                f"{th['mu_j']}",
+            ],
+            [
+                "mu_j (Janssen fit, k fixed at the stress value)",
+                f"{a['fit_k_fixed']['mu_j']:.3f}",
+                f"{th['mu_j']}",
+            ],
+            ["mobilised wall friction (sum F_t / sum F_n)", f"{a['mu_wall_mobilised']:.3f}", "–"],
+            [
+                "rho_rel (hull-corrected, Eq. 2.45)",
+                f"{a['rho_rel']:.3f}",
+                f"{th['rho_rel']} ± {th['rho_rel_err']}",
+            ],
+            ["weight carried by the walls", f"{a['wall_share']:.0%}", "–"],
+        ]
+        if mu is not None:
+            b = lateral_pressure_bounds(mu)
+            rows.append(
+                [
+                    f"bounds for mu = {mu:g}: Rankine active / Jaky / Rankine passive",
+                    f"{b['rankine_active']:.2f} / {b['jaky']:.2f} / {b['rankine_passive']:.2f}",
+                    "same",
+                ]
+            )
+        parts += [
+            "<h2>Janssen silo</h2>",
+            f"<p>{a['n_particles']} grains in a {2 * a['half_width_m'] * 1e3:.0f} mm wide silo, fill "
+            f"{a['fill_height_m']:.3f} m; fits above the grey line (the lowest silo width is the floor's zone). "
+            f"Cost: {html.escape(cost)}.</p>",
+            "<img src='granular_wall_pressure.png' alt='wall pressure'>",
+            _table(["quantity", "this run", "thesis §3.1"], rows),
+            "<p class=note>Data: <a href='granular_wall_pressure.csv'>granular_wall_pressure.csv</a></p>",
+        ]
+        directions = force_directions(frame_contacts(tables, -1))
+    else:
+        h = analyse_heap(tables)
+        write_csv(
+            out_dir / "granular_floor_pressure.csv",
+            heap_floor_figure(h, out_dir / "granular_floor_pressure.png", dpi),
+        )
+        rows = [
+            [
+                "repose angle, left / right flank fit [deg]",
+                f"{math.degrees(h['repose_left_rad']):.1f} / {math.degrees(h['repose_right_rad']):.1f}",
+            ],
+            [
+                "repose angle, integral method (Eq. 2.42) [deg]",
+                f"{math.degrees(h['repose_integral_rad']):.1f}",
+            ],
+            ["height / base [m]", f"{h['height_m']:.3f} / {h['base_m']:.3f}"],
+            ["rho_rel in the core (Eq. 2.45)", f"{h['rho_rel']:.3f}"],
+            ["mean coordination", f"{h['coordination']['mean']:.2f}"],
+            ["floor load / weight", f"{h['floor_load_N_m'] / h['weight_N_m']:.3f}"],
+        ]
+        parts += [
+            "<h2>Heap</h2>",
+            f"<p>{h['n_particles']} grains. Cost: {html.escape(cost)}. Thesis (poured 7-gons, 9 seeds): repose "
+            "angle 26.8° ± 2.0°, a floor-pressure dip under the apex.</p>",
+            "<img src='granular_floor_pressure.png' alt='floor pressure'>",
+            _table(["quantity", "this run"], rows),
+            "<p class=note>Data: <a href='granular_floor_pressure.csv'>granular_floor_pressure.csv</a></p>",
+        ]
+        directions = h["directions"]
+    write_csv(
+        out_dir / "granular_directions.csv",
+        direction_figure(directions, out_dir / "granular_directions.png", dpi),
+    )
+    write_csv(out_dir / "granular_network.csv", network_figure(tables, out_dir / "granular_network.png", dpi))
+    parts += [
+        "<h2>Fabric</h2>",
+        "<img src='granular_directions.png' alt='P(alpha)'> <img src='granular_network.png' alt='force network'>",
+        "<p class=note>Data: <a href='granular_directions.csv'>granular_directions.csv</a>, "
+        "<a href='granular_network.csv'>granular_network.csv</a></p>",
+    ]
+    return "\n".join(parts)
+
+
+def granular_report(
+    result, out_html, *, scene_name: str = "", mu: float | None = None, kind: str = "auto"
+) -> Path:
+    """Write a stand-alone page with the granular section of ``result`` (a scene without a sweep)."""
+    out_html = Path(out_html)
+    body = granular_section(result, out_html.parent, mu=mu, kind=kind)
+    page = (
+        "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"
+        f"<title>porepipe granular report {html.escape(scene_name)}</title></head><body>"
+        f"<h1>porepipe granular report: {html.escape(scene_name)}</h1>\n{body}</body></html>\n"
+    )
+    return write_text_atomic(out_html, page)

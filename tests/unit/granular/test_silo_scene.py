@@ -1,0 +1,78 @@
+"""The CI Janssen silo (config/scenes/granular-silo-ci.yaml) end to end: run, measure, fit.
+
+Truths used: static force balance (floor + walls carry the weight), saturation of the wall pressure (its slope in
+the lower half of the fill far below the hydrostatic slope at the top), the Rankine bracket of a Mohr-Coulomb bulk
+for k, and the Janssen fit's mu_j against the wall friction actually mobilised (sum of the walls' vertical
+tractions over their normal forces), which is what Janssen's tau_w = mu_j sigma_xx means.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from porepipe.granular import analyse_silo, lateral_pressure_bounds, read_granular, run
+from porepipe.scene import load_scene
+
+SCENE = Path(__file__).parents[3] / "config" / "scenes" / "granular-silo-ci.yaml"
+
+
+@pytest.fixture(scope="module")
+def silo(tmp_path_factory):
+    scene = load_scene(SCENE)
+    out = run(
+        scene.granular, tmp_path_factory.mktemp("silo") / "granular.h5", seed=scene.seed, progress=False
+    )
+    return analyse_silo(read_granular(out)), scene.granular.material.friction, out
+
+
+def test_ci_silo_force_balance(silo):
+    a = silo[0]
+    # residual kinetic energy at the end is ~1e-6 of the potential energy; 2 % covers the remaining vibration
+    assert a["floor_share"] + a["wall_share"] == pytest.approx(1.0, abs=0.02)
+
+
+def test_ci_silo_wall_pressure_saturates(silo):
+    a = silo[0]
+    z, p = a["depth_m"], a["wall_pressure"]
+    h = a["fill_height_m"]
+    top = z < 0.25 * h
+    lower = (z > 0.5 * h) & (z < a["fit_depth_max_m"])
+    slope_top = np.polyfit(z[top], p[top], 1)[0]
+    slope_lower = np.polyfit(z[lower], p[lower], 1)[0]
+    assert slope_top > 0
+    assert slope_lower < 0.25 * slope_top  # saturated (Janssen: e^{-z/lambda} decay of the slope)
+    assert a["wall_share"] > 0.6  # the walls carry most of the weight
+
+
+def test_ci_silo_k_and_mu_j(silo):
+    a, mu, _ = silo
+    b = lateral_pressure_bounds(mu)
+    assert b["rankine_active"] < a["k"] < b["rankine_passive"]
+    # the fitted wall friction is the mobilised one (both ~0.1 here, well below the grains' mu = 0.4); 20 %
+    # covers the profile's deviation from the exponential form (fit rms ~ 20 % of the plateau)
+    assert a["fit"]["mu_j"] == pytest.approx(a["mu_wall_mobilised"], rel=0.2)
+    assert (
+        0.6 < a["rho_rel"] < 0.91
+    )  # between random loose packing and the hexagonal disk packing pi/sqrt(12)
+
+
+def test_ci_silo_report_page(silo, tmp_path):
+    """The granular report section: page, figures and their data; the network CSV has one row per contact."""
+    from porepipe.granular import frame_contacts
+    from porepipe.report._granular import granular_report
+
+    a, mu, out = silo
+    page = granular_report(out, tmp_path / "index.html", scene_name="granular-silo-ci", mu=mu).read_text()
+    assert "0.64 ± 0.19" in page and f"{a['k']:.2f} ± {a['k_std']:.2f}" in page
+    for name in ("granular_wall_pressure", "granular_directions", "granular_network"):
+        assert (tmp_path / f"{name}.png").stat().st_size > 1000
+    rows = (tmp_path / "granular_network.csv").read_text().strip().splitlines()
+    assert len(rows) - 1 == len(frame_contacts(read_granular(out), -1)["i"])
+
+
+def test_analyse_silo_names_a_missing_wall(silo):
+    from porepipe._shared.errors import PorepipeError
+
+    with pytest.raises(PorepipeError, match="no wall 'chute'"):
+        analyse_silo(read_granular(silo[2]), walls=("chute", "box right"))
