@@ -71,7 +71,8 @@ def _synthetic_sweep(tmp_path):
         for name, files, kind in (("grey", grey, "voxelize"), ("pore", binary, "segment")):
             path = tmp_path / f"{'grey' if name == 'grey' else 'binary'}_a{a:g}.h5"
             with ResultWriter(path, stage=kind) as w:
-                w.write_volume(name, (np.arange(n**3).reshape(n, n, n) % 3).astype(np.uint8), voxel_um=a)
+                levels = 3 if name == "grey" else 2  # a binary volume holds 0 and 1 only
+                w.write_volume(name, (np.arange(n**3).reshape(n, n, n) % levels).astype(np.uint8), voxel_um=a)
             files.append(path)
     sweep = build_sweep(paths, grey + binary)
     with ResultWriter(tmp_path / "sweep.h5", stage="sweep", scene="t") as w:
