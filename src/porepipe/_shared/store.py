@@ -501,9 +501,12 @@ def open_result(path) -> xr.Dataset:
         The file is missing or not a porepipe result.
     """
     attrs = read_attrs(path)
-    with h5py.File(path, "r") as f:
+    with open_h5(path) as f:
         groups = [None] + [g for g in (VOLUME_GROUP, ARRAY_GROUP) if g in f]
-    parts = [xr.open_dataset(path, engine="h5netcdf", group=g, phony_dims="sort") for g in groups]
+    parts = [
+        xr.open_dataset(path, engine="h5netcdf", group=g, phony_dims="sort", decode_timedelta=False)
+        for g in groups
+    ]
     ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="drop_conflicts")
     ds.attrs = {**ds.attrs, **attrs}
     ds.set_close(lambda: [part.close() for part in parts])  # `with open_result(p) as ds` closes the file
@@ -514,7 +517,9 @@ def read_table(path, group: str | None = None) -> xr.Dataset:
     """Load the xarray Dataset of the root group (or of ``group``) into memory."""
     path = _check_file(path)
     try:
-        with xr.open_dataset(path, engine="h5netcdf", group=group, phony_dims="sort") as ds:
+        with xr.open_dataset(
+            path, engine="h5netcdf", group=group, phony_dims="sort", decode_timedelta=False
+        ) as ds:
             return ds.load()
     except (OSError, RuntimeError, KeyError, TypeError, ValueError) as err:
         raise _damaged(path, err, f"table{f' {group!r}' if group else ''}") from None
