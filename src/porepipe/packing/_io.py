@@ -22,6 +22,7 @@ from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.spheres import write_xyzr
 from porepipe._shared.store import label_dims
+from porepipe._shared.units import DIMENSIONLESS, MICROMETRE
 from porepipe.packing._types import EFFECT_BITS, HISTORY_KEYS, Packing, State
 
 _SPHERE_KEYS = ("centres_um", "radii_um", "types", "max_overlap", "converged")
@@ -33,7 +34,13 @@ _SPHERE_DIMS = {
     "max_overlap": ("sphere",),
     "converged": ("sphere",),
 }
-_SPHERE_UNITS = {"centres_um": "µm", "radii_um": "µm", "types": "1", "max_overlap": "1", "converged": "1"}
+_SPHERE_UNITS = {
+    "centres_um": MICROMETRE,
+    "radii_um": MICROMETRE,
+    "types": DIMENSIONLESS,
+    "max_overlap": DIMENSIONLESS,
+    "converged": DIMENSIONLESS,
+}
 _STATE_ARRAYS = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build", "ids")
 _STATE_INTS = ("since_build", "stage", "step", "nconv_prev", "next_id")
 
