@@ -251,7 +251,7 @@ def section_error_cost(ctx: Context) -> list[str]:
         _figure_html(
             "error_cost.png",
             "relative error against compute cost",
-            f"One point per run; cost = the computation's {clock} time recorded in its result file plus the "
+            f"One point per run; cost = the computation's {'CPU' if clock == 'cpu' else 'wall'} time recorded in its result file plus the "
             "voxelisation and segmentation of the volume it measured (interpreter start-up and imports excluded, "
             "see below; the scene's report.cost_clock chooses CPU or wall time); "
             "error relative to the supported limit. The cost of a digit comes from a straight line through the "
