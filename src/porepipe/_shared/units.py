@@ -60,7 +60,11 @@ LATTICE = {
     "voxel": "voxel",
     "voxels": "voxel",
     "voxel^2": "voxel^2",
+    "voxel^3": "voxel^3",
+    "voxel^-3": "voxel^-3",
     "jiffie": "jiffie (mean free flight time)",
+    "1/jiffie": "1/jiffie",
+    "voxel^2/jiffie": "voxel^2/jiffie",
     "lattice (voxel per step)": "voxel per time step",
     "lattice (rho/3)": "lattice pressure rho/3",
 }
