@@ -142,6 +142,13 @@ class SceneBase(_Strict):
             return self  # a 2-D granular scene has no box, spheres or voxels
         if not self.resolutions_um:
             raise ValueError("missing resolutions_um: give at least one voxel size in µm")
+        if getattr(getattr(self, "diffusion", None), "geometry", None) is not None:
+            other = sorted(a.value for a in set(self.analyses) - {Analysis.diffusion, Analysis.report})
+            if other:  # a synthetic capillary (diffusion.geometry) has a binary volume only, no grey one
+                raise ValueError(
+                    f"diffusion.geometry: a synthetic capillary scene runs diffusion only, not {other}"
+                )
+            return self
         if getattr(self, "acquire", None) is None:
             missing = [k for k in ("domain", "spheres") if getattr(self, k) is None]
             if missing:

@@ -376,6 +376,20 @@ def check_binary_values(values: np.ndarray, path, name: str = BINARY_VOLUME) -> 
 
     One rule for every stage: a "binary" volume with other values (a label image, a grey volume under the wrong
     name) is refused, never read as "anything non-zero is pore" by one stage and refused by another.
+
+    Parameters
+    ----------
+    values : ndarray
+        Voxels read from the volume.
+    path : path-like
+        The file they came from (for the message).
+    name : str
+        The volume's name (for the message).
+
+    Returns
+    -------
+    ndarray
+        ``values`` unchanged.
     """
     values = np.asarray(values)
     if values.size and values.dtype == np.uint8 and int(values.max()) > 1:
@@ -436,6 +450,18 @@ def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
 
     The binary volume (``name`` ``pore``) comes wrapped so that every read refuses values other than 0 and 1; damaged
     HDF5 content read inside the block is one :class:`PorepipeError` naming the file.
+
+    Parameters
+    ----------
+    path : path-like
+        A result file.
+    name : str
+        The volume (``grey``, ``pore`` …); its coordinate scales ``x_um`` … are not volumes.
+
+    Yields
+    ------
+    h5py.Dataset
+        The open volume (read it in slabs).
     """
     path = _check_file(path)
     with open_h5(path) as f:

@@ -187,3 +187,29 @@ def register(subparsers) -> None:
     ):
         p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
     p.set_defaults(func=main)
+    register_capillary(subparsers)
+
+
+def main_capillary(args) -> int:
+    from porepipe.diffusion._capillary import write_capillary
+    from porepipe.scene import load_scene
+
+    scene = load_scene(args.scene)
+    geometry = scene.diffusion.geometry
+    if geometry is None:
+        raise PorepipeError(f"{args.scene}: the scene has no diffusion.geometry to build a capillary from")
+    out = write_capillary(geometry, args.a, args.out, seed=scene.seed, scene=scene.name)
+    print(f"capillary {geometry.kind.value} at a = {args.a} µm -> {out}")
+    return 0
+
+
+def register_capillary(subparsers) -> None:
+    """``porepipe diffusion-capillary``: write the scene's ``diffusion.geometry`` as a binary volume."""
+    p = subparsers.add_parser(
+        "diffusion-capillary",
+        help="write the scene's synthetic capillary (diffusion.geometry) as binary_a{a}.h5",
+    )
+    p.add_argument("--scene", required=True, help="scene YAML with a diffusion.geometry")
+    p.add_argument("--a", type=float, required=True, help="resolution (voxel edge) in µm")
+    p.add_argument("-o", "--out", required=True, help="output binary_a{a}.h5")
+    p.set_defaults(func=main_capillary)

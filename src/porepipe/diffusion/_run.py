@@ -81,6 +81,10 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
     if "msd" in arr:
         data["msd"] = xr.Variable(("time", "xyz"), arr["msd"], {"units": "voxel^2"})
         data["time"] = xr.Variable(("time",), arr["msd_time"], {"units": "jiffie"})
+    if "history" in arr:  # statistical error against cost, one row per round (see _api.HISTORY_FIELDS)
+        for k, name in enumerate(_api.HISTORY_FIELDS):
+            meaning = "this round's kernel CPU s" if name == "round_cpu_s" else "cumulative after the round"
+            data[f"history_{name}"] = xr.Variable(("round",), arr["history"][:, k], {"meaning": meaning})
     ds = xr.Dataset(data)
     ds.attrs["definitions"] = _api.__doc__.split("Definitions (also written into every result)")[1].strip()
     ds.attrs["settings"] = json.dumps(settings.model_dump(mode="json"), sort_keys=True)
@@ -151,6 +155,10 @@ def run(
                 result.values["D"] = result.values[f"D_{name}"]
                 result.values["D_err"] = result.values[f"D_{name}_err"]
         else:
+            # the volume read here is ours: it becomes the distance codes in place (1 byte per voxel in all)
+            pore = _api.prepare(
+                np.ascontiguousarray(pore, np.uint8), voxel_um, periodic, axis.index, in_place=True
+            )
             result = _api.transport(
                 pore, axis.index, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint
             )

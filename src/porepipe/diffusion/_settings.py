@@ -6,6 +6,8 @@ import enum
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from porepipe.diffusion._capillary import CapillaryGeometry
+
 
 class Axis(str, enum.Enum):
     """Transport axis: particles enter at its low face and leave at its high face."""
@@ -171,6 +173,12 @@ class Settings(BaseModel):
     gas: GasSettings = Field(default_factory=GasSettings, description="event-driven gas (setup edmd)")
     reactions: ReactionSettings = Field(
         default_factory=ReactionSettings, description="wall reactions (setup reaction)"
+    )
+
+    geometry: CapillaryGeometry | None = Field(
+        None,
+        description="a synthetic capillary built per resolution instead of a segmented volume "
+        "(kind: square|cylinder|slit|constricted|pocketed|rough, sizes in voxels or *_um)",
     )
 
     @field_validator("species")

@@ -21,6 +21,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures, _labels
 from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
+from porepipe.report._diffusion import section as diffusion_section
 from porepipe.report._permeability_cost import permeability_cost_parts
 from porepipe.report._settings import Clock, Settings
 from porepipe.report._thesis import Table, scene_tables
@@ -298,6 +299,11 @@ def section_startup(ctx: Context) -> list[str]:
     ]
 
 
+def section_diffusion(ctx: Context) -> list[str]:
+    """Knudsen diffusion results of the sweep (porepipe.report._diffusion), if the scene ran diffusion."""
+    return diffusion_section(ctx.ds, ctx.inputs.get("sweep_path", ""), ctx.out_dir, ctx.settings.dpi)
+
+
 def section_permeability_cost(ctx: Context) -> list[str]:
     """κ error against cost of the LBM sphere benchmark (results/benchmarks/lbm_spheres.json), if it was run."""
     return permeability_cost_parts(ctx.out_dir, ctx.settings.dpi)
@@ -357,6 +363,7 @@ SECTIONS = [
     section_machine,
     section_error_cost,
     section_startup,
+    section_diffusion,
     section_permeability_cost,
     section_quantities,
     section_limits,
@@ -415,7 +422,7 @@ def build_report(
         grey=_by_resolution(grey),
         binary=_by_resolution(binary),
         lpt=_by_resolution(lpt),
-        inputs=dict(inputs or {}),
+        inputs={"sweep_path": Path(sweep_path), **(inputs or {})},
     )
     parts = [
         f"<h1>porepipe report: scene {html.escape(scene_name)}</h1>",

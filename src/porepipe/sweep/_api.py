@@ -35,12 +35,20 @@ def exponent_value(exponent: Exponent | str) -> float | None:
     return _P[Exponent(exponent)]
 
 
-def limit_of(a_um, values, exponent: float | None, confidence: float = 0.95) -> Limit:
-    """Extrapolate one quantity over the resolutions where it is finite."""
+def limit_of(a_um, values, exponent: float | None, confidence: float = 0.95, stat_err=None) -> Limit:
+    """Extrapolate one quantity over the resolutions where it is finite.
+
+    ``stat_err``: the points' statistical 1-σ errors; used as the known noise of the fit (weights, chi² verdict)
+    when every point has a positive one, else the noise is estimated from the residuals.
+    """
     a_um = np.asarray(a_um, dtype=np.float64)
     values = np.asarray(values, dtype=np.float64)
     keep = np.isfinite(values)
-    return fit_power(a_um[keep], values[keep], exponent=exponent, confidence=confidence)
+    sigma = None
+    if stat_err is not None:
+        err = np.asarray(stat_err, dtype=np.float64)[keep]
+        sigma = err if err.size and np.all(np.isfinite(err)) and np.all(err > 0) else None
+    return fit_power(a_um[keep], values[keep], exponent=exponent, sigma=sigma, confidence=confidence)
 
 
 def add_limits(
@@ -55,7 +63,8 @@ def add_limits(
     for f, form in enumerate(FORMS):
         for i in range(shape[1]):
             for j in range(shape[2]):
-                lim = limit_of(ds.a_um.values, ds.value.values[i, :, j], p_of[form], confidence)
+                stat = ds.stat_err.values[i, :, j] if "stat_err" in ds else None
+                lim = limit_of(ds.a_um.values, ds.value.values[i, :, j], p_of[form], confidence, stat)
                 for k in _LIMIT_FIELDS:
                     num[k][f, i, j] = getattr(lim, k) if lim.supported or k not in _FIT_FIELDS else np.nan
                 status[f, i, j], why[f, i, j] = lim.status.value, lim.why

@@ -6,6 +6,8 @@ Quantities are read generically from each file's root xarray table, so a new eng
   one short labelled dimension (e.g. ``phase``: ``minkowski.S_V[pore]``), and the known scalar attributes below.
   Sub-samples ``_k{i}`` of one edge (sweep.subsamples = 8 or 64) are replicas: ``value`` is their mean and
   ``rev_spread`` their standard deviation (the REV error bar of Zauner 2020 Fig. 7.8).
+- a variable ``X_err`` beside ``X`` in a per-resolution file is X's 1-σ statistical error (``stat_err``), not a
+  quantity of its own (the diffusion stage's W, D_eff, Ψ, τ carry one).
 Integer variables (counts, flags) and long curves are not quantities.
 """
 
@@ -161,18 +163,41 @@ def _volume_record(path) -> tuple[float, float, dict, int]:
     return a, sample, _cost(attrs), voxels
 
 
+def split_errors(quantities: dict[str, float]) -> tuple[dict[str, float], dict[str, float]]:
+    """Separate statistical error bars from values: ``g.X_err`` (``g.X_err[lab]``, ``g.X_err_m2_s``) is the 1-σ
+    error of ``g.X`` (``g.X[lab]``, ``g.X_m2_s``) when that exists (e.g. the diffusion stage's W_err, D_eff_err_m2_s).
+
+    Returns
+    -------
+    values : dict
+        The quantities without their error bars.
+    errors : dict
+        Quantity -> its statistical error.
+    """
+    values, errors = {}, {}
+    for name, value in quantities.items():
+        base = re.sub(r"_err(_m2_s)?(\[[^\]]*\])?$", r"\1\2", name)
+        if base != name and base in quantities:
+            errors[base] = value
+        else:
+            values[name] = value
+    return values, errors
+
+
 class _Table:
-    """Accumulates records (quantity, a, sample) -> value and cost, then builds the Dataset."""
+    """Accumulates records (quantity, a, sample) -> value, statistical error and cost, then builds the Dataset."""
 
     def __init__(self):
         self.values: dict[tuple, list[float]] = {}
+        self.errors: dict[tuple, list[float]] = {}
         self.cost: dict[tuple, dict] = {}
         self.source: dict[str, str] = {}
         self.units: dict[str, str] = {}
 
-    def add(self, quantity, a, sample, value, cost, source, units=""):
+    def add(self, quantity, a, sample, value, cost, source, units="", stat_err=float("nan")):
         """One value; sub-sample replicas of the same (quantity, a, sample) accumulate."""
         self.values.setdefault((quantity, a, sample), []).append(value)
+        self.errors.setdefault((quantity, a, sample), []).append(stat_err)
         self.cost.setdefault((quantity, a, sample), cost)
         self.source.setdefault(quantity, source)
         self.units.setdefault(quantity, units)
@@ -204,8 +229,11 @@ def _add_result(table: _Table, path: Path, bench: dict) -> None:
             raise PorepipeError(
                 f"{path}: resolution unknown (no _a{{a}} in the name and no voxel_um attribute)"
             )
-    for name, value in file_quantities(ds, group).items():
-        table.add(name, a, sample, value, cost, path.name, units.get(name, ""))
+    values, errors = split_errors(file_quantities(ds, group))
+    for name, value in values.items():
+        table.add(
+            name, a, sample, value, cost, path.name, units.get(name, ""), errors.get(name, float("nan"))
+        )
 
 
 def gather(result_paths, volume_paths=(), cost_dir=None) -> xr.Dataset:
@@ -250,11 +278,13 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
     shape = (len(quantities), len(a_um), len(samples))
     qi, ai, si = ({v: i for i, v in enumerate(vals)} for vals in (quantities, a_um, samples))
     cost_names = list(COST_KEYS) + list(BENCH_KEYS.values())
-    arrays = {name: np.full(shape, np.nan) for name in ["value", "rev_spread", *cost_names]}
+    arrays = {name: np.full(shape, np.nan) for name in ["value", "stat_err", "rev_spread", *cost_names]}
     count = np.zeros(shape, dtype=np.int64)
     for key, values in table.values.items():
         idx = (qi[key[0]], ai[key[1]], si[key[2]])
         arrays["value"][idx] = np.mean(values)
+        errs = np.asarray(table.errors[key], dtype=np.float64)
+        arrays["stat_err"][idx] = np.sqrt(np.sum(errs**2)) / errs.size  # error of the mean of replicas
         arrays["rev_spread"][idx] = np.std(values, ddof=1) if len(values) > 1 else np.nan
         count[idx] = len(values)
         for name in cost_names:
@@ -295,6 +325,9 @@ def _to_dataset(table: _Table, upstream: dict) -> xr.Dataset:
     )
     ds["rev_spread"].attrs.update(
         description="standard deviation of value over the sub-samples of one edge (REV error); NaN: one sample"
+    )
+    ds["stat_err"].attrs.update(
+        description="1-sigma statistical error of value from the run itself (e.g. batch means); NaN: none"
     )
     ds["rev_count"] = (
         dims,
