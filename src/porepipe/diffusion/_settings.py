@@ -121,6 +121,15 @@ class ReactionSettings(BaseModel):
     )
     particles: int = Field(20000, ge=2, description="reactant histories (each enters at the inlet face)")
     z_bins: int = Field(32, ge=0, description="axial bins of the reactive-hit map z_R(z) (0 = off)")
+    adsorption: float = Field(0.0, ge=0, le=1, description="probability that a wall hit adsorbs the particle")
+    residence_jiffies: float = Field(0.0, ge=0, description="mean residence time of an adsorbed particle")
+    residence_law: str = Field("fixed", pattern="^(fixed|exponential)$", description="fixed or exponential")
+    poisoning: float = Field(
+        0.0,
+        ge=0,
+        description="site activity decays by exp(-poisoning) per reaction at a voxel (between rounds)",
+    )
+    rounds: int = Field(1, ge=1, description="rounds of `particles` histories (poisoning acts between them)")
 
 
 class Settings(BaseModel):
