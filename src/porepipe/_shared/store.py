@@ -380,10 +380,10 @@ def check_binary_values(values: np.ndarray, path, name: str = BINARY_VOLUME) -> 
     Parameters
     ----------
     values : ndarray
-        Voxels read from the volume.
+        Voxels read from a binary volume (uint8; other types are left to the caller's dtype check).
     path : path-like
         The file they came from (for the message).
-    name : str
+    name : str, optional
         The volume's name (for the message).
 
     Returns
@@ -448,20 +448,18 @@ def _damaged(path, err: Exception, what: str = "HDF5 content") -> PorepipeError:
 def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
     """Open ``/volumes/<name>`` of a result file for chunked reading.
 
-    The binary volume (``name`` ``pore``) comes wrapped so that every read refuses values other than 0 and 1; damaged
-    HDF5 content read inside the block is one :class:`PorepipeError` naming the file.
-
     Parameters
     ----------
     path : path-like
         A result file.
     name : str
-        The volume (``grey``, ``pore`` …); its coordinate scales ``x_um`` … are not volumes.
+        The volume's name (its coordinate scales ``x_um`` … are not volumes). The binary volume (``pore``) comes
+        wrapped so that every read refuses values other than 0 and 1 (:func:`check_binary_values`).
 
     Yields
     ------
     h5py.Dataset
-        The open volume (read it in slabs).
+        The open volume; damaged HDF5 content read inside the block is one :class:`PorepipeError` naming the file.
     """
     path = _check_file(path)
     with open_h5(path) as f:

@@ -222,17 +222,26 @@ def _wall(settings: Settings) -> tuple:
     )
 
 
-def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> Tallies:
-    """Run rounds of ``settings.batches`` batches until ``enough(tallies)`` or a limit; checkpoint after each."""
+def _rel(err: float, value: float) -> float:
+    """Relative error err/|value| (0 when err is 0, inf when only the value is 0)."""
+    if err == 0:
+        return 0.0
+    return float(err / abs(value)) if value != 0 else float("inf")
+
+
+def _run_rounds(settings, key, checkpoint, label, run_round, rel_error, shapes) -> Tallies:
+    """Run rounds of ``settings.batches`` batches until ``rel_error(tallies)`` meets the target or a limit stops
+    them; checkpoint after each.
+    """
     checkpoint = Path(checkpoint) if checkpoint else None
     tallies = _load_checkpoint(checkpoint, key) if checkpoint else None
     if tallies is None:
         tallies = Tallies(
             np.zeros((0, K.N_TALLY)), *(np.zeros(s) for s in shapes[:3]), np.zeros((0, *shapes[3])), 0
         )
-    progress = Progress(label, 0)  # the stop is statistical, so no ETA
+    progress = Progress(label, 0, target=settings.target_rel_error, convergence="statistical")
     while tallies.rounds < settings.max_rounds:
-        if tallies.rounds >= 2 and enough(tallies):
+        if tallies.rounds >= 2 and rel_error(tallies) <= settings.target_rel_error:
             break
         if tallies.rows[:, K.T_HITS].sum() >= settings.max_wall_hits:
             break
@@ -241,11 +250,23 @@ def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> 
         tallies.round_cpu_s[tallies.rounds - 1] = time.process_time() - cpu0
         if checkpoint:
             _save_checkpoint(checkpoint, key, tallies)
+        rel = rel_error(tallies) if tallies.rounds >= 2 else None
         progress.update(
             tallies.rounds,
             f"{int(tallies.rows[:, K.T_PARTICLES].sum())} particles, "
-            f"{tallies.rows[:, K.T_HITS].sum():.3g} wall hits",
+            f"{tallies.rows[:, K.T_HITS].sum():.3g} wall hits"
+            + (
+                f", relative error {rel:.2g} (target {settings.target_rel_error:g})"
+                if rel is not None
+                else ""
+            ),
+            residual=rel,
         )
+    rel = rel_error(tallies) if tallies.rounds >= 2 else float("inf")
+    progress.close(
+        f"{tallies.rounds} rounds, {tallies.rows[:, K.T_HITS].sum():.3g} wall hits, relative error {rel:.2g} "
+        + ("(target met)" if rel <= settings.target_rel_error else "(stopped by a limit before the target)")
+    )
     return tallies
 
 
@@ -356,9 +377,9 @@ def transport(
         )
         tallies.add(rows, prof, hmap, orient, np.zeros(0))
 
-    def enough(tallies):
+    def rel_error(tallies):
         w, err = _estimate(tallies.rows, wk)
-        return err <= settings.target_rel_error * abs(w)
+        return _rel(err, w)
 
     tallies = _run_rounds(
         settings,
@@ -366,7 +387,7 @@ def transport(
         checkpoint,
         f"diffusion {'xyz'[axis]}",
         run_round,
-        enough,
+        rel_error,
         [
             (max(settings.profile_bins, 1),),
             (6, max(settings.hit_map_bins, 1), max(settings.hit_map_bins, 1)),
@@ -610,13 +631,12 @@ def equilibrium(
             rows, np.zeros((b, 1)), np.zeros((b, 6, 1, 1), np.int64), np.zeros((b, 1, 2), np.int64), msd_b
         )
 
-    def enough(tallies):
+    def rel_error(tallies):
         if msd:
             d, err = _msd_fit(tallies, t_samples)
-            dd = d[per]
-            return bool(np.all(err[per] <= settings.target_rel_error * np.abs(dd)))
+            return max((_rel(e, v) for e, v in zip(err[per], d[per])), default=0.0)
         f, err = _ratio(tallies.rows[:, K.T_PATH], tallies.rows[:, K.T_HITS])
-        return err <= settings.target_rel_error * f
+        return _rel(err, f)
 
     tallies = _run_rounds(
         settings,
@@ -624,7 +644,7 @@ def equilibrium(
         checkpoint,
         "diffusion equilibrium",
         run_round,
-        enough,
+        rel_error,
         [(1,), (6, 1, 1), (1, 2), (settings.msd_samples, 3)],
     )
     res = DiffusionResult(

@@ -71,7 +71,7 @@ class SpeedDist(str, enum.Enum):
 class GasSettings(BaseModel):
     """``diffusion.gas``: the event-driven hard-sphere gas of setup ``edmd`` (Mahler 2001 §3.3-3.6)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     particles: dict[str, int] = Field(
         default_factory=lambda: {"N2": 1000}, description="particles per species (Table 3.1 names)"
@@ -112,7 +112,7 @@ class ReactionSettings(BaseModel):
     when its probability is > 0.
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     w: float = Field(0.01, ge=0, le=1, description="probability that a wall hit turns A into P")
     w_reverse: float = Field(0.0, ge=0, le=1, description="probability that a wall hit turns P back into A")
