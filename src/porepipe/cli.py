@@ -153,12 +153,14 @@ def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
 
 
 def _check_outputs(args) -> None:
-    """Every subcommand's output names (``-o``, ``--xyzr``) are checked before it computes anything."""
-    from porepipe._shared.atomic import prepare_output
+    """Every subcommand's output names (``-o``, ``--xyzr``, ``--out-dir``) are checked before it computes anything."""
+    from porepipe._shared.atomic import prepare_output, prepare_output_dir
 
     for option in ("out", "xyzr"):
         if getattr(args, option, None):
             prepare_output(getattr(args, option))
+    if getattr(args, "out_dir", None):
+        prepare_output_dir(args.out_dir)
 
 
 def main(argv: list[str] | None = None) -> int:
