@@ -10,6 +10,7 @@ from pathlib import Path
 
 from porepipe import __version__
 from porepipe._registry import STAGES, stage_cli_modules, stage_settings
+from porepipe._shared.cost import mark_compute_start
 from porepipe._shared.errors import PorepipeError
 
 
@@ -172,6 +173,9 @@ def main(argv: list[str] | None = None) -> int:
         from porepipe._shared.progress import watch_compilation
 
         watch_compilation()  # "compiling kernels (first run only)" and its time apart
+    mark_compute_start(
+        args.func
+    )  # result files count their cost from here; start-up (interpreter, imports) apart
     try:
         _check_outputs(args)
         return int(args.func(args) or 0)

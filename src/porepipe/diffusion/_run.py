@@ -25,6 +25,7 @@ UNITS = {
     "D_err": "voxel^2/jiffie",
     "D_eff": "voxel^2/jiffie",
     "D_ref": "voxel^2/jiffie",
+    "D_eff_err": "voxel^2/jiffie",
     "mean_free_flight": "voxel",
     "four_v_over_s": "voxel",
     "length": "voxel",
@@ -42,9 +43,7 @@ UNITS = {
 def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
     data = {}
     for key, value in result.values.items():
-        attrs = (
-            {"units": "m^2/s"} if key.endswith("_m2_s") else ({"units": UNITS[key]} if key in UNITS else {})
-        )
+        attrs = {"units": "m^2/s"} if key.endswith("_m2_s") else {"units": UNITS.get(key, "1")}
         data[key] = xr.Variable((), float(value), attrs)
     arr = result.arrays
     if "profile" in arr:
@@ -54,15 +53,16 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
         data["concentration"] = xr.Variable(
             ("axial_bin",),
             arr["concentration"],
-            {"meaning": "time-averaged particles per voxel³ per simulated particle"},
+            {"units": "voxel^-3", "meaning": "time-averaged particles per voxel³ per simulated particle"},
         )
     if "hit_map" in arr:
         data["hit_map"] = xr.Variable(
             ("face", "map_a", "map_b"),
             arr["hit_map"],
             {
+                "units": "1",
                 "meaning": "wall hits per face (-x,+x,-y,+y,-z,+z: the direction of flight) "
-                "binned over the face's two tangent axes in increasing order"
+                "binned over the face's two tangent axes in increasing order",
             },
         )
     if "orientation" in arr:
@@ -70,8 +70,9 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
             ("cos_axis_bin", "azimuth_bin"),
             arr["orientation"],
             {
+                "units": "1",
                 "meaning": "flights by cos(angle to the transport axis) in [-1, 1] and "
-                "azimuth about it in [-pi, pi)"
+                "azimuth about it in [-pi, pi)",
             },
         )
     for key in sorted(arr.keys() - {"profile", "concentration", "hit_map", "orientation", "msd", "msd_time"}):

@@ -15,7 +15,7 @@ import numpy as np
 
 from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import VOLUME_GROUP, read_attrs, read_table
+from porepipe._shared.store import VOLUME_GROUP, dataset_attrs, read_attrs, read_table, volume_names
 
 #: water at 20 °C, Pa s: the default fluid of the exported LBM fields
 WATER_VISCOSITY_PA_S = 1.0e-3
@@ -232,7 +232,8 @@ def _volumes(path) -> dict[str, dict]:
     """Name -> attributes of every volume in a result file."""
     with h5py.File(path, "r") as f:
         group = f.get(VOLUME_GROUP)
-        return {} if group is None else {name: dict(group[name].attrs) for name in group}
+        # coordinate scales (x_um …) are not volumes; DIMENSION_LIST etc. are not metadata
+        return {} if group is None else {name: dataset_attrs(group[name]) for name in volume_names(group)}
 
 
 def _read_volume(path, name: str) -> np.ndarray:

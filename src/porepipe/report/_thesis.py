@@ -96,6 +96,9 @@ class Table:
     columns: list[str]
     rows: list[list]
     note: str = ""
+    #: True when the porepipe column holds numbers porepipe computed — this scene's results, or the LBM calibration
+    #: record's runs for Tables 6.2/6.3 — and not a re-derivation of the thesis's numbers
+    scene_values: bool = False
 
 
 def _diff(ours: float, theirs: float) -> list:
@@ -161,7 +164,9 @@ def _value(ds: xr.Dataset, quantity: str, a_um: float) -> float:
 
 def _scene_table(key: str, title: str, columns: list[str], rows: list[list], note: str) -> Table:
     found = any(np.isfinite(r[-3]) for r in rows if isinstance(r[-3], float))
-    return Table(key, title, columns, rows, note if found else note + " — this scene has no matching results")
+    return Table(
+        key, title, columns, rows, note if found else note + " — this scene has no matching results", found
+    )
 
 
 def table_5_1(ds: xr.Dataset, model: str | None) -> Table:
@@ -272,6 +277,7 @@ def table_6_2(record: dict | None = None) -> Table:
             "square ducts, Eq. 6.1.26; the thesis's e_v column is read in units of 1e-7, "
             "its header's 1e-6 being the same decade slip as its B column",
         ),
+        scene_values=bool(ours),
     )
 
 
@@ -306,7 +312,24 @@ def table_6_3(record: dict | None = None) -> Table:
         _run_note(
             record, "Eq. 6.1.41 box; eps against kappa_TH(7) of Eq. 6.1.37, signed (the thesis prints |eps|)"
         ),
+        scene_values=bool(ours),
     )
+
+
+def scene_tables(
+    ds: xr.Dataset, which, model: str | None, calibration: Path | dict | None = CALIBRATION_RECORD
+) -> tuple[list[Table], list[Table]]:
+    """The tables of ``which`` this scene produced numbers for, and the others (shown only as a list).
+
+    Tables 5.1 and 5.2 count only when the scene names the thesis model it reproduces (``report.thesis_model``);
+    a match of resolutions alone would compare a different packing with the thesis's. Tables 6.2 and 6.3 count when
+    the LBM calibration record ``calibration`` holds porepipe's runs of them.
+    """
+    shown, skipped = [], []
+    for t in thesis_tables(ds, which, model, calibration):
+        produced = t.scene_values and (model is not None or t.key not in ("5.1", "5.2"))
+        (shown if produced else skipped).append(t)
+    return shown, skipped
 
 
 def thesis_tables(
