@@ -3,8 +3,8 @@
 A pile of N random 8-10-gons (RAND1 shapes on ellipses, semi-axes 5 mm ± I) is laid out row by row with
 neighbours overlapping slightly (coordination ~ 3-4, as in the thesis's heaps; the measured value is printed)
 inside a box, under gravity, with friction and damping; it is stepped a little to build the contact state,
-then timed (best of 3). Reported
-for 1 and 2 threads, both neighbour searches, a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
+then timed (best of 3). Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
+list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
 distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
 optional effect compiled in (with neutral values), i.e. what the compile-time switches save.
 

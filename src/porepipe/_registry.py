@@ -24,6 +24,7 @@ STAGES: list[tuple[str, str | None]] = [
     ("porepipe.sweep", "sweep"),
     ("porepipe.report", "report"),
     ("porepipe.granular", "granular"),
+    ("porepipe.export", None),  # not a workflow stage: `porepipe export` only
 ]
 
 #: scene sections whose presence switches a stage on (default: absent); all others default to their Settings()

@@ -9,20 +9,19 @@ import sys
 from pathlib import Path
 
 from porepipe import __version__
-from porepipe._registry import stage_cli_modules
+from porepipe._registry import STAGES, stage_cli_modules, stage_settings
+from porepipe._shared.cost import mark_compute_start
 from porepipe._shared.errors import PorepipeError
-
-#: the repository root holding the Snakefile (src layout: <root>/src/porepipe/cli.py)
-REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
 def _validate(args) -> int:
+    from porepipe._shared.resources import scene_path
     from porepipe.scene import SceneError, load_scene
 
     failed = 0
     for path in args.scene:
         try:
-            scene = load_scene(path)
+            scene = load_scene(scene_path(path))
         except SceneError as err:
             failed += 1
             print(err, file=sys.stderr)
@@ -35,11 +34,9 @@ def snakemake_command(
     scene_path, cores: int, dry_run: bool = False, extra: list[str] | None = None
 ) -> list[str]:
     """The Snakemake invocation that runs one scene from the current directory."""
-    snakefile = REPO_ROOT / "Snakefile"
-    if not snakefile.is_file():
-        raise PorepipeError(
-            f"Snakefile not found at {snakefile}; install porepipe from its repository (pip install -e .)"
-        )
+    from porepipe._shared.resources import workflow_root
+
+    snakefile = workflow_root() / "Snakefile"
     cmd = [
         sys.executable,
         "-m",
@@ -62,11 +59,15 @@ def snakemake_command(
 
 
 def _run(args) -> int:
+    from porepipe._shared.resources import scene_path
     from porepipe.scene import load_scene
 
+    args.scene = str(scene_path(args.scene))
     scene = load_scene(args.scene)  # fail fast, with every problem listed
     extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
-    result = subprocess.run(snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False)
+    result = subprocess.run(
+        snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False, env=_job_environment()
+    )
     if result.returncode == 0 and not (args.dry_run or args.unlock):
         print(f"porepipe: results of scene {scene.name!r} are in {Path('results', scene.name).resolve()}")
     elif (
@@ -82,30 +83,65 @@ def _run(args) -> int:
     return result.returncode
 
 
+def _job_environment() -> dict:
+    """The environment of the Snakemake run: on a terminal, the jobs also write sparse progress lines to it."""
+    from porepipe._shared.progress import CONSOLE_ENV
+
+    env = dict(os.environ)
+    if sys.stderr.isatty() and not env.get("CI") and os.path.exists("/dev/tty"):
+        env[CONSOLE_ENV] = "/dev/tty"
+    return env
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``porepipe`` argument parser with every stage's subcommands."""
     parser = argparse.ArgumentParser(prog="porepipe", description=__doc__)
     parser.add_argument("--version", action="version", version=f"porepipe {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("validate", help="check scene files; list every problem")
-    p.add_argument("scene", nargs="+")
+    p.add_argument("scene", nargs="+", help="scene YAML files, or names of shipped scenes (mini, …)")
     p.set_defaults(func=_validate)
     p = sub.add_parser("run", help="run the whole workflow of a scene with Snakemake")
-    p.add_argument("scene")
-    p.add_argument("--cores", type=int, default=os.cpu_count() or 1)
-    p.add_argument("-n", "--dry-run", action="store_true", help="list the jobs only")
+    p.add_argument("scene", help="scene YAML file, or the name of a shipped scene (mini, granular-box, …)")
+    p.add_argument(
+        "--cores", type=int, default=os.cpu_count() or 1, help="cores Snakemake may use (default: all)"
+    )
+    p.add_argument(
+        "-n", "--dry-run", action=argparse.BooleanOptionalAction, default=False, help="list the jobs only"
+    )
     p.add_argument(
         "--unlock",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=False,
         help="release the lock a killed run left on this directory (Snakemake --unlock), run nothing",
     )
     p.epilog = (
         "Arguments after `--` go to Snakemake unchanged, e.g. `porepipe run S.yaml --cores 2 -- --forceall`."
     )
     p.set_defaults(func=_run, snakemake_args=[])
-    for module in stage_cli_modules():
+    settings = stage_settings()
+    for (_package, key), module in zip(STAGES, stage_cli_modules()):
+        before = set(sub.choices)
         module.register(sub)
+        for name in set(sub.choices) - before:
+            _help_from_settings(sub.choices[name], settings.get(key))
     return parser
+
+
+#: help of options many commands share, where a command gives none
+_COMMON_HELP = {"threads": "numba threads (default: every core numba sees; NUMBA_NUM_THREADS caps it)"}
+
+
+def _help_from_settings(parser: argparse.ArgumentParser, model) -> None:
+    """Give each option of a stage command that overrides a scene setting (of ``model``, a stage's Settings or None)
+    that setting's description as help, and shared options their common help.
+    """
+    for action in parser._actions:
+        if action.help is None and action.dest in _COMMON_HELP:
+            action.help = _COMMON_HELP[action.dest]
+        field = model.model_fields.get(action.dest) if model is not None else None
+        if action.help is None and field is not None and field.description:
+            action.help = f"{field.description} (default: the scene's, else {field.default!r})"
 
 
 def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
@@ -117,12 +153,14 @@ def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
 
 
 def _check_outputs(args) -> None:
-    """Every subcommand's output names (``-o``, ``--xyzr``) are checked before it computes anything."""
-    from porepipe._shared.atomic import prepare_output
+    """Every subcommand's output names (``-o``, ``--xyzr``, ``--out-dir``) are checked before it computes anything."""
+    from porepipe._shared.atomic import prepare_output, prepare_output_dir
 
     for option in ("out", "xyzr"):
         if getattr(args, option, None):
             prepare_output(getattr(args, option))
+    if getattr(args, "out_dir", None):
+        prepare_output_dir(args.out_dir)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -131,6 +169,13 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(own)
     if args.command == "run":
         args.snakemake_args = passthrough
+    if args.command not in ("run", "validate"):
+        from porepipe._shared.progress import watch_compilation
+
+        watch_compilation()  # "compiling kernels (first run only)" and its time apart
+    mark_compute_start(
+        args.func
+    )  # result files count their cost from here; start-up (interpreter, imports) apart
     try:
         _check_outputs(args)
         return int(args.func(args) or 0)

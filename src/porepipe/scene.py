@@ -7,10 +7,12 @@ naming the key, the bad value and what is allowed. Lengths are in micrometres th
 from __future__ import annotations
 
 import copy
+import difflib
 import enum
 import math
 import os
 import reprlib
+import typing
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -142,6 +144,13 @@ class SceneBase(_Strict):
             return self  # a 2-D granular scene has no box, spheres or voxels
         if not self.resolutions_um:
             raise ValueError("missing resolutions_um: give at least one voxel size in µm")
+        if getattr(getattr(self, "diffusion", None), "geometry", None) is not None:
+            other = sorted(a.value for a in set(self.analyses) - {Analysis.diffusion, Analysis.report})
+            if other:  # a synthetic capillary (diffusion.geometry) has a binary volume only, no grey one
+                raise ValueError(
+                    f"diffusion.geometry: a synthetic capillary scene runs diffusion only, not {other}"
+                )
+            return self
         if getattr(self, "acquire", None) is None:
             missing = [k for k in ("domain", "spheres") if getattr(self, k) is None]
             if missing:
@@ -211,13 +220,38 @@ def _short(value) -> str:
     return _SHORT.repr(value)
 
 
+def _model_in(annotation) -> type[BaseModel] | None:
+    """The pydantic model inside an annotation (``X``, ``X | None``, ``list[X]``, ``tuple[X, ...]``), if any."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _did_you_mean(loc: tuple) -> str:
+    """``"; did you mean 'x'?"`` for an unknown key at ``loc`` close to a key the section allows, else ``""``."""
+    model: type[BaseModel] | None = Scene
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue  # an item of a list: the same model
+        field = model.model_fields.get(part) if model is not None else None
+        model = _model_in(field.annotation) if field is not None else None
+    if model is None or not isinstance(loc[-1], str):
+        return ""
+    close = difflib.get_close_matches(loc[-1], list(model.model_fields), n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
 def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
     problems = []
     for e in err.errors():
         loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p.startswith("function-")))
         msg = e["msg"].removeprefix("Value error, ")
         if e["type"] == "extra_forbidden":
-            msg = "unknown key (misspelt?)"
+            msg = "unknown key (misspelt?)" + _did_you_mean(loc)
         elif e["type"] == "finite_number":
             msg = "NaN or inf; every setting must be a finite number"
         problems.append(f"{_loc(loc)} = {_short(_get(raw, loc))}: {msg[:300]}")

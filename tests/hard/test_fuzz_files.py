@@ -68,6 +68,16 @@ def test_damaged_results_give_one_line_errors(kind, label, argv, name, tmp_path)
     assert not findings, f"{label}:\n" + "\n".join(findings)
 
 
+@pytest.mark.parametrize(
+    ("kind", "label", "argv", "name"), CONSUMERS, ids=[f"{c[0]}->{c[1]}" for c in CONSUMERS]
+)
+def test_intact_results_are_accepted(kind, label, argv, name, tmp_path):
+    """The control: each consumer reads the intact file (else every refusal above would prove nothing)."""
+    intact = place(Mutation("intact", (DATA / RESULTS[kind]).read_bytes()), tmp_path / "in" / name)
+    outcome = run_cli(argv(str(intact), str(tmp_path / "out" / "result.h5")))
+    assert outcome.exception is None and outcome.code == 0, (outcome.exception, outcome.stderr[-500:])
+
+
 def _image_inputs(tmp_path: Path) -> dict[str, tuple[Path, list[str]]]:
     """Intact TIFF, RAW, HDF5 and npy images (the tiny grey volume) and the acquire options each needs."""
     import tifffile

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-
 from porepipe._shared.store import ResultWriter
 from porepipe.cli import main
 

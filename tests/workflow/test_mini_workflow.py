@@ -5,9 +5,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+import pint
 import xarray as xr
 import yaml
 
+from porepipe import open_result
 from porepipe._shared.store import read_attrs, read_volume
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -77,3 +80,48 @@ def test_mini_scene_runs_end_to_end(tmp_path):
     assert "<img" in report and "<table" in report
     leftovers = [p for p in res.rglob("*") if p.name.startswith(".")]
     assert not leftovers, leftovers
+    _check_self_described(res)
+
+
+def _units_of(var) -> str | None:
+    if var.attrs.get("units_from") == "unit":  # sweep: per-quantity units in the coordinate `unit`
+        return "1"
+    return var.attrs.get("units")
+
+
+def _check_self_described(res: Path) -> None:
+    """Every result of the run opens as one Dataset whose every numeric variable has units pint reads."""
+    ureg = pint.UnitRegistry()
+    files = [p for p in res.rglob("*.h5") if p.name != "checkpoint.h5"]
+    kinds = {p.parent.name for p in files}
+    assert kinds >= {
+        "pack",
+        "voxelize",
+        "segment",
+        "estimate",
+        "minkowski",
+        "lpt",
+        "permeability",
+        "sweep",
+    }, kinds
+    for path in files:
+        with open_result(path) as ds:
+            for name, var in ds.variables.items():
+                if var.dtype.kind in "OUS":
+                    continue
+                units = _units_of(var)
+                assert units is not None, f"{path.name}: variable {name} has no units"
+                ureg.Unit(units)  # one spelling, and one pint reads
+            if "x_um" in ds.dims:
+                a = (
+                    float(read_attrs(path).get("voxel_um", np.nan))
+                    if "voxel_um" in read_attrs(path)
+                    else None
+                )
+                step = np.diff(ds.x_um.values)
+                assert np.allclose(step, step[0]) and (a is None or np.isclose(step[0], a))
+    with open_result(res / "pack" / "packing.h5") as pack:
+        assert pack.centres_um.dims == ("sphere", "xyz") and pack.radii_um.attrs["units"] == "µm"
+    with open_result(res / "sweep" / "sweep.h5") as sweep:
+        for units in sweep.unit.values:
+            ureg.Unit(str(units))

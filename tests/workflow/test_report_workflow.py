@@ -6,7 +6,6 @@ directory; the tests read its output.
 
 import csv
 import re
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -16,7 +15,7 @@ import pytest
 import xarray as xr
 import yaml
 
-CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").is_file() else None)
+ROOT = Path(__file__).resolve().parents[2]
 #: CPU-second budget of the report rule on the mini scene (the issue asks for < 15 s; wall time on the shared CI
 #: machine varies with load, the job's CPU time does not)
 REPORT_CPU_S = 15.0
@@ -87,7 +86,11 @@ def test_report_has_the_required_parts(run):
     page = (res / "report" / "index.html").read_text()
     for png in ("quantities.png", "error_cost.png", "sections.png"):
         assert f"src='{png}'" in page and (res / "report" / png).stat().st_size > 1000
-    assert "<table>" in page and "Table 6.4" in page
+    assert (
+        "<table>" in page
+        and "What accuracy costs" in page
+        and "not shown, this scene produced no numbers" in page
+    )
     assert re.search(r"<td>\S+ ± \S+ \(p = ", page)  # at least one supported limit printed with its error
     assert "porepipe version" in page and "threads of the runs" in page and "host" in page
     links = re.findall(r"(?:src|href)='([^']+)'", page)
@@ -101,29 +104,35 @@ def test_report_rule_is_fast(run):
     assert float(row["cpu_time"]) < REPORT_CPU_S, row
 
 
-@pytest.mark.skipif(
-    CHROMIUM is None,
-    reason="headless Chromium is not installed here (Debian package `chromium`); "
-    "CI does not install it, so the browser check runs only where it is present",
-)
-def test_report_opens_in_headless_chromium(run, tmp_path):
+def test_snakemake_report_holds_the_marked_figures(run):
     res, _ = run
-    page = res / "report" / "index.html"
-    cmd = [
-        CHROMIUM,
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        f"--user-data-dir={tmp_path}",
-        "--enable-logging=stderr",
-        "--v=0",
-        "--dump-dom",
-        page.as_uri(),
-    ]
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert "Error against cost" in out.stdout and "<img" in out.stdout
-    assert "Uncaught" not in out.stderr and "ERR_FILE_NOT_FOUND" not in out.stderr
+    cwd = res.parent.parent
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "--snakefile",
+            str(ROOT / "Snakefile"),
+            "--directory",
+            str(cwd),
+            "--cores",
+            "1",
+            "--config",
+            f"scene={cwd / 'small.yaml'}",
+            "--report",
+            str(cwd / "snakemake_report.html"),
+        ],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    log = out.stdout + out.stderr
+    for name in ("index.html", "error_cost.png", "quantities.png", "limits.csv"):
+        assert f"Adding {name}" in log, log[-2000:]
+    assert (cwd / "snakemake_report.html").stat().st_size > 100_000
 
 
 def test_subsample_rule_cuts_the_corner(run):

@@ -102,8 +102,16 @@ rule acquire_compare:
         model="results/{scene}/acquire_model/model_statistics.h5",
     output:
         table="results/{scene}/acquire_compare/comparison.h5",
-        png="results/{scene}/acquire_compare/comparison.png",
-        md="results/{scene}/acquire_compare/comparison.md",
+        png=report(
+            "results/{scene}/acquire_compare/comparison.png",
+            caption="../report/comparison.rst",
+            category="Model against experiment",
+        ),
+        md=report(
+            "results/{scene}/acquire_compare/comparison.md",
+            caption="../report/comparison.rst",
+            category="Model against experiment",
+        ),
     log:
         "results/{scene}/logs/acquire_compare.log",
     benchmark:

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from porepipe._shared.naming import TAG_RE, res_tag
+from porepipe.diffusion import check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH
@@ -91,6 +92,8 @@ def grey_volume(wildcards):
 
 def binary_stage(scene):
     """Folder (= the writing rule) of the scene's whole binary volumes; the image's own, or the segmented model."""
+    if getattr(scene.diffusion, "geometry", None) is not None:
+        return "capillary"  # a synthetic capillary of diffusion.geometry (rule capillary)
     return "acquire_binary" if is_acquire_scene(scene) else "segment"
 
 
@@ -203,7 +206,7 @@ def sweep_results(wildcards):
 def sweep_volumes(wildcards):
     """Grey and binary volumes behind the results (their cost is the upstream cost of every run)."""
     scene = scene_of(wildcards)
-    out = [] if is_acquire_scene(scene) else grey_volumes(scene)
+    out = [] if is_acquire_scene(scene) or binary_stage(scene) == "capillary" else grey_volumes(scene)
     measured = {a.value for a in scene.analyses} - SWEEP_SKIP - {"estimate"}
     if measured or any(a.value == "segment" for a in scene.analyses):
         out += binary_volumes(scene)
@@ -219,7 +222,7 @@ def report_inputs(wildcards):
     inputs = {
         "sweep": results(scene, "sweep", "sweep.h5"),
         "scene": scene_file(wildcards),
-        "grey": grey_volumes(scene) if scene.report.slices else [],
+        "grey": grey_volumes(scene) if scene.report.slices and binary_stage(scene) != "capillary" else [],
         "binary": [],
         "lpt": per_resolution(scene, "lpt/lpt_a{a}.h5") if "lpt" in names else [],
     }
@@ -255,6 +258,8 @@ def diffusion_resolutions(scene):
             f"scene {scene.name!r}: diffusion.resolutions_um = {unknown} are not among resolutions_um = "
             f"{scene.resolutions_um}"
         )
+    if scene.diffusion.geometry is not None:  # every size a whole number of voxels at each resolution
+        check_capillary_resolutions(scene.diffusion.geometry, chosen)
     return chosen
 
 

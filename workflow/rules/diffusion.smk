@@ -1,4 +1,5 @@
 # Knudsen diffusion in the voxel pore space (Mahler 2001, ch. 2-3): one job per resolution and transport axis.
+# A scene with diffusion.geometry gets its binary volumes from rule capillary (a synthetic capillary per resolution).
 
 
 rule diffusion:
@@ -17,12 +18,26 @@ rule diffusion:
         "../envs/porepipe.yaml"
     threads: workflow.cores
     resources:
-        # the 1-byte distance geometry plus scipy's cluster labels while it is prepared (int32 per voxel)
-        mem_mb=mem_mb(bytes_per_voxel=16, base_mb=1000),
+        # the 1-byte input and the 1-byte distance geometry (in-place flood fill: 1.01 B/voxel beyond the input,
+        # measured at 320^3 by benchmarks/diffusion_memory.py), plus slack
+        mem_mb=mem_mb(bytes_per_voxel=3, base_mb=1000),
         runtime=240,
     shell:
         "porepipe diffusion {input.binary:q} --scene {input.scene:q} --axis {wildcards.axis} -o {output:q}"
         " --threads {threads} > {log:q} 2>&1"
+
+
+rule capillary:
+    input:
+        scene=scene_file,
+    output:
+        "results/{scene}/capillary/binary_a{a}.h5",
+    log:
+        "results/{scene}/logs/capillary_a{a}.log",
+    conda:
+        "../envs/porepipe.yaml"
+    shell:
+        "porepipe diffusion-capillary --scene {input.scene:q} --a {wildcards.a} -o {output:q} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["diffusion"] = lambda scene: [

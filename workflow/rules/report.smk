@@ -5,7 +5,26 @@ rule report:
     input:
         unpack(report_inputs),
     output:
-        "results/{scene}/report/index.html",
+        page=report(
+            "results/{scene}/report/index.html",
+            caption="../report/page.rst",
+            category="Report",
+        ),
+        error_cost=report(
+            "results/{scene}/report/error_cost.png",
+            caption="../report/error_cost.rst",
+            category="Accuracy against cost",
+        ),
+        quantities=report(
+            "results/{scene}/report/quantities.png",
+            caption="../report/quantities.rst",
+            category="Accuracy against cost",
+        ),
+        limits=report(
+            "results/{scene}/report/limits.csv",
+            caption="../report/limits.rst",
+            category="Accuracy against cost",
+        ),
     log:
         "results/{scene}/logs/report.log",
     benchmark:
@@ -18,7 +37,7 @@ rule report:
         runtime=10,
     shell:
         "porepipe report {input.scene:q} --sweep {input.sweep:q} --grey {input.grey:q} --binary {input.binary:q}"
-        " --lpt {input.lpt:q} -o {output:q} > {log:q} 2>&1"
+        " --lpt {input.lpt:q} -o {output.page:q} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["report"] = lambda scene: [results(scene, "report", "index.html")]

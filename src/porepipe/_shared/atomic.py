@@ -90,6 +90,35 @@ def prepare_output(path) -> Path:
     return path
 
 
+def prepare_output_dir(directory) -> Path:
+    """Check an output folder before any work is done: create it, refuse a file in the way or an unwritable folder.
+
+    Parameters
+    ----------
+    directory : path-like
+        The folder results will be written into (e.g. ``permeability --out-dir``).
+
+    Returns
+    -------
+    Path
+        The folder, which exists afterwards.
+    """
+    directory = Path(directory)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise PorepipeError(
+            f"output folder {directory}: a file is in the way ({_first_file(directory)})"
+        ) from None
+    except OSError as err:
+        raise PorepipeError(f"output folder {directory}: cannot create it: {err.strerror}") from None
+    if not directory.is_dir():
+        raise PorepipeError(f"output folder {directory} is a file, not a directory")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise PorepipeError(f"output folder {directory} is not writable")
+    return directory
+
+
 def _first_file(directory: Path) -> Path:
     """The first ancestor of ``directory`` (itself included) that exists but is not a directory."""
     for parent in [directory, *directory.parents]:

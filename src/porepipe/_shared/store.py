@@ -2,12 +2,19 @@
 
 Layout of a result file
 -----------------------
-- root attributes: ``stage``, ``scene``, ``scene_hash``, ``porepipe_version``, ``created``, ``wall_s``, ``cpu_s``,
+- root attributes: ``stage``, ``scene``, ``scene_hash``, ``porepipe_version``, ``created``, ``wall_s``, ``cpu_s``
+  (the computation: from the end of the command's start-up, :func:`porepipe._shared.cost.mark_compute_start`, or from the opening of the
+  writer when used from Python), ``startup_s`` (interpreter start-up and imports before it; NaN from Python),
   ``peak_mb``, ``threads`` and whatever the stage adds;
 - root group: at most one xarray Dataset of tables and curves (netCDF4 layout, so
   ``xarray.open_dataset(path, engine="h5netcdf")`` reads it); further Datasets go into named groups;
-- ``/volumes/<name>``: chunked, compressed 3-D arrays with ``voxel_um``, ``origin_um`` and ``periodic`` attributes;
-- ``/arrays/<name>``: other plain arrays.
+- ``/volumes/<name>``: chunked, compressed 3-D arrays with ``voxel_um``, ``origin_um`` and ``periodic`` attributes,
+  whose axes are HDF5 dimension scales ``x_um``, ``y_um``, ``z_um`` (voxel centres in µm), so
+  ``xarray.open_dataset(path, engine="h5netcdf", group="volumes")`` gives named dimensions with coordinates;
+- ``/arrays/<name>``: other plain arrays (named dimensions where the writer gives them).
+
+Every variable carries ``units`` in the one spelling of :mod:`porepipe._shared.units`; :func:`open_result` returns
+the whole file as one :class:`xarray.Dataset`.
 
 The file is written under a hidden temporary name in the target directory and renamed only when complete
 (:mod:`porepipe._shared.atomic`: fsync, then rename), so a killed job never leaves a file that Snakemake or
@@ -31,12 +38,16 @@ import h5py
 import numpy as np
 import xarray as xr
 
-from porepipe import __version__
+from porepipe._shared import cost as _cost
 from porepipe._shared.atomic import commit, prepare_output, temporary_path
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.units import DIMENSIONLESS, MICROMETRE, annotate, canonical, centres_um, units_of
+from porepipe._version import __version__
 
 VOLUME_GROUP = "volumes"
 ARRAY_GROUP = "arrays"
+#: names of the coordinate (dimension-scale) datasets of a volume's axes
+AXIS_NAMES = ("x_um", "y_um", "z_um")
 #: Edge of a volume chunk in voxels (64^3 bytes = 256 KiB for uint8).
 CHUNK_EDGE = 64
 
@@ -141,6 +152,9 @@ class ResultWriter:
         prepare_output(self.path)
         self._t0 = time.perf_counter()
         self._c0 = time.process_time()
+        self._startup = float("nan")
+        if _cost.COMPUTE_MARK:  # under the porepipe command: the computation began when its start-up ended
+            self._t0, self._c0, self._startup = _cost.COMPUTE_MARK[0]
         self._h5 = h5py.File(self.tmp_path, "w")
         return self
 
@@ -163,9 +177,15 @@ class ResultWriter:
             ds.to_netcdf(self.tmp_path, engine="h5netcdf", mode="a", group=group)
         with h5py.File(self.tmp_path, "a") as f:
             self.attrs["created"] = _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds")
-            self.attrs["wall_s"] = time.perf_counter() - self._t0
-            self.attrs["cpu_s"] = time.process_time() - self._c0
+            t1, c1 = time.perf_counter(), time.process_time()
+            self.attrs["wall_s"] = t1 - self._t0
+            self.attrs["cpu_s"] = c1 - self._c0
+            self.attrs["startup_s"] = self._startup
             self.attrs["peak_mb"] = _peak_mb()
+            if (
+                _cost.COMPUTE_MARK
+            ):  # a second result of the same process counts from here; its start-up is paid
+                _cost.COMPUTE_MARK[:] = [(t1, c1, 0.0)]
             for key, value in self.attrs.items():
                 f.attrs[key] = value
         commit(self.tmp_path, self.path)
@@ -202,8 +222,13 @@ class ResultWriter:
             compression_opts=1,
             shuffle=True,
         )
-        for key, value in {**_volume_attrs(voxel_um, origin_um, periodic), **(attrs or {})}.items():
+        geometry = _volume_attrs(voxel_um, origin_um, periodic)
+        units, lattice = canonical((attrs or {}).get("units", DIMENSIONLESS))
+        for key, value in {**geometry, **(attrs or {}), "units": units}.items():
             dset.attrs[key] = value
+        if lattice is not None:
+            dset.attrs["lattice_units"] = lattice
+        _attach_axes(self.h5[VOLUME_GROUP], dset, voxel_um, geometry["origin_um"])
         return dset
 
     def write_volume(self, name: str, data: np.ndarray, **kwargs) -> h5py.Dataset:
@@ -212,18 +237,92 @@ class ResultWriter:
         dset[...] = data
         return dset
 
-    def write_array(self, name: str, data: np.ndarray, attrs: dict | None = None) -> h5py.Dataset:
-        """Write a plain array under ``/arrays``."""
-        dset = self.h5.require_group(ARRAY_GROUP).create_dataset(name, data=np.asarray(data))
-        for key, value in (attrs or {}).items():
+    def write_array(
+        self, name: str, data: np.ndarray, attrs: dict | None = None, dims: Sequence[str] = ()
+    ) -> h5py.Dataset:
+        """Write a plain array under ``/arrays``; ``dims`` names its axes (index coordinates), units from the name."""
+        group = self.h5.require_group(ARRAY_GROUP)
+        dset = group.create_dataset(name, data=np.asarray(data))
+        units, lattice = units_of(name, dset.dtype, (attrs or {}).get("units"))
+        for key, value in {**(attrs or {}), **({"units": units} if units else {})}.items():
             dset.attrs[key] = value
+        if lattice is not None:
+            dset.attrs["lattice_units"] = lattice
+        if dims:
+            label_dims(group, {name: dims})
         return dset
 
     def write_table(self, ds: xr.Dataset, group: str | None = None) -> None:
-        """Queue an xarray Dataset for the root group (``group=None``) or a named group; written on completion."""
+        """Queue an xarray Dataset for the root group (``group=None``) or a named group; written on completion.
+
+        Its variables get ``units`` in porepipe's spelling on the way (:func:`porepipe._shared.units.annotate`).
+        """
         if any(g == group for _, g in self._tables):
             raise RuntimeError(f"a table for group {group!r} was already written; merge the Datasets first")
-        self._tables.append((ds, group))
+        self._tables.append((annotate(ds), group))
+
+
+# -- named dimensions for plain HDF5 datasets ---------------------------------------------------------------------------
+def _is_scale(dset) -> bool:
+    return isinstance(dset, h5py.Dataset) and dset.is_scale
+
+
+def _scale(group: h5py.Group, name: str, values: np.ndarray, units: str | None) -> h5py.Dataset:
+    """The dimension-scale dataset ``name`` of ``group`` holding ``values``; created if missing."""
+    if name in group:
+        return group[name]
+    dset = group.create_dataset(name, data=values)
+    if units:
+        dset.attrs["units"] = units
+    dset.make_scale(name)
+    return dset
+
+
+def _attach_axes(group: h5py.Group, dset: h5py.Dataset, voxel_um, origin_um) -> None:
+    """Attach coordinate scales x_um, y_um, z_um (voxel centres, µm) to a volume's three axes.
+
+    Volumes of one file with the same grid share the scales; a volume on another grid gets its own
+    (``x_um_<name>`` …), since one dimension name has one length.
+    """
+    voxel = np.broadcast_to(np.asarray(voxel_um, dtype=np.float64).ravel(), (3,))
+    for axis, base in enumerate(AXIS_NAMES):
+        coords = centres_um(dset.shape[axis], origin_um[axis], voxel[axis])
+        name = base
+        if name in group and not (
+            group[name].shape == coords.shape and np.allclose(group[name][...], coords, rtol=1e-12, atol=0)
+        ):
+            name = f"{base}_{dset.name.rsplit('/', 1)[-1]}"
+        dset.dims[axis].attach_scale(_scale(group, name, coords, MICROMETRE))
+
+
+def label_dims(group: h5py.Group, dims_of: dict[str, Sequence[str]], coords: dict | None = None) -> None:
+    """Name the axes of plain datasets of ``group`` by HDF5 dimension scales, so xarray reads them with named dims.
+
+    Parameters
+    ----------
+    group : h5py.Group
+        Where the datasets and their scales live.
+    dims_of : dict of dataset name -> sequence of str
+        The dimension name of each axis of each dataset (e.g. ``{"centres_um": ("sphere", "xyz")}``).
+    coords : dict of dimension name -> array_like, optional
+        Coordinate values of a dimension (e.g. ``{"xyz": ["x", "y", "z"]}``); others get 0, 1, 2 …
+    """
+    coords = coords or {}
+    for name, dims in dims_of.items():
+        dset = group[name]
+        if len(dims) != dset.ndim:
+            raise PorepipeError(
+                f"dataset {name!r} has {dset.ndim} axes but {len(dims)} dimension names {dims}"
+            )
+        for axis, dim in enumerate(dims):
+            values = coords.get(dim)
+            if values is None:
+                values = np.arange(dset.shape[axis], dtype=np.int64)
+            values = np.asarray(values)
+            if values.dtype.kind == "U":
+                values = values.astype(h5py.string_dtype())
+            units = DIMENSIONLESS if values.dtype.kind in "iuf" else None
+            dset.dims[axis].attach_scale(_scale(group, dim, values, units))
 
 
 # -- readers -----------------------------------------------------------------------------------------------------------
@@ -232,6 +331,17 @@ def _check_file(path) -> Path:
     if not path.is_file():
         raise PorepipeError(f"result file {path} does not exist")
     return path
+
+
+#: attributes HDF5 dimension scales and netCDF keep for themselves (not metadata of the data)
+_INTERNAL_ATTRS = frozenset(
+    {"DIMENSION_LIST", "REFERENCE_LIST", "CLASS", "NAME", "_Netcdf4Dimid", "_Netcdf4Coordinates"}
+)
+
+
+def dataset_attrs(dset) -> dict:
+    """The attributes of an h5py dataset, decoded, without the dimension-scale bookkeeping."""
+    return {k: _decode(v) for k, v in dset.attrs.items() if k not in _INTERNAL_ATTRS}
 
 
 def _decode(value):
@@ -266,6 +376,20 @@ def check_binary_values(values: np.ndarray, path, name: str = BINARY_VOLUME) -> 
 
     One rule for every stage: a "binary" volume with other values (a label image, a grey volume under the wrong
     name) is refused, never read as "anything non-zero is pore" by one stage and refused by another.
+
+    Parameters
+    ----------
+    values : ndarray
+        Voxels read from a binary volume (uint8; other types are left to the caller's dtype check).
+    path : path-like
+        The file they came from (for the message).
+    name : str, optional
+        The volume's name (for the message).
+
+    Returns
+    -------
+    ndarray
+        ``values`` unchanged.
     """
     values = np.asarray(values)
     if values.size and values.dtype == np.uint8 and int(values.max()) > 1:
@@ -324,15 +448,25 @@ def _damaged(path, err: Exception, what: str = "HDF5 content") -> PorepipeError:
 def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
     """Open ``/volumes/<name>`` of a result file for chunked reading.
 
-    The binary volume (``name`` ``pore``) comes wrapped so that every read refuses values other than 0 and 1; damaged
-    HDF5 content read inside the block is one :class:`PorepipeError` naming the file.
+    Parameters
+    ----------
+    path : path-like
+        A result file.
+    name : str
+        The volume's name (its coordinate scales ``x_um`` … are not volumes). The binary volume (``pore``) comes
+        wrapped so that every read refuses values other than 0 and 1 (:func:`check_binary_values`).
+
+    Yields
+    ------
+    h5py.Dataset
+        The open volume; damaged HDF5 content read inside the block is one :class:`PorepipeError` naming the file.
     """
     path = _check_file(path)
     with open_h5(path) as f:
         try:
             group = f.get(VOLUME_GROUP)
-            if not isinstance(group, h5py.Group) or name not in group:
-                have = sorted(group.keys()) if isinstance(group, h5py.Group) else []
+            if not isinstance(group, h5py.Group) or name not in group or _is_scale(group[name]):
+                have = volume_names(group) if isinstance(group, h5py.Group) else []
                 raise PorepipeError(f"{path} has no volume {name!r} (volumes present: {have or 'none'})")
             dset = group[name]
             if not isinstance(dset, h5py.Dataset):
@@ -345,10 +479,15 @@ def open_volume(path, name: str) -> Iterator[h5py.Dataset]:
             raise _damaged(path, err) from None
 
 
+def volume_names(group: h5py.Group) -> list[str]:
+    """Names of the volumes in an open ``/volumes`` group (its coordinate scales left out), sorted."""
+    return sorted(k for k, v in group.items() if isinstance(v, h5py.Dataset) and not v.is_scale)
+
+
 def read_volume(path, name: str) -> tuple[np.ndarray, dict]:
     """Read a whole volume and its attributes (``voxel_um``, ``origin_um``, ``periodic`` …)."""
     with open_volume(path, name) as dset:
-        return dset[...], {k: _decode(v) for k, v in dset.attrs.items()}
+        return dset[...], dataset_attrs(dset)
 
 
 def read_array(path, name: str) -> np.ndarray:
@@ -364,11 +503,47 @@ def read_array(path, name: str) -> np.ndarray:
             raise _damaged(path, err) from None
 
 
+def open_result(path) -> xr.Dataset:
+    """The whole result file as one lazily loaded :class:`xarray.Dataset`, whatever stage wrote it.
+
+    Parameters
+    ----------
+    path : path-like
+        Any porepipe result (``packing.h5``, ``grey_a2.h5``, ``binary_a2.h5``, ``minkowski_a1.h5``, ``sweep.h5`` …).
+
+    Returns
+    -------
+    xarray.Dataset
+        The root table, the volumes (dims ``x_um``, ``y_um``, ``z_um`` with voxel-centre coordinates in µm) and the
+        named arrays, merged; the file's provenance and cost (stage, scene, wall_s, cpu_s …) as ``attrs``. Further
+        tables of named groups (``history``, ``lpt`` …) stay where they are: ``read_table(path, group)``.
+        Volumes are read only when their values are used.
+
+    Raises
+    ------
+    PorepipeError
+        The file is missing or not a porepipe result.
+    """
+    attrs = read_attrs(path)
+    with open_h5(path) as f:
+        groups = [None] + [g for g in (VOLUME_GROUP, ARRAY_GROUP) if g in f]
+    parts = [
+        xr.open_dataset(path, engine="h5netcdf", group=g, phony_dims="sort", decode_timedelta=False)
+        for g in groups
+    ]
+    ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="drop_conflicts")
+    ds.attrs = {**ds.attrs, **attrs}
+    ds.set_close(lambda: [part.close() for part in parts])  # `with open_result(p) as ds` closes the file
+    return ds
+
+
 def read_table(path, group: str | None = None) -> xr.Dataset:
     """Load the xarray Dataset of the root group (or of ``group``) into memory."""
     path = _check_file(path)
     try:
-        with xr.open_dataset(path, engine="h5netcdf", group=group, phony_dims="sort") as ds:
+        with xr.open_dataset(
+            path, engine="h5netcdf", group=group, phony_dims="sort", decode_timedelta=False
+        ) as ds:
             return ds.load()
     except (OSError, RuntimeError, KeyError, TypeError, ValueError) as err:
         raise _damaged(path, err, f"table{f' {group!r}' if group else ''}") from None
@@ -411,7 +586,7 @@ def volume_meta(dset: h5py.Dataset, path, anisotropic: bool = False) -> VolumeMe
     -------
     VolumeMeta
     """
-    attrs = {k: _decode(v) for k, v in dset.attrs.items()}
+    attrs = dataset_attrs(dset)
     missing = [k for k in VOLUME_META_KEYS if k not in attrs]
     if missing:
         raise PorepipeError(

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from porepipe._shared.overrides import merge_settings
@@ -42,7 +43,7 @@ def settings_from_args(args, scene=None):
         for k in ("method", "phases", "pore_phases", "thresholds")
         if getattr(args, k) is not None
     }
-    if args.no_grains:
+    if not args.grains:
         over["statistics"] = {"grains": False}
     return merge_settings(Settings, base, over, "acquire settings")
 
@@ -116,17 +117,38 @@ def register(subparsers) -> None:
     p.add_argument("--format", choices=["auto", "tiff", "raw", "hdf5", "npy"], default=None)
     p.add_argument("--dataset", default=None, help="dataset inside an HDF5 file")
     p.add_argument("--raw-dtype", default="uint8", help="RAW element type (uint8, uint16, float32, ...)")
-    p.add_argument("--raw-shape", type=int, nargs=3, default=None, metavar=("NX", "NY", "NZ"))
-    p.add_argument("--raw-byte-order", choices=["little", "big"], default="little")
+    p.add_argument(
+        "--raw-shape",
+        type=int,
+        nargs=3,
+        default=None,
+        metavar=("NX", "NY", "NZ"),
+        help="RAW image: voxels along x, y, z",
+    )
+    p.add_argument(
+        "--raw-byte-order", choices=["little", "big"], default="little", help="RAW image byte order"
+    )
     p.add_argument("--raw-header", type=int, default=0, help="RAW header bytes to skip")
     p.add_argument("--raw-order", choices=["F", "C"], default="F", help="F: x fastest in the file")
     p.add_argument("--crop", type=int, nargs=3, default=None, metavar=("NX", "NY", "NZ"), help="central crop")
     p.add_argument("--denoise", choices=["none", "median", "nl_means"], default=None)
-    p.add_argument("--method", choices=["otsu", "multi_otsu", "thresholds"], default=None)
+    p.add_argument(
+        "--method",
+        choices=["otsu", "multi_otsu", "thresholds"],
+        default=None,
+        help="how phases are separated",
+    )
     p.add_argument("--phases", nargs="+", default=None, help="phase names, darkest first")
-    p.add_argument("--pore-phases", nargs="+", default=None)
-    p.add_argument("--thresholds", type=float, nargs="+", default=None)
-    p.add_argument("--no-grains", action="store_true", help="skip the watershed grain analysis")
+    p.add_argument("--pore-phases", nargs="+", default=None, help="the phases counted as pore space")
+    p.add_argument(
+        "--thresholds", type=float, nargs="+", default=None, help="grey thresholds (with --method thresholds)"
+    )
+    p.add_argument(
+        "--grains",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="run the watershed grain analysis (--no-grains skips it)",
+    )
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=_main)
 
@@ -137,7 +159,7 @@ def register(subparsers) -> None:
     p.add_argument(
         "--a", type=float, default=None, help="resolution asked for (must be the image's voxel size)"
     )
-    p.add_argument("-o", "--out", required=True)
+    p.add_argument("-o", "--out", required=True, help="output binary_a{a}.h5")
     p.set_defaults(func=_binary)
 
     p = subparsers.add_parser("acquire-calibrate", help="model scene YAML calibrated to image statistics")

@@ -13,6 +13,7 @@ import glob
 import logging
 import math
 import struct
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -359,7 +360,21 @@ def read_image(
         source = f"{path}:{dset.name}"
     else:
         data, file_spacing, is_2d = read_tiff(path)
+    _warn_if_overridden(source, file_spacing, voxel_um)
     return Image(data, _spacing(file_spacing, voxel_um, section_um), source, is_2d)
+
+
+def _warn_if_overridden(source: str, file_spacing: Sequence | None, voxel_um: float | None) -> None:
+    """One line on stderr when the caller's voxel size replaces a different one the file states."""
+    stated = [float(s) for s in (file_spacing or []) if s is not None]
+    if voxel_um is None or not stated:
+        return
+    if any(not math.isclose(s, float(voxel_um), rel_tol=1e-6) for s in stated):
+        print(
+            f"porepipe acquire: warning: {source} states a voxel size of "
+            f"{' × '.join(f'{s:g}' for s in stated)} µm; using the given {float(voxel_um):g} µm instead",
+            file=sys.stderr,
+        )
 
 
 def _spacing(file_spacing: Sequence | None, voxel_um: float | None, section_um: float | None):

@@ -135,7 +135,7 @@ def run_model(
                 "method": "otsu",
             },
         )
-        w.write_array("sphere_radii_um", packing.radii_um)
+        w.write_array("sphere_radii_um", packing.radii_um, dims=("sphere",))
         for group, ds in tables.items():
             w.write_table(ds, group)
         w.attrs.update(

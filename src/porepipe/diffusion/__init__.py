@@ -6,6 +6,8 @@ from porepipe._shared.lazy import lazy_exports
 
 _EXPORTS = {
     "Axis": "_settings",
+    "CapillaryGeometry": "_capillary",
+    "CapillaryKind": "_capillary",
     "DiffusionResult": "_api",
     "GasSettings": "_settings",
     "Geometry": "_api",
@@ -19,6 +21,8 @@ _EXPORTS = {
     "WallLaw": "_settings",
     "WallSpeed": "_settings",
     "accessible_pore": "_geometry",
+    "build_capillary": "_capillary",
+    "check_capillary_resolutions": "_capillary",
     "closed_box": "_geometry",
     "constricted_capillary": "_geometry",
     "cylinder": "_geometry",
@@ -35,6 +39,7 @@ _EXPORTS = {
     "square_capillary": "_geometry",
     "transport": "_api",
     "wall_area": "_geometry",
+    "write_capillary": "_capillary",
 }
 __all__ = [*_EXPORTS]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -8,6 +8,11 @@ from porepipe.diffusion._api import Geometry as Geometry
 from porepipe.diffusion._api import equilibrium as equilibrium
 from porepipe.diffusion._api import prepare as prepare
 from porepipe.diffusion._api import transport as transport
+from porepipe.diffusion._capillary import CapillaryGeometry as CapillaryGeometry
+from porepipe.diffusion._capillary import CapillaryKind as CapillaryKind
+from porepipe.diffusion._capillary import build_capillary as build_capillary
+from porepipe.diffusion._capillary import check_capillary_resolutions as check_capillary_resolutions
+from porepipe.diffusion._capillary import write_capillary as write_capillary
 from porepipe.diffusion._edmd import make_gas as make_gas
 from porepipe.diffusion._edmd import reactive_pore as reactive_pore
 from porepipe.diffusion._geometry import PoreVolume as PoreVolume
@@ -37,6 +42,8 @@ from porepipe.diffusion._species import mean_speed as mean_speed
 __all__ = [
     "SPECIES",
     "Axis",
+    "CapillaryGeometry",
+    "CapillaryKind",
     "DiffusionResult",
     "GasSettings",
     "Geometry",
@@ -49,6 +56,8 @@ __all__ = [
     "WallLaw",
     "WallSpeed",
     "accessible_pore",
+    "build_capillary",
+    "check_capillary_resolutions",
     "closed_box",
     "constricted_capillary",
     "cylinder",
@@ -65,4 +74,5 @@ __all__ = [
     "square_capillary",
     "transport",
     "wall_area",
+    "write_capillary",
 ]

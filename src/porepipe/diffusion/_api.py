@@ -21,6 +21,7 @@ Definitions (also written into every result)
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -77,7 +78,13 @@ class Geometry:
         return np.insert(found, self.axis, layer % n, axis=1)
 
 
-def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis: int | None = 2) -> Geometry:
+def prepare(
+    pore: np.ndarray,
+    voxel_um=1.0,
+    periodic=(False, False, False),
+    axis: int | None = 2,
+    in_place: bool = False,
+) -> Geometry:
     """Check a binary volume, keep its accessible cluster and build the distance codes.
 
     Parameters
@@ -90,6 +97,9 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
         Axes that wrap; the transport axis never does.
     axis : int or None
         Transport axis (0, 1, 2), or None for the periodic medium (largest cluster kept).
+    in_place : bool
+        Turn ``pore`` (a writeable C-contiguous uint8 array the caller gives up) into the codes: no second volume,
+        so a 1000³ image needs about 1 GB in all.
     """
     pore = np.asarray(pore)
     if pore.ndim != 3:
@@ -100,21 +110,24 @@ def prepare(pore: np.ndarray, voxel_um=1.0, periodic=(False, False, False), axis
     per = np.array([bool(p) for p in np.broadcast_to(periodic, (3,))])
     if axis is not None:
         per[axis] = False
-    keep = accessible_pore(pore, axis, per)
-    codes = np.empty(keep.shape, dtype=np.uint8)
-    K._chessboard_codes(keep, codes)
+    # memory: the 1-byte work copy of the flood fill becomes the distance codes in place (the raster pass reads each
+    # voxel's own 0/1 before writing its code), so beyond ``pore`` only one byte per voxel and the fill's front
+    n_total = int(np.count_nonzero(pore))
+    codes = accessible_pore(pore, axis, per, in_place=in_place)
     h = voxel / voxel.min()
-    n_acc = int(np.count_nonzero(keep))
+    n_acc = int(np.count_nonzero(codes))
+    area = wall_area(codes, h, per, open_axis=axis)
+    K._chessboard_codes(codes, codes)
     return Geometry(
         codes=codes,
         h=h,
         periodic=per,
         voxel_um=voxel,
         axis=axis,
-        total_porosity=float(np.count_nonzero(pore)) / pore.size,
+        total_porosity=n_total / pore.size,
         accessible_porosity=n_acc / pore.size,
         pore_volume=n_acc * float(np.prod(h)),
-        wall_area=wall_area(keep, h, per, open_axis=axis),
+        wall_area=area,
     )
 
 
@@ -129,6 +142,7 @@ class Tallies:
     orientation: np.ndarray
     msd: np.ndarray
     rounds: int = 0
+    round_cpu_s: dict = field(default_factory=dict)  # round -> CPU s of its kernel call (not checkpointed)
 
     def add(self, rows, profile, hitmap, orientation, msd):
         self.rows = np.concatenate([self.rows, rows])
@@ -208,28 +222,51 @@ def _wall(settings: Settings) -> tuple:
     )
 
 
-def _run_rounds(settings, key, checkpoint, label, run_round, enough, shapes) -> Tallies:
-    """Run rounds of ``settings.batches`` batches until ``enough(tallies)`` or a limit; checkpoint after each."""
+def _rel(err: float, value: float) -> float:
+    """Relative error err/|value| (0 when err is 0, inf when only the value is 0)."""
+    if err == 0:
+        return 0.0
+    return float(err / abs(value)) if value != 0 else float("inf")
+
+
+def _run_rounds(settings, key, checkpoint, label, run_round, rel_error, shapes) -> Tallies:
+    """Run rounds of ``settings.batches`` batches until ``rel_error(tallies)`` meets the target or a limit stops
+    them; checkpoint after each.
+    """
     checkpoint = Path(checkpoint) if checkpoint else None
     tallies = _load_checkpoint(checkpoint, key) if checkpoint else None
     if tallies is None:
         tallies = Tallies(
             np.zeros((0, K.N_TALLY)), *(np.zeros(s) for s in shapes[:3]), np.zeros((0, *shapes[3])), 0
         )
-    progress = Progress(label, 0)  # the stop is statistical, so no ETA
+    progress = Progress(label, 0, target=settings.target_rel_error, convergence="statistical")
     while tallies.rounds < settings.max_rounds:
-        if tallies.rounds >= 2 and enough(tallies):
+        if tallies.rounds >= 2 and rel_error(tallies) <= settings.target_rel_error:
             break
         if tallies.rows[:, K.T_HITS].sum() >= settings.max_wall_hits:
             break
+        cpu0 = time.process_time()
         run_round(tallies)
+        tallies.round_cpu_s[tallies.rounds - 1] = time.process_time() - cpu0
         if checkpoint:
             _save_checkpoint(checkpoint, key, tallies)
+        rel = rel_error(tallies) if tallies.rounds >= 2 else None
         progress.update(
             tallies.rounds,
             f"{int(tallies.rows[:, K.T_PARTICLES].sum())} particles, "
-            f"{tallies.rows[:, K.T_HITS].sum():.3g} wall hits",
+            f"{tallies.rows[:, K.T_HITS].sum():.3g} wall hits"
+            + (
+                f", relative error {rel:.2g} (target {settings.target_rel_error:g})"
+                if rel is not None
+                else ""
+            ),
+            residual=rel,
         )
+    rel = rel_error(tallies) if tallies.rounds >= 2 else float("inf")
+    progress.close(
+        f"{tallies.rounds} rounds, {tallies.rows[:, K.T_HITS].sum():.3g} wall hits, relative error {rel:.2g} "
+        + ("(target met)" if rel <= settings.target_rel_error else "(stopped by a limit before the target)")
+    )
     return tallies
 
 
@@ -340,9 +377,9 @@ def transport(
         )
         tallies.add(rows, prof, hmap, orient, np.zeros(0))
 
-    def enough(tallies):
+    def rel_error(tallies):
         w, err = _estimate(tallies.rows, wk)
-        return err <= settings.target_rel_error * abs(w)
+        return _rel(err, w)
 
     tallies = _run_rounds(
         settings,
@@ -350,7 +387,7 @@ def transport(
         checkpoint,
         f"diffusion {'xyz'[axis]}",
         run_round,
-        enough,
+        rel_error,
         [
             (max(settings.profile_bins, 1),),
             (6, max(settings.hit_map_bins, 1), max(settings.hit_map_bins, 1)),
@@ -379,13 +416,43 @@ def transport(
     v["D_eff_err"] = d_err * a_open / area_total
     _derived(v, geom, settings)
     res.arrays = _arrays(tallies, settings, geom, axis)
+    # D_eff = factor x (W, or the WK FLUSS rate per particle time), as above
+    factor = (
+        (vmean * length / 4.0 if not wk else length * geom.pore_volume / (2.0 * a_open)) * a_open / area_total
+    )
+    res.arrays["history"] = _history(tallies, b, lambda part: tuple(factor * x for x in _estimate(part, wk)))
     return res
+
+
+def _history(tallies: Tallies, batches: int, estimate) -> np.ndarray:
+    """(rounds, 7): after each round, the cumulative particles, flights, wall hits, voxel crossings, the headline
+    D_eff with its batch-means error from the batches run so far (``estimate(rows) -> (D_eff, err)``), and the
+    round's own kernel CPU seconds (NaN for rounds loaded from a checkpoint; the first includes the compilation).
+
+    The cost of each further digit of D_eff: the error falls as (particles x flights)^-1/2 once the batches are many.
+    """
+    rows = tallies.rows
+    rounds = rows.shape[0] // batches
+    out = np.zeros((rounds, len(HISTORY_FIELDS)))
+    for r in range(rounds):
+        part = rows[: (r + 1) * batches]
+        out[r, :4] = part[:, [K.T_PARTICLES, K.T_FLIGHTS, K.T_HITS, K.T_CROSS]].sum(axis=0)
+        out[r, 4:6] = estimate(part)
+        out[r, 6] = tallies.round_cpu_s.get(r, math.nan)
+    return out
+
+
+#: columns of the ``history`` array (one row per round)
+HISTORY_FIELDS = ("particles", "flights", "wall_hits", "voxel_crossings", "D_eff", "D_eff_err", "round_cpu_s")
 
 
 def _pore_hash(codes: np.ndarray) -> str:
     import hashlib
 
-    return hashlib.sha256(np.ascontiguousarray(codes > 0).tobytes()).hexdigest()[:16] + str(codes.shape)
+    digest = hashlib.sha256()
+    for layer in codes:  # the bytes of (codes > 0) layer by layer: no full-size temporary
+        digest.update(np.ascontiguousarray(layer > 0).tobytes())
+    return digest.hexdigest()[:16] + str(codes.shape)
 
 
 def _estimate(rows: np.ndarray, wk: bool) -> tuple[float, float]:
@@ -461,6 +528,10 @@ def _derived(v, geom, settings):
     eps = geom.accessible_porosity
     psi = v["D_eff"] / v["D_ref"]
     v.update(psi=psi, labyrinth_factor=psi / eps, tortuosity=eps / psi if psi > 0 else float("inf"))
+    # V and S are exact counts, so Ψ, χ and τ carry the relative statistical error of D_eff (τ to first order)
+    rel = v["D_eff_err"] / v["D_eff"] if v["D_eff"] > 0 else float("inf")
+    for k in ("psi", "labyrinth_factor", "tortuosity"):
+        v[f"{k}_err"] = abs(v[k]) * rel
 
 
 def _arrays(tallies, settings, geom, axis):
@@ -520,7 +591,9 @@ def equilibrium(
     ext = np.array(geom.codes.shape) * geom.h
     t_end = t_end or settings.msd_time_jiffies or 50.0 * float(ext.max())
     t_samples = np.linspace(t_end / settings.msd_samples, t_end, settings.msd_samples)
-    cells = geom.cells()
+    cells = np.zeros(
+        (0, 3), dtype=np.int64
+    )  # start points by rejection over the codes: no 24-byte list per voxel
     b, per_b = settings.batches, settings.batch_particles
     seed_k = kernel_seed(seed, STAGE, 2)
     key = hash_of(
@@ -558,13 +631,12 @@ def equilibrium(
             rows, np.zeros((b, 1)), np.zeros((b, 6, 1, 1), np.int64), np.zeros((b, 1, 2), np.int64), msd_b
         )
 
-    def enough(tallies):
+    def rel_error(tallies):
         if msd:
             d, err = _msd_fit(tallies, t_samples)
-            dd = d[per]
-            return bool(np.all(err[per] <= settings.target_rel_error * np.abs(dd)))
+            return max((_rel(e, v) for e, v in zip(err[per], d[per])), default=0.0)
         f, err = _ratio(tallies.rows[:, K.T_PATH], tallies.rows[:, K.T_HITS])
-        return err <= settings.target_rel_error * f
+        return _rel(err, f)
 
     tallies = _run_rounds(
         settings,
@@ -572,7 +644,7 @@ def equilibrium(
         checkpoint,
         "diffusion equilibrium",
         run_round,
-        enough,
+        rel_error,
         [(1,), (6, 1, 1), (1, 2), (settings.msd_samples, 3)],
     )
     res = DiffusionResult(
@@ -599,6 +671,14 @@ def equilibrium(
         v["D_eff"] = geom.accessible_porosity * dmean
         v["D_eff_err"] = geom.accessible_porosity * v["D_err"]
         _derived(v, geom, settings)
+
+        def d_eff(part):
+            rounds = part.shape[0] // b
+            d_p, err_p = _msd_fit(Tallies(part, None, None, None, tallies.msd[: rounds * b]), t_samples)
+            eps = geom.accessible_porosity
+            return eps * float(np.mean(d_p[per])), eps * float(np.sqrt(np.sum(err_p[per] ** 2)) / per.sum())
+
+        res.arrays["history"] = _history(tallies, b, d_eff)
     return res
 
 

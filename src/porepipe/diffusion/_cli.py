@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
+import argparse
 import re
 from pathlib import Path
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.numba_config import set_threads
 from porepipe.diffusion._settings import Axis, InletLaw, Settings, Setup, SpeedDist, WallLaw, WallSpeed
 
 #: CLI option -> settings key, for the options that override the scene
@@ -80,9 +80,9 @@ def _nested_overrides(args, base: dict) -> None:
             counts[name.strip()] = int(number)
         base.setdefault("gas", {})
         base["gas"] = {**dict(base["gas"]), "particles": counts}
-    if getattr(args, "no_collisions", False):
+    if getattr(args, "collisions", None) is not None:
         base.setdefault("gas", {})
-        base["gas"] = {**dict(base["gas"]), "collisions": False}
+        base["gas"] = {**dict(base["gas"]), "collisions": args.collisions}
 
 
 def _summary(v, settings: Settings) -> str:
@@ -111,6 +111,8 @@ def main(args) -> int:
     from porepipe.diffusion._run import run
 
     settings, seed, scene = _settings(args)
+    from porepipe._shared.numba_config import set_threads
+
     threads = set_threads(args.threads)
     binary = Path(args.binary)
     out = _output(args, binary, args.axis)
@@ -150,7 +152,12 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, help="override the scene seed")
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--checkpoint", help="checkpoint file (default .{out}.checkpoint.npz)")
-    p.add_argument("--resume", action="store_true", help="continue from a matching checkpoint")
+    p.add_argument(
+        "--resume",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="continue from a matching checkpoint",
+    )
     for name, enum in (
         ("setup", Setup),
         ("wall-law", WallLaw),
@@ -177,13 +184,48 @@ def register(subparsers) -> None:
     ):
         p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
     p.add_argument("--gas-particles", help="setup edmd: particles per species, e.g. N2=1000,He=200")
-    p.add_argument("--no-collisions", action="store_true", help="setup edmd: gas-gas collisions off")
-    for name, kind in (
-        ("duration-ps", float),
-        ("reaction-w", float),
-        ("reaction-w-reverse", float),
-        ("reaction-w-follow", float),
-        ("reaction-particles", int),
+    p.add_argument(
+        "--collisions",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="setup edmd: gas-gas collisions (--no-collisions: Knudsen regime, point particles)",
+    )
+    for name, kind, meaning in (
+        ("duration-ps", float, "setup edmd: simulated time in ps"),
+        ("reaction-w", float, "setup reaction: probability that a wall hit turns A into P"),
+        ("reaction-w-reverse", float, "setup reaction: probability that a wall hit turns P back into A"),
+        (
+            "reaction-w-follow",
+            float,
+            "setup reaction: probability that a wall hit turns P into S (A -> P -> S)",
+        ),
+        ("reaction-particles", int, "setup reaction: reactant histories (each enters at the inlet face)"),
     ):
-        p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind)
+        p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind, help=meaning)
     p.set_defaults(func=main)
+    register_capillary(subparsers)
+
+
+def main_capillary(args) -> int:
+    from porepipe.diffusion._capillary import write_capillary
+    from porepipe.scene import load_scene
+
+    scene = load_scene(args.scene)
+    geometry = scene.diffusion.geometry
+    if geometry is None:
+        raise PorepipeError(f"{args.scene}: the scene has no diffusion.geometry to build a capillary from")
+    out = write_capillary(geometry, args.a, args.out, seed=scene.seed, scene=scene.name)
+    print(f"capillary {geometry.kind.value} at a = {args.a} µm -> {out}")
+    return 0
+
+
+def register_capillary(subparsers) -> None:
+    """``porepipe diffusion-capillary``: write the scene's ``diffusion.geometry`` as a binary volume."""
+    p = subparsers.add_parser(
+        "diffusion-capillary",
+        help="write the scene's synthetic capillary (diffusion.geometry) as binary_a{a}.h5",
+    )
+    p.add_argument("--scene", required=True, help="scene YAML with a diffusion.geometry")
+    p.add_argument("--a", type=float, required=True, help="resolution (voxel edge) in µm")
+    p.add_argument("-o", "--out", required=True, help="output binary_a{a}.h5")
+    p.set_defaults(func=main_capillary)

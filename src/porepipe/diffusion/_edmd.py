@@ -429,6 +429,12 @@ def reactive_pore(
     batches: int = 16,
     max_hits: int = 10**7,
     z_bins: int = 0,
+    sites=None,
+    poisoning: float = 0.0,
+    rounds: int = 1,
+    adsorption: float = 0.0,
+    residence: float = 0.0,
+    residence_law: str = "fixed",
     seed: int = 0,
 ) -> dict:
     """First-order wall reaction A → P (optionally reversible, or consecutive P → S) in a pore fed from its low face
@@ -437,11 +443,19 @@ def reactive_pore(
     Returns the counts and, with k = w·ν_wall (ν_wall = wall hits per particle per jiffie, measured):
     ``eta`` = product rate/(k·N) = products/(w·wall hits) (4.5; η → 1 as w → 0), ``eta_err`` (batch means),
     ``phi`` by bisection (4.7), ``r_eff`` = products per particle-jiffie, ``k0_max`` = ν_wall (4.4: the w → 0 limit of
-    r_eff/w per particle), ``D_R`` (4.12, voxel²/jiffie) and ``z_react`` (reactive hits per axial bin).
+    r_eff/w per particle), ``D_R`` (4.12, voxel²/jiffie); with ``z_bins``: ``z_react`` (reactive hits per axial
+    bin), ``reactant_profile`` (c_A/c₀ per bin) and ``phi_profile`` (Φ fitted to it by (4.11)).
+    ``sites``: an array of the pore's shape (>= 0) that multiplies every reaction probability at a wall hit from
+    that pore voxel (active-site distribution); η then still uses the mean w (products/(w·hits)). ``poisoning`` > 0
+    runs ``rounds`` rounds of ``particles`` histories and after each multiplies a voxel's site factor by
+    exp(−poisoning·reactions there) (quasi-static deactivation); ``r_eff_rounds`` holds each round's rate.
+    ``adsorption`` > 0: probability that a wall hit adsorbs the particle for ``residence`` jiffies (``residence_law``
+    fixed or exponential); ``adsorbed_fraction`` = residence time over particle time (beyond the thesis, which
+    designed but never ran adsorption).
     Lengths in units of the smallest voxel edge, times in jiffies (v̄ = 1 voxel/jiffie).
     """
     from porepipe.diffusion._api import _ratio, prepare
-    from porepipe.diffusion._reactions import diffusion_under_reaction, phi_of_eta
+    from porepipe.diffusion._reactions import diffusion_under_reaction, phi_of_eta, profile_phi
 
     for name, value in (("w", w), ("w_reverse", w_reverse), ("w_follow", w_follow)):
         if not 0.0 <= value <= 1.0:
@@ -449,6 +463,19 @@ def reactive_pore(
     if wall_law not in _LAW:
         raise PorepipeError(f"wall_law must be one of {', '.join(_LAW)}, got {wall_law!r}")
     geom = prepare(pore, voxel_um, periodic, axis)
+    if not 0.0 <= adsorption <= 1.0 or residence < 0 or residence_law not in ("fixed", "exponential"):
+        raise PorepipeError(
+            f"adsorption must lie in [0, 1], residence >= 0 and residence_law fixed or exponential; got "
+            f"{adsorption!r}, {residence!r}, {residence_law!r}"
+        )
+    if poisoning < 0 or rounds < 1:
+        raise PorepipeError(f"poisoning must be >= 0 and rounds >= 1, got {poisoning!r}, {rounds!r}")
+    if poisoning > 0 and sites is None:
+        sites = np.ones(np.shape(pore))
+    if sites is not None:
+        sites = np.array(sites, dtype=float)
+        if sites.shape != np.shape(pore) or not np.all(np.isfinite(sites)) or np.any(sites < 0):
+            raise PorepipeError(f"sites must be finite, >= 0 and of the pore's shape {np.shape(pore)}")
     kernel = E.make_reactive_kernel(
         K.wall_flags(_LAW[wall_law], 1.0, False),
         K.LAMBERT,
@@ -456,26 +483,40 @@ def reactive_pore(
         w_reverse > 0,
         w_follow > 0,
         z_bins > 0,
+        sites is not None,
+        adsorption > 0,
     )
     per = max(1, particles // batches)
     tally = np.zeros((batches, E.N_RTALLY))
-    zhist = np.zeros((batches, max(z_bins, 1)))
-    kernel(
-        geom.codes,
-        geom.h,
-        geom.periodic,
-        axis,
-        geom.cells(0),
-        kernel_seed(seed, STAGE, 18),
-        0,
-        per,
-        max_hits,
-        1.0,
-        1.0,
-        np.array([w, w_reverse, w_follow], float),
-        tally,
-        zhist,
-    )
+    zhist = np.zeros((batches, 3, max(z_bins, 1)))
+    counts = np.zeros((batches, *np.shape(pore)) if poisoning > 0 else (0, 1, 1, 1), np.int64)
+    seed_k = kernel_seed(seed, STAGE, 18)
+    rates = []
+    for k in range(rounds):
+        part = np.zeros((batches, E.N_RTALLY))
+        counts[:] = 0
+        kernel(
+            geom.codes,
+            geom.h,
+            geom.periodic,
+            axis,
+            geom.cells(0),
+            seed_k,
+            k * batches * per,
+            per,
+            max_hits,
+            1.0,
+            1.0,
+            np.array([w, w_reverse, w_follow, adsorption, residence, float(residence_law == "exponential")]),
+            sites if sites is not None else np.ones((1, 1, 1)),
+            counts,
+            part,
+            zhist,
+        )
+        tally += part
+        rates.append(part[:, E.R_OUT_P].sum() / max(part[:, E.R_TIME].sum(), 1e-300))
+        if poisoning > 0:
+            sites *= np.exp(-poisoning * counts.sum(axis=0))
     col = tally.sum(axis=0)
     products = tally[:, E.R_OUT_P]
     out = {
@@ -495,6 +536,15 @@ def reactive_pore(
     nu, _ = _ratio(tally[:, E.R_HITS], tally[:, E.R_TIME])
     rate, rate_err = _ratio(products, tally[:, E.R_TIME])
     out.update(k0_max=nu, r_eff=rate, r_eff_err=rate_err, w=w, w_reverse=w_reverse, w_follow=w_follow)
+    if rounds > 1:
+        out["r_eff_rounds"] = np.array(rates)
+    if adsorption > 0:
+        out.update(
+            adsorptions=int(col[E.R_ADSORB]),
+            adsorbed_fraction=float(col[E.R_ADS_TIME] / max(col[E.R_TIME], 1e-300)),
+        )
+    if poisoning > 0:
+        out["sites"] = sites
     if w > 0:
         eta, eta_err = _ratio(products, w * tally[:, E.R_HITS])
         out.update(eta=eta, eta_err=eta_err)
@@ -502,7 +552,13 @@ def reactive_pore(
             phi = phi_of_eta(eta)
             out.update(phi=phi, D_R=diffusion_under_reaction(phi, out["length"], w * nu))
     if z_bins:
-        out["z_react"] = zhist.sum(axis=0)
+        maps = zhist.sum(axis=0)
+        out["z_react"] = maps[0]
+        out["z_time_reactant"] = maps[1]
+        profile = np.divide(maps[1], maps[2], out=np.zeros(z_bins), where=maps[2] > 0)
+        out["reactant_profile"] = profile
+        z = (np.arange(z_bins) + 0.5) / z_bins
+        out["phi_profile"] = profile_phi(z[maps[2] > 0], profile[maps[2] > 0])
     return out
 
 
@@ -607,7 +663,93 @@ def reaction_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0
         batches=settings.batches,
         max_hits=settings.max_hits_per_particle,
         z_bins=rs.z_bins,
+        poisoning=rs.poisoning,
+        rounds=rs.rounds,
+        adsorption=rs.adsorption,
+        residence=rs.residence_jiffies,
+        residence_law=rs.residence_law,
         seed=seed,
     )
-    arrays = {"z_react": out.pop("z_react")} if "z_react" in out else {}
+    keys = ("z_react", "z_time_reactant", "reactant_profile", "r_eff_rounds", "sites")
+    arrays = {k: out.pop(k) for k in keys if k in out}
     return DiffusionResult("reaction", "xyz"[axis], out, arrays)
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# transition regime: D against particle number (pressure) and the Bosanquet line (3.48-3.50)
+def bosanquet_fit(counts, d, d_err) -> dict:
+    """Weighted straight line 1/D = a + b·N (3.50) through (N, D ± D_err): intercept a = 1/D_Kn, slope b (the gas
+    resistance per particle), their standard errors, and χ²/dof of the fit.
+    """
+    counts, d, d_err = (np.asarray(x, float) for x in (counts, d, d_err))
+    if (
+        counts.size < 2
+        or not (counts.shape == d.shape == d_err.shape)
+        or np.any(d <= 0)
+        or np.any(d_err <= 0)
+    ):
+        raise PorepipeError("the Bosanquet fit needs >= 2 points with D > 0 and D_err > 0")
+    y = 1.0 / d
+    sy = d_err / d**2  # error of 1/D
+    wgt = 1.0 / sy**2
+    a_mat = np.stack([np.ones_like(counts), counts], axis=1)
+    cov = np.linalg.inv(a_mat.T @ (wgt[:, None] * a_mat))
+    a, b = cov @ (a_mat.T @ (wgt * y))
+    resid = y - (a + b * counts)
+    dof = max(counts.size - 2, 1)
+    return {
+        "intercept": float(a),
+        "intercept_err": float(math.sqrt(cov[0, 0])),
+        "slope": float(b),
+        "slope_err": float(math.sqrt(cov[1, 1])),
+        "chi2_dof": float(np.sum(wgt * resid**2) / dof),
+    }
+
+
+def pressure_series(
+    pore,
+    voxel_nm: float,
+    axis: int,
+    counts,
+    duration_ps: float,
+    *,
+    species: str = "N2",
+    wall_law: str = "lambert",
+    temperature_K: float = 298.15,
+    samples: int = 16,
+    seed: int = 0,
+) -> dict:
+    """Self-diffusion along ``axis`` of a pore periodic along that axis for each particle number in ``counts``
+    (N = 0 entries are not allowed; the Knudsen limit comes from the intercept), then the Bosanquet fit.
+
+    Returns ``counts``, ``D`` and ``D_err`` (nm²/ps, batch means over 8 particle groups), ``Kn`` (λ_M over the mean
+    chord 4V/S) and the :func:`bosanquet_fit` entries. Compare the intercept with 1/D of the Knudsen engine and the
+    slope with V/(n·D_CE)/V² (the bulk resistance per particle).
+    """
+    from porepipe.diffusion._geometry import wall_area
+
+    per = [False, False, False]
+    per[axis] = True
+    keep = (np.asarray(pore) > 0).astype(np.uint8)
+    volume = float(keep.sum()) * voxel_nm**3
+    chord = 4.0 * volume / wall_area(keep, np.full(3, voxel_nm), np.array(per))
+    d_sp = 2.0 * SPECIES[species][0]
+    out_d, out_err, kn = [], [], []
+    for k, n_part in enumerate(counts):
+        if n_part < 8:
+            raise PorepipeError(f"each point of the pressure series needs >= 8 particles, got {n_part}")
+        gas = make_gas(
+            pore, voxel_nm, {species: int(n_part)}, periodic=per, temperature_K=temperature_K, seed=seed + k
+        )
+        m = measure(gas, duration_ps, samples=samples, physics=Physics(wall_law=wall_law), groups=8)
+        out_d.append(m["D_self_nm2_ps"])
+        out_err.append(m["D_self_err_nm2_ps"])
+        kn.append(maxwell_free_path(n_part / volume, d_sp) / chord)
+    fit = bosanquet_fit(counts, out_d, out_err)
+    return {
+        "counts": np.asarray(counts),
+        "D": np.array(out_d),
+        "D_err": np.array(out_err),
+        "Kn": np.array(kn),
+        **fit,
+    }

@@ -30,6 +30,7 @@ from porepipe.diffusion._kernels import (
     EXIT_LOW,
     _emit,
     _fly,
+    _profile_add,
     _reflect,
     _speed,
     _stream_state,
@@ -672,12 +673,20 @@ def insert_spheres(cells, h, shape, periodic, sp, radius, pos, state, tries):
 R_PARTICLES, R_OUT_A, R_OUT_P, R_OUT_S, R_TRUNC, R_HITS, R_TIME, R_REACT, R_FOLLOW, R_REVERSE, R_BACKWALL = (
     range(11)
 )
-N_RTALLY = 11
+R_ADSORB, R_ADS_TIME = 11, 12
+N_RTALLY = 13
 _RCACHE: dict = {}
 
 
 def make_reactive_kernel(
-    wall: tuple, inlet_law: int, inlet_speed: int, reverse: bool, follow: bool, zmap: bool
+    wall: tuple,
+    inlet_law: int,
+    inlet_speed: int,
+    reverse: bool,
+    follow: bool,
+    zmap: bool,
+    sites: bool = False,
+    adsorb: bool = False,
 ):
     """Kernel of the one-face-fed pore with reactive walls; each effect is compiled in only when named.
 
@@ -687,20 +696,51 @@ def make_reactive_kernel(
     into P with probability ``w[0]``; with ``reverse`` P turns back into A with ``w[1]``; with ``follow`` P turns
     into S with ``w[2]`` (A → P → S). Leaving through the inlet ends the history: A = REFLEX (R_OUT_A), P or S =
     FLUSS products (R_OUT_P, R_OUT_S). In steady state with N particles in the pore each entering particle is one
-    history, so rates per particle-time are counts over R_TIME. ``zmap``: reactive hits A → P per axial bin.
+    history, so rates per particle-time are counts over R_TIME. ``zmap``: per axial bin ``zhist[b, 0]`` the reactive
+    hits A → P, ``zhist[b, 1]`` the time spent there as A and ``zhist[b, 2]`` by all species (the total density is
+    uniform, so their ratio is the reactant profile c_A/c₀ of (4.11)). ``sites``: every reaction probability at a
+    wall hit is multiplied by ``site_w`` of the pore voxel hit (an active-site distribution, thesis §4.1); when
+    ``site_count`` has one layer per batch, the reactions A → P per voxel are counted into it (for poisoning).
+    ``adsorb``: after the reaction step a wall hit adsorbs the particle with probability ``w[3]`` for a residence
+    time ``w[4]`` (fixed) or drawn from an exponential law of that mean (``w[5]`` = 1); it then desorbs by the wall
+    law. The residence time counts in the particle time (R_TIME) and in R_ADS_TIME.
     """
-    key = (*wall, int(inlet_law), int(inlet_speed), bool(reverse), bool(follow), bool(zmap))
+    key = (
+        *wall,
+        int(inlet_law),
+        int(inlet_speed),
+        bool(reverse),
+        bool(follow),
+        bool(zmap),
+        bool(sites),
+        bool(adsorb),
+    )
     if key in _RCACHE:
         return _RCACHE[key]
-    LAW, MIXED, WSPEED, INLET, INSPEED, REVERSE, FOLLOW, ZMAP = key
+    LAW, MIXED, WSPEED, INLET, INSPEED, REVERSE, FOLLOW, ZMAP, SITES, ADSORB = key
 
     @njit(cache=True, fastmath=K_FASTMATH, parallel=True)
     def _reactive(
-        geom, h, periodic, axis, inlet_cells, seed, first, per_batch, max_hits, vmean, alpha, w, tally, zhist
+        geom,
+        h,
+        periodic,
+        axis,
+        inlet_cells,
+        seed,
+        first,
+        per_batch,
+        max_hits,
+        vmean,
+        alpha,
+        w,
+        site_w,
+        site_count,
+        tally,
+        zhist,
     ):
         n_batches = tally.shape[0]
         length_ax = geom.shape[axis] * h[axis]
-        bin_w = length_ax / zhist.shape[1]
+        bin_w = length_ax / zhist.shape[2]
         for b in prange(n_batches):
             pos = np.empty(3)
             u = np.empty(3)
@@ -717,8 +757,13 @@ def make_reactive_kernel(
                 hits = 0
                 t_now = 0.0
                 while True:
+                    p_ax = pos[axis]
                     ev, ln, _ = _fly(geom, h, periodic, axis, pos, idx, u, img)
                     t_now += ln / speed
+                    if ZMAP:
+                        _profile_add(zhist[b, 2], p_ax, u[axis], ln, speed, bin_w)
+                        if species == 0:
+                            _profile_add(zhist[b, 1], p_ax, u[axis], ln, speed, bin_w)
                     if ev == EXIT_HIGH:
                         u[axis] = -u[axis]
                         acc[R_BACKWALL] += 1
@@ -728,19 +773,32 @@ def make_reactive_kernel(
                         break
                     hits += 1
                     x, state = _uniform(state)
+                    f = site_w[idx[0], idx[1], idx[2]] if SITES else 1.0  # active-site factor of this voxel
                     if species == 0:
-                        if x < w[0]:
+                        if x < f * w[0]:
                             species = 1
                             acc[R_REACT] += 1
+                            if SITES and site_count.shape[0] == n_batches:  # poisoning: reactions per voxel
+                                site_count[b, idx[0], idx[1], idx[2]] += 1
                             if ZMAP:
-                                zhist[b, min(int(pos[axis] / bin_w), zhist.shape[1] - 1)] += 1
+                                zhist[b, 0, min(int(pos[axis] / bin_w), zhist.shape[2] - 1)] += 1
                     elif species == 1:
-                        if REVERSE and x < w[1]:
+                        if REVERSE and x < f * w[1]:
                             species = 0
                             acc[R_REVERSE] += 1
-                        elif FOLLOW and x >= 1.0 - w[2]:
+                        elif FOLLOW and x >= 1.0 - f * w[2]:
                             species = 2
                             acc[R_FOLLOW] += 1
+                    if ADSORB:
+                        y, state = _uniform(state)
+                        if y < w[3]:
+                            stay = w[4]
+                            if w[5] > 0.0:
+                                z, state = _uniform(state)
+                                stay = -w[4] * math.log(z)
+                            t_now += stay
+                            acc[R_ADSORB] += 1
+                            acc[R_ADS_TIME] += stay
                     if hits >= max_hits:
                         acc[R_TRUNC] += 1
                         break

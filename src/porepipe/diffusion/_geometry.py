@@ -11,13 +11,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
+from porepipe._shared.clusters import spanning_clusters
 from porepipe._shared.errors import PorepipeError
-
-_FACES = ndimage.generate_binary_structure(3, 1)
+from porepipe.diffusion import _kernels as K
 
 
 @dataclass(frozen=True)
@@ -153,26 +150,13 @@ def closed_box(shape) -> PoreVolume:
 
 
 # ---------------------------------------------------------------------------------------------------------------------
-def _merge_periodic(labels: np.ndarray, n: int, periodic) -> np.ndarray:
-    """Relabel face-connected clusters that touch across periodic faces into one (label 0 stays 0)."""
-    pairs = []
-    for d in range(3):
-        if periodic[d]:
-            lo, hi = np.take(labels, 0, axis=d), np.take(labels, -1, axis=d)
-            ok = (lo > 0) & (hi > 0)
-            pairs.append(np.stack([lo[ok], hi[ok]], axis=1))
-    if not pairs or sum(len(p) for p in pairs) == 0:
-        return labels
-    pairs = np.concatenate(pairs)
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n + 1, n + 1))
-    _, comp = connected_components(graph, directed=False)
-    comp = comp + 1
-    comp[0] = 0
-    return comp[labels]
-
-
-def accessible_pore(pore: np.ndarray, axis: int | None, periodic=(False, False, False)) -> np.ndarray:
+def accessible_pore(
+    pore: np.ndarray, axis: int | None, periodic=(False, False, False), in_place: bool = False
+) -> np.ndarray:
     """The pore space a particle can use (§2.3): the largest face-connected (6-connected) cluster.
+
+    Found by the shared in-place flood fill (:func:`porepipe._shared.clusters.spanning_clusters`): one byte per
+    voxel for the work copy (none with ``in_place``), no label array.
 
     Parameters
     ----------
@@ -183,6 +167,8 @@ def accessible_pore(pore: np.ndarray, axis: int | None, periodic=(False, False, 
         largest cluster (clusters joined across periodic faces count as one).
     periodic : (3,) bool
         Axes that wrap (the transport axis never wraps).
+    in_place : bool
+        Overwrite ``pore`` (writeable C-contiguous uint8) with the result instead of taking a 1-byte work copy.
 
     Returns
     -------
@@ -199,47 +185,30 @@ def accessible_pore(pore: np.ndarray, axis: int | None, periodic=(False, False, 
     if not pore.any():
         raise PorepipeError(f"the pore volume of shape {pore.shape} is all solid (no voxel is 1 = pore)")
     per = [bool(p) and d != axis for d, p in enumerate(periodic)]
-    labels, n = ndimage.label(pore > 0, structure=_FACES)
-    labels = _merge_periodic(labels, n, per)
-    sizes = np.bincount(labels.ravel())
-    sizes[0] = 0
-    if axis is not None:
-        spanning = np.intersect1d(
-            np.unique(np.take(labels, 0, axis=axis)), np.unique(np.take(labels, -1, axis=axis))
+    keep, spanning = spanning_clusters(pore, axis, connectivity=6, periodic=per, in_place=in_place)
+    if axis is not None and spanning == 0:
+        name = "xyz"[axis]
+        raise PorepipeError(
+            f"no face-connected pore path joins the inlet face {name} = 0 to the outlet face "
+            f"{name} = {pore.shape[axis] - 1} (shape {pore.shape}); nothing can be transmitted"
         )
-        spanning = spanning[spanning > 0]
-        if spanning.size == 0:
-            name = "xyz"[axis]
-            raise PorepipeError(
-                f"no face-connected pore path joins the inlet face {name} = 0 to the outlet face "
-                f"{name} = {pore.shape[axis] - 1} (shape {pore.shape}); nothing can be transmitted"
-            )
-        keep = spanning[np.argmax(sizes[spanning])]
-    else:
-        keep = int(np.argmax(sizes))
-    return (labels == keep).astype(np.uint8)
+    return keep
 
 
 def wall_area(pore: np.ndarray, voxel, periodic=(False, False, False), open_axis: int | None = None) -> float:
     """Area of the pore-solid voxel faces, with the outside solid except across periodic axes and ``open_axis``.
+
+    Counted by a numba pass over the volume (no full-size temporaries).
 
     Returns
     -------
     float
         In the square of the ``voxel`` unit.
     """
-    p = np.asarray(pore) > 0
-    voxel = np.asarray(voxel, dtype=float)
-    area = 0.0
-    for d in range(3):
-        face = np.prod(np.delete(voxel, d))
-        inner = int(np.count_nonzero(p ^ np.roll(p, -1, axis=d)))  # includes the wrap pair
-        if not periodic[d]:
-            wrap = int(np.count_nonzero(np.take(p, 0, axis=d) ^ np.take(p, -1, axis=d)))
-            inner -= wrap
-            if d != open_axis:
-                inner += int(np.count_nonzero(np.take(p, 0, axis=d))) + int(
-                    np.count_nonzero(np.take(p, -1, axis=d))
-                )
-        area += inner * face
-    return float(area)
+    pore = np.ascontiguousarray(pore)
+    if pore.dtype == np.bool_:
+        pore = pore.view(np.uint8)
+    voxel = np.broadcast_to(np.asarray(voxel, dtype=float), (3,))
+    per = np.array([bool(p) for p in np.broadcast_to(periodic, (3,))])
+    faces = K._wall_faces(pore, per, -1 if open_axis is None else int(open_axis))
+    return float(sum(faces[d] * np.prod(np.delete(voxel, d)) for d in range(3)))

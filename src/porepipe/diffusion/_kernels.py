@@ -142,6 +142,7 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     crossings = 0
     u0, u1, u2 = u[0], u[1], u[2]
     h0, h1, h2 = h[0], h[1], h[2]
+    ih0, ih1, ih2 = 1.0 / h0, 1.0 / h1, 1.0 / h2  # floor(p * ih) in the jump: no division per jump
     s0 = 1 if u0 > 0.0 else (-1 if u0 < 0.0 else 0)
     s1 = 1 if u1 > 0.0 else (-1 if u1 < 0.0 else 0)
     s2 = 1 if u2 > 0.0 else (-1 if u2 < 0.0 else 0)
@@ -154,7 +155,7 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     i0, i1, i2 = idx[0], idx[1], idx[2]
     p0, p1, p2 = pos[0], pos[1], pos[2]
     while True:
-        r = np.int64(geom[i0, i1, i2]) - 1
+        r = np.int64(flat[(i0 * n1 + i1) * n2 + i2]) - 1  # flat load: no negative-index wraparound checks
         if r >= 2:
             # jump to the surface of the all-pore cube [i - r, i + r] (index space)
             t = _INF
@@ -175,9 +176,9 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
             p1 += t * u1
             p2 += t * u2
             length += t
-            i0 = min(max(np.int64(math.floor(p0 / h0)), i0 - r), i0 + r)
-            i1 = min(max(np.int64(math.floor(p1 / h1)), i1 - r), i1 + r)
-            i2 = min(max(np.int64(math.floor(p2 / h2)), i2 - r), i2 + r)
+            i0 = min(max(np.int64(math.floor(p0 * ih0)), i0 - r), i0 + r)
+            i1 = min(max(np.int64(math.floor(p1 * ih1)), i1 - r), i1 + r)
+            i2 = min(max(np.int64(math.floor(p2 * ih2)), i2 - r), i2 + r)
         # voxel walk from the segment start (p0, p1, p2) in voxel (i0, i1, i2)
         t0 = (((i0 + 1) * h0 - p0) * iu0 if s0 > 0 else (i0 * h0 - p0) * iu0) if s0 != 0 else _INF
         t1 = (((i1 + 1) * h1 - p1) * iu1 if s1 > 0 else (i1 * h1 - p1) * iu1) if s1 != 0 else _INF
@@ -353,6 +354,23 @@ def _uniform_in_pore(cells, h, pos, idx, state):
     c = min(int(x * cells.shape[0]), cells.shape[0] - 1)
     for d in range(3):
         idx[d] = cells[c, d]
+        y, state = _uniform(state)
+        pos[d] = (idx[d] + 1.0 - y) * h[d]
+    return state
+
+
+@njit(cache=True)
+def _uniform_in_codes(geom, h, pos, idx, state):
+    """Uniform position in the pore space of ``geom`` (code > 0) by rejection over the box: no voxel list, 1/ε tries."""
+    n0, n1, n2 = geom.shape
+    flat = geom.reshape(n0 * n1 * n2)
+    while True:
+        x, state = _uniform(state)
+        f = min(int(x * flat.size), flat.size - 1)
+        if flat[f] > 0:
+            break
+    idx[0], idx[1], idx[2] = f // (n1 * n2), (f // n2) % n1, f % n2
+    for d in range(3):
         y, state = _uniform(state)
         pos[d] = (idx[d] + 1.0 - y) * h[d]
     return state
@@ -574,7 +592,8 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
 
     Closed pores (``msd=False``): counts wall hits and path length (mean flight = path / hits -> 4V/S for diffuse
     Lambert walls). Periodic medium (``msd=True``): also the squared unwrapped displacement per axis at the
-    sample times ``t_samples``, summed per batch into ``msd_out[b, k, axis]``.
+    sample times ``t_samples``, summed per batch into ``msd_out[b, k, axis]``. Start points: uniform over ``cells``
+    ((m, 3) voxel list), or with an empty list by rejection over the codes (no per-voxel list in memory).
     """
     key = ("equilibrium", *wall, speed_dist, bool(msd))
     if key in _CACHE:
@@ -613,7 +632,10 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
             for q in range(per_batch):
                 pid = first + b * per_batch + q
                 state = _stream_state(seed, pid)
-                state = _uniform_in_pore(cells, h, pos, idx, state)
+                if cells.shape[0] > 0:
+                    state = _uniform_in_pore(cells, h, pos, idx, state)
+                else:
+                    state = _uniform_in_codes(geom, h, pos, idx, state)
                 state = _isotropic(u, state)
                 speed, state = _speed(SPEED, vmean, state)
                 for d in range(3):
@@ -657,3 +679,39 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
 
     _CACHE[key] = _equilibrium
     return _equilibrium
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# geometry: the voxel wall area without full-size temporaries
+@njit(cache=True)
+def _wall_faces(pore, periodic, open_axis):
+    """(3,) int64: pore-solid voxel faces normal to x, y, z; the outside counts as solid, except across periodic axes
+    (wrap to the opposite layer) and ``open_axis`` (-1: none), where it is open.
+    """
+    n = np.array(pore.shape, dtype=np.int64)
+    faces = np.zeros(3, dtype=np.int64)
+    idx = np.empty(3, dtype=np.int64)
+    for i in range(n[0]):
+        for j in range(n[1]):
+            for k in range(n[2]):
+                p = pore[i, j, k] != 0
+                idx[0], idx[1], idx[2] = i, j, k
+                for d in range(3):
+                    if idx[d] + 1 < n[d]:
+                        nxt = idx.copy()
+                        nxt[d] += 1
+                        q = pore[nxt[0], nxt[1], nxt[2]] != 0
+                        if p != q:
+                            faces[d] += 1
+                        continue
+                    # the last layer of axis d: its high face, and the low face of layer 0 on the same line
+                    if periodic[d]:
+                        first = idx.copy()
+                        first[d] = 0
+                        if p != (pore[first[0], first[1], first[2]] != 0):
+                            faces[d] += 1
+                    elif d != open_axis:
+                        first = idx.copy()
+                        first[d] = 0
+                        faces[d] += int(p) + int(pore[first[0], first[1], first[2]] != 0)
+    return faces

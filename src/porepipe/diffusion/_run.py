@@ -25,6 +25,7 @@ UNITS = {
     "D_err": "voxel^2/jiffie",
     "D_eff": "voxel^2/jiffie",
     "D_ref": "voxel^2/jiffie",
+    "D_eff_err": "voxel^2/jiffie",
     "mean_free_flight": "voxel",
     "four_v_over_s": "voxel",
     "length": "voxel",
@@ -42,9 +43,7 @@ UNITS = {
 def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
     data = {}
     for key, value in result.values.items():
-        attrs = (
-            {"units": "m^2/s"} if key.endswith("_m2_s") else ({"units": UNITS[key]} if key in UNITS else {})
-        )
+        attrs = {"units": "m^2/s"} if key.endswith("_m2_s") else {"units": UNITS.get(key, "1")}
         data[key] = xr.Variable((), float(value), attrs)
     arr = result.arrays
     if "profile" in arr:
@@ -54,15 +53,16 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
         data["concentration"] = xr.Variable(
             ("axial_bin",),
             arr["concentration"],
-            {"meaning": "time-averaged particles per voxel³ per simulated particle"},
+            {"units": "voxel^-3", "meaning": "time-averaged particles per voxel³ per simulated particle"},
         )
     if "hit_map" in arr:
         data["hit_map"] = xr.Variable(
             ("face", "map_a", "map_b"),
             arr["hit_map"],
             {
+                "units": "1",
                 "meaning": "wall hits per face (-x,+x,-y,+y,-z,+z: the direction of flight) "
-                "binned over the face's two tangent axes in increasing order"
+                "binned over the face's two tangent axes in increasing order",
             },
         )
     if "orientation" in arr:
@@ -70,8 +70,9 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
             ("cos_axis_bin", "azimuth_bin"),
             arr["orientation"],
             {
+                "units": "1",
                 "meaning": "flights by cos(angle to the transport axis) in [-1, 1] and "
-                "azimuth about it in [-pi, pi)"
+                "azimuth about it in [-pi, pi)",
             },
         )
     for key in sorted(arr.keys() - {"profile", "concentration", "hit_map", "orientation", "msd", "msd_time"}):
@@ -80,6 +81,10 @@ def _dataset(result: _api.DiffusionResult, settings: Settings) -> xr.Dataset:
     if "msd" in arr:
         data["msd"] = xr.Variable(("time", "xyz"), arr["msd"], {"units": "voxel^2"})
         data["time"] = xr.Variable(("time",), arr["msd_time"], {"units": "jiffie"})
+    if "history" in arr:  # statistical error against cost, one row per round (see _api.HISTORY_FIELDS)
+        for k, name in enumerate(_api.HISTORY_FIELDS):
+            meaning = "this round's kernel CPU s" if name == "round_cpu_s" else "cumulative after the round"
+            data[f"history_{name}"] = xr.Variable(("round",), arr["history"][:, k], {"meaning": meaning})
     ds = xr.Dataset(data)
     ds.attrs["definitions"] = _api.__doc__.split("Definitions (also written into every result)")[1].strip()
     ds.attrs["settings"] = json.dumps(settings.model_dump(mode="json"), sort_keys=True)
@@ -150,6 +155,10 @@ def run(
                 result.values["D"] = result.values[f"D_{name}"]
                 result.values["D_err"] = result.values[f"D_{name}_err"]
         else:
+            # the volume read here is ours: it becomes the distance codes in place (1 byte per voxel in all)
+            pore = _api.prepare(
+                np.ascontiguousarray(pore, np.uint8), voxel_um, periodic, axis.index, in_place=True
+            )
             result = _api.transport(
                 pore, axis.index, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint
             )

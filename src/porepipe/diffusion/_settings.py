@@ -6,6 +6,8 @@ import enum
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from porepipe.diffusion._capillary import CapillaryGeometry
+
 
 class Axis(str, enum.Enum):
     """Transport axis: particles enter at its low face and leave at its high face."""
@@ -69,7 +71,7 @@ class SpeedDist(str, enum.Enum):
 class GasSettings(BaseModel):
     """``diffusion.gas``: the event-driven hard-sphere gas of setup ``edmd`` (Mahler 2001 §3.3-3.6)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     particles: dict[str, int] = Field(
         default_factory=lambda: {"N2": 1000}, description="particles per species (Table 3.1 names)"
@@ -110,7 +112,7 @@ class ReactionSettings(BaseModel):
     when its probability is > 0.
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
 
     w: float = Field(0.01, ge=0, le=1, description="probability that a wall hit turns A into P")
     w_reverse: float = Field(0.0, ge=0, le=1, description="probability that a wall hit turns P back into A")
@@ -119,6 +121,15 @@ class ReactionSettings(BaseModel):
     )
     particles: int = Field(20000, ge=2, description="reactant histories (each enters at the inlet face)")
     z_bins: int = Field(32, ge=0, description="axial bins of the reactive-hit map z_R(z) (0 = off)")
+    adsorption: float = Field(0.0, ge=0, le=1, description="probability that a wall hit adsorbs the particle")
+    residence_jiffies: float = Field(0.0, ge=0, description="mean residence time of an adsorbed particle")
+    residence_law: str = Field("fixed", pattern="^(fixed|exponential)$", description="fixed or exponential")
+    poisoning: float = Field(
+        0.0,
+        ge=0,
+        description="site activity decays by exp(-poisoning) per reaction at a voxel (between rounds)",
+    )
+    rounds: int = Field(1, ge=1, description="rounds of `particles` histories (poisoning acts between them)")
 
 
 class Settings(BaseModel):
@@ -171,6 +182,12 @@ class Settings(BaseModel):
     gas: GasSettings = Field(default_factory=GasSettings, description="event-driven gas (setup edmd)")
     reactions: ReactionSettings = Field(
         default_factory=ReactionSettings, description="wall reactions (setup reaction)"
+    )
+
+    geometry: CapillaryGeometry | None = Field(
+        None,
+        description="a synthetic capillary built per resolution instead of a segmented volume "
+        "(kind: square|cylinder|slit|constricted|pocketed|rough, sizes in voxels or *_um)",
     )
 
     @field_validator("species")

@@ -9,11 +9,14 @@ from porepipe.granular._api import polygon_overlap as polygon_overlap
 from porepipe.granular._api import time_step_rule as time_step_rule
 from porepipe.granular._measure import contact_persistence as contact_persistence
 from porepipe.granular._measure import coordination as coordination
+from porepipe.granular._measure import diagonal_strain as diagonal_strain
+from porepipe.granular._measure import displacement_grid as displacement_grid
 from porepipe.granular._measure import force_directions as force_directions
 from porepipe.granular._measure import force_magnitudes as force_magnitudes
 from porepipe.granular._measure import frame_contacts as frame_contacts
 from porepipe.granular._measure import frame_particles as frame_particles
 from porepipe.granular._measure import packing_fraction as packing_fraction
+from porepipe.granular._measure import plane_strain_constants as plane_strain_constants
 from porepipe.granular._measure import polygon_area as polygon_area
 from porepipe.granular._measure import pressure_profile as pressure_profile
 from porepipe.granular._measure import repose_angle_fit as repose_angle_fit
@@ -63,6 +66,8 @@ __all__ = [
     "closure_linear",
     "contact_persistence",
     "coordination",
+    "diagonal_strain",
+    "displacement_grid",
     "ellipse_polygon",
     "fit_janssen",
     "force_directions",
@@ -76,6 +81,7 @@ __all__ = [
     "parabolic_r_p",
     "parabolic_sigma_zz",
     "parabolic_xi",
+    "plane_strain_constants",
     "polygon_area",
     "polygon_overlap",
     "polygon_properties",

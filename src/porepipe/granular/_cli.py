@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.numba_config import set_threads
 
 
 def main(args) -> int:
@@ -21,6 +21,8 @@ def main(args) -> int:
         raise PorepipeError(
             f"{args.scene}: the scene has no `granular:` section with particles, blocks or drop_sources"
         )
+    from porepipe._shared.numba_config import set_threads
+
     threads = set_threads(args.threads)
     run(
         settings,
@@ -42,7 +44,12 @@ def register(subparsers) -> None:
     p.add_argument(
         "--checkpoint", help="checkpoint file, written every granular.checkpoint_every_steps steps"
     )
-    p.add_argument("--resume", action="store_true", help="continue from --checkpoint if it exists")
+    p.add_argument(
+        "--resume",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="continue from --checkpoint if it exists",
+    )
     p.add_argument("--threads", type=int, default=None)
-    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--quiet", action=argparse.BooleanOptionalAction, default=False, help="no progress lines")
     p.set_defaults(func=main)

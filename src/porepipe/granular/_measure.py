@@ -472,3 +472,71 @@ def contact_persistence(before: dict, after: dict, n_particles: int) -> float:
     if not a:
         raise PorepipeError("contact_persistence: no particle-particle contacts in the first frame")
     return len(a & pairs(after)) / len(a)
+
+
+# -- strain and plane-strain elastic constants (§4.3.3) -----------------------------------------------------------
+def displacement_grid(before, after, x_edges, y_edges, active=None) -> dict[str, np.ndarray]:
+    """Mean particle displacement in a grid of test areas (cells by the particles' positions ``before``).
+
+    Parameters
+    ----------
+    before, after : (N, 2) array_like
+        Centroids in the reference and the deformed state.
+    x_edges, y_edges : array_like
+        Cell edges.
+    active : (N,) bool array_like, optional
+        Particles to use.
+
+    Returns
+    -------
+    dict
+        ``u`` (ny, nx, 2) mean displacement, ``x`` (ny, nx, 2) mean reference position, ``count`` (ny, nx); cells
+        without particles are NaN.
+    """
+    x0 = np.asarray(before, dtype=np.float64)
+    du = np.asarray(after, dtype=np.float64) - x0
+    if active is not None:
+        keep = np.asarray(active, bool)
+        x0, du = x0[keep], du[keep]
+    xe, ye = np.asarray(x_edges, dtype=np.float64), np.asarray(y_edges, dtype=np.float64)
+    ix = np.digitize(x0[:, 0], xe) - 1
+    iy = np.digitize(x0[:, 1], ye) - 1
+    ok = (ix >= 0) & (ix < len(xe) - 1) & (iy >= 0) & (iy < len(ye) - 1)
+    shape = (len(ye) - 1, len(xe) - 1)
+    flat = np.ravel_multi_index((iy[ok], ix[ok]), shape)
+    count = np.bincount(flat, minlength=shape[0] * shape[1]).reshape(shape)
+    u = np.full((*shape, 2), np.nan)
+    x = np.full((*shape, 2), np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for c in range(2):
+            u[..., c] = np.bincount(flat, du[ok, c], shape[0] * shape[1]).reshape(shape) / count
+            x[..., c] = np.bincount(flat, x0[ok, c], shape[0] * shape[1]).reshape(shape) / count
+    return {"u": u, "x": x, "count": count}
+
+
+def diagonal_strain(grid: dict) -> tuple[np.ndarray, np.ndarray]:
+    """u_xx = du_x/dx and u_zz = du_z/dz by central differences of the cell means (Eqs. 4.7-4.9).
+
+    The differences are taken between the neighbouring cells' mean reference positions; edge cells are NaN.
+    """
+    u, x = grid["u"], grid["x"]
+    uxx = np.full(u.shape[:2], np.nan)
+    uzz = np.full(u.shape[:2], np.nan)
+    uxx[:, 1:-1] = (u[:, 2:, 0] - u[:, :-2, 0]) / (x[:, 2:, 0] - x[:, :-2, 0])
+    uzz[1:-1, :] = (u[2:, :, 1] - u[:-2, :, 1]) / (x[2:, :, 1] - x[:-2, :, 1])
+    return uxx, uzz
+
+
+def plane_strain_constants(sigma_xx, sigma_zz, u_xx, u_zz) -> dict[str, np.ndarray]:
+    """Poisson ratio, Young's modulus and bulk modulus of an isotropic plane-strain medium (Eqs. 4.4, 4.5, 4.11).
+
+    nu = (s_zz u_xx - s_xx u_zz)/((u_xx - u_zz)(s_xx + s_zz)), E = s_xx (1 + nu)(1 - 2 nu)/(u_xx (1 - nu) + nu u_zz),
+    K = E/(2 (1 + nu)(1 - 2 nu)). Stress and strain must share a sign convention (e.g. both compression positive:
+    the strain of loading, i.e. minus that of an unloading of g).
+    """
+    sxx, szz, uxx, uzz = (np.asarray(v, dtype=np.float64) for v in (sigma_xx, sigma_zz, u_xx, u_zz))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nu = (szz * uxx - sxx * uzz) / ((uxx - uzz) * (sxx + szz))
+        young = sxx * (1 + nu) * (1 - 2 * nu) / (uxx * (1 - nu) + nu * uzz)
+        bulk = 0.5 * young / ((1 + nu) * (1 - 2 * nu))
+    return {"nu": nu, "E": young, "K": bulk}

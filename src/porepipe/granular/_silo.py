@@ -42,6 +42,7 @@ def analyse_silo(
     contacts_per_window: float = 15.0,
     slab_rows: float = 4.0,
     floor_zone: float = 1.0,
+    mu: float | None = None,
 ) -> dict:
     """Janssen read-out of a settled 2-D silo.
 
@@ -64,6 +65,9 @@ def analyse_silo(
     floor_zone : float
         The fits leave out the lowest ``floor_zone`` silo widths (the floor restrains the grains there and the
         wall pressure drops below Janssen's, as in real flat-bottomed silos).
+    mu : float, optional
+        Grain-wall friction of the scene: gives ``wall_at_coulomb_limit``, the fraction of wall contacts with
+        |F_t| >= 0.98 mu F_n (sliding or about to).
 
     Returns
     -------
@@ -72,7 +76,7 @@ def analyse_silo(
         ``depth_m`` / ``wall_pressure`` / ``wall_running_mean`` (profile, both walls averaged), ``k_local``
         (per slab), ``slab_depth_m``, ``k``, ``k_std``, ``fit`` (k, mu_j free), ``fit_k_fixed``, ``floor_share``
         and ``wall_share`` (of the weight), ``mu_wall_mobilised`` (sum of the walls' upward traction over the sum of
-        their normal forces: the mu_j that Janssen's tau_w = mu_j sigma_xx assumes), ``bounds`` (Rankine/Jaky for the scene's mu if given), ``n_particles``.
+        their normal forces: the mu_j that Janssen's tau_w = mu_j sigma_xx assumes), ``wall_at_coulomb_limit``, ``bounds`` (Rankine/Jaky for the scene's mu if given), ``n_particles``.
     """
     parts = M.frame_particles(tables, frame)
     contacts = M.frame_contacts(tables, frame)
@@ -150,9 +154,16 @@ def analyse_silo(
         "wall_share": float(contacts["fy_N"][on_walls].sum() / weight),
         # mobilised wall friction: upward wall traction over wall pressure, summed over both walls
         "mu_wall_mobilised": float(contacts["fy_N"][on_walls].sum() / fn.sum()),
+        "wall_at_coulomb_limit": _at_limit(contacts, on_walls, mu),
         "n_particles": int(act.sum()),
     }
     return out
+
+
+def _at_limit(contacts, rows, mu):
+    if mu is None or not rows.any():
+        return float("nan")
+    return float(np.mean(np.abs(contacts["ft_N"][rows]) >= 0.98 * mu * contacts["fn_N"][rows]))
 
 
 def _in_box(xy, box):

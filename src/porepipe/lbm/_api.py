@@ -76,8 +76,9 @@ class PermeabilityResult:
                 {"units": "voxel^2", "long_name": "κ̂ by pressure-gradient/velocity method"},
             ),
         }
-        for name, values in self.history.items():
-            data[f"history_{name}"] = ("check", np.asarray(values, dtype=np.float64))
+        for name, values in self.history.items():  # κ̂ in voxel² like kappa_lu; steps, changes, Mach: "1"
+            units = "voxel^2" if name == "kappa" else "1"
+            data[f"history_{name}"] = ("check", np.asarray(values, dtype=np.float64), {"units": units})
         attrs = {k: (v.value if hasattr(v, "value") else v) for k, v in self.attrs().items()}
         return xr.Dataset(
             {k: xr.Variable(*v) for k, v in data.items()},

@@ -10,10 +10,11 @@ import dataclasses
 
 import numpy as np
 
+from porepipe.lbm._darcy import Sampler
 from porepipe.lbm._domain import Lattice, build_lattice
-from porepipe.lbm._lattice import viscosity
+from porepipe.lbm._lattice import W, viscosity
 from porepipe.lbm._settings import Settings
-from porepipe.lbm._solver import Run, solve
+from porepipe.lbm._solver import Run, _threads_for, make_stepper, solve
 
 #: terms of the Fourier series (thesis: M = 200; M > 50 needed at the walls)
 SERIES_TERMS = 200
@@ -179,6 +180,46 @@ def mid_section_velocity_error(case: Case, run: Run, settings: Settings, b: int)
     ref = square_duct_velocity(b, x1, x2, drive).reshape(b, b)
     err = u - ref
     return float(np.mean(np.abs(err / ref))), float(np.mean(np.abs(err)))
+
+
+#: Table 6.1 of the thesis (BGK channel, τ̂ = 0.857): B -> (dt, t_end, δv [1e-8], δρ [1e-4])
+TABLE_6_1 = {
+    4: (1000, 20_000, 2.34, 0.174),
+    8: (1000, 20_000, 2.80, 0.174),
+    16: (5000, 30_000, 4.27, 0.869),
+    32: (5000, 50_000, 7.45, 0.869),
+    64: (10_000, 120_000, 1.33, 1.74),
+}
+
+
+def convergence_changes(
+    case: Case, settings: Settings, t_end: int, dt: int, uniform_start: bool = True
+) -> tuple[float, float]:
+    """(δv, δρ) of thesis Eq. 6.1.30 at ``t_end`` over the window ``dt``: the largest |w(t) − w(t − dt)| / |w(t)|
+    over the sample's pore nodes, w = the flow component v3 or the density ρ (no velocity floor, no shift).
+
+    ``uniform_start``: the thesis's initial condition n_i = 1/N_v (not the rest equilibrium n_i = ω_i).
+    """
+    lat = case.lattice
+    n = lat.n_nodes
+    src = np.zeros(19 * n, dtype=np.dtype(settings.precision.value))
+    if uniform_start:
+        src[:] = np.repeat(1 / 19 - W, n)  # zero-centred storage: f̃_i = f_i − ω_i
+    dst = np.zeros_like(src)
+    fields = np.zeros((4, n))
+    step = make_stepper(settings, lat)
+    sel = Sampler.of(lat).sample_nodes
+    with _threads_for(n):
+        for n_steps in (t_end - dt, dt):
+            before = fields.copy()
+            step(src, dst, fields, True, n_steps)
+            if n_steps % 2 == 1:
+                src, dst = dst, src
+    v_new, v_old = fields[1, sel], before[1, sel]
+    rho_new, rho_old = 1 + fields[0, sel], 1 + before[0, sel]
+    return float(np.max(np.abs(v_new - v_old) / np.abs(v_new))), float(
+        np.max(np.abs(rho_new - rho_old) / rho_new)
+    )
 
 
 def _sample_nodes(lat: Lattice) -> np.ndarray:

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import argparse
 
-from porepipe._shared.errors import PorepipeError
 from porepipe._shared.overrides import given_options, merge_settings
 from porepipe.lbm._settings import (
     Axis,
@@ -84,14 +83,6 @@ def main(args) -> int:
     return 0
 
 
-def _bool(text: str) -> bool:
-    if text.lower() in ("1", "true", "yes", "on"):
-        return True
-    if text.lower() in ("0", "false", "no", "off"):
-        return False
-    raise PorepipeError(f"expected true/false, got {text!r}")
-
-
 def register(subparsers) -> None:
     """Add ``permeability`` to the ``porepipe`` command."""
     p = subparsers.add_parser("permeability", help="lattice-Boltzmann permeability of a binary volume")
@@ -130,10 +121,10 @@ def register(subparsers) -> None:
     p.add_argument("--precision", choices=[s.value for s in Precision])
     p.add_argument("--gradient", choices=[s.value for s in Gradient])
     p.add_argument("--velocity", choices=[s.value for s in Velocity])
-    p.add_argument("--mirror", type=_bool)
-    p.add_argument("--write-fields", dest="write_fields", type=_bool)
-    p.add_argument("--write-vti", dest="write_vti", type=_bool)
-    p.add_argument("--accept-unconverged", dest="accept_unconverged", type=_bool)
+    p.add_argument("--mirror", action=argparse.BooleanOptionalAction)
+    p.add_argument("--write-fields", dest="write_fields", action=argparse.BooleanOptionalAction)
+    p.add_argument("--write-vti", dest="write_vti", action=argparse.BooleanOptionalAction)
+    p.add_argument("--accept-unconverged", dest="accept_unconverged", action=argparse.BooleanOptionalAction)
     for name, kind in (
         ("tau", float),
         ("tau-bulk", float),

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import base64
 from pathlib import Path
 
 import numpy as np
 
-from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.store import ResultWriter
 from porepipe.lbm._api import PermeabilityResult
 
@@ -57,13 +55,8 @@ def write_result(
     return path
 
 
-def _encode(array: np.ndarray) -> str:
-    raw = np.ascontiguousarray(array).astype("<f8").tobytes()
-    return base64.b64encode(np.array([len(raw)], dtype="<u8").tobytes() + raw).decode("ascii")
-
-
 def write_vti(path, fields: dict[str, np.ndarray], *, spacing: float, origin=(0.0, 0.0, 0.0)) -> Path:
-    """Write cell data on a regular grid as VTK XML ImageData (base64 binary, UInt64 headers), atomically.
+    """Write cell data on a regular grid as VTK XML ImageData through the VTK library (zlib, appended binary).
 
     Parameters
     ----------
@@ -71,38 +64,10 @@ def write_vti(path, fields: dict[str, np.ndarray], *, spacing: float, origin=(0.
         Scalars or 3-vectors per voxel (cell). NaN is written as NaN.
     spacing : float
         Voxel edge (µm).
+    origin : sequence of 3 float
+        Corner of voxel (0, 0, 0), µm.
     """
-    path = Path(path)
-    shape = None
-    arrays = []
-    for name, data in fields.items():
-        vector = data.ndim == 4
-        grid = data.shape[1:] if vector else data.shape
-        shape = shape or grid
-        # VTK order: x fastest, then y, then z; vector components interleaved per cell
-        values = np.stack(list(data), axis=-1).transpose(2, 1, 0, 3) if vector else data.transpose(2, 1, 0)
-        ncomp = 3 if vector else 1
-        arrays.append(
-            f'        <DataArray type="Float64" Name="{name}" NumberOfComponents="{ncomp}" '
-            f'format="binary">\n{_encode(values)}\n        </DataArray>'
-        )
-    extent = f"0 {shape[0]} 0 {shape[1]} 0 {shape[2]}"
-    text = "\n".join(
-        [
-            '<?xml version="1.0"?>',
-            '<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
-            (
-                f'  <ImageData WholeExtent="{extent}" Origin="{origin[0]} {origin[1]} {origin[2]}" '
-                f'Spacing="{spacing} {spacing} {spacing}">'
-            ),
-            f'    <Piece Extent="{extent}">',
-            "      <CellData>",
-            *arrays,
-            "      </CellData>",
-            "    </Piece>",
-            "  </ImageData>",
-            "</VTKFile>",
-            "",
-        ]
-    )
-    return write_text_atomic(path, text)
+    from porepipe.export import write_image
+
+    cells = {name: np.moveaxis(data, 0, -1) if data.ndim == 4 else data for name, data in fields.items()}
+    return write_image(path, cells, voxel_um=spacing, origin_um=origin)

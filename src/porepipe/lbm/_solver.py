@@ -326,7 +326,9 @@ def _solve(
         done, fields, old_history = resumed
         history.update({k: list(v) for k, v in old_history.items() if k in history})
     start = done
-    reporter = Progress(label, settings.max_steps) if progress else None
+    kappa_stop = settings.stop is StopRule.kappa
+    tolerance = settings.tolerance_kappa if kappa_stop else settings.tolerance_density
+    reporter = Progress(label, settings.max_steps, target=tolerance) if progress else None
     window = settings.window_steps
     prev_fields = fields.copy() if done else None
     prev_kappa = history["kappa"][-1] if history["kappa"] else float("nan")
@@ -372,7 +374,11 @@ def _solve(
         for name, value in zip(history, (done, kappa, dv, drho, dk, err, mach)):
             history[name].append(value)
         if reporter is not None:
-            reporter.update(done, f"κ̂={kappa:.6g} δκ={dk:.2e} err={err:.1e} δv={dv:.2e} δρ={drho:.2e}")
+            reporter.update(
+                done,
+                f"κ̂={kappa:.6g} δκ={dk:.2e} err={err:.1e} δv={dv:.2e} δρ={drho:.2e}",
+                residual=max(err, dk) if kappa_stop else drho,
+            )
         prev_fields, prev_kappa = fields.copy(), kappa
         rule = _stop(settings, dv, drho, dk, err)
         if rule is not None:
@@ -389,6 +395,11 @@ def _solve(
     if not converged and checkpoint is not None:
         _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
     mlups = n * (done - start) / max(step_wall, 1e-12) / 1e6
+    if reporter is not None:
+        reporter.close(
+            f"{'converged (' + stopped_by + ' rule)' if converged else 'NOT converged (step limit)'} after {done} "
+            f"steps, κ̂ = {est.get(key_name, float('nan')):.6g} voxel², {mlups:.1f} MLUPS"
+        )
     mass = float(n + np.sum(src, dtype=np.float64))
     return Run(
         converged,

@@ -97,7 +97,7 @@ def run(
         subsample_um is not None or "sample_um" in src
     )  # a sub-sample leaves out the cells that do not fit
     sizes, _ = cell_sizes(settings, voxel_um, pore.shape)
-    progress = Progress("lpt", total=sum(s <= min(pore.shape) for s in sizes))
+    progress = Progress(f"lpt {Path(binary_path).name}", total=sum(s <= min(pore.shape) for s in sizes))
     ds = local_porosity_analysis(
         pore,
         voxel_um=voxel_um,
@@ -106,6 +106,7 @@ def run(
         skip_too_large=is_part,
         progress=progress,
     )
+    progress.close(f"local porosity distributions for {progress.total} cell sizes")
     ds.attrs["sample"] = note
     digest = result_hash("lpt", settings=settings, inputs=[binary_path], subsample_um=subsample_um)
     with ResultWriter(out, stage="lpt", scene=src.get("scene", ""), scene_hash=digest, threads=threads) as w:

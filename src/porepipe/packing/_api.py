@@ -342,7 +342,9 @@ def _integrate(
     aux = np.zeros((n, 3))
     nbr = None
     prog = (
-        Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s) if progress else None
+        Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s, target=0.5)
+        if progress
+        else None
     )
     converged = n == 0
     while not converged and state.step < stage.steps:
@@ -449,10 +451,22 @@ def _integrate(
             wall_s=time.perf_counter() - t_step,
         )
         if prog is not None:
-            prog.update(s, f"converged {nconv}/{n}, max sigma {smax:.4g}, E_kin {ke:.4g}", force=converged)
+            prog.update(
+                s,
+                f"converged {nconv}/{n}, max sigma {smax:.4g}, E_kin {ke:.4g}",
+                force=converged,
+                residual=n - nconv,  # unconverged spheres: the run stops when none is left
+            )
         if checkpoint is not None and settings.checkpoint_every and s % settings.checkpoint_every == 0:
             checkpoint(state)
+    n_before = len(state.r)
     _finish_stage(state, stage, tables, box, periodic, conv)
+    if prog is not None:
+        deleted = n_before - len(state.r)
+        prog.close(
+            f"{'converged' if state.stage_converged[-1] else 'NOT converged'} after {state.stage_steps[-1]} steps, "
+            f"{len(state.r)} spheres" + (f", {deleted} unconverged deleted" if deleted else "")
+        )
 
 
 def _step_stats(sig: np.ndarray, conv: np.ndarray, aux: np.ndarray) -> tuple:

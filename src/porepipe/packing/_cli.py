@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import argparse
+
 
 def main(args) -> int:
     """Run the subcommand; returns the exit code."""
@@ -32,6 +34,11 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--out", required=True, help="output packing.h5")
     p.add_argument("--xyzr", help="also write the spheres as an 'x y z r' text file (µm)")
     p.add_argument("--checkpoint", help="checkpoint file, written every packing.checkpoint_every steps")
-    p.add_argument("--resume", action="store_true", help="continue from --checkpoint if it exists")
+    p.add_argument(
+        "--resume",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="continue from --checkpoint if it exists",
+    )
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=main)

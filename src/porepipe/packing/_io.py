@@ -1,7 +1,9 @@
 """Files of the packing stage: ``packing.h5`` (the result), ``xyzr`` export, checkpoints.
 
 ``packing.h5`` root datasets: ``centres_um`` (N, 3) float64, ``radii_um`` (N,) float64, ``types`` (N,) int32,
-``max_overlap`` (N,) float64, ``converged`` (N,) uint8; root attributes ``box_um`` (3,), ``periodic`` (3,) int8,
+``max_overlap`` (N,) float64, ``converged`` (N,) uint8, over the named dimensions ``sphere`` and ``xyz`` (HDF5
+dimension scales, so ``xarray.open_dataset(path, engine="h5netcdf")`` or :func:`porepipe.open_result` gives a
+Dataset over sphere × xyz), each with ``units``; root attributes ``box_um`` (3,), ``periodic`` (3,) int8,
 ``type_names``, ``converged`` (all spheres converged), ``stage_converged``, ``stage_steps``. The per-step history
 is an xarray Dataset in group ``history`` (``xarray.open_dataset(path, engine="h5netcdf", group="history")``);
 each stage's final spheres are kept under ``stages/<index>_<name>/``.
@@ -19,9 +21,26 @@ import xarray as xr
 from porepipe._shared.atomic import atomic_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.spheres import write_xyzr
+from porepipe._shared.store import label_dims
+from porepipe._shared.units import DIMENSIONLESS, MICROMETRE
 from porepipe.packing._types import EFFECT_BITS, HISTORY_KEYS, Packing, State
 
 _SPHERE_KEYS = ("centres_um", "radii_um", "types", "max_overlap", "converged")
+#: axes and units of the sphere datasets (max_overlap is relative to the smaller radius: dimensionless)
+_SPHERE_DIMS = {
+    "centres_um": ("sphere", "xyz"),
+    "radii_um": ("sphere",),
+    "types": ("sphere",),
+    "max_overlap": ("sphere",),
+    "converged": ("sphere",),
+}
+_SPHERE_UNITS = {
+    "centres_um": MICROMETRE,
+    "radii_um": MICROMETRE,
+    "types": DIMENSIONLESS,
+    "max_overlap": DIMENSIONLESS,
+    "converged": DIMENSIONLESS,
+}
 _STATE_ARRAYS = ("x", "v", "f", "r", "types", "frozen", "x_build", "r_build", "ids")
 _STATE_INTS = ("since_build", "stage", "step", "nconv_prev", "next_id")
 
@@ -46,6 +65,8 @@ def write_packing(writer, packing: Packing) -> None:
         g = h5.create_group(f"stages/{i}_{snap['name']}")
         for key in _SPHERE_KEYS:
             g.create_dataset(key, data=snap[key])
+        _describe_spheres(g)
+    _describe_spheres(h5)
     writer.attrs.update(
         {
             "box_um": np.asarray(packing.box_um, dtype=np.float64),
@@ -58,6 +79,13 @@ def write_packing(writer, packing: Packing) -> None:
         }
     )
     writer.write_table(history_dataset(packing), group="history")
+
+
+def _describe_spheres(group) -> None:
+    """Units and named dimensions (sphere, xyz) on the sphere datasets of ``group``."""
+    for key, units in _SPHERE_UNITS.items():
+        group[key].attrs["units"] = units
+    label_dims(group, _SPHERE_DIMS, coords={"xyz": ["x", "y", "z"]})
 
 
 def read_packing(path) -> dict:

@@ -13,10 +13,16 @@ _PUBLIC = {
     "varying_quantities": "_analysis",
     "build_report": "_api",
     "Table": "_thesis",
+    "scene_tables": "_thesis",
+    "startup_table": "_analysis",
+    "SECTIONS": "_api",
+    "Context": "_api",
     "thesis_tables": "_thesis",
 }
 
 __all__ = [
+    "SECTIONS",
+    "Context",
     "Reference",
     "Table",
     "build_report",
@@ -25,6 +31,8 @@ __all__ = [
     "pareto_front",
     "reference_limit",
     "runs_of",
+    "scene_tables",
+    "startup_table",
     "thesis_tables",
     "varying_quantities",
 ]

@@ -22,7 +22,16 @@ from porepipe.report._analysis import (
     runs_of as runs_of,
 )
 from porepipe.report._analysis import (
+    startup_table as startup_table,
+)
+from porepipe.report._analysis import (
     varying_quantities as varying_quantities,
+)
+from porepipe.report._api import (
+    SECTIONS as SECTIONS,
+)
+from porepipe.report._api import (
+    Context as Context,
 )
 from porepipe.report._api import (
     build_report as build_report,
@@ -31,10 +40,15 @@ from porepipe.report._thesis import (
     Table as Table,
 )
 from porepipe.report._thesis import (
+    scene_tables as scene_tables,
+)
+from porepipe.report._thesis import (
     thesis_tables as thesis_tables,
 )
 
 __all__ = [
+    "SECTIONS",
+    "Context",
     "Reference",
     "Table",
     "build_report",
@@ -43,6 +57,8 @@ __all__ = [
     "pareto_front",
     "reference_limit",
     "runs_of",
+    "scene_tables",
+    "startup_table",
     "thesis_tables",
     "varying_quantities",
 ]

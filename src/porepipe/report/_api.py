@@ -5,6 +5,7 @@ The page is static HTML with relative links only (no scripts, no network), so it
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import html
 import os
@@ -18,17 +19,18 @@ from porepipe import __version__
 from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
-from porepipe.report import _figures
-from porepipe.report._analysis import error_cost_table, varying_quantities
+from porepipe.report import _figures, _labels
+from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
+from porepipe.report._diffusion import section as diffusion_section
 from porepipe.report._permeability_cost import permeability_cost_parts
-from porepipe.report._settings import Settings
-from porepipe.report._thesis import Table, thesis_tables
+from porepipe.report._settings import Clock, Settings
+from porepipe.report._thesis import Table, scene_tables
 from porepipe.sweep import FULL, parse_name
 
 _CSS = """body{font-family:sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}
 table{border-collapse:collapse;font-size:12px;margin:.5em 0}td,th{border:1px solid #bbb;padding:2px 6px;
-text-align:right}th{background:#eee}td.l,th.l{text-align:left}img{max-width:100%;border:1px solid #ddd}
-.note{color:#555;font-size:12px}h2{border-bottom:1px solid #ccc}"""
+text-align:right}th{background:#eee}td.l,th.l{text-align:left}img{max-width:100%;border:1px solid #ddd;display:block}
+.note{color:#555;font-size:12px}h2{border-bottom:1px solid #ccc}ul.headline{font-size:15px;line-height:1.5}"""
 
 
 def _by_resolution(paths) -> dict[float, Path]:
@@ -84,25 +86,291 @@ def _machine(ds: xr.Dataset) -> str:
     return _table_html(["", ""], rows, 2)
 
 
-def _limits_rows(ds: xr.Dataset) -> list[list]:
-    rows = []
-    for q in ds.quantity.values:
+def _limit_cells(sel) -> tuple[dict, str]:
+    """Numbers of one fit for the CSV (NaN where unsupported) and its text for the page."""
+    if sel.status.item() == "ok":
+        q_inf, err, p = float(sel.q_inf), float(sel.err), float(sel.p)
+        return {"q_inf": q_inf, "err": err, "p": p, "status": "ok"}, f"{q_inf:.6g} ± {err:.2g} (p = {p:.3g})"
+    nan = float("nan")
+    return {"q_inf": nan, "err": nan, "p": nan, "status": sel.status.item()}, f"no limit: {sel.why.item()}"
+
+
+def _limits_rows(ds: xr.Dataset, quantities) -> tuple[list[dict], list[list]]:
+    """One row per (quantity, sample size) with data: numeric CSV records and the page's cells."""
+    records, cells = [], []
+    for q in quantities:
+        unit = _labels.unit_of(ds, q)
         for s in ds.sample_um.values:
             v = ds.value.sel(quantity=q, sample_um=s).values
             if not np.isfinite(v).any():
                 continue
+            rec = {
+                "quantity": q,
+                "unit": unit,
+                "sample_um": float(s),
+                "resolutions": int(np.isfinite(v).sum()),
+            }
+            rec["finest_value"] = float(v[np.isfinite(v)][-1])
             texts = []
             for form in ("power", "linear"):
-                sel = ds.sel(quantity=q, form=form, sample_um=s)
-                if sel.status.item() == "ok":
-                    texts.append(f"{float(sel.q_inf):.6g} ± {float(sel.err):.2g} (p = {float(sel.p):.3g})")
-                else:
-                    texts.append(f"no limit: {sel.why.item()}")
-            finest = v[np.isfinite(v)][-1]
-            rows.append(
-                [str(q), "whole" if s == FULL else f"{s:g}", int(np.isfinite(v).sum()), finest, *texts]
+                numbers, text = _limit_cells(ds.sel(quantity=q, form=form, sample_um=s))
+                rec.update({f"{form}_{k}": x for k, x in numbers.items()})
+                texts.append(text)
+            records.append(rec)
+            cells.append(
+                [
+                    _labels.title(q),
+                    _labels.pretty_unit(unit) or "not stated",
+                    "whole" if s == FULL else f"{s:g}",
+                    rec["resolutions"],
+                    rec["finest_value"],
+                    *texts,
+                ]
             )
-    return rows
+    return records, cells
+
+
+@dataclasses.dataclass
+class Context:
+    """What every report section reads: the sweep, the output folder, the settings and the input files."""
+
+    ds: xr.Dataset
+    out_dir: Path
+    settings: Settings
+    quantities: list[str]
+    grey: dict[float, Path]
+    binary: dict[float, Path]
+    lpt: dict[float, Path]
+    inputs: dict = dataclasses.field(default_factory=dict)
+
+
+def _figure_html(png: str, alt: str, note: str) -> str:
+    return f"<img src='{png}' alt='{html.escape(alt)}'><p class=note>{note}</p>"
+
+
+def section_machine(ctx: Context) -> list[str]:
+    """Where and with what the runs were made."""
+    return ["<h2>Machine</h2>", _machine(ctx.ds)]
+
+
+def section_quantities(ctx: Context) -> list[str]:
+    """Each quantity against resolution with its fit and limit."""
+    if not ctx.quantities:  # the figure still exists: the workflow's report() lists it
+        _figures.message_figure("no quantity changes with resolution", ctx.out_dir / "quantities.png")
+        return ["<h2>Quantities against resolution</h2><p>No quantity changes with resolution.</p>"]
+    rows = _figures.quantities_figure(
+        ctx.ds, ctx.quantities, ctx.out_dir / "quantities.png", ctx.settings.dpi
+    )
+    _figures.write_csv(ctx.out_dir / "quantities.csv", rows)
+    return [
+        "<h2>Quantities against resolution</h2>",
+        _figure_html(
+            "quantities.png",
+            "quantities against voxel edge",
+            "Data: <a href='quantities.csv'>quantities.csv</a>; black square: the limit a → 0 with its error bar "
+            "(only where the data support one). Matrix-phase twins of pore quantities and κ in other units are "
+            "left out.",
+        ),
+    ]
+
+
+def section_limits(ctx: Context) -> list[str]:
+    """The limits a → 0 of every quantity, with units; numbers in the CSV, never text."""
+    names = _labels.distinct(ctx.ds.quantity.values)
+    records, cells = _limits_rows(ctx.ds, names)
+    _figures.write_csv(ctx.out_dir / "limits.csv", records)
+    table = _table_html(
+        [
+            "quantity",
+            "unit",
+            "sample [µm]",
+            "resolutions",
+            "finest value",
+            f"q∞, p {ctx.ds.attrs.get('exponent', 'free')}",
+            "q∞, linear in a",
+        ],
+        cells,
+        2,
+    )
+    return [
+        "<h2>Limits a → 0</h2>",
+        table,
+        "<p class=note>Data: <a href='limits.csv'>limits.csv</a> (value, error and exponent in columns of their "
+        "own; NaN where the data support no limit, the reason in the status column)</p>",
+    ]
+
+
+#: a Pareto front whose dearest run costs less than this multiple of its cheapest is called overhead-bound
+OVERHEAD_BOUND = 2.0
+
+
+def times(factor: float) -> str:
+    """A cost factor for a sentence: ``31.6``, ``1,000``, ``2.5e+06``."""
+    if factor >= 1e6:
+        return f"{factor:.2g}"
+    return f"{factor:,.0f}" if factor >= 100 else f"{factor:.3g}"
+
+
+def _headline(row: dict) -> str:
+    name = _labels.title(row["quantity"])
+    factor = row["cost_factor_per_digit"]
+    if not np.isfinite(factor):
+        return (
+            f"{html.escape(name)}: no cost per digit yet ({row['front_runs']} run(s) with a known error on the "
+            "Pareto front: add resolutions)."
+        )
+    cost, err = row["front_cost_s"], row["front_rel_err"]
+    text = (
+        f"One more correct digit of <b>{html.escape(name)}</b> costs <b>×{times(factor)}</b> in {row['clock']} time "
+        f"(Pareto front: error {err[0]:.2g} for {cost[0]:.3g} s → {err[-1]:.2g} for {cost[-1]:.3g} s)."
+    )
+    if cost[-1] < OVERHEAD_BOUND * cost[0]:
+        text += (
+            f" These runs are overhead-bound: the finest cost only ×{cost[-1] / cost[0]:.2g} the coarsest, so fixed "
+            "costs per run (loading compiled kernels, reading files) dominate the computation at this size."
+        )
+    return text
+
+
+def section_error_cost(ctx: Context) -> list[str]:
+    """Relative error against compute cost per run, the headline cost of a digit per quantity."""
+    clock = Clock(ctx.settings.cost_clock).value
+    err_rows = error_cost_table(ctx.ds, ctx.quantities, clock)
+    summary = _figures.error_cost_figure(err_rows, ctx.out_dir / "error_cost.png", ctx.settings.dpi, clock)
+    _figures.write_csv(ctx.out_dir / "error_cost.csv", err_rows)
+    parts = ["<h2>What accuracy costs</h2>"]
+    if summary:
+        ordered = sorted(
+            summary, key=lambda r: not np.isfinite(r["cost_factor_per_digit"])
+        )  # known costs first
+        parts.append("<ul class=headline>" + "".join(f"<li>{_headline(r)}</li>" for r in ordered) + "</ul>")
+    else:
+        parts.append(
+            "<p>No quantity has a supported limit yet, so no errors can be shown: add resolutions.</p>"
+        )
+    parts.append(
+        _figure_html(
+            "error_cost.png",
+            "relative error against compute cost",
+            f"One point per run; cost = the computation's {'CPU' if clock == 'cpu' else 'wall'} time recorded in its result file plus the "
+            "voxelisation and segmentation of the volume it measured (interpreter start-up and imports excluded, "
+            "see below; the scene's report.cost_clock chooses CPU or wall time); "
+            "error relative to the supported limit. The cost of a digit comes from a straight line through the "
+            "Pareto front in log–log. Data: <a href='error_cost.csv'>error_cost.csv</a>",
+        )
+    )
+    return parts
+
+
+def section_startup(ctx: Context) -> list[str]:
+    """Compute time against the whole job's time: what interpreter start-up and imports add per job."""
+    rows = startup_table(ctx.ds)
+    if not rows:
+        return []
+    _figures.write_csv(ctx.out_dir / "startup.csv", rows)
+    keys = [
+        "stage",
+        "jobs",
+        "compute_wall_s",
+        "startup_s_per_job",
+        "job_wall_s",
+        "job_minus_compute_s_per_job",
+    ]
+    cells = [[r[k] for k in keys] for r in rows]
+    return [
+        "<h3>Compute and start-up</h3>",
+        _table_html(
+            [
+                "stage",
+                "jobs",
+                "compute [s]",
+                "start-up per job [s, median]",
+                "whole jobs [s]",
+                "whole job − compute per job [s, median]",
+            ],
+            cells,
+            1,
+        ),
+        "<p class=note>Compute: wall time of the computations as their result files record them (wall_s: "
+        "reading inputs, compiling kernels on a first run, computing, writing). Start-up: interpreter start-up "
+        "and imports before that (startup_s). Whole jobs: Snakemake's benchmarks of the same jobs, which hold "
+        "both and Snakemake's own overhead. The costs above use compute only. "
+        "Data: <a href='startup.csv'>startup.csv</a></p>",
+    ]
+
+
+def section_diffusion(ctx: Context) -> list[str]:
+    """Knudsen diffusion results of the sweep (porepipe.report._diffusion), if the scene ran diffusion."""
+    return diffusion_section(ctx.ds, ctx.inputs.get("sweep_path", ""), ctx.out_dir, ctx.settings.dpi)
+
+
+def section_permeability_cost(ctx: Context) -> list[str]:
+    """κ error against cost of the LBM sphere benchmark (results/benchmarks/lbm_spheres.json), if it was run."""
+    return permeability_cost_parts(ctx.out_dir, ctx.settings.dpi)
+
+
+def section_thesis(ctx: Context) -> list[str]:
+    """The thesis tables this scene produced numbers for; the others named in one line."""
+    shown, skipped = scene_tables(ctx.ds, ctx.settings.thesis_tables, ctx.settings.thesis_model)
+    parts = []
+    if shown:
+        parts.append("<h2>Thesis tables</h2>")
+        parts += [_thesis_html(t, ctx.out_dir) for t in shown]
+    if skipped:
+        names = ", ".join(t.key for t in skipped)
+        parts.append(
+            f"<p class=note>Thesis tables {html.escape(names)}: not shown, this scene produced no numbers for "
+            "them (5.1 and 5.2 also need report.thesis_model).</p>"
+        )
+    return parts
+
+
+def section_cross_sections(ctx: Context) -> list[str]:
+    """Mid cross-sections of the grey and binary volumes at each resolution, with scale bars."""
+    if not (ctx.settings.slices and (ctx.grey or ctx.binary)):
+        return []
+    axis = ctx.settings.slice_axis
+    rows = _figures.sections_figure(
+        ctx.grey, ctx.binary, axis, ctx.out_dir / "sections.png", ctx.settings.dpi
+    )
+    _figures.write_csv(ctx.out_dir / "sections.csv", rows)
+    return [
+        "<h2>Cross-sections</h2>",
+        _figure_html(
+            "sections.png",
+            "cross-sections",
+            f"Middle section normal to axis {'xyz'[axis]}; red bar: length in µm. Data: "
+            "<a href='sections.csv'>sections.csv</a>",
+        ),
+    ]
+
+
+def section_lpt(ctx: Context) -> list[str]:
+    """Local percolation and porosity spread against cell size."""
+    if not ctx.lpt:
+        return []
+    rows = _figures.lpt_figure(ctx.lpt, ctx.out_dir / "lpt.png", ctx.settings.dpi)
+    _figures.write_csv(ctx.out_dir / "lpt.csv", rows)
+    return [
+        "<h2>Local porosity theory</h2>",
+        _figure_html("lpt.png", "LPT curves", "Data: <a href='lpt.csv'>lpt.csv</a>"),
+    ]
+
+
+#: the page, top to bottom. A new section is one function ``f(ctx) -> list of HTML strings`` (empty: nothing to
+#: show) and one line here; extra input files reach it through ``build_report(..., inputs={name: paths})``.
+SECTIONS = [
+    section_machine,
+    section_error_cost,
+    section_startup,
+    section_diffusion,
+    section_permeability_cost,
+    section_quantities,
+    section_limits,
+    section_thesis,
+    section_cross_sections,
+    section_lpt,
+]
 
 
 def build_report(
@@ -114,8 +382,30 @@ def build_report(
     binary=(),
     lpt=(),
     scene_name: str = "",
+    inputs: dict | None = None,
 ) -> Path:
-    """Write the report page and its PNG/CSV files into the directory of ``out_html``."""
+    """Write the report page and its PNG/CSV files into the directory of ``out_html``.
+
+    Parameters
+    ----------
+    sweep_path : path-like
+        ``sweep.h5`` of the scene.
+    out_html : path-like
+        The page (``index.html``); figures and tables go beside it.
+    settings : Settings, optional
+        The scene's ``report`` section.
+    grey, binary, lpt : sequence of path-like
+        Volumes for the cross-sections and LPT results for their curves.
+    scene_name : str
+        Shown in the title (default: the sweep's scene attribute).
+    inputs : dict, optional
+        Further input files by name, for sections that need them (``Context.inputs``).
+
+    Returns
+    -------
+    pathlib.Path
+        The page written.
+    """
     settings = settings or Settings()
     ds = read_table(sweep_path)
     if "q_inf" not in ds:
@@ -124,6 +414,16 @@ def build_report(
     out_dir = out_html.parent
     out_dir.mkdir(parents=True, exist_ok=True)
     scene_name = scene_name or str(read_attrs(sweep_path).get("scene", ""))
+    ctx = Context(
+        ds=ds,
+        out_dir=out_dir,
+        settings=settings,
+        quantities=varying_quantities(ds, settings.quantities, settings.max_quantities),
+        grey=_by_resolution(grey),
+        binary=_by_resolution(binary),
+        lpt=_by_resolution(lpt),
+        inputs={"sweep_path": Path(sweep_path), **(inputs or {})},
+    )
     parts = [
         f"<h1>porepipe report: scene {html.escape(scene_name)}</h1>",
         (
@@ -131,91 +431,9 @@ def build_report(
             f"run against the limit and what it cost. Error bars are {ds.attrs.get('confidence', 0.95):.0%} "
             "intervals (max of fit covariance and leave-one-resolution-out).</p>"
         ),
-        "<h2>Machine</h2>",
-        _machine(ds),
     ]
-    quantities = varying_quantities(ds, settings.quantities, settings.max_quantities)
-    if quantities:
-        rows = _figures.quantities_figure(ds, quantities, out_dir / "quantities.png", settings.dpi)
-        _figures.write_csv(out_dir / "quantities.csv", rows)
-        parts += [
-            "<h2>Quantities against resolution</h2>",
-            "<img src='quantities.png' alt='quantities'>",
-            (
-                "<p class=note>Data: <a href='quantities.csv'>quantities.csv</a>; black square: the limit a → 0 "
-                "with its error bar (only where the data support one).</p>"
-            ),
-        ]
-    limits = _limits_rows(ds)
-    _figures.write_csv(
-        out_dir / "limits.csv",
-        [dict(zip(["quantity", "sample_um", "n", "finest", "power", "linear"], r)) for r in limits],
-    )
-    parts += [
-        "<h2>Limits a → 0</h2>",
-        _table_html(
-            [
-                "quantity",
-                "sample [um]",
-                "resolutions",
-                "finest value",
-                f"q_inf, p {ds.attrs.get('exponent', 'free')}",
-                "q_inf, linear in a",
-            ],
-            limits,
-            1,
-        ),
-        "<p class=note>Data: <a href='limits.csv'>limits.csv</a></p>",
-    ]
-    err_rows = error_cost_table(ds, quantities)
-    summary = _figures.error_cost_figure(err_rows, out_dir / "error_cost.png", settings.dpi)
-    _figures.write_csv(out_dir / "error_cost.csv", err_rows)
-    parts += [
-        "<h2>Error against cost</h2>",
-        "<img src='error_cost.png' alt='error against cost'>",
-        _table_html(
-            ["quantity", "runs on the Pareto front", "cost factor per extra digit"],
-            [[r["quantity"], r["front_runs"], r["cost_factor_per_digit"]] for r in summary],
-            1,
-        ),
-        (
-            "<p class=note>One point per run; cost = the run's wall time plus the voxelisation and segmentation "
-            "of the volume it measured; error relative to the supported limit. Data: "
-            "<a href='error_cost.csv'>error_cost.csv</a></p>"
-        ),
-    ]
-    if not err_rows:
-        parts.append(
-            "<p>No quantity has a supported limit yet, so no errors can be shown: add resolutions.</p>"
-        )
-    parts += permeability_cost_parts(out_dir, settings.dpi)  # results/benchmarks/lbm_spheres.json, if run
-    parts.append("<h2>Thesis tables</h2>")
-    parts += [
-        _thesis_html(t, out_dir) for t in thesis_tables(ds, settings.thesis_tables, settings.thesis_model)
-    ]
-    grey_by_a, binary_by_a = _by_resolution(grey), _by_resolution(binary)
-    if settings.slices and (grey_by_a or binary_by_a):
-        rows = _figures.sections_figure(
-            grey_by_a, binary_by_a, settings.slice_axis, out_dir / "sections.png", settings.dpi
-        )
-        _figures.write_csv(out_dir / "sections.csv", rows)
-        parts += [
-            "<h2>Cross-sections</h2>",
-            "<img src='sections.png' alt='cross-sections'>",
-            (
-                f"<p class=note>Middle section normal to axis {'xyz'[settings.slice_axis]}. Data: "
-                "<a href='sections.csv'>sections.csv</a></p>"
-            ),
-        ]
-    lpt_by_a = _by_resolution(lpt)
-    if lpt_by_a:
-        rows = _figures.lpt_figure(lpt_by_a, out_dir / "lpt.png", settings.dpi)
-        _figures.write_csv(out_dir / "lpt.csv", rows)
-        parts += [
-            "<h2>Local porosity theory</h2>",
-            "<img src='lpt.png' alt='LPT curves'>",
-            "<p class=note>Data: <a href='lpt.csv'>lpt.csv</a></p>",
-        ]
+    for section in SECTIONS:
+        parts += section(ctx)
     parts.append(f"<p class=note>Source: {html.escape(str(sweep_path))}</p>")
     page = (
         "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"

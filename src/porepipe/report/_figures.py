@@ -9,13 +9,17 @@ import numpy as np
 import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.ticker import NullFormatter
+from matplotlib.ticker import LogFormatterSciNotation, NullFormatter
+from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
 from porepipe._shared.store import open_volume
+from porepipe.report import _labels
 from porepipe.report._analysis import cost_per_digit, pareto_front, reference_limit
 from porepipe.sweep import FULL
 
 COLUMNS = 3
+#: markers of the error-against-cost series, cycled with the colours so neighbouring series differ in both
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "<", ">", "h", "p")
 
 
 def _figure(n_panels: int, width_in: float = 3.4, height_in: float = 2.7):
@@ -45,12 +49,13 @@ def write_csv(path: Path, rows: list[dict]) -> Path:
 
 
 def _sample_label(s: float) -> str:
-    return "whole sample" if s == FULL else f"L = {s:g} um"
+    return "whole sample" if s == FULL else f"sample L = {s:g} µm"
 
 
 def quantities_figure(ds: xr.Dataset, quantities, path: Path, dpi: int) -> list[dict]:
     """Every quantity against resolution, per sample size, with the fitted curve and the limit at a = 0."""
-    fig, axes = _figure(len(quantities))
+    fig, axes = _figure(len(quantities), height_in=3.0)
+    fig.subplots_adjust(left=0.09, wspace=0.42, hspace=0.75)
     rows = []
     a_max = float(ds.a_um.max())
     for ax, q in zip(axes, quantities):
@@ -61,7 +66,7 @@ def quantities_figure(ds: xr.Dataset, quantities, path: Path, dpi: int) -> list[
                 continue
             ax.plot(ds.a_um.values[keep], v[keep], "o", label=_sample_label(s))
             rows += [
-                {"quantity": q, "sample_um": s, "a_um": a, "value": x}
+                {"quantity": q, "unit": _labels.unit_of(ds, q), "sample_um": s, "a_um": a, "value": x}
                 for a, x in zip(ds.a_um.values[keep], v[keep])
             ]
         ref = reference_limit(ds, q)
@@ -84,49 +89,130 @@ def quantities_figure(ds: xr.Dataset, quantities, path: Path, dpi: int) -> list[
                 capsize=3,
                 label=f"limit {ref.value:.5g}",
             )
-            rows.append({"quantity": q, "sample_um": FULL, "a_um": 0.0, "value": ref.value})
-            ax.set_title(q, fontsize=8)
+            rows.append(
+                {
+                    "quantity": q,
+                    "unit": _labels.unit_of(ds, q),
+                    "sample_um": FULL,
+                    "a_um": 0.0,
+                    "value": ref.value,
+                }
+            )
+            ax.set_title(_labels.title(q, 44), fontsize=8)
         else:
             why = str(ds.why.sel(quantity=q, form="linear", sample_um=FULL).item())
-            ax.set_title(f"{q}\nno limit: {why[:45]}", fontsize=7)
-        ax.set_xlabel("voxel size a [um]")
+            short = why if len(why) <= 42 else why[:41] + "…"
+            ax.set_title(f"{_labels.title(q, 52)}\nno limit: {short}", fontsize=7)
+        ax.set_ylabel(_labels.axis_label(ds, q), fontsize=8)
+        ax.set_xlabel("voxel edge a [µm]", fontsize=8)
         ax.set_xlim(left=-0.03 * a_max)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=6, loc="best")
     fig.savefig(path, dpi=dpi)
     return rows
 
 
-def error_cost_figure(rows: list[dict], path: Path, dpi: int) -> list[dict]:
-    """Relative error against total cost, log–log, one point per run, the Pareto front of each quantity marked.
+def error_cost_figure(rows: list[dict], path: Path, dpi: int, clock: str = "wall") -> list[dict]:
+    """Relative error against compute cost, log–log, one point per run, the Pareto front of each quantity joined.
 
-    Returns one summary row per quantity with the cost factor of one more correct digit.
+    Each quantity has its own colour and marker; the legend sits right of the axes, off the data. Returns one
+    summary row per quantity with the cost factor of one more correct digit.
     """
-    fig, axes = _figure(1, 6.0, 4.2)
-    ax = axes[0]
+    fig = Figure(figsize=(9.0, 4.4))
+    fig.subplots_adjust(left=0.1, right=0.6, bottom=0.13, top=0.92)
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
     summary = []
-    for q in dict.fromkeys(r["quantity"] for r in rows):
+    for k, q in enumerate(dict.fromkeys(r["quantity"] for r in rows)):
         mine = [r for r in rows if r["quantity"] == q]
         cost = np.array([r["cost_s"] for r in mine])
         err = np.array([r["rel_err"] for r in mine])
-        (line,) = ax.loglog(cost, err, "o", ms=4, alpha=0.7, label=q)
+        resolved = np.array([bool(r.get("resolved", 1)) for r in mine])
         front = pareto_front(cost, err)
-        ax.loglog(cost[front], err[front], "-", color=line.get_color(), lw=1.2)
-        ax.loglog(cost[front], err[front], "o", mfc="none", mec="k", ms=7)
+        known = front[resolved[front]]  # errors below the limit's error bar are not known: no slope from them
+        color = f"C{k % 10}"
+        marker = MARKERS[k % len(MARKERS)]
+        ax.loglog(cost, err, marker, color=color, ms=5, alpha=0.45, mec="none")
+        ax.loglog(
+            cost[front],
+            err[front],
+            "-" + marker,
+            color=color,
+            ms=6,
+            lw=1.3,
+            mec="k",
+            mew=0.5,
+            label=_labels.title(q, 36),
+        )
         summary.append(
             {
                 "quantity": q,
-                "front_runs": int(front.size),
-                "cost_factor_per_digit": cost_per_digit(cost[front], err[front]),
+                "front_runs": int(known.size),
+                "cost_factor_per_digit": cost_per_digit(cost[known], err[known]),
+                "front_cost_s": cost[known].tolist(),
+                "front_rel_err": err[known].tolist(),
+                "clock": "CPU" if clock == "cpu" else "wall",
             }
         )
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("cost of the run incl. voxelize + segment [wall s]")
-    ax.set_ylabel("|q(a) - q_inf| / |q_inf|")
-    ax.set_title("error against cost (ringed: Pareto front)", fontsize=9)
+    _log_ticks(ax)
+    ax.set_xlabel(f"cost of the run incl. its voxelize + segment [s, {'CPU' if clock == 'cpu' else 'wall'}]")
+    ax.set_ylabel("relative error |q(a) − q∞| / |q∞|")
+    ax.set_title("What accuracy costs (joined: Pareto front; faint: other runs)", fontsize=10)
+    ax.grid(True, which="major", lw=0.4, alpha=0.5)
     if rows:
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, frameon=False)
+    else:
+        ax.text(
+            0.5,
+            0.5,
+            "no quantity has a supported limit yet",
+            ha="center",
+            va="center",
+            transform=ax.transAxes,
+        )
     fig.savefig(path, dpi=dpi)
     return summary
+
+
+def _log_ticks(ax) -> None:
+    """Label the log x axis also where it spans less than a decade (matplotlib would leave it bare)."""
+    lo, hi = ax.get_xlim()
+    if hi / max(lo, 1e-300) < 10:
+        ax.xaxis.set_minor_formatter(LogFormatterSciNotation(minor_thresholds=(2, 0.4)))
+    else:
+        ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+def message_figure(text: str, path: Path, dpi: int = 60) -> Path:
+    """A small figure that says ``text`` (where a figure the workflow expects has nothing to show)."""
+    fig = Figure(figsize=(4.0, 1.0))
+    FigureCanvasAgg(fig)
+    fig.text(0.5, 0.5, text, ha="center", va="center")
+    fig.savefig(path, dpi=dpi)
+    return path
+
+
+def nice_length(span: float) -> float:
+    """A round length (1, 2 or 5 × 10^k) near a quarter of ``span``, for a scale bar."""
+    target = span / 4.0
+    base = 10.0 ** np.floor(np.log10(target))
+    return float(max(m * base for m in (1.0, 2.0, 5.0) if m * base <= target))
+
+
+def _scale_bar(ax, span_um: float) -> None:
+    length = nice_length(span_um)
+    bar = AnchoredSizeBar(
+        ax.transData,
+        length,
+        f"{length:g} µm",
+        "lower right",
+        pad=0.3,
+        color="tab:red",
+        frameon=True,
+        size_vertical=span_um / 60.0,
+        fontproperties={"size": 8},
+    )
+    bar.patch.set_alpha(0.75)
+    ax.add_artist(bar)
 
 
 def _mid_slice(path, name: str, axis: int) -> np.ndarray:
@@ -155,10 +241,20 @@ def sections_figure(grey_paths: dict, binary_paths: dict, axis: int, path: Path,
                 continue
             img = _mid_slice(paths[a], name, axis)
             cmap, vmax = ("gray", 216) if name == "grey" else ("binary", 1)  # matrix white in both rows
-            ax.imshow(img.T, origin="lower", cmap=cmap, vmin=0, vmax=vmax, interpolation="nearest")
+            width_um, height_um = img.shape[0] * a, img.shape[1] * a
+            ax.imshow(
+                img.T,
+                origin="lower",
+                cmap=cmap,
+                vmin=0,
+                vmax=vmax,
+                interpolation="nearest",
+                extent=(0.0, width_um, 0.0, height_um),
+            )
+            _scale_bar(ax, width_um)
             ax.set_title(
-                f"{'grey g (white = matrix)' if name == 'grey' else 'binary (black = pore)'}, a = {a:g} um",
-                fontsize=7,
+                f"{'grey g (white = matrix)' if name == 'grey' else 'binary (black = pore)'}, a = {a:g} µm",
+                fontsize=8,
             )
             rows.append(
                 {
@@ -185,15 +281,15 @@ def lpt_figure(lpt_paths: dict, path: Path, dpi: int) -> list[dict]:
             alpha = "3" if "3" in alphas else alphas[0]
             p = ds.p.values[:, alphas.index(alpha)]
             var = ds.phi_var.values
-        axes[0].plot(L_um, p, "o-", ms=3, label=f"a = {a:g} um")
-        axes[1].plot(L_um, var, "o-", ms=3, label=f"a = {a:g} um")
+        axes[0].plot(L_um, p, "o-", ms=3, label=f"a = {a:g} µm")
+        axes[1].plot(L_um, var, "o-", ms=3, label=f"a = {a:g} µm")
         rows += [
             {"a_um": a, "L_um": l, "alpha": alpha, "p": x, "phi_var": v} for l, x, v in zip(L_um, p, var)
         ]
-    axes[0].set(xlabel="cell edge L [um]", ylabel="p_alpha(L)", xscale="log", title="local percolation")
+    axes[0].set(xlabel="cell edge L [µm]", ylabel="p_α(L) [1]", xscale="log", title="local percolation")
     axes[1].set(
-        xlabel="cell edge L [um]",
-        ylabel="var of mu(phi, L)",
+        xlabel="cell edge L [µm]",
+        ylabel="variance of μ(φ, L) [1]",
         xscale="log",
         yscale="log",
         title="local porosity spread",

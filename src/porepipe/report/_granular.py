@@ -190,7 +190,7 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
         f"{float(attrs.get('dt_s', 0)):.3g} s, {float(attrs.get('particle_steps_per_s', 0)):.3g} particle-steps/s"
     )
     if kind == "silo":
-        a = analyse_silo(tables)
+        a = analyse_silo(tables, mu=mu)
         write_csv(
             out_dir / "granular_wall_pressure.csv",
             silo_pressure_figure(a, out_dir / "granular_wall_pressure.png", dpi),
@@ -214,6 +214,7 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
                 f"{th['mu_j']}",
             ],
             ["mobilised wall friction (sum F_t / sum F_n)", f"{a['mu_wall_mobilised']:.3f}", "–"],
+            ["wall contacts at the Coulomb limit", f"{a['wall_at_coulomb_limit']:.0%}", "–"],
             [
                 "rho_rel (hull-corrected, Eq. 2.45)",
                 f"{a['rho_rel']:.3f}",

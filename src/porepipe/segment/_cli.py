@@ -20,6 +20,11 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("segment", help="binary pore volume (pore if grey <= threshold)")
     p.add_argument("grey", help="grey_a{a}.h5")
     p.add_argument("-o", "--out", required=True, help="output binary_a{a}.h5")
-    p.add_argument("--method", choices=[m.value for m in SegmentationMethod], default="otsu")
+    p.add_argument(
+        "--method",
+        choices=[m.value for m in SegmentationMethod],
+        default="otsu",
+        help="threshold rule: otsu on the grey histogram, fixed g_th, or trivial (pore iff g < 128)",
+    )
     p.add_argument("--threshold", type=int, default=None, help="g_th for --method fixed (0..215)")
     p.set_defaults(func=main)

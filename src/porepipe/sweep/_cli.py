@@ -5,6 +5,7 @@ Argparse only; the work is in ``_run`` (and ``_adaptive``, which drives whole wo
 
 from __future__ import annotations
 
+import argparse
 import sys
 
 from porepipe._shared.errors import PorepipeError
@@ -80,14 +81,15 @@ def register(subparsers) -> None:
     p.add_argument("--confidence", type=float, default=0.95)
     p.add_argument(
         "--adaptive",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=False,
         help="run the scene's adaptive refinement (sweep.adaptive); exit 0 = target met, 3 = stopped first",
     )
     p.add_argument("--cores", type=int, default=1, help="with --adaptive: cores for each workflow run")
     p.set_defaults(func=_sweep)
     p = subparsers.add_parser("subsample", help="cut the corner cube of edge L µm from a binary volume")
     p.add_argument("binary", help="binary_a{a}.h5")
-    p.add_argument("--edge-um", type=float, required=True)
+    p.add_argument("--edge-um", type=float, required=True, help="edge L of the cube, µm")
     p.add_argument("-o", "--out", required=True, help="binary_a{a}_L{L}.h5 (binary_a{a}_L{L}_k{index}.h5)")
     p.add_argument("--count", type=int, default=1, help="sub-samples per edge: 1 (origin corner), 8 or 64")
     p.add_argument("--index", type=int, default=0, help="which of the --count cubes (x fastest)")

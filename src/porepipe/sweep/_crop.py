@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import ResultWriter, hash_of, open_volume, read_attrs
+from porepipe._shared.store import ResultWriter, dataset_attrs, hash_of, open_volume, read_attrs
 
 #: relative tolerance for an edge to be a whole number of voxels
 _WHOLE_RTOL = 1e-9
@@ -59,7 +59,7 @@ def crop_corner(binary_path, edge_um: float, out, index: int = 0, count: int = 1
     """
     root = read_attrs(binary_path)
     with open_volume(binary_path, "pore") as dset:
-        vattrs = dict(dset.attrs.items())
+        vattrs = dataset_attrs(dset)
         voxel_um = float(vattrs["voxel_um"])
         n = corner_voxels(float(edge_um), voxel_um, dset.shape)
         ox, oy, oz = subsample_offsets(index, count, n, dset.shape)

@@ -117,3 +117,18 @@ def test_line_source_shrinks_and_point_source_is_a_point():
     assert len(u) == 400
     assert stats.kstest(u, "uniform").pvalue > 1e-3
     np.testing.assert_array_equal(sim.G[0, np.nonzero(sim.drop == 1)[0], 0], 0.9)
+
+
+def test_bad_driver_inputs_name_the_problem():
+    from pydantic import ValidationError
+
+    from porepipe._shared.errors import PorepipeError
+
+    slab = {"name": "lid", "vertices_m": [(0, 1), (1, 1), (1, 2), (0, 2)]}
+    with pytest.raises(ValidationError, match="cannot be a piston and vibrate"):
+        simulation([], [{**slab, "piston": {"force_N": 1.0, "mass_kg": 1.0}, "vibration": {}}])
+    with pytest.raises(ValidationError, match="mass_kg"):
+        simulation([], [{**slab, "piston": {"force_N": 1.0, "mass_kg": 0.0}}])
+    grain = [{"vertices_m": square(A), "position_m": (0.5, 0.5)}]
+    with pytest.raises(PorepipeError, match="t2 must not precede t1"):
+        simulation(grain, size_change={"time_s": (1.0, 0.5)})

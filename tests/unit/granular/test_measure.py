@@ -177,3 +177,25 @@ def test_pressure_profile_windows():
     assert prof["mean"] == pytest.approx(1.0)
     auto = M.pressure_profile(u, np.ones(100), 100.0, contacts_per_window=15)
     assert np.median(auto["count"]) == pytest.approx(15, abs=1)
+
+
+def test_strain_of_an_affine_field_and_plane_strain_constants():
+    """Points on a regular lattice displaced by u = G x: the cell-mean central differences return G's diagonal
+    exactly (affine field, aligned cell means); Hooke's plane-strain law with E = 2.5, nu = 0.3 inverted by
+    Eqs. 4.4/4.5/4.11 returns them to rounding."""
+    g = np.array([[-2e-3, 5e-4], [3e-4, -4e-3]])
+    xs, ys = np.meshgrid(np.arange(0.25, 10, 0.5), np.arange(0.25, 8, 0.5))
+    x0 = np.column_stack([xs.ravel(), ys.ravel()])
+    grid = M.displacement_grid(x0, x0 + x0 @ g.T, np.arange(0, 10.1, 1.0), np.arange(0, 8.1, 1.0))
+    assert (grid["count"] == 4).all()
+    uxx, uzz = M.diagonal_strain(grid)
+    np.testing.assert_allclose(uxx[:, 1:-1], g[0, 0], rtol=1e-9)
+    np.testing.assert_allclose(uzz[1:-1, :], g[1, 1], rtol=1e-9)
+    young, nu, exx, ezz = 2.5, 0.3, 1e-3, 3e-3
+    c = young / ((1 + nu) * (1 - 2 * nu))
+    sxx, szz = c * ((1 - nu) * exx + nu * ezz), c * ((1 - nu) * ezz + nu * exx)
+    out = M.plane_strain_constants(sxx, szz, exx, ezz)
+    assert float(out["nu"]) == pytest.approx(nu, rel=1e-12)
+    assert float(out["E"]) == pytest.approx(young, rel=1e-12)
+    # Eq. 4.10: u_ii = sigma_ii/(2K) in plane strain
+    assert float(out["K"]) == pytest.approx((sxx + szz) / (2 * (exx + ezz)), rel=1e-12)

@@ -87,3 +87,27 @@ def test_grey_values_of_a_half_space_voxel_are_exact_fractions():
     c = np.array([[-r + 4.0 + 1e-7, 2.0, 2.0]])  # plane at x = 4 (+1e-7), inside x < 4
     g = voxelize(c, np.array([r]), (8.0, 4.0, 4.0), 1.0, periodic=False)
     assert (g[:4] == 216).all() and (g[4:] == 0).all()
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_chord_ends_on_samples_exactly_on_the_surface(periodic):
+    # h = a/6 = 1/8, a power of two: sample coordinates, centres on sample points and radii n*h are exact, so
+    # dx*dx + dy*dy + dz*dz == r*r holds exactly for the lattice points of Pythagorean quadruples (e.g. 2,5,14 → 15):
+    # every row through such a point has a chord end exactly on the surface (the closed ball keeps it)
+    a = 0.75
+    h = a / 6
+    box = (4.5, 4.5, 3.0)  # 36 x 36 x 24 samples
+    lattice = np.array([[9, 11, 7], [20, 17, 12], [27, 30, 3], [5, 33, 20], [14, 6, 22], [30, 2, 15]])
+    c = (lattice + 0.5) * h
+    # 15² = 2²+5²+14², 9² = 1²+4²+8², 7² = 2²+3²+6², 5² = 0²+3²+4², 13² = 3²+4²+12², 3² = 1²+2²+2²
+    r = np.array([15, 9, 7, 5, 13, 3]) * h
+    g = _both_equal_oracle(c, r, box, a, periodic)
+    # the test means something only if samples sit exactly on a surface: count them with the kernels' arithmetic
+    axes = [(np.arange(round(6 * e / a)) + 0.5) * h for e in box]
+    x, y, z = np.meshgrid(*axes, indexing="ij")
+    on_surface = sum(
+        int(np.count_nonzero((x - cx) * (x - cx) + (y - cy) * (y - cy) + (z - cz) * (z - cz) == rr * rr))
+        for (cx, cy, cz), rr in zip(c, r)
+    )
+    assert on_surface > 100
+    assert 0 < g.mean() < 216

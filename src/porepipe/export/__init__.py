@@ -1,0 +1,13 @@
+"""ParaView export of results: volumes as compressed VTI, packings and grains as VTP, LBM fields in SI units."""
+
+from porepipe._shared.lazy import lazy_exports
+
+_EXPORTS = {
+    "export_result": "_api",
+    "grain_polygons": "_api",
+    "write_image": "_api",
+    "write_points": "_api",
+    "write_polygons": "_api",
+}
+__all__ = [*_EXPORTS]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

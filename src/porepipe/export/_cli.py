@@ -1,0 +1,38 @@
+"""``porepipe export``: a result as a ParaView file (argparse only; the work is in ``_api``)."""
+
+from __future__ import annotations
+
+
+def main(args) -> int:
+    """Run the subcommand; returns the exit code."""
+    from porepipe.export._api import export_result
+
+    print(
+        export_result(
+            args.result, args.out, gradient_pa_m=args.gradient_pa_m, viscosity_pa_s=args.viscosity_pa_s
+        )
+    )
+    return 0
+
+
+def register(subparsers) -> None:
+    """Add ``export`` to the ``porepipe`` command."""
+    p = subparsers.add_parser(
+        "export", help="write a result for ParaView (.vti volumes and LBM fields, .vtp packings and grains)"
+    )
+    p.add_argument(
+        "result", help="grey/binary volume, packing.h5, grains.h5 or a permeability result with fields"
+    )
+    p.add_argument(
+        "-o", "--out", required=True, help="output file: .vti for volumes and flow, .vtp for the rest"
+    )
+    p.add_argument(
+        "--gradient-pa-m", type=float, default=1.0e4, help="LBM fields: applied pressure gradient in Pa/m"
+    )
+    p.add_argument(
+        "--viscosity-pa-s",
+        type=float,
+        default=1.0e-3,
+        help="LBM fields: fluid viscosity in Pa s (water: 1e-3)",
+    )
+    p.set_defaults(func=main)

@@ -1,0 +1,93 @@
+"""Every option of every `porepipe` command has help text, every on/off flag is a BooleanOptionalAction (--x/--no-x),
+and a misspelt scene key is answered with the closest allowed key."""
+
+import argparse
+
+import pytest
+
+from porepipe.cli import build_parser
+from porepipe.scene import SceneError, parse_scene
+
+
+def _actions(parser, name="porepipe"):
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub_name, sub in action.choices.items():
+                yield from _actions(sub, f"{name} {sub_name}")
+        elif not isinstance(action, (argparse._HelpAction, argparse._VersionAction)):
+            yield name, action
+
+
+def test_every_option_has_help_text():
+    missing = [f"{name} {a.option_strings or a.dest}" for name, a in _actions(build_parser()) if not a.help]
+    assert not missing
+
+
+def test_no_store_true_flags_and_no_true_false_strings():
+    bad = [
+        f"{name} {a.option_strings}"
+        for name, a in _actions(build_parser())
+        if isinstance(a, (argparse._StoreTrueAction, argparse._StoreFalseAction))
+        or (a.type is not None and getattr(a.type, "__name__", "") == "_bool")
+    ]
+    assert not bad
+    flags = {
+        (name, a.option_strings[0])
+        for name, a in _actions(build_parser())
+        if isinstance(a, argparse.BooleanOptionalAction)
+    }
+    assert ("porepipe permeability", "--write-fields") in flags
+    assert ("porepipe acquire", "--grains") in flags
+
+
+@pytest.mark.parametrize(
+    ("section", "typo", "meant"),
+    [(None, "sead", "seed"), ("domain", "periodc", "periodic"), ("permeability", "colision", "collision")],
+)
+def test_unknown_key_gets_the_closest_allowed_key(section, typo, meant):
+    raw = {
+        "name": "t",
+        "domain": {"size_um": [8, 8, 8]},
+        "resolutions_um": [4],
+        "spheres": {"inline": [[4, 4, 4, 2]]},
+        "analyses": ["segment"],
+    }
+    (raw.setdefault(section, {}) if section else raw)[typo] = 1
+    with pytest.raises(SceneError) as err:
+        parse_scene(raw)
+    (line,) = [p for p in err.value.problems if typo in p]
+    assert line.endswith(f"did you mean {meant!r}?")
+
+
+def test_a_key_unlike_any_gets_no_suggestion():
+    with pytest.raises(SceneError) as err:
+        parse_scene({"name": "t", "domain": {"size_um": [8, 8, 8]}, "resolutions_um": [4], "zzqqxx": 1})
+    (line,) = [p for p in err.value.problems if p.startswith("zzqqxx")]
+    assert "did you mean" not in line
+
+
+class _Terminal:
+    def isatty(self):
+        return True
+
+    def write(self, text):
+        return len(text)
+
+    def flush(self):
+        pass
+
+
+def test_run_names_its_terminal_to_the_jobs_only_on_a_terminal_outside_ci(monkeypatch):
+    import sys
+
+    from porepipe import cli
+    from porepipe._shared.progress import CONSOLE_ENV
+
+    monkeypatch.delenv("CI", raising=False)
+    monkeypatch.delenv(CONSOLE_ENV, raising=False)
+    assert CONSOLE_ENV not in cli._job_environment()  # pytest's stderr is no terminal
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    monkeypatch.setattr(cli.os.path, "exists", lambda path: path == "/dev/tty")
+    assert cli._job_environment()[CONSOLE_ENV] == "/dev/tty"
+    monkeypatch.setenv("CI", "1")
+    assert CONSOLE_ENV not in cli._job_environment()

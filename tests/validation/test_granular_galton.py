@@ -1,0 +1,156 @@
+"""Thesis §2.5.4 Galton board (10 rows of nails), measured with independent balls.
+
+Set-up: each ball falls through a board of its own (boards side by side, 14 nail spacings apart, so balls never
+meet and every ball is an independent trial, which the chi² test needs; the thesis dropped ~2300 interacting
+balls into one board). Nails are round (16-gon walls, radius 1.5 mm) on a triangular lattice (spacing d = 8 mm,
+row pitch d sqrt(3)/2), so no ball can rest on a tip; balls are 16-gons of radius 2 mm released at rest above the
+top nail with a uniform +-0.2 mm horizontal jitter and a random orientation. A ball's bin is the nearest
+integer to (x - x0)/d + 5 when its centre passes half a row pitch below the last row (10 decisions of +-d/2).
+
+Finding (measured 2026-12-02 on a loaded 2-core machine, mu = 0.3, 200 balls per gamma): the bin distribution is
+NOT binomial, and its width is set by the normal damping gamma, i.e. by how much horizontal momentum a ball
+carries from one nail to the next, not by chance:
+
+    gamma  0.5: variance 14.6 (balls hop over nails; 22 and 21 balls in the outer bins 0 and 10)
+    gamma  1.0: variance  4.44
+    gamma 1.25: variance  2.40, yet bins [0 2 16 15 51 37 57 15 5 2 0] (chi² ~ 25 on 8 dof, p ~ 0.002:
+                even bins 4 and 6 over-full, bin 5 short)
+    gamma  1.5: variance  1.29
+    gamma  3.0: every ball follows the same deterministic zig-zag after its first decision (L R R L L R R L ...)
+
+Not a resolution artefact (150 balls, gamma = 1, mu = 0.3; sample-variance SE ~ 0.5): variance 4.59 at the
+default dt, 4.02 at dt/2, 4.88 with 32-gon balls, 4.64 at E = 1e7 N/m. Friction matters as much as gamma
+(gamma = 1.25, 150 balls): mu = 0 gives variance 12.6 (balls slide off keeping their momentum), mu = 0.8 gives 2.14.
+
+Binomial(10, 1/2): variance 2.5. A single dissipative ball forgets its one random number (the release jitter)
+instead of amplifying it into 10 independent decisions: with strong damping the nail-to-nail map contracts onto a
+periodic orbit, with weak damping the ball keeps its momentum (persistent walk). Tuning gamma until the variance
+matches would not make the decisions independent (gamma 1.25 matches the variance and still fails chi²), so the
+issue's check "bin counts pass a chi² test against the binomial" is not met; the tests below pin the measured
+behaviour and the power of the chi² test that the binomial check would use.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from porepipe.granular import Settings, Simulation, regular_polygon
+
+ROWS = 10
+D = 0.008  # nail spacing, m
+PITCH = D * math.sqrt(3) / 2  # row pitch (triangular lattice), m
+LANE = 14 * D  # boards side by side: a ball's reach is +-(ROWS/2 + 1) d, so lanes 14 d apart never meet
+R_BALL, R_NAIL, CORNERS = 0.002, 0.0015, 16
+
+
+def _boards(n_balls, gamma, mu, seed):
+    """n_balls independent Galton boards side by side, one ball above each top nail."""
+    rng = np.random.default_rng(seed)
+    ball = [tuple(p) for p in regular_polygon(CORNERS, R_BALL)]
+    nail = regular_polygon(CORNERS, R_NAIL)
+    particles, walls = [], []
+    for b in range(n_balls):
+        x0 = b * LANE
+        particles.append(
+            {
+                "vertices_m": ball,
+                "position_m": (x0 + rng.uniform(-2e-4, 2e-4), R_BALL + R_NAIL + 0.5 * PITCH),
+                "angle_rad": float(rng.uniform(0, 2 * math.pi)),
+            }
+        )
+        for k in range(ROWS):  # row k: the k + 1 reachable nails and one more on either side
+            for j in range(-1, k + 2):
+                centre = (x0 + (j - k / 2) * D, -k * PITCH)
+                walls.append({"name": f"n{b}_{k}_{j}", "vertices_m": [tuple(p + centre) for p in nail]})
+    floor_y, right = -(ROWS + 1.5) * PITCH, n_balls * LANE
+    walls.append(
+        {
+            "name": "floor",
+            "vertices_m": [
+                (-LANE, floor_y - 0.01),
+                (right, floor_y - 0.01),
+                (right, floor_y),
+                (-LANE, floor_y),
+            ],
+        }
+    )
+    settings = Settings.model_validate(
+        {
+            "particles": particles,
+            "walls": walls,
+            "gravity_m_s2": (0.0, -9.81),
+            "integrator": "verlet",
+            "material": {"young_N_m": 1e6, "density_kg_m2": 5000.0, "damping": gamma, "friction": mu},
+        }
+    )
+    return Simulation(settings, seed=0), np.arange(n_balls) * LANE
+
+
+def galton_bins(n_balls, gamma, mu=0.3, seed=1, t_max_s=2.0):
+    """Bin index (0..10) of each ball: nearest integer to (x - x0)/d + 5 half a pitch below the last row."""
+    sim, x0 = _boards(n_balls, gamma, mu, seed)
+    x_out = np.full(n_balls, np.nan)
+    while np.isnan(x_out).any():
+        assert sim.time_s < t_max_s, "a ball did not leave the board"
+        sim.advance(40)
+        p = sim.position
+        new = np.isnan(x_out) & (p[:, 1] < -(ROWS - 0.5) * PITCH)
+        x_out[new] = p[new, 0]
+    return np.rint((x_out - x0) / D + ROWS / 2).astype(int)
+
+
+def chi2_binomial_pvalue(bins, p, n=ROWS):
+    """Pearson chi² p-value of bin counts against Binomial(n, p), tails pooled until each expects >= 5 balls."""
+    counts = np.bincount(np.clip(bins, 0, n), minlength=n + 1).astype(float)
+    expected = len(bins) * stats.binom.pmf(np.arange(n + 1), n, p)
+    lo, hi = 0, n
+    while expected[: lo + 1].sum() < 5:
+        lo += 1
+    while expected[hi:].sum() < 5:
+        hi -= 1
+    obs = np.r_[counts[: lo + 1].sum(), counts[lo + 1 : hi], counts[hi:].sum()]
+    exp = np.r_[expected[: lo + 1].sum(), expected[lo + 1 : hi], expected[hi:].sum()]
+    return float(stats.chisquare(obs, exp).pvalue)
+
+
+def test_chi2_bin_test_has_power_at_400_balls():
+    # The sizing of the binomial check: with 400 independent balls the chi² test at alpha = 0.05 rejects
+    # Binomial(10, 0.55) against p = 1/2 and a same-mean beta-binomial with 30 % more variance (rho = 0.3/9) with
+    # >= 80 % power (measured by 400 synthetic boards each: ~1.0 and ~0.85; binomial SE of a power estimate at
+    # 0.85 is 0.018, so the bound 0.78 is 4 SE below). Its size under the null is alpha (0.05 +- 0.035, 3.2 SE).
+    rng = np.random.default_rng(7)
+    reps, n = 400, 400
+    a = 0.5 * (9 / 0.3 - 1)  # beta-binomial a = b with intra-class correlation rho = 1/(2a + 1) = 0.3/9
+
+    def rejected(draw, p0):
+        return np.mean([chi2_binomial_pvalue(draw(), p0) < 0.05 for _ in range(reps)])
+
+    assert rejected(lambda: rng.binomial(10, 0.55, n), 0.5) >= 0.8
+    assert rejected(lambda: stats.betabinom.rvs(10, a, a, size=n, random_state=rng), 0.5) >= 0.78
+    assert abs(rejected(lambda: rng.binomial(10, 2 / 3, n), 2 / 3) - 0.05) < 0.035
+
+
+def test_single_ball_galton_board_width_is_set_by_damping_not_binomial():
+    # 80 independent balls per gamma (mu = 0.3). Binomial(10, 1/2) has variance 2.5; the sample variance of 80
+    # binomial draws has SE 2.5 sqrt(2/79) = 0.40. Measured (200 balls): 4.44 at gamma = 1 and 1.29 at
+    # gamma = 1.5. Asserted: gamma = 1 exceeds 2.5 + 2.5 SE and gamma = 1.5 falls below 2.5 - 2.5 SE -- the
+    # independent-ball board is not a Bernoulli process (module docstring). (chi² at 80 balls lacks the power to
+    # be asserted: it gave p = 0.14 at gamma = 1 with variance above the bound.)
+    # Symmetry still holds: the mean bin is 5 within 3 SE (SE = sqrt(var/80)).
+    for gamma, wide in ((1.0, True), (1.5, False)):
+        bins = galton_bins(80, gamma)
+        var = bins.var(ddof=1)
+        assert (var > 2.5 + 2.5 * 0.40) if wide else (var < 2.5 - 2.5 * 0.40), (gamma, var)
+        assert abs(bins.mean() - 5) < 3 * math.sqrt(var / 80), (gamma, bins.mean())
+
+
+@pytest.mark.xfail(
+    strict=True, reason="measured: an independent-ball board is not binomial (module docstring)"
+)
+def test_galton_board_bins_pass_chi2_against_binomial():
+    # The issue's check, sized by test_chi2_bin_test_has_power_at_400_balls would need 400 balls; 120 balls at
+    # gamma = 1.25 (the damping whose variance is closest to 2.5) already reject at alpha = 0.05.
+    bins = galton_bins(120, 1.25)
+    assert chi2_binomial_pvalue(bins, 0.5) > 0.05
