@@ -23,8 +23,8 @@ import numpy as np
 
 from porepipe.report._figures import _figure, write_csv
 
-#: the results file of benchmarks/lbm_spheres.py, relative to the working directory (the repository root)
-RESULTS_FILE = Path("results", "benchmarks", "lbm_spheres.json")
+#: the results file of benchmarks/lbm_spheres.py, relative to the results root (results/<scene>/report/../..)
+RESULTS_FILE = Path("benchmarks", "lbm_spheres.json")
 #: the error the table sizes runs for
 TARGET_ERROR = 0.01
 #: error and time power laws are fitted to the finest this many runs (the coarsest are outside the asymptotic range)
@@ -109,8 +109,13 @@ def _cell(value, fmt: str) -> str:
     return "–" if not np.isfinite(value) else format(value, fmt)
 
 
-def permeability_cost_parts(out_dir, dpi: int = 100, results=RESULTS_FILE) -> list[str]:
-    """HTML parts of the report section (figure, table, CSV written into ``out_dir``); [] without results."""
+def permeability_cost_parts(out_dir, dpi: int = 100, results=None) -> list[str]:
+    """HTML parts of the report section (figure, table, CSV written into ``out_dir``); [] without results.
+
+    ``results`` defaults to ``benchmarks/lbm_spheres.json`` of the results root that holds ``out_dir``
+    (``results/<scene>/report`` -> ``results/benchmarks/lbm_spheres.json``).
+    """
+    results = Path(results) if results is not None else Path(out_dir).resolve().parents[1] / RESULTS_FILE
     rows = read_rows(results)
     if not rows:
         return []

@@ -69,3 +69,17 @@ def test_section_writes_figure_table_and_csv(tmp_path):
     assert (tmp_path / "permeability_cost.png").stat().st_size > 0
     assert (tmp_path / "permeability_cost.csv").read_text().startswith("c,walls")
     assert permeability_cost_parts(tmp_path, 50, tmp_path / "missing.json") == []
+
+
+def test_section_reads_the_benchmark_of_its_own_results_root(tmp_path):
+    """results/<scene>/report finds results/benchmarks/lbm_spheres.json; a report elsewhere finds nothing."""
+    (tmp_path / "results" / "benchmarks").mkdir(parents=True)
+    (tmp_path / "results" / "benchmarks" / "lbm_spheres.json").write_text(
+        json.dumps(_rows("cli", 8.0, 2.0, 1e-4, 4.0))
+    )
+    report = tmp_path / "results" / "mini" / "report"
+    report.mkdir(parents=True)
+    assert permeability_cost_parts(report, 50)
+    other = tmp_path / "elsewhere" / "x" / "report"
+    other.mkdir(parents=True)
+    assert permeability_cost_parts(other, 50) == []
