@@ -6,7 +6,9 @@ from pathlib import Path
 
 import pytest
 
-BENCHMARKS = sorted((Path(__file__).resolve().parents[2] / "benchmarks").glob("*.py"))
+BENCHMARKS = sorted(
+    p for p in (Path(__file__).resolve().parents[2] / "benchmarks").glob("*.py") if not p.name.startswith("_")
+)  # _common.py etc. are helpers, not benchmarks
 
 
 @pytest.mark.parametrize("script", BENCHMARKS, ids=lambda p: p.stem)

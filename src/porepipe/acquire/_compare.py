@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import read_table
+from porepipe._shared.store import open_h5, read_table
 
 #: Table 8.4 (Minkowski) and Table 8.5 (LB) quantities: (name in the statistics, label, unit)
 QUANTITIES = [
@@ -31,11 +31,10 @@ PERMEABILITY = [("kappa_mD", "κ", "mD")]
 
 def _groups(path) -> dict[str, xr.Dataset]:
     out = {"": read_table(path)}
-    for group in ("lpt", "permeability"):
-        try:
-            out[group] = read_table(path, group)
-        except (OSError, KeyError, ValueError):
-            continue
+    with open_h5(path) as f:
+        present = [group for group in ("lpt", "permeability") if group in f]
+    for group in present:  # optional groups: absent is fine, a damaged one is an error naming the file
+        out[group] = read_table(path, group)
     return out
 
 
