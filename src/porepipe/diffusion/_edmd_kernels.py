@@ -476,54 +476,32 @@ def advance(
             tally[E_PAIRS] += 1
             pair_counts[sp[i], sp[j]] += 1
             pair_counts[sp[j], sp[i]] += 1
-            heap = _predict(
-                pos,
-                vel,
-                tp,
-                sp,
-                radius,
-                cnt,
-                tcross,
-                h,
-                shape,
-                periodic,
-                head,
-                nxt,
-                cidx,
-                i,
-                t,
-                heap,
-                False,
-                -1,
-                0,
-            )
-            heap = _predict(
-                pos,
-                vel,
-                tp,
-                sp,
-                radius,
-                cnt,
-                tcross,
-                h,
-                shape,
-                periodic,
-                head,
-                nxt,
-                cidx,
-                j,
-                t,
-                heap,
-                False,
-                -1,
-                0,
-            )
-            heap = _predict_pairs(
-                pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t, heap, -1, 0
-            )
-            heap = _predict_pairs(
-                pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, j, t, heap, -1, 0
-            )
+            for k in (i, j):  # both partners: new wall/cell events first, then new pair events (this order)
+                heap = _predict(
+                    pos,
+                    vel,
+                    tp,
+                    sp,
+                    radius,
+                    cnt,
+                    tcross,
+                    h,
+                    shape,
+                    periodic,
+                    head,
+                    nxt,
+                    cidx,
+                    k,
+                    t,
+                    heap,
+                    False,
+                    -1,
+                    0,
+                )
+            for k in (i, j):
+                heap = _predict_pairs(
+                    pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, k, t, heap, -1, 0
+                )
             continue
         # crossing of a face of i's cell
         _sync(pos, vel, tp, i, t)
