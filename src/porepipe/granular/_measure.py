@@ -40,7 +40,7 @@ def frame_particles(tables: dict, frame: int = -1) -> dict:
     f = frame % nf if -nf <= frame < nf else None
     if f is None:
         raise PorepipeError(f"frame {frame} out of range: the result has {nf} frames")
-    pos = ds["position"].values[f]
+    pos = np.concatenate([ds["position_m"].values[f], ds["angle_rad"].values[f][:, None]], axis=1)
     verts = ds["vertices_m"].values
     nc = ds["n_corners"].values
     polys = []

@@ -3,13 +3,15 @@
 Result layout (``xarray.open_dataset(path, engine="h5netcdf")`` reads the root; ``group="contacts"`` and
 ``group="series"`` the others):
 
-- root: ``position`` (frame, particle, dof = x, y, phi) in m / rad, ``velocity`` (m/s, rad/s), ``active``,
-  ``time_s`` (frame); particle outlines ``vertices_m`` (particle, corner, xy; NaN-padded), ``mass_kg``,
-  ``inertia_kg_m2``; walls ``wall_vertices_m`` (wall, corner, xy);
+- root: centroid ``position_m`` (frame, particle, xy) in m and ``angle_rad`` (frame, particle), their rates
+  ``velocity_m_s`` (m/s) and ``angular_velocity_rad_s`` (rad/s), ``active``, ``time_s`` (frame); particle outlines
+  ``vertices_m`` (particle, corner, xy; NaN-padded), ``mass_kg`` (density kg/m² × area), ``inertia_kg_m2``; walls
+  ``wall_vertices_m`` (wall, corner, xy). Every variable carries ``units`` in one spelling pint parses;
 - ``contacts``: one row per contact and frame: ``frame``, ``i``, ``j`` (j >= n_particles: wall j - n), force on i
   ``fx_N``, ``fy_N`` (-F on j), application point ``sx_m``, ``sy_m``, ``fn_N``, ``ft_N``, ``area_m2``,
   ``length_m``;
-- ``series``: ``time_s``, ``kinetic_energy_J``, ``contacts``, ``coordination``, ``max_overlap``.
+- ``series``: ``time_s``, ``kinetic_energy_J``, ``contacts``, ``coordination``, ``max_overlap`` (overlap area /
+  r_eq² of the smaller particle, dimensionless).
 """
 
 from __future__ import annotations
@@ -31,6 +33,14 @@ from porepipe.granular._settings import Settings
 
 STAGE = "granular"
 _CONTACT_KEYS = ("i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area_m2", "length_m")
+#: units of the contact and series columns (pint spellings); the rest (indices, counts, ratios) are "1"
+_UNITS = {
+    **{k: "N" for k in ("fx_N", "fy_N", "fn_N", "ft_N")},
+    **{k: "m" for k in ("sx_m", "sy_m", "length_m")},
+    "area_m2": "m^2",
+    "time_s": "s",
+    "kinetic_energy_J": "J",
+}
 
 
 def _save_checkpoint(path: Path, key: str, sim: Simulation, frames: list, series: list) -> None:
@@ -195,28 +205,38 @@ def _write(w: ResultWriter, sim: Simulation, frames: list[Frame], series: list[t
     for k in range(sim.n_walls):
         b = n + k
         wverts[k, : sim.nc[b]] = sim.body[b, : sim.nc[b]] + sim.G[0, b, :2]
+    position = np.stack([f.position for f in frames])  # (frame, particle, x y phi)
+    velocity = np.stack([f.velocity for f in frames])
     root = xr.Dataset(
         {
-            "position": (("frame", "particle", "dof"), np.stack([f.position for f in frames])),
-            "velocity": (("frame", "particle", "dof"), np.stack([f.velocity for f in frames])),
+            "position_m": (("frame", "particle", "xy"), position[..., :2], {"units": "m"}),
+            "angle_rad": (("frame", "particle"), position[..., 2], {"units": "rad"}),
+            "velocity_m_s": (("frame", "particle", "xy"), velocity[..., :2], {"units": "m/s"}),
+            "angular_velocity_rad_s": (("frame", "particle"), velocity[..., 2], {"units": "rad/s"}),
             "active": (("frame", "particle"), np.stack([f.active for f in frames])),
             "time_s": (("frame",), np.array([f.time_s for f in frames])),
-            "vertices_m": (("particle", "corner", "xy"), verts),
+            "vertices_m": (("particle", "corner", "xy"), verts, {"units": "m"}),
             "n_corners": (("particle",), sim.nc[:n].copy()),
-            "mass_kg": (("particle",), sim.mass),
-            "inertia_kg_m2": (("particle",), sim.inertia),
-            "wall_vertices_m": (("wall", "corner", "xy"), wverts),
+            "mass_kg": (("particle",), sim.mass, {"units": "kg"}),
+            "inertia_kg_m2": (("particle",), sim.inertia, {"units": "kg*m^2"}),
+            "wall_vertices_m": (("wall", "corner", "xy"), wverts, {"units": "m"}),
         },
-        coords={"dof": ["x", "y", "phi"], "xy": ["x", "y"], "wall_name": (("wall",), sim.wall_names)},
-        attrs={"angles": "counter-clockwise (gc2d: clockwise)", "units": "SI, 2-D (N/m, kg/m^2)"},
+        coords={"xy": ["x", "y"], "wall_name": (("wall",), sim.wall_names)},
+        attrs={
+            "angles": "counter-clockwise (gc2d: clockwise)",
+            "unit_system": "SI, 2-D: Young's modulus N/m, density kg/m^2",
+        },
     )
     w.write_table(root)
     rows = {k: np.concatenate([f.contacts[k] for f in frames]) for k in _CONTACT_KEYS}
     rows["frame"] = np.concatenate([np.full(len(f.contacts["i"]), k, np.int64) for k, f in enumerate(frames)])
-    w.write_table(xr.Dataset({k: (("contact",), v) for k, v in rows.items()}), group="contacts")
+    w.write_table(
+        xr.Dataset({k: (("contact",), v, {"units": _UNITS.get(k, "1")}) for k, v in rows.items()}), group="contacts"
+    )
     s = np.asarray(series, dtype=np.float64).reshape(-1, 5)
     names = ("time_s", "kinetic_energy_J", "contacts", "coordination", "max_overlap")
-    w.write_table(xr.Dataset({k: (("sample",), s[:, c]) for c, k in enumerate(names)}), group="series")
+    table = {k: (("sample",), s[:, c], {"units": _UNITS.get(k, "1")}) for c, k in enumerate(names)}
+    w.write_table(xr.Dataset(table), group="series")
 
 
 def read_granular(path) -> dict[str, xr.Dataset]:

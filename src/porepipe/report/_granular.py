@@ -43,7 +43,7 @@ def _kind(tables) -> str:
     wv = tables["frames"]["wall_vertices_m"].values
     x0 = np.nanmax(wv[names.index("box left")][:, 0])
     x1 = np.nanmin(wv[names.index("box right")][:, 0])
-    pos = tables["frames"]["position"].values[-1]
+    pos = tables["frames"]["position_m"].values[-1]
     act = tables["frames"]["active"].values[-1].astype(bool)
     y0 = np.nanmax(wv[names.index("box floor")][:, 1])
     return "silo" if pos[act, 1].max() - y0 > 2 * (x1 - x0) else "heap"

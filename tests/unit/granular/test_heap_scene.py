@@ -21,7 +21,7 @@ def heaps(tmp_path_factory):
 
 def test_ci_heap_is_reproducible(heaps):
     a, b = (read_granular(p) for p in heaps)
-    np.testing.assert_array_equal(a["frames"]["position"].values, b["frames"]["position"].values)
+    np.testing.assert_array_equal(a["frames"]["position_m"].values, b["frames"]["position_m"].values)
     np.testing.assert_array_equal(a["contacts"]["fx_N"].values, b["contacts"]["fx_N"].values)
 
 

@@ -41,7 +41,7 @@ def test_result_file_layout(tmp_path):
     out = run(Settings.model_validate(SMALL), tmp_path / "g.h5", seed=1, scene="small", progress=False)
     d = read_granular(out)
     frames, contacts, series = d["frames"], d["contacts"], d["series"]
-    assert frames.position.shape == (5, 20, 3) and frames.time_s.values[-1] == pytest.approx(0.03)
+    assert frames.position_m.shape == (5, 20, 2) and frames.time_s.values[-1] == pytest.approx(0.03)
     assert set(contacts.data_vars) >= {
         "i",
         "j",
@@ -63,6 +63,38 @@ def test_result_file_layout(tmp_path):
     attrs = read_attrs(out)
     assert attrs["stage"] == "granular" and attrs["wall_s"] > 0 and attrs["steps"] == 1500
     assert attrs["effects"] == "none"
+
+
+def test_every_unit_of_a_granular_result_is_one_pint_reads_and_the_right_dimension(tmp_path):
+    pint = pytest.importorskip("pint")
+    ureg = pint.UnitRegistry()
+    out = run(Settings.model_validate(SMALL), tmp_path / "g.h5", seed=1, scene="small", progress=False)
+    tables = read_granular(out)
+    for group, ds in tables.items():
+        for name, var in ds.variables.items():
+            if var.dtype.kind in "biuf":
+                assert "units" in var.attrs, f"{group}/{name} has no units"
+                ureg.Unit(var.attrs["units"])  # raises if pint cannot parse it
+    frames, series = tables["frames"], tables["series"]
+    dimension = {"position_m": "[length]", "angle_rad": "", "velocity_m_s": "[length]/[time]"}
+    dimension |= {"angular_velocity_rad_s": "1/[time]", "mass_kg": "[mass]", "inertia_kg_m2": "[mass]*[length]**2"}
+    for name, dim in dimension.items():
+        assert ureg.Unit(frames[name].attrs["units"]).dimensionality == ureg.get_dimensionality(dim), name
+    # truth: the kinetic energy the series records at the last frame's time is 1/2 m v^2 + 1/2 I w^2 of that frame,
+    # each term converted by pint from the stored units to joule (exact up to float round-off: 1e-12)
+    t_end = float(frames.time_s.values[-1])
+    k = int(np.argmin(np.abs(series.time_s.values - t_end)))
+    assert series.time_s.values[k] == pytest.approx(t_end, rel=1e-12)
+    act = frames.active.values[-1].astype(bool)
+
+    def q(name, values):
+        return ureg.Quantity(values, frames[name].attrs["units"])
+
+    v2 = (q("velocity_m_s", frames.velocity_m_s.values[-1]) ** 2).sum(axis=1)
+    w2 = q("angular_velocity_rad_s", frames.angular_velocity_rad_s.values[-1]) ** 2
+    kinetic = 0.5 * (q("mass_kg", frames.mass_kg.values) * v2 + q("inertia_kg_m2", frames.inertia_kg_m2.values) * w2)
+    recorded = ureg.Quantity(series.kinetic_energy_J.values[k], series.kinetic_energy_J.attrs["units"])
+    assert kinetic[act].sum().to("J").magnitude == pytest.approx(recorded.to("J").magnitude, rel=1e-12)
 
 
 def test_simulation_restore_is_bit_identical():
