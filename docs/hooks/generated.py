@@ -2,12 +2,14 @@
 
 ``<!-- scene-reference -->`` in a page becomes one table per section of :class:`porepipe.scene.Scene` (key, type,
 default, meaning), so the reference never drifts from the code; ``<!-- scene-gallery -->`` becomes one entry per
-shipped scene, from the scene file's own leading comment and its analyses.
+shipped scene, from the scene file's own leading comment and its analyses, with its picture and caption from
+docs/gallery (``docs/gallery/make_pictures.py`` makes them).
 """
 
 from __future__ import annotations
 
 import enum
+import json
 import typing
 from pathlib import Path
 
@@ -16,6 +18,8 @@ from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
 ROOT = Path(__file__).resolve().parents[2]
+#: the gallery's pictures and captions.json, made by docs/gallery/make_pictures.py
+GALLERY = ROOT / "docs" / "gallery"
 
 #: wall time of a whole `porepipe run SCENE --cores N`, measured (see the README's table for the conditions)
 MEASURED = {
@@ -110,8 +114,11 @@ def _leading_comment(text: str) -> str:
 
 
 def scene_gallery() -> str:
-    """One entry per shipped scene: what it does (its own comment), its analyses and its measured cost."""
+    """One entry per shipped scene: what it does (its own comment), its analyses, its measured cost and its picture."""
     out = []
+    captions = (
+        json.loads((GALLERY / "captions.json").read_text()) if (GALLERY / "captions.json").is_file() else {}
+    )
     for path in sorted((ROOT / "config" / "scenes").glob("*.yaml")):
         text = path.read_text()
         raw = yaml.safe_load(text)
@@ -129,8 +136,16 @@ def scene_gallery() -> str:
             f"- **Asks for**: {box}{res}analyses {analyses}",
             f"- **Measured cost**: {MEASURED.get(raw['name'], 'not measured yet')}",
             "",
+            *_picture(path.stem, captions),
         ]
     return "\n".join(out)
+
+
+def _picture(stem: str, captions: dict) -> list[str]:
+    """The scene's picture from docs/gallery (made by docs/gallery/make_pictures.py) with its caption."""
+    if stem not in captions or not (GALLERY / f"{stem}.png").is_file():
+        return ["*No picture yet: run `python docs/gallery/make_pictures.py " + stem + "`.*", ""]
+    return [f"![{stem}](gallery/{stem}.png)", "", f"*{captions[stem]}*", ""]
 
 
 def on_page_markdown(markdown, page, config, files):

@@ -35,8 +35,8 @@ STAGE = "granular"
 _CONTACT_KEYS = ("i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area_m2", "length_m")
 #: units of the contact and series columns (pint spellings); the rest (indices, counts, ratios) are "1"
 _UNITS = {
-    **{k: "N" for k in ("fx_N", "fy_N", "fn_N", "ft_N")},
-    **{k: "m" for k in ("sx_m", "sy_m", "length_m")},
+    **dict.fromkeys(("fx_N", "fy_N", "fn_N", "ft_N"), "N"),
+    **dict.fromkeys(("sx_m", "sy_m", "length_m"), "m"),
     "area_m2": "m^2",
     "time_s": "s",
     "kinetic_energy_J": "J",
@@ -231,7 +231,8 @@ def _write(w: ResultWriter, sim: Simulation, frames: list[Frame], series: list[t
     rows = {k: np.concatenate([f.contacts[k] for f in frames]) for k in _CONTACT_KEYS}
     rows["frame"] = np.concatenate([np.full(len(f.contacts["i"]), k, np.int64) for k, f in enumerate(frames)])
     w.write_table(
-        xr.Dataset({k: (("contact",), v, {"units": _UNITS.get(k, "1")}) for k, v in rows.items()}), group="contacts"
+        xr.Dataset({k: (("contact",), v, {"units": _UNITS.get(k, "1")}) for k, v in rows.items()}),
+        group="contacts",
     )
     s = np.asarray(series, dtype=np.float64).reshape(-1, 5)
     names = ("time_s", "kinetic_energy_J", "contacts", "coordination", "max_overlap")

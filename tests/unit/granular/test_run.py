@@ -77,7 +77,11 @@ def test_every_unit_of_a_granular_result_is_one_pint_reads_and_the_right_dimensi
                 ureg.Unit(var.attrs["units"])  # raises if pint cannot parse it
     frames, series = tables["frames"], tables["series"]
     dimension = {"position_m": "[length]", "angle_rad": "", "velocity_m_s": "[length]/[time]"}
-    dimension |= {"angular_velocity_rad_s": "1/[time]", "mass_kg": "[mass]", "inertia_kg_m2": "[mass]*[length]**2"}
+    dimension |= {
+        "angular_velocity_rad_s": "1/[time]",
+        "mass_kg": "[mass]",
+        "inertia_kg_m2": "[mass]*[length]**2",
+    }
     for name, dim in dimension.items():
         assert ureg.Unit(frames[name].attrs["units"]).dimensionality == ureg.get_dimensionality(dim), name
     # truth: the kinetic energy the series records at the last frame's time is 1/2 m v^2 + 1/2 I w^2 of that frame,
@@ -92,7 +96,9 @@ def test_every_unit_of_a_granular_result_is_one_pint_reads_and_the_right_dimensi
 
     v2 = (q("velocity_m_s", frames.velocity_m_s.values[-1]) ** 2).sum(axis=1)
     w2 = q("angular_velocity_rad_s", frames.angular_velocity_rad_s.values[-1]) ** 2
-    kinetic = 0.5 * (q("mass_kg", frames.mass_kg.values) * v2 + q("inertia_kg_m2", frames.inertia_kg_m2.values) * w2)
+    kinetic = 0.5 * (
+        q("mass_kg", frames.mass_kg.values) * v2 + q("inertia_kg_m2", frames.inertia_kg_m2.values) * w2
+    )
     recorded = ureg.Quantity(series.kinetic_energy_J.values[k], series.kinetic_energy_J.attrs["units"])
     assert kinetic[act].sum().to("J").magnitude == pytest.approx(recorded.to("J").magnitude, rel=1e-12)
 

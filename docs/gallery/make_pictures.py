@@ -1,0 +1,320 @@
+"""Make the gallery's pictures: one small PNG per scene in config/scenes, and captions.json that says how each was made.
+
+Scenes that run in seconds are run for real (their first stages, at the scene's own size, through the ``porepipe``
+command) and the result is drawn; heavy full-size scenes are drawn from what the scene file itself defines, without
+running them, and their caption says so. Rerun after changing a scene::
+
+    .venv/bin/python docs/gallery/make_pictures.py            # every scene (a few minutes on 2 cores)
+    .venv/bin/python docs/gallery/make_pictures.py mini       # only the named scenes
+
+The pictures are 400 × 300 px (matplotlib Agg); docs/hooks/generated.py puts each one, with its caption, into the
+gallery.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import yaml
+from matplotlib.collections import PolyCollection
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+SCENES = ROOT / "config" / "scenes"
+CAPTIONS = HERE / "captions.json"
+PIPE = [str(Path(sys.executable).with_name("porepipe"))]
+
+
+def _scene(name: str) -> dict:
+    return yaml.safe_load((SCENES / f"{name}.yaml").read_text())
+
+
+def _porepipe(*args) -> None:
+    subprocess.run([*PIPE, *map(str, args)], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+
+
+def _figure():
+    fig, ax = plt.subplots(figsize=(4, 3), dpi=100)
+    return fig, ax
+
+
+def _save(fig, name: str) -> None:
+    fig.tight_layout()
+    fig.savefig(HERE / f"{name}.png", dpi=100)
+    plt.close(fig)
+
+
+def _grey_slice(ax, grey: np.ndarray, voxel_um: float, title: str) -> None:
+    k = grey.shape[2] // 2
+    n, m = grey.shape[:2]
+    im = ax.imshow(
+        grey[:, :, k].T,
+        origin="lower",
+        cmap="gray_r",
+        vmin=0,
+        vmax=216,
+        extent=(0, n * voxel_um, 0, m * voxel_um),
+    )
+    ax.set_xlabel("x (µm)")
+    ax.set_ylabel("y (µm)")
+    ax.set_title(title, fontsize=9)
+    ax.figure.colorbar(im, ax=ax, label="grey (0 pore, 216 matrix)", fraction=0.046)
+
+
+# -- scenes that run: pack, then voxelise at the scene's finest resolution -----------------------------------------
+def packed(name: str) -> str:
+    """Pack the scene's spheres (its own pack stage) and draw the mid-plane of its grey volume at the finest a."""
+    from porepipe.voxelize import voxelize
+
+    raw = _scene(name)
+    a = min(raw["resolutions_um"])
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        _porepipe("pack", SCENES / f"{name}.yaml", "-o", Path(tmp) / "packing.h5", "--threads", 2)
+        wall = time.perf_counter() - t0
+        with h5py.File(Path(tmp) / "packing.h5") as f:
+            centres, radii = f["centres_um"][...], f["radii_um"][...]
+    box = raw["domain"]["size_um"]
+    grey = voxelize(centres, radii, box_um=box, voxel_um=a)
+    fig, ax = _figure()
+    _grey_slice(ax, grey, a, f"{name}: grey volume at a = {a:g} µm, z = {box[2] / 2:g} µm")
+    _save(fig, name)
+    return (
+        f"Run for this picture: the scene's own packing ({len(radii)} spheres, `porepipe pack`, {wall:.0f} s on a "
+        f"loaded 2-core machine), voxelised at a = {a:g} µm; the grey values of the mid-plane z = {box[2] / 2:g} µm "
+        "(0 = pore, 216 = matrix)."
+    )
+
+
+def granular(name: str) -> str:
+    """Run the scene's 2-D DEM to its end and draw the settled polygons of the last frame."""
+    from porepipe.granular import frame_particles, read_granular
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        _porepipe(
+            "granular", SCENES / f"{name}.yaml", "-o", Path(tmp) / "granular.h5", "--threads", 2, "--quiet"
+        )
+        wall = time.perf_counter() - t0
+        tables = read_granular(Path(tmp) / "granular.h5")
+    last = frame_particles(tables, -1)
+    t_end = float(tables["frames"].time_s.values[-1])
+    walls = tables["frames"]["wall_vertices_m"].values
+    fig, ax = _figure()
+    polys = [p * 100 for p, on in zip(last["polygons"], last["active"], strict=True) if on]
+    ax.add_collection(PolyCollection(polys, facecolors="#c8a165", edgecolors="#5a4020", linewidths=0.3))
+    for w in walls:
+        w = w[~np.isnan(w[:, 0])] * 100
+        ax.fill(w[:, 0], w[:, 1], color="0.4")
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (cm)")
+    ax.set_ylabel("y (cm)")
+    ax.set_title(f"{name}: {len(polys)} polygons at t = {t_end:g} s", fontsize=9)
+    _save(fig, name)
+    return (
+        f"Run for this picture: the scene's whole 2-D DEM (`porepipe granular`, {wall:.0f} s on a loaded 2-core "
+        f"machine); the polygons of the last frame (t = {t_end:g} s) and the walls in grey."
+    )
+
+
+def capillary(name: str) -> str:
+    """Write the scene's synthetic capillary at its finest a and draw a section through its axis."""
+    from porepipe._shared.store import read_binary_volume
+
+    raw = _scene(name)
+    a = min(raw["resolutions_um"])
+    with tempfile.TemporaryDirectory() as tmp:
+        _porepipe(
+            "diffusion-capillary", "--scene", SCENES / f"{name}.yaml", "--a", a, "-o", Path(tmp) / "b.h5"
+        )
+        pore, meta = read_binary_volume(Path(tmp) / "b.h5")
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(4, 3), dpi=100, width_ratios=[1, 1])
+    n = pore.shape
+    ax.imshow(
+        pore[:, n[1] // 2, :],
+        origin="lower",
+        cmap="Blues",
+        vmin=0,
+        vmax=1.4,
+        extent=(0, n[2] * a, 0, n[0] * a),
+    )
+    ax.set_title("section y = mid", fontsize=8)
+    ax.set_xlabel("z (µm)")
+    ax.set_ylabel("x (µm)")
+    bx.imshow(
+        pore[:, :, n[2] // 2].T,
+        origin="lower",
+        cmap="Blues",
+        vmin=0,
+        vmax=1.4,
+        extent=(0, n[0] * a, 0, n[1] * a),
+    )
+    bx.set_title("section z = mid", fontsize=8)
+    bx.set_xlabel("x (µm)")
+    fig.suptitle(f"{name}: pore voxels (blue) at a = {a:g} µm", fontsize=9)
+    _save(fig, name)
+    g = raw["diffusion"]["geometry"]
+    return (
+        f"Run for this picture: the scene's capillary (radius {g['radius_um']:g} µm, length {g['length_um']:g} µm) "
+        f"as `porepipe diffusion-capillary` voxelises it at a = {a:g} µm, {int(pore.sum())} pore voxels; sections "
+        "along and across the axis (the diffusion itself is not run here)."
+    )
+
+
+def image(name: str) -> str:
+    """Draw the mid-plane of the scene's own input image (the synthetic µ-CT TIFF it ships with)."""
+    import tifffile
+
+    raw = _scene(name)
+    path = ROOT / "config" / "scenes" / "data" / "image-to-model.tif"
+    img = tifffile.imread(path)
+    a = raw["resolutions_um"][0]
+    fig, ax = _figure()
+    k = img.shape[0] // 2
+    im = ax.imshow(img[k], origin="lower", cmap="gray", extent=(0, img.shape[2] * a, 0, img.shape[1] * a))
+    fig.colorbar(im, ax=ax, label="8-bit grey", fraction=0.046)
+    ax.set_xlabel("µm")
+    ax.set_ylabel("µm")
+    ax.set_title(f"{name}: input image, slice {k} of {img.shape[0]}", fontsize=9)
+    _save(fig, name)
+    return (
+        f"The scene's input: slice {k} of the {' × '.join(map(str, img.shape))}-voxel synthetic µ-CT image "
+        f"`config/scenes/data/{path.name}` ({a:g} µm voxels) that the scene's `acquire` stage reads; nothing is run."
+    )
+
+
+# -- heavy scenes: drawn from the scene file, not run -----------------------------------------------------------------
+def _radius_pdf(spec: dict, r: np.ndarray) -> np.ndarray:
+    lo, hi = spec["min_um"], spec["max_um"]
+    inside = (r >= lo) & (r <= hi)
+    if spec["dist"] == "exponential":
+        al = spec["alpha_per_um"]
+        return np.where(inside, al * np.exp(-al * (r - lo)) / (1 - np.exp(-al * (hi - lo))), 0.0)
+    return np.where(inside, 1.0 / (hi - lo), 0.0)
+
+
+def radii(name: str) -> str:
+    """Expected number of spheres per µm of radius of each sphere type, from the scene's radius distributions."""
+    raw = _scene(name)
+    fig, ax = _figure()
+    for t in raw["packing"]["types"]:
+        spec = t["radius_um"]
+        r = np.linspace(spec["min_um"] * 0.9, spec["max_um"] * 1.05, 2000)
+        ax.plot(r, t["count"] * _radius_pdf(spec, r), label=f"{t['name']}: {t['count']:,} spheres")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_ylim(bottom=1e-1)
+    ax.set_xlabel("radius r (µm)")
+    ax.set_ylabel("spheres per µm of r")
+    ax.legend(fontsize=7, loc="upper right")
+    size = raw["domain"]["size_um"]
+    ax.set_title(f"{name}: inserted radii, box {size[0]:g} µm (not run)", fontsize=9)
+    _save(fig, name)
+    n = sum(t["count"] for t in raw["packing"]["types"])
+    return (
+        f"Not run for this picture (the full-size packing of {n:,} spheres takes minutes and GBs): the radius "
+        "distributions the scene file asks for, drawn from its `packing.types` (count × probability density; "
+        "the radius protocol and the deletion of unconverged spheres change them during the run)."
+    )
+
+
+def silo(name: str) -> str:
+    """The silo and the loose lattice of polygons the scene starts from, as the simulation places them (no step)."""
+    from porepipe.granular import Settings, Simulation
+
+    raw = _scene(name)
+    sim = Simulation(Settings.model_validate(raw["granular"]), seed=raw.get("seed", 0))
+    pos = sim.position[: sim.n_mob]
+    fig, ax = _figure()
+    box = raw["granular"]["box"]
+    x0, y0 = box["lower_m"]
+    x1, y1 = box["upper_m"]
+    ax.plot(
+        [x0 * 100, x0 * 100, x1 * 100, x1 * 100], [y1 * 100, y0 * 100, y0 * 100, y1 * 100], color="0.3", lw=2
+    )
+    ax.scatter(pos[:, 0] * 100, pos[:, 1] * 100, s=0.2, color="#8a6a3a", linewidths=0)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (cm)")
+    ax.set_ylabel("y (cm)")
+    ax.set_title(f"{name}: {sim.n_mob:,} grains at t = 0 (not run)", fontsize=9)
+    _save(fig, name)
+    return (
+        f"Not run for this picture (~30–45 min on 2 cores): the silo walls and the centroids of the {sim.n_mob:,} "
+        "polygons on the loose lattice the scene starts from, as the simulation places them before its first step; "
+        "gravity then ramps up and the column settles to about 40 cm."
+    )
+
+
+def grains(name: str) -> str:
+    """Circles where the scene's spheres cut the mid-plane (before decoration with the quartz grain types)."""
+    raw = _scene(name)
+    xyzr = np.loadtxt(ROOT / "config" / "scenes" / "data" / "fontainebleau-like.xyzr")
+    size = raw["domain"]["size_um"]
+    z = size[2] / 2
+    fig, ax = _figure()
+    shifts = [(dx, dy, dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)]  # periodic images
+    for dx, dy, dz in shifts:
+        d = xyzr[:, 2] + dz * size[2] - z
+        cut = np.abs(d) < xyzr[:, 3]
+        cut_r = np.sqrt(xyzr[cut, 3] ** 2 - d[cut] ** 2)
+        for x, y, r in zip(xyzr[cut, 0] + dx * size[0], xyzr[cut, 1] + dy * size[1], cut_r, strict=True):
+            ax.add_patch(plt.Circle((x, y), r, color="#b9a27c", lw=0))
+    ax.set_xlim(0, size[0])
+    ax.set_ylim(0, size[1])
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (µm)")
+    ax.set_ylabel("y (µm)")
+    ax.set_title(f"{name}: {len(xyzr)} spheres cut at z = {z:g} µm", fontsize=9)
+    _save(fig, name)
+    return (
+        f"Not run for this picture: where the scene's {len(xyzr)} spheres (`config/scenes/data/"
+        f"fontainebleau-like.xyzr`) cut the mid-plane z = {z:g} µm. The run replaces each sphere by a decorated "
+        "quartz grain of equal volume, so the real grains are faceted, not round."
+    )
+
+
+#: how each shipped scene gets its picture
+MAKERS = {
+    "mini": packed,
+    "mini-diffusion": packed,
+    "filled-packing-ci": packed,
+    "rough-walls-ci": packed,
+    "granular-box": granular,
+    "granular-heap-ci": granular,
+    "granular-silo-ci": granular,
+    "knudsen-capillary-ci": capillary,
+    "image-to-model": image,
+    "filled-packing": radii,
+    "rough-walls": radii,
+    "granular-silo": silo,
+    "fontainebleau-like": grains,
+}
+
+
+def main(names: list[str]) -> None:
+    """Make the pictures of ``names`` (all shipped scenes if empty) and update captions.json."""
+    shipped = sorted(p.stem for p in SCENES.glob("*.yaml"))
+    missing = sorted(set(shipped) - set(MAKERS))
+    if missing:
+        raise SystemExit(f"no picture maker for scene(s) {', '.join(missing)}: add them to MAKERS")
+    captions = json.loads(CAPTIONS.read_text()) if CAPTIONS.exists() else {}
+    for name in names or shipped:
+        print(f"{name} …", flush=True)
+        captions[name] = MAKERS[name](name)
+        CAPTIONS.write_text(json.dumps(dict(sorted(captions.items())), indent=1, ensure_ascii=False) + "\n")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
