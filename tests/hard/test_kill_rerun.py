@@ -24,7 +24,7 @@ import yaml
 
 DATA = Path(__file__).parent / "data" / "tiny"
 #: attributes (and datasets) that differ between two runs by nature (cost and provenance of the run, not its result)
-TIMING_ATTRS = {"wall_s", "cpu_s", "peak_mb", "created", "threads", "porepipe_version", "source"}
+TIMING_ATTRS = {"wall_s", "cpu_s", "startup_s", "peak_mb", "created", "threads", "porepipe_version", "source"}
 #: netCDF dimension-scale links: HDF5 object addresses, which depend on the write order, not on the result
 ADDRESS_ATTRS = {"REFERENCE_LIST", "DIMENSION_LIST"}
 KILL_POINTS = ("pack checkpoint", "packing.h5 written", "first binary written")
