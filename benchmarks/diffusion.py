@@ -3,7 +3,7 @@
     python benchmarks/diffusion.py           # 30 x 30 x 300 capillary and a 96^3 porous sample
     python benchmarks/diffusion.py --smoke   # seconds (CI)
 
-Prints a markdown table and writes diffusion.json in the working directory. Peer: SPARTA's free-molecular DSMC moves
+Prints a markdown table and writes diffusion.json and diffusion_edmd.json into --out (default results/benchmarks/). Peer: SPARTA's free-molecular DSMC moves
 1.2e7 particles per CPU-second per core (its published benchmark log); a particle-move there is one time step of one
 particle, a wall hit here is one whole flight from wall to wall (many voxels). Target: 2e7 wall hits/s on 2 cores.
 Geometry memory: 1 byte per voxel (the distance-code array) plus the (m, 3) inlet/outlet pixel lists.
@@ -15,11 +15,11 @@ porosity (0.35) and grain size (8-voxel radius).
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
 import numpy as np
+from _common import add_out_argument, write_record
 
 from porepipe._shared.numba_config import set_threads
 from porepipe.diffusion import Settings, WallLaw, square_capillary, transport
@@ -78,6 +78,7 @@ def measure(pore, settings, threads, repeats):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--smoke", action="store_true", help="small sizes, one repeat")
+    add_out_argument(parser)
     args = parser.parse_args()
     per = 40 if args.smoke else 400
     repeats = 1 if args.smoke else 3
@@ -124,11 +125,11 @@ def main() -> None:
         f"(2 cores: {2 * SPARTA_MOVES_PER_CORE_S:.2g}); target here {TARGET_HITS_2_CORES:.2g} wall hits/s on 2 "
         "cores; geometry 1 byte per voxel"
     )
-    Path("diffusion.json").write_text(json.dumps(rows, indent=1))
-    edmd_section(args.smoke)
+    write_record(args.out, "diffusion.json", rows)
+    edmd_section(args.smoke, args.out)
 
 
-def edmd_section(smoke: bool) -> None:
+def edmd_section(smoke: bool, out: str) -> None:
     """Event-driven hard-sphere gas (setup edmd): events/s and cost per particle and simulated ps for N = 10^3..10^5
     N2 at n = 0.125 nm^-3 (about 5 bar, 298 K) in a periodic box; one core (the kernel is serial).
 
@@ -171,7 +172,7 @@ def edmd_section(smoke: bool) -> None:
             f"{r['us_per_particle_ps']:.3g} |"
         )
     print("(cost per particle and simulated time grows like log N for an N log N method)")
-    Path("diffusion_edmd.json").write_text(json.dumps(rows, indent=1))
+    write_record(out, "diffusion_edmd.json", rows)
 
 
 if __name__ == "__main__":

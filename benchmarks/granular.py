@@ -21,13 +21,12 @@ import os
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import argparse
-import json
 import math
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
+from _common import add_out_argument, write_record
 
 from porepipe.granular import Settings, Simulation, polygon_properties
 from porepipe.granular import _kernels as K
@@ -150,7 +149,7 @@ def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke", action="store_true", help="300 particles, a few steps, 1 thread")
-    ap.add_argument("--out", default="benchmarks/granular.json")
+    add_out_argument(ap)
     ap.add_argument("--n", type=int, default=None, help="particles (default 10 000, smoke 300)")
     args = ap.parse_args()
     n, warm, steps, repeats = (300, 10, 10, 1) if args.smoke else (10_000, 300, 200, 3)
@@ -187,8 +186,8 @@ def main() -> None:
     print(f"| target (2 cores) | {TARGET:.3g} |\nbest here: {best:.3g} ({best / TARGET:.0%} of the target)")
     if not args.smoke:
         builds_out = [{"spread": k[0], "method": k[1], "seconds": v} for k, v in builds.items()]
-        Path(args.out).write_text(
-            json.dumps({"rows": rows, "builds": builds_out, "effects": cost, "peers": PEERS}, indent=1)
+        write_record(
+            args.out, "granular.json", {"rows": rows, "builds": builds_out, "effects": cost, "peers": PEERS}
         )
 
 
