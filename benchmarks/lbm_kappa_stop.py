@@ -14,11 +14,11 @@ Usage: python benchmarks/lbm_kappa_stop.py results/mini/segment/binary_a4.h5 \
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
 import numpy as np
+from _common import add_out_argument, write_record
 
 from porepipe._shared.store import read_binary_volume
 from porepipe.lbm import Settings, permeability
@@ -88,7 +88,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("volumes", nargs="*", help="binary_a{a}.h5[=grains.h5|grey_a{a}.h5]")
     p.add_argument("--axis", default="z")
-    p.add_argument("--out", default="results/benchmarks")
+    add_out_argument(p)
     p.add_argument("--smoke", action="store_true", help="a generated 24³ porous volume only")
     args = p.parse_args(argv)
     cases = [(_generated(), 1.0, None, "generated 24^3")] if args.smoke or not args.volumes else []
@@ -110,10 +110,7 @@ def main(argv=None) -> int:
             + ("" if d["converged"] else " -- the density run did NOT converge (step limit)"),
             flush=True,
         )
-    out = Path(args.out) / "lbm_kappa_stop.json"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(rows, indent=1))
-    print(f"-> {out}")
+    write_record(args.out, "lbm_kappa_stop.json", rows)
     return 0
 
 

@@ -12,9 +12,9 @@ Usage: python benchmarks/lbm_spheres.py [--fractions 0.125 0.343] [--diameters 8
 from __future__ import annotations
 
 import argparse
-import json
 import time
-from pathlib import Path
+
+from _common import add_out_argument, write_record
 
 from porepipe.lbm import Settings, permeability
 from porepipe.lbm import _calibration as cal
@@ -58,9 +58,7 @@ def main(argv=None) -> int:
     p.add_argument("--fractions", type=float, nargs="+", default=[0.125, 0.343])
     p.add_argument("--diameters", type=float, nargs="+", default=[8, 12, 16, 24, 32])
     p.add_argument("--walls", nargs="+", default=["halfway", "cli"])
-    p.add_argument(
-        "--out", default="results/benchmarks", help="folder of lbm_spheres.json (read by the report)"
-    )
+    add_out_argument(p)  # the report reads lbm_spheres.json from results/benchmarks/
     p.add_argument("--smoke", action="store_true", help="c = 0.125, d = 8 only")
     args = p.parse_args(argv)
     if args.smoke:
@@ -79,10 +77,7 @@ def main(argv=None) -> int:
                     f"cpu={row['cpu_s']:.1f} s",
                     flush=True,
                 )
-    out = Path(args.out) / "lbm_spheres.json"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(rows, indent=1))
-    print(f"-> {out}")
+    write_record(args.out, "lbm_spheres.json", rows)
     return 0
 
 

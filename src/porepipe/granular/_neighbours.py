@@ -295,18 +295,24 @@ def _box_pairs_init(order, xlo, xhi, ylo, yhi, n, pairs):
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def _padded_circles_meet(i, j, x, rad, active, cut):
+    """Both particles active and their circles, each padded by ``cut``, overlap."""
+    if active[i] == 0 or active[j] == 0:
+        return False
+    rr = rad[i] + rad[j] + 2.0 * cut
+    dx = x[j, 0] - x[i, 0]
+    dy = x[j, 1] - x[i, 1]
+    return dx * dx + dy * dy <= rr * rr
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def _swap_candidates(pairs, n, x, rad, active, cut):
     """The set's pairs whose padded circles overlap, as CSR by i (rows sorted by j)."""
     counts = np.zeros(n + 1, np.int64)
     for key in pairs:
         i = key // n
         j = key - i * n
-        if active[i] == 0 or active[j] == 0:
-            continue
-        rr = rad[i] + rad[j] + 2.0 * cut
-        dx = x[j, 0] - x[i, 0]
-        dy = x[j, 1] - x[i, 1]
-        if dx * dx + dy * dy <= rr * rr:
+        if _padded_circles_meet(i, j, x, rad, active, cut):
             counts[i + 1] += 1
     for k in range(n):
         counts[k + 1] += counts[k]
@@ -315,12 +321,7 @@ def _swap_candidates(pairs, n, x, rad, active, cut):
     for key in pairs:
         i = key // n
         j = key - i * n
-        if active[i] == 0 or active[j] == 0:
-            continue
-        rr = rad[i] + rad[j] + 2.0 * cut
-        dx = x[j, 0] - x[i, 0]
-        dy = x[j, 1] - x[i, 1]
-        if dx * dx + dy * dy <= rr * rr:
+        if _padded_circles_meet(i, j, x, rad, active, cut):
             pj[fill[i]] = j
             fill[i] += 1
     _sort_rows(counts, pj)
