@@ -73,19 +73,9 @@ def prepare_output(path) -> Path:
     if path.is_dir():
         raise PorepipeError(f"output {path} is a directory; give a file name (e.g. {path / 'result.h5'})")
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        raise PorepipeError(
-            f"output {path}: cannot create its directory, a file is in the way ({_first_file(path.parent)})"
-        ) from None
-    except OSError as err:
-        raise PorepipeError(
-            f"output {path}: cannot create its directory {path.parent}: {err.strerror}"
-        ) from None
-    if not path.parent.is_dir():
-        raise PorepipeError(f"output {path}: {path.parent} is a file, not a directory")
-    if not os.access(path.parent, os.W_OK | os.X_OK):
-        raise PorepipeError(f"output {path}: directory {path.parent} is not writable")
+        prepare_output_dir(path.parent)
+    except PorepipeError as err:
+        raise PorepipeError(f"output {path}: {err}") from None
     remove_stale_temporaries(path)
     return path
 
