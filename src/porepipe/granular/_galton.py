@@ -173,4 +173,3 @@ def chi2_binomial(bins, p: float, n: int = ROWS, min_expected: float = 5.0):
     exp = np.r_[expected[: lo + 1].sum(), expected[lo + 1 : hi], expected[hi:].sum()]
     res = stats.chisquare(obs, exp)
     return float(res.statistic), len(obs) - 1, float(res.pvalue)
-
