@@ -32,10 +32,10 @@ HOPPER_W, HOPPER_H = 0.06, 0.05  # hopper top width and height
 class GaltonBoard:
     """Geometry and material of the board (lengths in m)."""
 
-    spacing_m: float = 0.012  # nail spacing D: gaps of ~2 ball diameters, so that the stream does not jam
+    spacing_m: float = 0.010  # nail spacing D: gaps of 1.6 ball diameters (1.4 jams the stream)
     nail_r_m: float = 0.002  # hexagon circumradius
     tip_shift_m: float = 0.0  # tips moved by this (negative: to the left, p > 1/2)
-    damping: float = 0.5
+    damping: float = 1.0
     friction: float = 0.3
     every_s: float = 0.02  # one ball dropped into the hopper every this many seconds
     outlet_m: float = 2.5 * 2 * BALL_R  # funnel outlet: wide enough not to clog, feeds the top nail only
@@ -58,7 +58,8 @@ class GaltonBoard:
         for k in range(ROWS):
             for j in range(-8, 9):
                 x = (j + 0.5 * (k % 2)) * d
-                if abs(x) + self.nail_r_m < half_w:
+                # no nail closer to a side wall than a ball diameter plus a radius: no pocket to stick in
+                if half_w - abs(x) - self.nail_r_m > 3 * BALL_R:
                     corners = [tuple(p + (x, -k * pitch)) for p in hexagon]
                     walls.append({"name": f"nail{k}_{j}", "vertices_m": corners})
         y_out = self.nail_r_m + 3 * BALL_R  # funnel outlet height: a ball leaving it falls onto the top nail
@@ -116,6 +117,19 @@ def galton_paths(
 ):
     """Run until every ball has left the board; return (decisions (N, ROWS) of 0/1, bins (N,)).
 
+    Parameters
+    ----------
+    sim : Simulation
+        From :meth:`GaltonBoard.simulation`.
+    board : GaltonBoard
+        Its geometry (row levels, nail spacing).
+    t_max_s : float, optional
+        Give up at this simulated time (default: last drop + 10 s).
+    chunk : int
+        Steps between readings of the positions (a ball falls well under a row pitch in ``chunk`` steps).
+    progress : bool
+        Print the count of balls through once per simulated second.
+
     Raises
     ------
     PorepipeError
@@ -160,7 +174,21 @@ def galton_paths(
 def chi2_binomial(bins, p: float, n: int = ROWS, min_expected: float = 5.0):
     """Pearson chi² of bin counts against n_balls Binomial(n, p), tails pooled until each expects >= 5 balls.
 
-    Returns (chi2, degrees of freedom, p-value).
+    Parameters
+    ----------
+    bins : (N,) int array
+        Bin of each ball (values beyond 0..n count in the outer bins).
+    p : float
+        Probability of a step to the right.
+    n : int
+        Rows (decisions per ball).
+    min_expected : float
+        Pooling threshold of the tails.
+
+    Returns
+    -------
+    tuple
+        (chi², degrees of freedom, p-value).
     """
     counts = np.bincount(np.clip(bins, 0, n), minlength=n + 1).astype(float)
     expected = len(bins) * stats.binom.pmf(np.arange(n + 1), n, p)
