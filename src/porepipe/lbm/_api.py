@@ -11,6 +11,7 @@ import xarray as xr
 from porepipe._shared.errors import PorepipeError
 from porepipe.lbm._domain import Prepared, chamber_setup, periodic_setup
 from porepipe.lbm._lattice import CS2
+from porepipe.lbm._mpi import Serial
 from porepipe.lbm._settings import Axis, Lateral, Settings, Setup, Walls
 from porepipe.lbm._solver import Run, StabilityError, check_tau, solve
 from porepipe.lbm._throats import throat_warning
@@ -135,8 +136,13 @@ def _check_pore(pore: np.ndarray) -> np.ndarray:
     return pore
 
 
-def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool = False) -> Prepared:
-    """Build the set-up the settings ask for (flow along axis 0 of ``pore_internal``)."""
+def prepare(
+    pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool = False, comm=None
+) -> Prepared:
+    """Build the set-up the settings ask for (flow along axis 0 of ``pore_internal``); ``comm``: the domain
+    decomposition (:mod:`porepipe.lbm._mpi`) whose part of the lattice to build (default: all of it).
+    """
+    build = {"build": comm.build} if comm is not None else {}
     lateral_periodic = settings.lateral is Lateral.periodic
     if settings.setup is Setup.periodic:
         return periodic_setup(
@@ -145,6 +151,7 @@ def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool
             lateral_periodic=lateral_periodic,
             prune=settings.prune,
             keep_wall_links=keep_wall_links,
+            **build,
         )
     return chamber_setup(
         pore_internal,
@@ -154,6 +161,7 @@ def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool
         lateral_periodic=lateral_periodic,
         prune=settings.prune,
         keep_wall_links=keep_wall_links,
+        **build,
     )
 
 
@@ -204,6 +212,20 @@ def _check_geometry(geometry, shape) -> None:
         )
 
 
+def _check_distributable(settings: Settings, interpolate: bool) -> None:
+    """Refuse what an MPI run cannot do yet: interpolated walls and field output."""
+    if interpolate:
+        raise PorepipeError(
+            f"permeability.walls = {settings.walls.value} with a wall geometry runs in one process only; "
+            "use walls: halfway under MPI, or run without --mpi"
+        )
+    if settings.write_fields or settings.write_vti:
+        raise PorepipeError(
+            "permeability.write_fields / write_vti are not available under MPI (the fields stay spread over the "
+            "ranks); run without --mpi to write them"
+        )
+
+
 def permeability(
     pore: np.ndarray,
     axis: Axis | str = Axis.z,
@@ -214,6 +236,7 @@ def permeability(
     progress: bool = True,
     label: str | None = None,
     geometry: SphereWalls | GrainWalls | GreyWalls | None = None,
+    comm=None,
 ) -> PermeabilityResult:
     """Lattice-Boltzmann permeability of a binary sample along one axis.
 
@@ -234,6 +257,10 @@ def permeability(
         Sub-voxel wall positions for ``walls`` = cli/bfl, in the caller's axis order and the sample's voxel grid
         (exact spheres, exact decorated grains, or grey values); every set-up (periodic, mirror, chamber) takes them.
         Without it the walls are halfway bounce-back (``result.walls``).
+    comm : Serial or Slabs, optional
+        Domain decomposition (:mod:`porepipe.lbm._mpi`): ``Slabs()`` under ``mpirun`` runs this process's slab
+        (every rank calls with the same arguments and gets the same result; halfway walls, no fields). Default:
+        one process.
 
     Returns
     -------
@@ -257,10 +284,13 @@ def permeability(
     pore = _check_pore(pore)
     check_tau(settings)
     interpolate = _interpolating(settings, geometry)
+    comm = comm or Serial()
+    if comm.distributed:
+        _check_distributable(settings, interpolate)
     if interpolate:
         _check_geometry(geometry, pore.shape)
     internal = np.ascontiguousarray(np.moveaxis(pore, axis.index, 0))
-    prep = prepare(internal, settings, keep_wall_links=interpolate)
+    prep = prepare(internal, settings, keep_wall_links=interpolate, comm=comm)
     throat, warning = throat_warning(internal, settings, interpolate)
     base = {
         "axis": axis,
@@ -285,7 +315,7 @@ def permeability(
             n_nodes=0,
             **base,
         )
-    if prep.lattice.n_wall_links == 0:
+    if not comm.has_walls(prep.lattice):
         return PermeabilityResult(
             **kappa_units(float("inf"), voxel_um),
             method="no_walls",
@@ -294,7 +324,7 @@ def permeability(
             steps=0,
             history={},
             mlups=0.0,
-            n_nodes=prep.lattice.n_nodes,
+            n_nodes=comm.n_nodes(prep.lattice),
             reason="no solid voxel and no wall anywhere: nothing resists the flow, "
             "κ is unbounded (use `lateral: walls` for a duct)",
             **base,
@@ -314,6 +344,7 @@ def permeability(
         checkpoint=checkpoint,
         progress=progress,
         links=links,
+        comm=comm,
     )
     reason = (
         f"converged ({run.stopped_by} rule)"
@@ -341,7 +372,7 @@ def permeability(
         reason=reason,
         history=run.history,
         mlups=run.mlups,
-        n_nodes=prep.lattice.n_nodes,
+        n_nodes=comm.n_nodes(prep.lattice),
         velocity=velocity,
         pressure=pressure,
         total_mass=run.total_mass,
