@@ -281,6 +281,30 @@ def permeability_grey_arg(wildcards, input):
     return f"--grey {shlex.quote(input.grey)}" if "grey" in input.keys() else ""
 
 
+# MPI permeability (scene key permeability.mpi_ranks > 1): Snakemake's MPI convention, resources `tasks` and `mpi`
+# (the launcher; `--set-resources permeability:mpi=srun` on a cluster) with `{resources.mpi} -n {resources.tasks}`
+# in the shell command. A one-process job has no `mpi` resource (None drops it), so no executor takes it for MPI.
+def permeability_ranks(wildcards):
+    return max(1, scene_of(wildcards).permeability.mpi_ranks)
+
+
+def permeability_mpi(wildcards):
+    return "mpirun" if permeability_ranks(wildcards) > 1 else None
+
+
+def permeability_launch(wildcards, resources):
+    """`<launcher> -n <ranks>` before the command of an MPI job, else nothing."""
+    if resources.get("mpi") and resources.tasks > 1:
+        return f"{resources.mpi} -n {resources.tasks}"
+    return ""
+
+
+def permeability_rank_args(wildcards, threads, resources):
+    """`--mpi` for an MPI job, and the numba threads of each rank (the job's threads shared among its ranks)."""
+    ranks = resources.tasks if resources.get("mpi") else 1
+    return f"--threads {max(1, threads // ranks)}" + (" --mpi" if ranks > 1 else "")
+
+
 #: analysis name -> function(scene) -> list of final outputs; each rule file registers its analysis here.
 ANALYSIS_TARGETS = {}
 
