@@ -212,13 +212,8 @@ def _check_geometry(geometry, shape) -> None:
         )
 
 
-def _check_distributable(settings: Settings, interpolate: bool) -> None:
-    """Refuse what an MPI run cannot do yet: interpolated walls and field output."""
-    if interpolate:
-        raise PorepipeError(
-            f"permeability.walls = {settings.walls.value} with a wall geometry runs in one process only; "
-            "use walls: halfway under MPI, or run without --mpi"
-        )
+def _check_distributable(settings: Settings) -> None:
+    """Refuse what an MPI run cannot do yet: field output."""
     if settings.write_fields or settings.write_vti:
         raise PorepipeError(
             "permeability.write_fields / write_vti are not available under MPI (the fields stay spread over the "
@@ -286,7 +281,7 @@ def permeability(
     interpolate = _interpolating(settings, geometry)
     comm = comm or Serial()
     if comm.distributed:
-        _check_distributable(settings, interpolate)
+        _check_distributable(settings)
     if interpolate:
         _check_geometry(geometry, pore.shape)
     internal = np.ascontiguousarray(np.moveaxis(pore, axis.index, 0))
@@ -333,7 +328,9 @@ def permeability(
     if interpolate:
         lat = prep.lattice
         domain = _domain_geometry(geometry, settings, axis.index, internal.shape[0])
-        links = build_links(lat.pore, lat.periodic, *lat.wall_links, domain, settings.walls)
+        links = build_links(
+            lat.pore, lat.periodic, *lat.wall_links, comm.local_geometry(domain), settings.walls
+        )
         lat.wall_links = None
     run = solve(
         prep.lattice,
@@ -379,6 +376,6 @@ def permeability(
         stopped_by=run.stopped_by,
         kappa_error=run.kappa_error,
         walls=settings.walls.value if interpolate else Walls.halfway.value,
-        n_links=links.size if links is not None else 0,
+        n_links=comm.owned_links(links, prep.lattice) if links is not None else 0,
         **base,
     )

@@ -70,6 +70,14 @@ class Serial:
         """Pore nodes of the whole domain."""
         return lat.n_nodes
 
+    def local_geometry(self, geometry):
+        """The wall geometry in the coordinates of this process's lattice."""
+        return geometry
+
+    def owned_links(self, links, lat: Lattice) -> int:
+        """Interpolated links of the whole domain."""
+        return links.size
+
     def key(self) -> str:
         """The decomposition, for checkpoint keys."""
         return ""
@@ -149,10 +157,6 @@ class Slabs:
 
     def build(self, pore, periodic, force_layers, sample_layers, window=None, *, keep_wall_links=False):
         """The lattice of this rank's slab with its two ghost layers (periodic along the flow only through them)."""
-        if keep_wall_links:
-            raise PorepipeError(
-                "interpolated walls (walls: cli/bfl) run in one process only; use walls: halfway with MPI"
-            )
         pore = np.ascontiguousarray(pore, dtype=bool)
         counts = np.count_nonzero(pore.reshape(pore.shape[0], -1), axis=1)
         self.bounds = split_layers(counts, self.size)
@@ -166,6 +170,7 @@ class Slabs:
             _local(force_layers, a, b),
             _local(sample_layers, a, b),
             window,
+            keep_wall_links=keep_wall_links,
         )
         self._halo = _Halo.of(lat)
         return lat
@@ -210,6 +215,17 @@ class Slabs:
         owned = self.owned(lat)
         return int(self.sum(owned.stop - owned.start))
 
+    def local_geometry(self, geometry):
+        """The domain's wall geometry seen from the slab lattice (its layer 0 is the domain's layer a − 1)."""
+        a, _, n_layers, *_ = self._layout
+        return SlabWalls(geometry, a - 1, n_layers)
+
+    def owned_links(self, links, lat: Lattice) -> int:
+        """Interpolated links of the owned nodes of every rank."""
+        nodes, _ = links.nodes_and_populations()
+        owned = self.owned(lat)
+        return int(self.sum(int(np.count_nonzero((nodes >= owned.start) & (nodes < owned.stop)))))
+
     def exchange(self, pops: np.ndarray) -> None:
         """Send the crossing populations of the first and last owned layer into the neighbours' ghost layers."""
         f = pops.reshape(19, self._halo.n_nodes)
@@ -251,6 +267,21 @@ class Slabs:
                 f"the {self.size} ranks' checkpoints ({path.name} and its siblings) disagree: steps "
                 f"{steps} (−1: none or stale); delete them or rerun with --no-resume"
             )
+
+
+@dataclasses.dataclass(frozen=True)
+class SlabWalls:
+    """A domain's wall geometry seen from a slab lattice whose layer 0 is the domain's layer ``offset`` (wrapped)."""
+
+    inner: object
+    offset: int
+    n_layers: int
+
+    def fractions(self, nodes: np.ndarray, pops: np.ndarray) -> np.ndarray:
+        """Wall distances q of the links (node voxel, population) given in slab coordinates."""
+        domain = nodes.copy()
+        domain[:, 0] = (domain[:, 0] + self.offset) % self.n_layers
+        return self.inner.fractions(domain, pops)
 
 
 def rank_checkpoint(path: Path, rank: int, size: int) -> Path:

@@ -278,10 +278,12 @@ def _density_change(d_new: np.ndarray, d_old: np.ndarray, mean_new: float, mean_
     return K._max_rel_change(rho_new / mean_new, rho_old / mean_old, 1e-300)
 
 
-def _restore_mass(pops: np.ndarray, n_nodes: int) -> None:
-    """Put the mass the interpolated walls lost back, spread evenly over the rest populations (ρ° = 1 per node)."""
-    deficit = -float(np.sum(pops, dtype=np.float64))
-    pops[:n_nodes] += deficit / n_nodes
+def _restore_mass(pops: np.ndarray, n_nodes: int, owned: slice, comm) -> None:
+    """Put the mass the interpolated walls lost back, spread evenly over the rest populations (ρ° = 1 per node) of
+    the owned nodes of every process.
+    """
+    deficit = -comm.sum(float(np.sum(pops.reshape(19, n_nodes)[:, owned], dtype=np.float64)))
+    pops[owned] += deficit / comm.sum(owned.stop - owned.start)
 
 
 def _stop(settings: Settings, dv: float, drho: float, dk: float, err: float) -> str | None:
@@ -344,6 +346,7 @@ def _solve(
     fields = np.zeros((4, n))
     step = comm.wrap(make_stepper(settings, lat, links))
     owned = comm.owned(lat)
+    leaky = comm.max(float(links.size if links is not None else 0)) > 0  # interpolated walls somewhere
     sampler = comm.sampler(lat)
     nu = viscosity(settings.tau)
     key_name = estimate_key(sampler.everywhere, settings.gradient, settings.velocity)
@@ -380,8 +383,8 @@ def _solve(
         done += n_run
         own = fields[:, owned]
         mach = _guard(own, done, settings, comm)
-        if links is not None and links.size:
-            _restore_mass(src, n)
+        if leaky:
+            _restore_mass(src, n, owned, comm)
         tables = comm.sum(sampler.tables(own))
         est = estimates(
             sampler,
