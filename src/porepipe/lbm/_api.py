@@ -62,6 +62,7 @@ class PermeabilityResult:
     n_links: int = 0
     throat_voxels: float = float("nan")
     warning: str = ""
+    ranks: int = 1  # MPI ranks of the run (1: one process)
 
     def to_dataset(self) -> xr.Dataset:
         """Tables of the result (κ in all units, estimates, convergence history) as an xarray Dataset."""
@@ -119,6 +120,7 @@ class PermeabilityResult:
             "n_interpolated_links": self.n_links,
             "throat_voxels": self.throat_voxels,
             "warning": self.warning,
+            "mpi_ranks": self.ranks,
         }
 
 
@@ -296,6 +298,7 @@ def permeability(
         "n_spanning": prep.n_spanning,
         "throat_voxels": throat,
         "warning": warning,
+        "ranks": comm.size,
     }
     if prep.lattice is None:
         return PermeabilityResult(

@@ -118,7 +118,10 @@ def split_layers(counts: np.ndarray, parts: int) -> np.ndarray:
             f"the domain has {n} layers along the flow, fewer than the {parts} MPI ranks: run with at most {n}"
         )
     cum = np.concatenate([[0], np.cumsum(counts)])
-    inner = np.searchsorted(cum, cum[-1] * np.arange(1, parts) / parts)
+    target = cum[-1] * np.arange(1, parts) / parts
+    above = np.searchsorted(cum, target)  # first layer boundary at or past each target
+    below = np.maximum(above - 1, 0)
+    inner = np.where(target - cum[below] < cum[above] - target, below, above)  # the nearer boundary
     bounds = [0]
     for k, x in enumerate(inner, start=1):
         bounds.append(int(min(max(x, bounds[-1] + 1), n - (parts - k))))
