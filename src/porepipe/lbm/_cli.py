@@ -64,10 +64,10 @@ def main(args) -> int:
     try:
         return _main(args)
     except Exception as err:
-        from porepipe.lbm._mpi import abort_world
+        from porepipe.lbm._mpi import SharedError, abort_world
 
         kind = "error" if isinstance(err, PorepipeError) else type(err).__name__
-        abort_world(f"porepipe permeability: {kind}: {err}")
+        abort_world(f"porepipe permeability: {kind}: {err}", shared=isinstance(err, SharedError))
         raise
 
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import re
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,15 @@ from porepipe._shared.errors import PorepipeError
 from porepipe.lbm._darcy import Sampler
 from porepipe.lbm._domain import Lattice, build_lattice
 from porepipe.lbm._lattice import C
+
+#: seconds a rank other than 0 waits, on an error every rank raises alike, for rank 0 to report it and end the run
+#: (one line instead of one per rank); past it the rank reports and ends the run itself
+SHARED_GRACE_S = 10.0
+
+
+class SharedError(PorepipeError):
+    """An error every rank of an MPI run raises alike (decided from the same reduced numbers or gathered data)."""
+
 
 #: populations that cross a slab face towards higher layers (c_x = +1) and towards lower ones (c_x = −1)
 UP = np.flatnonzero(C[:, 0] == 1)
@@ -266,7 +276,7 @@ class Slabs:
         """Refuse to go on unless every rank resumes from the same step (−1: none resumes)."""
         steps = self.comm.allgather(step)
         if len(set(steps)) > 1:
-            raise PorepipeError(
+            raise SharedError(
                 f"the {self.size} ranks' checkpoints ({path.name} and its siblings) disagree: steps "
                 f"{steps} (−1: none or stale); delete them or rerun with --no-resume"
             )
@@ -304,13 +314,16 @@ def other_checkpoints(path: Path, size: int) -> list[Path]:
     return ([path] if size > 1 and path.is_file() else []) + others
 
 
-def abort_world(message: str, code: int = 2) -> None:
+def abort_world(message: str, code: int = 2, shared: bool = False) -> None:
     """Print ``message`` as this rank's one line and end every rank of the run (MPI_Abort: no rank waits for a
-    dead one; the result file is written only after the last collective step, so none is left).
+    dead one; the result file is written only after the last collective step, so none is left). ``shared``: every
+    rank has the same error, rank 0 alone reports it (the others wait :data:`SHARED_GRACE_S` to be ended).
     """
     from mpi4py import MPI
 
     world = MPI.COMM_WORLD
+    if shared and world.rank != 0:
+        time.sleep(SHARED_GRACE_S)
     print(f"{message} (MPI rank {world.rank} of {world.size}; ending all ranks)", file=sys.stderr, flush=True)
     world.Abort(code)
 

@@ -21,7 +21,7 @@ from porepipe.lbm import _kernels as K
 from porepipe.lbm._darcy import estimate_key, estimates, sample_mean_rho
 from porepipe.lbm._domain import Lattice
 from porepipe.lbm._lattice import CS2, dhumieres_matrix, mrt_rates, trt_minus_tau, viscosity
-from porepipe.lbm._mpi import ONE_PROCESS, Serial
+from porepipe.lbm._mpi import ONE_PROCESS, Serial, SharedError
 from porepipe.lbm._settings import Collision, Settings, StopRule
 from porepipe.lbm._walls import Links
 
@@ -41,8 +41,10 @@ ROUND_OFF = 1e-13
 NOISE_FRACTION = 1e-2
 
 
-class StabilityError(PorepipeError):
-    """The run became unstable; the message names the step and the parameter to change."""
+class StabilityError(SharedError):
+    """The run became unstable; the message names the step and the parameter to change (every rank of an MPI run
+    decides it from the same reduced numbers).
+    """
 
 
 @dataclasses.dataclass

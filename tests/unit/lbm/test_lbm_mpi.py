@@ -70,6 +70,11 @@ def _mpirun(ranks: int, args: list[str]) -> subprocess.CompletedProcess:
     )
 
 
+def _errors(done: subprocess.CompletedProcess) -> int:
+    """Number of error lines of the ranks (an error every rank has alike is reported once, by rank 0)."""
+    return sum(line.startswith("porepipe permeability: error") for line in done.stderr.splitlines())
+
+
 def _kappa(path) -> float:
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         return float(ds["kappa_lu"])
@@ -134,6 +139,7 @@ def test_checkpoints_are_per_rank_resumed_together_and_refused_when_stale(tmp_pa
     args = [str(binary), *FAST, "-o", str(out), "--checkpoint", str(ckpt), "--mpi"]
     stopped = _mpirun(2, [*args, "--max-steps", "200"])  # step limit: an error, no result, checkpoints kept
     assert stopped.returncode != 0 and not out.exists()
+    assert _errors(stopped) == 1 and "not converged after 200 steps" in stopped.stderr  # rank 0 reports alone
     ranks = [tmp_path / "c.rank0of2.h5", tmp_path / "c.rank1of2.h5"]
     assert all(p.is_file() for p in ranks)
     # one process does not resume a two-rank state: refused with the files named
@@ -142,7 +148,7 @@ def test_checkpoints_are_per_rank_resumed_together_and_refused_when_stale(tmp_pa
     kept = ranks[1].rename(tmp_path / "kept.h5")
     refused = _mpirun(2, args)
     assert refused.returncode != 0 and not out.exists()
-    assert "disagree: steps [200, -1]" in refused.stderr
+    assert "disagree: steps [200, -1]" in refused.stderr and _errors(refused) == 1
     kept.rename(ranks[1])
     resumed = _mpirun(2, args)
     assert resumed.returncode == 0, resumed.stderr
@@ -159,8 +165,7 @@ def test_a_rank_that_raises_ends_the_run_with_one_line_and_no_result(tmp_path):
     t0 = time.monotonic()
     done = _mpirun(2, [str(binary), *FAST, "-o", str(out), "--checkpoint", str(ckpt), "--mpi"])
     assert done.returncode != 0 and not out.exists()
-    lines = [ln for ln in done.stderr.splitlines() if ln.startswith("porepipe permeability:")]
-    assert len(lines) == 1 and "damaged" in lines[0] and "MPI rank 1 of 2" in lines[0], done.stderr
+    assert _errors(done) == 1 and "damaged" in done.stderr and "MPI rank 1 of 2" in done.stderr, done.stderr
     assert time.monotonic() - t0 < LIMIT_S
 
 
