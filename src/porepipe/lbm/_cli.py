@@ -132,7 +132,8 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--mpi",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=False,
         help="run as one rank of `mpirun -n P porepipe permeability --mpi …`: slabs along the flow, "
         "rank 0 writes the result (needs mpi4py: pip install 'porepipe[mpi]')",
     )
