@@ -27,6 +27,7 @@ from pydantic import (
 )
 
 from porepipe._registry import OPTIONAL_SECTIONS, stage_settings
+from porepipe._shared.budget import Resources
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.yaml_safe import load_yaml
 from porepipe.segment._settings import Segmentation, SegmentationMethod
@@ -137,6 +138,9 @@ class SceneBase(_Strict):
     )
     segmentation: Segmentation = Segmentation()
     analyses: list[Analysis] = Field(default_factory=lambda: [Analysis.estimate])
+    resources: Resources = Field(
+        Resources(), description="what one stage may use: memory_budget_mb (volumes over it go in chunks)"
+    )
 
     @model_validator(mode="after")
     def _model_source(self):
