@@ -55,3 +55,38 @@ def chunk_too_large(nbytes: int, budget_mb: int | None, chunk: str) -> PorepipeE
         f"{BUDGET_KEY} = {budget_mb} MB is too small for one chunk: {chunk} needs {need} MB; "
         f"give at least {BUDGET_KEY}: {need}"
     )
+
+
+def planes_within(budget_mb: int | None, plane_bytes: int, fixed_bytes: int, wanted: int, chunk: str) -> int:
+    """How many volume planes of ``plane_bytes`` a slab loop may hold at once (at most ``wanted``).
+
+    Parameters
+    ----------
+    budget_mb : int or None
+        ``resources.memory_budget_mb`` (None: ``wanted``).
+    plane_bytes : int
+        Bytes one plane costs (its input, output and temporaries together).
+    fixed_bytes : int
+        Bytes held whatever the slab thickness (work arrays of the threads).
+    wanted : int
+        The thickness asked for (a stage's ``slab_planes``).
+    chunk : str
+        What one plane is, for the error message.
+
+    Returns
+    -------
+    int
+        Planes per slab, >= 1.
+
+    Raises
+    ------
+    PorepipeError
+        Not even one plane fits; the message names the budget and the plane.
+    """
+    limit = budget_bytes(budget_mb)
+    if limit is None:
+        return int(wanted)
+    planes = (limit - int(fixed_bytes)) // max(1, int(plane_bytes))
+    if planes < 1:
+        raise chunk_too_large(int(fixed_bytes) + int(plane_bytes), budget_mb, chunk)
+    return int(min(wanted, planes))
