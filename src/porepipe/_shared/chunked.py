@@ -109,8 +109,8 @@ def choose_edge(
         Periodic axes (the halo wraps there).
     cost : callable
         Bytes a task holds for a box of a given read shape (the box itself and what the function allocates).
-    budget_mb : int
-        The scene's ``resources.memory_budget_mb``.
+    budget_mb : int or None
+        The scene's ``resources.memory_budget_mb`` (None: one box holds the whole volume).
     align : int
         Core edges are multiples of it (e.g. the stride of a cell grid, so every box starts on the grid).
     workers : int
@@ -128,6 +128,8 @@ def choose_edge(
     PorepipeError
         The budget cannot hold even a box of core edge ``align``; the message names the budget and the box.
     """
+    if budget_bytes(budget_mb) is None:
+        return _edges(shape, align)[0]
     limit = budget_bytes(budget_mb) // max(1, workers)
     for edge in _edges(shape, align):
         if cost(largest_read(shape, edge, halo, wrap)) <= limit:

@@ -62,12 +62,14 @@ def _box_part(block: np.ndarray, box, size: int, settings: Settings) -> _PerSize
 
 
 def _box_cost(read, size: int, surface: bool) -> int:
-    """Bytes one task holds: the box, its interface fields, the kernels' ring and row sums, a percolation cell."""
+    """Bytes one task holds: the box (twice while it is read), its interface fields, the kernels' ring and row sums,
+    a percolation cell.
+    """
     voxels = math.prod(read)
-    fields = 1 + (3 if surface else 0)
+    fields = 3 if surface else 0
     plane = (read[1] - size + 1) * (read[2] - size + 1)
     ring = (size + _RING_EXTRA) * plane * 4 * (3 if surface else 1) + plane * 8
-    return voxels * (1 + fields) + ring + 16 * (size + 2) ** 3
+    return voxels * (2 + fields) + ring + 16 * (size + 2) ** 3
 
 
 def _pore_count(block: np.ndarray, box) -> int:
@@ -77,7 +79,8 @@ def _pore_count(block: np.ndarray, box) -> int:
 def _pore_voxels(path, shape, budget_mb: int, threads) -> int:
     """Pore voxels of the stored volume, box by box (no halo)."""
     flat = (False, False, False)
-    edge = choose_edge(shape, 0, flat, math.prod, budget_mb, what="a box of the pore volume")
+    cost = lambda read: 2 * math.prod(read)  # noqa: E731  (h5py's copy of each piece while it is read)
+    edge = choose_edge(shape, 0, flat, cost, budget_mb, what="a box of the pore volume")
     opener = functools.partial(open_volume, path, "pore")
     return map_boxes(opener, plan_boxes(shape, edge, 0, flat), _pore_count, operator.add, threads=threads)
 

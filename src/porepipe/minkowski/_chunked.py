@@ -18,6 +18,8 @@ from porepipe.minkowski._weights import N_CODES
 
 #: a 2x2x2 cell reaches one voxel past its first one
 HALO = 1
+#: a box is held twice while it is read (h5py's array of each piece, copied into the box)
+_READ_COPIES = 2
 
 
 def _binary_part(block: np.ndarray, box) -> np.ndarray:
@@ -34,7 +36,7 @@ def _grey_part(block: np.ndarray, box, n_levels: int) -> np.ndarray:
 
 def _plan(shape, periodic, budget_mb: int, per_task: int, what: str):
     flags = _periodic3(periodic)
-    cost = lambda read: int(np.prod(read, dtype=np.int64)) + per_task  # noqa: E731
+    cost = lambda read: _READ_COPIES * int(np.prod(read, dtype=np.int64)) + per_task  # noqa: E731
     edge = choose_edge(shape, HALO, flags, cost, budget_mb, what=what)
     return plan_boxes(shape, edge, HALO, flags)
 
@@ -71,7 +73,20 @@ def configuration_histogram_chunked(
 def threshold_histograms_chunked(
     path, name: str, shape, periodic, budget_mb: int, n_levels: int = 256, threads: int | None = None
 ) -> np.ndarray:
-    """:func:`threshold_histograms` of a stored grey volume, box by box within ``budget_mb`` (arguments as above)."""
+    """:func:`threshold_histograms` of a stored grey volume, box by box within ``budget_mb``.
+
+    Parameters
+    ----------
+    path, name, shape, periodic, budget_mb, threads
+        As for :func:`configuration_histogram_chunked` (``name`` is ``grey``).
+    n_levels : int
+        Thresholds t = 0 .. n_levels - 1 (rows of the result).
+
+    Returns
+    -------
+    (n_levels, 256) int64 ndarray
+        Identical to :func:`threshold_histograms` of the whole volume.
+    """
     per_task = n_levels * N_CODES * 8 * (1 + (threads or 1))
     boxes = _plan(shape, periodic, budget_mb, per_task, "a grey Minkowski box")
     part = functools.partial(_grey_part, n_levels=n_levels)

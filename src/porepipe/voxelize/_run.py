@@ -21,6 +21,20 @@ def slab_planes(scene, shape, threads: int) -> int:
 
     A slab holds 1 byte per voxel; each thread also holds the work arrays of one plane. Voxels are independent of
     their neighbours, so the slabs need no halo.
+
+    Parameters
+    ----------
+    scene : Scene
+        The validated scene (``voxelize.slab_planes``, ``resources.memory_budget_mb``).
+    shape : 3 ints
+        Voxels per axis of the volume.
+    threads : int
+        Numba threads in use.
+
+    Returns
+    -------
+    int
+        Planes per slab, >= 1.
     """
     plane = shape[1] * shape[2]
     fixed = threads * _THREAD_BYTES_PER_VOXEL * plane
