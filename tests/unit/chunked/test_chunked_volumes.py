@@ -207,3 +207,19 @@ def test_scene_unknown_resources_key_is_named(tmp_path):
     }
     with pytest.raises(SceneError, match=r"resources\.memory_mb.*memory_budget_mb"):
         parse_scene(raw, tmp_path)
+
+
+def test_a_volume_beyond_this_machine_needs_a_budget(tmp_path):
+    """64·10^12 voxels: refused without a budget (the message points to the key), accepted with one."""
+    raw = {
+        "name": "huge",
+        "domain": {"size_um": [10000.0] * 3},
+        "spheres": {"inline": [[4, 4, 4, 2]]},
+        "resolutions_um": [0.25],
+    }
+    with pytest.raises(SceneError, match=r"more than this machine's .* set resources\.memory_budget_mb"):
+        parse_scene(raw, tmp_path)
+    assert (
+        parse_scene({**raw, "resources": {"memory_budget_mb": 4000}}, tmp_path).resources.memory_budget_mb
+        == 4000
+    )
