@@ -156,7 +156,9 @@ def acquire_targets(scene):
 def segmentation_args(wildcards):
     seg = scene_of(wildcards).segmentation
     threshold = f" --threshold {seg.threshold}" if seg.threshold is not None else ""
-    return f"--method {seg.method.value}{threshold}"
+    budget = scene_of(wildcards).resources.memory_budget_mb
+    budget = f" --memory-budget-mb {budget}" if budget is not None else ""
+    return f"--method {seg.method.value}{threshold}{budget}"
 
 
 def minkowski_inputs(wildcards):
