@@ -38,9 +38,13 @@ from porepipe.diffusion._settings import WallLaw as WallLaw
 from porepipe.diffusion._settings import WallSpeed as WallSpeed
 from porepipe.diffusion._species import SPECIES as SPECIES
 from porepipe.diffusion._species import mean_speed as mean_speed
+from porepipe.diffusion._surface import Adsorbate as Adsorbate
+from porepipe.diffusion._surface import Mechanism as Mechanism
+from porepipe.diffusion._surface import surface_run as surface_run
 
 __all__ = [
     "SPECIES",
+    "Adsorbate",
     "Axis",
     "CapillaryGeometry",
     "CapillaryKind",
@@ -48,6 +52,7 @@ __all__ = [
     "GasSettings",
     "Geometry",
     "InletLaw",
+    "Mechanism",
     "PoreVolume",
     "ReactionSettings",
     "Settings",
@@ -72,6 +77,7 @@ __all__ = [
     "rough_capillary",
     "slit",
     "square_capillary",
+    "surface_run",
     "transport",
     "wall_area",
     "write_capillary",
