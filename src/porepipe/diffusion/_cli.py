@@ -94,6 +94,9 @@ def _summary(v, settings: Settings) -> str:
             f"lambda_eff = {float(v['lambda_eff_nm']):.4g} nm, Kn = {float(v['Kn']):.3g}{d}, "
             f"{int(v['events'])} events"
         )
+    if "series_eta" in v:
+        etas = ", ".join(f"{float(e):.3g}" for e in v["series_eta"].values)
+        return f"study of {len(v['series_eta'])} sets, {int(v['runs'])} runs: eta = {etas}"
     eta = f"eta = {float(v['eta']):.4g} ± {float(v['eta_err']):.2g}, " if "eta" in v else ""
     phi = f"Phi = {float(v['phi']):.4g}, " if "phi" in v else ""
     return f"{eta}{phi}{int(v['products'])} products, {int(v['wall_hits'])} wall hits"

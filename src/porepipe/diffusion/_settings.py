@@ -107,6 +107,18 @@ class GasSettings(BaseModel):
         return value
 
 
+class ReactionSet(BaseModel):
+    """One run of a reaction study (``diffusion.reactions.series``): A → P with ``w``, P → A with ``w_reverse``,
+    P → S with ``w_follow``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
+
+    w: float = Field(gt=0, le=1, description="probability that a wall hit turns A into P")
+    w_reverse: float = Field(0.0, ge=0, le=1, description="probability that a wall hit turns P back into A")
+    w_follow: float = Field(0.0, ge=0, le=1, description="probability that a wall hit turns P into S")
+
+
 class ReactionSettings(BaseModel):
     """``diffusion.reactions``: wall reactions of setup ``reaction`` (§4.1-4.2); each effect is compiled in only
     when its probability is > 0.
@@ -130,6 +142,12 @@ class ReactionSettings(BaseModel):
         description="site activity decays by exp(-poisoning) per reaction at a voxel (between rounds)",
     )
     rounds: int = Field(1, ge=1, description="rounds of `particles` histories (poisoning acts between them)")
+    series: list[ReactionSet] = Field(
+        default_factory=list,
+        description="a study (thesis Tables 4.2-4.4): one run of `particles` histories per set instead of the single "
+        "w / w_reverse / w_follow; a set with w_follow > 0 also runs its reference without the follow-up "
+        "(selectivity S)",
+    )
 
 
 class Settings(BaseModel):
