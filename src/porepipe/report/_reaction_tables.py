@@ -73,6 +73,8 @@ def study_rows(path: Path) -> list[dict]:
                 "analogue": ANALOGUE.get(kind, ""),
                 "porepipe": float(table[f"series_{name}"].values[k]),
                 "porepipe_err": float(table[f"series_{name}_err"].values[k]),
+                "r_eff_per_particle_jiffie": float(table["series_r_eff"].values[k]),
+                "r_eff_err": float(table["series_r_eff_err"].values[k]),
             }
         )
     return rows
@@ -100,18 +102,40 @@ def parts(diffusion_dir, out_dir) -> list[str]:
         w += f", w₂ = {r['w_follow']:g}" if r["w_follow"] else ""
         thesis = [f"{r[f'thesis_{c}']:.2f}" + (" ◀" if r["analogue"] == c else "") for c in "ABC"]
         diff = r["porepipe"] - r[f"thesis_{r['analogue']}"] if r["analogue"] else np.nan
+        r_eff = _fmt(1e3 * r["r_eff_per_particle_jiffie"], 1e3 * r["r_eff_err"])
         cells.append(
-            [r["table"], r["quantity"], w, *thesis, _fmt(r["porepipe"], r["porepipe_err"]), f"{diff:+.3f}"]
+            [
+                r["table"],
+                r["quantity"],
+                w,
+                *thesis,
+                _fmt(r["porepipe"], r["porepipe_err"]),
+                f"{diff:+.3f}",
+                r_eff,
+            ]
         )
     kinds = sorted({r["analogue"] for r in rows if r["analogue"]})
     return [
         "<h2>Wall reactions: Mahler 2001 Tables 4.2-4.4</h2>",
         _html_table(
-            ["table", "", "w", "thesis A", "thesis B", "thesis C", "porepipe", "porepipe − thesis ◀"], cells
+            [
+                "table",
+                "",
+                "w",
+                "thesis A",
+                "thesis B",
+                "thesis C",
+                "porepipe",
+                "porepipe − thesis ◀",
+                "porepipe r_eff [1e-3/jiffie]",
+            ],
+            cells,
         ),
         (
             "<p class=note>η = products leaving the inlet / (w · wall hits) (4.5); S = product rate with the "
-            "follow-up reaction / without it. Thesis: two printed digits, no error bars. porepipe: 1 σ over "
+            "follow-up reaction / without it; r_eff = products leaving per particle in the pore per jiffie (4.3 at "
+            "unit concentration: compare it across the A/B/C scenes for the thesis's Fig. 4.6 crossover). Thesis: "
+            "two printed digits, no error bars. porepipe: 1 σ over "
             "independent particle streams (S: the two runs' errors added in quadrature, which overstates it). "
             f"This scene's capillary stands for thesis column {', '.join(kinds) or '–'} (◀); the thesis gives no "
             "dimensions, so the columns agree in trend (η falls with w; reverse reaction lowers η; S rises as "
