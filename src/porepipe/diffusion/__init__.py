@@ -29,6 +29,7 @@ _EXPORTS = {
     "constricted_capillary": "_geometry",
     "cylinder": "_geometry",
     "equilibrium": "_api",
+    "fit_length_series": "_length_series",
     "eta_of_phi": "_reactions",
     "make_gas": "_edmd",
     "mean_speed": "_species",
@@ -41,6 +42,7 @@ _EXPORTS = {
     "square_capillary": "_geometry",
     "surface_run": "_surface",
     "transport": "_api",
+    "length_series": "_length_series",
     "wall_area": "_geometry",
     "write_capillary": "_capillary",
 }

@@ -25,6 +25,8 @@ from porepipe.diffusion._geometry import rough_capillary as rough_capillary
 from porepipe.diffusion._geometry import slit as slit
 from porepipe.diffusion._geometry import square_capillary as square_capillary
 from porepipe.diffusion._geometry import wall_area as wall_area
+from porepipe.diffusion._length_series import fit_length_series as fit_length_series
+from porepipe.diffusion._length_series import length_series as length_series
 from porepipe.diffusion._reactions import eta_of_phi as eta_of_phi
 from porepipe.diffusion._reactions import phi_of_eta as phi_of_eta
 from porepipe.diffusion._settings import Axis as Axis
@@ -68,6 +70,8 @@ __all__ = [
     "cylinder",
     "equilibrium",
     "eta_of_phi",
+    "fit_length_series",
+    "length_series",
     "make_gas",
     "mean_speed",
     "phi_of_eta",

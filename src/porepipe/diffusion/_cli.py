@@ -136,6 +136,12 @@ def main(args) -> int:
     if settings.setup in (Setup.edmd, Setup.reaction):
         print(f"diffusion {args.axis} ({settings.setup.value}): {_summary(v, settings)} -> {out}")
         return 0
+    if settings.lengths:
+        print(
+            f"diffusion {args.axis} (length series, {len(settings.lengths)} lengths): alpha = "
+            f"{float(v['alpha']):.4g} ± {float(v['alpha_err']):.2g}, chi2/dof = {float(v['chi2_per_dof']):.3g} -> {out}"
+        )
+        return 0
     head = f"W = {float(v['W']):.5g} ± {float(v['W_err']):.2g}, " if "W" in v else ""
     print(
         f"diffusion {args.axis} ({settings.setup.value}): {head}D = {float(v['D_m2_s']):.5g} "

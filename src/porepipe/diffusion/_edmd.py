@@ -646,27 +646,10 @@ def edmd_result(pore, settings, voxel_um, periodic, seed: int = 0):
 
 
 def reaction_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0):
-    """Setup ``reaction``: :func:`reactive_pore` with ``settings.reactions`` along ``axis`` (a DiffusionResult); with
-    ``reactions.series`` the study of :mod:`porepipe.diffusion._reaction_study` (arrays ``series_*``).
-    """
+    """Setup ``reaction``: :func:`reactive_pore` with ``settings.reactions`` along ``axis`` (a DiffusionResult)."""
     from porepipe.diffusion._api import DiffusionResult
 
     rs = settings.reactions
-    if rs.series:
-        from porepipe.diffusion._reaction_study import reaction_study
-
-        common = dict(
-            wall_law=settings.wall_law.value,
-            voxel_um=voxel_um,
-            periodic=periodic,
-            particles=rs.particles,
-            batches=settings.batches,
-            max_hits=settings.max_hits_per_particle,
-            seed=seed,
-        )
-        study = reaction_study(pore, axis, rs.series, **common)
-        arrays = {k: study.pop(k) for k in list(study) if k.startswith("series_")}
-        return DiffusionResult("reaction", "xyz"[axis], study, arrays)
     out = reactive_pore(
         pore,
         axis,

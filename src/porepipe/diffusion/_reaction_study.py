@@ -64,3 +64,24 @@ def reaction_study(pore, axis: int, sets, **common) -> dict:
     result["particles_per_run"] = any_run["particles"]
     result["truncated"] = int(sum(r["truncated"] for r in runs.values()))
     return result
+
+
+def study_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0):
+    """Setup ``reaction`` with ``reactions.series``: the study as a DiffusionResult (arrays ``series_*``)."""
+    from porepipe.diffusion._api import DiffusionResult
+
+    rs = settings.reactions
+    study = reaction_study(
+        pore,
+        axis,
+        rs.series,
+        wall_law=settings.wall_law.value,
+        voxel_um=voxel_um,
+        periodic=periodic,
+        particles=rs.particles,
+        batches=settings.batches,
+        max_hits=settings.max_hits_per_particle,
+        seed=seed,
+    )
+    arrays = {k: study.pop(k) for k in list(study) if k.startswith("series_")}
+    return DiffusionResult("reaction", "xyz"[axis], study, arrays)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from porepipe.diffusion._capillary import CapillaryGeometry
 
@@ -197,6 +197,11 @@ class Settings(BaseModel):
         description="bins of cos(angle to the axis) in the flight-orientation histogram "
         "(azimuth gets 2x as many); 0 = off",
     )
+    lengths: list[int] = Field(
+        default_factory=list,
+        description="length series (setup transmission, thesis §3.6.4): W through the first L voxels along the axis "
+        "for each L, and the fit 1/D = 1/D0 + alpha (r/L)/D0 (3.51); empty = off",
+    )
     gas: GasSettings = Field(default_factory=GasSettings, description="event-driven gas (setup edmd)")
     reactions: ReactionSettings = Field(
         default_factory=ReactionSettings, description="wall reactions (setup reaction)"
@@ -216,6 +221,21 @@ class Settings(BaseModel):
         if value not in SPECIES:
             raise ValueError(f"unknown species {value!r}; allowed: {', '.join(SPECIES)}")
         return value
+
+    @field_validator("lengths")
+    @classmethod
+    def _lengths(cls, value):
+        if value and (len(value) < 2 or min(value) < 1 or len(set(value)) != len(value)):
+            raise ValueError(f"lengths must be >= 2 distinct whole numbers of voxels >= 1, got {value}")
+        return value
+
+    @model_validator(mode="after")
+    def _lengths_need_transmission(self):
+        if self.lengths and self.setup is not Setup.transmission:
+            raise ValueError(
+                f"lengths (a length series) needs setup transmission, got setup {self.setup.value}"
+            )
+        return self
 
     @field_validator("axes")
     @classmethod

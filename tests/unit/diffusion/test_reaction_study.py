@@ -12,8 +12,8 @@ from pydantic import ValidationError
 
 from porepipe._shared.store import ResultWriter
 from porepipe.diffusion import ReactionSettings, Settings, rough_capillary, square_capillary
-from porepipe.diffusion._edmd import reaction_result, reactive_pore
-from porepipe.diffusion._reaction_study import reaction_study
+from porepipe.diffusion._edmd import reactive_pore
+from porepipe.diffusion._reaction_study import reaction_study, study_result
 from porepipe.diffusion._run import _dataset
 from porepipe.diffusion._settings import ReactionSet
 from porepipe.report._reaction_tables import THESIS, parts, study_rows
@@ -48,7 +48,7 @@ def test_series_in_settings_runs_the_study_and_bad_sets_are_refused():
         batches=8,
         reactions={"particles": 800, "series": [{"w": 0.5}, {"w": 0.01, "w_reverse": 0.01}]},
     )
-    result = reaction_result(CHANNEL, settings, 2, 1.0, (False, False, False), seed=1)
+    result = study_result(CHANNEL, settings, 2, 1.0, (False, False, False), seed=1)
     np.testing.assert_array_equal(result.arrays["series_w_reverse"], [0.0, 0.01])
     assert result.arrays["series_eta"][0] < result.arrays["series_eta"][1]  # η falls with w
     for bad, key in (({"w": 0.0}, "w"), ({"w": 0.1, "w_follow": 2}, "w_follow"), ({"w": 0.1, "v": 1}, "v")):
@@ -67,7 +67,7 @@ def study_file(tmp_path_factory):
         reactions={"particles": 800, "series": [{"w": 0.5}, {"w": 0.01, "w_follow": 0.01}, {"w": 0.3}]},
     )
     pore = rough_capillary(4, 16, 0.3, seed=1).pore
-    result = reaction_result(pore, settings, 2, 1.0, (False, False, False), seed=2)
+    result = study_result(pore, settings, 2, 1.0, (False, False, False), seed=2)
     folder = tmp_path_factory.mktemp("scene") / "diffusion"
     folder.mkdir()
     with ResultWriter(folder / "diffusion_a1_z.h5", stage="diffusion", scene="t") as w:
