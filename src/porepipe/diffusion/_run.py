@@ -147,7 +147,7 @@ def run(
         threads=threads,
     ) as w:
         if settings.setup is Setup.edmd:
-            result = _edmd.edmd_result(pore, settings, voxel_um, periodic, seed=seed)
+            result = _edmd.edmd_result(pore, settings, voxel_um, periodic, seed=seed, axis=axis.index)
         elif settings.setup is Setup.reaction and settings.reactions.series:
             result = study_result(pore, settings, axis.index, voxel_um, periodic, seed=seed)
         elif settings.setup is Setup.reaction:

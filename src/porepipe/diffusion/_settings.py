@@ -84,6 +84,12 @@ class GasSettings(BaseModel):
         "maxwell", description="maxwell, or mean (all at v̄: the §3.6.2 relaxation test)"
     )
     speed_bins: int = Field(40, ge=1, description="bins of the final speed histogram")
+    orientation_bins: int = Field(
+        0,
+        ge=0,
+        description="bins of cos(angle to the axis) of the velocity-orientation histogram over the sample times "
+        "(azimuth gets 2x as many; thesis Figs. 3.21-3.22); 0 = off",
+    )
 
     @field_validator("particles")
     @classmethod
