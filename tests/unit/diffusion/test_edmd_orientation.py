@@ -6,7 +6,6 @@ equilibrium, hence isotropic: its histogram over 10 sample times, ~3 collisions 
 are nearly independent), passes the same χ² test at the 0.1 % level.
 """
 
-
 import numpy as np
 from scipy import stats
 
