@@ -286,7 +286,7 @@ def permeability_inputs(wildcards):
     if getattr(scene, "decoration", None) is not None:
         inputs["grains"] = results(scene, "decorate", "grains.h5")
     elif getattr(wildcards, "sub", ""):
-        inputs["packing"] = packing_input(wildcards)
+        inputs["packing"] = packing_input(wildcards) if getattr(scene, "spheres", None) is not None else []
     elif getattr(scene, "acquire", None) is None:
         inputs["grey"] = grey_volume(wildcards)
     return inputs

@@ -4,6 +4,8 @@ The sweeps are built by hand, so every number in a row is known: the tables must
 thesis's printed value beside it (Zauner 2020 Tables 5.1 and 5.2, from the spec digest) and take the difference.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -88,3 +90,22 @@ def test_rev_table_lists_only_quantities_with_several_sub_samples(sweeps):
     assert (quantity, a, edge, count, mean, spread) == (KAPPA, 1.0, 40.0, 8, 700.0, 35.0)
     assert np.isnan(whole)
     assert rev_rows(_sweep({(PHI, 1.0, np.inf): 0.2})) == []
+
+
+def test_missing_sweep_of_a_thesis_rows_scene_is_one_clear_error(tmp_path, monkeypatch):
+    """report.thesis_rows_from names a scene whose sweep was not built: one line naming the key and the file."""
+    from types import SimpleNamespace
+
+    from porepipe._shared.errors import PorepipeError
+    from porepipe.report._run import thesis_row_sweeps
+    from porepipe.report._settings import Settings
+
+    monkeypatch.chdir(tmp_path)
+    scene = SimpleNamespace(report=Settings(thesis_rows_from={"PP": "thesis-pp"}))
+    with pytest.raises(
+        PorepipeError, match=r"report\.thesis_rows_from\.PP: results/thesis-pp/sweep/sweep\.h5"
+    ):
+        thesis_row_sweeps(scene)
+    (tmp_path / "results/thesis-pp/sweep").mkdir(parents=True)
+    (tmp_path / "results/thesis-pp/sweep/sweep.h5").write_bytes(b"")
+    assert thesis_row_sweeps(scene) == {"PP": Path("results/thesis-pp/sweep/sweep.h5")}
