@@ -327,6 +327,10 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
                 )
         if spheres.get("pack") is True and "packing" not in raw:
             problems.append("spheres.pack = True: needs a `packing:` section that says how to pack")
+    perm, sweep = raw.get("permeability"), raw.get("sweep")
+    if isinstance(perm, dict) and perm.get("whole_volume") is False:
+        if not (isinstance(sweep, dict) and sweep.get("sample_um")):
+            problems.append("permeability.whole_volume = false: needs sub-samples to run on (sweep.sample_um)")
     return problems
 
 

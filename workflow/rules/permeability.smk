@@ -32,6 +32,7 @@ ANALYSIS_TARGETS["permeability"] = lambda scene: [
     results(scene, "permeability", f"perm_a{res_tag(a)}_{axis}.h5")
     for axis in permeability_axes(scene)
     for a in permeability_resolutions(scene)
+    if scene.permeability.whole_volume
 ]
 SUBSAMPLE_TARGETS["permeability"] = lambda scene, edge: [
     results(scene, "permeability", f"perm_a{res_tag(a)}_L{tag}_{axis}.h5")
