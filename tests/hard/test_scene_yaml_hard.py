@@ -126,6 +126,8 @@ def test_oversized_file_is_refused(tmp_path):
 
 def test_permeability_only_on_sub_samples_needs_sub_samples(tmp_path):
     text = GOOD + "permeability: {whole_volume: false}\n"
-    with pytest.raises(SceneError, match=r"permeability.whole_volume = false: needs sub-samples .*sweep.sample_um"):
+    with pytest.raises(
+        SceneError, match=r"permeability.whole_volume = false: needs sub-samples .*sweep.sample_um"
+    ):
         load_scene(_write(tmp_path, text))
     assert not load_scene(_write(tmp_path, text + "sweep: {sample_um: [40]}\n")).permeability.whole_volume
