@@ -331,6 +331,10 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
                 )
         if spheres.get("pack") is True and "packing" not in raw:
             problems.append("spheres.pack = True: needs a `packing:` section that says how to pack")
+    perm, sweep = raw.get("permeability"), raw.get("sweep")
+    sub_samples = isinstance(sweep, dict) and sweep.get("sample_um")
+    if isinstance(perm, dict) and perm.get("whole_volume") is False and not sub_samples:
+        problems.append("permeability.whole_volume = false: needs sub-samples to run on (sweep.sample_um)")
     return problems
 
 

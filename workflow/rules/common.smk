@@ -25,6 +25,17 @@ for _path in _scene_files:
     _scene = load_scene(_path)
     SCENES[_scene.name] = _scene
     SCENE_FILES[_scene.name] = _path
+# scenes whose sweeps a report reads for more thesis-table rows (report.thesis_rows_from): <name>.yaml beside it
+for _name, _scene in list(SCENES.items()):
+    for _other in getattr(getattr(_scene, "report", None), "thesis_rows_from", {}).values():
+        if _other not in SCENES:
+            _path = str(Path(SCENE_FILES[_name]).parent / f"{_other}.yaml")
+            if not Path(_path).is_file():
+                raise ValueError(
+                    f"scene {_name!r}: report.thesis_rows_from names scene {_other!r}, but {_path} does not exist"
+                )
+            SCENES[_other] = load_scene(_path)
+            SCENE_FILES[_other] = _path
 
 #: a resolution or sub-sample edge in a file name: the repr-exact tag of porepipe._shared.naming.res_tag
 NUMBER_RE = TAG_RE
@@ -227,6 +238,9 @@ def report_inputs(wildcards):
         "grey": grey_volumes(scene) if scene.report.slices and binary_stage(scene) != "capillary" else [],
         "binary": [],
         "lpt": per_resolution(scene, "lpt/lpt_a{a}.h5") if "lpt" in names else [],
+        "thesis_rows": [
+            results(SCENES[other], "sweep", "sweep.h5") for other in scene.report.thesis_rows_from.values()
+        ],
     }
     if scene.report.slices and names - {"report", "estimate"}:
         inputs["binary"] = binary_volumes(scene)
@@ -266,12 +280,15 @@ def diffusion_resolutions(scene):
 
 
 def permeability_inputs(wildcards):
-    """The binary volume and scene; with a model's wall geometry for `walls: cli`: a decorated scene's grains.h5
-    (exact polyhedra), else the grey volume (sub-voxel wall distances from grey values)."""
+    """The binary volume (whole or sub-sample) and scene, with the wall geometry for `walls: cli`: a decorated scene's
+    grains.h5 (exact polyhedra); else for a whole model volume its grey volume (sub-voxel wall distances from grey
+    values), for a sub-sample the packing.h5 it was cut from (the grey volume is the whole one's)."""
     scene = scene_of(wildcards)
-    inputs = {"binary": whole_binary_volume(wildcards), "scene": scene_file(wildcards)}
+    inputs = {"binary": binary_volume(wildcards), "scene": scene_file(wildcards)}
     if getattr(scene, "decoration", None) is not None:
         inputs["grains"] = results(scene, "decorate", "grains.h5")
+    elif getattr(wildcards, "sub", ""):
+        inputs["packing"] = packing_input(wildcards) if getattr(scene, "spheres", None) is not None else []
     elif getattr(scene, "acquire", None) is None:
         inputs["grey"] = grey_volume(wildcards)
     return inputs
@@ -280,6 +297,8 @@ def permeability_inputs(wildcards):
 def permeability_grey_arg(wildcards, input):
     if "grains" in input.keys():
         return f"--grains {shlex.quote(input.grains)}"
+    if "packing" in input.keys():
+        return packing_arg(wildcards, input)
     return f"--grey {shlex.quote(input.grey)}" if "grey" in input.keys() else ""
 
 

@@ -103,6 +103,11 @@ class Settings(BaseModel):
         default_factory=list,
         description="run only at these of the scene's resolutions (empty: all); fine lattices cost most",
     )
+    whole_volume: bool = Field(
+        True,
+        description="run on the whole volume; false: only on the sweep's sub-samples (sweep.sample_um), "
+        "where the whole lattice would cost too much",
+    )
     collision: Collision = Field(
         Collision.trt, description="bgk, trt (default: Λ = magic makes κ̂ τ-independent) or mrt (the thesis's)"
     )

@@ -54,5 +54,26 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
     lpt = lpt if lpt is not None else existing(scene, "lpt/lpt_a{a}.h5")
     out = Path(out or Path("results", scene.name, "report", "index.html"))
     return build_report(
-        sweep, out, settings=scene.report, grey=grey, binary=binary, lpt=lpt, scene_name=scene.name
+        sweep,
+        out,
+        settings=scene.report,
+        grey=grey,
+        binary=binary,
+        lpt=lpt,
+        scene_name=scene.name,
+        inputs={"thesis_rows": thesis_row_sweeps(scene)},
     )
+
+
+def thesis_row_sweeps(scene) -> dict[str, Path]:
+    """``report.thesis_rows_from`` as thesis model -> ``results/<scene>/sweep/sweep.h5``; a missing one is an error."""
+    sweeps = {
+        m: Path("results", name, "sweep", "sweep.h5") for m, name in scene.report.thesis_rows_from.items()
+    }
+    for model, path in sweeps.items():
+        if not path.is_file():
+            raise PorepipeError(
+                f"report.thesis_rows_from.{model}: {path} does not exist; run the workflow on scene "
+                f"{scene.report.thesis_rows_from[model]!r} first (`porepipe run` does it for you)"
+            )
+    return sweeps
