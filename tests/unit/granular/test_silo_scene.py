@@ -1,9 +1,10 @@
 """The CI Janssen silo (config/scenes/granular-silo-ci.yaml) end to end: run, measure, fit.
 
 Truths used: static force balance (floor + walls carry the weight), saturation of the wall pressure (its slope in
-the lower half of the fill far below the hydrostatic slope at the top), the Rankine bracket of a Mohr-Coulomb bulk
-for k, and the Janssen fit's mu_j against the wall friction actually mobilised (sum of the walls' vertical
-tractions over their normal forces), which is what Janssen's tau_w = mu_j sigma_xx means.
+the lower half of the fill far below the hydrostatic slope at the top), the thesis's measured k = 0.64 ± 0.19
+(Schinner 2001 §3.1) for k, the Rankine bracket of a Mohr-Coulomb bulk, and the Janssen fit's mu_j against the
+wall friction actually mobilised (sum of the walls' vertical tractions over their normal forces), which is what
+Janssen's tau_w = mu_j sigma_xx means.
 """
 
 from pathlib import Path
@@ -11,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from porepipe.granular import analyse_silo, lateral_pressure_bounds, read_granular, run
+from porepipe.granular import THESIS_SILO, analyse_silo, lateral_pressure_bounds, read_granular, run
 from porepipe.scene import load_scene
 
 SCENE = Path(__file__).parents[3] / "config" / "scenes" / "granular-silo-ci.yaml"
@@ -49,9 +50,15 @@ def test_ci_silo_k_and_mu_j(silo):
     a, mu, _ = silo
     b = lateral_pressure_bounds(mu)
     assert b["rankine_active"] < a["k"] < b["rankine_passive"]
-    # the fitted wall friction is the mobilised one (both ~0.1 here, well below the grains' mu = 0.4); 20 %
-    # covers the profile's deviation from the exponential form (fit rms ~ 20 % of the plateau)
-    assert a["fit"]["mu_j"] == pytest.approx(a["mu_wall_mobilised"], rel=0.2)
+    # the thesis's k with its spread over test areas (0.64 ± 0.19), widened by two standard errors of our mean
+    # over ~20 slabs (one realisation: 0.74-0.87 for fills differing in the last digit of a source position), holds
+    # the mean here (0.87 ± 0.25); the gravity-ramp protocol this scene had before gave 0.98 ± 0.28 and fails. k is
+    # not inside Rankine-Jaky [0.46, 0.63]: that bracket holds at yield, a fill below the repose state need not be
+    sem = a["k_std"] / np.sqrt(len(a["k_local"]))
+    assert abs(a["k"] - THESIS_SILO["k"]) < THESIS_SILO["k_err"] + 2 * sem
+    # the fitted wall friction (k fixed at the stress tensors' mean) is the mobilised one (both ~0.15 here, below
+    # the thesis's 0.33); 20 % covers the profile's deviation from the exponential form
+    assert a["fit_k_fixed"]["mu_j"] == pytest.approx(a["mu_wall_mobilised"], rel=0.2)
     assert (
         0.6 < a["rho_rel"] < 0.91
     )  # between random loose packing and the hexagonal disk packing pi/sqrt(12)
