@@ -83,9 +83,9 @@ def is_granular_scene(scene):
 
 
 # a regex that matches exactly the 2-D granular scenes (their report reads granular.h5, not a sweep), and one that
-# matches every other scene name
+# matches every other scene name (the look-ahead ends at the name: a name character may not follow)
 GRANULAR_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_granular_scene(s)) or "(?!)"
-NOT_GRANULAR_SCENE_RE = rf"(?!(?:{GRANULAR_SCENE_RE})$)[A-Za-z0-9][A-Za-z0-9_.-]*"
+NOT_GRANULAR_SCENE_RE = rf"(?!(?:{GRANULAR_SCENE_RE})(?![A-Za-z0-9_.-]))[A-Za-z0-9][A-Za-z0-9_.-]*"
 
 
 # -- volumes ----------------------------------------------------------------------------------------------------------

@@ -28,10 +28,10 @@ rule report:
         ),
     log:
         "results/{scene}/logs/report.log",
-    wildcard_constraints:
-        scene=NOT_GRANULAR_SCENE_RE,
     benchmark:
         "results/{scene}/cost/report.tsv"
+    wildcard_constraints:
+        scene=NOT_GRANULAR_SCENE_RE,
     conda:
         "../envs/porepipe.yaml"
     threads: 1
