@@ -199,3 +199,64 @@ def test_strain_of_an_affine_field_and_plane_strain_constants():
     assert float(out["E"]) == pytest.approx(young, rel=1e-12)
     # Eq. 4.10: u_ii = sigma_ii/(2K) in plane strain
     assert float(out["K"]) == pytest.approx((sxx + szz) / (2 * (exx + ezz)), rel=1e-12)
+
+
+# -- the floor-pressure dip (Schinner 2001 §4.2) -------------------------------------------------------------------
+def _piecewise(x, nodes):
+    """Piecewise-linear profile through (x, p) nodes."""
+    xs, ps = zip(*nodes, strict=True)
+    return np.interp(x, xs, ps)
+
+
+def test_pressure_dip_is_zero_for_pressure_proportional_to_height():
+    """A wedge heap whose floor pressure follows the local height (columns, layered heaps): no dip."""
+    x = np.linspace(-1.0, 1.0, 201)
+    p = _piecewise(x, [(-1, 0), (0, 1), (1, 0)])
+    out = M.pressure_dip(x, p, 0.0)
+    assert out["dip"] == pytest.approx(0.0, abs=1e-12)
+    assert out["p_side"] == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("nodes", "dip"),
+    [
+        ([(-1, 0), (-0.2, 1), (0, 0.6), (0.2, 1), (1, 0)], 0.4),  # symmetric "M": 1 - 0.6/1
+        ([(-1, 0), (-0.3, 1), (0, 0.45), (0.25, 0.8), (1, 0)], 0.5),  # asymmetric: 1 - 0.45/((1 + 0.8)/2)
+    ],
+)
+def test_pressure_dip_of_a_constructed_minimum(nodes, dip):
+    x = np.linspace(-1.0, 1.0, 401)  # holds every node exactly
+    out = M.pressure_dip(x, _piecewise(x, nodes), 0.0)
+    assert out["dip"] == pytest.approx(dip, rel=1e-12)
+    assert out["x_left_max"] == pytest.approx(nodes[1][0], abs=1e-12)
+    assert out["x_right_max"] == pytest.approx(nodes[3][0], abs=1e-12)
+
+
+def test_pressure_dip_fluctuation_is_the_window_scatter():
+    """Windows alternating +-delta about the smoothed profile: scatter delta, relative to p_side."""
+    x = np.linspace(-1.0, 1.0, 200)
+    p = _piecewise(x, [(-1, 0), (0, 2), (1, 0)])
+    delta = 0.1
+    noisy = p + delta * np.where(np.arange(len(x)) % 2 == 0, 1.0, -1.0)
+    out = M.pressure_dip(x, p, 0.0, noise=noisy)
+    assert out["fluctuation"] == pytest.approx(delta / out["p_side"], rel=1e-12)
+
+
+def test_pressure_dip_rejects_bad_input():
+    x = np.linspace(0.0, 1.0, 10)
+    with pytest.raises(PorepipeError, match="apex x = 2.0 outside"):
+        M.pressure_dip(x, x, 2.0)
+    with pytest.raises(PorepipeError, match="one length"):
+        M.pressure_dip(x, x[:-1], 0.5)
+
+
+def test_scaled_profile_maps_to_the_thesis_axes():
+    """s = (x - apex) / (base/2), p / (rho g h); NaN outside the measured range (ensemble averages skip it)."""
+    x = np.linspace(0.1, 0.5, 41)  # apex 0.3, half base 0.2
+    p = 50.0 * (1.0 - np.abs(x - 0.3) / 0.2)
+    grid = np.array([-1.2, -0.95, -0.5, 0.0, 0.5, 0.95, 1.2])
+    out = M.scaled_profile(x, p, 0.3, 0.2, 50.0, grid)
+    np.testing.assert_allclose(out[1:-1], 1.0 - np.abs(grid[1:-1]), atol=1e-12)
+    assert np.isnan(out[0]) and np.isnan(out[-1])
+    with pytest.raises(PorepipeError, match="must be positive"):
+        M.scaled_profile(x, p, 0.3, 0.0, 50.0, grid)
