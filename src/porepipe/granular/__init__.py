@@ -24,6 +24,7 @@ _EXPORTS = {
     "force_magnitudes": "_measure",
     "frame_contacts": "_measure",
     "frame_particles": "_measure",
+    "heap_ensemble": "_silo",
     "hopper_sigma_zz": "_theory",
     "janssen": "_theory",
     "lateral_pressure_bounds": "_theory",

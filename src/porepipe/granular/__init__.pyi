@@ -39,6 +39,7 @@ from porepipe.granular._shapes import regular_polygon as regular_polygon
 from porepipe.granular._silo import THESIS_SILO as THESIS_SILO
 from porepipe.granular._silo import analyse_heap as analyse_heap
 from porepipe.granular._silo import analyse_silo as analyse_silo
+from porepipe.granular._silo import heap_ensemble as heap_ensemble
 from porepipe.granular._theory import closure_ife as closure_ife
 from porepipe.granular._theory import closure_linear as closure_linear
 from porepipe.granular._theory import fit_janssen as fit_janssen
@@ -76,6 +77,7 @@ __all__ = [
     "force_magnitudes",
     "frame_contacts",
     "frame_particles",
+    "heap_ensemble",
     "hopper_sigma_zz",
     "janssen",
     "lateral_pressure_bounds",

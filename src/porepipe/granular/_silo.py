@@ -261,3 +261,46 @@ def _foot(x, load, tail: float = 0.01) -> tuple[float, float]:
     cum /= cum[-1]
     xs = np.asarray(x, dtype=np.float64)[order]
     return float(xs[np.searchsorted(cum, tail)]), float(xs[min(np.searchsorted(cum, 1 - tail), len(xs) - 1)])
+
+
+def heap_ensemble(heaps: list[dict], points: int = 81) -> dict:
+    """Average the floor pressure of several heaps (realisations differing in the seed, as the thesis's 9).
+
+    Each :func:`analyse_heap` result's running-mean profile is put on the thesis's axes (x from the apex in units
+    of half the foot width, pressure over rho g h), the profiles are averaged where each covers, and the dip of the
+    mean profile is measured.
+
+    Returns
+    -------
+    dict
+        ``s`` (grid on [-1.2, 1.2]), ``mean`` and ``std`` (scaled pressure), ``dip`` (:func:`pressure_dip` of the
+        mean), ``dips`` (each heap's own dip), ``repose_deg`` (mean and std of the flank fits), ``n``.
+    """
+    if not heaps:
+        raise PorepipeError("heap_ensemble: no heaps given")
+    grid = np.linspace(-1.2, 1.2, points)
+    rows = np.array(
+        [
+            M.scaled_profile(
+                h["floor_x_m"],
+                h["floor_running_mean"],
+                h["apex_x_m"],
+                0.5 * (h["foot_m"][1] - h["foot_m"][0]),
+                h["rho_g_h"],
+                grid,
+            )
+            for h in heaps
+        ]
+    )
+    mean = np.nanmean(rows, axis=0)
+    ok = ~np.isnan(mean)
+    repose = np.degrees([[h["repose_left_rad"], h["repose_right_rad"]] for h in heaps]).ravel()
+    return {
+        "s": grid,
+        "mean": mean,
+        "std": np.nanstd(rows, axis=0),
+        "dip": M.pressure_dip(grid[ok], mean[ok], 0.0),
+        "dips": [h["dip"]["dip"] for h in heaps],
+        "repose_deg": (float(repose.mean()), float(repose.std())),
+        "n": len(heaps),
+    }

@@ -260,3 +260,39 @@ def test_scaled_profile_maps_to_the_thesis_axes():
     assert np.isnan(out[0]) and np.isnan(out[-1])
     with pytest.raises(PorepipeError, match="must be positive"):
         M.scaled_profile(x, p, 0.3, 0.0, 50.0, grid)
+
+
+def _fake_heap(apex, half, rgh, nodes, repose_deg):
+    x = np.linspace(apex - 1.5 * half, apex + 1.5 * half, 301)
+    return {
+        "floor_x_m": x,
+        "floor_running_mean": rgh * _piecewise((x - apex) / half, nodes),
+        "apex_x_m": apex,
+        "foot_m": (apex - half, apex + half),
+        "rho_g_h": rgh,
+        "repose_left_rad": math.radians(repose_deg[0]),
+        "repose_right_rad": math.radians(repose_deg[1]),
+        "dip": {"dip": 0.0},
+    }
+
+
+def test_heap_ensemble_averages_on_the_thesis_axes():
+    """Two heaps of different size, place and weight with the same scaled "M" profile, and a third with a triangle:
+    the mean is their average on s = (x - apex)/(foot/2), p/(rho g h); its dip is that of the averaged nodes."""
+    from porepipe.granular import heap_ensemble
+
+    m = [(-1.5, 0), (-1, 0), (-0.2, 1), (0, 0.4), (0.2, 1), (1, 0), (1.5, 0)]
+    tri = [(-1.5, 0), (-1, 0), (0, 1), (1, 0), (1.5, 0)]
+    heaps = [
+        _fake_heap(0.1, 0.2, 500.0, m, (20, 22)),
+        _fake_heap(-0.3, 0.05, 80.0, m, (24, 26)),
+        _fake_heap(0.0, 1.0, 1.0, tri, (22, 24)),
+    ]
+    e = heap_ensemble(heaps, points=121)  # grid step 0.02 holds s = 0, +-0.2
+    # mean at s = 0: (0.4 + 0.4 + 1)/3 = 0.6; at s = +-0.2: (1 + 1 + 0.8)/3 = 0.9333 (the maxima of the mean)
+    assert e["mean"][60] == pytest.approx(0.6, rel=1e-9)
+    assert e["dip"]["dip"] == pytest.approx(1 - 0.6 / (2.8 / 3), rel=1e-9)
+    assert e["repose_deg"] == pytest.approx((23.0, np.std([20, 22, 24, 26, 22, 24])), rel=1e-12)
+    assert e["n"] == 3
+    with pytest.raises(PorepipeError, match="no heaps"):
+        heap_ensemble([])
