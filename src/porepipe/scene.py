@@ -144,8 +144,8 @@ class SceneBase(_Strict):
 
     @model_validator(mode="after")
     def _model_source(self):
-        if self.analyses and set(self.analyses) <= {Analysis.granular}:
-            return self  # a 2-D granular scene has no box, spheres or voxels
+        if Analysis.granular in self.analyses and set(self.analyses) <= {Analysis.granular, Analysis.report}:
+            return self  # a 2-D granular scene has no box, spheres or voxels (its report reads granular.h5)
         if not self.resolutions_um:
             raise ValueError("missing resolutions_um: give at least one voxel size in µm")
         if getattr(getattr(self, "diffusion", None), "geometry", None) is not None:

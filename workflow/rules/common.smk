@@ -89,6 +89,16 @@ def is_acquire_scene(scene):
 ACQUIRE_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_acquire_scene(s)) or "(?!)"
 
 
+def is_granular_scene(scene):
+    return getattr(scene, "granular", None) is not None and "granular" in {a.value for a in scene.analyses}
+
+
+# a regex that matches exactly the 2-D granular scenes (their report reads granular.h5, not a sweep), and one that
+# matches every other scene name (the look-ahead ends at the name: a name character may not follow)
+GRANULAR_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_granular_scene(s)) or "(?!)"
+NOT_GRANULAR_SCENE_RE = rf"(?!(?:{GRANULAR_SCENE_RE})(?![A-Za-z0-9_.-]))[A-Za-z0-9][A-Za-z0-9_.-]*"
+
+
 # -- volumes ----------------------------------------------------------------------------------------------------------
 def grey_volumes(scene):
     """The grey volume of every resolution of the scene."""
