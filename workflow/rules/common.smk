@@ -246,6 +246,36 @@ def mem_mb(bytes_per_voxel, base_mb=500):
     return lambda wildcards: int(base_mb + bytes_per_voxel * voxels(wildcards) / 2**20)
 
 
+def every_core(cluster_threads):
+    """The `threads` of a job that uses every core it gets. A local run: its --cores. A cluster job:
+    `cluster_threads` (a cluster run has no --cores, and a job's own Snakemake would see the whole node)."""
+
+    def threads(wildcards):
+        if workflow.local_exec and not workflow.remote_exec:
+            return workflow.cores
+        return cluster_threads
+
+    return threads
+
+
+def cpus_per_task(wildcards, threads):
+    """The `resources: cpus_per_task` of every rule: one Slurm CPU per thread the rule runs."""
+    return threads
+
+
+def permeability_tasks(wildcards):
+    """MPI ranks of one permeability job: workflow config `permeability_tasks` (default 1, one process)."""
+    tasks = config.get("permeability_tasks", 1)
+    if not isinstance(tasks, int) or tasks < 1:
+        raise ValueError(f"config permeability_tasks = {tasks!r}: give a whole number of MPI ranks >= 1")
+    return tasks
+
+
+def permeability_mpi(wildcards):
+    """The `resources: mpi` launcher of a permeability job with more than one rank (none for one process)."""
+    return "mpirun" if permeability_tasks(wildcards) > 1 else None
+
+
 def diffusion_axes(scene):
     return [axis.value for axis in scene.diffusion.axes]
 

@@ -15,11 +15,16 @@ rule permeability:
         axis="[xyz]",
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         # 19 populations x 2 copies in float64 per node, plus the fields and the index arrays
         mem_mb=mem_mb(bytes_per_voxel=400, base_mb=1000),
         runtime=720,
+        # the MPI hook (issue 23 part 3): `--config permeability_tasks=P` asks Slurm for P ranks (--ntasks) and sets
+        # `mpi`, the launcher the command runs the solver under; one process (the default) has neither
+        tasks=permeability_tasks,
+        mpi=permeability_mpi,
     params:
         grey=permeability_grey_arg,
     shell:
