@@ -146,8 +146,12 @@ class SlurmCluster:
 
     # -- daemons -------------------------------------------------------------------------------------------------
     def _start(self, name: str, cmd: list[str]) -> None:
-        out = open(self.dir / f"{name}.out", "w")  # noqa: SIM115 - the daemon keeps it open
-        self.procs[name] = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
+        with open(
+            self.dir / f"{name}.out", "w"
+        ) as out:  # the daemon writes to its own copy of the descriptor
+            self.procs[name] = subprocess.Popen(
+                cmd, stdout=out, stderr=subprocess.STDOUT, start_new_session=True
+            )
 
     def _fail(self, what: str) -> None:
         logs = [self.dir / f"{n}.out" for n in self.procs] + [
