@@ -56,7 +56,7 @@ def _run(cmd: list, cwd: Path, timeout_s: float = 900) -> subprocess.CompletedPr
 
 
 def _job_states() -> dict[str, str]:
-    """Slurm job id -> state of every job (finished ones too: MinJobAge keeps them for minutes)."""
+    """Slurm job id -> state of every job (finished ones too: the test cluster keeps them for an hour, MinJobAge)."""
     out = subprocess.run(
         ["squeue", "--states=all", "--noheader", "--format=%i|%T"], capture_output=True, text=True, check=True
     )
