@@ -272,6 +272,23 @@ def mem_mb(bytes_per_voxel, base_mb=500):
     return lambda wildcards: int(base_mb + bytes_per_voxel * voxels(wildcards) / 2**20)
 
 
+def every_core(cluster_threads):
+    """The `threads` of a job that uses every core it gets. A local run: its --cores. A cluster job:
+    `cluster_threads` (a cluster run has no --cores, and a job's own Snakemake would see the whole node)."""
+
+    def threads(wildcards):
+        if workflow.local_exec and not workflow.remote_exec:
+            return workflow.cores
+        return cluster_threads
+
+    return threads
+
+
+def cpus_per_task(wildcards, threads):
+    """The `resources: cpus_per_task` of every rule: one Slurm CPU per thread the rule runs."""
+    return threads
+
+
 def diffusion_axes(scene):
     return [axis.value for axis in scene.diffusion.axes]
 

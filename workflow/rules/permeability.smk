@@ -16,8 +16,9 @@ rule permeability:
         axis="[xyz]",
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         # 19 populations x 2 copies in float64 per node, plus the fields and the index arrays
         mem_mb=mem_mb(bytes_per_voxel=400, base_mb=1000),
         runtime=720,
