@@ -196,18 +196,21 @@ def main() -> None:
     ap.add_argument("--smoke", action="store_true", help="300 particles, a few steps, 1 thread")
     add_out_argument(ap)
     ap.add_argument("--n", type=int, default=None, help="particles (default 10 000, smoke 300)")
+    ap.add_argument("--methods", default="sweep,swap,cells", help="broad phases to time (comma-separated)")
+    ap.add_argument("--max-threads", type=int, default=2, help="time 1 .. this many threads")
     args = ap.parse_args()
+    methods = tuple(args.methods.split(","))
     n, warm, steps, repeats = (300, 10, 10, 1) if args.smoke else (10_000, 300, 200, 3)
     n = args.n or n
     builds = {}
     for spread in (0.1, 0.5):
-        for method in ("sweep", "swap", "cells"):
+        for method in methods:
             builds[(spread, method)] = list_build_cost(n, spread, method, 20, 1 if args.smoke else 3)
             print(f"N={n} I={spread:.1f} {method:6s}: {1e3 * builds[(spread, method)]:.3g} ms per list build")
     rows = []
     for spread in (0.1,) if args.smoke else (0.1, 0.5):
-        for method in ("sweep", "swap", "cells"):
-            for threads in (1,) if args.smoke else (1, 2):
+        for method in methods:
+            for threads in (1,) if args.smoke else range(1, args.max_threads + 1):
                 if threads > numba.config.NUMBA_NUM_THREADS:
                     continue
                 r = measure(n, spread, method, threads, warm, steps, repeats)
