@@ -23,8 +23,9 @@ So the many-ball board is not binomial either: a ball carries its sideways momen
 stream of 50 balls/s do not reset it, and a board tight enough to channel the balls jams. A two-state Markov walk
 with lag-1 correlation 0.26 has variance 2.5 x 1.61 = 4.0; the rest of the 6.1 is hops over a nail and longer
 memory. The tips shifted by
-1 mm to the left move the distribution to the right (D = 12 mm: P(right) 0.54-0.62 per row, mean bin 6.02), the
-asymmetry the thesis shows. The tests pin this; the issue's chi² check stays a strict xfail.
+1 mm to the left move the distribution to the right (D = 12 mm, gamma 0.5: P(right) 0.54-0.62 per row, mean bin
+6.02 at 300 balls; 6.26 at 2300, variance 9.9, chi² against Binomial(10, 2/3) 12791, p = 0), the asymmetry the
+thesis shows. The tests pin this; the issue's chi² check stays a strict xfail.
 
 Part 2, independent balls (one ball per board, the chi² test's premise).
 Set-up: each ball falls through a board of its own (boards side by side, 14 nail spacings apart, so balls never
