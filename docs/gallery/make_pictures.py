@@ -308,6 +308,11 @@ MAKERS = {
     "rough-walls": radii,
     "granular-silo": silo,
     "fontainebleau-like": grains,
+    "thesis-5.6.1-ci": packed,
+    "thesis-5.6.1-pp-ci": packed,
+    "thesis-5.6.1": radii,
+    "thesis-5.6.1-pp": radii,
+    "thesis-5.6.2": radii,
 }
 
 

@@ -13,8 +13,9 @@ rule granular:
         "results/{scene}/cost/granular.tsv"
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(4)
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=240,
     params:

@@ -7,6 +7,9 @@ from porepipe.granular._api import Frame as Frame
 from porepipe.granular._api import Simulation as Simulation
 from porepipe.granular._api import polygon_overlap as polygon_overlap
 from porepipe.granular._api import time_step_rule as time_step_rule
+from porepipe.granular._galton import GaltonBoard as GaltonBoard
+from porepipe.granular._galton import chi2_binomial as chi2_binomial
+from porepipe.granular._galton import galton_paths as galton_paths
 from porepipe.granular._measure import contact_persistence as contact_persistence
 from porepipe.granular._measure import coordination as coordination
 from porepipe.granular._measure import diagonal_strain as diagonal_strain
@@ -60,11 +63,13 @@ __all__ = [
     "AngleMode",
     "Dist",
     "Frame",
+    "GaltonBoard",
     "Settings",
     "Simulation",
     "analyse_heap",
     "analyse_silo",
     "check_convex",
+    "chi2_binomial",
     "closure_ife",
     "closure_linear",
     "contact_persistence",
@@ -77,6 +82,7 @@ __all__ = [
     "force_magnitudes",
     "frame_contacts",
     "frame_particles",
+    "galton_paths",
     "heap_ensemble",
     "hopper_sigma_zz",
     "janssen",

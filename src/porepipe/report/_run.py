@@ -52,8 +52,29 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
     binary = binary if binary is not None else existing(scene, "segment/binary_a{a}.h5")
     lpt = lpt if lpt is not None else existing(scene, "lpt/lpt_a{a}.h5")
     return build_report(
-        sweep, out, settings=scene.report, grey=grey, binary=binary, lpt=lpt, scene_name=scene.name
+        sweep,
+        out,
+        settings=scene.report,
+        grey=grey,
+        binary=binary,
+        lpt=lpt,
+        scene_name=scene.name,
+        inputs={"thesis_rows": thesis_row_sweeps(scene)},
     )
+
+
+def thesis_row_sweeps(scene) -> dict[str, Path]:
+    """``report.thesis_rows_from`` as thesis model -> ``results/<scene>/sweep/sweep.h5``; a missing one is an error."""
+    sweeps = {
+        m: Path("results", name, "sweep", "sweep.h5") for m, name in scene.report.thesis_rows_from.items()
+    }
+    for model, path in sweeps.items():
+        if not path.is_file():
+            raise PorepipeError(
+                f"report.thesis_rows_from.{model}: {path} does not exist; run the workflow on scene "
+                f"{scene.report.thesis_rows_from[model]!r} first (`porepipe run` does it for you)"
+            )
+    return sweeps
 
 
 def _granular(scene, result: Path, out: Path) -> Path:
