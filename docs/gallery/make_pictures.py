@@ -302,6 +302,8 @@ MAKERS = {
     "granular-heap-layered": granular,
     "granular-heap-13gons": granular,
     "granular-silo-ci": granular,
+    "granular-silo-mu05": granular,
+    "granular-silo-mu07": granular,
     "knudsen-capillary-ci": capillary,
     "image-to-model": image,
     "filled-packing": radii,
