@@ -300,6 +300,7 @@ MAKERS = {
     "granular-heap-ci": granular,
     "granular-heap-poured": granular,
     "granular-heap-layered": granular,
+    "granular-heap-layered-ci": granular,
     "granular-heap-13gons": granular,
     "granular-silo-ci": granular,
     "granular-silo-mu05": granular,
