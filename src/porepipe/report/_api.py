@@ -19,7 +19,7 @@ from porepipe import __version__
 from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
-from porepipe.report import _figures, _labels
+from porepipe.report import _figures, _labels, _rev
 from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
 from porepipe.report._diffusion import section as diffusion_section
 from porepipe.report._length_series import parts as length_series_parts
@@ -329,7 +329,10 @@ def section_permeability_cost(ctx: Context) -> list[str]:
 
 def section_thesis(ctx: Context) -> list[str]:
     """The thesis tables this scene produced numbers for; the others named in one line."""
-    shown, skipped = scene_tables(ctx.ds, ctx.settings.thesis_tables, ctx.settings.thesis_model)
+    others = {m: read_table(p) for m, p in ctx.inputs.get("thesis_rows", {}).items()}
+    shown, skipped = scene_tables(
+        ctx.ds, ctx.settings.thesis_tables, ctx.settings.thesis_model, others=others
+    )
     parts = []
     if shown:
         parts.append("<h2>Thesis tables</h2>")
@@ -341,6 +344,21 @@ def section_thesis(ctx: Context) -> list[str]:
             "them (5.1 and 5.2 also need report.thesis_model).</p>"
         )
     return parts
+
+
+def section_rev(ctx: Context) -> list[str]:
+    """REV error bars: each quantity's mean and spread over the sweep's sub-samples (Fig. 7.8, Table 7.4)."""
+    rows = _rev.rev_rows(ctx.ds)
+    if not rows:
+        return []
+    _figures.write_csv(ctx.out_dir / "rev.csv", [dict(zip(_rev.COLUMNS, r)) for r in rows])
+    return [
+        "<h2>REV sub-samples</h2>",
+        _table_html(_rev.COLUMNS, rows, 2),
+        "<p class=note>Mean and standard deviation (ddof = 1) over the sweep.subsamples cubes of each edge, cut "
+        "evenly from face to face (thesis §7.4): the spread is the REV error bar. Data: "
+        "<a href='rev.csv'>rev.csv</a></p>",
+    ]
 
 
 def section_cross_sections(ctx: Context) -> list[str]:
@@ -388,6 +406,7 @@ SECTIONS = [
     section_quantities,
     section_limits,
     section_thesis,
+    section_rev,
     section_cross_sections,
     section_lpt,
 ]
