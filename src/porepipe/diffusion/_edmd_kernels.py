@@ -5,16 +5,23 @@ cells of edge ``h`` (the voxels, or sub-voxels of them), each pore (1) or solid 
 except across periodic axes. Every particle carries its own clock ``tp[i]``: its position is stored at that time and
 moved only when the particle takes part in an event, so one event costs O(log N) and not the thesis's O(N).
 
-Events (one binary heap, lazy invalidation):
+Events: each particle keeps two predictions, its next cell crossing ``tcross[i]`` and at most one pair collision
+``tpair[i]`` with ``partner[i]`` (held by both partners, same time); the calendar is a tournament tree over the
+particles keyed by min(tcross, tpair), O(log N) per change, no stale entries (the single-event scheme of
+Lubachevsky 1991 and Donev, Torquato & Stillinger, J. Comput. Phys. 202, 737 (2005), with the cell crossing kept
+apart so that a crossing keeps the pair event):
 
 - pair collision (i, j): predicted exactly, one root test (spec §4.5: the thesis's two tests are one condition),
   against the 27 neighbour cells after a velocity change and against the 9 newly adjacent cells after a crossing
-  (a pair that collides is adjacent then, and it became so at a velocity change or a crossing of one partner);
-- cell crossing (i, -1): the particle reaches a face of its cell; the next cell is pore (move the particle between
+  (a pair that collides is adjacent then, and it became so at a velocity change or a crossing of one partner). A
+  prediction is kept only when earlier than both partners' pair events; a particle whose partner takes another
+  event, or changes velocity at a wall, is re-predicted over its 27 cells at once (counted as ``E_STALE``). Thus
+  for every adjacent pair one of the two holds an event no later than the pair's own collision;
+- cell crossing: the particle reaches a face of its cell; the next cell is pore (move the particle between
   the cell lists), solid or the closed outside (a wall hit: exact, no wall can be missed), or wraps periodically.
 
-Each particle has a counter ``cnt[i]`` bumped whenever its velocity changes; an event stores the counters of its
-partners at prediction time and is stale if they changed.
+Simultaneous events run in particle order (the tree's left leaf wins a tie); a crossing runs before a pair collision
+of the same particle at the same instant.
 """
 
 from __future__ import annotations
@@ -44,77 +51,78 @@ N_ETALLY = 6
 
 
 # ---------------------------------------------------------------------------------------------------------------------
-# binary heap of events: time, i, j (-1 = crossing), counters of i and j at prediction time
+# event calendar: one entry per particle, key = min(next crossing, next pair collision), in a tournament tree
 @njit(cache=True)
-def _heap_push(ht, hi, hj, hci, hcj, n, t, i, j, ci, cj):
-    """Push one event; returns the new size (the caller guarantees room)."""
-    k = n
-    while k > 0:
-        parent = (k - 1) >> 1
-        if ht[parent] <= t:
-            break
-        ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[parent], hi[parent], hj[parent], hci[parent], hcj[parent]
-        k = parent
-    ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
-    return n + 1
-
-
-@njit(cache=True)
-def _heap_pop(ht, hi, hj, hci, hcj, n):
-    """Remove the root (the earliest event); returns the new size."""
-    n -= 1
-    if n == 0:
-        return 0
-    t, i, j, ci, cj = ht[n], hi[n], hj[n], hci[n], hcj[n]
-    k = 0
-    while True:
-        c = 2 * k + 1
-        if c >= n:
-            break
-        if c + 1 < n and ht[c + 1] < ht[c]:
-            c += 1
-        if ht[c] >= t:
-            break
-        ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[c], hi[c], hj[c], hci[c], hcj[c]
-        k = c
-    ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
-    return n
+def _tree_new(n_part):
+    """Tournament tree over ``n_part`` leaves, all keys inf: (key per node, winning particle per node, leaf offset)."""
+    m = 1
+    while m < max(n_part, 1):
+        m *= 2
+    tt = np.full(2 * m, np.inf)
+    ti = np.full(2 * m, -1, dtype=np.int64)
+    for i in range(n_part):
+        ti[m + i] = i
+    for k in range(m - 1, 0, -1):
+        ti[k] = ti[2 * k]
+    return tt, ti, m
 
 
 @njit(cache=True)
-def _heap_room(ht, hi, hj, hci, hcj, n, need, cnt):
-    """Make room for ``need`` more events: drop stale ones (and re-heapify), grow the arrays if still short."""
-    if n + need <= ht.shape[0]:
-        return ht, hi, hj, hci, hcj, n
-    m = 0
-    for k in range(n):
-        ok = hci[k] == cnt[hi[k]] and (hj[k] < 0 or hcj[k] == cnt[hj[k]])
-        if ok:
-            ht[m], hi[m], hj[m], hci[m], hcj[m] = ht[k], hi[k], hj[k], hci[k], hcj[k]
-            m += 1
-    cap = ht.shape[0]
-    if m + need > cap // 2:
-        cap = 2 * (m + need) + 1024
-        ht2, hi2, hj2 = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64)
-        hci2, hcj2 = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        ht2[:m], hi2[:m], hj2[:m], hci2[:m], hcj2[:m] = ht[:m], hi[:m], hj[:m], hci[:m], hcj[:m]
-        ht, hi, hj, hci, hcj = ht2, hi2, hj2, hci2, hcj2
-    # re-heapify the kept events (Floyd)
-    for start in range((m - 2) // 2, -1, -1):
-        k = start
-        t, i, j, ci, cj = ht[k], hi[k], hj[k], hci[k], hcj[k]
-        while True:
-            c = 2 * k + 1
-            if c >= m:
-                break
-            if c + 1 < m and ht[c + 1] < ht[c]:
-                c += 1
-            if ht[c] >= t:
-                break
-            ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[c], hi[c], hj[c], hci[c], hcj[c]
-            k = c
-        ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
-    return ht, hi, hj, hci, hcj, m
+def _tree_set(tt, ti, m, i, t):
+    """Leaf i gets key ``t``; the matches on its path to the root are replayed (O(log N)). Ties: the left leaf wins,
+    so equal times run in particle order.
+    """
+    k = m + i
+    tt[k] = t
+    while k > 1:
+        left = k & ~1
+        k >>= 1
+        if tt[left + 1] < tt[left]:
+            tt[k], ti[k] = tt[left + 1], ti[left + 1]
+        else:
+            tt[k], ti[k] = tt[left], ti[left]
+
+
+@njit(cache=True, inline="always")
+def _rekey(sched, i):
+    tt, ti, m, tcross, tpair = sched[0], sched[1], sched[2], sched[3], sched[4]
+    _tree_set(tt, ti, m, i, min(tcross[i], tpair[i]))
+
+
+@njit(cache=True)
+def _drop(sched, q):
+    """Particle q loses its pair event (its partner took another): no pair until its re-prediction from the stack."""
+    tpair, partner, stack, top, mark = sched[4], sched[5], sched[6], sched[7], sched[8]
+    partner[q] = -1
+    tpair[q] = np.inf
+    _rekey(sched, q)
+    if mark[q] == 0:
+        mark[q] = 1
+        stack[top[0]] = q
+        top[0] += 1
+
+
+@njit(cache=True)
+def _claim(sched, a, b, t):
+    """Make (a, b) a's pair event at time ``t``; a's previous partner, if another one, is dropped."""
+    tpair, partner = sched[4], sched[5]
+    q = partner[a]
+    if q >= 0 and q != b:
+        _drop(sched, q)
+    partner[a] = b
+    tpair[a] = t
+    _rekey(sched, a)
+
+
+@njit(cache=True)
+def _forget(sched, i):
+    """Particle i changed velocity: its pair event and its partner's are void (the partner is re-predicted)."""
+    tpair, partner = sched[4], sched[5]
+    q = partner[i]
+    if q >= 0:
+        _drop(sched, q)
+    partner[i] = -1
+    tpair[i] = np.inf
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -266,103 +274,20 @@ def _crossing(pos, vel, cidx, h, i, t):
 
 
 @njit(cache=True)
-def _predict_pairs(
-    pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t, heap, layer, step
-):
-    """Push the collisions of i with the particles of its 27 neighbour cells (``layer`` >= 0: only the 9 cells at
-    offset ``step`` along axis ``layer``, the ones a crossing has just made neighbours).
-
-    The heap gets room for every candidate before the scan, so the scan itself never reallocates (a reallocation
-    inside the loop made numba keep the heap arrays alive through every iteration: 4x slower).
+def _scan(gas, sched, i, t, layer, step):
+    """Pair collisions of i with the particles of its 27 neighbour cells (``layer`` >= 0: only the 9 cells at offset
+    ``step`` along axis ``layer``, the ones a crossing has just made neighbours). A collision at T is kept when it is
+    earlier than both partners' pair events (T < tpair[i] and T < tpair[j]): it then becomes the pair event of both.
+    A pair rejected here is safe: the earlier event of i or j comes first, and whoever loses a pair event is
+    re-predicted over all 27 cells at once (:func:`_drop`).
     """
-    ht, hi, hj, hci, hcj, n = heap
-    need = _scan_cells(
-        pos,
-        vel,
-        tp,
-        sp,
-        radius,
-        cnt,
-        h,
-        shape,
-        periodic,
-        head,
-        nxt,
-        cidx,
-        i,
-        t,
-        ht,
-        hi,
-        hj,
-        hci,
-        hcj,
-        -1,
-        layer,
-        step,
-    )
-    if n + need > ht.shape[0]:
-        ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, need, cnt)
-    n = _scan_cells(
-        pos,
-        vel,
-        tp,
-        sp,
-        radius,
-        cnt,
-        h,
-        shape,
-        periodic,
-        head,
-        nxt,
-        cidx,
-        i,
-        t,
-        ht,
-        hi,
-        hj,
-        hci,
-        hcj,
-        n,
-        layer,
-        step,
-    )
-    return ht, hi, hj, hci, hcj, n
-
-
-@njit(cache=True)
-def _scan_cells(
-    pos,
-    vel,
-    tp,
-    sp,
-    radius,
-    cnt,
-    h,
-    shape,
-    periodic,
-    head,
-    nxt,
-    cidx,
-    i,
-    t,
-    ht,
-    hi,
-    hj,
-    hci,
-    hcj,
-    n,
-    layer,
-    step,
-):
-    """With ``n`` < 0: the number of particles in the cells to scan (room the pushes may need). Else push i's
-    collisions with them onto the heap of size ``n`` (which must have room) and return the new size.
-    """
-    count = n < 0
-    found = 0
+    pos, vel, tp, sp, radius, h, shape, periodic, head, nxt, cidx = gas
+    tpair = sched[4]
     e0, e1, e2 = shape[0] * h, shape[1] * h, shape[2] * h
     xi = pos[i, 0] + (t - tp[i]) * vel[i, 0]
     yi = pos[i, 1] + (t - tp[i]) * vel[i, 1]
     zi = pos[i, 2] + (t - tp[i]) * vel[i, 2]
+    ri = radius[sp[i]]
     for a in range(-1, 2):
         k0 = cidx[i, 0] + a
         if (layer == 0 and a != step) or not _wrap_ok(k0, shape[0], periodic[0]):
@@ -377,9 +302,7 @@ def _scan_cells(
                     continue
                 j = head[_flat(k0 % shape[0], k1 % shape[1], k2 % shape[2], shape[1], shape[2])]
                 while j >= 0:
-                    if count:
-                        found += 1
-                    elif j != i:
+                    if j != i:
                         dtj = t - tp[j]
                         dx = _min_image(xi - pos[j, 0] - dtj * vel[j, 0], e0, periodic[0])
                         dy = _min_image(yi - pos[j, 1] - dtj * vel[j, 1], e1, periodic[1])
@@ -391,31 +314,34 @@ def _scan_cells(
                             vel[i, 0] - vel[j, 0],
                             vel[i, 1] - vel[j, 1],
                             vel[i, 2] - vel[j, 2],
-                            radius[sp[i]] + radius[sp[j]],
+                            ri + radius[sp[j]],
                         )
-                        if dt < np.inf:
-                            n = _heap_push(ht, hi, hj, hci, hcj, n, t + dt, i, j, cnt[i], cnt[j])
+                        tc = t + dt
+                        if tc < tpair[i] and tc < tpair[j]:
+                            _claim(sched, i, j, tc)
+                            _claim(sched, j, i, tc)
                     j = nxt[j]
-    return found if count else n
 
 
 @njit(cache=True)
-def _predict(
-    pos, vel, tp, sp, radius, cnt, tcross, h, shape, periodic, head, nxt, cidx, i, t, heap, pairs, layer, step
-):
-    """New crossing of i (always) and its pair collisions (when gas-gas collisions are on; see _predict_pairs)."""
-    ht, hi, hj, hci, hcj, n = heap
+def _settle(gas, sched, t, tally):
+    """Re-predict (all 27 cells) every particle that lost its pair event, until none is left."""
+    stack, top, mark = sched[6], sched[7], sched[8]
+    while top[0] > 0:
+        top[0] -= 1
+        q = stack[top[0]]
+        mark[q] = 0
+        tally[E_STALE] += 1
+        _scan(gas, sched, q, t, -1, 0)
+
+
+@njit(cache=True)
+def _new_crossing(gas, sched, i, t):
+    pos, vel, cidx, h = gas[0], gas[1], gas[10], gas[5]
+    tcross = sched[3]
     tc, _, _ = _crossing(pos, vel, cidx, h, i, t)
     tcross[i] = tc
-    if n >= ht.shape[0]:
-        ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, 1, cnt)
-    n = _heap_push(ht, hi, hj, hci, hcj, n, tc, i, -1, cnt[i], 0)
-    heap = (ht, hi, hj, hci, hcj, n)
-    if pairs:
-        heap = _predict_pairs(
-            pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t, heap, layer, step
-        )
-    return heap
+    _rekey(sched, i)
 
 
 @njit(cache=True)
@@ -494,62 +420,37 @@ def advance(
     cell = np.empty(n_part, dtype=np.int64)
     cidx = np.empty((n_part, 3), dtype=np.int64)
     tp = np.full(n_part, t_start)
-    cnt = np.zeros(n_part, dtype=np.int64)
-    tcross = np.full(n_part, np.inf)
     build_cells(pos, h, shape, head, nxt, prv, cell, cidx)
-    cap = 16 * n_part + 1024
-    heap = (
-        np.empty(cap),
-        np.empty(cap, np.int64),
-        np.empty(cap, np.int64),
-        np.empty(cap, np.int64),
-        np.empty(cap, np.int64),
-        0,
+    gas = (pos, vel, tp, sp, radius, h, shape, periodic, head, nxt, cidx)
+    tt, ti, m = _tree_new(n_part)
+    sched = (
+        tt,
+        ti,
+        m,
+        np.full(n_part, np.inf),  # tcross: next cell-face crossing
+        np.full(n_part, np.inf),  # tpair: pair event (the same time in both partners)
+        np.full(n_part, -1, dtype=np.int64),  # partner (symmetric), -1 = none
+        np.empty(n_part, dtype=np.int64),  # stack of particles to re-predict
+        np.zeros(1, dtype=np.int64),  # its size
+        np.zeros(n_part, dtype=np.uint8),  # on the stack
     )
-    # crossings first (the pair filter needs both partners' crossing times), then the pairs
+    tcross, tpair, partner = sched[3], sched[4], sched[5]
     for i in range(n_part):
-        heap = _predict(
-            pos,
-            vel,
-            tp,
-            sp,
-            radius,
-            cnt,
-            tcross,
-            h,
-            shape,
-            periodic,
-            head,
-            nxt,
-            cidx,
-            i,
-            t_start,
-            heap,
-            False,
-            -1,
-            0,
-        )
+        _new_crossing(gas, sched, i, t_start)
     if pairs:
         for i in range(n_part):
-            heap = _predict_pairs(
-                pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, i, t_start, heap, -1, 0
-            )
+            _scan(gas, sched, i, t_start, -1, 0)
     u = np.empty(3)
     react = False
     for s in range(react_w.shape[0]):
         react = react or react_w[s] > 0.0
     while True:
-        ht, hi, hj, hci, hcj, n = heap
-        if n == 0 or ht[0] > t_stop:
+        t, i = tt[1], ti[1]
+        if not t <= t_stop:
             break
-        t, i, j, ci, cj = ht[0], hi[0], hj[0], hci[0], hcj[0]
-        n = _heap_pop(ht, hi, hj, hci, hcj, n)
-        heap = (ht, hi, hj, hci, hcj, n)
-        if ci != cnt[i] or (j >= 0 and cj != cnt[j]):
-            tally[E_STALE] += 1
-            continue
         tally[E_EVENTS] += 1
-        if j >= 0:  # pair collision
+        if tpair[i] < tcross[i]:  # pair collision
+            j = partner[i]
             _sync(pos, vel, tp, i, t)
             _sync(pos, vel, tp, j, t)
             dx = _min_image(pos[i, 0] - pos[j, 0], ext[0], periodic[0])
@@ -557,37 +458,17 @@ def advance(
             dz = _min_image(pos[i, 2] - pos[j, 2], ext[2], periodic[2])
             r = math.sqrt(dx * dx + dy * dy + dz * dz)
             collide(vel, i, j, dx / r, dy / r, dz / r, mass[sp[i]], mass[sp[j]])
-            cnt[i] += 1
-            cnt[j] += 1
             tally[E_PAIRS] += 1
             pair_counts[sp[i], sp[j]] += 1
             pair_counts[sp[j], sp[i]] += 1
-            for k in (i, j):  # both partners: new wall/cell events first, then new pair events (this order)
-                heap = _predict(
-                    pos,
-                    vel,
-                    tp,
-                    sp,
-                    radius,
-                    cnt,
-                    tcross,
-                    h,
-                    shape,
-                    periodic,
-                    head,
-                    nxt,
-                    cidx,
-                    k,
-                    t,
-                    heap,
-                    False,
-                    -1,
-                    0,
-                )
-            for k in (i, j):
-                heap = _predict_pairs(
-                    pos, vel, tp, sp, radius, cnt, h, shape, periodic, head, nxt, cidx, k, t, heap, -1, 0
-                )
+            for k in (i, j):  # partners of each other: no third particle loses its event
+                partner[k] = -1
+                tpair[k] = np.inf
+            _new_crossing(gas, sched, i, t)
+            _new_crossing(gas, sched, j, t)
+            _scan(gas, sched, i, t, -1, 0)
+            _scan(gas, sched, j, t, -1, 0)
+            _settle(gas, sched, t, tally)
             continue
         # crossing of a face of i's cell
         _sync(pos, vel, tp, i, t)
@@ -625,30 +506,13 @@ def advance(
             speed, state = _reflect(law, mixed, wall_speed, ev, u, speed, vmean[sp[i]], alpha, state)
             for q in range(3):
                 vel[i, q] = u[q] * speed
-            cnt[i] += 1
             tally[E_WALLS] += 1
             wall_counts[sp[i]] += 1
-            heap = _predict(
-                pos,
-                vel,
-                tp,
-                sp,
-                radius,
-                cnt,
-                tcross,
-                h,
-                shape,
-                periodic,
-                head,
-                nxt,
-                cidx,
-                i,
-                t,
-                heap,
-                pairs,
-                -1,
-                0,
-            )
+            _forget(sched, i)
+            _new_crossing(gas, sched, i, t)
+            if pairs:
+                _scan(gas, sched, i, t, -1, 0)
+                _settle(gas, sched, t, tally)
             continue
         if wrapped:
             pos[i, d] -= s * ext[d]
@@ -657,27 +521,10 @@ def advance(
         cidx[i, d] = k
         _link(head, nxt, prv, cell, i, _flat(cidx[i, 0], cidx[i, 1], cidx[i, 2], n1, n2))
         tally[E_CROSSINGS] += 1
-        heap = _predict(
-            pos,
-            vel,
-            tp,
-            sp,
-            radius,
-            cnt,
-            tcross,
-            h,
-            shape,
-            periodic,
-            head,
-            nxt,
-            cidx,
-            i,
-            t,
-            heap,
-            pairs,
-            d,
-            s,
-        )
+        _new_crossing(gas, sched, i, t)
+        if pairs:
+            _scan(gas, sched, i, t, d, s)
+            _settle(gas, sched, t, tally)
     for i in range(n_part):
         _sync(pos, vel, tp, i, t_stop)
     return state
