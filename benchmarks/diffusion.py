@@ -2,6 +2,11 @@
 
     python benchmarks/diffusion.py           # 30 x 30 x 300 capillary and a 96^3 porous sample
     python benchmarks/diffusion.py --smoke   # seconds (CI)
+    python benchmarks/diffusion.py --edmd-only --edmd-reference old_edmd_kernels.py   # EDMD only, before/after
+
+``--edmd-reference`` names a copy of an earlier ``porepipe/diffusion/_edmd_kernels.py`` (for instance
+``git show main:src/porepipe/diffusion/_edmd_kernels.py > old_edmd_kernels.py``): its event loop is timed on the same
+gas in the same run, next to the current one, so that a noisy shared machine compares like with like.
 
 Prints a markdown table and writes diffusion.json, diffusion_edmd.json and diffusion_surface.json into --out (default
 results/benchmarks/). Peer: SPARTA's free-molecular DSMC moves
@@ -79,8 +84,13 @@ def measure(pore, settings, threads, repeats):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--smoke", action="store_true", help="small sizes, one repeat")
+    parser.add_argument("--edmd-only", action="store_true", help="only the event-driven gas section")
+    parser.add_argument("--edmd-reference", help="earlier _edmd_kernels.py to time alongside the current one")
     add_out_argument(parser)
     args = parser.parse_args()
+    if args.edmd_only:
+        edmd_section(args.smoke, args.out, args.edmd_reference, surface=False)
+        return
     per = 40 if args.smoke else 400
     repeats = 1 if args.smoke else 3
     bare = Settings(batches=32, batch_particles=per, max_rounds=1, profile_bins=0)
@@ -127,10 +137,10 @@ def main() -> None:
         "cores; geometry 1 byte per voxel"
     )
     write_record(args.out, "diffusion.json", rows)
-    edmd_section(args.smoke, args.out)
+    edmd_section(args.smoke, args.out, args.edmd_reference)
 
 
-def edmd_section(smoke: bool, out: str) -> None:
+def edmd_section(smoke: bool, out: str, reference: str | None = None, surface: bool = True) -> None:
     """Event-driven hard-sphere gas (setup edmd): events/s and cost per particle and simulated ps for N = 10^3..10^5
     N2 at n = 0.125 nm^-3 (about 5 bar, 298 K) in a periodic box; one core (the kernel is serial).
 
@@ -138,14 +148,52 @@ def edmd_section(smoke: bool, out: str) -> None:
     cell-list EDMD codes against each other; no numeric events/s figure of it was found in the stored text, so none
     is quoted. The thesis's O(N) scan per event (O(N^2) per simulated time) is not kept as a code path.
     """
-    import math
-
     from porepipe.diffusion import _edmd as D
 
+    kernels = [("current", D.E)]
+    if reference:
+        kernels.insert(0, ("reference", _load_kernels(reference)))
     sizes = (1000, 10000) if smoke else (1000, 10000, 100000)
     steps = 3.0 if smoke else 20.0  # collision times per particle
     rows = []
     for n in sizes:
+        for label, kernel in kernels:
+            rows.append({"kernel": label, **_edmd_rate(D, kernel, n, steps)})
+    print(
+        "\n| event-driven gas, N | kernel | events | events/s | events per CPU-s | CPU µs per particle and ps | "
+        "events per CPU-s, gas-gas collisions off |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(
+            f"| {r['N']} | {r['kernel']} | {r['events']:.3g} | {r['events_per_s']:.3g} | {r['events_per_cpu_s']:.3g} | "
+            f"{r['us_per_particle_ps']:.3g} | {r['events_per_cpu_s_pairs_off']:.3g} |"
+        )
+    print("(cost per particle and simulated time grows like log N for an N log N method)")
+    write_record(out, "diffusion_edmd.json", rows)
+    if surface:
+        surface_section(smoke, out)
+
+
+def _load_kernels(path: str):
+    """The module of an earlier _edmd_kernels.py (imported under its own name, compiled on first use)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("edmd_reference_kernels", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _edmd_rate(D, kernel, n: int, steps: float) -> dict:
+    """Events per CPU-s of ``n`` N2 at 0.125 nm^-3 (periodic box) over ``steps`` collision times with the event
+    loop of ``kernel`` (D.E swapped for the run; the counters and physics are the same module-independent ones).
+    """
+    import math
+
+    current = D.E
+    D.E = kernel
+    try:
         edge = (n / 0.125) ** (1 / 3)
         gas = D.make_gas(np.ones((1, 1, 1), np.uint8), edge, {"N2": n}, periodic=(True, True, True), seed=1)
         z = D.collision_rate(0.125, 2 * 0.1899, D.mean_speed_nm_ps("N2", 298.15))
@@ -156,30 +204,17 @@ def edmd_section(smoke: bool, out: str) -> None:
         dt, cpu = time.perf_counter() - t0, time.process_time() - c0
         events = gas.tally[0] - e0
         free = _knudsen_mode_rate(D, n, edge, steps / z)
-        rows.append(
-            {
-                "N": n,
-                "events_per_cpu_s_pairs_off": free,
-                "events": events,
-                "events_per_s": events / dt,
-                "events_per_cpu_s": events / cpu,
-                "us_per_particle_ps": 1e6 * cpu / (n * steps / z),
-                "log2N": math.log2(n),
-            }
-        )
-    print(
-        "\n| event-driven gas, N | events | events/s | events per CPU-s | CPU µs per particle and ps | "
-        "events per CPU-s, gas-gas collisions off |"
-    )
-    print("|---|---|---|---|---|---|")
-    for r in rows:
-        print(
-            f"| {r['N']} | {r['events']:.3g} | {r['events_per_s']:.3g} | {r['events_per_cpu_s']:.3g} | "
-            f"{r['us_per_particle_ps']:.3g} | {r['events_per_cpu_s_pairs_off']:.3g} |"
-        )
-    print("(cost per particle and simulated time grows like log N for an N log N method)")
-    write_record(out, "diffusion_edmd.json", rows)
-    surface_section(smoke, out)
+    finally:
+        D.E = current
+    return {
+        "N": n,
+        "events_per_cpu_s_pairs_off": free,
+        "events": events,
+        "events_per_s": events / dt,
+        "events_per_cpu_s": events / cpu,
+        "us_per_particle_ps": 1e6 * cpu / (n * steps / z),
+        "log2N": math.log2(n),
+    }
 
 
 def _knudsen_mode_rate(D, n: int, edge: float, duration: float) -> float:

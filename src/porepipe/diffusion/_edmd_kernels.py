@@ -51,6 +51,81 @@ N_ETALLY = 6
 
 
 # ---------------------------------------------------------------------------------------------------------------------
+# binary heap of events with lazy invalidation (the calendar of the adsorbing gas, _surface_kernels): time, i, j
+# (-1 = no partner), counters of i and j at prediction time
+@njit(cache=True)
+def _heap_push(ht, hi, hj, hci, hcj, n, t, i, j, ci, cj):
+    """Push one event; returns the new size (the caller guarantees room)."""
+    k = n
+    while k > 0:
+        parent = (k - 1) >> 1
+        if ht[parent] <= t:
+            break
+        ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[parent], hi[parent], hj[parent], hci[parent], hcj[parent]
+        k = parent
+    ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
+    return n + 1
+
+
+@njit(cache=True)
+def _heap_pop(ht, hi, hj, hci, hcj, n):
+    """Remove the root (the earliest event); returns the new size."""
+    n -= 1
+    if n == 0:
+        return 0
+    t, i, j, ci, cj = ht[n], hi[n], hj[n], hci[n], hcj[n]
+    k = 0
+    while True:
+        c = 2 * k + 1
+        if c >= n:
+            break
+        if c + 1 < n and ht[c + 1] < ht[c]:
+            c += 1
+        if ht[c] >= t:
+            break
+        ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[c], hi[c], hj[c], hci[c], hcj[c]
+        k = c
+    ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
+    return n
+
+
+@njit(cache=True)
+def _heap_room(ht, hi, hj, hci, hcj, n, need, cnt):
+    """Make room for ``need`` more events: drop stale ones (and re-heapify), grow the arrays if still short."""
+    if n + need <= ht.shape[0]:
+        return ht, hi, hj, hci, hcj, n
+    m = 0
+    for k in range(n):
+        ok = hci[k] == cnt[hi[k]] and (hj[k] < 0 or hcj[k] == cnt[hj[k]])
+        if ok:
+            ht[m], hi[m], hj[m], hci[m], hcj[m] = ht[k], hi[k], hj[k], hci[k], hcj[k]
+            m += 1
+    cap = ht.shape[0]
+    if m + need > cap // 2:
+        cap = 2 * (m + need) + 1024
+        ht2, hi2, hj2 = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64)
+        hci2, hcj2 = np.empty(cap, np.int64), np.empty(cap, np.int64)
+        ht2[:m], hi2[:m], hj2[:m], hci2[:m], hcj2[:m] = ht[:m], hi[:m], hj[:m], hci[:m], hcj[:m]
+        ht, hi, hj, hci, hcj = ht2, hi2, hj2, hci2, hcj2
+    # re-heapify the kept events (Floyd)
+    for start in range((m - 2) // 2, -1, -1):
+        k = start
+        t, i, j, ci, cj = ht[k], hi[k], hj[k], hci[k], hcj[k]
+        while True:
+            c = 2 * k + 1
+            if c >= m:
+                break
+            if c + 1 < m and ht[c + 1] < ht[c]:
+                c += 1
+            if ht[c] >= t:
+                break
+            ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[c], hi[c], hj[c], hci[c], hcj[c]
+            k = c
+        ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
+    return ht, hi, hj, hci, hcj, m
+
+
+# ---------------------------------------------------------------------------------------------------------------------
 # event calendar: one entry per particle, key = min(next crossing, next pair collision), in a tournament tree
 @njit(cache=True)
 def _tree_new(n_part):
@@ -76,11 +151,11 @@ def _tree_set(tt, ti, m, i, t):
     tt[k] = t
     while k > 1:
         left = k & ~1
+        w = left + 1 if tt[left + 1] < tt[left] else left
         k >>= 1
-        if tt[left + 1] < tt[left]:
-            tt[k], ti[k] = tt[left + 1], ti[left + 1]
-        else:
-            tt[k], ti[k] = tt[left], ti[left]
+        if tt[k] == tt[w] and ti[k] == ti[w]:
+            return  # this match and all above it are unchanged
+        tt[k], ti[k] = tt[w], ti[w]
 
 
 @njit(cache=True, inline="always")
@@ -249,6 +324,16 @@ def _wrap_ok(k, n, per):
     return per or (0 <= k < n)
 
 
+@njit(cache=True, inline="always")
+def _wrap(k, n, per):
+    """Cell index k in [-1, n] wrapped on a periodic axis of n cells, -1 if outside a closed one."""
+    if k < 0:
+        return n - 1 if per else -1
+    if k >= n:
+        return 0 if per else -1
+    return k
+
+
 # ---------------------------------------------------------------------------------------------------------------------
 # predictions
 @njit(cache=True)
@@ -288,19 +373,21 @@ def _scan(gas, sched, i, t, layer, step):
     yi = pos[i, 1] + (t - tp[i]) * vel[i, 1]
     zi = pos[i, 2] + (t - tp[i]) * vel[i, 2]
     ri = radius[sp[i]]
+    n0, n1, n2 = shape[0], shape[1], shape[2]
     for a in range(-1, 2):
-        k0 = cidx[i, 0] + a
-        if (layer == 0 and a != step) or not _wrap_ok(k0, shape[0], periodic[0]):
+        k0 = _wrap(cidx[i, 0] + a, n0, periodic[0])
+        if (layer == 0 and a != step) or k0 < 0:
             continue
         for b in range(-1, 2):
-            k1 = cidx[i, 1] + b
-            if (layer == 1 and b != step) or not _wrap_ok(k1, shape[1], periodic[1]):
+            k1 = _wrap(cidx[i, 1] + b, n1, periodic[1])
+            if (layer == 1 and b != step) or k1 < 0:
                 continue
+            row = (k0 * n1 + k1) * n2
             for c in range(-1, 2):
-                k2 = cidx[i, 2] + c
-                if (layer == 2 and c != step) or not _wrap_ok(k2, shape[2], periodic[2]):
+                k2 = _wrap(cidx[i, 2] + c, n2, periodic[2])
+                if (layer == 2 and c != step) or k2 < 0:
                     continue
-                j = head[_flat(k0 % shape[0], k1 % shape[1], k2 % shape[2], shape[1], shape[2])]
+                j = head[row + k2]
                 while j >= 0:
                     if j != i:
                         dtj = t - tp[j]
