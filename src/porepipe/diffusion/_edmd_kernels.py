@@ -366,13 +366,13 @@ def _scan(gas, sched, i, t, layer, step):
     A pair rejected here is safe: the earlier event of i or j comes first, and whoever loses a pair event is
     re-predicted over all 27 cells at once (:func:`_drop`).
     """
-    pos, vel, tp, sp, radius, h, shape, periodic, head, nxt, cidx = gas
+    pos, vel, tp, rad, h, shape, periodic, head, nxt, cidx = gas
     tpair = sched[4]
     e0, e1, e2 = shape[0] * h, shape[1] * h, shape[2] * h
     xi = pos[i, 0] + (t - tp[i]) * vel[i, 0]
     yi = pos[i, 1] + (t - tp[i]) * vel[i, 1]
     zi = pos[i, 2] + (t - tp[i]) * vel[i, 2]
-    ri = radius[sp[i]]
+    ri = rad[i]
     n0, n1, n2 = shape[0], shape[1], shape[2]
     for a in range(-1, 2):
         k0 = _wrap(cidx[i, 0] + a, n0, periodic[0])
@@ -401,7 +401,7 @@ def _scan(gas, sched, i, t, layer, step):
                             vel[i, 0] - vel[j, 0],
                             vel[i, 1] - vel[j, 1],
                             vel[i, 2] - vel[j, 2],
-                            ri + radius[sp[j]],
+                            ri + rad[j],
                         )
                         tc = t + dt
                         if tc < tpair[i] and tc < tpair[j]:
@@ -424,10 +424,11 @@ def _settle(gas, sched, t, tally):
 
 @njit(cache=True)
 def _new_crossing(gas, sched, i, t):
-    pos, vel, cidx, h = gas[0], gas[1], gas[10], gas[5]
-    tcross = sched[3]
-    tc, _, _ = _crossing(pos, vel, cidx, h, i, t)
+    pos, vel, cidx, h = gas[0], gas[1], gas[9], gas[4]
+    tcross, cdir = sched[3], sched[9]
+    tc, d, s = _crossing(pos, vel, cidx, h, i, t)
     tcross[i] = tc
+    cdir[i] = 2 * d + (1 if s > 0 else 0)
     _rekey(sched, i)
 
 
@@ -508,7 +509,10 @@ def advance(
     cidx = np.empty((n_part, 3), dtype=np.int64)
     tp = np.full(n_part, t_start)
     build_cells(pos, h, shape, head, nxt, prv, cell, cidx)
-    gas = (pos, vel, tp, sp, radius, h, shape, periodic, head, nxt, cidx)
+    rad = np.empty(n_part)  # radius per particle (one load less per candidate than radius[sp[j]])
+    for i in range(n_part):
+        rad[i] = radius[sp[i]]
+    gas = (pos, vel, tp, rad, h, shape, periodic, head, nxt, cidx)
     tt, ti, m = _tree_new(n_part)
     sched = (
         tt,
@@ -520,6 +524,7 @@ def advance(
         np.empty(n_part, dtype=np.int64),  # stack of particles to re-predict
         np.zeros(1, dtype=np.int64),  # its size
         np.zeros(n_part, dtype=np.uint8),  # on the stack
+        np.zeros(n_part, dtype=np.int64),  # face of the next crossing: 2 axis + (1 if upward)
     )
     tcross, tpair, partner = sched[3], sched[4], sched[5]
     for i in range(n_part):
@@ -533,7 +538,7 @@ def advance(
         react = react or react_w[s] > 0.0
     while True:
         t, i = tt[1], ti[1]
-        if not t <= t_stop:
+        if not t <= t_stop or t == np.inf:  # (inf: nothing moves any more)
             break
         tally[E_EVENTS] += 1
         if tpair[i] < tcross[i]:  # pair collision
@@ -559,9 +564,8 @@ def advance(
             continue
         # crossing of a face of i's cell
         _sync(pos, vel, tp, i, t)
-        _, d, s = _crossing(pos, vel, cidx, h, i, t)
-        if d < 0:
-            continue  # at rest: no crossing (cannot be popped, time inf)
+        d = sched[9][i] >> 1
+        s = 1 if sched[9][i] & 1 else -1
         k = cidx[i, d] + s
         face = (cidx[i, d] + (1 if s > 0 else 0)) * h
         wall = False
@@ -589,6 +593,7 @@ def advance(
                 x, state = _uniform(state)
                 if x <= react_w[sp[i]]:
                     sp[i] = react_to[sp[i]]
+                    rad[i] = radius[sp[i]]
                     tally[E_REACTIONS] += 1
             speed, state = _reflect(law, mixed, wall_speed, ev, u, speed, vmean[sp[i]], alpha, state)
             for q in range(3):
