@@ -89,6 +89,16 @@ def is_acquire_scene(scene):
 ACQUIRE_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_acquire_scene(s)) or "(?!)"
 
 
+def is_granular_scene(scene):
+    return getattr(scene, "granular", None) is not None and "granular" in {a.value for a in scene.analyses}
+
+
+# a regex that matches exactly the 2-D granular scenes (their report reads granular.h5, not a sweep), and one that
+# matches every other scene name (the look-ahead ends at the name: a name character may not follow)
+GRANULAR_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_granular_scene(s)) or "(?!)"
+NOT_GRANULAR_SCENE_RE = rf"(?!(?:{GRANULAR_SCENE_RE})(?![A-Za-z0-9_.-]))[A-Za-z0-9][A-Za-z0-9_.-]*"
+
+
 # -- volumes ----------------------------------------------------------------------------------------------------------
 def grey_volumes(scene):
     """The grey volume of every resolution of the scene."""
@@ -167,7 +177,9 @@ def acquire_targets(scene):
 def segmentation_args(wildcards):
     seg = scene_of(wildcards).segmentation
     threshold = f" --threshold {seg.threshold}" if seg.threshold is not None else ""
-    return f"--method {seg.method.value}{threshold}"
+    budget = scene_of(wildcards).resources.memory_budget_mb
+    budget = f" --memory-budget-mb {budget}" if budget is not None else ""
+    return f"--method {seg.method.value}{threshold}{budget}"
 
 
 def minkowski_inputs(wildcards):
@@ -260,6 +272,23 @@ def mem_mb(bytes_per_voxel, base_mb=500):
     return lambda wildcards: int(base_mb + bytes_per_voxel * voxels(wildcards) / 2**20)
 
 
+def every_core(cluster_threads):
+    """The `threads` of a job that uses every core it gets. A local run: its --cores. A cluster job:
+    `cluster_threads` (a cluster run has no --cores, and a job's own Snakemake would see the whole node)."""
+
+    def threads(wildcards):
+        if workflow.local_exec and not workflow.remote_exec:
+            return workflow.cores
+        return cluster_threads
+
+    return threads
+
+
+def cpus_per_task(wildcards, threads):
+    """The `resources: cpus_per_task` of every rule: one Slurm CPU per thread the rule runs."""
+    return threads
+
+
 def diffusion_axes(scene):
     return [axis.value for axis in scene.diffusion.axes]
 
@@ -298,6 +327,30 @@ def permeability_grey_arg(wildcards, input):
     if "packing" in input.keys():
         return packing_arg(wildcards, input)
     return f"--grey {shlex.quote(input.grey)}" if "grey" in input.keys() else ""
+
+
+# MPI permeability (scene key permeability.mpi_ranks > 1): Snakemake's MPI convention, resources `tasks` and `mpi`
+# (the launcher; `--set-resources permeability:mpi=srun` on a cluster) with `{resources.mpi} -n {resources.tasks}`
+# in the shell command. A one-process job has no `mpi` resource (None drops it), so no executor takes it for MPI.
+def permeability_ranks(wildcards):
+    return max(1, scene_of(wildcards).permeability.mpi_ranks)
+
+
+def permeability_mpi(wildcards):
+    return "mpirun" if permeability_ranks(wildcards) > 1 else None
+
+
+def permeability_launch(wildcards, resources):
+    """`<launcher> -n <ranks>` before the command of an MPI job, else nothing."""
+    if resources.get("mpi") and resources.tasks > 1:
+        return f"{resources.mpi} -n {resources.tasks}"
+    return ""
+
+
+def permeability_rank_args(wildcards, threads, resources):
+    """`--mpi` for an MPI job, and the numba threads of each rank (the job's threads shared among its ranks)."""
+    ranks = resources.tasks if resources.get("mpi") else 1
+    return f"--threads {max(1, threads // ranks)}" + (" --mpi" if ranks > 1 else "")
 
 
 #: analysis name -> function(scene) -> list of final outputs; each rule file registers its analysis here.

@@ -16,16 +16,21 @@ rule permeability:
         axis="[xyz]",
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         # 19 populations x 2 copies in float64 per node, plus the fields and the index arrays
         mem_mb=mem_mb(bytes_per_voxel=400, base_mb=1000),
         runtime=720,
+        tasks=permeability_ranks,  # MPI ranks (permeability.mpi_ranks; 1: one process)
+        mpi=permeability_mpi,  # the MPI launcher; none for a one-process job
     params:
         grey=permeability_grey_arg,
+        launch=permeability_launch,
+        ranks=permeability_rank_args,
     shell:
-        "porepipe permeability {input.binary:q} {params.grey} --scene {input.scene:q} --axis {wildcards.axis}"
-        " -o {output:q} --resume --threads {threads} > {log:q} 2>&1"
+        "{params.launch} porepipe permeability {input.binary:q} {params.grey} --scene {input.scene:q}"
+        " --axis {wildcards.axis} -o {output:q} --resume {params.ranks} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["permeability"] = lambda scene: [

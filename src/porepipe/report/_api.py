@@ -22,7 +22,9 @@ from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures, _labels, _rev
 from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
 from porepipe.report._diffusion import section as diffusion_section
+from porepipe.report._length_series import parts as length_series_parts
 from porepipe.report._permeability_cost import permeability_cost_parts
+from porepipe.report._reaction_tables import parts as reaction_parts
 from porepipe.report._settings import Clock, Settings
 from porepipe.report._thesis import Table, scene_tables
 from porepipe.sweep import FULL, parse_name
@@ -304,6 +306,22 @@ def section_diffusion(ctx: Context) -> list[str]:
     return diffusion_section(ctx.ds, ctx.inputs.get("sweep_path", ""), ctx.out_dir, ctx.settings.dpi)
 
 
+def section_reactions(ctx: Context) -> list[str]:
+    """Reaction studies of the scene (setup reaction with reactions.series) beside Mahler 2001 Tables 4.2-4.4."""
+    sweep = ctx.inputs.get("sweep_path", "")
+    if not sweep:
+        return []
+    return reaction_parts(Path(sweep).parent.parent / "diffusion", ctx.out_dir)
+
+
+def section_length_series(ctx: Context) -> list[str]:
+    """A length series of the scene (diffusion.lengths) with α of (3.51) beside the thesis's and the literature's."""
+    sweep = ctx.inputs.get("sweep_path", "")
+    if not sweep:
+        return []
+    return length_series_parts(Path(sweep).parent.parent / "diffusion", ctx.out_dir)
+
+
 def section_permeability_cost(ctx: Context) -> list[str]:
     """κ error against cost of the LBM sphere benchmark (results/benchmarks/lbm_spheres.json), if it was run."""
     return permeability_cost_parts(ctx.out_dir, ctx.settings.dpi)
@@ -382,6 +400,8 @@ SECTIONS = [
     section_error_cost,
     section_startup,
     section_diffusion,
+    section_reactions,
+    section_length_series,
     section_permeability_cost,
     section_quantities,
     section_limits,
