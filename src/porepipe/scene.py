@@ -27,6 +27,7 @@ from pydantic import (
 )
 
 from porepipe._registry import OPTIONAL_SECTIONS, stage_settings
+from porepipe._shared.budget import Resources
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.yaml_safe import load_yaml
 from porepipe.segment._settings import Segmentation, SegmentationMethod
@@ -137,11 +138,14 @@ class SceneBase(_Strict):
     )
     segmentation: Segmentation = Segmentation()
     analyses: list[Analysis] = Field(default_factory=lambda: [Analysis.estimate])
+    resources: Resources = Field(
+        Resources(), description="what one stage may use: memory_budget_mb (volumes over it go in chunks)"
+    )
 
     @model_validator(mode="after")
     def _model_source(self):
-        if self.analyses and set(self.analyses) <= {Analysis.granular}:
-            return self  # a 2-D granular scene has no box, spheres or voxels
+        if Analysis.granular in self.analyses and set(self.analyses) <= {Analysis.granular, Analysis.report}:
+            return self  # a 2-D granular scene has no box, spheres or voxels (its report reads granular.h5)
         if not self.resolutions_um:
             raise ValueError("missing resolutions_um: give at least one voxel size in µm")
         if getattr(getattr(self, "diffusion", None), "geometry", None) is not None:
@@ -293,11 +297,11 @@ def _size_problems(raw: dict, size, res) -> list[str]:
                 "domain.size_um; allowed: a voxel size giving a whole number of voxels per edge"
             )
         voxels = math.prod(edge / a for edge in edges) if len(edges) == 3 else 0.0
-        if voxels > memory:
+        if voxels > memory and _get(raw, ("resources", "memory_budget_mb")) in (None, "(missing)"):
             problems.append(
                 f"resolutions_um[{i}] = {a!r}: the volume would have {voxels:.3g} voxels "
                 f"({voxels / 2**30:.3g} GiB at 1 byte each), more than this machine's "
-                f"{memory / 2**30:.0f} GiB of memory"
+                f"{memory / 2**30:.0f} GiB of memory; set resources.memory_budget_mb to process it in chunks"
             )
     types = _get(raw, ("packing", "types"))
     counts = [t.get("count") for t in types if isinstance(t, dict)] if isinstance(types, list) else []
@@ -327,6 +331,10 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
                 )
         if spheres.get("pack") is True and "packing" not in raw:
             problems.append("spheres.pack = True: needs a `packing:` section that says how to pack")
+    perm, sweep = raw.get("permeability"), raw.get("sweep")
+    sub_samples = isinstance(sweep, dict) and sweep.get("sample_um")
+    if isinstance(perm, dict) and perm.get("whole_volume") is False and not sub_samples:
+        problems.append("permeability.whole_volume = false: needs sub-samples to run on (sweep.sample_um)")
     return problems
 
 

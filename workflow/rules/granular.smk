@@ -25,4 +25,31 @@ rule granular:
         " --threads {threads} > {log:q} 2>&1"
 
 
+# the report page of a granular scene (`report` in its analyses): silo or heap read-out, figures and CSVs beside it
+rule granular_report:
+    input:
+        scene=scene_file,
+        granular="results/{scene}/granular/granular.h5",
+    output:
+        page=report(
+            "results/{scene}/report/index.html",
+            caption="../report/granular.rst",
+            category="Report",
+        ),
+    log:
+        "results/{scene}/logs/report.log",
+    benchmark:
+        "results/{scene}/cost/report.tsv"
+    wildcard_constraints:
+        scene=GRANULAR_SCENE_RE,
+    conda:
+        "../envs/porepipe.yaml"
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    shell:
+        "porepipe report {input.scene:q} --granular {input.granular:q} -o {output.page:q} > {log:q} 2>&1"
+
+
 ANALYSIS_TARGETS["granular"] = lambda scene: [results(scene, "granular", "granular.h5")]

@@ -14,6 +14,7 @@ _EXPORTS = {
     "cell_sizes": "_api",
     "characteristic_length": "_api",
     "local_porosity_analysis": "_api",
+    "local_porosity_analysis_chunked": "_chunked",
     "local_porosity_histogram": "_api",
     "local_surface_histogram": "_api",
     "percolation_bits": "_api",

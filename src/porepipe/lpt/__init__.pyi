@@ -33,6 +33,9 @@ from porepipe.lpt._api import (
 from porepipe.lpt._api import (
     percolation_bits as percolation_bits,
 )
+from porepipe.lpt._chunked import (
+    local_porosity_analysis_chunked as local_porosity_analysis_chunked,
+)
 from porepipe.lpt._plot import (
     plot_lpt as plot_lpt,
 )
@@ -61,6 +64,7 @@ __all__ = [
     "cell_sizes",
     "characteristic_length",
     "local_porosity_analysis",
+    "local_porosity_analysis_chunked",
     "local_porosity_histogram",
     "local_surface_histogram",
     "percolation_bits",

@@ -551,28 +551,59 @@ def local_porosity_analysis(
     """
     settings = settings or Settings()
     pore = _as_pore(pore)
+    return analysis_of(
+        pore.shape,
+        int(pore.sum(dtype=np.int64)),
+        lambda size, wrap: _one_size(pore, size, wrap, settings),
+        voxel_um=voxel_um,
+        periodic=periodic,
+        settings=settings,
+        skip_too_large=skip_too_large,
+        progress=progress,
+    )
+
+
+def analysis_of(
+    shape: Sequence[int],
+    n_pore: int,
+    one_size,
+    *,
+    voxel_um: float,
+    periodic: Sequence[bool],
+    settings: Settings,
+    skip_too_large: bool = False,
+    progress=None,
+) -> xr.Dataset:
+    """The Dataset of :func:`local_porosity_analysis` from ``one_size(size, wrap)`` -> the parts of one cell size.
+
+    One driver for the in-memory volume and the chunked one (:mod:`porepipe.lpt._chunked`): the cell sizes, the
+    cells' wrap and the assembly are the same; only how one size is measured differs.
+    """
     if not np.isfinite(voxel_um) or voxel_um <= 0:
         raise PorepipeError(f"voxel_um must be a positive number, got {voxel_um}")
     wrap = tuple(bool(p) and settings.placement is Placement.auto for p in periodic)
-    sizes, mapping = cell_sizes(settings, voxel_um, pore.shape)
-    skipped = [s for s in sizes if s > min(pore.shape)]
+    sizes, mapping = cell_sizes(settings, voxel_um, shape)
+    skipped = [s for s in sizes if s > min(shape)]
     if skipped and skip_too_large:
-        sizes = [s for s in sizes if s <= min(pore.shape)]
+        sizes = [s for s in sizes if s <= min(shape)]
     if not sizes:
         raise PorepipeError(
-            f"no lpt cell size fits the sample of shape {pore.shape} (sizes {skipped} voxels)"
+            f"no lpt cell size fits the sample of shape {tuple(shape)} (sizes {skipped} voxels)"
         )
     per = []
     for i, size in enumerate(sizes):
-        per.append(_one_size(pore, size, wrap, settings))
+        per.append(one_size(size, wrap))
         if progress is not None:
             progress.update(i + 1, f"L = {size}")
-    return _dataset(per, pore, voxel_um, periodic, wrap, settings, mapping, skipped if skip_too_large else [])
+    volume = (tuple(int(n) for n in shape), int(n_pore))
+    return _dataset(
+        per, volume, voxel_um, periodic, wrap, settings, mapping, skipped if skip_too_large else []
+    )
 
 
 def _dataset(
     per: list[_PerSize],
-    pore: np.ndarray,
+    volume: tuple[tuple[int, int, int], int],
     voxel_um: float,
     periodic,
     wrap,
@@ -580,6 +611,7 @@ def _dataset(
     mapping: dict,
     skipped: list[int],
 ) -> xr.Dataset:
+    shape, n_pore = volume
     sizes = np.array([p.size for p in per], np.int64)
     vol = sizes.astype(np.float64) ** 3
     alphas = [d.value for d in settings.directions]
@@ -697,14 +729,14 @@ def _dataset(
         },
         attrs={
             "voxel_um": float(voxel_um),
-            "shape": np.array(pore.shape, np.int64),
+            "shape": np.array(shape, np.int64),
             "periodic": np.array([int(bool(p)) for p in periodic], np.int8),
             "wrap": np.array([int(w) for w in wrap], np.int8),
             "placement_mode": settings.placement.value,
             "mu_stride": int(settings.mu_stride),
             "connectivity": int(settings.connectivity.value),
-            "phi_bar": float(pore.sum(dtype=np.int64) / pore.size),
-            "pore_voxels": int(pore.sum(dtype=np.int64)),
+            "phi_bar": float(n_pore / np.prod(shape, dtype=np.float64)),
+            "pore_voxels": int(n_pore),
             "L_star": int(L_star),
             "L_star_um": float(L_star * voxel_um) if L_star else float("nan"),
             "L_star_note": "smallest computed L with mu(0,L) = mu(1,L) = 0 (eq. 4.6.4); L_star = 0 and L_star_um = "

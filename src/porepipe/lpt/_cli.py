@@ -27,27 +27,36 @@ _OVERRIDES = (
 )
 
 
-def settings_from_args(args) -> Settings:
-    """Scene ``lpt:`` section (if --scene) with the options given on the command line on top."""
-    base = None
+def settings_from_args(args) -> tuple[Settings, int | None]:
+    """Scene ``lpt:`` section (if --scene) with the options given on the command line on top, and the memory budget."""
+    base, budget = None, None
     if args.scene:
         from porepipe.scene import load_scene
 
-        base = load_scene(args.scene).lpt
+        scene = load_scene(args.scene)
+        base, budget = scene.lpt, scene.resources.memory_budget_mb
+    if getattr(args, "memory_budget_mb", None) is not None:
+        budget = args.memory_budget_mb
     given = given_options(args, _OVERRIDES)
     if "cell_um" in given:  # cells given one way replace the scene's cells given the other way
         given.setdefault("cell_voxels", [])
     if "cell_voxels" in given:
         given.setdefault("cell_um", [])
-    return merge_settings(Settings, base, given, "lpt options")
+    return merge_settings(Settings, base, given, "lpt options"), budget
 
 
 def main(args) -> int:
     """Run the subcommand; returns the exit code."""
     from porepipe.lpt._run import run
 
+    settings, budget = settings_from_args(args)
     ds = run(
-        args.binary, args.out, settings_from_args(args), subsample_um=args.subsample_um, threads=args.threads
+        args.binary,
+        args.out,
+        settings,
+        subsample_um=args.subsample_um,
+        threads=args.threads,
+        memory_budget_mb=budget,
     )
     print(
         f"lpt: phi_bar = {ds.attrs['phi_bar']:.6f}, L = {ds.L.values.tolist()} voxels, "
@@ -87,6 +96,9 @@ def register(subparsers) -> None:
         type=float,
         help="analyse only the corner cube of this edge (cells larger than "
         "it are left out; the workflow's sample-size sweep uses `porepipe subsample` files instead)",
+    )
+    p.add_argument(
+        "--memory-budget-mb", type=int, help="a volume larger than this goes box by box (overrides the scene)"
     )
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=main)

@@ -7,11 +7,14 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from porepipe._shared.budget import fits
+from porepipe._shared.chunked import volume_bytes
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.numba_config import set_threads
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import ResultWriter, open_volume, read_attrs, result_hash, volume_meta
 from porepipe.lpt._api import cell_sizes, local_porosity_analysis
+from porepipe.lpt._chunked import local_porosity_analysis_chunked
 from porepipe.lpt._plot import plot_lpt
 from porepipe.lpt._settings import Settings
 
@@ -59,6 +62,44 @@ def read_binary(
         return dset[:edge, :edge, :edge], voxel_um, (False, False, False), note
 
 
+def _stored_whole(path, budget_mb: int | None) -> tuple | None:
+    """(shape, voxel_um, periodic, note) of a whole stored volume that does not fit the budget, else None."""
+    if budget_mb is None:
+        return None
+    root = read_attrs(path)
+    with open_volume(path, "pore") as dset:
+        meta, shape = volume_meta(dset, path), dset.shape
+    if fits(volume_bytes(shape), budget_mb):
+        return None
+    note = "whole sample"
+    if "sample_um" in root:
+        note = (
+            f"sub-sample: corner cube of {float(root['sample_um']):g} µm edge from {root.get('source', '?')}"
+        )
+    return shape, meta.voxel_um, meta.periodic, note + " (read in boxes: resources.memory_budget_mb)"
+
+
+def _analyse(binary_path, settings, subsample_um, is_part, budget_mb, name):
+    """The analysis in memory, or box by box when the whole volume does not fit the budget; (Dataset, note)."""
+    stored = None if subsample_um is not None else _stored_whole(binary_path, budget_mb)
+    if stored is None:
+        pore, voxel_um, periodic, note = read_binary(binary_path, subsample_um)
+        shape = pore.shape
+    else:
+        shape, voxel_um, periodic, note = stored
+    sizes, _ = cell_sizes(settings, voxel_um, shape)
+    progress = Progress(f"lpt {name}", total=sum(s <= min(shape) for s in sizes))
+    common = dict(
+        voxel_um=voxel_um, periodic=periodic, settings=settings, skip_too_large=is_part, progress=progress
+    )
+    if stored is None:
+        ds = local_porosity_analysis(pore, **common)
+    else:
+        ds = local_porosity_analysis_chunked(binary_path, shape, budget_mb=budget_mb, **common)
+    progress.close(f"local porosity distributions for {progress.total} cell sizes")
+    return ds, note
+
+
 def run(
     binary_path,
     out,
@@ -67,6 +108,7 @@ def run(
     subsample_um: float | None = None,
     threads: int | None = None,
     plots: bool | None = None,
+    memory_budget_mb: int | None = None,
 ) -> xr.Dataset:
     """Write ``lpt_a{a}.h5`` (the Dataset of :func:`local_porosity_analysis` at the root) and its PNG plots.
 
@@ -84,6 +126,9 @@ def run(
         Numba threads (default: all).
     plots : bool, optional
         Write the PNG plots (default: ``settings.plots``).
+    memory_budget_mb : int, optional
+        The scene's ``resources.memory_budget_mb``: a whole volume larger than it is analysed box by box
+        (:mod:`porepipe.lpt._chunked`; the same Dataset).
 
     Returns
     -------
@@ -92,21 +137,13 @@ def run(
     """
     threads = set_threads(threads)
     src = read_attrs(binary_path)
-    pore, voxel_um, periodic, note = read_binary(binary_path, subsample_um)
     is_part = (
         subsample_um is not None or "sample_um" in src
     )  # a sub-sample leaves out the cells that do not fit
-    sizes, _ = cell_sizes(settings, voxel_um, pore.shape)
-    progress = Progress(f"lpt {Path(binary_path).name}", total=sum(s <= min(pore.shape) for s in sizes))
-    ds = local_porosity_analysis(
-        pore,
-        voxel_um=voxel_um,
-        periodic=periodic,
-        settings=settings,
-        skip_too_large=is_part,
-        progress=progress,
+    ds, note = _analyse(
+        binary_path, settings, subsample_um, is_part, memory_budget_mb, Path(binary_path).name
     )
-    progress.close(f"local porosity distributions for {progress.total} cell sizes")
+    voxel_um = ds.attrs["voxel_um"]
     ds.attrs["sample"] = note
     digest = result_hash("lpt", settings=settings, inputs=[binary_path], subsample_um=subsample_um)
     with ResultWriter(out, stage="lpt", scene=src.get("scene", ""), scene_hash=digest, threads=threads) as w:

@@ -6,6 +6,7 @@ _EXPORTS = {
     "Adjacency": "_settings",
     "boolean_lattice_densities": "_boolean",
     "configuration_histogram": "_api",
+    "configuration_histogram_chunked": "_chunked",
     "configuration_histogram_slabs": "_api",
     "iter_slabs": "_api",
     "matrix_histogram": "_api",
@@ -17,6 +18,7 @@ _EXPORTS = {
     "specific_surface_from_histogram": "_api",
     "threshold_dataset": "_api",
     "threshold_histograms": "_api",
+    "threshold_histograms_chunked": "_chunked",
     "threshold_histograms_slabs": "_api",
 }
 __all__ = [*_EXPORTS]

@@ -45,6 +45,12 @@ from porepipe.minkowski._boolean import (
 from porepipe.minkowski._boolean import (
     miles_densities as miles_densities,
 )
+from porepipe.minkowski._chunked import (
+    configuration_histogram_chunked as configuration_histogram_chunked,
+)
+from porepipe.minkowski._chunked import (
+    threshold_histograms_chunked as threshold_histograms_chunked,
+)
 from porepipe.minkowski._settings import (
     Adjacency as Adjacency,
 )
@@ -53,6 +59,7 @@ __all__ = [
     "Adjacency",
     "boolean_lattice_densities",
     "configuration_histogram",
+    "configuration_histogram_chunked",
     "configuration_histogram_slabs",
     "iter_slabs",
     "matrix_histogram",
@@ -64,5 +71,6 @@ __all__ = [
     "specific_surface_from_histogram",
     "threshold_dataset",
     "threshold_histograms",
+    "threshold_histograms_chunked",
     "threshold_histograms_slabs",
 ]

@@ -13,18 +13,21 @@ def main(args) -> int:
     """Run the subcommand; returns the exit code."""
     from porepipe.minkowski._run import run
 
-    base = None
+    base, budget = None, None
     if args.scene:
         from porepipe.scene import load_scene
 
-        base = load_scene(args.scene).minkowski
+        scene = load_scene(args.scene)
+        base, budget = scene.minkowski, scene.resources.memory_budget_mb
+    if args.memory_budget_mb is not None:
+        budget = args.memory_budget_mb
     settings = merge_settings(
         Settings, base, given_options(args, ("adjacency", "slab_planes")), "minkowski options"
     )
     grey = args.grey if (args.grey or not settings.threshold_functions) else None
     if settings.threshold_functions and not grey:
         raise PorepipeError("minkowski.threshold_functions is on: give the grey volume with --grey GREY.h5")
-    table = run(args.binary, args.out, settings, grey, args.threads)
+    table = run(args.binary, args.out, settings, grey, args.threads, budget)
     pore = table.sel(phase="pore")
     print(
         f"φ={float(pore.phi):.6f} S_V={float(pore.S_V):.6g} µm^-1 K_V={float(pore.K_V):.6g} µm^-2 "
@@ -42,5 +45,8 @@ def register(subparsers) -> None:
     p.add_argument("--grey", help="grey_a{a}.h5: also the functionals at every threshold g_th (one pass)")
     p.add_argument("--adjacency", choices=[a.value for a in Adjacency], help="overrides the scene")
     p.add_argument("--slab-planes", type=int, help="x planes read at once (overrides the scene)")
+    p.add_argument(
+        "--memory-budget-mb", type=int, help="volumes larger than this go box by box (overrides the scene)"
+    )
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=main)

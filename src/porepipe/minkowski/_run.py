@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from porepipe._shared.budget import fits
+from porepipe._shared.chunked import volume_bytes
 from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import ResultWriter, open_volume, read_attrs, result_hash, volume_meta
 from porepipe.minkowski._api import (
@@ -14,14 +16,39 @@ from porepipe.minkowski._api import (
     threshold_dataset,
     threshold_histograms_slabs,
 )
+from porepipe.minkowski._chunked import configuration_histogram_chunked, threshold_histograms_chunked
 from porepipe.minkowski._settings import Settings
 
 #: table group of the Minkowski functions of the grey threshold in the result file
 THRESHOLD_GROUP = "threshold"
 
 
+def _binary_histogram(path, slab_planes: int, budget_mb: int | None, threads: int):
+    """Configuration histogram, volume meta and shape: slab by slab, or box by box when over the budget."""
+    with open_volume(path, "pore") as pore:
+        meta, shape = volume_meta(pore, path), pore.shape
+        if fits(volume_bytes(shape), budget_mb):
+            return (*configuration_histogram_slabs(iter_slabs(pore, slab_planes), meta.periodic), meta)
+    hist = configuration_histogram_chunked(path, "pore", shape, meta.periodic, budget_mb, threads)
+    return hist, shape, meta
+
+
+def _grey_histograms(path, slab_planes: int, budget_mb: int | None, threads: int):
+    """Threshold histograms and volume meta of a grey volume: slab by slab, or box by box when over the budget."""
+    with open_volume(path, "grey") as grey:
+        meta, shape = volume_meta(grey, path), grey.shape
+        if fits(volume_bytes(shape), budget_mb):
+            return threshold_histograms_slabs(iter_slabs(grey, slab_planes), meta.periodic)[0], meta
+    return threshold_histograms_chunked(path, "grey", shape, meta.periodic, budget_mb, threads=threads), meta
+
+
 def run(
-    binary_path, out, settings: Settings | None = None, grey_path=None, threads: int | None = None
+    binary_path,
+    out,
+    settings: Settings | None = None,
+    grey_path=None,
+    threads: int | None = None,
+    memory_budget_mb: int | None = None,
 ) -> xr.Dataset:
     """Write ``minkowski_a{a}.h5`` from ``binary_a{a}.h5`` (volume ``pore``), reading it slab by slab.
 
@@ -37,6 +64,9 @@ def run(
         Grey volume: the group ``threshold`` then holds the same quantities for every threshold g_th.
     threads : int, optional
         Numba threads (default: all).
+    memory_budget_mb : int, optional
+        The scene's ``resources.memory_budget_mb``: a volume larger than it is read in boxes of at most that size
+        (:mod:`porepipe.minkowski._chunked`; identical histograms).
 
     Returns
     -------
@@ -50,18 +80,14 @@ def run(
     digest = result_hash(
         "minkowski", settings=settings, inputs=[binary_path] + ([grey_path] if grey_path else [])
     )
-    with open_volume(binary_path, "pore") as pore:
-        meta = volume_meta(pore, binary_path)
-        hist, shape = configuration_histogram_slabs(iter_slabs(pore, settings.slab_planes), meta.periodic)
+    hist, shape, meta = _binary_histogram(binary_path, settings.slab_planes, memory_budget_mb, threads)
     table = minkowski_from_histogram(hist, meta.voxel_um, settings.adjacency, meta.periodic)
     with ResultWriter(
         out, stage="minkowski", scene=src.get("scene", ""), scene_hash=digest, threads=threads
     ) as w:
         w.write_table(table)
         if grey_path:
-            with open_volume(grey_path, "grey") as grey:
-                gmeta = volume_meta(grey, grey_path)
-                hists, _ = threshold_histograms_slabs(iter_slabs(grey, settings.slab_planes), gmeta.periodic)
+            hists, gmeta = _grey_histograms(grey_path, settings.slab_planes, memory_budget_mb, threads)
             all_pore = np.flatnonzero(hists[:, -1] == hists.sum(axis=1))  # thresholds at/above max(grey)
             last = int(all_pore[0]) if len(all_pore) else len(hists) - 1
             w.write_table(

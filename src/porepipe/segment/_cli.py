@@ -9,7 +9,13 @@ def main(args) -> int:
     """Run the subcommand; returns the exit code."""
     from porepipe.segment._run import run
 
-    decision = run(args.grey, args.out, SegmentationMethod(args.method), args.threshold)
+    decision = run(
+        args.grey,
+        args.out,
+        SegmentationMethod(args.method),
+        args.threshold,
+        memory_budget_mb=args.memory_budget_mb,
+    )
     if decision.note:
         print(decision.note)
     return 0
@@ -27,4 +33,9 @@ def register(subparsers) -> None:
         help="threshold rule: otsu on the grey histogram, fixed g_th, or trivial (pore iff g < 128)",
     )
     p.add_argument("--threshold", type=int, default=None, help="g_th for --method fixed (0..215)")
+    p.add_argument(
+        "--memory-budget-mb",
+        type=int,
+        help="resources.memory_budget_mb of the scene: sets how many planes are held at once",
+    )
     p.set_defaults(func=main)

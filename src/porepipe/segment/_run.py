@@ -5,12 +5,23 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from porepipe._shared.budget import planes_within
 from porepipe._shared.grey import read_grey_histogram
 from porepipe._shared.store import ResultWriter, open_volume, read_attrs, result_hash, volume_meta
 from porepipe.segment._api import Threshold, choose_threshold, segment
 
+#: bytes per voxel of a slab: the grey values read, the comparison's booleans and the binary values written
+_BYTES_PER_VOXEL = 3
 
-def run(grey_path, out, method, threshold: int | None = None, slab_planes: int = 64) -> Threshold:
+
+def run(
+    grey_path,
+    out,
+    method,
+    threshold: int | None = None,
+    slab_planes: int = 64,
+    memory_budget_mb: int | None = None,
+) -> Threshold:
     """Write ``binary_a{a}.h5`` from ``grey_a{a}.h5``, slab by slab, with threshold and method as attributes.
 
     Parameters
@@ -24,7 +35,10 @@ def run(grey_path, out, method, threshold: int | None = None, slab_planes: int =
     threshold : int, optional
         g_th for ``fixed`` (0..215); pore if g <= g_th.
     slab_planes : int
-        x planes held in memory at once.
+        x planes held in memory at once (fewer where the budget says so).
+    memory_budget_mb : int, optional
+        The scene's ``resources.memory_budget_mb``; segmentation is voxel by voxel (no halo), so the budget only
+        sets the slab thickness; a budget below one plane is an error naming it.
 
     Returns
     -------
@@ -42,6 +56,9 @@ def run(grey_path, out, method, threshold: int | None = None, slab_planes: int =
         open_volume(grey_path, "grey") as grey,
     ):
         meta = volume_meta(grey, grey_path)
+        plane = _BYTES_PER_VOXEL * grey.shape[1] * grey.shape[2]
+        what = f"one x plane of {grey.shape[1]}x{grey.shape[2]} voxels to segment"
+        slab_planes = planes_within(memory_budget_mb, plane, 0, slab_planes, what)
         pore = w.create_volume(
             "pore",
             grey.shape,

@@ -4,12 +4,42 @@ from __future__ import annotations
 
 import numpy as np
 
+from porepipe._shared.budget import planes_within
 from porepipe._shared.grey import write_grey_volume
 from porepipe._shared.numba_config import set_threads
 from porepipe._shared.spheres import spheres_from_scene
 from porepipe._shared.store import ResultWriter, result_hash
 from porepipe.scene import scene_part
 from porepipe.voxelize._api import grid_shape, iter_grey_slabs
+
+#: bytes per voxel of a plane each thread works on (voxel status, 4 words of sample bits, chord counts)
+_THREAD_BYTES_PER_VOXEL = 1 + 32 + 4
+
+
+def slab_planes(scene, shape, threads: int) -> int:
+    """Planes per slab: the scene's ``voxelize.slab_planes``, fewer where ``resources.memory_budget_mb`` says so.
+
+    A slab holds 1 byte per voxel; each thread also holds the work arrays of one plane. Voxels are independent of
+    their neighbours, so the slabs need no halo.
+
+    Parameters
+    ----------
+    scene : Scene
+        The validated scene (``voxelize.slab_planes``, ``resources.memory_budget_mb``).
+    shape : 3 ints
+        Voxels per axis of the volume.
+    threads : int
+        Numba threads in use.
+
+    Returns
+    -------
+    int
+        Planes per slab, >= 1.
+    """
+    plane = shape[1] * shape[2]
+    fixed = threads * _THREAD_BYTES_PER_VOXEL * plane
+    what = f"one x plane of {shape[1]}x{shape[2]} voxels with the work arrays of {threads} thread(s)"
+    return planes_within(scene.resources.memory_budget_mb, plane, fixed, scene.voxelize.slab_planes, what)
 
 
 def run(
@@ -55,7 +85,7 @@ def run(
             voxel_um,
             scene.domain.periodic,
             scene.voxelize.method,
-            scene.voxelize.slab_planes,
+            slab_planes(scene, shape, threads),
             progress,
         )
         hist = write_grey_volume(w, slabs, shape, voxel_um, scene.domain.periodic, {"n_spheres": len(radii)})

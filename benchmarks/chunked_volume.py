@@ -1,0 +1,143 @@
+"""A sphere packing larger than the memory budget through voxelize -> segment -> minkowski, with time and peak memory.
+
+The spheres are a Boolean model (uniform random centres, one radius, overlaps allowed) at the given porosity, in a
+periodic box of ``n`` µm at a voxel size of 1 µm, so the volume has n³ voxels. Each stage runs as its own
+``porepipe`` process with the scene's ``resources.memory_budget_mb``; the peak resident memory of each process
+(``wait4`` rusage) and its wall time are printed next to the volume's size. With the default budget of 4000 MB a
+2048³ volume (8.6 GB) cannot be held: minkowski then goes box by box with Dask, voxelize and segment slab by slab.
+
+    python benchmarks/chunked_volume.py                 # 512³ with a 64 MB budget (about 1-2 min on 2 cores)
+    python benchmarks/chunked_volume.py --full          # 2048³ with a 4000 MB budget (needs ~10 GB of disk)
+    python benchmarks/chunked_volume.py --n 1024 --budget-mb 1000
+
+Writes ``chunked_volume.json`` into ``--out`` (default ``results/benchmarks/``); the volumes go to a work folder
+there that is deleted at the end unless ``--keep``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from _common import add_out_argument, write_record
+
+STAGES = ("voxelize", "segment", "minkowski")
+
+
+def boolean_spheres(n: int, radius: float, porosity: float, seed: int = 0) -> np.ndarray:
+    """Rows x y z r (µm) of a Boolean model with expected porosity ``porosity`` in the box [0, n)³."""
+    count = int(round(-math.log(porosity) * n**3 / (4.0 / 3.0 * math.pi * radius**3)))
+    rng = np.random.default_rng(seed)
+    return np.column_stack([rng.random((count, 3)) * n, np.full(count, float(radius))])
+
+
+def write_scene(work: Path, n: int, spheres: np.ndarray, budget_mb: int) -> Path:
+    np.savetxt(work / "spheres.xyzr", spheres, fmt="%.6f")
+    scene = work / "scene.yaml"
+    scene.write_text(
+        f"name: chunked\ndomain: {{size_um: [{n}, {n}, {n}], periodic: true}}\n"
+        "spheres: {xyzr: spheres.xyzr}\nresolutions_um: [1.0]\nanalyses: [minkowski]\n"
+        f"resources: {{memory_budget_mb: {budget_mb}}}\n"
+    )
+    return scene
+
+
+def run_stage(argv: list[str], threads: int) -> dict:
+    """Run one porepipe command; its wall time (s) and peak resident memory (MB, from wait4)."""
+    cmd = [sys.executable, "-m", "porepipe.cli", *argv]
+    if argv[0] != "segment":  # segment is numpy only, no numba threads
+        cmd += ["--threads", str(threads)]
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    out = proc.stdout.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    seconds = time.perf_counter() - t0
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise SystemExit(f"{' '.join(argv[:1])} failed:\n{out}")
+    return {"seconds": seconds, "peak_mb": usage.ru_maxrss / 1024.0, "output": out.strip().splitlines()[-1:]}
+
+
+def baseline_mb() -> float:
+    """Peak RSS of a process that only imports the three stages and Dask (interpreter, numba, xarray, h5py)."""
+    imports = (
+        "import porepipe.cli, porepipe.voxelize._run, porepipe.segment._run, porepipe.minkowski._run, dask"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", imports])
+    return os.wait4(proc.pid, 0)[2].ru_maxrss / 1024.0
+
+
+def commands(work: Path, scene: Path, budget_mb: int) -> dict[str, list[str]]:
+    grey, binary, mink = work / "grey.h5", work / "binary.h5", work / "minkowski.h5"
+    return {
+        "voxelize": ["voxelize", str(scene), "--a", "1.0", "-o", str(grey)],
+        "segment": ["segment", str(grey), "-o", str(binary), "--memory-budget-mb", str(budget_mb)],
+        "minkowski": ["minkowski", str(binary), "--scene", str(scene), "-o", str(mink)],
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=512, help="voxels per edge (default 512)")
+    parser.add_argument("--budget-mb", type=int, default=64, help="resources.memory_budget_mb (default 64)")
+    parser.add_argument("--full", action="store_true", help="2048³ with a 4000 MB budget (the issue's case)")
+    parser.add_argument("--radius", type=float, default=32.0, help="sphere radius in µm (= voxels)")
+    parser.add_argument("--porosity", type=float, default=0.35)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--keep", action="store_true", help="keep the work folder with the volumes")
+    add_out_argument(parser)
+    args = parser.parse_args()
+    if args.full:
+        args.n, args.budget_mb = 2048, 4000
+    work = Path(args.out) / f"chunked_volume_work_{args.n}"
+    work.mkdir(parents=True, exist_ok=True)
+    spheres = boolean_spheres(args.n, args.radius, args.porosity)
+    scene = write_scene(work, args.n, spheres, args.budget_mb)
+    rows, base = [], baseline_mb()
+    print(f"baseline (imports only): {base:.0f} MB", flush=True)
+    try:
+        for stage, argv in commands(work, scene, args.budget_mb).items():
+            row = {"stage": stage, **run_stage(argv, args.threads)}
+            row["file_gb"] = (work / Path(argv[argv.index("-o") + 1]).name).stat().st_size / 1e9
+            rows.append(row)
+            print(
+                f"{stage}: {row['seconds']:.1f} s, peak {row['peak_mb']:.0f} MB; {row['output']}", flush=True
+            )
+    finally:
+        if not args.keep:
+            shutil.rmtree(work, ignore_errors=True)
+    volume_gb = args.n**3 / 1e9
+    print(
+        f"\n# {args.n}³ voxels ({volume_gb:.2f} GB as uint8), {len(spheres)} spheres of r = {args.radius:g}, "
+        f"budget {args.budget_mb} MB, {args.threads} threads (shared machine)\n"
+    )
+    print(f"baseline: a process that only imports the stages holds {base:.0f} MB (not volume data)\n")
+    print("| stage | wall [s] | peak RSS [MB] | peak - baseline [MB] | file [GB] |\n|---|---|---|---|---|")
+    for r in rows:
+        print(
+            f"| {r['stage']} | {r['seconds']:.1f} | {r['peak_mb']:.0f} | {r['peak_mb'] - base:.0f} | "
+            f"{r['file_gb']:.2f} |"
+        )
+    record = {
+        "n": args.n,
+        "budget_mb": args.budget_mb,
+        "spheres": len(spheres),
+        "radius_um": args.radius,
+        "threads": args.threads,
+        "volume_gb": volume_gb,
+        "rows": rows,
+        "baseline_mb": base,
+        "peak_within_budget": all(r["peak_mb"] <= args.budget_mb for r in rows),
+        "peak_above_baseline_within_budget": all(r["peak_mb"] - base <= args.budget_mb for r in rows),
+    }
+    write_record(args.out, f"chunked_volume_{args.n}.json", record)
+
+
+if __name__ == "__main__":
+    main()
