@@ -142,6 +142,15 @@ def check_identity(tmp, path, identity: tuple[int, int]) -> None:
     On a file system shared by several nodes, a rerun of the job on another node takes the temporary file of a
     process it cannot see for a killed job's leftover and removes it; the writer must then commit nothing (writing
     on would make a new file holding only what came after the removal).
+
+    Parameters
+    ----------
+    tmp : path-like
+        The writer's temporary file.
+    path : path-like
+        The result it stands for (named in the message).
+    identity : tuple of int
+        :func:`file_identity` of ``tmp`` when the writer made it.
     """
     try:
         same = file_identity(tmp) == identity
@@ -157,7 +166,20 @@ def check_identity(tmp, path, identity: tuple[int, int]) -> None:
 def commit(tmp, path, identity: tuple[int, int] | None = None) -> Path:
     """Flush the finished temporary file ``tmp`` to disk and rename it onto ``path`` (then flush the directory).
 
-    With ``identity`` (:func:`file_identity` of ``tmp`` when it was made) a removed or replaced ``tmp`` is refused.
+    Parameters
+    ----------
+    tmp : path-like
+        The finished temporary file.
+    path : path-like
+        The result's name.
+    identity : tuple of int, optional
+        :func:`file_identity` of ``tmp`` when it was made: a removed or replaced ``tmp`` is refused
+        (:func:`check_identity`).
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     tmp, path = Path(tmp), Path(path)
     if identity is not None:
