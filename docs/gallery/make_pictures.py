@@ -236,7 +236,7 @@ def radii(name: str) -> str:
 
 
 def silo(name: str) -> str:
-    """The silo and the loose lattice of polygons the scene starts from, as the simulation places them (no step)."""
+    """The silo and where its drop sources insert the grains, as the simulation places them (no step)."""
     from porepipe.granular import Settings, Simulation
 
     raw = _scene(name)
@@ -253,12 +253,12 @@ def silo(name: str) -> str:
     ax.set_aspect("equal")
     ax.set_xlabel("x (cm)")
     ax.set_ylabel("y (cm)")
-    ax.set_title(f"{name}: {sim.n_mob:,} grains at t = 0 (not run)", fontsize=9)
+    ax.set_title(f"{name}: insertion points of {sim.n_mob:,} grains (not run)", fontsize=9)
     _save(fig, name)
     return (
-        f"Not run for this picture (~30–45 min on 2 cores): the silo walls and the centroids of the {sim.n_mob:,} "
-        "polygons on the loose lattice the scene starts from, as the simulation places them before its first step; "
-        "gravity then ramps up and the column settles to about 40 cm."
+        f"Not run for this picture (~40 min on one core): the silo walls and where the scene's drop sources insert "
+        f"its {sim.n_mob:,} polygons (one dot per grain, at its insertion height: the sources rise with the fill, "
+        "so the dots form 16 rising lines); the silo fills from the top to about 36 cm."
     )
 
 
@@ -298,6 +298,9 @@ MAKERS = {
     "rough-walls-ci": packed,
     "granular-box": granular,
     "granular-heap-ci": granular,
+    "granular-heap-poured": granular,
+    "granular-heap-layered": granular,
+    "granular-heap-13gons": granular,
     "granular-silo-ci": granular,
     "knudsen-capillary-ci": capillary,
     "image-to-model": image,
@@ -305,6 +308,11 @@ MAKERS = {
     "rough-walls": radii,
     "granular-silo": silo,
     "fontainebleau-like": grains,
+    "thesis-5.6.1-ci": packed,
+    "thesis-5.6.1-pp-ci": packed,
+    "thesis-5.6.1": radii,
+    "thesis-5.6.1-pp": radii,
+    "thesis-5.6.2": radii,
 }
 
 

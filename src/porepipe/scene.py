@@ -144,8 +144,8 @@ class SceneBase(_Strict):
 
     @model_validator(mode="after")
     def _model_source(self):
-        if self.analyses and set(self.analyses) <= {Analysis.granular}:
-            return self  # a 2-D granular scene has no box, spheres or voxels
+        if Analysis.granular in self.analyses and set(self.analyses) <= {Analysis.granular, Analysis.report}:
+            return self  # a 2-D granular scene has no box, spheres or voxels (its report reads granular.h5)
         if not self.resolutions_um:
             raise ValueError("missing resolutions_um: give at least one voxel size in µm")
         if getattr(getattr(self, "diffusion", None), "geometry", None) is not None:
@@ -331,6 +331,10 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
                 )
         if spheres.get("pack") is True and "packing" not in raw:
             problems.append("spheres.pack = True: needs a `packing:` section that says how to pack")
+    perm, sweep = raw.get("permeability"), raw.get("sweep")
+    sub_samples = isinstance(sweep, dict) and sweep.get("sample_um")
+    if isinstance(perm, dict) and perm.get("whole_volume") is False and not sub_samples:
+        problems.append("permeability.whole_volume = false: needs sub-samples to run on (sweep.sample_um)")
     return problems
 
 

@@ -18,15 +18,10 @@ import sys
 import time
 from pathlib import Path
 
-import h5py
-import numpy as np
 import yaml
+from h5content import differences, h5_results
 
 DATA = Path(__file__).parent / "data" / "tiny"
-#: attributes (and datasets) that differ between two runs by nature (cost and provenance of the run, not its result)
-TIMING_ATTRS = {"wall_s", "cpu_s", "startup_s", "peak_mb", "created", "threads", "porepipe_version", "source"}
-#: netCDF dimension-scale links: HDF5 object addresses, which depend on the write order, not on the result
-ADDRESS_ATTRS = {"REFERENCE_LIST", "DIMENSION_LIST"}
 KILL_POINTS = ("pack checkpoint", "packing.h5 written", "first binary written")
 
 
@@ -94,32 +89,6 @@ def _run_until(scene: Path, cwd: Path, ready) -> bool:
     return False
 
 
-def _bytes(value) -> bytes:
-    """The exact content of an array or attribute (strings by value: an object array's bytes are pointers)."""
-    arr = np.asarray(value)
-    return repr(arr.tolist()).encode() if arr.dtype.kind == "O" else arr.dtype.str.encode() + arr.tobytes()
-
-
-def _content(path: Path) -> dict:
-    """Every dataset's bytes and every attribute (timings aside) of an HDF5 file, by name."""
-    out = {}
-    with h5py.File(path, "r") as f:
-
-        def visit(name, obj):
-            skip = TIMING_ATTRS | ADDRESS_ATTRS
-            out[name + "@attrs"] = {k: _bytes(v) for k, v in obj.attrs.items() if k not in skip}
-            if isinstance(obj, h5py.Dataset) and name.rsplit("/", 1)[-1] not in TIMING_ATTRS:
-                out[name] = _bytes(obj[...])  # pack's history/wall_s is a timing too
-
-        visit("/", f)
-        f.visititems(visit)
-    return out
-
-
-def _results(cwd: Path) -> dict[str, Path]:
-    return {str(p.relative_to(cwd)): p for p in (cwd / "results").rglob("*.h5")}
-
-
 def test_killed_workflow_reruns_to_bit_identical_results(tmp_path):
     scene = _scene(tmp_path)
     reference, killed = tmp_path / "reference", tmp_path / "killed"
@@ -138,12 +107,10 @@ def test_killed_workflow_reruns_to_bit_identical_results(tmp_path):
     print(f"\nkill-and-rerun: killed at {killed_at} of {list(KILL_POINTS)}")
     assert len(killed_at) >= 2, f"the workflow finished before most kill points: {killed_at}"
 
-    want, got = _results(reference), _results(killed)
+    want, got = h5_results(reference), h5_results(killed)
     assert sorted(got) == sorted(want)
     for name in want:
-        a, b = _content(want[name]), _content(got[name])
-        assert a.keys() == b.keys(), name
-        changed = [key for key in a if a[key] != b[key]]
+        changed = differences(want[name], got[name])
         assert not changed, f"{name}: {changed} differ from the uninterrupted run"
     leftovers = [
         p

@@ -122,3 +122,12 @@ def test_oversized_file_is_refused(tmp_path):
     path = _write(tmp_path, GOOD + "#" * (5 * 2**20) + "\n")
     with pytest.raises(SceneError, match="bytes, more than"):
         load_scene(path)
+
+
+def test_permeability_only_on_sub_samples_needs_sub_samples(tmp_path):
+    text = GOOD + "permeability: {whole_volume: false}\n"
+    with pytest.raises(
+        SceneError, match=r"permeability.whole_volume = false: needs sub-samples .*sweep.sample_um"
+    ):
+        load_scene(_write(tmp_path, text))
+    assert not load_scene(_write(tmp_path, text + "sweep: {sample_um: [40]}\n")).permeability.whole_volume

@@ -94,8 +94,8 @@ def test_same_seed_same_packing_and_other_seed_differs():
 
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs at least 2 numba threads to compare")
 def test_one_and_two_threads_give_the_same_packing():
-    """Forces are gathered per sphere in list order and the step reductions run over fixed chunks, so the thread
-    count does not change a single bit (parallel_min_spheres = 0 forces the parallel kernels on)."""
+    """Pair forces are summed in a fixed order (slab colours one after the other, spheres in order within a slab)
+    and the step reductions run over fixed chunks, so the thread count does not change a single bit (parallel_min_spheres = 0 forces the parallel kernels on)."""
     settings = _settings(n=150, parallel_min_spheres=0)
     runs = []
     for threads in (1, 2):

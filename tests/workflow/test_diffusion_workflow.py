@@ -58,3 +58,24 @@ def test_capillary_size_that_is_no_whole_voxel_count_stops_the_dry_run(tmp_path)
     out = _dry_run(path, tmp_path)
     assert out.returncode != 0
     assert "diffusion.geometry.a_um = 1.25 is 1.25 voxels" in out.stdout + out.stderr
+
+
+def test_mesopore_scenes_load_and_plan_capillary_diffusion_and_report(tmp_path):
+    """The capillaries A/B/C of Mahler 2001 §4.2.3 (full and CI size): valid scenes, the thesis's reaction study
+    (every set of Tables 4.2-4.4), and a DAG capillary → diffusion → sweep → report; the length-series scenes
+    (§3.6.4) run their longest length on the whole capillary."""
+    from porepipe.report._reaction_tables import THESIS
+    from porepipe.scene import load_scene
+
+    kinds = {"a": "constricted", "b": "pocketed", "c": "rough"}
+    for k, kind in kinds.items():
+        for suffix in ("", "-ci"):
+            scene = load_scene(ROOT / "config" / "scenes" / f"mesopore-{k}{suffix}.yaml")
+            assert scene.diffusion.geometry.kind.value == kind
+            sets = {(s.w, s.w_reverse, s.w_follow) for s in scene.diffusion.reactions.series}
+            assert {key[1:] for key in THESIS} <= sets
+    for name in ("knudsen-length-series", "knudsen-length-series-ci"):
+        scene = load_scene(ROOT / "config" / "scenes" / f"{name}.yaml")
+        assert max(scene.diffusion.lengths) == scene.diffusion.geometry.length
+    rules, _ = _planned(ROOT / "config" / "scenes" / "mesopore-a-ci.yaml", tmp_path)
+    assert rules == {"all": 1, "capillary": 1, "diffusion": 1, "sweep": 1, "report": 1}, rules

@@ -22,8 +22,9 @@ rule acquire:
         scene=ACQUIRE_SCENE_RE,
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=8000,
         runtime=60,
     shell:
@@ -45,6 +46,7 @@ rule acquire_binary:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=4000,
         runtime=10,
     shell:
@@ -67,6 +69,7 @@ rule acquire_calibrate:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=30,
     shell:
@@ -87,8 +90,9 @@ rule acquire_model:
         scene=ACQUIRE_SCENE_RE,
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=8000,
         runtime=120,
     shell:
@@ -122,6 +126,7 @@ rule acquire_compare:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=10,
     shell:

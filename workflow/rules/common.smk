@@ -25,6 +25,17 @@ for _path in _scene_files:
     _scene = load_scene(_path)
     SCENES[_scene.name] = _scene
     SCENE_FILES[_scene.name] = _path
+# scenes whose sweeps a report reads for more thesis-table rows (report.thesis_rows_from): <name>.yaml beside it
+for _name, _scene in list(SCENES.items()):
+    for _other in getattr(getattr(_scene, "report", None), "thesis_rows_from", {}).values():
+        if _other not in SCENES:
+            _path = str(Path(SCENE_FILES[_name]).parent / f"{_other}.yaml")
+            if not Path(_path).is_file():
+                raise ValueError(
+                    f"scene {_name!r}: report.thesis_rows_from names scene {_other!r}, but {_path} does not exist"
+                )
+            SCENES[_other] = load_scene(_path)
+            SCENE_FILES[_other] = _path
 
 #: a resolution or sub-sample edge in a file name: the repr-exact tag of porepipe._shared.naming.res_tag
 NUMBER_RE = TAG_RE
@@ -76,6 +87,16 @@ def is_acquire_scene(scene):
 
 # a regex that matches exactly the acquire scenes (and nothing when there are none)
 ACQUIRE_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_acquire_scene(s)) or "(?!)"
+
+
+def is_granular_scene(scene):
+    return getattr(scene, "granular", None) is not None and "granular" in {a.value for a in scene.analyses}
+
+
+# a regex that matches exactly the 2-D granular scenes (their report reads granular.h5, not a sweep), and one that
+# matches every other scene name (the look-ahead ends at the name: a name character may not follow)
+GRANULAR_SCENE_RE = "|".join(re.escape(n) for n, s in SCENES.items() if is_granular_scene(s)) or "(?!)"
+NOT_GRANULAR_SCENE_RE = rf"(?!(?:{GRANULAR_SCENE_RE})(?![A-Za-z0-9_.-]))[A-Za-z0-9][A-Za-z0-9_.-]*"
 
 
 # -- volumes ----------------------------------------------------------------------------------------------------------
@@ -227,6 +248,9 @@ def report_inputs(wildcards):
         "grey": grey_volumes(scene) if scene.report.slices and binary_stage(scene) != "capillary" else [],
         "binary": [],
         "lpt": per_resolution(scene, "lpt/lpt_a{a}.h5") if "lpt" in names else [],
+        "thesis_rows": [
+            results(SCENES[other], "sweep", "sweep.h5") for other in scene.report.thesis_rows_from.values()
+        ],
     }
     if scene.report.slices and names - {"report", "estimate"}:
         inputs["binary"] = binary_volumes(scene)
@@ -248,6 +272,23 @@ def mem_mb(bytes_per_voxel, base_mb=500):
     return lambda wildcards: int(base_mb + bytes_per_voxel * voxels(wildcards) / 2**20)
 
 
+def every_core(cluster_threads):
+    """The `threads` of a job that uses every core it gets. A local run: its --cores. A cluster job:
+    `cluster_threads` (a cluster run has no --cores, and a job's own Snakemake would see the whole node)."""
+
+    def threads(wildcards):
+        if workflow.local_exec and not workflow.remote_exec:
+            return workflow.cores
+        return cluster_threads
+
+    return threads
+
+
+def cpus_per_task(wildcards, threads):
+    """The `resources: cpus_per_task` of every rule: one Slurm CPU per thread the rule runs."""
+    return threads
+
+
 def diffusion_axes(scene):
     return [axis.value for axis in scene.diffusion.axes]
 
@@ -266,12 +307,15 @@ def diffusion_resolutions(scene):
 
 
 def permeability_inputs(wildcards):
-    """The binary volume and scene; with a model's wall geometry for `walls: cli`: a decorated scene's grains.h5
-    (exact polyhedra), else the grey volume (sub-voxel wall distances from grey values)."""
+    """The binary volume (whole or sub-sample) and scene, with the wall geometry for `walls: cli`: a decorated scene's
+    grains.h5 (exact polyhedra); else for a whole model volume its grey volume (sub-voxel wall distances from grey
+    values), for a sub-sample the packing.h5 it was cut from (the grey volume is the whole one's)."""
     scene = scene_of(wildcards)
-    inputs = {"binary": whole_binary_volume(wildcards), "scene": scene_file(wildcards)}
+    inputs = {"binary": binary_volume(wildcards), "scene": scene_file(wildcards)}
     if getattr(scene, "decoration", None) is not None:
         inputs["grains"] = results(scene, "decorate", "grains.h5")
+    elif getattr(wildcards, "sub", ""):
+        inputs["packing"] = packing_input(wildcards) if getattr(scene, "spheres", None) is not None else []
     elif getattr(scene, "acquire", None) is None:
         inputs["grey"] = grey_volume(wildcards)
     return inputs
@@ -280,7 +324,33 @@ def permeability_inputs(wildcards):
 def permeability_grey_arg(wildcards, input):
     if "grains" in input.keys():
         return f"--grains {shlex.quote(input.grains)}"
+    if "packing" in input.keys():
+        return packing_arg(wildcards, input)
     return f"--grey {shlex.quote(input.grey)}" if "grey" in input.keys() else ""
+
+
+# MPI permeability (scene key permeability.mpi_ranks > 1): Snakemake's MPI convention, resources `tasks` and `mpi`
+# (the launcher; `--set-resources permeability:mpi=srun` on a cluster) with `{resources.mpi} -n {resources.tasks}`
+# in the shell command. A one-process job has no `mpi` resource (None drops it), so no executor takes it for MPI.
+def permeability_ranks(wildcards):
+    return max(1, scene_of(wildcards).permeability.mpi_ranks)
+
+
+def permeability_mpi(wildcards):
+    return "mpirun" if permeability_ranks(wildcards) > 1 else None
+
+
+def permeability_launch(wildcards, resources):
+    """`<launcher> -n <ranks>` before the command of an MPI job, else nothing."""
+    if resources.get("mpi") and resources.tasks > 1:
+        return f"{resources.mpi} -n {resources.tasks}"
+    return ""
+
+
+def permeability_rank_args(wildcards, threads, resources):
+    """`--mpi` for an MPI job, and the numba threads of each rank (the job's threads shared among its ranks)."""
+    ranks = resources.tasks if resources.get("mpi") else 1
+    return f"--threads {max(1, threads // ranks)}" + (" --mpi" if ranks > 1 else "")
 
 
 #: analysis name -> function(scene) -> list of final outputs; each rule file registers its analysis here.

@@ -15,8 +15,9 @@ rule decorate:
         "results/{scene}/cost/decorate.tsv"
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=4000,
         runtime=60,
     params:
@@ -39,6 +40,7 @@ rule voxelize_grains:
         "../envs/porepipe.yaml"
     threads: 4
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=8),
         runtime=120,
     shell:

@@ -16,8 +16,9 @@ rule diffusion:
         axis="[xyz]",
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         # the 1-byte input and the 1-byte distance geometry (in-place flood fill: 1.01 B/voxel beyond the input,
         # measured at 320^3 by benchmarks/diffusion_memory.py), plus slack
         mem_mb=mem_mb(bytes_per_voxel=3, base_mb=1000),
@@ -36,6 +37,11 @@ rule capillary:
         "results/{scene}/logs/capillary_a{a}.log",
     conda:
         "../envs/porepipe.yaml"
+    threads: 1
+    resources:
+        cpus_per_task=cpus_per_task,
+        mem_mb=mem_mb(bytes_per_voxel=2),
+        runtime=10,
     shell:
         "porepipe diffusion-capillary --scene {input.scene:q} --a {wildcards.a} -o {output:q} > {log:q} 2>&1"
 

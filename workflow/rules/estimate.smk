@@ -14,6 +14,7 @@ rule estimate:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=1000,
         runtime=5,
     shell:

@@ -13,8 +13,9 @@ rule granular:
         "results/{scene}/cost/granular.tsv"
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(4)
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=240,
     params:
@@ -22,6 +23,33 @@ rule granular:
     shell:
         "porepipe granular {input.scene:q} -o {output:q} --checkpoint {params.checkpoint:q} --resume"
         " --threads {threads} > {log:q} 2>&1"
+
+
+# the report page of a granular scene (`report` in its analyses): silo or heap read-out, figures and CSVs beside it
+rule granular_report:
+    input:
+        scene=scene_file,
+        granular="results/{scene}/granular/granular.h5",
+    output:
+        page=report(
+            "results/{scene}/report/index.html",
+            caption="../report/granular.rst",
+            category="Report",
+        ),
+    log:
+        "results/{scene}/logs/report.log",
+    benchmark:
+        "results/{scene}/cost/report.tsv"
+    wildcard_constraints:
+        scene=GRANULAR_SCENE_RE,
+    conda:
+        "../envs/porepipe.yaml"
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    shell:
+        "porepipe report {input.scene:q} --granular {input.granular:q} -o {output.page:q} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["granular"] = lambda scene: [results(scene, "granular", "granular.h5")]

@@ -17,6 +17,7 @@ rule lpt:
         "../envs/porepipe.yaml"
     threads: 2
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=24),
         runtime=60,
     shell:

@@ -16,6 +16,7 @@ rule minkowski:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=1000,
         runtime=30,
     params:

@@ -13,8 +13,9 @@ rule pack:
         "results/{scene}/cost/pack.tsv"
     conda:
         "../envs/porepipe.yaml"
-    threads: workflow.cores
+    threads: every_core(8)
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=4000,
         runtime=240,
     params:

@@ -1,4 +1,5 @@
-# The accuracy-versus-cost report (HTML + PNG): the workflow's final target when a scene lists `report`.
+# The accuracy-versus-cost report (HTML + PNG): the workflow's final target when a scene lists `report`. A 2-D
+# granular scene has no sweep: its report page comes from rule granular_report (granular.smk), same path.
 
 
 rule report:
@@ -29,10 +30,13 @@ rule report:
         "results/{scene}/logs/report.log",
     benchmark:
         "results/{scene}/cost/report.tsv"
+    wildcard_constraints:
+        scene=NOT_GRANULAR_SCENE_RE,
     conda:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=10,
     shell:

@@ -20,6 +20,7 @@ rule subsample:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=1),
         runtime=10,
     params:
@@ -43,6 +44,7 @@ rule sweep:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=10,
     params:

@@ -15,6 +15,7 @@ rule voxelize:
         "../envs/porepipe.yaml"
     threads: 4
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=4),
         runtime=60,
     params:

@@ -5,6 +5,7 @@ the event-driven hard-sphere gas and wall reactions (ch. 3-4).
 from porepipe._shared.lazy import lazy_exports
 
 _EXPORTS = {
+    "Adsorbate": "_surface",
     "Axis": "_settings",
     "CapillaryGeometry": "_capillary",
     "CapillaryKind": "_capillary",
@@ -12,6 +13,7 @@ _EXPORTS = {
     "GasSettings": "_settings",
     "Geometry": "_api",
     "InletLaw": "_settings",
+    "Mechanism": "_surface",
     "PoreVolume": "_geometry",
     "ReactionSettings": "_settings",
     "SPECIES": "_species",
@@ -27,6 +29,7 @@ _EXPORTS = {
     "constricted_capillary": "_geometry",
     "cylinder": "_geometry",
     "equilibrium": "_api",
+    "fit_length_series": "_length_series",
     "eta_of_phi": "_reactions",
     "make_gas": "_edmd",
     "mean_speed": "_species",
@@ -37,7 +40,9 @@ _EXPORTS = {
     "rough_capillary": "_geometry",
     "slit": "_geometry",
     "square_capillary": "_geometry",
+    "surface_run": "_surface",
     "transport": "_api",
+    "length_series": "_length_series",
     "wall_area": "_geometry",
     "write_capillary": "_capillary",
 }

@@ -25,6 +25,8 @@ from porepipe.diffusion._geometry import rough_capillary as rough_capillary
 from porepipe.diffusion._geometry import slit as slit
 from porepipe.diffusion._geometry import square_capillary as square_capillary
 from porepipe.diffusion._geometry import wall_area as wall_area
+from porepipe.diffusion._length_series import fit_length_series as fit_length_series
+from porepipe.diffusion._length_series import length_series as length_series
 from porepipe.diffusion._reactions import eta_of_phi as eta_of_phi
 from porepipe.diffusion._reactions import phi_of_eta as phi_of_eta
 from porepipe.diffusion._settings import Axis as Axis
@@ -38,9 +40,13 @@ from porepipe.diffusion._settings import WallLaw as WallLaw
 from porepipe.diffusion._settings import WallSpeed as WallSpeed
 from porepipe.diffusion._species import SPECIES as SPECIES
 from porepipe.diffusion._species import mean_speed as mean_speed
+from porepipe.diffusion._surface import Adsorbate as Adsorbate
+from porepipe.diffusion._surface import Mechanism as Mechanism
+from porepipe.diffusion._surface import surface_run as surface_run
 
 __all__ = [
     "SPECIES",
+    "Adsorbate",
     "Axis",
     "CapillaryGeometry",
     "CapillaryKind",
@@ -48,6 +54,7 @@ __all__ = [
     "GasSettings",
     "Geometry",
     "InletLaw",
+    "Mechanism",
     "PoreVolume",
     "ReactionSettings",
     "Settings",
@@ -63,6 +70,8 @@ __all__ = [
     "cylinder",
     "equilibrium",
     "eta_of_phi",
+    "fit_length_series",
+    "length_series",
     "make_gas",
     "mean_speed",
     "phi_of_eta",
@@ -72,6 +81,7 @@ __all__ = [
     "rough_capillary",
     "slit",
     "square_capillary",
+    "surface_run",
     "transport",
     "wall_area",
     "write_capillary",

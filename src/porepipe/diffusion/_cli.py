@@ -94,6 +94,9 @@ def _summary(v, settings: Settings) -> str:
             f"lambda_eff = {float(v['lambda_eff_nm']):.4g} nm, Kn = {float(v['Kn']):.3g}{d}, "
             f"{int(v['events'])} events"
         )
+    if "series_eta" in v:
+        etas = ", ".join(f"{float(e):.3g}" for e in v["series_eta"].values)
+        return f"study of {len(v['series_eta'])} sets, {int(v['runs'])} runs: eta = {etas}"
     eta = f"eta = {float(v['eta']):.4g} ± {float(v['eta_err']):.2g}, " if "eta" in v else ""
     phi = f"Phi = {float(v['phi']):.4g}, " if "phi" in v else ""
     return f"{eta}{phi}{int(v['products'])} products, {int(v['wall_hits'])} wall hits"
@@ -132,6 +135,12 @@ def main(args) -> int:
     v = read_table(out)
     if settings.setup in (Setup.edmd, Setup.reaction):
         print(f"diffusion {args.axis} ({settings.setup.value}): {_summary(v, settings)} -> {out}")
+        return 0
+    if settings.lengths:
+        print(
+            f"diffusion {args.axis} (length series, {len(settings.lengths)} lengths): alpha = "
+            f"{float(v['alpha']):.4g} ± {float(v['alpha_err']):.2g}, chi2/dof = {float(v['chi2_per_dof']):.3g} -> {out}"
+        )
         return 0
     head = f"W = {float(v['W']):.5g} ± {float(v['W_err']):.2g}, " if "W" in v else ""
     print(

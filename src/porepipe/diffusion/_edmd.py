@@ -359,11 +359,36 @@ def chapman_enskog_d(n: float, d: float, species: str, temperature_K: float, chi
     return 1.019 * d1 / (enskog_chi(n, d) if chi else 1.0)
 
 
+def orientation_histogram(vel: np.ndarray, axis: int, bins: int) -> np.ndarray:
+    """(bins, 2·bins) counts of velocity directions: cos(angle to ``axis``) in [-1, 1] × azimuth about it in
+    [-π, π) (measured from the next axis, (axis + 1) % 3). Equal-area cells: an isotropic gas fills them evenly.
+    """
+    speed = np.linalg.norm(vel, axis=1)
+    ok = speed > 0
+    v = vel[ok] / speed[ok, None]
+    a, b = (axis + 1) % 3, (axis + 2) % 3
+    hist, _, _ = np.histogram2d(
+        v[:, axis],
+        np.arctan2(v[:, b], v[:, a]),
+        bins=(bins, 2 * bins),
+        range=((-1.0, 1.0), (-math.pi, math.pi)),
+    )
+    return hist
+
+
 def measure(
-    gas: Gas, duration_ps: float, samples: int = 20, physics: Physics | None = None, groups: int = 8
+    gas: Gas,
+    duration_ps: float,
+    samples: int = 20,
+    physics: Physics | None = None,
+    groups: int = 8,
+    orientation_bins: int = 0,
+    axis: int = 2,
 ) -> dict:
     """Run ``gas`` for ``duration_ps`` in ``samples`` steps; collision rate, λ_eff, msd D (periodic axes) with
-    batch errors over ``groups`` particle groups, and the event cost.
+    batch errors over ``groups`` particle groups, and the event cost. ``orientation_bins`` > 0: the velocity
+    orientations of all particles at the sample times (:func:`orientation_histogram` about ``axis``), summed, as
+    ``orientation`` (thesis §3.7, Figs. 3.21-3.22).
     """
     import time
 
@@ -375,6 +400,7 @@ def measure(
     times = np.linspace(duration_ps / samples, duration_ps, samples)
     msd = np.zeros((samples, groups, 3))
     group = np.arange(n) % groups
+    orient = np.zeros((max(orientation_bins, 1), 2 * max(orientation_bins, 1)))
     wall0 = time.perf_counter()
     done = 0.0
     for k, t in enumerate(times):
@@ -383,6 +409,8 @@ def measure(
         disp2 = (gas.unwrapped() - start) ** 2
         for g in range(groups):
             msd[k, g] = disp2[group == g].mean(axis=0)
+        if orientation_bins:
+            orient = orient + orientation_histogram(gas.vel, axis, orientation_bins)
     wall = time.perf_counter() - wall0
     pairs = gas.tally[E.E_PAIRS] - pairs0
     walls = gas.tally[E.E_WALLS] - walls0
@@ -410,6 +438,8 @@ def measure(
         out["D_self_err_nm2_ps"] = float(dg.std(ddof=1) / math.sqrt(groups))
     out["msd"] = msd.mean(axis=1)
     out["msd_time_ps"] = times
+    if orientation_bins:
+        out["orientation"] = orient
     return out
 
 
@@ -564,7 +594,7 @@ def reactive_pore(
 
 # ---------------------------------------------------------------------------------------------------------------------
 # the stage's modes (setup edmd / reaction)
-def edmd_result(pore, settings, voxel_um, periodic, seed: int = 0):
+def edmd_result(pore, settings, voxel_um, periodic, seed: int = 0, axis: int = 2):
     """Setup ``edmd``: the gas of ``settings.gas`` in the pore space, run and measured (a DiffusionResult).
 
     Values: Z (collision rate, 1/ps) next to Enskog's, λ_eff and λ_M (nm), Kn = λ_M/(4V/S), D_self (nm²/ps and
@@ -597,7 +627,9 @@ def edmd_result(pore, settings, voxel_um, periodic, seed: int = 0):
         thermal_wall=settings.wall_speed.value == "thermal",
     )
     e0 = gas.kinetic_energy()
-    m = measure(gas, g.duration_ps, samples=g.samples, physics=physics)
+    m = measure(
+        gas, g.duration_ps, samples=g.samples, physics=physics, orientation_bins=g.orientation_bins, axis=axis
+    )
     n_part = gas.pos.shape[0]
     first = gas.names[0]
     d = 2.0 * SPECIES[first][0]
@@ -642,6 +674,8 @@ def edmd_result(pore, settings, voxel_um, periodic, seed: int = 0):
         "speed_histogram": hist.astype(float),
         "speed_bin_edges_nm_ps": edges,
     }
+    if "orientation" in m:
+        arrays["orientation"] = m["orientation"]
     return DiffusionResult("edmd", "".join("xyz"[k] for k in range(3) if gas.periodic[k]) or "-", v, arrays)
 
 

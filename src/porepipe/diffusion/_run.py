@@ -17,6 +17,8 @@ import xarray as xr
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, read_attrs, read_binary_volume, result_hash
 from porepipe.diffusion import _api, _edmd
+from porepipe.diffusion._length_series import length_series
+from porepipe.diffusion._reaction_study import study_result
 from porepipe.diffusion._settings import Axis, Settings, Setup
 
 #: units of the scalars written to the result (others are counts or dimensionless)
@@ -145,7 +147,9 @@ def run(
         threads=threads,
     ) as w:
         if settings.setup is Setup.edmd:
-            result = _edmd.edmd_result(pore, settings, voxel_um, periodic, seed=seed)
+            result = _edmd.edmd_result(pore, settings, voxel_um, periodic, seed=seed, axis=axis.index)
+        elif settings.setup is Setup.reaction and settings.reactions.series:
+            result = study_result(pore, settings, axis.index, voxel_um, periodic, seed=seed)
         elif settings.setup is Setup.reaction:
             result = _edmd.reaction_result(pore, settings, axis.index, voxel_um, periodic, seed=seed)
         elif settings.setup is Setup.msd:
@@ -154,6 +158,12 @@ def run(
             if f"D_{name}" in result.values:
                 result.values["D"] = result.values[f"D_{name}"]
                 result.values["D_err"] = result.values[f"D_{name}_err"]
+        elif settings.lengths:  # a length series (setup transmission; checked by Settings)
+            series = length_series(
+                pore, axis.index, settings.lengths, settings, voxel_um, periodic, seed=seed
+            )
+            arrays = {k: series.pop(k) for k in list(series) if k.startswith("series_")}
+            result = _api.DiffusionResult("length_series", axis.value, series, arrays)
         else:
             # the volume read here is ours: it becomes the distance codes in place (1 byte per voxel in all)
             pore = _api.prepare(

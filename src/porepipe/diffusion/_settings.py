@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from porepipe.diffusion._capillary import CapillaryGeometry
 
@@ -84,6 +84,12 @@ class GasSettings(BaseModel):
         "maxwell", description="maxwell, or mean (all at v̄: the §3.6.2 relaxation test)"
     )
     speed_bins: int = Field(40, ge=1, description="bins of the final speed histogram")
+    orientation_bins: int = Field(
+        0,
+        ge=0,
+        description="bins of cos(angle to the axis) of the velocity-orientation histogram over the sample times "
+        "(azimuth gets 2x as many; thesis Figs. 3.21-3.22); 0 = off",
+    )
 
     @field_validator("particles")
     @classmethod
@@ -105,6 +111,18 @@ class GasSettings(BaseModel):
         if value not in ("maxwell", "mean"):
             raise ValueError(f"initial_speed must be maxwell or mean, got {value!r}")
         return value
+
+
+class ReactionSet(BaseModel):
+    """One run of a reaction study (``diffusion.reactions.series``): A → P with ``w``, P → A with ``w_reverse``,
+    P → S with ``w_follow``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
+
+    w: float = Field(gt=0, le=1, description="probability that a wall hit turns A into P")
+    w_reverse: float = Field(0.0, ge=0, le=1, description="probability that a wall hit turns P back into A")
+    w_follow: float = Field(0.0, ge=0, le=1, description="probability that a wall hit turns P into S")
 
 
 class ReactionSettings(BaseModel):
@@ -130,6 +148,12 @@ class ReactionSettings(BaseModel):
         description="site activity decays by exp(-poisoning) per reaction at a voxel (between rounds)",
     )
     rounds: int = Field(1, ge=1, description="rounds of `particles` histories (poisoning acts between them)")
+    series: list[ReactionSet] = Field(
+        default_factory=list,
+        description="a study (thesis Tables 4.2-4.4): one run of `particles` histories per set instead of the single "
+        "w / w_reverse / w_follow; a set with w_follow > 0 also runs its reference without the follow-up "
+        "(selectivity S)",
+    )
 
 
 class Settings(BaseModel):
@@ -179,6 +203,11 @@ class Settings(BaseModel):
         description="bins of cos(angle to the axis) in the flight-orientation histogram "
         "(azimuth gets 2x as many); 0 = off",
     )
+    lengths: list[int] = Field(
+        default_factory=list,
+        description="length series (setup transmission, thesis §3.6.4): W through the first L voxels along the axis "
+        "for each L, and the fit 1/D = 1/D0 + alpha (r/L)/D0 (3.51); empty = off",
+    )
     gas: GasSettings = Field(default_factory=GasSettings, description="event-driven gas (setup edmd)")
     reactions: ReactionSettings = Field(
         default_factory=ReactionSettings, description="wall reactions (setup reaction)"
@@ -198,6 +227,21 @@ class Settings(BaseModel):
         if value not in SPECIES:
             raise ValueError(f"unknown species {value!r}; allowed: {', '.join(SPECIES)}")
         return value
+
+    @field_validator("lengths")
+    @classmethod
+    def _lengths(cls, value):
+        if value and (len(value) < 2 or min(value) < 1 or len(set(value)) != len(value)):
+            raise ValueError(f"lengths must be >= 2 distinct whole numbers of voxels >= 1, got {value}")
+        return value
+
+    @model_validator(mode="after")
+    def _lengths_need_transmission(self):
+        if self.lengths and self.setup is not Setup.transmission:
+            raise ValueError(
+                f"lengths (a length series) needs setup transmission, got setup {self.setup.value}"
+            )
+        return self
 
     @field_validator("axes")
     @classmethod

@@ -7,6 +7,9 @@ from porepipe.granular._api import Frame as Frame
 from porepipe.granular._api import Simulation as Simulation
 from porepipe.granular._api import polygon_overlap as polygon_overlap
 from porepipe.granular._api import time_step_rule as time_step_rule
+from porepipe.granular._galton import GaltonBoard as GaltonBoard
+from porepipe.granular._galton import chi2_binomial as chi2_binomial
+from porepipe.granular._galton import galton_paths as galton_paths
 from porepipe.granular._measure import contact_persistence as contact_persistence
 from porepipe.granular._measure import coordination as coordination
 from porepipe.granular._measure import diagonal_strain as diagonal_strain
@@ -18,9 +21,11 @@ from porepipe.granular._measure import frame_particles as frame_particles
 from porepipe.granular._measure import packing_fraction as packing_fraction
 from porepipe.granular._measure import plane_strain_constants as plane_strain_constants
 from porepipe.granular._measure import polygon_area as polygon_area
+from porepipe.granular._measure import pressure_dip as pressure_dip
 from porepipe.granular._measure import pressure_profile as pressure_profile
 from porepipe.granular._measure import repose_angle_fit as repose_angle_fit
 from porepipe.granular._measure import repose_angle_integral as repose_angle_integral
+from porepipe.granular._measure import scaled_profile as scaled_profile
 from porepipe.granular._measure import stress_tensor as stress_tensor
 from porepipe.granular._measure import surface_profile as surface_profile
 from porepipe.granular._measure import wall_contacts as wall_contacts
@@ -37,6 +42,7 @@ from porepipe.granular._shapes import regular_polygon as regular_polygon
 from porepipe.granular._silo import THESIS_SILO as THESIS_SILO
 from porepipe.granular._silo import analyse_heap as analyse_heap
 from porepipe.granular._silo import analyse_silo as analyse_silo
+from porepipe.granular._silo import heap_ensemble as heap_ensemble
 from porepipe.granular._theory import closure_ife as closure_ife
 from porepipe.granular._theory import closure_linear as closure_linear
 from porepipe.granular._theory import fit_janssen as fit_janssen
@@ -57,11 +63,13 @@ __all__ = [
     "AngleMode",
     "Dist",
     "Frame",
+    "GaltonBoard",
     "Settings",
     "Simulation",
     "analyse_heap",
     "analyse_silo",
     "check_convex",
+    "chi2_binomial",
     "closure_ife",
     "closure_linear",
     "contact_persistence",
@@ -74,6 +82,8 @@ __all__ = [
     "force_magnitudes",
     "frame_contacts",
     "frame_particles",
+    "galton_paths",
+    "heap_ensemble",
     "hopper_sigma_zz",
     "janssen",
     "lateral_pressure_bounds",
@@ -85,6 +95,7 @@ __all__ = [
     "polygon_area",
     "polygon_overlap",
     "polygon_properties",
+    "pressure_dip",
     "pressure_profile",
     "principal_angle",
     "read_granular",
@@ -93,6 +104,7 @@ __all__ = [
     "repose_angle_fit",
     "repose_angle_integral",
     "run",
+    "scaled_profile",
     "silo_sigma_zz",
     "silo_xi",
     "stepped_silo",

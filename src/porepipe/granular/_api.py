@@ -383,8 +383,17 @@ class Simulation:
             self.active[i] = 1
         return len(due) > 0
 
+    def remove(self, which) -> None:
+        """Take particles out of the run for good (a sink: balls that reached the bins, grains that left a silo).
+
+        ``which`` is a boolean mask or index array over the mobile particles; their contacts end at the next step.
+        """
+        idx = np.arange(self.n_mob)[which]
+        self.active[idx] = 0
+        self.insert_s[idx] = np.inf  # never (re)inserted
+
     def _next_insert_step(self) -> int:
-        pending = self.insert_s[self.active[: self.n_mob] == 0]
+        pending = self.insert_s[(self.active[: self.n_mob] == 0) & np.isfinite(self.insert_s)]
         if pending.size == 0:
             return 1 << 62
         return max(math.ceil(pending.min() / self.dt - 0.5), self.step + 1)
@@ -525,6 +534,7 @@ class Simulation:
     STATE = (
         "G",
         "active",
+        "insert_s",
         "nb_start",
         "nb_j",
         "ft",

@@ -27,31 +27,43 @@ def _cross(ax, ay, bx, by):
 def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b, side):
     """Clip convex P (CCW, n_p corners) by convex Q (CCW); the result (count returned) is in buf_a / tag_a.
 
-    The clip starts at the edge of Q that faces P's centroid (cpx, cpy), so that the working polygon shrinks to
-    the small overlap region after the first pass.
+    Only Q's *near chain* takes part: with u = cQ - cP and h = max over P of u.x, P lies in u.x <= h, and there
+    Q equals the intersection of the half-planes of the edges with a corner at u.x <= h (the chain of Q facing
+    P; the chain's two end edges leave the half-space, so the others add nothing), so P n Q = P clipped by
+    that chain. If even Q's lowest corner has u.x > h, the centre line separates them (no overlap, no clip).
+    The edges are taken in order from Q's lowest corner, so the first one cuts P down to the overlap region.
     """
+    ux = cqx - cpx
+    uy = cqy - cpy
+    h = -1e300
+    for k in range(n_p):
+        h = max(h, ux * P[k, 0] + uy * P[k, 1])
+    low = 1e300
+    kmin = 0
+    for k in range(n_q):
+        d = ux * Q[k, 0] + uy * Q[k, 1]
+        if d < low:
+            low = d
+            kmin = k
+    if low > h:
+        return 0
     for k in range(n_p):
         buf_a[k, 0] = P[k, 0]
         buf_a[k, 1] = P[k, 1]
         tag_a[k] = -1 - k
     m = n_p
-    best = -1e300
-    k0 = 0
-    for k in range(n_q):
-        k1 = k + 1 if k + 1 < n_q else 0
-        ex = Q[k1, 0] - Q[k, 0]
-        ey = Q[k1, 1] - Q[k, 1]
-        d = ey * (cpx - cqx) - ex * (cpy - cqy)  # outward normal (ey, -ex) . (cP - cQ), times |e|
-        d = d * abs(d) / (ex * ex + ey * ey)  # sign(d) d^2/|e|^2: ranks like the normalised distance, no sqrt
-        if d > best:
-            best = d
-            k0 = k
     src, stag, dst, dtag = buf_a, tag_a, buf_b, tag_b
+    dk = ux * Q[kmin, 0] + uy * Q[kmin, 1]
     for kk in range(n_q):
-        k = k0 + kk
+        k = kmin + kk
         if k >= n_q:
             k -= n_q
         k1 = k + 1 if k + 1 < n_q else 0
+        dk1 = ux * Q[k1, 0] + uy * Q[k1, 1]
+        far = dk > h and dk1 > h  # a far edge cannot cut P
+        dk = dk1
+        if far:
+            continue
         qx = Q[k, 0]
         qy = Q[k, 1]
         ex = Q[k1, 0] - qx

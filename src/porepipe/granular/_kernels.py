@@ -221,6 +221,13 @@ def make_stepper(
         n_blocks = (n_mob + BLOCK - 1) // BLOCK
         kmax = body.shape[1]
         half_dt2 = 0.5 * dt * dt
+        # clipping buffers of each work block, allocated once per call (not per block and step)
+        bufs_a = np.empty((n_blocks, 2 * kmax + 4, 2))
+        bufs_b = np.empty((n_blocks, 2 * kmax + 4, 2))
+        tags_a = np.empty((n_blocks, 2 * kmax + 4), np.int64)
+        tags_b = np.empty((n_blocks, 2 * kmax + 4), np.int64)
+        sides = np.empty((n_blocks, 2 * kmax + 4))
+        geos = np.empty((n_blocks, 11))
         wall_vel = np.zeros((n_body, 2))
         if PIST:
             for w in range(n_mob, n_body):
@@ -280,12 +287,12 @@ def make_stepper(
                     _place(body, nc, G[0, w, 0], G[0, w, 1], G[0, w, 2], wv, aabb, w)
             # 2. contacts, pair by pair (each pair owned by its lower index i)
             for blk in prange(n_blocks):
-                buf_a = np.empty((2 * kmax + 4, 2))
-                buf_b = np.empty((2 * kmax + 4, 2))
-                tag_a = np.empty(2 * kmax + 4, np.int64)
-                tag_b = np.empty(2 * kmax + 4, np.int64)
-                side = np.empty(2 * kmax + 4)
-                geo = np.empty(11)
+                buf_a = bufs_a[blk]
+                buf_b = bufs_b[blk]
+                tag_a = tags_a[blk]
+                tag_b = tags_b[blk]
+                side = sides[blk]
+                geo = geos[blk]
                 for i in range(blk * BLOCK, min((blk + 1) * BLOCK, n_mob)):
                     for p in range(nb_start[i], nb_start[i + 1]):
                         j = nb_j[p]

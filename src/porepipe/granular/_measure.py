@@ -301,6 +301,79 @@ def pressure_profile(
     }
 
 
+def pressure_dip(x, pressure, apex_x: float, noise=None) -> dict[str, float]:
+    """Depth of the floor-pressure minimum under a heap's apex (the "dip", Schinner 2001 §4.2).
+
+    ``dip = 1 - p(apex) / p_side`` with p_side the mean of the profile's maxima on the left and on the right of the
+    apex (each half includes the apex). A profile that peaks under the apex (pressure ~ local height, a layered
+    heap) gives 0; experiments on conical piles give up to 0.5 (the digest's §2.2).
+
+    Parameters
+    ----------
+    x : array_like
+        Window centres along the floor (sorted), m.
+    pressure : array_like
+        Smoothed floor pressure there (e.g. ``pressure_profile(...)["running_mean"]``), N/m.
+    apex_x : float
+        x of the heap's apex (inside the range of ``x``).
+    noise : array_like, optional
+        The unsmoothed window pressures at the same ``x``: their scatter about ``pressure`` over the central half
+        of the heap, relative to p_side, is returned as ``fluctuation`` (a dip below it is not resolved; the thesis's
+        criterion for its layered heaps).
+
+    Returns
+    -------
+    dict
+        ``dip``, ``p_apex``, ``p_side``, ``x_left_max``, ``x_right_max``, ``fluctuation`` (NaN without ``noise``).
+    """
+    x = np.asarray(x, dtype=np.float64)
+    p = np.asarray(pressure, dtype=np.float64)
+    if x.shape != p.shape or x.ndim != 1 or len(x) < 3:
+        raise PorepipeError(
+            f"pressure_dip: x and pressure must be 1-D of one length >= 3, got {x.shape}, {p.shape}"
+        )
+    if not x[0] <= apex_x <= x[-1]:
+        raise PorepipeError(f"pressure_dip: apex x = {apex_x} outside the profile [{x[0]}, {x[-1]}]")
+    p_apex = float(np.interp(apex_x, x, p))
+    left, right = x <= apex_x, x >= apex_x
+    il = np.flatnonzero(left)[np.nanargmax(p[left])] if left.any() else None
+    ir = np.flatnonzero(right)[np.nanargmax(p[right])] if right.any() else None
+    sides = [max(p[k], p_apex) for k in (il, ir) if k is not None]
+    p_side = float(np.mean(sides))
+    if not p_side > 0:
+        raise PorepipeError("pressure_dip: the profile has no positive pressure")
+    fluct = float("nan")
+    if noise is not None:
+        q = np.asarray(noise, dtype=np.float64)
+        half = 0.25 * (x[-1] - x[0])
+        core = np.abs(x - apex_x) <= half
+        fluct = float(np.nanstd(q[core] - p[core]) / p_side)
+    return {
+        "dip": 1.0 - p_apex / p_side,
+        "p_apex": p_apex,
+        "p_side": p_side,
+        "x_left_max": float(x[il]) if il is not None else float("nan"),
+        "x_right_max": float(x[ir]) if ir is not None else float("nan"),
+        "fluctuation": fluct,
+    }
+
+
+def scaled_profile(x, pressure, apex_x: float, half_base: float, rho_g_h: float, grid) -> np.ndarray:
+    """A floor-pressure profile on the thesis's axes: p / (rho g h) at s = (x - apex) / (base / 2), on ``grid``.
+
+    Outside the profile's range the value is NaN, so :func:`numpy.nanmean` over realisations (an ensemble, as the
+    thesis's 9 heaps) averages what each covers.
+    """
+    if not (half_base > 0 and rho_g_h > 0):
+        raise PorepipeError(
+            f"scaled_profile: half_base and rho_g_h must be positive, got {half_base}, {rho_g_h}"
+        )
+    s = (np.asarray(x, dtype=np.float64) - apex_x) / half_base
+    return np.interp(
+        np.asarray(grid, dtype=np.float64), s, np.asarray(pressure) / rho_g_h, left=np.nan, right=np.nan
+    )
+
+
 # -- contact statistics ------------------------------------------------------------------------------------------
 def coordination(contacts: dict, n_particles: int, active=None, walls: bool = True) -> dict:
     """Contacts per particle K, its mean and the distribution P(K) (§2.3.2).

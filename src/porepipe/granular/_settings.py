@@ -162,6 +162,11 @@ class DropSource(_Strict):
     from_s: NonNegFloat = 0.0
     to_s: NonNegFloat = Field(description="last insertion time")
     velocity_m_s: Vec2 = (0.0, 0.0)
+    rise_m_s: Finite = Field(
+        0.0,
+        description="the insertion height y rises at this rate from from_s on (a silo filled from the top: the "
+        "source follows the growing fill so grains fall a short, constant height; 0 = fixed)",
+    )
     shrink: bool = Field(
         False,
         description="shrinking line source (layered heaps, §4.2.1): the width falls linearly from width_m at "

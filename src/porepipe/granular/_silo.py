@@ -174,16 +174,22 @@ def _in_box(xy, box):
 def analyse_heap(
     tables: dict, frame: int = -1, *, floor: str = "box floor", g: float = 9.81, bins: int = 18
 ) -> dict:
-    """Floor pressure, repose angles, packing fraction and fabric of a heap on a floor.
+    """Floor pressure and its dip, repose angles, packing fraction and fabric of a heap on a floor.
+
+    The heap's foot is where the floor carries it: the x-range between the 1 % and 99 % quantiles of the floor
+    load (grains that rolled away along the floor do not widen it). Repose fits, the integral method and the
+    scaled profile use the foot; the floor-pressure profile covers every floor contact.
 
     Returns
     -------
     dict
         ``floor_x_m`` / ``floor_pressure`` (sliding windows of ~15 contacts) and ``floor_running_mean``,
-        ``floor_mean``, ``height_m``, ``base_m`` (x-extent of the grains), ``repose_left_rad`` /
-        ``repose_right_rad`` (highest-centroid fits on the flanks' middle halves), ``repose_integral_rad`` (Eq. 2.42
-        on each half, averaged), ``rho_rel`` (hull-corrected, in the core), ``coordination``, ``directions``
-        (P(alpha)), ``magnitudes`` (P(F/<F>)), ``n_particles``.
+        ``floor_mean``, ``apex_x_m``, ``height_m``, ``base_m`` (x-extent of the grains), ``foot_m`` (x0, x1),
+        ``repose_left_rad`` / ``repose_right_rad`` (highest-centroid fits on the flanks' middle halves),
+        ``repose_integral_rad`` (Eq. 2.42 on each half, averaged), ``rho_rel`` (hull-corrected, in the core),
+        ``rho_g_h`` (bulk rho g h, the thesis's pressure scale), ``dip`` (:func:`pressure_dip` of the running mean:
+        ``dip``, ``fluctuation``, ...), ``coordination``, ``directions`` (P(alpha)), ``magnitudes`` (P(F/<F>)),
+        ``n_particles``, ``weight_N_m``, ``floor_load_N_m``.
     """
     parts = M.frame_particles(tables, frame)
     contacts = M.frame_contacts(tables, frame)
@@ -194,21 +200,26 @@ def analyse_heap(
     cen = parts["centroid"][act]
     polys = [p for p, a in zip(parts["polygons"], act, strict=True) if a]
     allv = np.concatenate(polys)
-    xa, xb = float(allv[:, 0].min()), float(allv[:, 0].max())
     d_grain = 2 * float(np.sqrt(np.mean(parts["area"][act]) / np.pi))
-    apex_bin = M.surface_profile(cen, np.linspace(xa, xb, max(int((xb - xa) / d_grain), 2) + 1))
-    xs, tops = apex_bin
+    wc = M.wall_contacts(contacts, n, fk, fv)
+    if len(wc["normal_force"]) < 3:
+        raise PorepipeError(f"analyse_heap: fewer than 3 grains rest on {floor!r}")
+    xa, xb = _foot(wc["point"][:, 0], wc["normal_force"])
+    xs, tops = M.surface_profile(cen, np.linspace(xa, xb, max(int((xb - xa) / d_grain), 2) + 1))
     xc = float(xs[np.nanargmax(tops)])
     height = float(np.nanmax(allv[:, 1]) - y0)
-    wc = M.wall_contacts(contacts, n, fk, fv)
-    prof = M.pressure_profile(wc["point"][:, 0], wc["normal_force"], xb - xa, centres=np.linspace(xa, xb, 60))
+    x_lo, x_hi = float(wc["point"][:, 0].min()), float(wc["point"][:, 0].max())
+    prof = M.pressure_profile(
+        wc["point"][:, 0], wc["normal_force"], xb - xa, centres=np.linspace(x_lo, x_hi, 80)
+    )
     left = M.repose_angle_fit(
         cen, (xa + 0.25 * (xc - xa), xc - 0.25 * (xc - xa), max(int(0.5 * (xc - xa) / d_grain), 2))
     )
     right = M.repose_angle_fit(
         cen, (xc + 0.25 * (xb - xc), xb - 0.25 * (xb - xc), max(int(0.5 * (xb - xc) / d_grain), 2))
     )
-    solid = sum(M.polygon_area(p) for p in polys)
+    on_foot = (cen[:, 0] >= xa) & (cen[:, 0] <= xb)
+    solid = sum(M.polygon_area(p) for p, keep in zip(polys, on_foot, strict=True) if keep)
     pf = M.packing_fraction(
         polys, (xc - 0.3 * (xc - xa), y0 + d_grain, xc + 0.3 * (xb - xc), y0 + 0.5 * height)
     )
@@ -218,6 +229,7 @@ def analyse_heap(
         M.repose_angle_integral(area * (xc - xa) / (xb - xa), xc - xa)
         + M.repose_angle_integral(area * (xb - xc) / (xb - xa), xb - xc)
     )
+    rho_p = float(np.median(tables["frames"]["mass_kg"].values / parts["area"]))
     return {
         "floor_x_m": prof["centres"],
         "floor_pressure": prof["pressure"],
@@ -225,15 +237,70 @@ def analyse_heap(
         "floor_mean": prof["mean"],
         "apex_x_m": xc,
         "height_m": height,
-        "base_m": xb - xa,
+        "base_m": float(allv[:, 0].max() - allv[:, 0].min()),
+        "foot_m": (xa, xb),
         "repose_left_rad": left["angle_rad"],
         "repose_right_rad": right["angle_rad"],
         "repose_integral_rad": integral,
         "rho_rel": pf["corrected"],
+        "rho_g_h": pf["corrected"] * rho_p * g * height,
+        "dip": M.pressure_dip(prof["centres"], prof["running_mean"], xc, noise=prof["pressure"]),
         "coordination": M.coordination(contacts, n, active=act),
         "directions": M.force_directions(contacts, bins=bins),
         "magnitudes": M.force_magnitudes(contacts),
         "n_particles": int(act.sum()),
         "weight_N_m": float(tables["frames"]["mass_kg"].values[act].sum() * g),
         "floor_load_N_m": float(wc["normal_force"].sum()),
+    }
+
+
+def _foot(x, load, tail: float = 0.01) -> tuple[float, float]:
+    """x-range between the ``tail`` and ``1 - tail`` quantiles of the floor load."""
+    order = np.argsort(x)
+    cum = np.cumsum(np.asarray(load, dtype=np.float64)[order])
+    cum /= cum[-1]
+    xs = np.asarray(x, dtype=np.float64)[order]
+    return float(xs[np.searchsorted(cum, tail)]), float(xs[min(np.searchsorted(cum, 1 - tail), len(xs) - 1)])
+
+
+def heap_ensemble(heaps: list[dict], points: int = 81) -> dict:
+    """Average the floor pressure of several heaps (realisations differing in the seed, as the thesis's 9).
+
+    Each :func:`analyse_heap` result's running-mean profile is put on the thesis's axes (x from the apex in units
+    of half the foot width, pressure over rho g h), the profiles are averaged where each covers, and the dip of the
+    mean profile is measured.
+
+    Returns
+    -------
+    dict
+        ``s`` (grid on [-1.2, 1.2]), ``mean`` and ``std`` (scaled pressure), ``dip`` (:func:`pressure_dip` of the
+        mean), ``dips`` (each heap's own dip), ``repose_deg`` (mean and std of the flank fits), ``n``.
+    """
+    if not heaps:
+        raise PorepipeError("heap_ensemble: no heaps given")
+    grid = np.linspace(-1.2, 1.2, points)
+    rows = np.array(
+        [
+            M.scaled_profile(
+                h["floor_x_m"],
+                h["floor_running_mean"],
+                h["apex_x_m"],
+                0.5 * (h["foot_m"][1] - h["foot_m"][0]),
+                h["rho_g_h"],
+                grid,
+            )
+            for h in heaps
+        ]
+    )
+    mean = np.nanmean(rows, axis=0)
+    ok = ~np.isnan(mean)
+    repose = np.degrees([[h["repose_left_rad"], h["repose_right_rad"]] for h in heaps]).ravel()
+    return {
+        "s": grid,
+        "mean": mean,
+        "std": np.nanstd(rows, axis=0),
+        "dip": M.pressure_dip(grid[ok], mean[ok], 0.0),
+        "dips": [h["dip"]["dip"] for h in heaps],
+        "repose_deg": (float(repose.mean()), float(repose.std())),
+        "n": len(heaps),
     }

@@ -127,8 +127,9 @@ def collect_bodies(settings: Settings, seed: int) -> Bodies:
         if src.shrink and src.to_s > src.from_s:  # line source of layered heaps: width -> 0 at to_s
             width *= 1.0 - (times - src.from_s) / (src.to_s - src.from_s)
         xs = src.x_m + width * (gen.uniform(0.0, 1.0, len(times)) - 0.5)
-        for t, v, phi, x in zip(times, shapes, phis, xs, strict=True):
-            add(v, (x, src.y_m), phi, src.velocity_m_s, 0.0, float(t), k)
+        ys = src.y_m + src.rise_m_s * (times - src.from_s)
+        for t, v, phi, x, y in zip(times, shapes, phis, xs, ys, strict=True):
+            add(v, (x, y), phi, src.velocity_m_s, 0.0, float(t), k)
     n = len(verts)
     return Bodies(
         verts,

@@ -11,6 +11,7 @@ import xarray as xr
 from porepipe._shared.errors import PorepipeError
 from porepipe.lbm._domain import Prepared, chamber_setup, periodic_setup
 from porepipe.lbm._lattice import CS2
+from porepipe.lbm._mpi import Serial
 from porepipe.lbm._settings import Axis, Lateral, Settings, Setup, Walls
 from porepipe.lbm._solver import Run, StabilityError, check_tau, solve
 from porepipe.lbm._throats import throat_warning
@@ -61,6 +62,7 @@ class PermeabilityResult:
     n_links: int = 0
     throat_voxels: float = float("nan")
     warning: str = ""
+    ranks: int = 1  # MPI ranks of the run (1: one process)
 
     def to_dataset(self) -> xr.Dataset:
         """Tables of the result (κ in all units, estimates, convergence history) as an xarray Dataset."""
@@ -118,6 +120,7 @@ class PermeabilityResult:
             "n_interpolated_links": self.n_links,
             "throat_voxels": self.throat_voxels,
             "warning": self.warning,
+            "mpi_ranks": self.ranks,
         }
 
 
@@ -135,8 +138,13 @@ def _check_pore(pore: np.ndarray) -> np.ndarray:
     return pore
 
 
-def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool = False) -> Prepared:
-    """Build the set-up the settings ask for (flow along axis 0 of ``pore_internal``)."""
+def prepare(
+    pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool = False, comm=None
+) -> Prepared:
+    """Build the set-up the settings ask for (flow along axis 0 of ``pore_internal``); ``comm``: the domain
+    decomposition (:mod:`porepipe.lbm._mpi`) whose part of the lattice to build (default: all of it).
+    """
+    build = {"build": comm.build} if comm is not None else {}
     lateral_periodic = settings.lateral is Lateral.periodic
     if settings.setup is Setup.periodic:
         return periodic_setup(
@@ -145,6 +153,7 @@ def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool
             lateral_periodic=lateral_periodic,
             prune=settings.prune,
             keep_wall_links=keep_wall_links,
+            **build,
         )
     return chamber_setup(
         pore_internal,
@@ -154,6 +163,7 @@ def prepare(pore_internal: np.ndarray, settings: Settings, keep_wall_links: bool
         lateral_periodic=lateral_periodic,
         prune=settings.prune,
         keep_wall_links=keep_wall_links,
+        **build,
     )
 
 
@@ -204,6 +214,15 @@ def _check_geometry(geometry, shape) -> None:
         )
 
 
+def _check_distributable(settings: Settings) -> None:
+    """Refuse what an MPI run cannot do yet: field output."""
+    if settings.write_fields or settings.write_vti:
+        raise PorepipeError(
+            "permeability.write_fields / write_vti are not available under MPI (the fields stay spread over the "
+            "ranks); run without --mpi to write them"
+        )
+
+
 def permeability(
     pore: np.ndarray,
     axis: Axis | str = Axis.z,
@@ -214,6 +233,7 @@ def permeability(
     progress: bool = True,
     label: str | None = None,
     geometry: SphereWalls | GrainWalls | GreyWalls | None = None,
+    comm=None,
 ) -> PermeabilityResult:
     """Lattice-Boltzmann permeability of a binary sample along one axis.
 
@@ -234,6 +254,10 @@ def permeability(
         Sub-voxel wall positions for ``walls`` = cli/bfl, in the caller's axis order and the sample's voxel grid
         (exact spheres, exact decorated grains, or grey values); every set-up (periodic, mirror, chamber) takes them.
         Without it the walls are halfway bounce-back (``result.walls``).
+    comm : Serial or Slabs, optional
+        Domain decomposition (:mod:`porepipe.lbm._mpi`): ``Slabs()`` under ``mpirun`` runs this process's slab
+        (every rank calls with the same arguments and gets the same result; halfway walls, no fields). Default:
+        one process.
 
     Returns
     -------
@@ -257,10 +281,13 @@ def permeability(
     pore = _check_pore(pore)
     check_tau(settings)
     interpolate = _interpolating(settings, geometry)
+    comm = comm or Serial()
+    if comm.distributed:
+        _check_distributable(settings)
     if interpolate:
         _check_geometry(geometry, pore.shape)
     internal = np.ascontiguousarray(np.moveaxis(pore, axis.index, 0))
-    prep = prepare(internal, settings, keep_wall_links=interpolate)
+    prep = prepare(internal, settings, keep_wall_links=interpolate, comm=comm)
     throat, warning = throat_warning(internal, settings, interpolate)
     base = {
         "axis": axis,
@@ -271,6 +298,7 @@ def permeability(
         "n_spanning": prep.n_spanning,
         "throat_voxels": throat,
         "warning": warning,
+        "ranks": comm.size,
     }
     if prep.lattice is None:
         return PermeabilityResult(
@@ -285,7 +313,7 @@ def permeability(
             n_nodes=0,
             **base,
         )
-    if prep.lattice.n_wall_links == 0:
+    if not comm.has_walls(prep.lattice):
         return PermeabilityResult(
             **kappa_units(float("inf"), voxel_um),
             method="no_walls",
@@ -294,7 +322,7 @@ def permeability(
             steps=0,
             history={},
             mlups=0.0,
-            n_nodes=prep.lattice.n_nodes,
+            n_nodes=comm.n_nodes(prep.lattice),
             reason="no solid voxel and no wall anywhere: nothing resists the flow, "
             "κ is unbounded (use `lateral: walls` for a duct)",
             **base,
@@ -303,7 +331,9 @@ def permeability(
     if interpolate:
         lat = prep.lattice
         domain = _domain_geometry(geometry, settings, axis.index, internal.shape[0])
-        links = build_links(lat.pore, lat.periodic, *lat.wall_links, domain, settings.walls)
+        links = build_links(
+            lat.pore, lat.periodic, *lat.wall_links, comm.local_geometry(domain), settings.walls
+        )
         lat.wall_links = None
     run = solve(
         prep.lattice,
@@ -314,6 +344,7 @@ def permeability(
         checkpoint=checkpoint,
         progress=progress,
         links=links,
+        comm=comm,
     )
     reason = (
         f"converged ({run.stopped_by} rule)"
@@ -341,13 +372,13 @@ def permeability(
         reason=reason,
         history=run.history,
         mlups=run.mlups,
-        n_nodes=prep.lattice.n_nodes,
+        n_nodes=comm.n_nodes(prep.lattice),
         velocity=velocity,
         pressure=pressure,
         total_mass=run.total_mass,
         stopped_by=run.stopped_by,
         kappa_error=run.kappa_error,
         walls=settings.walls.value if interpolate else Walls.halfway.value,
-        n_links=links.size if links is not None else 0,
+        n_links=comm.owned_links(links, prep.lattice) if links is not None else 0,
         **base,
     )

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 
+from porepipe._shared.errors import PorepipeError
 from porepipe._shared.overrides import given_options, merge_settings
 from porepipe.lbm._settings import (
     Axis,
@@ -57,10 +58,23 @@ def _settings(args) -> Settings:
 
 
 def main(args) -> int:
-    """Run the subcommand; returns the exit code."""
+    """Run the subcommand; returns the exit code. With ``--mpi`` an error on any rank ends every rank."""
+    if not args.mpi:
+        return _main(args)
+    try:
+        return _main(args)
+    except Exception as err:
+        from porepipe.lbm._mpi import SharedError, abort_world
+
+        kind = "error" if isinstance(err, PorepipeError) else type(err).__name__
+        abort_world(f"porepipe permeability: {kind}: {err}", shared=isinstance(err, SharedError))
+        raise
+
+
+def _main(args) -> int:
     from porepipe.lbm._run import run
 
-    for out, r in run(
+    results = run(
         args.binary,
         _settings(args),
         args.axis,
@@ -72,7 +86,11 @@ def main(args) -> int:
         packing=args.packing,
         grey=args.grey,
         grains=args.grains,
-    ):
+        mpi=args.mpi,
+    )
+    if args.mpi and not _is_root():
+        return 0
+    for out, r in results:
         print(
             f"axis {r.axis.value}: kappa = {r.kappa_lu:.6g} voxel^2 = "
             f"{r.kappa_m2:.6g} m^2 = {r.kappa_mD:.6g} mD ({r.method}, {r.reason}, {r.steps} steps, "
@@ -81,6 +99,12 @@ def main(args) -> int:
         if r.warning:
             print(f"warning: {r.warning}")
     return 0
+
+
+def _is_root() -> bool:
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD.Get_rank() == 0
 
 
 def register(subparsers) -> None:
@@ -105,6 +129,13 @@ def register(subparsers) -> None:
         action=argparse.BooleanOptionalAction,
         default=True,
         help="continue from a matching checkpoint (default); --no-resume starts afresh",
+    )
+    p.add_argument(
+        "--mpi",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="run as one rank of `mpirun -n P porepipe permeability --mpi …`: slabs along the flow, "
+        "rank 0 writes the result (needs mpi4py: pip install 'porepipe[mpi]')",
     )
     p.add_argument("--collision", choices=[c.value for c in Collision])
     p.add_argument("--walls", choices=[w.value for w in Walls])

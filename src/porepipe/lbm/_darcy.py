@@ -16,14 +16,18 @@ from porepipe.lbm._settings import Gradient, Velocity
 
 @dataclasses.dataclass
 class Sampler:
-    """Precomputed per-node layer index and sample membership of one lattice.
+    """Per-node layer index and sample membership of the nodes one process owns, and the domain's layer layout.
 
-    Slice averages run over whole slices (C(ℓ) ∩ P); only the sample average ⟨v⟩_S uses the lateral window.
+    Slice averages run over whole slices (C(ℓ) ∩ P); only the sample average ⟨v⟩_S uses the lateral window. Layers
+    are numbered over the whole domain, so the per-layer sums of several processes (each owning whole layers) add up
+    exactly to those of one process.
     """
 
     layer: np.ndarray  # (N,) int64 layer of each node
     sample_nodes: np.ndarray  # (N,) bool: node in S
     n_layers: int
+    sample_layers: tuple[int, int]  # half-open layer range of S
+    everywhere: bool  # body force on every layer (periodic set-up)
 
     @classmethod
     def of(cls, lat: Lattice) -> Sampler:
@@ -31,17 +35,40 @@ class Sampler:
         layer = np.repeat(np.arange(lat.shape[0], dtype=np.int64), counts)
         win = lat.node_window()
         s0, s1 = lat.sample_layers
-        return cls(layer, win & (layer >= s0) & (layer < s1), lat.shape[0])
+        return cls(
+            layer, win & (layer >= s0) & (layer < s1), lat.shape[0], (s0, s1), lat.body_force_everywhere
+        )
 
     def layer_sums(self, values: np.ndarray) -> np.ndarray:
         """Σ over the pore nodes of every layer, C(ℓ) ∩ P (thesis Eq. 6.1.24)."""
         return np.bincount(self.layer, weights=values, minlength=self.n_layers)
 
-    def layer_means(self, values: np.ndarray) -> np.ndarray:
-        """Mean over the pore nodes of every layer, ⟨·⟩_{C(ℓ)∩P} (NaN where a layer has none)."""
-        count = np.bincount(self.layer, minlength=self.n_layers)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return self.layer_sums(values) / count
+    def tables(self, fields: np.ndarray) -> np.ndarray:
+        """(6, n_layers) per-layer sums of the (4, N) fields: Σ ρu, Σ δρ, node count, and over the sample's nodes
+        Σ u, Σ ρ, node count (:data:`TABLE_ROWS`). Every κ̂ estimate and sample mean follows from them.
+        """
+        d, u = fields[0], fields[1]
+        rho = 1.0 + d
+        inside = self.sample_nodes
+        rows = (
+            rho * u,
+            d,
+            np.ones_like(d),
+            np.where(inside, u, 0.0),
+            np.where(inside, rho, 0.0),
+            inside * 1.0,
+        )
+        return np.stack([self.layer_sums(r) for r in rows])
+
+
+#: rows of :meth:`Sampler.tables`
+TABLE_ROWS = ("flux", "density", "nodes", "sample_velocity", "sample_rho", "sample_nodes")
+
+
+def sample_mean_rho(tables: np.ndarray) -> float:
+    """Mean ρ over the sample's pore nodes (1 where the sample has none)."""
+    n = float(np.sum(tables[5]))
+    return float(np.sum(tables[4])) / n if n else 1.0
 
 
 def _slope(y: np.ndarray) -> float:
@@ -52,9 +79,8 @@ def _slope(y: np.ndarray) -> float:
 
 
 def estimates(
-    lat: Lattice,
     sampler: Sampler,
-    fields: np.ndarray,
+    tables: np.ndarray,
     *,
     nu: float,
     body_force: float,
@@ -66,26 +92,26 @@ def estimates(
 
     Parameters
     ----------
-    fields : (4, N) ndarray
-        δρ and the velocity (u_0 along the flow) per node.
+    sampler : Sampler
+        The domain's layer layout.
+    tables : (6, n_layers) ndarray
+        :meth:`Sampler.tables` of the fields (summed over the processes).
     sample_voxels, sample_area : int
         |S| (solid included) and the voxels of one cross-section of S.
     """
-    d, u = fields[0], fields[1]
-    s0, s1 = lat.sample_layers
+    flux, density, nodes = tables[0], tables[1], tables[2]
+    s0, s1 = sampler.sample_layers
     n_s = s1 - s0
-    rho = 1.0 + d
-    u_mean = float(np.sum(u[sampler.sample_nodes])) / sample_voxels
-    q_layer = sampler.layer_sums(rho * u)[s0:s1]
-    rho_bar_s = float(np.mean(rho[sampler.sample_nodes])) if np.any(sampler.sample_nodes) else 1.0
-    u_flux = float(np.mean(q_layer)) / (rho_bar_s * sample_area)
+    u_mean = float(np.sum(tables[3])) / sample_voxels
+    u_flux = float(np.mean(flux[s0:s1])) / (sample_mean_rho(tables) * sample_area)
     velocities = {Velocity.mean.value: u_mean, Velocity.flux.value: u_flux}
     out = {}
-    if lat.body_force_everywhere:
+    if sampler.everywhere:
         for vname, v in velocities.items():
             out[f"body_force/{vname}"] = nu * v / body_force
         return out
-    rho_layer = 1.0 + sampler.layer_means(d)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rho_layer = 1.0 + density / nodes  # NaN where a layer has no node
     p_layer = CS2 * rho_layer
     rho_bar = 0.5 * (rho_layer[s0] + rho_layer[s1 - 1])
     w = min(trim_layers, max(0, (n_s - 2) // 2))
@@ -93,7 +119,7 @@ def estimates(
         Gradient.ends.value: (p_layer[s1 - 1] - p_layer[s0]) / (n_s - 1) if n_s > 1 else float("nan"),
         Gradient.fit.value: _slope(p_layer[s0:s1]),
         Gradient.fit_trimmed.value: _slope(p_layer[s0 + w : s1 - w]),
-        Gradient.outside.value: (p_layer[s1 % lat.shape[0]] - p_layer[s0 - 1]) / (n_s + 1),
+        Gradient.outside.value: (p_layer[s1 % sampler.n_layers] - p_layer[s0 - 1]) / (n_s + 1),
     }
     for gname, g in grads.items():
         for vname, v in velocities.items():

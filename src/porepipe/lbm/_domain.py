@@ -243,9 +243,18 @@ def _prune(sample: np.ndarray, lateral_periodic: bool, wrap: bool, enabled: bool
 
 
 def periodic_setup(
-    sample: np.ndarray, *, mirror: bool, lateral_periodic: bool, prune: bool, keep_wall_links: bool = False
+    sample: np.ndarray,
+    *,
+    mirror: bool,
+    lateral_periodic: bool,
+    prune: bool,
+    keep_wall_links: bool = False,
+    build=build_lattice,
 ) -> Prepared:
-    """Body force on every node, periodic along the flow (optionally sample + its mirror image)."""
+    """Body force on every node, periodic along the flow (optionally sample + its mirror image).
+
+    ``build``: the lattice builder (:func:`build_lattice`, or a process's slab of it, :mod:`porepipe.lbm._mpi`).
+    """
     domain = np.concatenate([sample, sample[::-1]], axis=0) if mirror else sample
     keep, n_span, pruned = _prune(domain, lateral_periodic, True, prune)
     area = domain.shape[1] * domain.shape[2]
@@ -258,7 +267,7 @@ def periodic_setup(
             0,
             reason="no pore path connects the inlet face to the outlet face: κ = 0",
         )
-    lat = build_lattice(
+    lat = build(
         keep,
         (True, lateral_periodic, lateral_periodic),
         (0, domain.shape[0]),
@@ -277,6 +286,7 @@ def chamber_setup(
     lateral_periodic: bool,
     prune: bool,
     keep_wall_links: bool = False,
+    build=build_lattice,
 ) -> Prepared:
     """Thesis §6.1.4: open inlet chamber (force zone in its first layers), sample, open outlet chamber."""
     keep, n_span, pruned = _prune(sample, lateral_periodic, False, prune)
@@ -294,7 +304,7 @@ def chamber_setup(
     domain = np.concatenate(
         [np.ones((inlet_layers, *cross), bool), keep, np.ones((outlet_layers, *cross), bool)], axis=0
     )
-    lat = build_lattice(
+    lat = build(
         domain,
         (True, lateral_periodic, lateral_periodic),
         (0, force_layers),

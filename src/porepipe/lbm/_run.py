@@ -10,6 +10,7 @@ from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import read_attrs, read_binary_volume, result_hash
 from porepipe.lbm._api import PermeabilityResult, permeability
 from porepipe.lbm._io import write_result
+from porepipe.lbm._mpi import decomposition, other_checkpoints
 from porepipe.lbm._settings import Axis, Settings, Walls
 from porepipe.lbm._walls import geometry_from_files
 
@@ -30,6 +31,26 @@ def default_checkpoint(out) -> Path:
     return out.with_name(f".{out.name}.checkpoint.h5")
 
 
+def _checkpoint_of(path: Path, checkpoint, comm, resume: bool) -> Path:
+    """The checkpoint file of this process; checkpoints of another decomposition are refused (or, without resume,
+    deleted) so that no run resumes from a state it cannot continue.
+    """
+    base = Path(checkpoint) if checkpoint else default_checkpoint(path)
+    others = other_checkpoints(base, comm.size)
+    if others and resume:
+        raise PorepipeError(
+            f"checkpoint(s) of a run with another number of processes: {', '.join(p.name for p in others)} "
+            f"(this run: {comm.size}); rerun with that number, or with --no-resume to discard them"
+        )
+    ckpt = comm.checkpoint_path(base)
+    if not resume and comm.root:
+        for stale in others:
+            stale.unlink(missing_ok=True)
+    if not resume:
+        ckpt.unlink(missing_ok=True)
+    return ckpt
+
+
 def run(
     binary,
     settings: Settings,
@@ -43,6 +64,7 @@ def run(
     packing=None,
     grey=None,
     grains=None,
+    mpi: bool = False,
 ) -> list[tuple[Path, PermeabilityResult]]:
     """Read ``binary`` (volume ``pore``), run every requested axis, write one result file per axis.
 
@@ -71,6 +93,9 @@ def run(
         ``grey_a{a}.h5`` of the volume: sub-voxel wall distances estimated from the grey values.
     grains : path-like, optional
         ``grains.h5`` whose decorated grains the volume shows: exact sub-voxel wall distances (ray–polyhedron).
+    mpi : bool
+        Run as one rank of ``mpirun -n P`` (:mod:`porepipe.lbm._mpi`): every rank computes its slab, rank 0 writes
+        the result; each rank keeps its own checkpoint ``<checkpoint stem>.rank<r>of<P>.h5``.
 
     Returns
     -------
@@ -84,6 +109,7 @@ def run(
         raise PorepipeError(
             f"--checkpoint names one file but {len(axes)} axes were asked for; give one --axis"
         )
+    comm = decomposition(mpi)
     threads = set_threads(threads)
     pore, meta = read_binary_volume(binary)
     scene = read_attrs(binary).get("scene", "")
@@ -107,14 +133,16 @@ def run(
     written = []
     for axis in axes:
         path = output_path(binary, axis, out, out_dir)
-        ckpt = Path(checkpoint) if checkpoint else default_checkpoint(path)
-        if not resume:
-            ckpt.unlink(missing_ok=True)
+        ckpt = _checkpoint_of(path, checkpoint, comm, resume)
         result = permeability(
-            pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt, geometry=geometry
+            pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt, geometry=geometry, comm=comm
         )
         sources = [binary] + ([p for p in (packing, grey, grains) if p] if interpolated else [])
-        digest = result_hash("permeability", settings=settings, inputs=sources, axis=axis.value)
-        write_result(path, result, scene=scene, scene_hash=digest, threads=threads, origin_um=meta.origin_um)
+        physics = settings.model_dump(mode="json", exclude={"mpi_ranks"})  # the ranks do not change κ
+        digest = result_hash("permeability", settings=physics, inputs=sources, axis=axis.value)
+        if comm.root:
+            write_result(
+                path, result, scene=scene, scene_hash=digest, threads=threads, origin_um=meta.origin_um
+            )
         written.append((path, result))
     return written

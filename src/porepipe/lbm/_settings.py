@@ -103,6 +103,11 @@ class Settings(BaseModel):
         default_factory=list,
         description="run only at these of the scene's resolutions (empty: all); fine lattices cost most",
     )
+    whole_volume: bool = Field(
+        True,
+        description="run on the whole volume; false: only on the sweep's sub-samples (sweep.sample_um), "
+        "where the whole lattice would cost too much",
+    )
     collision: Collision = Field(
         Collision.trt, description="bgk, trt (default: Λ = magic makes κ̂ τ-independent) or mrt (the thesis's)"
     )
@@ -171,6 +176,12 @@ class Settings(BaseModel):
     write_fields: bool = Field(False, description="store velocity and pressure fields in the result")
     write_vti: bool = Field(False, description="also export the fields as VTK ImageData (.vti) for ParaView")
     checkpoint_every_s: float = Field(600.0, gt=0, description="wall seconds between checkpoints")
+    mpi_ranks: int = Field(
+        0,
+        ge=0,
+        description="workflow: run each permeability job as `mpirun -n mpi_ranks porepipe permeability --mpi` "
+        "(slabs along the flow; halfway walls; 0 = one process)",
+    )
 
     @field_validator("tau", "tau_bulk")
     @classmethod

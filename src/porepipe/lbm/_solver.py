@@ -18,9 +18,10 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import hash_of, open_h5
 from porepipe.lbm import _kernels as K
-from porepipe.lbm._darcy import Sampler, estimate_key, estimates
+from porepipe.lbm._darcy import estimate_key, estimates, sample_mean_rho
 from porepipe.lbm._domain import Lattice
 from porepipe.lbm._lattice import CS2, dhumieres_matrix, mrt_rates, trt_minus_tau, viscosity
+from porepipe.lbm._mpi import ONE_PROCESS, Serial, SharedError
 from porepipe.lbm._settings import Collision, Settings, StopRule
 from porepipe.lbm._walls import Links
 
@@ -40,8 +41,10 @@ ROUND_OFF = 1e-13
 NOISE_FRACTION = 1e-2
 
 
-class StabilityError(PorepipeError):
-    """The run became unstable; the message names the step and the parameter to change."""
+class StabilityError(SharedError):
+    """The run became unstable; the message names the step and the parameter to change (every rank of an MPI run
+    decides it from the same reduced numbers).
+    """
 
 
 @dataclasses.dataclass
@@ -131,13 +134,14 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
     return step
 
 
-def _checkpoint_key(lat: Lattice, settings: Settings, links: Links | None) -> str:
+def _checkpoint_key(lat: Lattice, settings: Settings, links: Links | None, decomposition: str = "") -> str:
     q = ""
     if links is not None and links.size:
         q = hashlib.sha256(links.slot.tobytes() + links.b.tobytes() + links.c.tobytes()).hexdigest()[:16]
-    return hash_of(
-        {"lattice": lat.key(), "links": q, **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}}
-    )
+    record = {"lattice": lat.key(), "links": q, **{k: str(getattr(settings, k)) for k in _PHYSICS_KEYS}}
+    if decomposition:  # one process keeps its keys of before
+        record["decomposition"] = decomposition
+    return hash_of(record)
 
 
 def kappa_error(kappas, noise: float = ROUND_OFF) -> float:
@@ -192,9 +196,10 @@ def _load_checkpoint(path: Path, key: str, pops: np.ndarray):
         ) from None
 
 
-def _guard(fields: np.ndarray, step: int, settings: Settings) -> float:
-    """Raise on NaN/Inf or a Mach number above the limit; return the Mach number."""
+def _guard(fields: np.ndarray, step: int, settings: Settings, comm=ONE_PROCESS) -> float:
+    """Raise on NaN/Inf or a Mach number above the limit (over every process); return the Mach number."""
     finite, u2 = K._finite_and_max_speed2(fields)
+    finite, u2 = not comm.max(float(not finite)), comm.max(u2)
     if not finite:
         raise StabilityError(
             f"non-finite density or velocity at step {step}: the run is unstable; increase `tau` "
@@ -242,8 +247,11 @@ def solve(
     checkpoint: Path | None = None,
     progress: bool = True,
     links: Links | None = None,
+    comm=None,
 ) -> Run:
-    """Run the lattice to a steady state and evaluate κ̂ (see :func:`_solve`)."""
+    """Run the lattice to a steady state and evaluate κ̂ (see :func:`_solve`); ``comm``: the decomposition that
+    built ``lat`` (:mod:`porepipe.lbm._mpi`; default one process).
+    """
     with _threads_for(lat.n_nodes):
         return _solve(
             lat,
@@ -254,26 +262,30 @@ def solve(
             checkpoint=checkpoint,
             progress=progress,
             links=links,
+            comm=comm or Serial(),
         )
 
 
-def _density_change(d_new: np.ndarray, d_old: np.ndarray) -> float:
+def _density_change(d_new: np.ndarray, d_old: np.ndarray, mean_new: float, mean_old: float) -> float:
     """Largest relative change of ρ/⟨ρ⟩ between two checks (Eq. 6.1.30 without a uniform shift of the level).
 
     Interpolated walls do not conserve mass exactly (they leak ~1e-8 of it per step; :func:`_restore_mass` puts
     it back at every check); a uniform change of ρ is no change of the incompressible flow. With halfway walls
-    ⟨ρ⟩ is constant and this is Eq. 6.1.30 itself.
+    ⟨ρ⟩ is constant and this is Eq. 6.1.30 itself. ``mean_new``, ``mean_old``: ⟨ρ⟩ over the sample (of every
+    process).
     """
     if d_new.size == 0:
         return 0.0
     rho_new, rho_old = 1.0 + d_new, 1.0 + d_old
-    return K._max_rel_change(rho_new / np.mean(rho_new), rho_old / np.mean(rho_old), 1e-300)
+    return K._max_rel_change(rho_new / mean_new, rho_old / mean_old, 1e-300)
 
 
-def _restore_mass(pops: np.ndarray, n_nodes: int) -> None:
-    """Put the mass the interpolated walls lost back, spread evenly over the rest populations (ρ° = 1 per node)."""
-    deficit = -float(np.sum(pops, dtype=np.float64))
-    pops[:n_nodes] += deficit / n_nodes
+def _restore_mass(pops: np.ndarray, n_nodes: int, owned: slice, comm) -> None:
+    """Put the mass the interpolated walls lost back, spread evenly over the rest populations (ρ° = 1 per node) of
+    the owned nodes of every process.
+    """
+    deficit = -comm.sum(float(np.sum(pops.reshape(19, n_nodes)[:, owned], dtype=np.float64)))
+    pops[owned] += deficit / comm.sum(owned.stop - owned.start)
 
 
 def _stop(settings: Settings, dv: float, drho: float, dk: float, err: float) -> str | None:
@@ -288,6 +300,25 @@ def _stop(settings: Settings, dv: float, drho: float, dk: float, err: float) -> 
     return "density" if ok else None
 
 
+def _velocity_change(u_new: np.ndarray, u_old: np.ndarray, comm) -> float:
+    """Largest relative change of the flow velocity (Eq. 6.1.30, floored at VELOCITY_FLOOR × the peak)."""
+    peak = comm.max(float(np.max(np.abs(u_new))) if u_new.size else 0.0)
+    return comm.max(K._max_rel_change(u_new, u_old, max(VELOCITY_FLOOR * peak, 1e-300)))
+
+
+def _mass(src: np.ndarray, n: int, owned: slice, comm) -> float:
+    """Total mass Σ f over the owned nodes of every process (ρ° = 1 per node plus the zero-centred populations)."""
+    pops = src.reshape(19, n)[:, owned]
+    return comm.sum(float(pops.shape[1] + np.sum(pops, dtype=np.float64)))
+
+
+def _resume(checkpoint, ckey, src, comm):
+    """(step, fields, history) of this process's matching checkpoint, or None; every process must agree."""
+    resumed = _load_checkpoint(checkpoint, ckey, src)
+    comm.agree(resumed[0] if resumed is not None else -1, checkpoint)
+    return resumed
+
+
 def _solve(
     lat: Lattice,
     settings: Settings,
@@ -298,6 +329,7 @@ def _solve(
     checkpoint: Path | None,
     progress: bool,
     links: Links | None,
+    comm,
 ) -> Run:
     """Run the lattice to a steady state and evaluate κ̂.
 
@@ -305,7 +337,8 @@ def _solve(
     window and the estimated remaining relative error (:func:`kappa_error`, from the last three checks) are both
     below ``tolerance_kappa``. ``stop: density``: when, over one window, the largest relative change of the flow
     velocity and of the density over the sample's pore nodes (thesis Eq. 6.1.30) and the relative change of κ̂
-    are all below their tolerances. Raises :class:`StabilityError` on NaN/Inf or Mach > ``mach_max``.
+    are all below their tolerances. Raises :class:`StabilityError` on NaN/Inf or Mach > ``mach_max``. Every
+    check reduces over the processes of ``comm``, so all of them take the same decisions.
     """
     check_tau(settings)
     dtype = np.dtype(settings.precision.value)
@@ -313,24 +346,27 @@ def _solve(
     src = np.zeros(19 * n, dtype=dtype)  # zero-centred: equilibrium at rest, ρ = 1
     dst = np.zeros_like(src)
     fields = np.zeros((4, n))
-    step = make_stepper(settings, lat, links)
-    sampler = Sampler.of(lat)
+    step = comm.wrap(make_stepper(settings, lat, links))
+    owned = comm.owned(lat)
+    leaky = comm.max(float(links.size if links is not None else 0)) > 0  # interpolated walls somewhere
+    sampler = comm.sampler(lat)
     nu = viscosity(settings.tau)
-    key_name = estimate_key(lat.body_force_everywhere, settings.gradient, settings.velocity)
-    ckey = _checkpoint_key(lat, settings, links)
+    key_name = estimate_key(sampler.everywhere, settings.gradient, settings.velocity)
+    ckey = _checkpoint_key(lat, settings, links, comm.key())
     names = ("step", "kappa", "delta_v", "delta_rho", "delta_kappa", "kappa_error", "mach")
     history: dict[str, list] = {k: [] for k in names}
     done = 0
-    resumed = _load_checkpoint(checkpoint, ckey, src)
+    resumed = _resume(checkpoint, ckey, src, comm)
     if resumed is not None:
         done, fields, old_history = resumed
         history.update({k: list(v) for k, v in old_history.items() if k in history})
     start = done
     kappa_stop = settings.stop is StopRule.kappa
     tolerance = settings.tolerance_kappa if kappa_stop else settings.tolerance_density
-    reporter = Progress(label, settings.max_steps, target=tolerance) if progress else None
+    reporter = Progress(label, settings.max_steps, target=tolerance) if progress and comm.root else None
     window = settings.window_steps
     prev_fields = fields.copy() if done else None
+    prev_rho = sample_mean_rho(comm.sum(sampler.tables(fields[:, owned]))) if done else 1.0
     prev_kappa = history["kappa"][-1] if history["kappa"] else float("nan")
     est = {}
     converged = False
@@ -347,13 +383,14 @@ def _solve(
         if n_run % 2 == 1:
             src, dst = dst, src
         done += n_run
-        mach = _guard(fields, done, settings)
-        if links is not None and links.size:
-            _restore_mass(src, n)
+        own = fields[:, owned]
+        mach = _guard(own, done, settings, comm)
+        if leaky:
+            _restore_mass(src, n, owned, comm)
+        tables = comm.sum(sampler.tables(own))
         est = estimates(
-            lat,
             sampler,
-            fields,
+            tables,
             nu=nu,
             body_force=settings.body_force,
             sample_voxels=sample_voxels,
@@ -361,13 +398,13 @@ def _solve(
             trim_layers=settings.trim_layers,
         )
         kappa = est[key_name]
+        rho = sample_mean_rho(tables)
         dv, drho, dk = (float("inf"),) * 3
         if prev_fields is not None and n_run == window:  # Eq. 6.1.30 compares over a full window dt
             sel = sampler.sample_nodes
-            u_new, u_old = fields[1, sel], prev_fields[1, sel]
-            floor = VELOCITY_FLOOR * float(np.max(np.abs(u_new))) if u_new.size else 0.0
-            dv = K._max_rel_change(u_new, u_old, max(floor, 1e-300))
-            drho = _density_change(fields[0, sel], prev_fields[0, sel])
+            old = prev_fields[:, owned]
+            dv = _velocity_change(own[1, sel], old[1, sel], comm)
+            drho = comm.max(_density_change(own[0, sel], old[0, sel], rho, prev_rho))
             dk = abs(kappa - prev_kappa) / abs(kappa) if kappa != 0 and math.isfinite(kappa) else float("inf")
             settled = (settled or [prev_kappa])[-2:] + [kappa]
             err = kappa_error(settled, NOISE_FRACTION * settings.tolerance_kappa)
@@ -379,12 +416,12 @@ def _solve(
                 f"κ̂={kappa:.6g} δκ={dk:.2e} err={err:.1e} δv={dv:.2e} δρ={drho:.2e}",
                 residual=max(err, dk) if kappa_stop else drho,
             )
-        prev_fields, prev_kappa = fields.copy(), kappa
+        prev_fields, prev_kappa, prev_rho = fields.copy(), kappa, rho
         rule = _stop(settings, dv, drho, dk, err)
         if rule is not None:
             converged, stopped_by = True, rule
             break
-        if checkpoint is not None and time.perf_counter() - last_ckpt > settings.checkpoint_every_s:
+        if checkpoint is not None and comm.max(time.perf_counter() - last_ckpt) > settings.checkpoint_every_s:
             _save_checkpoint(checkpoint, ckey, done, src, fields, history)
             last_ckpt = time.perf_counter()
     if converged and not math.isfinite(est[key_name]):
@@ -394,23 +431,24 @@ def _solve(
         )
     if not converged and checkpoint is not None:
         _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
-    mlups = n * (done - start) / max(step_wall, 1e-12) / 1e6
+    n_owned = comm.sum(owned.stop - owned.start)
+    step_wall = comm.max(step_wall)
+    mlups = n_owned * (done - start) / max(step_wall, 1e-12) / 1e6
     if reporter is not None:
         reporter.close(
             f"{'converged (' + stopped_by + ' rule)' if converged else 'NOT converged (step limit)'} after {done} "
             f"steps, κ̂ = {est.get(key_name, float('nan')):.6g} voxel², {mlups:.1f} MLUPS"
         )
-    mass = float(n + np.sum(src, dtype=np.float64))
     return Run(
         converged,
         done,
         {k: np.asarray(v, dtype=np.float64) for k, v in history.items()},
-        fields,
+        fields[:, owned],
         est,
         key_name,
         mlups,
         step_wall,
-        mass,
+        _mass(src, n, owned, comm),
         stopped_by,
         err,
     )

@@ -367,6 +367,7 @@ def _integrate(
                 settings.cutoff,
                 skin,
                 reorder=True,
+                half=True,
             )
             rebuilt = int(state.need_rebuild)
             _keep(state, order)
@@ -386,8 +387,7 @@ def _integrate(
             state.types,
             state.ids,
             state.frozen,
-            nbr[0],
-            nbr[1],
+            *nbr,
             box,
             periodic,
             *pair_tables(k_t, tables.sig),
@@ -527,7 +527,7 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     per = np.broadcast_to(np.asarray(periodic, dtype=np.bool_), (3,))
     x = x.copy()
     x[:, per] = np.mod(x[:, per], box[per])  # the kernels assume periodic coordinates in [0, L)
-    start, idx = build_neighbours(x, r, types, box, per, pair_on, 1.0, 0.0)
+    lists = build_neighbours(x, r, types, box, per, pair_on, 1.0, 0.0, half=True)
     kernel = K.make_step_kernel(True, False, not per.all())
     frozen = np.ones(n, dtype=np.uint8)
     zeros = np.zeros((n, 3))
@@ -543,8 +543,7 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
         types,
         np.arange(n),
         frozen,
-        start,
-        idx,
+        *lists,
         box,
         per,
         *pair_tables(ones, sig_t),

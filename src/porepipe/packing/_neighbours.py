@@ -6,8 +6,10 @@ are about one same-class interaction reach wide. A sphere looks for partners onl
 a larger index) and in the classes of *smaller* spheres, scanning the cells within its own reach
 ``cutoff * (r_i + R_max,class) + skin`` (Ogarko & Luding 2012: the large sphere covers many small cells, which
 costs about as many cell visits as it has partners, while a small sphere querying a large class would visit
-every large sphere within the large reach). Each unordered pair is found once (the half list); the full list used by
-the force kernel is its symmetric completion, so the force on each sphere is a gather without write races.
+every large sphere within the large reach). Each unordered pair is found once (the half list). The step kernel
+evaluates each pair once and applies it to both ends (Newton's third law); to do so without write races it runs the
+spheres by slabs at least one pair reach wide, three colours of slabs one after the other (:func:`slabs`).
+The full list (both ends of each pair) is the half list's symmetric completion.
 """
 
 from __future__ import annotations
@@ -78,7 +80,9 @@ def _class_grids(x, r, box, cutoff, skin):
     return cls, ncls, side, ncell, cell_off
 
 
-def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um, reorder=False):
+def build_neighbours(
+    x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um, reorder=False, half=False
+):
     """Full CSR neighbour list: partners j of i with |x_i - x_j| <= cutoff * (r_i + r_j) + skin (minimum image).
 
     Periodic coordinates must lie in [0, L) (the engine keeps them there); others raise a PorepipeError.
@@ -94,10 +98,14 @@ def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_
         Partner indices, each unordered pair listed from both ends.
     order : (N,) int64
         Only with ``reorder``: the permutation applied (new sphere k is old sphere ``order[k]``).
+
+    With ``half`` the step kernel's lists come instead of (start, idx): the half list (half_start, half_idx; each
+    unordered pair once) and the slabs (slab_start, slab_items) of :func:`slabs`.
     """
     n = x_um.shape[0]
     if n == 0:
         empty = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        empty = (*empty, *empty) if half else empty
         return (*empty, np.zeros(0, dtype=np.int64)) if reorder else empty
     _check_in_box(x_um, box_um, periodic)
     cls, ncls, side, ncell, cell_off = _class_grids(x_um, r_um, box_um, cutoff, skin_um)
@@ -135,7 +143,33 @@ def build_neighbours(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_
     np.cumsum(counts, out=half_start[1:])
     half_idx = np.empty(half_start[-1], dtype=np.int64)
     K._half_fill(*args, half_start, half_idx)
+    if half:
+        lists = (half_start, half_idx, *slabs(x_um, r_um, box_um, periodic, cutoff, skin_um))
+        return (*lists, order) if reorder else lists
     start = np.empty(n + 1, dtype=np.int64)
     idx = np.empty(2 * half_idx.size, dtype=np.int64)
     K._full_from_half(half_start, half_idx, start, idx)
     return (start, idx, order) if reorder else (start, idx)
+
+
+def slabs(x_um, r_um, box_um, periodic, cutoff, skin_um):
+    """Spheres by slab along the axis that holds the most slabs at least one pair reach (cutoff 2 R_max + skin)
+    wide: slab s holds spheres ``items[start[s]:start[s + 1]]``, in increasing order.
+
+    A listed pair then spans two neighbouring slabs at most, so slabs of one colour (s mod 3) share no sphere. With
+    periodic faces the slab count is 1, 2 or a multiple of 3 (the colouring must also hold across the wrap).
+    """
+    reach = (cutoff * 2.0 * float(r_um.max()) + skin_um) * (
+        1.0 + 1e-9
+    )  # margin: slab ids come from rounded x m / L
+    counts = np.floor(np.asarray(box_um, dtype=np.float64) / reach).astype(np.int64)
+    per = np.asarray(periodic, dtype=bool)
+    counts = np.where(per & (counts > 2), counts - counts % 3, counts)
+    counts = np.maximum(counts, 1)
+    axis = int(np.argmax(counts))
+    m = int(counts[axis])
+    slab = np.clip(np.floor(x_um[:, axis] * (m / box_um[axis])).astype(np.int64), 0, m - 1)
+    start = np.empty(m + 1, dtype=np.int64)
+    items = np.empty(slab.size, dtype=np.int64)
+    K._counting_sort(slab, m, start, items)
+    return start, items

@@ -19,10 +19,12 @@ from porepipe import __version__
 from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
-from porepipe.report import _figures, _labels
+from porepipe.report import _figures, _labels, _rev
 from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
 from porepipe.report._diffusion import section as diffusion_section
+from porepipe.report._length_series import parts as length_series_parts
 from porepipe.report._permeability_cost import permeability_cost_parts
+from porepipe.report._reaction_tables import parts as reaction_parts
 from porepipe.report._settings import Clock, Settings
 from porepipe.report._thesis import Table, scene_tables
 from porepipe.sweep import FULL, parse_name
@@ -304,6 +306,22 @@ def section_diffusion(ctx: Context) -> list[str]:
     return diffusion_section(ctx.ds, ctx.inputs.get("sweep_path", ""), ctx.out_dir, ctx.settings.dpi)
 
 
+def section_reactions(ctx: Context) -> list[str]:
+    """Reaction studies of the scene (setup reaction with reactions.series) beside Mahler 2001 Tables 4.2-4.4."""
+    sweep = ctx.inputs.get("sweep_path", "")
+    if not sweep:
+        return []
+    return reaction_parts(Path(sweep).parent.parent / "diffusion", ctx.out_dir)
+
+
+def section_length_series(ctx: Context) -> list[str]:
+    """A length series of the scene (diffusion.lengths) with α of (3.51) beside the thesis's and the literature's."""
+    sweep = ctx.inputs.get("sweep_path", "")
+    if not sweep:
+        return []
+    return length_series_parts(Path(sweep).parent.parent / "diffusion", ctx.out_dir)
+
+
 def section_permeability_cost(ctx: Context) -> list[str]:
     """κ error against cost of the LBM sphere benchmark (results/benchmarks/lbm_spheres.json), if it was run."""
     return permeability_cost_parts(ctx.out_dir, ctx.settings.dpi)
@@ -311,7 +329,10 @@ def section_permeability_cost(ctx: Context) -> list[str]:
 
 def section_thesis(ctx: Context) -> list[str]:
     """The thesis tables this scene produced numbers for; the others named in one line."""
-    shown, skipped = scene_tables(ctx.ds, ctx.settings.thesis_tables, ctx.settings.thesis_model)
+    others = {m: read_table(p) for m, p in ctx.inputs.get("thesis_rows", {}).items()}
+    shown, skipped = scene_tables(
+        ctx.ds, ctx.settings.thesis_tables, ctx.settings.thesis_model, others=others
+    )
     parts = []
     if shown:
         parts.append("<h2>Thesis tables</h2>")
@@ -323,6 +344,21 @@ def section_thesis(ctx: Context) -> list[str]:
             "them (5.1 and 5.2 also need report.thesis_model).</p>"
         )
     return parts
+
+
+def section_rev(ctx: Context) -> list[str]:
+    """REV error bars: each quantity's mean and spread over the sweep's sub-samples (Fig. 7.8, Table 7.4)."""
+    rows = _rev.rev_rows(ctx.ds)
+    if not rows:
+        return []
+    _figures.write_csv(ctx.out_dir / "rev.csv", [dict(zip(_rev.COLUMNS, r)) for r in rows])
+    return [
+        "<h2>REV sub-samples</h2>",
+        _table_html(_rev.COLUMNS, rows, 2),
+        "<p class=note>Mean and standard deviation (ddof = 1) over the sweep.subsamples cubes of each edge, cut "
+        "evenly from face to face (thesis §7.4): the spread is the REV error bar. Data: "
+        "<a href='rev.csv'>rev.csv</a></p>",
+    ]
 
 
 def section_cross_sections(ctx: Context) -> list[str]:
@@ -364,10 +400,13 @@ SECTIONS = [
     section_error_cost,
     section_startup,
     section_diffusion,
+    section_reactions,
+    section_length_series,
     section_permeability_cost,
     section_quantities,
     section_limits,
     section_thesis,
+    section_rev,
     section_cross_sections,
     section_lpt,
 ]

@@ -21,6 +21,7 @@ def main(args) -> int:
         grey=args.grey,
         binary=args.binary,
         lpt=args.lpt,
+        granular=args.granular,
     )
     print(f"report: written {out}", file=sys.stderr)
     return 0
@@ -36,5 +37,9 @@ def register(subparsers) -> None:
         "--binary", nargs="*", help="binary_a{a}.h5 files for cross-sections (default: those present)"
     )
     p.add_argument("--lpt", nargs="*", help="lpt_a{a}.h5 files for LPT curves (default: those present)")
+    p.add_argument(
+        "--granular",
+        help="granular.h5 of a 2-D granular scene: its silo or heap report (default when no sweep)",
+    )
     p.add_argument("-o", "--out", help="output index.html (default results/<scene>/report/index.html)")
     p.set_defaults(func=main)

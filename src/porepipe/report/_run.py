@@ -16,7 +16,7 @@ def existing(scene, pattern: str) -> list[str]:
     return [str(p) for p in paths if p.is_file()]
 
 
-def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=None) -> Path:
+def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=None, granular=None) -> Path:
     """Write the accuracy-versus-cost report of ``scene``.
 
     Parameters
@@ -38,12 +38,11 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
         The page written.
     """
     sweep = Path(sweep or Path("results", scene.name, "sweep", "sweep.h5"))
-    granular = Path("results", scene.name, "granular", "granular.h5")
-    if not sweep.is_file() and getattr(scene, "granular", None) is not None and granular.is_file():
-        from porepipe.report._granular import granular_report  # a 2-D granular scene has no sweep
-
-        out = Path(out or Path("results", scene.name, "report", "index.html"))
-        return granular_report(granular, out, scene_name=scene.name, mu=scene.granular.material.friction)
+    out = Path(out or Path("results", scene.name, "report", "index.html"))
+    if granular is None and not sweep.is_file() and getattr(scene, "granular", None) is not None:
+        granular = Path("results", scene.name, "granular", "granular.h5")  # a 2-D granular scene has no sweep
+    if granular is not None:
+        return _granular(scene, Path(granular), out)
     if not sweep.is_file():
         raise PorepipeError(
             f"{sweep} does not exist: run the workflow first (`porepipe run {scene_path}` with "
@@ -52,7 +51,40 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
     grey = grey if grey is not None else existing(scene, grey_stage(scene) + "/grey_a{a}.h5")
     binary = binary if binary is not None else existing(scene, "segment/binary_a{a}.h5")
     lpt = lpt if lpt is not None else existing(scene, "lpt/lpt_a{a}.h5")
-    out = Path(out or Path("results", scene.name, "report", "index.html"))
     return build_report(
-        sweep, out, settings=scene.report, grey=grey, binary=binary, lpt=lpt, scene_name=scene.name
+        sweep,
+        out,
+        settings=scene.report,
+        grey=grey,
+        binary=binary,
+        lpt=lpt,
+        scene_name=scene.name,
+        inputs={"thesis_rows": thesis_row_sweeps(scene)},
     )
+
+
+def thesis_row_sweeps(scene) -> dict[str, Path]:
+    """``report.thesis_rows_from`` as thesis model -> ``results/<scene>/sweep/sweep.h5``; a missing one is an error."""
+    sweeps = {
+        m: Path("results", name, "sweep", "sweep.h5") for m, name in scene.report.thesis_rows_from.items()
+    }
+    for model, path in sweeps.items():
+        if not path.is_file():
+            raise PorepipeError(
+                f"report.thesis_rows_from.{model}: {path} does not exist; run the workflow on scene "
+                f"{scene.report.thesis_rows_from[model]!r} first (`porepipe run` does it for you)"
+            )
+    return sweeps
+
+
+def _granular(scene, result: Path, out: Path) -> Path:
+    """The granular report page of ``result`` (matplotlib and the granular package only when one is built)."""
+    if getattr(scene, "granular", None) is None:
+        raise PorepipeError(f"report --granular {result}: scene {scene.name!r} has no `granular:` section")
+    if not result.is_file():
+        raise PorepipeError(
+            f"{result} does not exist: run the granular stage first (`porepipe run` the scene)"
+        )
+    from porepipe.report._granular import granular_report
+
+    return granular_report(result, out, scene_name=scene.name, mu=scene.granular.material.friction)

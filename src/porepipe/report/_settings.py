@@ -50,6 +50,12 @@ class Settings(BaseModel):
         description="row label of the thesis model the scene reproduces "
         "(e.g. 'PP' or 'FP' for Tables 5.1/5.2)",
     )
+    thesis_rows_from: dict[str, str] = Field(
+        default_factory=dict,
+        description="more rows of Tables 5.1/5.2: thesis model -> name of the scene that reproduces it, a scene "
+        "file <name>.yaml beside this one (e.g. {PP: thesis-5.6.1-pp} in the FP scene); the workflow runs it first "
+        "and the report reads its results/<name>/sweep/sweep.h5",
+    )
     slices: bool = Field(
         True, description="cross-sections of grey and binary volumes at each resolution (Fig. 7.3)"
     )

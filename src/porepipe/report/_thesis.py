@@ -154,61 +154,99 @@ def table_7_2() -> Table:
 
 
 def _value(ds: xr.Dataset, quantity: str, a_um: float) -> float:
-    if quantity not in ds.quantity.values:
-        return float("nan")
-    a = ds.a_um.values
-    i = np.flatnonzero(np.isclose(a, a_um, rtol=1e-6))
-    sample = FULL if FULL in ds.sample_um.values else ds.sample_um.values[0]
-    return float(ds.value.sel(quantity=quantity, sample_um=sample).values[i[0]]) if i.size else float("nan")
+    return _measured(ds, quantity, a_um)[0]
+
+
+def _measured(ds: xr.Dataset, quantity: str, a_um: float, sub_ok: bool = False) -> tuple[float, str]:
+    """(value, where it came from) of ``quantity`` at resolution ``a_um``: the whole volume's run with its CPU cost;
+    with ``sub_ok`` and no whole-volume run, the mean over the largest sub-sample edge, with its REV spread.
+    """
+    i = np.flatnonzero(np.isclose(ds.a_um.values, a_um, rtol=1e-6))
+    if quantity not in ds.quantity.values or not i.size:
+        return float("nan"), ""
+    at = ds.sel(quantity=quantity).isel(a_um=i[0])
+    samples = [FULL] if FULL in ds.sample_um.values else []
+    if sub_ok:
+        samples += sorted((s for s in ds.sample_um.values if s != FULL), reverse=True)
+    for s in samples or [ds.sample_um.values[0]]:
+        run = at.sel(sample_um=s)
+        value = float(run.value)
+        if not np.isfinite(value):
+            continue
+        cpu = float(run.cpu_s) if "cpu_s" in run else float("nan")
+        cost = f"{cpu:.1f} CPU s" if np.isfinite(cpu) else "cost not recorded"
+        if s == FULL:
+            return value, f"whole volume, {cost}"
+        count = int(run.rev_count) if "rev_count" in run else 1
+        spread = float(run.rev_spread) if "rev_spread" in run else float("nan")
+        rev = f" ± {spread:.4g} (REV spread of {count})" if count > 1 and np.isfinite(spread) else ""
+        return value, f"sub-sample L = {s:g} um{rev}, {cost}"
+    return float("nan"), ""
 
 
 def _scene_table(key: str, title: str, columns: list[str], rows: list[list], note: str) -> Table:
-    found = any(np.isfinite(r[-3]) for r in rows if isinstance(r[-3], float))
+    found = any(np.isfinite(r[3]) for r in rows if isinstance(r[3], float))
     return Table(
         key, title, columns, rows, note if found else note + " — this scene has no matching results", found
     )
 
 
-def table_5_1(ds: xr.Dataset, model: str | None) -> Table:
-    model = model if model in T5_1 else "FP"
-    rows = [
-        [
-            f"{model} a = {a:g} um",
-            label,
-            theirs,
-            _value(ds, q, a) * scale,
-            *_diff(_value(ds, q, a) * scale, theirs),
-        ]
-        for a, *vals in T5_1[model]
-        for (label, q, scale), theirs in zip(T5_1_COLS, vals)
-    ]
+#: columns of Tables 5.1 and 5.2
+_SCENE_COLUMNS = ["row", "quantity", "thesis", "porepipe", "difference", "relative", "source and cost"]
+
+
+def _models(
+    ds: xr.Dataset, model: str | None, others: dict | None, table: dict
+) -> list[tuple[str, xr.Dataset]]:
+    """(thesis model, sweep) pairs in the thesis's row order: this scene's model and those of ``others``."""
+    sweeps = {**(others or {}), **({model: ds} if model in table else {})}
+    return [(m, sweeps[m]) for m in table if m in sweeps] or [("FP", ds)]
+
+
+def table_5_1(ds: xr.Dataset, model: str | None, others: dict | None = None) -> Table:
+    """Table 5.1 rows of every model with a sweep (this scene's ``model``, and ``others``: model -> sweep)."""
+    rows = []
+    for m, sweep in _models(ds, model, others, T5_1):
+        for a, *vals in T5_1[m]:
+            for (label, q, scale), theirs in zip(T5_1_COLS, vals):
+                value, source = _measured(sweep, q, a)
+                rows.append(
+                    [f"{m} a = {a:g} um", label, theirs, value * scale, *_diff(value * scale, theirs), source]
+                )
     return _scene_table(
         "5.1",
-        f"Table 5.1: Minkowski functionals of the {model} packing",
-        ["row", "quantity", "thesis", "porepipe", "difference", "relative"],
+        "Table 5.1: Minkowski functionals of the primary (PP) and final (FP) packings",
+        _SCENE_COLUMNS,
         rows,
-        "minkowski.*[pore] of this scene at the thesis's resolutions",
+        "minkowski.*[pore] of the scene (and of the scenes in report.thesis_rows_from) at the thesis's resolutions",
     )
 
 
-def table_5_2(ds: xr.Dataset, model: str | None) -> Table:
-    model = model if model in T5_2 else "FP"
-    kappas = [
-        q for q in ds.quantity.values if str(q).startswith("permeability") and str(q).endswith(".kappa_mD")
-    ]
+def table_5_2(ds: xr.Dataset, model: str | None, others: dict | None = None) -> Table:
+    """Table 5.2 rows (κ, mean over the flow axes run) of every model with a sweep; a sub-sample where the whole
+    volume was not run, labelled so.
+    """
     rows = []
-    for a, theirs in T5_2[model]:
-        vals = [_value(ds, q, a) for q in kappas]
-        ours = float(np.nanmean(vals)) if any(np.isfinite(vals)) else float("nan")
-        rows.append(
-            [f"{model} a = {a:g} um", "kappa [mD] (mean of axes)", theirs, ours, *_diff(ours, theirs)]
-        )
+    for m, sweep in _models(ds, model, others, T5_2):
+        kappas = [
+            q
+            for q in sweep.quantity.values
+            if str(q).startswith("permeability") and str(q).endswith(".kappa_mD")
+        ]
+        for a, theirs in T5_2[m]:
+            found = [_measured(sweep, q, a, sub_ok=True) for q in kappas]
+            found = [(v, src) for v, src in found if np.isfinite(v)]
+            ours = float(np.mean([v for v, _ in found])) if found else float("nan")
+            source = "; ".join(dict.fromkeys(src for _, src in found))
+            rows.append(
+                [f"{m} a = {a:g} um", "kappa [mD] (mean of axes)", theirs, ours, *_diff(ours, theirs), source]
+            )
     return _scene_table(
         "5.2",
-        f"Table 5.2: LB permeability of the {model} packing",
-        ["row", "quantity", "thesis", "porepipe", "difference", "relative"],
+        "Table 5.2: LB permeability of the primary (PP) and final (FP) packings",
+        _SCENE_COLUMNS,
         rows,
-        "permeability_*.kappa_mD of this scene",
+        "permeability_*.kappa_mD of the scene (and of the scenes in report.thesis_rows_from)",
     )
 
 
@@ -317,32 +355,42 @@ def table_6_3(record: dict | None = None) -> Table:
 
 
 def scene_tables(
-    ds: xr.Dataset, which, model: str | None, calibration: Path | dict | None = CALIBRATION_RECORD
+    ds: xr.Dataset,
+    which,
+    model: str | None,
+    calibration: Path | dict | None = CALIBRATION_RECORD,
+    others: dict | None = None,
 ) -> tuple[list[Table], list[Table]]:
     """The tables of ``which`` this scene produced numbers for, and the others (shown only as a list).
 
     Tables 5.1 and 5.2 count only when the scene names the thesis model it reproduces (``report.thesis_model``);
     a match of resolutions alone would compare a different packing with the thesis's. Tables 6.2 and 6.3 count when
-    the LBM calibration record ``calibration`` holds porepipe's runs of them.
+    the LBM calibration record ``calibration`` holds porepipe's runs of them. ``others``: thesis model -> sweep of
+    the scene that reproduces it (``report.thesis_rows_from``), for the rows of Tables 5.1/5.2 not this scene's.
     """
     shown, skipped = [], []
-    for t in thesis_tables(ds, which, model, calibration):
-        produced = t.scene_values and (model is not None or t.key not in ("5.1", "5.2"))
+    for t in thesis_tables(ds, which, model, calibration, others):
+        produced = t.scene_values and (model is not None or bool(others) or t.key not in ("5.1", "5.2"))
         (shown if produced else skipped).append(t)
     return shown, skipped
 
 
 def thesis_tables(
-    ds: xr.Dataset, which, model: str | None, calibration: Path | dict | None = CALIBRATION_RECORD
+    ds: xr.Dataset,
+    which,
+    model: str | None,
+    calibration: Path | dict | None = CALIBRATION_RECORD,
+    others: dict | None = None,
 ) -> list[Table]:
     """The thesis tables named in ``which`` (report settings), each with the pipeline's own values beside them.
 
-    ``calibration``: the LBM calibration record (or its path) that fills Tables 6.2 and 6.3.
+    ``calibration``: the LBM calibration record (or its path) that fills Tables 6.2 and 6.3; ``others``: thesis
+    model -> sweep of another scene, for more rows of Tables 5.1 and 5.2.
     """
     record = load_calibration(calibration) if {"6.2", "6.3"} & {ThesisTable(w).value for w in which} else None
     builders = {
-        ThesisTable.t5_1: lambda: table_5_1(ds, model),
-        ThesisTable.t5_2: lambda: table_5_2(ds, model),
+        ThesisTable.t5_1: lambda: table_5_1(ds, model, others),
+        ThesisTable.t5_2: lambda: table_5_2(ds, model, others),
         ThesisTable.t6_2: lambda: table_6_2(record),
         ThesisTable.t6_3: lambda: table_6_3(record),
         ThesisTable.t6_4: table_6_4,

@@ -199,3 +199,100 @@ def test_strain_of_an_affine_field_and_plane_strain_constants():
     assert float(out["E"]) == pytest.approx(young, rel=1e-12)
     # Eq. 4.10: u_ii = sigma_ii/(2K) in plane strain
     assert float(out["K"]) == pytest.approx((sxx + szz) / (2 * (exx + ezz)), rel=1e-12)
+
+
+# -- the floor-pressure dip (Schinner 2001 §4.2) -------------------------------------------------------------------
+def _piecewise(x, nodes):
+    """Piecewise-linear profile through (x, p) nodes."""
+    xs, ps = zip(*nodes, strict=True)
+    return np.interp(x, xs, ps)
+
+
+def test_pressure_dip_is_zero_for_pressure_proportional_to_height():
+    """A wedge heap whose floor pressure follows the local height (columns, layered heaps): no dip."""
+    x = np.linspace(-1.0, 1.0, 201)
+    p = _piecewise(x, [(-1, 0), (0, 1), (1, 0)])
+    out = M.pressure_dip(x, p, 0.0)
+    assert out["dip"] == pytest.approx(0.0, abs=1e-12)
+    assert out["p_side"] == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("nodes", "dip"),
+    [
+        ([(-1, 0), (-0.2, 1), (0, 0.6), (0.2, 1), (1, 0)], 0.4),  # symmetric "M": 1 - 0.6/1
+        ([(-1, 0), (-0.3, 1), (0, 0.45), (0.25, 0.8), (1, 0)], 0.5),  # asymmetric: 1 - 0.45/((1 + 0.8)/2)
+    ],
+)
+def test_pressure_dip_of_a_constructed_minimum(nodes, dip):
+    x = np.linspace(-1.0, 1.0, 401)  # holds every node exactly
+    out = M.pressure_dip(x, _piecewise(x, nodes), 0.0)
+    assert out["dip"] == pytest.approx(dip, rel=1e-12)
+    assert out["x_left_max"] == pytest.approx(nodes[1][0], abs=1e-12)
+    assert out["x_right_max"] == pytest.approx(nodes[3][0], abs=1e-12)
+
+
+def test_pressure_dip_fluctuation_is_the_window_scatter():
+    """Windows alternating +-delta about the smoothed profile: scatter delta, relative to p_side."""
+    x = np.linspace(-1.0, 1.0, 200)
+    p = _piecewise(x, [(-1, 0), (0, 2), (1, 0)])
+    delta = 0.1
+    noisy = p + delta * np.where(np.arange(len(x)) % 2 == 0, 1.0, -1.0)
+    out = M.pressure_dip(x, p, 0.0, noise=noisy)
+    assert out["fluctuation"] == pytest.approx(delta / out["p_side"], rel=1e-12)
+
+
+def test_pressure_dip_rejects_bad_input():
+    x = np.linspace(0.0, 1.0, 10)
+    with pytest.raises(PorepipeError, match="apex x = 2.0 outside"):
+        M.pressure_dip(x, x, 2.0)
+    with pytest.raises(PorepipeError, match="one length"):
+        M.pressure_dip(x, x[:-1], 0.5)
+
+
+def test_scaled_profile_maps_to_the_thesis_axes():
+    """s = (x - apex) / (base/2), p / (rho g h); NaN outside the measured range (ensemble averages skip it)."""
+    x = np.linspace(0.1, 0.5, 41)  # apex 0.3, half base 0.2
+    p = 50.0 * (1.0 - np.abs(x - 0.3) / 0.2)
+    grid = np.array([-1.2, -0.95, -0.5, 0.0, 0.5, 0.95, 1.2])
+    out = M.scaled_profile(x, p, 0.3, 0.2, 50.0, grid)
+    np.testing.assert_allclose(out[1:-1], 1.0 - np.abs(grid[1:-1]), atol=1e-12)
+    assert np.isnan(out[0]) and np.isnan(out[-1])
+    with pytest.raises(PorepipeError, match="must be positive"):
+        M.scaled_profile(x, p, 0.3, 0.0, 50.0, grid)
+
+
+def _fake_heap(apex, half, rgh, nodes, repose_deg):
+    x = np.linspace(apex - 1.5 * half, apex + 1.5 * half, 301)
+    return {
+        "floor_x_m": x,
+        "floor_running_mean": rgh * _piecewise((x - apex) / half, nodes),
+        "apex_x_m": apex,
+        "foot_m": (apex - half, apex + half),
+        "rho_g_h": rgh,
+        "repose_left_rad": math.radians(repose_deg[0]),
+        "repose_right_rad": math.radians(repose_deg[1]),
+        "dip": {"dip": 0.0},
+    }
+
+
+def test_heap_ensemble_averages_on_the_thesis_axes():
+    """Two heaps of different size, place and weight with the same scaled "M" profile, and a third with a triangle:
+    the mean is their average on s = (x - apex)/(foot/2), p/(rho g h); its dip is that of the averaged nodes."""
+    from porepipe.granular import heap_ensemble
+
+    m = [(-1.5, 0), (-1, 0), (-0.2, 1), (0, 0.4), (0.2, 1), (1, 0), (1.5, 0)]
+    tri = [(-1.5, 0), (-1, 0), (0, 1), (1, 0), (1.5, 0)]
+    heaps = [
+        _fake_heap(0.1, 0.2, 500.0, m, (20, 22)),
+        _fake_heap(-0.3, 0.05, 80.0, m, (24, 26)),
+        _fake_heap(0.0, 1.0, 1.0, tri, (22, 24)),
+    ]
+    e = heap_ensemble(heaps, points=121)  # grid step 0.02 holds s = 0, +-0.2
+    # mean at s = 0: (0.4 + 0.4 + 1)/3 = 0.6; at s = +-0.2: (1 + 1 + 0.8)/3 = 0.9333 (the maxima of the mean)
+    assert e["mean"][60] == pytest.approx(0.6, rel=1e-9)
+    assert e["dip"]["dip"] == pytest.approx(1 - 0.6 / (2.8 / 3), rel=1e-9)
+    assert e["repose_deg"] == pytest.approx((23.0, np.std([20, 22, 24, 26, 22, 24])), rel=1e-12)
+    assert e["n"] == 3
+    with pytest.raises(PorepipeError, match="no heaps"):
+        heap_ensemble([])

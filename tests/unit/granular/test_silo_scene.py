@@ -1,9 +1,10 @@
 """The CI Janssen silo (config/scenes/granular-silo-ci.yaml) end to end: run, measure, fit.
 
 Truths used: static force balance (floor + walls carry the weight), saturation of the wall pressure (its slope in
-the lower half of the fill far below the hydrostatic slope at the top), the Rankine bracket of a Mohr-Coulomb bulk
-for k, and the Janssen fit's mu_j against the wall friction actually mobilised (sum of the walls' vertical
-tractions over their normal forces), which is what Janssen's tau_w = mu_j sigma_xx means.
+the lower half of the fill far below the hydrostatic slope at the top), the thesis's measured k = 0.64 ± 0.19 and
+mu_j = 0.33 (Schinner 2001 §3.1), the Rankine-active-to-Jaky bracket of a Mohr-Coulomb bulk for k, and the Janssen
+fit's mu_j against the wall friction actually mobilised (sum of the walls' vertical tractions over their normal
+forces), which is what Janssen's tau_w = mu_j sigma_xx means.
 """
 
 from pathlib import Path
@@ -11,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from porepipe.granular import analyse_silo, lateral_pressure_bounds, read_granular, run
+from porepipe.granular import THESIS_SILO, analyse_silo, lateral_pressure_bounds, read_granular, run
 from porepipe.scene import load_scene
 
 SCENE = Path(__file__).parents[3] / "config" / "scenes" / "granular-silo-ci.yaml"
@@ -46,12 +47,23 @@ def test_ci_silo_wall_pressure_saturates(silo):
 
 
 def test_ci_silo_k_and_mu_j(silo):
+    """k and mu_j of a silo filled from the top at a limited rate, against the thesis (§3.1) and Rankine-Jaky.
+
+    Tolerances: k within the thesis's spread over test areas (0.64 ± 0.19), and its mean over ~19 slabs in the
+    Rankine-active-to-Jaky bracket within two standard errors of that mean; mu_j within 30 % of the thesis's 0.33
+    (one realisation; a second fill protocol with half the rate gave k 0.59, mu_j 0.30); the fitted mu_j (k fixed
+    at the stress tensors' mean) within 25 % of the friction the walls actually mobilise. The fast fill this scene
+    had before (momentum flux above the saturated floor load) gave k 0.87, mu_j 0.14 and fails all but the last.
+    """
     a, mu, _ = silo
     b = lateral_pressure_bounds(mu)
-    assert b["rankine_active"] < a["k"] < b["rankine_passive"]
-    # the fitted wall friction is the mobilised one (both ~0.1 here, well below the grains' mu = 0.4); 20 %
-    # covers the profile's deviation from the exponential form (fit rms ~ 20 % of the plateau)
-    assert a["fit"]["mu_j"] == pytest.approx(a["mu_wall_mobilised"], rel=0.2)
+    th = THESIS_SILO
+    assert abs(a["k"] - th["k"]) < th["k_err"]
+    sem = a["k_std"] / np.sqrt(len(a["k_local"]))
+    assert b["rankine_active"] - 2 * sem < a["k"] < b["jaky"] + 2 * sem
+    assert a["fit_k_fixed"]["mu_j"] == pytest.approx(th["mu_j"], rel=0.3)
+    assert a["mu_wall_mobilised"] == pytest.approx(th["mu_j"], rel=0.3)
+    assert a["fit_k_fixed"]["mu_j"] == pytest.approx(a["mu_wall_mobilised"], rel=0.25)
     assert (
         0.6 < a["rho_rel"] < 0.91
     )  # between random loose packing and the hexagonal disk packing pi/sqrt(12)

@@ -107,7 +107,13 @@ def test_pressure_gradient_methods_agree_on_a_linear_profile():
     fields[1] = 2e-5
     nu = 0.1
     est = estimates(
-        lat, sampler, fields, nu=nu, body_force=1e-6, sample_voxels=5 * 9, sample_area=9, trim_layers=1
+        sampler,
+        sampler.tables(fields),
+        nu=nu,
+        body_force=1e-6,
+        sample_voxels=5 * 9,
+        sample_area=9,
+        trim_layers=1,
     )
     s_nodes = int(np.count_nonzero(pore[3:8]))
     u_mean = 2e-5 * s_nodes / 45
@@ -124,8 +130,15 @@ def test_body_force_estimate_is_nu_u_over_b():
     lat = build_lattice(pore, (True, False, False), (0, 4), (0, 4))
     fields = np.zeros((4, lat.n_nodes))
     fields[1] = 3e-5
+    sampler = Sampler.of(lat)
     est = estimates(
-        lat, Sampler.of(lat), fields, nu=0.2, body_force=1e-6, sample_voxels=36, sample_area=9, trim_layers=0
+        sampler,
+        sampler.tables(fields),
+        nu=0.2,
+        body_force=1e-6,
+        sample_voxels=36,
+        sample_area=9,
+        trim_layers=0,
     )
     assert est["body_force/mean"] == pytest.approx(0.2 * 3e-5 / 1e-6, rel=1e-12)
     assert est["body_force/flux"] == pytest.approx(0.2 * 3e-5 / 1e-6, rel=1e-12)

@@ -1,8 +1,9 @@
 """Step kernel: Newton's third law, pair relaxation to dx_eq, damping (§5.3), neighbour lists vs all pairs."""
 
+import numba
 import numpy as np
 import pytest
-from naive_packing import neighbour_pairs
+from naive_packing import max_overlaps, min_image, neighbour_pairs
 
 from porepipe.packing import _kernels as K
 from porepipe.packing._api import pair_tables
@@ -28,7 +29,7 @@ class Run:
         self.dt, self.cut = dt, cut
         skin = self.r.max() * 2 if skin is None else skin
         self.nbr = build_neighbours(
-            self.x, self.r, self.types, self.box, self.per, np.ones((nt, nt), np.uint8), cut, skin
+            self.x, self.r, self.types, self.box, self.per, np.ones((nt, nt), np.uint8), cut, skin, half=True
         )
         self.kernel = K.make_step_kernel(False, False, not self.per.all())
         self.sigmax = np.zeros(n)
@@ -48,8 +49,7 @@ class Run:
             self.types,
             np.arange(len(self.r)),
             np.zeros(len(self.r), np.uint8),
-            self.nbr[0],
-            self.nbr[1],
+            *self.nbr,
             self.box,
             self.per,
             *pair_tables(self.k, self.sig),
@@ -91,6 +91,52 @@ def test_newtons_third_law_sum_of_forces_vanishes():
     # differs: the residual is round-off, below 1e-12 of the summed magnitudes
     assert np.abs(total).max() <= 1e-12 * np.abs(run.f).sum()
     assert np.abs(run.f).sum() > 0
+
+
+def _all_pairs_forces(x, r, types, box, per, k_t, sig_t, cut):
+    """Pair forces summed over all pairs in reach, straight from the force law (5.2.2) in NumPy, O(N^2)."""
+    d = min_image(x[:, None, :] - x[None, :, :], box, per)
+    dist = np.sqrt((d * d).sum(-1))
+    np.fill_diagonal(dist, np.inf)
+    k = 0.5 * (k_t[types][:, None] + k_t[types][None, :])
+    rsum = r[:, None] + r[None, :]
+    dxeq = rsum - 0.5 * np.minimum(sig_t[types][:, None], sig_t[types][None, :]) * (
+        rsum - np.abs(r[:, None] - r[None, :])
+    )
+    u8 = (dxeq / dist) ** 8
+    f = np.where(
+        dist <= dxeq, np.sqrt(k) * (1 + k / 4) / dxeq * (1 - dist / dxeq), 4 * k / dist * u8 * (u8 - 1)
+    )
+    f = np.where(dist <= cut * dxeq, f, 0.0)
+    return (f[..., None] * d / dist[..., None]).sum(1)
+
+
+@pytest.mark.parametrize("periodic", [True, [True, False, True]])
+def test_forces_and_overlaps_equal_all_pairs_for_any_thread_count(periodic):
+    """Each listed pair is evaluated once and applied to both ends, slab colours one after another: the forces equal
+    an all-pairs sum of the force law to round-off (1e-12 of the largest force: only the summation order differs),
+    max sigma equals the all-pairs maximum, and 1 and 2 threads give the same bits (box wide enough for 12 slabs)."""
+    rng = np.random.default_rng(3)
+    box = np.array([30.0, 150.0, 40.0])
+    x, r = _random_spheres(rng, 700, box, 2.0, 4.0)
+    types = rng.integers(0, 2, r.size)
+    k_t, sig_t = np.array([40.0, 10.0]), np.array([0.3, 0.2])
+    got = []
+    for threads in (1, 2):
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        try:
+            run = Run(x, r, types, box, k_t, sig_t, [1.0, 1.0], 0.01, periodic=periodic, skin=1.0)
+            run.step()
+        finally:
+            numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        got.append((run.f.copy(), run.sigmax.copy()))
+    # slabs along y, at least one reach 1.3 * 8 + 1 wide: 13, or 12 with periodic faces (a multiple of 3)
+    assert run.nbr[2].size - 1 == (12 if run.per[1] else 13)
+    ref = _all_pairs_forces(x, np.asarray(r), types, box, run.per, k_t, sig_t, 1.3)
+    assert np.abs(got[0][0] - ref).max() <= 1e-12 * np.abs(ref).max()
+    sig_ref = max_overlaps(x, np.asarray(r), box, run.per)
+    np.testing.assert_allclose(np.maximum(got[0][1], 0.0), np.maximum(sig_ref, 0.0), rtol=0, atol=1e-14)
+    assert got[0][0].tobytes() == got[1][0].tobytes() and got[0][1].tobytes() == got[1][1].tobytes()
 
 
 @pytest.mark.parametrize("ta,tb", [(0, 0), (0, 1), (1, 1)])

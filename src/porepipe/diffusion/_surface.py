@@ -1,0 +1,343 @@
+"""Adsorption, surface diffusion, Langmuir-Hinshelwood and Eley-Rideal on the voxel walls (Mahler 2001 §4.3-4.4).
+
+The thesis designed these mechanisms (Q_ADSORB per voxel face, residence times, RkPartner within a reactive
+distance, w_ER = a·θ_B·w) but never ran them; this module runs them in the Knudsen regime (no gas-gas collisions)
+with every gas and adsorbed particle advancing through one event calendar (see
+:mod:`porepipe.diffusion._surface_kernels`). Units: lengths in voxels, times in jiffies, speeds in voxel/jiffie.
+
+Model (each choice stated so the analytic truths below are exact):
+
+- each wall face of a pore voxel carries ``s × s`` sites of area A_site = (face area)/s², a fraction
+  ``active_fraction`` of them active (the thesis's a); a site holds one particle;
+- a gas particle of species X hitting an active empty site adsorbs with probability ``adsorption``; it stays a
+  residence time (fixed or exponential of mean ``residence``), hops to an in-face neighbour site at rate ``hop_rate``
+  (rejected if that site is occupied, inactive or off the face) and desorbs by the wall law with a thermal speed;
+- Eley-Rideal A(g) + B(ads) → P: an A hit on a site that holds B reacts with probability ``w``; so per A hit the
+  reaction probability is a·θ_B·w, the thesis's (4.16), with θ_B the coverage of the active sites;
+- Langmuir-Hinshelwood A(ads) + B(ads) → P: a particle arriving at a site tries each in-face neighbour holding its
+  partner with probability ``w`` (reactive distance = one site spacing);
+- ``replenish``: each reaction's product is counted and both reactants re-enter the gas (steady state).
+
+Analytic truths (tests/validation/test_surface_mechanisms.py):
+
+- Langmuir (competitive, one site per particle): with Lambert walls the equilibrium gas hits every site at
+  F_X = n_X·v̄_X·A_site/4 per time, so each active site is a Markov chain empty ⇄ X with rates a_X·F_X and 1/τ_X:
+  θ_X = K_X·n_X/(1 + Σ_Y K_Y·n_Y), K_X = a_X·v̄_X·A_site·τ_X/4 (:func:`langmuir_coverage`); hops (a symmetric
+  exclusion process) do not change it.
+- LH encounters: with independent Bernoulli occupations (exact at w → 0) an arrival of X on a site with z in-face
+  neighbours reacts with probability 1 − (1 − w·θ_Y)^z, z − 1 for a hop (the site it came from is empty now)
+  (:func:`lh_reaction_probability`).
+- ER with B fixed on the surface and no replenishment: −dN_B/dt = k·N_A·N_B, k = w·v̄_A·A_site/(4V), N_A − N_B
+  constant: the second-order law (:func:`second_order_remaining`), first order when A is in excess.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.rng import kernel_seed
+from porepipe.diffusion import _surface_kernels as S
+
+STAGE = "diffusion"
+_LAWS = {"lambert": 1, "isotropic": 3, "cosine_dtheta": 2}
+
+
+@dataclass(frozen=True)
+class Adsorbate:
+    """One species: mean speed (voxel/jiffie), start counts, adsorption probability, mean residence, hop rate."""
+
+    name: str
+    vmean: float = 1.0
+    gas: int = 0
+    adsorbed: int = 0
+    adsorption: float = 0.0
+    residence: float = math.inf
+    hop_rate: float = 0.0
+
+    def __post_init__(self):
+        checks = (
+            ("vmean", self.vmean > 0 and math.isfinite(self.vmean)),
+            ("gas", self.gas >= 0 and int(self.gas) == self.gas),
+            ("adsorbed", self.adsorbed >= 0 and int(self.adsorbed) == self.adsorbed),
+            ("adsorption", 0.0 <= self.adsorption <= 1.0),
+            ("residence", self.residence > 0),
+            ("hop_rate", self.hop_rate >= 0 and math.isfinite(self.hop_rate)),
+        )
+        for key, ok in checks:
+            if not ok:
+                raise PorepipeError(f"species {self.name!r}: invalid {key} = {getattr(self, key)!r}")
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """A + B → product, bimolecular: ``kind`` "LH" (both adsorbed) or "ER" (``a`` from the gas, ``b`` adsorbed)."""
+
+    kind: str
+    a: str
+    b: str
+    product: str
+    w: float
+
+    def __post_init__(self):
+        if self.kind not in ("LH", "ER"):
+            raise PorepipeError(f"mechanism kind must be LH or ER, got {self.kind!r}")
+        if not 0.0 <= self.w <= 1.0:
+            raise PorepipeError(f"mechanism {self.kind}: w must lie in [0, 1], got {self.w!r}")
+
+
+def wall_sites(codes: np.ndarray, periodic) -> tuple[np.ndarray, np.ndarray]:
+    """Wall faces of the pore voxels: ``face_of`` ((n·6,) int64, face id or -1 per voxel and face event
+    2·axis + (step > 0)) and ``site_face`` ((m, 4) int64: voxel index and face event per face id).
+    """
+    pore = codes > 0
+    walls = []
+    for ax in range(3):
+        for up in (0, 1):
+            shifted = np.roll(pore, -1 if up else 1, axis=ax)
+            wall = pore & ~shifted
+            if not periodic[ax]:
+                edge = [slice(None)] * 3
+                edge[ax] = -1 if up else 0
+                wall[tuple(edge)] = pore[tuple(edge)]
+            walls.append(wall)
+    stack = np.stack(walls, axis=-1)  # (n0, n1, n2, 6)
+    face_of = np.full(stack.size, -1, dtype=np.int64)
+    flat = np.flatnonzero(stack.reshape(-1))
+    face_of[flat] = np.arange(flat.size)
+    vox = np.column_stack(np.unravel_index(flat // 6, codes.shape))
+    return face_of, np.column_stack([vox, flat % 6]).astype(np.int64)
+
+
+def _sites_and_activity(n_faces, s, active_fraction, seed):
+    n_sites = n_faces * s * s
+    if not 0.0 < active_fraction <= 1.0:
+        raise PorepipeError(f"active_fraction must lie in (0, 1], got {active_fraction!r}")
+    rng = np.random.default_rng(kernel_seed(seed, STAGE, 19))
+    active = rng.random(n_sites) < active_fraction if active_fraction < 1.0 else np.ones(n_sites, bool)
+    return n_sites, active
+
+
+def _start_sites(species, active, seed):
+    """Start site per particle (-1 = gas): the pre-adsorbed ones on distinct random active sites."""
+    n_pre = sum(int(sp.adsorbed) for sp in species)
+    free = np.flatnonzero(active)
+    if n_pre > free.size:
+        raise PorepipeError(f"{n_pre} pre-adsorbed particles do not fit on {free.size} active sites")
+    rng = np.random.default_rng(kernel_seed(seed, STAGE, 20))
+    chosen = rng.choice(free, size=n_pre, replace=False)
+    kinds, sites, k = [], [], 0
+    for x, sp in enumerate(species):
+        kinds += [x] * (int(sp.gas) + int(sp.adsorbed))
+        sites += [-1] * int(sp.gas) + list(chosen[k : k + int(sp.adsorbed)])
+        k += int(sp.adsorbed)
+    return np.array(kinds, dtype=np.int64), np.array(sites, dtype=np.int64)
+
+
+def _mechanism_arrays(mechanisms, names):
+    lh, er = np.full(3, -1, np.int64), np.full(3, -1, np.int64)
+    lh_w = er_w = 0.0
+    seen = set()
+    for m in mechanisms:
+        for key in ("a", "b", "product"):
+            if getattr(m, key) not in names:
+                raise PorepipeError(
+                    f"mechanism {m.kind}: {key} = {getattr(m, key)!r} is not a species ({names})"
+                )
+        if m.kind in seen:
+            raise PorepipeError(f"at most one {m.kind} mechanism, got two")
+        seen.add(m.kind)
+        spec = np.array([names.index(m.a), names.index(m.b), names.index(m.product)], np.int64)
+        if m.w == 0.0:
+            continue  # a zero-probability mechanism is off: not one random number drawn for it
+        if m.kind == "LH":
+            lh, lh_w = spec, m.w
+        else:
+            er, er_w = spec, m.w
+    return lh, lh_w, er, er_w
+
+
+def surface_run(
+    pore,
+    species,
+    mechanisms=(),
+    *,
+    t_end: float,
+    t_warm: float = 0.0,
+    sites_per_edge: int = 2,
+    active_fraction: float = 1.0,
+    wall_law: str = "lambert",
+    residence_law: str = "exponential",
+    replenish: bool = False,
+    blocks: int = 16,
+    t_samples=(),
+    voxel_um=1.0,
+    periodic=(False, False, False),
+    seed: int = 0,
+) -> dict:
+    """Run the adsorbing, reacting Knudsen gas in a closed (or periodic) pore from 0 to ``t_end`` jiffies.
+
+    Returns per species (arrays in the order of ``species``) over the blocks after ``t_warm``: ``coverage`` (time
+    mean adsorbed count / active sites) and its error, ``gas_density`` (time mean gas count / pore volume),
+    ``adsorptions``, ``desorptions``, ``hops``, ``hop_tries``, ``wall_hits``; ``lh_reactions``/``er_reactions``
+    (counts after ``t_warm``) and their rates per time; ``series`` (gas and adsorbed counts at ``t_samples``,
+    shape (k, species, 2)); ``final_counts`` (gas + adsorbed slots per species at the end); geometry data
+    (``pore_volume``, ``sites``, ``site_area``, ``active_sites``) and ``events``.
+    """
+    from porepipe.diffusion._api import prepare
+
+    species = tuple(species)
+    names = [sp.name for sp in species]
+    if not species or len(set(names)) != len(names):
+        raise PorepipeError(f"species must be a non-empty list of distinct names, got {names}")
+    if wall_law not in _LAWS:
+        raise PorepipeError(f"wall_law must be one of {', '.join(_LAWS)}, got {wall_law!r}")
+    if residence_law not in ("fixed", "exponential"):
+        raise PorepipeError(f"residence_law must be fixed or exponential, got {residence_law!r}")
+    if int(sites_per_edge) != sites_per_edge or sites_per_edge < 1:
+        raise PorepipeError(f"sites_per_edge must be a positive whole number, got {sites_per_edge!r}")
+    if not (0.0 <= t_warm < t_end) or blocks < 1:
+        raise PorepipeError(
+            f"need 0 <= t_warm < t_end and blocks >= 1, got {t_warm!r}, {t_end!r}, {blocks!r}"
+        )
+    lh, lh_w, er, er_w = _mechanism_arrays(mechanisms, names)
+    geom = prepare(pore, voxel_um, periodic, axis=None)
+    if not np.allclose(geom.h, 1.0):
+        raise PorepipeError(f"the adsorbing gas needs cubic voxels, got voxel_um {geom.voxel_um.tolist()}")
+    face_of, site_face = wall_sites(geom.codes, geom.periodic)
+    s = int(sites_per_edge)
+    n_sites, active = _sites_and_activity(site_face.shape[0], s, active_fraction, seed)
+    kinds, site0 = _start_sites(species, active, seed)
+    if kinds.size == 0:
+        raise PorepipeError("no particles: give some species a gas or adsorbed count > 0")
+    opts = np.array([_LAWS[wall_law], int(residence_law == "exponential"), int(bool(replenish))], np.int64)
+    n_sp = len(species)
+    tally = np.zeros((blocks, n_sp, S.N_STALLY))
+    rtally = np.zeros((blocks, S.N_XTALLY))
+    samples = np.asarray(t_samples, dtype=float).reshape(-1)
+    series = np.zeros((samples.size, n_sp, 2))
+    final_sp = np.empty(kinds.size, np.int64)
+    final_st = np.empty(kinds.size, np.int64)
+    events = S.surface_kernel(
+        opts,
+        geom.codes,
+        geom.h,
+        geom.periodic,
+        geom.cells(),
+        face_of,
+        site_face,
+        s,
+        active,
+        kinds,
+        site0,
+        np.array([sp.vmean for sp in species]),
+        np.array([sp.adsorption for sp in species]),
+        np.array([sp.residence for sp in species]),
+        np.array([sp.hop_rate for sp in species]),
+        lh,
+        lh_w,
+        er,
+        er_w,
+        kernel_seed(seed, STAGE, 21),
+        float(t_end),
+        float(t_warm),
+        samples,
+        tally,
+        rtally,
+        series,
+        final_sp,
+        final_st,
+    )
+    return _summary(
+        tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, t_end - t_warm, events
+    )
+
+
+def _summary(tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, span, events) -> dict:
+    n_blk, n_sp = tally.shape[0], tally.shape[1]
+    blk = span / n_blk
+    n_active = int(active.sum())
+    cov_b = tally[:, :, S.S_ADS_T] / blk / n_active
+    err = cov_b.std(axis=0, ddof=1) / math.sqrt(n_blk) if n_blk > 1 else np.full(n_sp, math.inf)
+    total = tally.sum(axis=0)
+    keep = final_st != S.GONE
+    return {
+        "coverage": cov_b.mean(axis=0),
+        "coverage_err": err,
+        "coverage_blocks": cov_b,
+        "gas_density": total[:, S.S_GAS_T] / span / geom.pore_volume,
+        "wall_hits": total[:, S.S_HITS],
+        "adsorptions": total[:, S.S_ADS],
+        "desorptions": total[:, S.S_DES],
+        "hop_tries": total[:, S.S_HOP_TRY],
+        "hops": total[:, S.S_HOP_OK],
+        "lh_reactions": int(rtally[:, S.X_LH].sum()),
+        "er_reactions": int(rtally[:, S.X_ER].sum()),
+        "lh_blocks": rtally[:, S.X_LH],
+        "er_blocks": rtally[:, S.X_ER],
+        "blocks_tally": tally,
+        "span": span,
+        "series": series,
+        "final_counts": np.bincount(final_sp[keep], minlength=n_sp),
+        "pore_volume": geom.pore_volume,
+        "sites": n_sites,
+        "active_sites": n_active,
+        "site_area": 1.0 / (s * s),
+        "sites_per_edge": s,
+        "events": int(events),
+    }
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# analytic truths
+def langmuir_coverage(k, n) -> np.ndarray:
+    """Competitive Langmuir isotherm θ_X = K_X·n_X/(1 + Σ K_Y·n_Y) (one site per particle)."""
+    kn = np.asarray(k, float) * np.asarray(n, float)
+    return kn / (1.0 + kn.sum())
+
+
+def langmuir_constant(adsorption: float, vmean: float, site_area: float, residence: float) -> float:
+    """K = a·v̄·A_site·τ/4: site hits per time per unit gas density (v̄·A/4, Lambert equilibrium) × a × τ."""
+    return adsorption * vmean * site_area * residence / 4.0
+
+
+def _in_face_neighbours(s: int) -> np.ndarray:
+    """(s, s) number of in-face neighbour sites (4 inside, 3 on an edge, 2 in a corner; 0 for s = 1)."""
+    z = np.full((s, s), 4)
+    z[0, :] -= 1
+    z[-1, :] -= 1
+    z[:, 0] -= 1
+    z[:, -1] -= 1
+    return z if s > 1 else np.zeros((1, 1), int)
+
+
+def lh_reaction_probability(s: int, w: float, theta_partner: float, arrival: str) -> float:
+    """Mean probability that an arrival reacts under independent Bernoulli occupation with partner coverage θ.
+
+    ``arrival`` "adsorption": a uniform (empty) site, 1 − (1 − wθ)^z averaged over the s×s sites;
+    "hop": an accepted hop from a site to a uniform in-face neighbour, 1 − (1 − wθ)^(z_target − 1) averaged over
+    the ordered neighbour pairs (source, target).
+    """
+    z = _in_face_neighbours(s)
+    q = 1.0 - w * theta_partner
+    if arrival == "adsorption":
+        return float(np.mean(1.0 - q**z))
+    if arrival != "hop":
+        raise PorepipeError(f"arrival must be adsorption or hop, got {arrival!r}")
+    if s < 2:
+        return 0.0
+    # each target site is reached from its z neighbours: weight by z
+    return float(np.sum(z * (1.0 - q ** (z - 1))) / np.sum(z))
+
+
+def second_order_remaining(n_a0: float, n_b0: float, k: float, t) -> np.ndarray:
+    """N_B(t) for A + B → P with −dN_B/dt = k·N_A·N_B and N_A − N_B = n_a0 − n_b0 (exact solution)."""
+    t = np.asarray(t, float)
+    d = n_a0 - n_b0
+    if abs(d) < 1e-12 * max(n_a0, 1.0):
+        return n_b0 / (1.0 + k * n_b0 * t)
+    e = np.exp(-k * d * t)
+    return d * n_b0 * e / (n_a0 - n_b0 * e)

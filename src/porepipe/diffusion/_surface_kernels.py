@@ -1,0 +1,602 @@
+"""Numba kernel of the Knudsen gas with an explicit adsorbed layer (Mahler 2001 §4.3-4.4, beyond the thesis).
+
+Every wall face of a pore voxel (a pore-solid voxel face, thesis §4.4: surface element = voxel face) is split into
+``s × s`` adsorption sites; a site holds at most one particle. Gas particles fly as in the Knudsen engine (points,
+exact voxel traversal, no gas-gas collisions) and all of them advance together through one event calendar (binary
+heap, one pending event per particle, lazy invalidation by a per-particle counter), because adsorbed particles
+couple them. Events:
+
+- wall hit of a gas particle of species X on site s:
+  Eley-Rideal (X is the mechanism's gas partner and s holds its adsorbed partner: react with ``er_w``), else
+  adsorption (s active and empty: with probability ``ads[X]``), else a diffuse reflection;
+- desorption of an adsorbed particle after its residence time (fixed or exponential of mean ``tau[X]``), emitted
+  by the wall law with a thermal (flux-weighted Maxwell-Boltzmann) speed;
+- surface hop (rate ``hop[X]``): to one of the 4 in-face neighbour sites, rejected when it is occupied, inactive or
+  off the face (a symmetric exclusion process: it leaves the Langmuir occupation measure unchanged).
+
+Langmuir-Hinshelwood: a particle of species A or B arriving at a site (by adsorption or by a hop) tries each in-face
+neighbour site holding the other partner with probability ``lh_w`` (the reactive distance is one site spacing,
+h/s); on success both leave the surface and the product enters the gas from the arrival site.
+
+Slots: particle ``i`` keeps its index for the whole run; a reaction turns one reactant slot into the product and
+removes the other (state GONE). With ``replenish`` the product is counted and the two reactant slots are put back
+into the gas, uniform in the pore with an isotropic direction and a Maxwell-Boltzmann speed (stoichiometric
+replenishment, thesis §4.3.1: the totals of A and B stay constant, so the system reaches a steady state).
+
+The wall law, the residence law, replenishment and the mechanisms are run-time options (``opts``, the species
+arrays; a mechanism whose species index is -1 is off): one compiled kernel serves every scene, at the cost of a
+few untaken branches per event.
+
+Walls re-emit with a thermal speed (flux-weighted MB): then the mean time between wall hits of every particle is
+4V/(v̄S) whatever its history, so reactions that consume fast particles first cannot bias the rate laws.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from porepipe.diffusion._edmd_kernels import _heap_pop, _heap_push, _heap_room
+from porepipe.diffusion._kernels import (
+    SPEED_FLUX,
+    SPEED_MAXWELL,
+    _emit,
+    _fly,
+    _isotropic,
+    _speed,
+    _stream_state,
+    _uniform,
+    _uniform_in_pore,
+)
+
+GAS, ADSORBED, GONE = 0, 1, 2
+#: per-species columns of the block tally
+S_HITS, S_ADS, S_DES, S_HOP_TRY, S_HOP_OK, S_GAS_T, S_ADS_T = range(7)
+N_STALLY = 7
+#: reaction columns of the block tally
+X_LH, X_ER = range(2)
+N_XTALLY = 2
+_NEIGH = ((1, 0), (-1, 0), (0, 1), (0, -1))
+#: entries of the options array: wall law, exponential residence (1) or fixed (0), replenishment (1)
+O_LAW, O_REXP, O_REPL = range(3)
+
+
+@njit(cache=True)
+def _site_of_hit(face_of, shape, h, s, pos, idx, ev):
+    """Site index of a wall hit at ``pos`` on face ``ev`` of voxel ``idx`` (-1 if the face is not a wall face)."""
+    f = face_of[((idx[0] * shape[1] + idx[1]) * shape[2] + idx[2]) * 6 + ev]
+    if f < 0:
+        return -1
+    ax = ev >> 1
+    a, b = (ax + 1) % 3, (ax + 2) % 3
+    ia = min(max(int((pos[a] / h[a] - idx[a]) * s), 0), s - 1)
+    ib = min(max(int((pos[b] / h[b] - idx[b]) * s), 0), s - 1)
+    return (f * s + ia) * s + ib
+
+
+@njit(cache=True)
+def _site_point(site_face, h, s, site, pos, idx):
+    """Put ``pos``/``idx`` at the centre of ``site`` (on its face plane); returns the face event (0..5)."""
+    f = site // (s * s)
+    ia = (site // s) % s
+    ib = site % s
+    ev = site_face[f, 3]
+    ax = ev >> 1
+    a, b = (ax + 1) % 3, (ax + 2) % 3
+    for d in range(3):
+        idx[d] = site_face[f, d]
+    pos[ax] = (idx[ax] + (ev & 1)) * h[ax]
+    pos[a] = (idx[a] + (ia + 0.5) / s) * h[a]
+    pos[b] = (idx[b] + (ib + 0.5) / s) * h[b]
+    return ev
+
+
+@njit(cache=True)
+def _residence(tau, law_exp, state):
+    if not law_exp or not math.isfinite(tau):
+        return tau, state
+    x, state = _uniform(state)
+    return -tau * math.log(x), state
+
+
+@njit(cache=True)
+def _next_surface_time(t, t_des, hop, state):
+    """Next event of an adsorbed particle: min(desorption, next hop); returns (time, is_hop, state)."""
+    if hop > 0.0:
+        x, state = _uniform(state)
+        th = t - math.log(x) / hop
+        if th < t_des:
+            return th, True, state
+    return t_des, False, state
+
+
+@njit(cache=True)
+def _emit_gas(opts, geom, h, periodic, i, t, ev, vmean, pos, idx, u, speed, tev, state):
+    """Diffuse emission of slot ``i`` from the wall face ``ev`` it sits on, thermal speed, fly to the next hit."""
+    p = pos[i]
+    q = idx[i]
+    d = u[i]
+    sign = -1.0 if (ev & 1) else 1.0
+    state = _emit(opts[O_LAW], ev >> 1, sign, d, state)
+    v, state = _speed(SPEED_FLUX, vmean, state)
+    img = np.zeros(3, dtype=np.int64)
+    e2, ln, _ = _fly(geom, h, periodic, -1, p, q, d, img)
+    speed[i] = v
+    tev[i] = e2
+    return t + ln / v, state
+
+
+@njit(cache=True)
+def _insert_gas(geom, h, periodic, cells, i, t, vmean, pos, idx, u, speed, tev, state):
+    """Slot ``i`` as a fresh equilibrium gas particle (uniform, isotropic, Maxwell speed); returns its hit time."""
+    p = pos[i]
+    q = idx[i]
+    d = u[i]
+    state = _uniform_in_pore(cells, h, p, q, state)
+    state = _isotropic(d, state)
+    v, state = _speed(SPEED_MAXWELL, vmean, state)
+    img = np.zeros(3, dtype=np.int64)
+    e2, ln, _ = _fly(geom, h, periodic, -1, p, q, d, img)
+    speed[i] = v
+    tev[i] = e2
+    return t + ln / v, state
+
+
+@njit(cache=True)
+def surface_kernel(
+    opts,
+    geom,
+    h,
+    periodic,
+    cells,
+    face_of,
+    site_face,
+    s,
+    active,
+    sp0,
+    site0,
+    vmean,
+    ads,
+    tau,
+    hop,
+    lh_spec,
+    lh_w,
+    er_spec,
+    er_w,
+    seed,
+    t_end,
+    t_warm,
+    t_samples,
+    tally,
+    rtally,
+    series,
+    final_species,
+    final_state,
+):
+    """Run to ``t_end``; tallies per time block after ``t_warm``; ``series[k, X, 0/1]`` = gas / adsorbed counts
+    of species X at ``t_samples[k]``. ``site0[i]`` >= 0 starts particle i adsorbed there. Returns the number of
+    events.
+    """
+    n = sp0.shape[0]
+    n_sp = vmean.shape[0]
+    n_blk = tally.shape[0]
+    blk_len = (t_end - t_warm) / n_blk
+    sp = sp0.copy()
+    st = np.zeros(n, dtype=np.int64)
+    pos = np.zeros((n, 3))
+    idx = np.zeros((n, 3), dtype=np.int64)
+    u = np.zeros((n, 3))
+    speed = np.ones(n)
+    tev = np.zeros(n, dtype=np.int64)  # face event of the pending wall hit
+    site = np.full(n, -1, dtype=np.int64)
+    t_des = np.zeros(n)
+    cnt = np.zeros(n, dtype=np.int64)
+    occ = np.full(active.shape[0], -1, dtype=np.int64)
+    n_gas = np.zeros(n_sp)
+    n_ads = np.zeros(n_sp)
+    cap = 2 * n + 16
+    ht, hi, hj = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64)
+    hci, hcj = np.empty(cap, np.int64), np.empty(cap, np.int64)
+    nh = 0
+    state = _stream_state(seed, 0)
+    # start: gas particles in equilibrium, adsorbed ones on their sites
+    for i in range(n):
+        if site0[i] >= 0:
+            st[i] = ADSORBED
+            site[i] = site0[i]
+            occ[site0[i]] = i
+            _site_point(site_face, h, s, site0[i], pos[i], idx[i])
+            tau_i, state = _residence(tau[sp[i]], opts[O_REXP] == 1, state)
+            t_des[i] = tau_i
+            te, _, state = _next_surface_time(0.0, t_des[i], hop[sp[i]], state)
+            n_ads[sp[i]] += 1
+        else:
+            te, state = _insert_gas(
+                geom, h, periodic, cells, i, 0.0, vmean[sp[i]], pos, idx, u, speed, tev, state
+            )
+            n_gas[sp[i]] += 1
+        nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, 0, 0)
+    t_last = 0.0
+    k_sample = 0
+    events = 0
+    while nh > 0:
+        t = ht[0]
+        i = hi[0]
+        c_i = hci[0]
+        nh = _heap_pop(ht, hi, hj, hci, hcj, nh)
+        if c_i != cnt[i]:
+            continue
+        if t > t_end:
+            t = t_end
+        # time integrals and samples up to t
+        while k_sample < t_samples.shape[0] and t_samples[k_sample] <= t:
+            for x in range(n_sp):
+                series[k_sample, x, 0] = n_gas[x]
+                series[k_sample, x, 1] = n_ads[x]
+            k_sample += 1
+        a0 = max(t_last, t_warm)
+        while a0 < t:
+            bk = min(int((a0 - t_warm) / blk_len), n_blk - 1)
+            a1 = min(t, t_warm + (bk + 1) * blk_len) if bk < n_blk - 1 else t
+            for x in range(n_sp):
+                tally[bk, x, S_GAS_T] += n_gas[x] * (a1 - a0)
+                tally[bk, x, S_ADS_T] += n_ads[x] * (a1 - a0)
+            a0 = a1
+        t_last = t
+        if t >= t_end:
+            break
+        events += 1
+        bk = min(int((t - t_warm) / blk_len), n_blk - 1) if t >= t_warm else -1
+        x = sp[i]
+        if st[i] == GAS:
+            # ---- wall hit
+            ev = tev[i]
+            si = _site_of_hit(face_of, geom.shape, h, s, pos[i], idx[i], ev)
+            if bk >= 0:
+                tally[bk, x, S_HITS] += 1
+            done = False
+            if er_spec[0] >= 0 and x == er_spec[0] and si >= 0 and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
+                y, state = _uniform(state)
+                if y < er_w:
+                    j = occ[si]
+                    occ[si] = -1
+                    n_ads[sp[j]] -= 1
+                    n_gas[x] -= 1
+                    if bk >= 0:
+                        rtally[bk, X_ER] += 1
+                    te, tj, state = _react(
+                        opts,
+                        geom,
+                        h,
+                        periodic,
+                        cells,
+                        i,
+                        j,
+                        x,
+                        sp[j],
+                        er_spec[2],
+                        t,
+                        ev,
+                        vmean,
+                        sp,
+                        st,
+                        site,
+                        cnt,
+                        pos,
+                        idx,
+                        u,
+                        speed,
+                        tev,
+                        n_gas,
+                        state,
+                    )
+                    nh = _push2(ht, hi, hj, hci, hcj, nh, cnt, i, te, j, tj)
+                    done = True
+            if not done and si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
+                y, state = _uniform(state)
+                if y < ads[x]:
+                    st[i] = ADSORBED
+                    site[i] = si
+                    occ[si] = i
+                    n_gas[x] -= 1
+                    n_ads[x] += 1
+                    if bk >= 0:
+                        tally[bk, x, S_ADS] += 1
+                    tau_i, state = _residence(tau[x], opts[O_REXP] == 1, state)
+                    t_des[i] = t + tau_i
+                    cnt[i] += 1
+                    nh, state = _arrive(
+                        opts,
+                        geom,
+                        h,
+                        periodic,
+                        cells,
+                        face_of,
+                        site_face,
+                        s,
+                        i,
+                        t,
+                        bk,
+                        vmean,
+                        hop,
+                        lh_spec,
+                        lh_w,
+                        sp,
+                        st,
+                        site,
+                        occ,
+                        t_des,
+                        cnt,
+                        pos,
+                        idx,
+                        u,
+                        speed,
+                        tev,
+                        n_gas,
+                        n_ads,
+                        rtally,
+                        ht,
+                        hi,
+                        hj,
+                        hci,
+                        hcj,
+                        nh,
+                        state,
+                    )
+                    done = True
+            if not done:
+                te, state = _emit_gas(
+                    opts, geom, h, periodic, i, t, ev, vmean[x], pos, idx, u, speed, tev, state
+                )
+                cnt[i] += 1
+                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+        else:
+            # ---- adsorbed: desorption or hop
+            si = site[i]
+            if t >= t_des[i]:
+                occ[si] = -1
+                site[i] = -1
+                st[i] = GAS
+                n_ads[x] -= 1
+                n_gas[x] += 1
+                if bk >= 0:
+                    tally[bk, x, S_DES] += 1
+                ev = _site_point(site_face, h, s, si, pos[i], idx[i])
+                te, state = _emit_gas(
+                    opts, geom, h, periodic, i, t, ev, vmean[x], pos, idx, u, speed, tev, state
+                )
+                cnt[i] += 1
+                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+            else:
+                if bk >= 0:
+                    tally[bk, x, S_HOP_TRY] += 1
+                y, state = _uniform(state)
+                k = min(int(y * 4.0), 3)
+                ia = (si // s) % s + _NEIGH[k][0]
+                ib = si % s + _NEIGH[k][1]
+                target = si - (si % (s * s)) + ia * s + ib
+                if 0 <= ia < s and 0 <= ib < s and active[target] and occ[target] < 0:
+                    occ[si] = -1
+                    occ[target] = i
+                    site[i] = target
+                    _site_point(site_face, h, s, target, pos[i], idx[i])
+                    if bk >= 0:
+                        tally[bk, x, S_HOP_OK] += 1
+                    cnt[i] += 1
+                    nh, state = _arrive(
+                        opts,
+                        geom,
+                        h,
+                        periodic,
+                        cells,
+                        face_of,
+                        site_face,
+                        s,
+                        i,
+                        t,
+                        bk,
+                        vmean,
+                        hop,
+                        lh_spec,
+                        lh_w,
+                        sp,
+                        st,
+                        site,
+                        occ,
+                        t_des,
+                        cnt,
+                        pos,
+                        idx,
+                        u,
+                        speed,
+                        tev,
+                        n_gas,
+                        n_ads,
+                        rtally,
+                        ht,
+                        hi,
+                        hj,
+                        hci,
+                        hcj,
+                        nh,
+                        state,
+                    )
+                else:
+                    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+                    cnt[i] += 1
+                    nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+        if nh + 4 > ht.shape[0]:
+            ht, hi, hj, hci, hcj, nh = _heap_room(ht, hi, hj, hci, hcj, nh, 4, cnt)
+    while k_sample < t_samples.shape[0]:
+        for x in range(n_sp):
+            series[k_sample, x, 0] = n_gas[x]
+            series[k_sample, x, 1] = n_ads[x]
+        k_sample += 1
+    final_species[:] = sp
+    final_state[:] = st
+    return events
+
+
+@njit(cache=True)
+def _push2(ht, hi, hj, hci, hcj, nh, cnt, i, ti, j, tj):
+    """Schedule the two slots of a reaction (a time < 0 = nothing to schedule)."""
+    if ti >= 0.0:
+        nh = _heap_push(ht, hi, hj, hci, hcj, nh, ti, i, -1, cnt[i], 0)
+    if tj >= 0.0:
+        nh = _heap_push(ht, hi, hj, hci, hcj, nh, tj, j, -1, cnt[j], 0)
+    return nh
+
+
+@njit(cache=True)
+def _react(
+    opts,
+    geom,
+    h,
+    periodic,
+    cells,
+    i,
+    j,
+    xi,
+    xj,
+    product,
+    t,
+    ev,
+    vmean,
+    sp,
+    st,
+    site,
+    cnt,
+    pos,
+    idx,
+    u,
+    speed,
+    tev,
+    n_gas,
+    state,
+):
+    """Slots i (at a wall point, face ``ev``) and j (already off the counts) react: i becomes the product and
+    leaves the wall into the gas, j is gone; with opts[O_REPL] both are put back as fresh gas reactants instead.
+    Returns the next event times of i and j (-1: none) and the state.
+    """
+    cnt[i] += 1
+    cnt[j] += 1
+    site[i] = -1
+    site[j] = -1
+    if opts[O_REPL] == 1:
+        st[i] = GAS
+        st[j] = GAS
+        sp[i] = xi
+        sp[j] = xj
+        n_gas[xi] += 1
+        n_gas[xj] += 1
+        ti, state = _insert_gas(geom, h, periodic, cells, i, t, vmean[xi], pos, idx, u, speed, tev, state)
+        tj, state = _insert_gas(geom, h, periodic, cells, j, t, vmean[xj], pos, idx, u, speed, tev, state)
+        return ti, tj, state
+    st[i] = GAS
+    st[j] = GONE
+    sp[i] = product
+    n_gas[product] += 1
+    ti, state = _emit_gas(opts, geom, h, periodic, i, t, ev, vmean[product], pos, idx, u, speed, tev, state)
+    return ti, -1.0, state
+
+
+@njit(cache=True)
+def _arrive(
+    opts,
+    geom,
+    h,
+    periodic,
+    cells,
+    face_of,
+    site_face,
+    s,
+    i,
+    t,
+    bk,
+    vmean,
+    hop,
+    lh_spec,
+    lh_w,
+    sp,
+    st,
+    site,
+    occ,
+    t_des,
+    cnt,
+    pos,
+    idx,
+    u,
+    speed,
+    tev,
+    n_gas,
+    n_ads,
+    rtally,
+    ht,
+    hi,
+    hj,
+    hci,
+    hcj,
+    nh,
+    state,
+):
+    """Particle i has just arrived on its site: Langmuir-Hinshelwood tries with its in-face neighbours, then the
+    next surface event (or, after a reaction, the emissions). ``cnt[i]`` is already bumped.
+    """
+    x = sp[i]
+    si = site[i]
+    if lh_spec[0] >= 0 and (x == lh_spec[0] or x == lh_spec[1]):
+        partner = lh_spec[1] if x == lh_spec[0] else lh_spec[0]
+        base = si - (si % (s * s))
+        ia0 = (si // s) % s
+        ib0 = si % s
+        for k in range(4):
+            ia = ia0 + _NEIGH[k][0]
+            ib = ib0 + _NEIGH[k][1]
+            if not (0 <= ia < s and 0 <= ib < s):
+                continue
+            nb = base + ia * s + ib
+            j = occ[nb]
+            if j < 0 or sp[j] != partner:
+                continue
+            y, state = _uniform(state)
+            if y < lh_w:
+                occ[si] = -1
+                occ[nb] = -1
+                n_ads[x] -= 1
+                n_ads[partner] -= 1
+                if bk >= 0:
+                    rtally[bk, X_LH] += 1
+                ev = _site_point(site_face, h, s, si, pos[i], idx[i])
+                ti, tj, state = _react(
+                    opts,
+                    geom,
+                    h,
+                    periodic,
+                    cells,
+                    i,
+                    j,
+                    x,
+                    partner,
+                    lh_spec[2],
+                    t,
+                    ev,
+                    vmean,
+                    sp,
+                    st,
+                    site,
+                    cnt,
+                    pos,
+                    idx,
+                    u,
+                    speed,
+                    tev,
+                    n_gas,
+                    state,
+                )
+                nh = _push2(ht, hi, hj, hci, hcj, nh, cnt, i, ti, j, tj)
+                return nh, state
+    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+    nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+    return nh, state
