@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -54,28 +54,51 @@ def write_scene(work: Path, n: int, spheres: np.ndarray, budget_mb: int) -> Path
     return scene
 
 
+def _hwm_mb(pid: int) -> float:
+    """VmHWM (peak resident set since the process's exec) of ``pid`` in MB; 0 once it is gone."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return 0.0
+
+
 def run_stage(argv: list[str], threads: int) -> dict:
-    """Run one porepipe command; its wall time (s) and peak resident memory (MB, from wait4)."""
+    """Run one porepipe command; its wall time (s) and peak resident memory (MB).
+
+    The peak is the child's VmHWM, read every 0.2 s while it runs: rusage's ru_maxrss would also count the memory of
+    this process at the fork (it survives exec), which the tiled run makes large.
+    """
     cmd = [sys.executable, "-m", "porepipe.cli", *argv]
     if argv[0] != "segment":  # segment is numpy only, no numba threads
         cmd += ["--threads", str(threads)]
     t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    out = proc.stdout.read()
-    _, status, usage = os.wait4(proc.pid, 0)
-    seconds = time.perf_counter() - t0
-    if os.waitstatus_to_exitcode(status) != 0:
+    with tempfile.TemporaryFile("w+") as log:
+        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, text=True)
+        peak = 0.0
+        while proc.poll() is None:
+            peak = max(peak, _hwm_mb(proc.pid))
+            time.sleep(0.2)
+        seconds = time.perf_counter() - t0
+        log.seek(0)
+        out = log.read()
+    if proc.returncode != 0:
         raise SystemExit(f"{' '.join(argv[:1])} failed:\n{out}")
-    return {"seconds": seconds, "peak_mb": usage.ru_maxrss / 1024.0, "output": out.strip().splitlines()[-1:]}
+    return {"seconds": seconds, "peak_mb": peak, "output": out.strip().splitlines()[-1:]}
 
 
 def baseline_mb() -> float:
     """Peak RSS of a process that only imports the three stages and Dask (interpreter, numba, xarray, h5py)."""
-    imports = (
-        "import porepipe.cli, porepipe.voxelize._run, porepipe.segment._run, porepipe.minkowski._run, dask"
-    )
-    proc = subprocess.Popen([sys.executable, "-c", imports])
-    return os.wait4(proc.pid, 0)[2].ru_maxrss / 1024.0
+    imports = "import porepipe.cli, porepipe.voxelize._run, porepipe.segment._run, porepipe.minkowski._run, dask, time"
+    proc = subprocess.Popen([sys.executable, "-c", f"{imports}; time.sleep(1.0)"])
+    time.sleep(0.5)
+    peak = 0.0
+    while proc.poll() is None:
+        peak = max(peak, _hwm_mb(proc.pid))
+        time.sleep(0.1)
+    return peak
 
 
 def commands(work: Path, scene: Path, budget_mb: int) -> dict[str, list[str]]:
