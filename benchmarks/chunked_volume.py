@@ -187,8 +187,11 @@ def main() -> None:
         if not args.keep:
             shutil.rmtree(work, ignore_errors=True)
     volume_gb = args.n**3 / 1e9
+    source = f"{len(spheres)} spheres of r = {args.radius:g}"
+    if args.tiled:
+        source = f"tiled from a {args.tiled}³ periodic cell of {len(boolean_spheres(args.tiled, args.radius, args.porosity))} spheres of r = {args.radius:g}"
     print(
-        f"\n# {args.n}³ voxels ({volume_gb:.2f} GB as uint8), {len(spheres)} spheres of r = {args.radius:g}, "
+        f"\n# {args.n}³ voxels ({volume_gb:.2f} GB as uint8), {source}, "
         f"budget {args.budget_mb} MB, {args.threads} threads (shared machine)\n"
     )
     print(f"baseline: a process that only imports the stages holds {base:.0f} MB (not volume data)\n")
