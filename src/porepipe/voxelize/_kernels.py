@@ -20,6 +20,7 @@ from porepipe._shared.sample_points import (
     MARGIN,
     N_SAMPLES,
     PARTIAL,
+    ROWS_PER_WORD,
     SUB,
     UNTOUCHED,
     WORDS,
@@ -203,11 +204,12 @@ SLACK = 1e-7
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _row_ranges(cz, r2, eps, near_xy, far_xy, h, k0, k1):
+def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
     """Voxel ranges of one voxel row (fixed x, y) for one ball: ``lo, hi, f_lo, f_hi``.
 
     ``[lo, hi)`` (within ``[k0, k1)``) holds every voxel that the brute-force reach test (squared hull distance
-    within ``r*r*(1 + MARGIN)``) accepts, widened by ``eps`` µm against rounding; ``[f_lo, f_hi)`` inside it the
+    within ``r*r*(1 + MARGIN)``) accepts, widened by ``eps`` µm against rounding (of the square roots and of the
+    products with ``inv_h`` = 1/h); ``[f_lo, f_hi)`` inside it the
     voxels whose whole sample hull is within ``r*r*(1 - MARGIN)``, narrowed by ``eps`` (empty as ``f_lo == f_hi ==
     lo``). ``near_xy``/``far_xy``: the squared near/far hull distances in x and y.
     """
@@ -215,16 +217,16 @@ def _row_ranges(cz, r2, eps, near_xy, far_xy, h, k0, k1):
     if reach < 0.0:
         return k0, k0, k0, k0
     w = np.sqrt(reach) + eps
-    lo = max(int(np.ceil(((cz - w) / h - (SUB - 0.5)) / SUB)), k0)
-    hi = min(int(np.floor(((cz + w) / h - 0.5) / SUB)) + 1, k1)
+    lo = max(int(np.ceil(((cz - w) * inv_h - (SUB - 0.5)) * (1.0 / SUB))), k0)
+    hi = min(int(np.floor(((cz + w) * inv_h - 0.5) * (1.0 / SUB))) + 1, k1)
     if lo >= hi:
         return k0, k0, k0, k0
     inner = r2 * (1.0 - MARGIN) - far_xy
     if inner <= 0.0:
         return lo, hi, lo, lo
     wf = np.sqrt(inner) - eps
-    f_lo = max(int(np.ceil(((cz - wf) / h - 0.5) / SUB)), lo)
-    f_hi = min(int(np.floor(((cz + wf) / h - (SUB - 0.5)) / SUB)) + 1, hi)
+    f_lo = max(int(np.ceil(((cz - wf) * inv_h - 0.5) * (1.0 / SUB))), lo)
+    f_hi = min(int(np.floor(((cz + wf) * inv_h - (SUB - 0.5)) * (1.0 / SUB))) + 1, hi)
     if wf <= 0.0 or f_lo >= f_hi:
         return lo, hi, lo, lo
     return lo, hi, f_lo, f_hi
@@ -259,7 +261,9 @@ def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask):
     k0, k1 = axis_range(cz, r, h, nz)
     for j in range(j0, j1):
         ny_, fy_ = hull_gap(cy, j, h)
-        lo, hi, f_lo, f_hi = _row_ranges(cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, h, k0, k1)
+        lo, hi, f_lo, f_hi = _row_ranges(
+            cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
+        )
         _reach_shell(status, mask, j, lo, f_lo)
         for k in range(f_lo, f_hi):
             status[j, k] = FULL
@@ -319,17 +323,20 @@ def _voxel_count(chords, k):
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _or_voxel(mask, j, k, chords, words):
-    """OR the samples of voxel ``k`` inside the 36 chords of its voxel row into its union mask."""
+    """OR the samples of voxel ``k`` inside the 36 chords of its voxel row into its union mask.
+
+    Row q = 6·sx + sy of the voxel gets the bits ``max(lo - 6k, 0) .. min(hi - 6k, 5)`` (none when that is empty),
+    in the layout of :func:`porepipe._shared.sample_points.or_row`, branch-free (both ends clamped to 0..6 so that
+    every shift is defined).
+    """
+    z0 = SUB * k
     for w in range(WORDS):
         words[w] = 0
-    z0 = SUB * k
-    for sx in range(SUB):
-        for sy in range(SUB):
-            q = SUB * sx + sy
-            lo = max(chords[0, q] - z0, 0)
-            hi = min(chords[1, q] - z0, SUB - 1)
-            if lo <= hi:
-                or_row(words, sx, sy, ((1 << (hi + 1)) - 1) ^ ((1 << lo) - 1))
+    for q in range(SUB * SUB):
+        lo = min(max(chords[0, q] - z0, 0), SUB)
+        hi = max(min(chords[1, q] - z0, SUB - 1), lo - 1)  # hi = lo - 1: no bits
+        bits = (1 << (hi + 1)) - (1 << lo)
+        words[q // ROWS_PER_WORD] |= np.uint64(bits) << np.uint64(SUB * (q % ROWS_PER_WORD))
     for w in range(WORDS):
         mask[j, k, w] |= words[w]
 
@@ -375,7 +382,9 @@ def _shell_grey(i, cx, cy, cz, r, h, ny, nz, status, mask, scratch, proven, chor
         dx2[sx] = dx * dx
     for j in range(j0, j1):
         ny_, fy_ = hull_gap(cy, j, h)
-        lo, hi, f_lo, f_hi = _row_ranges(cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, h, k0, k1)
+        lo, hi, f_lo, f_hi = _row_ranges(
+            cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
+        )
         if not (_needs_chords(status, j, lo, f_lo) or _needs_chords(status, j, f_hi, hi)):
             continue
         _row_chords(j, dx2, cy, cz, r2, h, SUB * nz - 1, scratch[1], proven, chords)
@@ -437,7 +446,7 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
         rows = np.empty((4, SUB * SUB))
         proven = np.empty(SUB * SUB, dtype=np.bool_)
-        chords = np.empty((2, SUB * SUB), dtype=np.int64)
+        chords = np.empty((2, SUB * SUB), dtype=np.int32)
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
