@@ -29,7 +29,6 @@ import numpy as np
 from _common import add_out_argument, write_record
 
 from porepipe.granular import Settings, Simulation, polygon_properties
-from porepipe.granular import _contact as C
 from porepipe.granular import _kernels as K
 from porepipe.granular._settings import Shape
 from porepipe.granular._system import generate_shapes
@@ -123,50 +122,6 @@ def list_build_cost(n: int, spread: float, method: str, warm: int, repeats: int)
     return best
 
 
-@numba.njit(cache=True)
-def _narrow_phase(wv, nc, G, pi, pj, reps):
-    """The narrow phase alone (overlap geometry of every given pair, ``reps`` times), one thread."""
-    k = 2 * wv.shape[1] + 4
-    buf_a, buf_b, side, geo = np.empty((k, 2)), np.empty((k, 2)), np.empty(k), np.empty(11)
-    tag_a, tag_b = np.empty(k, np.int64), np.empty(k, np.int64)
-    total = 0.0
-    for _ in range(reps):
-        for p in range(pi.size):
-            i, j = pi[p], pj[p]
-            C._overlap_geometry(
-                wv[i], nc[i], wv[j], nc[j], G[0, i, 0], G[0, i, 1], G[0, j, 0], G[0, j, 1],
-                buf_a, tag_a, buf_b, tag_b, side, geo,
-            )  # fmt: skip
-            total += geo[0]
-    return total
-
-
-def narrow_phase_share(n: int, warm: int, steps: int, repeats: int) -> dict:
-    """Nanoseconds per pair of the narrow phase (pairs whose boxes overlap, as the kernel clips them) and its share
-    of a whole step (1 thread, monodisperse pile, best of ``repeats``).
-    """
-    numba.set_num_threads(1)
-    sim = Simulation(pile(n, 0.1, "swap"), seed=1)
-    sim.advance(warm)
-    pi = np.repeat(np.arange(sim.n_mob), np.diff(sim.nb_start))
-    pj = sim.nb_j
-    a = sim.aabb
-    box = (a[pi, 1] >= a[pj, 0]) & (a[pj, 1] >= a[pi, 0]) & (a[pi, 3] >= a[pj, 2]) & (a[pj, 3] >= a[pi, 2])
-    pi, pj = pi[box], pj[box]
-    _narrow_phase(sim.wv, sim.nc, sim.G, pi, pj, 1)
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        _narrow_phase(sim.wv, sim.nc, sim.G, pi, pj, steps)
-        best = min(best, time.perf_counter() - t0)
-    per_step = sim.n_mob / _time(sim, steps, repeats)
-    return {
-        "ns_per_pair": 1e9 * best / steps / pi.size,
-        "share": best / steps / per_step,
-        "pairs": int(pi.size),
-    }
-
-
 def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
     """Bare kernel vs every effect compiled in with neutral values, on the same pile (1 thread, interleaved
     rounds, best of each, so that the machine's load drifts hit both alike).
@@ -196,18 +151,21 @@ def main() -> None:
     ap.add_argument("--smoke", action="store_true", help="300 particles, a few steps, 1 thread")
     add_out_argument(ap)
     ap.add_argument("--n", type=int, default=None, help="particles (default 10 000, smoke 300)")
+    ap.add_argument("--methods", default="sweep,swap,cells", help="broad phases to time (comma-separated)")
+    ap.add_argument("--max-threads", type=int, default=2, help="time 1 .. this many threads")
     args = ap.parse_args()
+    methods = tuple(args.methods.split(","))
     n, warm, steps, repeats = (300, 10, 10, 1) if args.smoke else (10_000, 300, 200, 3)
     n = args.n or n
     builds = {}
     for spread in (0.1, 0.5):
-        for method in ("sweep", "swap", "cells"):
+        for method in methods:
             builds[(spread, method)] = list_build_cost(n, spread, method, 20, 1 if args.smoke else 3)
             print(f"N={n} I={spread:.1f} {method:6s}: {1e3 * builds[(spread, method)]:.3g} ms per list build")
     rows = []
     for spread in (0.1,) if args.smoke else (0.1, 0.5):
-        for method in ("sweep", "swap", "cells"):
-            for threads in (1,) if args.smoke else (1, 2):
+        for method in methods:
+            for threads in (1,) if args.smoke else range(1, args.max_threads + 1):
                 if threads > numba.config.NUMBA_NUM_THREADS:
                     continue
                 r = measure(n, spread, method, threads, warm, steps, repeats)
@@ -217,11 +175,6 @@ def main() -> None:
                     f"(coordination {r['coordination']:.2f}, {r['rebuilds']} list builds)",
                     flush=True,
                 )
-    narrow = narrow_phase_share(n, warm, steps, repeats)
-    print(
-        f"narrow phase: {narrow['ns_per_pair']:.0f} ns per clipped pair ({narrow['pairs'] / n:.2f} per particle), "
-        f"{narrow['share']:.0%} of a step (1 thread, I = 0.1)"
-    )
     cost = effect_cost(n, warm, steps, repeats)
     print(
         f"effects: bare {cost['bare']:.3g}, all compiled in {cost['all effects compiled in']:.3g} "
@@ -239,7 +192,7 @@ def main() -> None:
         write_record(
             args.out,
             "granular.json",
-            {"rows": rows, "builds": builds_out, "effects": cost, "narrow_phase": narrow, "peers": PEERS},
+            {"rows": rows, "builds": builds_out, "effects": cost, "peers": PEERS},
         )
 
 

@@ -119,6 +119,25 @@ def test_line_source_shrinks_and_point_source_is_a_point():
     np.testing.assert_array_equal(sim.G[0, np.nonzero(sim.drop == 1)[0], 0], 0.9)
 
 
+def test_rising_source_follows_a_fill():
+    """rise_m_s: the k-th grain (time t_k) is inserted at y + rise (t_k - from_s); a fixed source stays at y."""
+    src = {
+        "x_m": 0.5,
+        "y_m": 0.02,
+        "width_m": 0.0,
+        "every_s": 0.01,
+        "from_s": 0.05,
+        "to_s": 0.15,
+        "rise_m_s": 0.3,
+        "shape": {"size_m": (0.002, 0.002), "corners": 6},
+    }
+    sim = simulation([], [floor()], dt_s=1e-5, drop_sources=[src, {**src, "x_m": 0.9, "rise_m_s": 0.0}])
+    k = np.nonzero(sim.drop == 0)[0]
+    np.testing.assert_allclose(sim.G[0, k, 1], 0.02 + 0.3 * (sim.insert_s[k] - 0.05), rtol=0, atol=1e-15)
+    assert len(k) == 11
+    np.testing.assert_array_equal(sim.G[0, np.nonzero(sim.drop == 1)[0], 1], 0.02)
+
+
 def test_bad_driver_inputs_name_the_problem():
     from pydantic import ValidationError
 
