@@ -7,8 +7,10 @@ chord method bit-identical to brute force.
 
 Brute force (:func:`_voxelize_plane`) tests all 216 points of every voxel near a sphere. The chord method
 (:func:`_chord_plane`) works in sample-row space: along a row of samples in z the points inside a ball form one
-interval (the chord), whose two ends are found from a square root and proven by the exact predicate; the chords are
-counted per voxel in O(1) each, and ORed as bit masks only into voxels that two or more balls reach.
+interval (the chord), whose two ends are found from a square root and proven by the exact predicate. Per voxel row
+(fixed x, y) and ball, square roots give the run of voxels wholly inside (set to 216 without a test) and the shell
+around it; only shell voxels get the row's 36 chords: counted straight into a voxel one ball alone reaches, ORed as
+bit masks into voxels that two or more balls reach.
 """
 
 import numpy as np
