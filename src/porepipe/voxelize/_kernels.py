@@ -97,6 +97,7 @@ def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mas
 #: voxel state of the chord method beyond those of :mod:`porepipe._shared.sample_points`: two or more spheres reach
 #: into the voxel (its grey value is the popcount of the union mask, not the chord count)
 MULTI = 3
+assert (UNTOUCHED, PARTIAL, FULL, MULTI) == (0, 1, 2, 3)  # the branch-free step of _reach_shell relies on it
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -238,16 +239,14 @@ def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
 def _reach_shell(status, mask, j, lo, hi):
     """One more ball reaches voxels ``lo .. hi - 1`` of row ``j``: the first makes a voxel PARTIAL, a second MULTI.
 
-    A MULTI voxel's union mask is cleared for :func:`_shell_grey`; FULL stays FULL.
+    Branch-free: UNTOUCHED (0) -> PARTIAL (1) -> MULTI (3), FULL (2) stays, as ``st + (st < FULL) * (st + 1)``. The
+    union masks are cleared for :func:`_shell_grey` (no mask is ORed before every ball is classified).
     """
     for k in range(lo, hi):
         st = status[j, k]
-        if st == UNTOUCHED:
-            status[j, k] = PARTIAL
-        elif st == PARTIAL:
-            status[j, k] = MULTI
-            for w in range(WORDS):
-                mask[j, k, w] = 0
+        status[j, k] = st + (st < FULL) * (st + 1)
+        for w in range(WORDS):
+            mask[j, k, w] = 0
 
 
 @njit(cache=True, fastmath=FASTMATH)
