@@ -250,10 +250,12 @@ def _reach_shell(status, mask, j, lo, hi):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask):
+def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges):
     """Mark the voxels of plane ``i`` that one ball reaches, by whole runs per voxel row (:func:`_row_ranges`).
 
     The run inside the ball becomes FULL, the shell on either side one more reaching sphere (:func:`_reach_shell`).
+    Row ``j`` of the ball's y range ``[j0, j1)`` (:func:`porepipe._shared.sample_points.axis_range`) keeps its
+    ranges in ``ranges[j - j0]`` for :func:`_shell_grey`.
     """
     r2 = r * r
     eps = SLACK * (r + abs(cz))
@@ -265,6 +267,10 @@ def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask):
         lo, hi, f_lo, f_hi = _row_ranges(
             cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
         )
+        ranges[j - j0, 0] = lo
+        ranges[j - j0, 1] = hi
+        ranges[j - j0, 2] = f_lo
+        ranges[j - j0, 3] = f_hi
         _reach_shell(status, mask, j, lo, f_lo)
         for k in range(f_lo, f_hi):
             status[j, k] = FULL
@@ -364,31 +370,26 @@ def _add_shell(status, mask, j, lo, hi, chords, words, out):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _shell_grey(i, cx, cy, cz, r, h, ny, nz, status, mask, scratch, proven, chords, words, out):
+def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, scratch, proven, chords, words, out):
     """Add one ball's samples to the shell voxels of plane ``i``: counts into ``out`` (PARTIAL), bits into masks (MULTI).
 
     Per voxel row, the 36 chords are found only if a shell voxel (outside the untested FULL run of
     :func:`_row_ranges`) is PARTIAL or MULTI. A ball that does not reach a PARTIAL voxel adds 0 to it (the reach test
-    is conservative), so summing into ``out`` leaves the count of the one ball that does. ``scratch`` (4, 36),
-    ``proven`` (36) and ``chords`` (2, 36) are scratch.
+    is conservative), so summing into ``out`` leaves the count of the one ball that does. ``ranges``: the rows'
+    ranges from :func:`_classify`; ``scratch`` (4, 36), ``proven`` (36) and ``chords`` (2, 36) are scratch.
     """
     r2 = r * r
-    eps = SLACK * (r + abs(cz))
-    nx_, fx_ = hull_gap(cx, i, h)
+    z_last = SUB * status.shape[1] - 1
     j0, j1 = axis_range(cy, r, h, ny)
-    k0, k1 = axis_range(cz, r, h, nz)
     dx2 = scratch[0, :SUB]
     for sx in range(SUB):
         dx = sample_coord(i, sx, h) - cx
         dx2[sx] = dx * dx
     for j in range(j0, j1):
-        ny_, fy_ = hull_gap(cy, j, h)
-        lo, hi, f_lo, f_hi = _row_ranges(
-            cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
-        )
+        lo, hi, f_lo, f_hi = ranges[j - j0, 0], ranges[j - j0, 1], ranges[j - j0, 2], ranges[j - j0, 3]
         if not (_needs_chords(status, j, lo, f_lo) or _needs_chords(status, j, f_hi, hi)):
             continue
-        _row_chords(j, dx2, cy, cz, r2, h, SUB * nz - 1, scratch[1], proven, chords)
+        _row_chords(j, dx2, cy, cz, r2, h, z_last, scratch[1], proven, chords)
         _add_shell(status, mask, j, lo, f_lo, chords, words, out)
         _add_shell(status, mask, j, f_hi, hi, chords, words, out)
 
@@ -421,15 +422,30 @@ def _chord_plane(
     status[:, :] = UNTOUCHED
     out[:, :] = 0
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
+    n_rows = 0
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            _classify(i, images[s, 0], images[s, 1], images[s, 2], images[s, 3], h, ny, nz, status, mask)
+            j0, j1 = axis_range(images[s, 1], images[s, 3], h, ny)
+            n_rows += j1 - j0
+    ranges = np.empty((n_rows, 4), dtype=np.int64)  # per ball, its voxel rows' ranges (_row_ranges)
+    row = 0
     for q in range(first, last):
         s = order[q]
         cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
         if cx + r >= plane_lo:
-            _shell_grey(i, cx, cy, cz, r, h, ny, nz, status, mask, scratch, proven, chords, words, out)
+            j0, j1 = axis_range(cy, r, h, ny)
+            _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges[row : row + j1 - j0])
+            row += j1 - j0
+    row = 0
+    for q in range(first, last):
+        s = order[q]
+        cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
+        if cx + r >= plane_lo:
+            j0, j1 = axis_range(cy, r, h, ny)
+            rows = ranges[row : row + j1 - j0]
+            _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, rows, scratch, proven, chords, words, out)
+            row += j1 - j0
     _grey_full_multi(status, mask, out)
 
 
