@@ -329,7 +329,7 @@ def _voxel_count(chords, k):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _or_voxel(mask, j, k, chords, words):
+def _or_voxel(mask, j, k, chords):
     """OR the samples of voxel ``k`` inside the 36 chords of its voxel row into its union mask.
 
     Row q = 6·sx + sy of the voxel gets the bits ``max(lo - 6k, 0) .. min(hi - 6k, 5)`` (none when that is empty),
@@ -338,14 +338,13 @@ def _or_voxel(mask, j, k, chords, words):
     """
     z0 = SUB * k
     for w in range(WORDS):
-        words[w] = 0
-    for q in range(SUB * SUB):
-        lo = min(max(chords[0, q] - z0, 0), SUB)
-        hi = max(min(chords[1, q] - z0, SUB - 1), lo - 1)  # hi = lo - 1: no bits
-        bits = (1 << (hi + 1)) - (1 << lo)
-        words[q // ROWS_PER_WORD] |= np.uint64(bits) << np.uint64(SUB * (q % ROWS_PER_WORD))
-    for w in range(WORDS):
-        mask[j, k, w] |= words[w]
+        acc = np.uint64(0)
+        for q in range(ROWS_PER_WORD * w, min(ROWS_PER_WORD * (w + 1), SUB * SUB)):
+            lo = min(max(chords[0, q] - z0, 0), SUB)
+            hi = max(min(chords[1, q] - z0, SUB - 1), lo - 1)  # hi = lo - 1: no bits
+            bits = (1 << (hi + 1)) - (1 << lo)
+            acc |= np.uint64(bits) << np.uint64(SUB * (q - ROWS_PER_WORD * w))
+        mask[j, k, w] |= acc
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -359,18 +358,18 @@ def _needs_chords(status, j, lo, hi):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_shell(status, mask, j, lo, hi, chords, words, out):
+def _add_shell(status, mask, j, lo, hi, chords, out):
     """Voxels ``lo .. hi - 1`` of row ``j``: add the chord count to PARTIAL ones, OR the chord bits into MULTI ones."""
     for k in range(lo, hi):
         st = status[j, k]
         if st == PARTIAL:
             out[j, k] += _voxel_count(chords, k)
         elif st == MULTI:
-            _or_voxel(mask, j, k, chords, words)
+            _or_voxel(mask, j, k, chords)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, scratch, proven, chords, words, out):
+def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, scratch, proven, chords, out):
     """Add one ball's samples to the shell voxels of plane ``i``: counts into ``out`` (PARTIAL), bits into masks (MULTI).
 
     Per voxel row, the 36 chords are found only if a shell voxel (outside the untested FULL run of
@@ -390,8 +389,8 @@ def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, scratch, proven, 
         if not (_needs_chords(status, j, lo, f_lo) or _needs_chords(status, j, f_hi, hi)):
             continue
         _row_chords(j, dx2, cy, cz, r2, h, z_last, scratch[1], proven, chords)
-        _add_shell(status, mask, j, lo, f_lo, chords, words, out)
-        _add_shell(status, mask, j, f_hi, hi, chords, words, out)
+        _add_shell(status, mask, j, lo, f_lo, chords, out)
+        _add_shell(status, mask, j, f_hi, hi, chords, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -410,9 +409,7 @@ def _grey_full_multi(status, mask, out):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _chord_plane(
-    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, scratch, proven, chords, words, out
-):
+def _chord_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, scratch, proven, chords, out):
     """Grey values of plane x = i by chords in sample-row space (bit-identical to :func:`_voxelize_plane`).
 
     First every ball marks the voxels it reaches (:func:`_classify`: runs of FULL voxels in bulk, the shell one by
@@ -444,7 +441,7 @@ def _chord_plane(
         if cx + r >= plane_lo:
             j0, j1 = axis_range(cy, r, h, ny)
             rows = ranges[row : row + j1 - j0]
-            _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, rows, scratch, proven, chords, words, out)
+            _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, rows, scratch, proven, chords, out)
             row += j1 - j0
     _grey_full_multi(status, mask, out)
 
@@ -483,7 +480,6 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
                     rows,
                     proven,
                     chords,
-                    words,
                     out[p],
                 )
             else:
