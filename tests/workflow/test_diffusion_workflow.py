@@ -77,5 +77,7 @@ def test_mesopore_scenes_load_and_plan_capillary_diffusion_and_report(tmp_path):
     for name in ("knudsen-length-series", "knudsen-length-series-ci"):
         scene = load_scene(ROOT / "config" / "scenes" / f"{name}.yaml")
         assert max(scene.diffusion.lengths) == scene.diffusion.geometry.length
+    surface = load_scene(ROOT / "config" / "scenes" / "surface-reactions-ci.yaml").diffusion
+    assert surface.setup.value == "surface" and surface.surface.mechanisms[0].kind == "LH"
     rules, _ = _planned(ROOT / "config" / "scenes" / "mesopore-a-ci.yaml", tmp_path)
     assert rules == {"all": 1, "capillary": 1, "diffusion": 1, "sweep": 1, "report": 1}, rules

@@ -133,6 +133,14 @@ def main(args) -> int:
     from porepipe._shared.store import read_table
 
     v = read_table(out)
+    if settings.setup is Setup.surface:
+        cov = ", ".join(
+            f"{k[: -len('_coverage')]} {float(v[k]):.4g}" for k in v.data_vars if k.endswith("_coverage")
+        )
+        print(
+            f"diffusion (surface): coverage {cov}; LH {int(v['lh_reactions'])}, ER {int(v['er_reactions'])} -> {out}"
+        )
+        return 0
     if settings.setup in (Setup.edmd, Setup.reaction):
         print(f"diffusion {args.axis} ({settings.setup.value}): {_summary(v, settings)} -> {out}")
         return 0

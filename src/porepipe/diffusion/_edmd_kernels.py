@@ -271,8 +271,94 @@ def _predict_pairs(
 ):
     """Push the collisions of i with the particles of its 27 neighbour cells (``layer`` >= 0: only the 9 cells at
     offset ``step`` along axis ``layer``, the ones a crossing has just made neighbours).
+
+    The heap gets room for every candidate before the scan, so the scan itself never reallocates (a reallocation
+    inside the loop made numba keep the heap arrays alive through every iteration: 4x slower).
     """
     ht, hi, hj, hci, hcj, n = heap
+    need = _scan_cells(
+        pos,
+        vel,
+        tp,
+        sp,
+        radius,
+        cnt,
+        h,
+        shape,
+        periodic,
+        head,
+        nxt,
+        cidx,
+        i,
+        t,
+        ht,
+        hi,
+        hj,
+        hci,
+        hcj,
+        -1,
+        layer,
+        step,
+    )
+    if n + need > ht.shape[0]:
+        ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, need, cnt)
+    n = _scan_cells(
+        pos,
+        vel,
+        tp,
+        sp,
+        radius,
+        cnt,
+        h,
+        shape,
+        periodic,
+        head,
+        nxt,
+        cidx,
+        i,
+        t,
+        ht,
+        hi,
+        hj,
+        hci,
+        hcj,
+        n,
+        layer,
+        step,
+    )
+    return ht, hi, hj, hci, hcj, n
+
+
+@njit(cache=True)
+def _scan_cells(
+    pos,
+    vel,
+    tp,
+    sp,
+    radius,
+    cnt,
+    h,
+    shape,
+    periodic,
+    head,
+    nxt,
+    cidx,
+    i,
+    t,
+    ht,
+    hi,
+    hj,
+    hci,
+    hcj,
+    n,
+    layer,
+    step,
+):
+    """With ``n`` < 0: the number of particles in the cells to scan (room the pushes may need). Else push i's
+    collisions with them onto the heap of size ``n`` (which must have room) and return the new size.
+    """
+    count = n < 0
+    found = 0
     e0, e1, e2 = shape[0] * h, shape[1] * h, shape[2] * h
     xi = pos[i, 0] + (t - tp[i]) * vel[i, 0]
     yi = pos[i, 1] + (t - tp[i]) * vel[i, 1]
@@ -291,7 +377,9 @@ def _predict_pairs(
                     continue
                 j = head[_flat(k0 % shape[0], k1 % shape[1], k2 % shape[2], shape[1], shape[2])]
                 while j >= 0:
-                    if j != i:
+                    if count:
+                        found += 1
+                    elif j != i:
                         dtj = t - tp[j]
                         dx = _min_image(xi - pos[j, 0] - dtj * vel[j, 0], e0, periodic[0])
                         dy = _min_image(yi - pos[j, 1] - dtj * vel[j, 1], e1, periodic[1])
@@ -306,11 +394,9 @@ def _predict_pairs(
                             radius[sp[i]] + radius[sp[j]],
                         )
                         if dt < np.inf:
-                            if n >= ht.shape[0]:
-                                ht, hi, hj, hci, hcj, n = _heap_room(ht, hi, hj, hci, hcj, n, 1, cnt)
                             n = _heap_push(ht, hi, hj, hci, hcj, n, t + dt, i, j, cnt[i], cnt[j])
                     j = nxt[j]
-    return ht, hi, hj, hci, hcj, n
+    return found if count else n
 
 
 @njit(cache=True)

@@ -20,6 +20,7 @@ from porepipe.diffusion import _api, _edmd
 from porepipe.diffusion._length_series import length_series
 from porepipe.diffusion._reaction_study import study_result
 from porepipe.diffusion._settings import Axis, Settings, Setup
+from porepipe.diffusion._surface import surface_result
 
 #: units of the scalars written to the result (others are counts or dimensionless)
 UNITS = {
@@ -148,6 +149,8 @@ def run(
     ) as w:
         if settings.setup is Setup.edmd:
             result = _edmd.edmd_result(pore, settings, voxel_um, periodic, seed=seed, axis=axis.index)
+        elif settings.setup is Setup.surface:
+            result = surface_result(pore, settings, voxel_um, periodic, seed=seed)
         elif settings.setup is Setup.reaction and settings.reactions.series:
             result = study_result(pore, settings, axis.index, voxel_um, periodic, seed=seed)
         elif settings.setup is Setup.reaction:

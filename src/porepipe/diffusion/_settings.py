@@ -35,6 +35,9 @@ class Setup(str, enum.Enum):
     reaction = (
         "reaction"  # wall reaction A -> P (-> S) in a one-face-fed pore, Knudsen regime (§4.1-4.2): η, Φ
     )
+    surface = (
+        "surface"  # adsorption, surface hops, Langmuir-Hinshelwood / Eley-Rideal in a closed pore (§4.3-4.4)
+    )
 
 
 class WallLaw(str, enum.Enum):
@@ -111,6 +114,69 @@ class GasSettings(BaseModel):
         if value not in ("maxwell", "mean"):
             raise ValueError(f"initial_speed must be maxwell or mean, got {value!r}")
         return value
+
+
+class SurfaceSpecies(BaseModel):
+    """One species of setup ``surface`` (``diffusion.surface.species``)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=True)  # residence may be .inf
+
+    name: str = Field(description="gas (thesis Table 3.1 name, or 'butene'); sets the mean speed")
+    gas: int = Field(0, ge=0, description="particles starting in the gas")
+    adsorbed: int = Field(0, ge=0, description="particles starting adsorbed on random active sites")
+    adsorption: float = Field(
+        0.0, ge=0, le=1, description="probability that a hit on an empty active site adsorbs"
+    )
+    residence_jiffies: float = Field(
+        float("inf"), gt=0, description="mean residence time (.inf: never desorbs)"
+    )
+    hop_rate: float = Field(0.0, ge=0, allow_inf_nan=False, description="surface hops per jiffie")
+
+    @field_validator("name")
+    @classmethod
+    def _known(cls, value):
+        from porepipe.diffusion._species import SPECIES
+
+        if value not in SPECIES:
+            raise ValueError(f"unknown species {value!r}; allowed: {', '.join(SPECIES)}")
+        return value
+
+
+class SurfaceMechanism(BaseModel):
+    """A bimolecular surface reaction of setup ``surface``: LH (both adsorbed) or ER (``a`` from the gas)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    kind: str = Field(pattern="^(LH|ER)$", description="LH (Langmuir-Hinshelwood) or ER (Eley-Rideal)")
+    a: str = Field(description="first reactant (ER: the gas-phase one)")
+    b: str = Field(description="second reactant (adsorbed)")
+    product: str = Field(description="product species")
+    w: float = Field(ge=0, le=1, description="reaction probability per encounter (LH) or per hit on b (ER)")
+
+
+class SurfaceSettings(BaseModel):
+    """``diffusion.surface``: setup ``surface`` (porepipe.diffusion._surface) in the scene's pore space, closed."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    species: list[SurfaceSpecies] = Field(
+        default_factory=list, description="species with counts and surface data"
+    )
+    mechanisms: list[SurfaceMechanism] = Field(
+        default_factory=list, description="LH and/or ER (at most one each)"
+    )
+    duration_jiffies: float = Field(1000.0, gt=0, description="simulated time")
+    warmup_jiffies: float = Field(100.0, ge=0, description="time before the tallies start")
+    sites_per_edge: int = Field(
+        2, ge=1, description="sites per voxel-face edge (reactive distance = h / this)"
+    )
+    active_fraction: float = Field(1.0, gt=0, le=1, description="fraction of active sites (the thesis's a)")
+    residence_law: str = Field(
+        "exponential", pattern="^(fixed|exponential)$", description="fixed or exponential"
+    )
+    replenish: bool = Field(False, description="count products and put both reactants back into the gas")
+    blocks: int = Field(16, ge=2, description="time blocks for the error bars")
+    samples: int = Field(20, ge=0, description="sample times of the gas/adsorbed counts")
 
 
 class ReactionSet(BaseModel):
@@ -209,6 +275,9 @@ class Settings(BaseModel):
         "for each L, and the fit 1/D = 1/D0 + alpha (r/L)/D0 (3.51); empty = off",
     )
     gas: GasSettings = Field(default_factory=GasSettings, description="event-driven gas (setup edmd)")
+    surface: SurfaceSettings = Field(
+        default_factory=SurfaceSettings, description="adsorbing gas and surface reactions (setup surface)"
+    )
     reactions: ReactionSettings = Field(
         default_factory=ReactionSettings, description="wall reactions (setup reaction)"
     )

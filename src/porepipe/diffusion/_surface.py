@@ -341,3 +341,64 @@ def second_order_remaining(n_a0: float, n_b0: float, k: float, t) -> np.ndarray:
         return n_b0 / (1.0 + k * n_b0 * t)
     e = np.exp(-k * d * t)
     return d * n_b0 * e / (n_a0 - n_b0 * e)
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+# setup surface of the diffusion stage
+def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
+    """Setup ``surface``: :func:`surface_run` with ``settings.surface`` in the pore space (a DiffusionResult).
+
+    Speeds: the species' mean speeds at ``settings.temperature_K`` relative to the fastest (v̄ = 1 voxel/jiffie).
+    Values per species ``<name>_coverage`` (± ``_err``), ``<name>_gas_density`` (per voxel³), ``<name>_langmuir``
+    (the competitive isotherm at the measured densities, meaningful without reactions; NaN when a species that adsorbs
+    never desorbs); reaction counts and rates.
+    """
+    from porepipe.diffusion._api import DiffusionResult
+    from porepipe.diffusion._species import mean_speed
+
+    ss = settings.surface
+    if not ss.species:
+        raise PorepipeError("setup surface needs diffusion.surface.species (at least one)")
+    speeds = [mean_speed(sp.name, settings.temperature_K) for sp in ss.species]
+    species = [
+        Adsorbate(
+            sp.name, v / max(speeds), sp.gas, sp.adsorbed, sp.adsorption, sp.residence_jiffies, sp.hop_rate
+        )
+        for sp, v in zip(ss.species, speeds)
+    ]
+    mechanisms = [Mechanism(m.kind, m.a, m.b, m.product, m.w) for m in ss.mechanisms]
+    t = np.linspace(0.0, ss.duration_jiffies, ss.samples) if ss.samples else ()
+    run = surface_run(
+        pore,
+        species,
+        mechanisms,
+        t_end=ss.duration_jiffies,
+        t_warm=ss.warmup_jiffies,
+        sites_per_edge=ss.sites_per_edge,
+        active_fraction=ss.active_fraction,
+        wall_law=settings.wall_law.value,
+        residence_law=ss.residence_law,
+        replenish=ss.replenish,
+        blocks=ss.blocks,
+        t_samples=t,
+        voxel_um=voxel_um,
+        periodic=periodic,
+        seed=seed,
+    )
+    k = [
+        langmuir_constant(s.adsorption, s.vmean, run["site_area"], s.residence) if s.adsorption else 0.0
+        for s in species
+    ]
+    stationary = all(math.isfinite(x) for x in k)  # a species that never leaves fills the sites for ever
+    theta = langmuir_coverage(k, run["gas_density"]) if stationary else np.full(len(species), math.nan)
+    v = {"events": run["events"], "sites": run["sites"], "active_sites": run["active_sites"]}
+    for x, sp in enumerate(species):
+        v[f"{sp.name}_coverage"] = float(run["coverage"][x])
+        v[f"{sp.name}_coverage_err"] = float(run["coverage_err"][x])
+        v[f"{sp.name}_gas_density"] = float(run["gas_density"][x])
+        v[f"{sp.name}_langmuir"] = float(theta[x])
+    span = run["span"]
+    v.update(lh_reactions=run["lh_reactions"], er_reactions=run["er_reactions"])
+    v.update(lh_rate=run["lh_reactions"] / span, er_rate=run["er_reactions"] / span)
+    arrays = {"series_counts": run["series"], "series_time_jiffies": np.asarray(t, float)}
+    return DiffusionResult("surface", "-", v, arrays)

@@ -187,3 +187,43 @@ def test_lh_probability_closed_forms():
 def test_bad_inputs_raise_one_clear_error(make, match):
     with pytest.raises(PorepipeError, match=match):
         make()
+
+
+def test_setup_surface_through_the_stage_file_door(tmp_path):
+    """Setup ``surface`` from a scene section: the written result holds coverages next to the Langmuir isotherm
+    (tolerance as above) and the settings survive the round trip (an infinite residence is allowed)."""
+    import json
+
+    import xarray as xr
+
+    from porepipe._shared.store import ResultWriter
+    from porepipe.diffusion import Settings
+    from porepipe.diffusion._run import run as run_stage
+
+    binary = tmp_path / "binary_a0.001.h5"
+    with ResultWriter(binary, stage="segment", scene="t", scene_hash="abc") as w:
+        w.write_volume("pore", np.asarray(BOX), voxel_um=0.001, periodic=(0, 0, 0))
+    settings = Settings(
+        setup="surface",
+        surface={
+            "species": [
+                {"name": "N2", "gas": 1500, "adsorption": 0.5, "residence_jiffies": 10.0},
+                {"name": "CO2", "gas": 500, "adsorption": 0.2, "residence_jiffies": 30.0},
+                {"name": "Ar", "gas": 10},  # never adsorbs (and never desorbs): no obstacle to the isotherm
+            ],
+            "duration_jiffies": 1200,
+            "warmup_jiffies": 200,
+        },
+    )
+    out = run_stage(settings, binary, tmp_path / "s.h5", "z", seed=9)
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    for name in ("N2", "CO2"):
+        theta, err, lang = (float(ds[f"{name}_{k}"]) for k in ("coverage", "coverage_err", "langmuir"))
+        assert abs(theta - lang) <= 4 * err + 3e-3 * theta
+    assert float(ds["Ar_coverage"]) == 0.0
+    assert ds["series_counts"].shape == (20, 3, 2)
+    species = json.loads(ds.attrs["settings"])["surface"]["species"]
+    assert species[2]["residence_jiffies"] == math.inf  # written as Infinity, read back as inf
+    with pytest.raises(PorepipeError, match="surface.species"):
+        run_stage(Settings(setup="surface"), binary, tmp_path / "t.h5", "z")
+    assert not (tmp_path / "t.h5").exists()

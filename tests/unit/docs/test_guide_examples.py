@@ -26,3 +26,6 @@ def test_every_python_block_of_the_guide_runs_in_order(tmp_path, monkeypatch, ca
     np.testing.assert_allclose(mean_local, ns["pore"].mean(), rtol=1e-12)  # exact identity, round-off only
     np.testing.assert_allclose(float(ns["mf"]["phi"].sel(phase="pore")), ns["pore"].mean(), rtol=1e-12)
     assert 0 < ns["run"].values["W"] < 1
+    # adsorption: competitive Langmuir isotherm, 4 standard errors plus 0.3 % (tests/unit/diffusion/test_surface_*)
+    theta = ns["surf"]["coverage"][0]
+    assert abs(theta - ns["theta_langmuir"]) <= 4 * ns["surf"]["coverage_err"][0] + 3e-3 * theta
