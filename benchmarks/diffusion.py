@@ -176,11 +176,16 @@ def edmd_section(smoke: bool, out: str, reference: str | None = None, surface: b
 
 
 def _load_kernels(path: str):
-    """The module of an earlier _edmd_kernels.py (imported under its own name, compiled on first use)."""
+    """The module of an earlier _edmd_kernels.py, imported under its file name (numba's cache of it refers to the
+    module by that name).
+    """
     import importlib.util
+    import sys
 
-    spec = importlib.util.spec_from_file_location("edmd_reference_kernels", path)
+    name = Path(path).stem
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
 

@@ -45,7 +45,8 @@ from porepipe.diffusion._kernels import (
     _uniform_in_pore,
 )
 
-#: columns of the event tally
+#: columns of the event tally (E_STALE: re-predictions of particles whose pair event was taken by another pair or
+#: voided by the partner's wall hit; the key stays for the reports' ``stale_events``)
 E_EVENTS, E_PAIRS, E_WALLS, E_CROSSINGS, E_STALE, E_REACTIONS = range(6)
 N_ETALLY = 6
 
