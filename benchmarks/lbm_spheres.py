@@ -42,6 +42,7 @@ def run(c: float, diameter: float, walls: str, tau: float = 0.857, tolerance: fl
         "tau": tau,
         "K": k,
         "K_ref": ref,
+        "K_ref_rounding": cal.ZICK_HOMSY_SC_ROUNDING[c],
         "error": k / ref - 1,
         "steps": res.steps,
         "stopped_by": res.stopped_by,
