@@ -48,6 +48,17 @@ def test_published_drag_agrees_with_the_dilute_series():
     assert cal.sangani_acrivos_dilute(0.216) == pytest.approx(cal.ZICK_HOMSY_SC[0.216], rel=1e-2)
 
 
+def test_a_shifted_sphere_array_is_the_same_array_moved():
+    """A whole-voxel shift rolls the voxels (periodic images included); a sub-voxel one keeps c to the staircase's
+    O(1/L) and moves the exact walls with it."""
+    pore, walls, a = cal.sphere_array(20, 0.45)
+    moved, moved_walls, a_moved = cal.sphere_array(20, 0.45, (1.0, 0.0, -3.0))
+    assert a_moved == a and np.array_equal(moved, np.roll(pore, (1, 0, -3), axis=(0, 1, 2)))
+    half, half_walls, _ = cal.sphere_array(20, 0.45, (0.5, 0.5, 0.5))
+    assert abs(1 - half.mean() - 0.45) < 0.02 and not np.array_equal(half, pore)
+    np.testing.assert_allclose(half_walls.centres - walls.centres, 0.5)
+
+
 @pytest.mark.parametrize("c", [0.125, 0.343, 0.45])
 def test_interpolated_walls_within_one_percent_at_16_voxels_per_diameter(c):
     """CLI walls: |K/K_ZH − 1| < 1 % at ~16 voxels per diameter (measured +0.51, +0.88, +0.94 %); halfway

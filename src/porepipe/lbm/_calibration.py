@@ -258,18 +258,21 @@ def sangani_acrivos_dilute(c: float) -> float:
     return 1.0 / (1 - 1.7601 * s + c - 1.5593 * c**2 + 3.9799 * s**8 - 3.0734 * s**10)
 
 
-def sphere_array(cells: int, c: float):
-    """One sphere of solid fraction ``c`` centred in a periodic cube of ``cells`` voxels (a simple-cubic array).
+def sphere_array(cells: int, c: float, shift=(0.0, 0.0, 0.0)):
+    """One sphere of solid fraction ``c`` in a periodic cube of ``cells`` voxels (a simple-cubic array), its centre
+    at the cube's centre moved by ``shift`` (voxels; the interpolated walls' error depends on where the sphere
+    sits on the lattice, by ±0.2 % at 32 voxels per diameter for c = 0.45).
 
     Returns (pore (cells,)*3 bool: voxel centres outside the sphere, SphereWalls, radius in voxels).
     """
     from porepipe.lbm._walls import SphereWalls
 
     a = cells * (3 * c / (4 * np.pi)) ** (1 / 3)
-    x = np.arange(cells) + 0.5 - cells / 2
-    r2 = x[:, None, None] ** 2 + x[None, :, None] ** 2 + x[None, None, :] ** 2
-    centre = np.full((1, 3), cells / 2)
-    return r2 >= a * a, SphereWalls(centre, np.array([a]), (float(cells),) * 3), a
+    centre = cells / 2 + np.asarray(shift, dtype=float)
+    axes = [np.arange(cells) + 0.5 - centre[k] for k in range(3)]
+    axes = [x - cells * np.round(x / cells) for x in axes]  # nearest periodic image
+    r2 = axes[0][:, None, None] ** 2 + axes[1][None, :, None] ** 2 + axes[2][None, None, :] ** 2
+    return r2 >= a * a, SphereWalls(centre[None], np.array([a]), (float(cells),) * 3), a
 
 
 def drag_coefficient(kappa_lu: float, cells: int, a: float) -> float:
