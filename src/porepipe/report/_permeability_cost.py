@@ -35,7 +35,8 @@ MIN_ORDER = 0.5
 
 def read_rows(path) -> list[dict]:
     """The benchmark's rows (a JSON list of dicts) with the sphere centred (``--shifts`` adds shifted ones, one
-    diameter several times); [] when the file is absent."""
+    diameter several times); [] when the file is absent.
+    """
     path = Path(path)
     if not path.is_file():
         return []
