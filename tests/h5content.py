@@ -8,7 +8,24 @@ import h5py
 import numpy as np
 
 #: attributes (and datasets) that differ between two runs by nature (cost and provenance of the run, not its result)
-TIMING_ATTRS = {"wall_s", "cpu_s", "startup_s", "peak_mb", "created", "threads", "porepipe_version", "source"}
+#: (the sweep gathers the costs of every result: Snakemake's benchmark and the upstream jobs'; LBM its MLUPS)
+TIMING_ATTRS = {
+    "wall_s",
+    "cpu_s",
+    "startup_s",
+    "peak_mb",
+    "created",
+    "threads",
+    "porepipe_version",
+    "source",
+} | {
+    "bench_s",
+    "bench_cpu_s",
+    "bench_max_rss_mb",
+    "upstream_wall_s",
+    "upstream_cpu_s",
+    "mlups",
+}
 #: netCDF dimension-scale links: HDF5 object addresses, which depend on the write order, not on the result
 ADDRESS_ATTRS = {"REFERENCE_LIST", "DIMENSION_LIST"}
 

@@ -24,6 +24,7 @@ from pathlib import Path
 PACKAGES = ("slurm-wlm", "munge")
 DAEMONS = ("munged", "slurmctld", "slurmd", "sbatch", "squeue", "scancel")
 SYSTEM_CONF = Path("/etc/slurm/slurm.conf")
+CLUSTER_NAME = "porepipe-test"
 #: finished jobs stay listed this long: the plugin's `squeue` status query needs >= 120 s, the test checks them at its end
 MIN_JOB_AGE_S = 3600
 
@@ -35,9 +36,26 @@ def slurm_available() -> str | None:
         reason = _install()
         if reason:
             return f"Slurm is not installed ({', '.join(missing)} missing) and {reason}"
-    if SYSTEM_CONF.exists():
-        return f"{SYSTEM_CONF} exists (a configured Slurm host); the test's own cluster will not replace it"
+    if SYSTEM_CONF.exists() and not _stale_test_conf():
+        return (
+            f"{SYSTEM_CONF} exists (a configured Slurm host, or another test session's running cluster); "
+            "the test's own cluster will not replace it"
+        )
     return None
+
+
+def _stale_test_conf() -> bool:
+    """True (and the file removed) where /etc/slurm/slurm.conf is a killed test session's, its controller gone."""
+    text = SYSTEM_CONF.read_text(errors="replace")
+    if f"ClusterName={CLUSTER_NAME}" not in text:
+        return False
+    pid_file = Path(text.split("SlurmctldPidFile=", 1)[1].split()[0]) if "SlurmctldPidFile=" in text else None
+    try:
+        os.kill(int(pid_file.read_text()), 0)
+        return False  # another test session's cluster is running
+    except (AttributeError, OSError, ValueError):
+        SYSTEM_CONF.unlink(missing_ok=True)
+        return True
 
 
 def _install() -> str | None:
@@ -111,7 +129,7 @@ class SlurmCluster:
         self.cpus = int(next(f for f in node.split() if f.startswith("CPUs=")).split("=")[1])
         return "\n".join(
             [
-                "ClusterName=porepipe-test",
+                f"ClusterName={CLUSTER_NAME}",
                 f"SlurmctldHost={self.host}",
                 f"SlurmctldPort={_free_port()}",
                 f"SlurmdPort={_free_port()}",

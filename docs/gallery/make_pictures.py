@@ -134,6 +134,17 @@ def granular(name: str) -> str:
     )
 
 
+def _geometry_words(geometry: dict) -> str:
+    """``{kind: square, a: 30, length: 600}`` as "square, a 30, length 600" (µm where the key says so, else voxels)."""
+    sizes = ", ".join(
+        f"{k.removesuffix('_um').replace('_', ' ')} {v:g}{' µm' if k.endswith('_um') else ''}"
+        for k, v in geometry.items()
+        if k != "kind"
+    )
+    in_voxels = not any(k.endswith("_um") for k in geometry)
+    return f"{geometry['kind']}, {sizes}" + (" voxels" if in_voxels else "")
+
+
 def capillary(name: str) -> str:
     """Write the scene's synthetic capillary at its finest a and draw a section through its axis."""
     from porepipe._shared.store import read_binary_volume
@@ -172,7 +183,7 @@ def capillary(name: str) -> str:
     _save(fig, name)
     g = raw["diffusion"]["geometry"]
     return (
-        f"Run for this picture: the scene's capillary (radius {g['radius_um']:g} µm, length {g['length_um']:g} µm) "
+        f"Run for this picture: the scene's capillary ({_geometry_words(g)}) "
         f"as `porepipe diffusion-capillary` voxelises it at a = {a:g} µm, {int(pore.sum())} pore voxels; sections "
         "along and across the axis (the diffusion itself is not run here)."
     )
@@ -306,6 +317,15 @@ MAKERS = {
     "granular-silo-mu05": granular,
     "granular-silo-mu07": granular,
     "knudsen-capillary-ci": capillary,
+    "knudsen-length-series": capillary,
+    "knudsen-length-series-ci": capillary,
+    "mesopore-a": capillary,
+    "mesopore-a-ci": capillary,
+    "mesopore-b": capillary,
+    "mesopore-b-ci": capillary,
+    "mesopore-c": capillary,
+    "mesopore-c-ci": capillary,
+    "surface-reactions-ci": capillary,
     "image-to-model": image,
     "filled-packing": radii,
     "rough-walls": radii,

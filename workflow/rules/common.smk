@@ -268,8 +268,16 @@ def voxels(wildcards):
 
 
 def mem_mb(bytes_per_voxel, base_mb=500):
-    """A `resources: mem_mb` function: `base_mb` plus `bytes_per_voxel` for every voxel of the rule's volume."""
-    return lambda wildcards: int(base_mb + bytes_per_voxel * voxels(wildcards) / 2**20)
+    """A `resources: mem_mb` function: `base_mb` plus `bytes_per_voxel` for every voxel of the rule's volume, at
+    most the scene's resources.memory_budget_mb (a volume over it is processed in chunks within the budget).
+    """
+
+    def mem(wildcards):
+        need = bytes_per_voxel * voxels(wildcards) / 2**20
+        budget = scene_of(wildcards).resources.memory_budget_mb
+        return int(base_mb + (need if budget is None else min(need, budget)))
+
+    return mem
 
 
 def every_core(cluster_threads):

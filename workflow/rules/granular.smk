@@ -46,6 +46,7 @@ rule granular_report:
         "../envs/porepipe.yaml"
     threads: 1
     resources:
+        cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=10,
     shell:

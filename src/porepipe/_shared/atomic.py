@@ -18,7 +18,9 @@ from porepipe._shared.errors import PorepipeError
 
 __all__ = [
     "atomic_path",
+    "check_identity",
     "commit",
+    "file_identity",
     "prepare_output",
     "remove_stale_temporaries",
     "temporary_path",
@@ -128,9 +130,60 @@ def _fsync(path: Path, *, directory: bool = False) -> None:
         os.close(fd)
 
 
-def commit(tmp, path) -> Path:
-    """Flush the finished temporary file ``tmp`` to disk and rename it onto ``path`` (then flush the directory)."""
+def file_identity(path) -> tuple[int, int]:
+    """The (device, inode) of ``path``; a file made again under the name while the first is held open has another."""
+    st = os.stat(path)
+    return st.st_dev, st.st_ino
+
+
+def check_identity(tmp, path, identity: tuple[int, int]) -> None:
+    """Refuse (one :class:`PorepipeError`) when ``tmp`` is no longer the file this writer made.
+
+    On a file system shared by several nodes, a rerun of the job on another node takes the temporary file of a
+    process it cannot see for a killed job's leftover and removes it; the writer must then commit nothing (writing
+    on would make a new file holding only what came after the removal).
+
+    Parameters
+    ----------
+    tmp : path-like
+        The writer's temporary file.
+    path : path-like
+        The result it stands for (named in the message).
+    identity : tuple of int
+        :func:`file_identity` of ``tmp`` when the writer made it.
+    """
+    try:
+        same = file_identity(tmp) == identity
+    except FileNotFoundError:
+        same = False
+    if not same:
+        raise PorepipeError(
+            f"output {path}: its temporary file {Path(tmp).name} was removed while it was written (a rerun of the "
+            f"job elsewhere?); nothing committed"
+        )
+
+
+def commit(tmp, path, identity: tuple[int, int] | None = None) -> Path:
+    """Flush the finished temporary file ``tmp`` to disk and rename it onto ``path`` (then flush the directory).
+
+    Parameters
+    ----------
+    tmp : path-like
+        The finished temporary file.
+    path : path-like
+        The result's name.
+    identity : tuple of int, optional
+        :func:`file_identity` of ``tmp`` when it was made: a removed or replaced ``tmp`` is refused
+        (:func:`check_identity`).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     tmp, path = Path(tmp), Path(path)
+    if identity is not None:
+        check_identity(tmp, path, identity)
     _fsync(tmp)
     os.replace(tmp, path)
     _fsync(path.parent, directory=True)

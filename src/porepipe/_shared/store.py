@@ -39,7 +39,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared import cost as _cost
-from porepipe._shared.atomic import commit, prepare_output, temporary_path
+from porepipe._shared.atomic import check_identity, commit, file_identity, prepare_output, temporary_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.units import DIMENSIONLESS, MICROMETRE, annotate, canonical, centres_um, units_of
 from porepipe._version import __version__
@@ -156,6 +156,7 @@ class ResultWriter:
         if _cost.COMPUTE_MARK:  # under the porepipe command: the computation began when its start-up ended
             self._t0, self._c0, self._startup = _cost.COMPUTE_MARK[0]
         self._h5 = h5py.File(self.tmp_path, "w")
+        self._identity = file_identity(self.tmp_path)
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
@@ -173,6 +174,7 @@ class ResultWriter:
     def _finish(self) -> None:
         self._h5.close()
         self._h5 = None
+        check_identity(self.tmp_path, self.path, self._identity)  # before anything could make the name again
         for ds, group in self._tables:
             ds.to_netcdf(self.tmp_path, engine="h5netcdf", mode="a", group=group)
         with h5py.File(self.tmp_path, "a") as f:
@@ -188,7 +190,7 @@ class ResultWriter:
                 _cost.COMPUTE_MARK[:] = [(t1, c1, 0.0)]
             for key, value in self.attrs.items():
                 f.attrs[key] = value
-        commit(self.tmp_path, self.path)
+        commit(self.tmp_path, self.path, self._identity)
 
     # -- writers ---------------------------------------------------------------------------------------------------
     @property

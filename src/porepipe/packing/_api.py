@@ -528,7 +528,10 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     x = x.copy()
     x[:, per] = np.mod(x[:, per], box[per])  # the kernels assume periodic coordinates in [0, L)
     lists = build_neighbours(x, r, types, box, per, pair_on, 1.0, 0.0, half=True)
-    kernel = K.make_step_kernel(True, False, not per.all())
+    # every sphere frozen: the step only evaluates overlaps, and the stochastic branch never runs. The variant with
+    # freezing and stochastic forces is the one the thesis protocol's stages use, so a packing run compiles one
+    # step kernel less (cold start of the mini scene)
+    kernel = K.make_step_kernel(True, True, not per.all())
     frozen = np.ones(n, dtype=np.uint8)
     zeros = np.zeros((n, 3))
     ones = np.ones(nt)

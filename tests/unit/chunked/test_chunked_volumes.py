@@ -223,3 +223,22 @@ def test_a_volume_beyond_this_machine_needs_a_budget(tmp_path):
         parse_scene({**raw, "resources": {"memory_budget_mb": 4000}}, tmp_path).resources.memory_budget_mb
         == 4000
     )
+
+
+def test_command_line_budget_reaches_the_chunked_paths(tmp_path, capsys):
+    """--memory-budget-mb of minkowski and lpt (the workflow passes the scene's via --scene) gives the same tables."""
+    from porepipe.cli import main
+
+    rng = np.random.default_rng(9)
+    path = _store(tmp_path, "pore", (rng.random((120, 110, 100)) < 0.4).astype(np.uint8), (True,) * 3)
+    for budget in ([], ["--memory-budget-mb", "1"]):
+        tag = "chunked" if budget else "whole"
+        assert main(["minkowski", str(path), "-o", str(tmp_path / f"m_{tag}.h5"), *budget]) == 0
+        lpt = ["lpt", str(path), "-o", str(tmp_path / f"l_{tag}.h5"), "--cell-voxels", "4", "--no-plots"]
+        assert main([*lpt, "--lambda-max-cells", "300", *budget]) == 0
+    _assert_same_dataset(read_table(tmp_path / "m_whole.h5"), read_table(tmp_path / "m_chunked.h5"))
+    _assert_same_dataset(read_table(tmp_path / "l_whole.h5"), read_table(tmp_path / "l_chunked.h5"))
+    assert "read in boxes" in read_table(tmp_path / "l_chunked.h5").attrs["sample"]
+    assert main(["minkowski", str(path), "-o", str(tmp_path / "m0.h5"), "--memory-budget-mb", "0"]) == 2
+    assert "resources.memory_budget_mb = 0" in capsys.readouterr().err
+    assert not (tmp_path / "m0.h5").exists()

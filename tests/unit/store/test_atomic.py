@@ -8,8 +8,9 @@ import sys
 import h5py
 import numpy as np
 import pytest
+import xarray as xr
 
-from porepipe._shared.atomic import atomic_path, temporary_path, write_text_atomic
+from porepipe._shared.atomic import atomic_path, commit, file_identity, temporary_path, write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, read_binary_volume
 
@@ -114,3 +115,32 @@ def test_anisotropic_voxels_only_where_a_stage_asks_for_them(tmp_path):
     with pytest.raises(PorepipeError, match="voxel_um"):
         _binary(tmp_path / "d.h5", voxel_um=[0.17, -1.0, 1.0])
         read_binary_volume(tmp_path / "d.h5", anisotropic=True)
+
+
+@pytest.mark.parametrize("table", [False, True])
+def test_writer_whose_temporary_file_was_removed_commits_nothing(tmp_path, table):
+    """A rerun on another node removed this writer's temporary file (its process id means nothing there): the
+    writer must not commit what it would write on into a new file under that name (attributes, tables only)."""
+    path = tmp_path / "r.h5"
+    with pytest.raises(PorepipeError, match=r"r\.h5: its temporary file .* was removed while it was written"):
+        with ResultWriter(path, stage="test") as w:
+            w.write_volume("v", np.ones((4, 4, 4), np.uint8), voxel_um=1.0)
+            if table:
+                w.write_table(xr.Dataset({"q": ("i", np.arange(3.0))}))
+            w.h5.flush()
+            w.tmp_path.unlink()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_commit_refuses_a_temporary_file_made_again_under_the_same_name(tmp_path):
+    tmp, path = tmp_path / ".t.txt.1.tmp", tmp_path / "t.txt"
+    with open(tmp, "w") as held:  # the writer holds its file open (as ResultWriter holds its HDF5 handle)
+        held.write("first half")
+        made = file_identity(tmp)
+        tmp.unlink()
+        tmp.write_text("second half")  # the same name, another file (the first one's inode is still held)
+        with pytest.raises(PorepipeError, match="was removed while it was written"):
+            commit(tmp, path, made)
+    assert not path.exists()
+    commit(tmp, path, file_identity(tmp))
+    assert path.read_text() == "second half"
