@@ -111,3 +111,19 @@ def test_chord_ends_on_samples_exactly_on_the_surface(periodic):
     )
     assert on_surface > 100
     assert 0 < g.mean() < 216
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("a", [1.0, 0.25])
+def test_large_spheres_cut_by_faces_equal_brute_force(a, periodic):
+    # spheres 10-40 voxels wide (at a = 0.25 µm), whose rows hold long runs of whole voxels (set FULL without a test)
+    # and shells on both sides; centres near and beyond the faces, so runs are cut by the volume or wrapped across it
+    rng = np.random.default_rng(7)
+    box = (12.0, 10.0, 8.0)
+    c = np.vstack([rng.uniform(-1, 13, (6, 3)), [[0.1, 5.0, 7.9], [11.9, 0.2, 4.0]]])
+    r = np.concatenate([rng.uniform(1.25, 5.0, 6), [4.6, 3.3]])
+    fast = voxelize(c, r, box, a, periodic, VoxelizeMethod.boundary)
+    brute = voxelize(c, r, box, a, periodic, VoxelizeMethod.brute)
+    # exact: brute force is the 6^3 sample definition (checked against the numpy oracle above)
+    np.testing.assert_array_equal(fast, brute)
+    assert (fast == 216).mean() > 0.1 and ((fast > 0) & (fast < 216)).any()
