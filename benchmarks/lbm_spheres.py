@@ -6,12 +6,13 @@ section reads it) and prints one row per run: solid fraction
 c, voxels per diameter d, walls, K = L³/(6π a κ̂), its error against ZICK_HOMSY_SC, steps and CPU seconds.
 The order of convergence between two resolutions is log(e₁/e₂)/log(d₂/d₁) of |error|.
 
-Usage: python benchmarks/lbm_spheres.py [--fractions 0.125 0.343] [--diameters 8 12 16 24 32] [--smoke]
+Usage: python benchmarks/lbm_spheres.py [--fractions 0.125 0.343] [--diameters 8 12 16 24 32] [--shifts 5] [--smoke]
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import time
 
 from _common import add_out_argument, write_record
@@ -19,11 +20,17 @@ from _common import add_out_argument, write_record
 from porepipe.lbm import Settings, permeability
 from porepipe.lbm import _calibration as cal
 
+#: Sub-voxel shifts of the sphere for ``--shifts N`` (the first N): centred, body-centred, half a voxel on one axis,
+#: a quarter on each, an irregular one.
+SHIFTS = ((0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (0.5, 0.0, 0.0), (0.25, 0.25, 0.25), (0.13, 0.37, 0.29))
 
-def run(c: float, diameter: float, walls: str, tau: float = 0.857, tolerance: float = 1e-6) -> dict:
+
+def run(
+    c: float, diameter: float, walls: str, tau: float = 0.857, tolerance: float = 1e-6, shift=(0.0, 0.0, 0.0)
+) -> dict:
     """One sphere array: K against Zick & Homsy, steps and cost."""
     cells = cal.cells_for_diameter(c, diameter)
-    pore, geometry, a = cal.sphere_array(cells, c)
+    pore, geometry, a = cal.sphere_array(cells, c, shift)
     t_cpu, t_wall = time.process_time(), time.perf_counter()
     res = permeability(
         pore,
@@ -38,10 +45,12 @@ def run(c: float, diameter: float, walls: str, tau: float = 0.857, tolerance: fl
         "c": c,
         "cells": cells,
         "diameter": 2 * a,
+        "shift": list(shift),
         "walls": res.walls,
         "tau": tau,
         "K": k,
         "K_ref": ref,
+        "K_ref_rounding": cal.ZICK_HOMSY_SC_ROUNDING[c],
         "error": k / ref - 1,
         "steps": res.steps,
         "stopped_by": res.stopped_by,
@@ -59,6 +68,13 @@ def main(argv=None) -> int:
     p.add_argument("--diameters", type=float, nargs="+", default=[8, 12, 16, 24, 32])
     p.add_argument("--walls", nargs="+", default=["halfway", "cli"])
     add_out_argument(p)  # the report reads lbm_spheres.json from results/benchmarks/
+    p.add_argument(
+        "--shifts",
+        type=int,
+        default=1,
+        choices=range(1, len(SHIFTS) + 1),
+        help="runs per case with the sphere moved by sub-voxel shifts (the error's lattice-position scatter)",
+    )
     p.add_argument("--smoke", action="store_true", help="c = 0.125, d = 8 only")
     args = p.parse_args(argv)
     if args.smoke:
@@ -68,11 +84,12 @@ def main(argv=None) -> int:
         if c not in cal.ZICK_HOMSY_SC:
             p.error(f"no published drag for c = {c}; choose from {sorted(cal.ZICK_HOMSY_SC)}")
         for d in args.diameters:
-            for walls in args.walls:
-                row = run(c, d, walls)
+            for walls, shift in itertools.product(args.walls, SHIFTS[: args.shifts]):
+                row = run(c, d, walls, shift=shift)
                 rows.append(row)
                 print(
-                    f"c={c:<6} d={row['diameter']:6.2f} L={row['cells']:3d} {row['walls']:8s} K={row['K']:.5f} "
+                    f"c={c:<6} d={row['diameter']:6.2f} L={row['cells']:3d} shift={shift} {row['walls']:8s} "
+                    f"K={row['K']:.5f} "
                     f"(ZH {row['K_ref']}) err={100 * row['error']:+.3f} % steps={row['steps']} "
                     f"cpu={row['cpu_s']:.1f} s",
                     flush=True,

@@ -48,6 +48,17 @@ def test_published_drag_agrees_with_the_dilute_series():
     assert cal.sangani_acrivos_dilute(0.216) == pytest.approx(cal.ZICK_HOMSY_SC[0.216], rel=1e-2)
 
 
+def test_a_shifted_sphere_array_is_the_same_array_moved():
+    """A whole-voxel shift rolls the voxels (periodic images included); a sub-voxel one keeps c to the staircase's
+    O(1/L) and moves the exact walls with it."""
+    pore, walls, a = cal.sphere_array(20, 0.45)
+    moved, moved_walls, a_moved = cal.sphere_array(20, 0.45, (1.0, 0.0, -3.0))
+    assert a_moved == a and np.array_equal(moved, np.roll(pore, (1, 0, -3), axis=(0, 1, 2)))
+    half, half_walls, _ = cal.sphere_array(20, 0.45, (0.5, 0.5, 0.5))
+    assert abs(1 - half.mean() - 0.45) < 0.02 and not np.array_equal(half, pore)
+    np.testing.assert_allclose(half_walls.centres - walls.centres, 0.5)
+
+
 @pytest.mark.parametrize("c", [0.125, 0.343, 0.45])
 def test_interpolated_walls_within_one_percent_at_16_voxels_per_diameter(c):
     """CLI walls: |K/K_ZH − 1| < 1 % at ~16 voxels per diameter (measured +0.51, +0.88, +0.94 %); halfway
@@ -59,15 +70,25 @@ def test_interpolated_walls_within_one_percent_at_16_voxels_per_diameter(c):
     assert abs(k_half / ref - 1) > 2 * abs(k_cli / ref - 1)
 
 
-def test_interpolated_walls_converge_at_second_order_and_within_0p3_percent_at_32():
-    """c = 0.343 at 15.6 and 32.1 voxels per diameter: error +0.88 % -> +0.17 % (order 2.3; ≥ 1.8 asked) and
-    under 0.3 % at 32."""
+def test_interpolated_walls_converge_at_second_order_from_16_to_32():
+    """c = 0.343 at 15.6 and 32.1 voxels per diameter: error +0.88 % -> +0.17 % (order 2.3; ≥ 1.8 asked). Indicative
+    only: at 24.3 and 40.0 it is +0.51 and +0.32 % (the error moves with the sphere's place on the lattice), and
+    Zick & Homsy print K = 15.4, ±0.32 %."""
     ref = cal.ZICK_HOMSY_SC[0.343]
     coarse, fine = (abs(_drag(0.343, d, "cli") / ref - 1) for d in (16, 32))
     d_coarse = 2 * cal.sphere_array(cal.cells_for_diameter(0.343, 16), 0.343)[2]
     d_fine = 2 * cal.sphere_array(cal.cells_for_diameter(0.343, 32), 0.343)[2]
     assert fine < 0.003
     assert np.log(coarse / fine) / np.log(d_fine / d_coarse) > 1.8
+
+
+@pytest.mark.slow
+def test_interpolated_walls_within_0p3_percent_at_32_where_the_reference_has_four_digits():
+    """c = 0.216, K = 7.442 printed to ±0.007 %: |error| < 0.3 % at 32 voxels per diameter (measured −0.04 %; −0.20
+    and +0.22 % at 15.6 and 23.8, the sign set by where the sphere sits on the lattice). For c = 0.343 and 0.45 Zick &
+    Homsy print three digits (±0.32 and ±0.18 %), too few to test 0.3 % against."""
+    assert cal.ZICK_HOMSY_SC_ROUNDING[0.216] < 0.1 * 0.003 < cal.ZICK_HOMSY_SC_ROUNDING[0.343]
+    assert abs(_drag(0.216, 32, "cli") / cal.ZICK_HOMSY_SC[0.216] - 1) < 0.003
 
 
 @pytest.mark.parametrize("walls", ["halfway", "cli"])

@@ -34,11 +34,15 @@ MIN_ORDER = 0.5
 
 
 def read_rows(path) -> list[dict]:
-    """The benchmark's rows (a JSON list of dicts); [] when the file is absent."""
+    """The benchmark's rows (a JSON list of dicts) with the sphere centred (``--shifts`` adds shifted ones, one
+    diameter several times); [] when the file is absent.
+    """
     path = Path(path)
     if not path.is_file():
         return []
-    return [r for r in json.loads(path.read_text()) if {"c", "diameter", "walls", "error"} <= set(r)]
+    rows = json.loads(path.read_text())
+    keys = {"c", "diameter", "walls", "error"}
+    return [r for r in rows if keys <= set(r) and not any(r.get("shift", ()))]
 
 
 def _power_fit(x, y) -> tuple[float, float]:
