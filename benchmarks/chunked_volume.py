@@ -10,6 +10,7 @@ periodic box of ``n`` µm at a voxel size of 1 µm, so the volume has n³ voxels
     python benchmarks/chunked_volume.py --full          # 2048³ with a 4000 MB budget (needs ~10 GB of disk)
     python benchmarks/chunked_volume.py --n 1024 --budget-mb 500
     python benchmarks/chunked_volume.py --full --tiled 128   # 2048³ grey tiled from one voxelized 128³ cell
+    python benchmarks/chunked_volume.py --smoke         # 64³ with a 1 MB budget (CI smoke; no figures to quote)
 
 ``--tiled C`` voxelizes one periodic cell of C voxels and writes the n³ grey volume as (n/C)³ copies of it (the
 voxelize stage takes ~1 h for 2048³ on 2 loaded cores); segment and minkowski then run as above, and their result
@@ -150,6 +151,7 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=512, help="voxels per edge (default 512)")
     parser.add_argument("--budget-mb", type=int, default=64, help="resources.memory_budget_mb (default 64)")
     parser.add_argument("--full", action="store_true", help="2048³ with a 4000 MB budget (the issue's case)")
+    parser.add_argument("--smoke", action="store_true", help="64³ with a 1 MB budget (CI smoke)")
     parser.add_argument("--radius", type=float, default=32.0, help="sphere radius in µm (= voxels)")
     parser.add_argument("--porosity", type=float, default=0.35)
     parser.add_argument("--threads", type=int, default=2)
@@ -159,6 +161,8 @@ def main() -> None:
     args = parser.parse_args()
     if args.full:
         args.n, args.budget_mb = 2048, 4000
+    if args.smoke:
+        args.n, args.budget_mb, args.radius = 64, 1, 8.0
     work = Path(args.out) / f"chunked_volume_work_{args.n}"
     work.mkdir(parents=True, exist_ok=True)
     spheres = boolean_spheres(args.n, args.radius, args.porosity)

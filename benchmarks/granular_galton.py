@@ -5,6 +5,7 @@ by shifting the tips sideways. Each ball's bin is recorded when it passes half a
 and the ball then leaves the run (the bins below would only hold it).
 
     python benchmarks/granular_galton.py --balls 2300 --p 0.5
+    python benchmarks/granular_galton.py --smoke        # 100 balls, for CI (no figures to quote)
 """
 
 from __future__ import annotations
@@ -30,8 +31,11 @@ def main() -> None:
     ap.add_argument("--spacing", type=float, default=0.010, help="nail spacing D, m")
     ap.add_argument("--nail", type=float, default=0.002, help="nail (hexagon) circumradius, m")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--smoke", action="store_true", help="100 balls (CI smoke; no figures to quote)")
     add_out_argument(ap)
     args = ap.parse_args()
+    if args.smoke:
+        args.balls = 100
     board = GaltonBoard(args.spacing, args.nail, -args.tip_shift, args.damping, args.friction, args.every)
     sim = board.simulation(args.balls, args.seed)
     t0 = time.perf_counter()

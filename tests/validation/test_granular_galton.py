@@ -209,3 +209,9 @@ def test_galton_board_bins_pass_chi2_against_binomial(fair_board):
     # The issue's check on the thesis's set-up (one board, many balls): chi² of the bin counts against
     # Binomial(10, 1/2). Measured p = 1e-25 (D = 10 mm) to 1e-100 (D = 12 mm) at 300 balls, 0 at 2300.
     assert chi2_binomial_pvalue(fair_board[1], 0.5) > 0.05
+
+
+def test_chi2_of_too_few_balls_is_a_clear_error():
+    """Twelve balls cannot fill bins expecting five each: one line naming the count, not scipy's sum mismatch."""
+    with pytest.raises(ValueError, match="12 balls are too few"):
+        chi2_binomial(np.full(12, 5), 0.5)

@@ -197,6 +197,11 @@ def chi2_binomial(bins, p: float, n: int = ROWS, min_expected: float = 5.0):
         lo += 1
     while expected[hi:].sum() < min_expected:
         hi -= 1
+    if lo >= hi:
+        raise ValueError(
+            f"chi2_binomial: {len(bins)} balls are too few for bins expecting >= {min_expected:g} balls each "
+            f"(Binomial({n}, {p:g}))"
+        )
     obs = np.r_[counts[: lo + 1].sum(), counts[lo + 1 : hi], counts[hi:].sum()]
     exp = np.r_[expected[: lo + 1].sum(), expected[lo + 1 : hi], expected[hi:].sum()]
     res = stats.chisquare(obs, exp)
