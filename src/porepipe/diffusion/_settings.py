@@ -9,6 +9,15 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from porepipe.diffusion._capillary import CapillaryGeometry
 
 
+def known_species(value: str) -> str:
+    """``value`` if it names a species of the built-in table, else a ValueError listing the allowed names."""
+    from porepipe.diffusion._species import SPECIES
+
+    if value not in SPECIES:
+        raise ValueError(f"unknown species {value!r}; allowed: {', '.join(SPECIES)}")
+    return value
+
+
 class Axis(str, enum.Enum):
     """Transport axis: particles enter at its low face and leave at its high face."""
 
@@ -135,11 +144,7 @@ class SurfaceSpecies(BaseModel):
     @field_validator("name")
     @classmethod
     def _known(cls, value):
-        from porepipe.diffusion._species import SPECIES
-
-        if value not in SPECIES:
-            raise ValueError(f"unknown species {value!r}; allowed: {', '.join(SPECIES)}")
-        return value
+        return known_species(value)
 
 
 class SurfaceMechanism(BaseModel):
@@ -291,11 +296,7 @@ class Settings(BaseModel):
     @field_validator("species")
     @classmethod
     def _known(cls, value):
-        from porepipe.diffusion._species import SPECIES
-
-        if value not in SPECIES:
-            raise ValueError(f"unknown species {value!r}; allowed: {', '.join(SPECIES)}")
-        return value
+        return known_species(value)
 
     @field_validator("lengths")
     @classmethod

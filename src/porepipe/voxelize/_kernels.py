@@ -172,35 +172,6 @@ def _chord(dxy, h, cz, r2, zc, inv_h):
     return _chord_walk(dxy, h, cz, r2, lo, hi)
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _guess_rows(dxy, n, h, cz, r2, ends, proven):
-    """Square-root guesses of the chord ends of rows ``dxy[:n]`` into ``ends`` (2, n), and whether both are proven.
-
-    Branch-free, so the loop vectorises: the guessed low end is proven when its sample is inside and the one below
-    is not, the high end likewise, by the exact predicate (the same arithmetic as :func:`_inside`, with integral
-    float sample indices). Rows not proven (a guess one sample off, rare; or no sample inside) are left to callers.
-    """
-    zc = cz / h - 0.5
-    inv_h = 1.0 / h
-    for t in range(n):
-        d = dxy[t]
-        half = np.sqrt(max(r2 - d, 0.0)) * inv_h
-        lo = np.ceil(zc - half)
-        hi = np.floor(zc + half)
-        dz_lo = (lo + 0.5) * h - cz
-        dz_below = (lo - 0.5) * h - cz
-        dz_hi = (hi + 0.5) * h - cz
-        dz_above = (hi + 1.5) * h - cz
-        ends[0, t] = lo
-        ends[1, t] = hi
-        proven[t] = (
-            (d + dz_lo * dz_lo <= r2)
-            & (d + dz_below * dz_below > r2)
-            & (d + dz_hi * dz_hi <= r2)
-            & (d + dz_above * dz_above > r2)
-        )
-
-
 #: relative slack (of r + |cz|, µm) on the z extent of a ball in one voxel row: far above the rounding of the square
 #: root and divisions of :func:`_row_ranges` (~1e-8 r at worst), far below any voxel
 SLACK = 1e-7
@@ -281,8 +252,10 @@ def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges):
 def _row_chords(j, dx2, cy, cz, r2, h, z_last, dxy, proven, chords):
     """The 36 chords of voxel row ``j`` (sample rows q = 6·sx + sy) into ``chords`` (2, 36): global z samples lo..hi.
 
-    Each decided by the exact predicate: the square-root guesses of both ends, proven as in :func:`_guess_rows`
-    (one branch-free loop that vectorises), else :func:`_chord`; clipped to the grid; empty when lo > hi.
+    Each decided by the exact predicate: the square-root guesses of both ends, in one branch-free loop that
+    vectorises, where the guessed low end is proven when its sample is inside and the one below is not, the high end
+    likewise (the same arithmetic as :func:`_inside`, with integral float sample indices); rows not proven (a guess
+    one sample off, rare; or no sample inside) by :func:`_chord`; clipped to the grid; empty when lo > hi.
     """
     for sx in range(SUB):
         for sy in range(SUB):

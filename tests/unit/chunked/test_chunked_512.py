@@ -12,10 +12,13 @@ import pytest
 
 from porepipe._shared.store import ResultWriter, read_table, read_volume
 from porepipe.lpt import Settings as LptSettings
-from porepipe.lpt import local_porosity_analysis
-from porepipe.lpt._chunked import local_porosity_analysis_chunked
-from porepipe.minkowski import configuration_histogram, threshold_histograms
-from porepipe.minkowski._chunked import configuration_histogram_chunked, threshold_histograms_chunked
+from porepipe.lpt import local_porosity_analysis, local_porosity_analysis_chunked
+from porepipe.minkowski import (
+    configuration_histogram,
+    configuration_histogram_chunked,
+    threshold_histograms,
+    threshold_histograms_chunked,
+)
 from porepipe.scene import parse_scene
 from porepipe.segment._run import run as segment_run
 from porepipe.segment._settings import SegmentationMethod
