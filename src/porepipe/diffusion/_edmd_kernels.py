@@ -32,6 +32,7 @@ import numpy as np
 from numba import njit, prange
 
 from porepipe._shared.numba_config import FASTMATH as K_FASTMATH
+from porepipe._shared.numba_config import NO_REFCOUNT
 from porepipe.diffusion._kernels import (
     EXIT_HIGH,
     EXIT_LOW,
@@ -45,11 +46,9 @@ from porepipe.diffusion._kernels import (
     _uniform_in_pore,
 )
 
-#: compile options of the event loop's helpers: ``_nrt=False`` builds them without numba's reference counting. They
-#: only index arrays that their caller owns (no allocation, no array returned), and with reference counting every
-#: call paid an atomic increment and decrement per array argument (36 for one pair scan): a third of the event
-#: loop's time at N = 10^5 in a profile. Numba's option is private; the EDMD tests exercise every helper.
-_BORROW = {"cache": True, "_nrt": False}
+#: compile options of the event loop's helpers: no reference counting (with it, one pair scan paid 36 atomic
+#: operations; see NO_REFCOUNT)
+_BORROW = {"cache": True, **NO_REFCOUNT}
 
 #: columns of the event tally (E_STALE: re-predictions of particles whose pair event was taken by another pair or
 #: voided by the partner's wall hit; the key stays for the reports' ``stale_events``)

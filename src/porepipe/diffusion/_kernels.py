@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
 
 _INF = np.inf
 _GAMMA = np.uint64(0x9E3779B97F4A7C15)
@@ -54,7 +54,7 @@ def _mix(z):
     return z ^ (z >> _S31)
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _stream_state(seed, particle):
     """Start state of particle ``particle``'s stream under the 63-bit ``seed`` (independent of thread count)."""
     return _mix(np.uint64(seed) ^ _mix(np.uint64(particle) * _GAMMA + _GAMMA))
@@ -118,7 +118,7 @@ def _chessboard_codes(pore, out):
 
 # ---------------------------------------------------------------------------------------------------------------------
 # the flight
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
 def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     """Fly from ``pos`` (inside pore voxel ``idx``) along the unit vector ``u`` to the next event.
 
@@ -300,7 +300,7 @@ def _cos_theta(law, state):
     return x, state  # isotropic: cos uniform in (0, 1]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _emit(law, axis, sign, u, state):
     """Overwrite ``u`` with a diffuse direction about the normal ``sign * e_axis``."""
     c, state = _cos_theta(law, state)
@@ -315,7 +315,7 @@ def _emit(law, axis, sign, u, state):
     return state
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _speed(dist, vmean, state):
     """A speed from ``dist`` (SPEED_MEAN / SPEED_MAXWELL / SPEED_FLUX) for a species of mean speed ``vmean``."""
     if dist == SPEED_MEAN:
@@ -334,7 +334,7 @@ def _speed(dist, vmean, state):
     return sigma * math.sqrt(acc), state
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _isotropic(u, state):
     """Uniform direction on the sphere."""
     x, state = _uniform(state)
@@ -347,7 +347,7 @@ def _isotropic(u, state):
     return state
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _uniform_in_pore(cells, h, pos, idx, state):
     """Uniform position in a random voxel of ``cells`` ((m, 3) int64)."""
     x, state = _uniform(state)
@@ -359,7 +359,7 @@ def _uniform_in_pore(cells, h, pos, idx, state):
     return state
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _uniform_in_codes(geom, h, pos, idx, state):
     """Uniform position in the pore space of ``geom`` (code > 0) by rejection over the box: no voxel list, 1/ε tries."""
     n0, n1, n2 = geom.shape
@@ -423,7 +423,7 @@ T_PARTICLES, T_OUT_HIGH, T_OUT_LOW, T_TRUNC, T_HITS, T_CROSS, T_PATH, T_TIME, T_
 N_TALLY = 9
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_REFCOUNT)
 def _profile_add(prof, p_start, u_ax, length, speed, bin_w):
     """Add the time a straight flight of ``length`` from axial coordinate ``p_start`` spends in each axial bin."""
     nb = prof.shape[0]

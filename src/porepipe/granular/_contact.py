@@ -12,7 +12,7 @@ import math
 
 from numba import njit
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
 
 #: contact line shorter than this fraction of the overlap's extent counts as degenerate (fall-back normal)
 _LINE_EPS = 1e-9
@@ -23,7 +23,7 @@ def _cross(ax, ay, bx, by):
     return ax * by - ay * bx
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
 def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b, side):
     """Clip convex P (CCW, n_p corners) by convex Q (CCW); the result (count returned) is in buf_a / tag_a.
 
@@ -117,7 +117,7 @@ def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_
     return m
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
 def _overlap_geometry(P, n_p, Q, n_q, cpx, cpy, cqx, cqy, buf_a, tag_a, buf_b, tag_b, side, out):
     """Overlap of convex polygons P and Q: fills out = (A, c1x, c1y, c2x, c2y, sx, sy, gx, gy, ok_line, m).
 
@@ -183,7 +183,7 @@ def _overlap_geometry(P, n_p, Q, n_q, cpx, cpy, cqx, cqy, buf_a, tag_a, buf_b, t
         out[6] = out[8]
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
 def _contact_frame(geo, xi, yi, xj, yj, j_is_wall, buf):
     """Normal n (from i to j), tangent t = n rotated by +90 deg, and contact-line length L; returns (nx, ny, L).
 
