@@ -380,26 +380,34 @@ def _scan(gas, sched, i, t, layer, step):
     zi = pos[i, 2] + (t - tp[i]) * vel[i, 2]
     ri = rad[i]
     n0, n1, n2 = shape[0], shape[1], shape[2]
-    for a in range(-1, 2):
+    # minimum image only where it can act: a periodic axis with i in a boundary cell (or fewer than 5 cells);
+    # elsewhere |separation| < 2h < extent/2 and the image correction is the identity
+    m0 = periodic[0] and (n0 < 5 or cidx[i, 0] == 0 or cidx[i, 0] == n0 - 1)
+    m1 = periodic[1] and (n1 < 5 or cidx[i, 1] == 0 or cidx[i, 1] == n1 - 1)
+    m2 = periodic[2] and (n2 < 5 or cidx[i, 2] == 0 or cidx[i, 2] == n2 - 1)
+    a0, a1 = (step, step) if layer == 0 else (-1, 1)
+    b0, b1 = (step, step) if layer == 1 else (-1, 1)
+    c0, c1 = (step, step) if layer == 2 else (-1, 1)
+    for a in range(a0, a1 + 1):
         k0 = _wrap(cidx[i, 0] + a, n0, periodic[0])
-        if (layer == 0 and a != step) or k0 < 0:
+        if k0 < 0:
             continue
-        for b in range(-1, 2):
+        for b in range(b0, b1 + 1):
             k1 = _wrap(cidx[i, 1] + b, n1, periodic[1])
-            if (layer == 1 and b != step) or k1 < 0:
+            if k1 < 0:
                 continue
             row = (k0 * n1 + k1) * n2
-            for c in range(-1, 2):
+            for c in range(c0, c1 + 1):
                 k2 = _wrap(cidx[i, 2] + c, n2, periodic[2])
-                if (layer == 2 and c != step) or k2 < 0:
+                if k2 < 0:
                     continue
                 j = head[row + k2]
                 while j >= 0:
                     if j != i:
                         dtj = t - tp[j]
-                        dx = _min_image(xi - pos[j, 0] - dtj * vel[j, 0], e0, periodic[0])
-                        dy = _min_image(yi - pos[j, 1] - dtj * vel[j, 1], e1, periodic[1])
-                        dz = _min_image(zi - pos[j, 2] - dtj * vel[j, 2], e2, periodic[2])
+                        dx = _min_image(xi - pos[j, 0] - dtj * vel[j, 0], e0, m0)
+                        dy = _min_image(yi - pos[j, 1] - dtj * vel[j, 1], e1, m1)
+                        dz = _min_image(zi - pos[j, 2] - dtj * vel[j, 2], e2, m2)
                         dt = pair_time(
                             dx,
                             dy,
