@@ -80,20 +80,24 @@ def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
     )
 
 
-def _time(sim: Simulation, steps: int, repeats: int) -> float:
-    best = math.inf
+def _time(sim: Simulation, steps: int, repeats: int) -> tuple[float, float]:
+    """Best polygon-steps per wall second and per CPU second (all threads' CPU time) over ``repeats`` runs; on a
+    shared machine the CPU figure is the one that does not depend on the other users.
+    """
+    best, best_cpu = math.inf, math.inf
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         sim.advance(steps)
         best = min(best, time.perf_counter() - t0)
-    return sim.n_mob * steps / best
+        best_cpu = min(best_cpu, time.process_time() - c0)
+    return sim.n_mob * steps / best, sim.n_mob * steps / max(best_cpu, 1e-9)
 
 
 def measure(n: int, spread: float, method: str, threads: int, warm: int, steps: int, repeats: int) -> dict:
     numba.set_num_threads(threads)
     sim = Simulation(pile(n, spread, method), seed=1)
     sim.advance(warm)
-    rate = _time(sim, steps, repeats)
+    rate, rate_cpu = _time(sim, steps, repeats)
     c = sim.contacts()
     coord = 2.0 * np.sum(c["j"] < sim.n_mob) / sim.n_mob
     return {
@@ -102,6 +106,7 @@ def measure(n: int, spread: float, method: str, threads: int, warm: int, steps: 
         "method": method,
         "threads": threads,
         "rate": rate,
+        "rate_per_cpu_s": rate_cpu,
         "coordination": float(coord),
         "rebuilds": sim.rebuilds,
     }
@@ -141,7 +146,7 @@ def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
     out = dict.fromkeys(sims, 0.0)
     for _ in range(repeats + 1):
         for label, sim in sims.items():
-            out[label] = max(out[label], _time(sim, steps, 1))
+            out[label] = max(out[label], _time(sim, steps, 1)[0])
     out["ratio"] = out["bare"] / out["all effects compiled in"]
     return out
 
@@ -171,7 +176,8 @@ def main() -> None:
                 r = measure(n, spread, method, threads, warm, steps, repeats)
                 rows.append(r)
                 print(
-                    f"N={r['n']:6d} I={spread:.1f} {method:6s} threads={threads}: {r['rate']:.3g} polygon-steps/s "
+                    f"N={r['n']:6d} I={spread:.1f} {method:6s} threads={threads}: {r['rate']:.3g} polygon-steps/s, "
+                    f"{r['rate_per_cpu_s']:.3g} per CPU-s "
                     f"(coordination {r['coordination']:.2f}, {r['rebuilds']} list builds)",
                     flush=True,
                 )
@@ -181,12 +187,20 @@ def main() -> None:
         f"polygon-steps/s -> compile-time switches save {cost['ratio']:.3f}x"
     )
     best = max(r["rate"] for r in rows)
-    print("\n| case | polygon-steps/s |\n|---|---|")
+    print("\n| case | polygon-steps/s | per CPU-s |\n|---|---|---|")
     for r in rows:
-        print(f"| N={r['n']} I={r['spread']} {r['method']} {r['threads']} thr | {r['rate']:.3g} |")
+        print(
+            f"| N={r['n']} I={r['spread']} {r['method']} {r['threads']} thr | {r['rate']:.3g} | "
+            f"{r['rate_per_cpu_s']:.3g} |"
+        )
     for name, rate in PEERS.items():
-        print(f"| {name} (published) | {rate:.3g} |")
-    print(f"| target (2 cores) | {TARGET:.3g} |\nbest here: {best:.3g} ({best / TARGET:.0%} of the target)")
+        print(f"| {name} (published) | {rate:.3g} | |")
+    per_core = max(r["rate_per_cpu_s"] for r in rows)
+    print(
+        f"| target (2 cores) | {TARGET:.3g} | |\nbest here: {best:.3g} ({best / TARGET:.0%} of the target); "
+        f"{per_core:.3g} per CPU-s, i.e. {2 * per_core:.3g} on 2 idle cores at perfect scaling "
+        f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)"
+    )
     if not args.smoke:
         builds_out = [{"spread": k[0], "method": k[1], "seconds": v} for k, v in builds.items()]
         write_record(
