@@ -221,35 +221,19 @@ def surface_run(
     series = np.zeros((samples.size, n_sp, 2))
     final_sp = np.empty(kinds.size, np.int64)
     final_st = np.empty(kinds.size, np.int64)
-    events = S.surface_kernel(
+    geo = (geom.codes, geom.h, geom.periodic, geom.cells(), face_of, site_face, active, s)
+    kin = (
         opts,
-        geom.codes,
-        geom.h,
-        geom.periodic,
-        geom.cells(),
-        face_of,
-        site_face,
-        s,
-        active,
-        kinds,
-        site0,
         np.array([sp.vmean for sp in species]),
         np.array([sp.adsorption for sp in species]),
         np.array([sp.residence for sp in species]),
         np.array([sp.hop_rate for sp in species]),
-        lh,
-        lh_w,
-        er,
-        er_w,
-        kernel_seed(seed, STAGE, 21),
-        float(t_end),
-        float(t_warm),
-        samples,
-        tally,
-        rtally,
-        series,
-        final_sp,
-        final_st,
+    )
+    mech = (lh, er, np.array([lh_w, er_w]))
+    seed_k = kernel_seed(seed, STAGE, 21)
+    out = (tally, rtally, series, final_sp, final_st)
+    events = S.surface_kernel(
+        geo, kin, mech, kinds, site0, seed_k, float(t_end), float(t_warm), samples, *out
     )
     return _summary(
         tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, t_end - t_warm, events

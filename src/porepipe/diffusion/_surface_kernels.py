@@ -29,6 +29,15 @@ few untaken branches per event.
 
 Walls re-emit with a thermal speed (flux-weighted MB): then the mean time between wall hits of every particle is
 4V/(v̄S) whatever its history, so reactions that consume fast particles first cannot bias the rate laws.
+
+The arrays travel in a few tuples (numba passes heterogeneous tuples of arrays by reference):
+
+- ``geo = (codes, h, periodic, cells, face_of, site_face, active, s)``: the pore and its sites (read only);
+- ``kin = (opts, vmean, ads, tau, hop)``: run options and per-species data (read only);
+- ``mech = (lh_spec, er_spec, w)``: mechanism species (a, b, product; -1 = off) and ``w = [lh_w, er_w]``;
+- ``pt = (sp, st, site, t_des, cnt, pos, idx, u, speed, tev)``: the particle slots;
+- ``surf = (occ, n_gas, n_ads)``: site occupation and the live counts per species;
+- ``heap = (ht, hi, hj, hci, hcj)``: the event calendar (its size ``nh`` travels beside it).
 """
 
 from __future__ import annotations
@@ -61,11 +70,15 @@ N_XTALLY = 2
 _NEIGH = ((1, 0), (-1, 0), (0, 1), (0, -1))
 #: entries of the options array: wall law, exponential residence (1) or fixed (0), replenishment (1)
 O_LAW, O_REXP, O_REPL = range(3)
+#: entries of the mechanism probabilities
+W_LH, W_ER = range(2)
 
 
 @njit(cache=True)
-def _site_of_hit(face_of, shape, h, s, pos, idx, ev):
+def _site_of_hit(geo, pos, idx, ev):
     """Site index of a wall hit at ``pos`` on face ``ev`` of voxel ``idx`` (-1 if the face is not a wall face)."""
+    codes, h, _, _, face_of, _, _, s = geo
+    shape = codes.shape
     f = face_of[((idx[0] * shape[1] + idx[1]) * shape[2] + idx[2]) * 6 + ev]
     if f < 0:
         return -1
@@ -77,8 +90,9 @@ def _site_of_hit(face_of, shape, h, s, pos, idx, ev):
 
 
 @njit(cache=True)
-def _site_point(site_face, h, s, site, pos, idx):
+def _site_point(geo, site, pos, idx):
     """Put ``pos``/``idx`` at the centre of ``site`` (on its face plane); returns the face event (0..5)."""
+    _, h, _, _, _, site_face, _, s = geo
     f = site // (s * s)
     ia = (site // s) % s
     ib = site % s
@@ -113,24 +127,26 @@ def _next_surface_time(t, t_des, hop, state):
 
 
 @njit(cache=True)
-def _emit_gas(opts, geom, h, periodic, i, t, ev, vmean, pos, idx, u, speed, tev, state):
+def _emit_gas(geo, law, pt, i, t, ev, vmean, state):
     """Diffuse emission of slot ``i`` from the wall face ``ev`` it sits on, thermal speed, fly to the next hit."""
-    p = pos[i]
-    q = idx[i]
+    codes, h, periodic = geo[0], geo[1], geo[2]
+    _, _, _, _, _, pos, idx, u, speed, tev = pt
     d = u[i]
     sign = -1.0 if (ev & 1) else 1.0
-    state = _emit(opts[O_LAW], ev >> 1, sign, d, state)
+    state = _emit(law, ev >> 1, sign, d, state)
     v, state = _speed(SPEED_FLUX, vmean, state)
     img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(geom, h, periodic, -1, p, q, d, img)
+    e2, ln, _ = _fly(codes, h, periodic, -1, pos[i], idx[i], d, img)
     speed[i] = v
     tev[i] = e2
     return t + ln / v, state
 
 
 @njit(cache=True)
-def _insert_gas(geom, h, periodic, cells, i, t, vmean, pos, idx, u, speed, tev, state):
+def _insert_gas(geo, pt, i, t, vmean, state):
     """Slot ``i`` as a fresh equilibrium gas particle (uniform, isotropic, Maxwell speed); returns its hit time."""
+    codes, h, periodic, cells = geo[0], geo[1], geo[2], geo[3]
+    _, _, _, _, _, pos, idx, u, speed, tev = pt
     p = pos[i]
     q = idx[i]
     d = u[i]
@@ -138,33 +154,57 @@ def _insert_gas(geom, h, periodic, cells, i, t, vmean, pos, idx, u, speed, tev, 
     state = _isotropic(d, state)
     v, state = _speed(SPEED_MAXWELL, vmean, state)
     img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(geom, h, periodic, -1, p, q, d, img)
+    e2, ln, _ = _fly(codes, h, periodic, -1, p, q, d, img)
     speed[i] = v
     tev[i] = e2
     return t + ln / v, state
 
 
 @njit(cache=True)
+def _push(heap, nh, cnt, i, t):
+    """Schedule slot ``i``'s next event at ``t`` under its current counter."""
+    ht, hi, hj, hci, hcj = heap
+    return _heap_push(ht, hi, hj, hci, hcj, nh, t, i, -1, cnt[i], 0)
+
+
+@njit(cache=True)
+def _push2(heap, nh, cnt, i, ti, j, tj):
+    """Schedule the two slots of a reaction (a time < 0 = nothing to schedule)."""
+    if ti >= 0.0:
+        nh = _push(heap, nh, cnt, i, ti)
+    if tj >= 0.0:
+        nh = _push(heap, nh, cnt, j, tj)
+    return nh
+
+
+@njit(cache=True)
+def _tally_time(tally, t_last, t, t_warm, blk_len, n_gas, n_ads):
+    """Add the gas and adsorbed count integrals over (t_last, t] to the time blocks after ``t_warm``."""
+    n_blk = tally.shape[0]
+    a0 = max(t_last, t_warm)
+    while a0 < t:
+        bk = min(int((a0 - t_warm) / blk_len), n_blk - 1)
+        a1 = min(t, t_warm + (bk + 1) * blk_len) if bk < n_blk - 1 else t
+        for x in range(n_gas.shape[0]):
+            tally[bk, x, S_GAS_T] += n_gas[x] * (a1 - a0)
+            tally[bk, x, S_ADS_T] += n_ads[x] * (a1 - a0)
+        a0 = a1
+
+
+@njit(cache=True)
+def _sample(series, k, n_gas, n_ads):
+    for x in range(n_gas.shape[0]):
+        series[k, x, 0] = n_gas[x]
+        series[k, x, 1] = n_ads[x]
+
+
+@njit(cache=True)
 def surface_kernel(
-    opts,
-    geom,
-    h,
-    periodic,
-    cells,
-    face_of,
-    site_face,
-    s,
-    active,
+    geo,
+    kin,
+    mech,
     sp0,
     site0,
-    vmean,
-    ads,
-    tau,
-    hop,
-    lh_spec,
-    lh_w,
-    er_spec,
-    er_w,
     seed,
     t_end,
     t_warm,
@@ -179,26 +219,30 @@ def surface_kernel(
     of species X at ``t_samples[k]``. ``site0[i]`` >= 0 starts particle i adsorbed there. Returns the number of
     events.
     """
+    opts, vmean, _, tau, hop = kin
+    active = geo[6]
     n = sp0.shape[0]
     n_sp = vmean.shape[0]
     n_blk = tally.shape[0]
     blk_len = (t_end - t_warm) / n_blk
-    sp = sp0.copy()
-    st = np.zeros(n, dtype=np.int64)
-    pos = np.zeros((n, 3))
-    idx = np.zeros((n, 3), dtype=np.int64)
-    u = np.zeros((n, 3))
-    speed = np.ones(n)
-    tev = np.zeros(n, dtype=np.int64)  # face event of the pending wall hit
-    site = np.full(n, -1, dtype=np.int64)
-    t_des = np.zeros(n)
-    cnt = np.zeros(n, dtype=np.int64)
-    occ = np.full(active.shape[0], -1, dtype=np.int64)
-    n_gas = np.zeros(n_sp)
-    n_ads = np.zeros(n_sp)
+    pt = (
+        sp0.copy(),
+        np.zeros(n, dtype=np.int64),  # st
+        np.full(n, -1, dtype=np.int64),  # site
+        np.zeros(n),  # t_des
+        np.zeros(n, dtype=np.int64),  # cnt
+        np.zeros((n, 3)),  # pos
+        np.zeros((n, 3), dtype=np.int64),  # idx
+        np.zeros((n, 3)),  # u
+        np.ones(n),  # speed
+        np.zeros(n, dtype=np.int64),  # tev: face event of the pending wall hit
+    )
+    sp, st, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
+    surf = (np.full(active.shape[0], -1, dtype=np.int64), np.zeros(n_sp), np.zeros(n_sp))
+    occ, n_gas, n_ads = surf
     cap = 2 * n + 16
-    ht, hi, hj = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64)
-    hci, hcj = np.empty(cap, np.int64), np.empty(cap, np.int64)
+    heap = (np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64))
+    heap = heap + (np.empty(cap, np.int64), np.empty(cap, np.int64))
     nh = 0
     state = _stream_state(seed, 0)
     # start: gas particles in equilibrium, adsorbed ones on their sites
@@ -207,21 +251,20 @@ def surface_kernel(
             st[i] = ADSORBED
             site[i] = site0[i]
             occ[site0[i]] = i
-            _site_point(site_face, h, s, site0[i], pos[i], idx[i])
+            _site_point(geo, site0[i], pos[i], idx[i])
             tau_i, state = _residence(tau[sp[i]], opts[O_REXP] == 1, state)
             t_des[i] = tau_i
             te, _, state = _next_surface_time(0.0, t_des[i], hop[sp[i]], state)
             n_ads[sp[i]] += 1
         else:
-            te, state = _insert_gas(
-                geom, h, periodic, cells, i, 0.0, vmean[sp[i]], pos, idx, u, speed, tev, state
-            )
+            te, state = _insert_gas(geo, pt, i, 0.0, vmean[sp[i]], state)
             n_gas[sp[i]] += 1
-        nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, 0, 0)
+        nh = _push(heap, nh, cnt, i, te)
     t_last = 0.0
     k_sample = 0
     events = 0
     while nh > 0:
+        ht, hi, hj, hci, hcj = heap
         t = ht[0]
         i = hi[0]
         c_i = hci[0]
@@ -232,207 +275,23 @@ def surface_kernel(
             t = t_end
         # time integrals and samples up to t
         while k_sample < t_samples.shape[0] and t_samples[k_sample] <= t:
-            for x in range(n_sp):
-                series[k_sample, x, 0] = n_gas[x]
-                series[k_sample, x, 1] = n_ads[x]
+            _sample(series, k_sample, n_gas, n_ads)
             k_sample += 1
-        a0 = max(t_last, t_warm)
-        while a0 < t:
-            bk = min(int((a0 - t_warm) / blk_len), n_blk - 1)
-            a1 = min(t, t_warm + (bk + 1) * blk_len) if bk < n_blk - 1 else t
-            for x in range(n_sp):
-                tally[bk, x, S_GAS_T] += n_gas[x] * (a1 - a0)
-                tally[bk, x, S_ADS_T] += n_ads[x] * (a1 - a0)
-            a0 = a1
+        _tally_time(tally, t_last, t, t_warm, blk_len, n_gas, n_ads)
         t_last = t
         if t >= t_end:
             break
         events += 1
         bk = min(int((t - t_warm) / blk_len), n_blk - 1) if t >= t_warm else -1
-        x = sp[i]
         if st[i] == GAS:
-            # ---- wall hit
-            ev = tev[i]
-            si = _site_of_hit(face_of, geom.shape, h, s, pos[i], idx[i], ev)
-            if bk >= 0:
-                tally[bk, x, S_HITS] += 1
-            done = False
-            if er_spec[0] >= 0 and x == er_spec[0] and si >= 0 and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
-                y, state = _uniform(state)
-                if y < er_w:
-                    j = occ[si]
-                    occ[si] = -1
-                    n_ads[sp[j]] -= 1
-                    n_gas[x] -= 1
-                    if bk >= 0:
-                        rtally[bk, X_ER] += 1
-                    te, tj, state = _react(
-                        opts,
-                        geom,
-                        h,
-                        periodic,
-                        cells,
-                        i,
-                        j,
-                        x,
-                        sp[j],
-                        er_spec[2],
-                        t,
-                        ev,
-                        vmean,
-                        sp,
-                        st,
-                        site,
-                        cnt,
-                        pos,
-                        idx,
-                        u,
-                        speed,
-                        tev,
-                        n_gas,
-                        state,
-                    )
-                    nh = _push2(ht, hi, hj, hci, hcj, nh, cnt, i, te, j, tj)
-                    done = True
-            if not done and si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
-                y, state = _uniform(state)
-                if y < ads[x]:
-                    st[i] = ADSORBED
-                    site[i] = si
-                    occ[si] = i
-                    n_gas[x] -= 1
-                    n_ads[x] += 1
-                    if bk >= 0:
-                        tally[bk, x, S_ADS] += 1
-                    tau_i, state = _residence(tau[x], opts[O_REXP] == 1, state)
-                    t_des[i] = t + tau_i
-                    cnt[i] += 1
-                    nh, state = _arrive(
-                        opts,
-                        geom,
-                        h,
-                        periodic,
-                        cells,
-                        face_of,
-                        site_face,
-                        s,
-                        i,
-                        t,
-                        bk,
-                        vmean,
-                        hop,
-                        lh_spec,
-                        lh_w,
-                        sp,
-                        st,
-                        site,
-                        occ,
-                        t_des,
-                        cnt,
-                        pos,
-                        idx,
-                        u,
-                        speed,
-                        tev,
-                        n_gas,
-                        n_ads,
-                        rtally,
-                        ht,
-                        hi,
-                        hj,
-                        hci,
-                        hcj,
-                        nh,
-                        state,
-                    )
-                    done = True
-            if not done:
-                te, state = _emit_gas(
-                    opts, geom, h, periodic, i, t, ev, vmean[x], pos, idx, u, speed, tev, state
-                )
-                cnt[i] += 1
-                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+            nh, state = _wall_hit(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state)
         else:
-            # ---- adsorbed: desorption or hop
-            si = site[i]
-            if t >= t_des[i]:
-                occ[si] = -1
-                site[i] = -1
-                st[i] = GAS
-                n_ads[x] -= 1
-                n_gas[x] += 1
-                if bk >= 0:
-                    tally[bk, x, S_DES] += 1
-                ev = _site_point(site_face, h, s, si, pos[i], idx[i])
-                te, state = _emit_gas(
-                    opts, geom, h, periodic, i, t, ev, vmean[x], pos, idx, u, speed, tev, state
-                )
-                cnt[i] += 1
-                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
-            else:
-                if bk >= 0:
-                    tally[bk, x, S_HOP_TRY] += 1
-                y, state = _uniform(state)
-                k = min(int(y * 4.0), 3)
-                ia = (si // s) % s + _NEIGH[k][0]
-                ib = si % s + _NEIGH[k][1]
-                target = si - (si % (s * s)) + ia * s + ib
-                if 0 <= ia < s and 0 <= ib < s and active[target] and occ[target] < 0:
-                    occ[si] = -1
-                    occ[target] = i
-                    site[i] = target
-                    _site_point(site_face, h, s, target, pos[i], idx[i])
-                    if bk >= 0:
-                        tally[bk, x, S_HOP_OK] += 1
-                    cnt[i] += 1
-                    nh, state = _arrive(
-                        opts,
-                        geom,
-                        h,
-                        periodic,
-                        cells,
-                        face_of,
-                        site_face,
-                        s,
-                        i,
-                        t,
-                        bk,
-                        vmean,
-                        hop,
-                        lh_spec,
-                        lh_w,
-                        sp,
-                        st,
-                        site,
-                        occ,
-                        t_des,
-                        cnt,
-                        pos,
-                        idx,
-                        u,
-                        speed,
-                        tev,
-                        n_gas,
-                        n_ads,
-                        rtally,
-                        ht,
-                        hi,
-                        hj,
-                        hci,
-                        hcj,
-                        nh,
-                        state,
-                    )
-                else:
-                    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
-                    cnt[i] += 1
-                    nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+            nh, state = _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state)
         if nh + 4 > ht.shape[0]:
             ht, hi, hj, hci, hcj, nh = _heap_room(ht, hi, hj, hci, hcj, nh, 4, cnt)
+            heap = (ht, hi, hj, hci, hcj)
     while k_sample < t_samples.shape[0]:
-        for x in range(n_sp):
-            series[k_sample, x, 0] = n_gas[x]
-            series[k_sample, x, 1] = n_ads[x]
+        _sample(series, k_sample, n_gas, n_ads)
         k_sample += 1
     final_species[:] = sp
     final_state[:] = st
@@ -440,46 +299,99 @@ def surface_kernel(
 
 
 @njit(cache=True)
-def _push2(ht, hi, hj, hci, hcj, nh, cnt, i, ti, j, tj):
-    """Schedule the two slots of a reaction (a time < 0 = nothing to schedule)."""
-    if ti >= 0.0:
-        nh = _heap_push(ht, hi, hj, hci, hcj, nh, ti, i, -1, cnt[i], 0)
-    if tj >= 0.0:
-        nh = _heap_push(ht, hi, hj, hci, hcj, nh, tj, j, -1, cnt[j], 0)
-    return nh
+def _wall_hit(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state):
+    """A gas particle hits the wall: Eley-Rideal, else adsorption, else a diffuse reflection."""
+    opts, vmean, ads, tau, _ = kin
+    lh_spec, er_spec, w = mech
+    sp, st, site, t_des, cnt, pos, idx, _, _, tev = pt
+    occ, n_gas, n_ads = surf
+    active = geo[6]
+    x = sp[i]
+    ev = tev[i]
+    si = _site_of_hit(geo, pos[i], idx[i], ev)
+    if bk >= 0:
+        tally[bk, x, S_HITS] += 1
+    if er_spec[0] >= 0 and x == er_spec[0] and si >= 0 and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
+        y, state = _uniform(state)
+        if y < w[W_ER]:
+            j = occ[si]
+            occ[si] = -1
+            n_ads[sp[j]] -= 1
+            n_gas[x] -= 1
+            if bk >= 0:
+                rtally[bk, X_ER] += 1
+            te, tj, state = _react(geo, kin, pt, n_gas, i, j, sp[j], er_spec[2], t, ev, state)
+            return _push2(heap, nh, cnt, i, te, j, tj), state
+    if si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
+        y, state = _uniform(state)
+        if y < ads[x]:
+            st[i] = ADSORBED
+            site[i] = si
+            occ[si] = i
+            n_gas[x] -= 1
+            n_ads[x] += 1
+            if bk >= 0:
+                tally[bk, x, S_ADS] += 1
+            tau_i, state = _residence(tau[x], opts[O_REXP] == 1, state)
+            t_des[i] = t + tau_i
+            cnt[i] += 1
+            return _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state)
+    te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[x], state)
+    cnt[i] += 1
+    return _push(heap, nh, cnt, i, te), state
 
 
 @njit(cache=True)
-def _react(
-    opts,
-    geom,
-    h,
-    periodic,
-    cells,
-    i,
-    j,
-    xi,
-    xj,
-    product,
-    t,
-    ev,
-    vmean,
-    sp,
-    st,
-    site,
-    cnt,
-    pos,
-    idx,
-    u,
-    speed,
-    tev,
-    n_gas,
-    state,
-):
+def _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state):
+    """An adsorbed particle's event: desorption at its residence end, else a hop try."""
+    opts, vmean, _, _, hop = kin
+    sp, st, site, t_des, cnt, pos, idx, _, _, _ = pt
+    occ, n_gas, n_ads = surf
+    active, s = geo[6], geo[7]
+    x = sp[i]
+    si = site[i]
+    if t >= t_des[i]:
+        occ[si] = -1
+        site[i] = -1
+        st[i] = GAS
+        n_ads[x] -= 1
+        n_gas[x] += 1
+        if bk >= 0:
+            tally[bk, x, S_DES] += 1
+        ev = _site_point(geo, si, pos[i], idx[i])
+        te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[x], state)
+        cnt[i] += 1
+        return _push(heap, nh, cnt, i, te), state
+    if bk >= 0:
+        tally[bk, x, S_HOP_TRY] += 1
+    y, state = _uniform(state)
+    k = min(int(y * 4.0), 3)
+    ia = (si // s) % s + _NEIGH[k][0]
+    ib = si % s + _NEIGH[k][1]
+    target = si - (si % (s * s)) + ia * s + ib
+    if 0 <= ia < s and 0 <= ib < s and active[target] and occ[target] < 0:
+        occ[si] = -1
+        occ[target] = i
+        site[i] = target
+        _site_point(geo, target, pos[i], idx[i])
+        if bk >= 0:
+            tally[bk, x, S_HOP_OK] += 1
+        cnt[i] += 1
+        return _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state)
+    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+    cnt[i] += 1
+    return _push(heap, nh, cnt, i, te), state
+
+
+@njit(cache=True)
+def _react(geo, kin, pt, n_gas, i, j, xj, product, t, ev, state):
     """Slots i (at a wall point, face ``ev``) and j (already off the counts) react: i becomes the product and
     leaves the wall into the gas, j is gone; with opts[O_REPL] both are put back as fresh gas reactants instead.
     Returns the next event times of i and j (-1: none) and the state.
     """
+    opts, vmean = kin[0], kin[1]
+    sp, st, site, _, cnt = pt[0], pt[1], pt[2], pt[3], pt[4]
+    xi = sp[i]
     cnt[i] += 1
     cnt[j] += 1
     site[i] = -1
@@ -487,63 +399,30 @@ def _react(
     if opts[O_REPL] == 1:
         st[i] = GAS
         st[j] = GAS
-        sp[i] = xi
         sp[j] = xj
         n_gas[xi] += 1
         n_gas[xj] += 1
-        ti, state = _insert_gas(geom, h, periodic, cells, i, t, vmean[xi], pos, idx, u, speed, tev, state)
-        tj, state = _insert_gas(geom, h, periodic, cells, j, t, vmean[xj], pos, idx, u, speed, tev, state)
+        ti, state = _insert_gas(geo, pt, i, t, vmean[xi], state)
+        tj, state = _insert_gas(geo, pt, j, t, vmean[xj], state)
         return ti, tj, state
     st[i] = GAS
     st[j] = GONE
     sp[i] = product
     n_gas[product] += 1
-    ti, state = _emit_gas(opts, geom, h, periodic, i, t, ev, vmean[product], pos, idx, u, speed, tev, state)
+    ti, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[product], state)
     return ti, -1.0, state
 
 
 @njit(cache=True)
-def _arrive(
-    opts,
-    geom,
-    h,
-    periodic,
-    cells,
-    face_of,
-    site_face,
-    s,
-    i,
-    t,
-    bk,
-    vmean,
-    hop,
-    lh_spec,
-    lh_w,
-    sp,
-    st,
-    site,
-    occ,
-    t_des,
-    cnt,
-    pos,
-    idx,
-    u,
-    speed,
-    tev,
-    n_gas,
-    n_ads,
-    rtally,
-    ht,
-    hi,
-    hj,
-    hci,
-    hcj,
-    nh,
-    state,
-):
+def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
     """Particle i has just arrived on its site: Langmuir-Hinshelwood tries with its in-face neighbours, then the
     next surface event (or, after a reaction, the emissions). ``cnt[i]`` is already bumped.
     """
+    hop = kin[4]
+    lh_spec, _, w = mech
+    sp, _, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
+    occ, n_gas, n_ads = surf
+    s = geo[7]
     x = sp[i]
     si = site[i]
     if lh_spec[0] >= 0 and (x == lh_spec[0] or x == lh_spec[1]):
@@ -561,42 +440,15 @@ def _arrive(
             if j < 0 or sp[j] != partner:
                 continue
             y, state = _uniform(state)
-            if y < lh_w:
+            if y < w[W_LH]:
                 occ[si] = -1
                 occ[nb] = -1
                 n_ads[x] -= 1
                 n_ads[partner] -= 1
                 if bk >= 0:
                     rtally[bk, X_LH] += 1
-                ev = _site_point(site_face, h, s, si, pos[i], idx[i])
-                ti, tj, state = _react(
-                    opts,
-                    geom,
-                    h,
-                    periodic,
-                    cells,
-                    i,
-                    j,
-                    x,
-                    partner,
-                    lh_spec[2],
-                    t,
-                    ev,
-                    vmean,
-                    sp,
-                    st,
-                    site,
-                    cnt,
-                    pos,
-                    idx,
-                    u,
-                    speed,
-                    tev,
-                    n_gas,
-                    state,
-                )
-                nh = _push2(ht, hi, hj, hci, hcj, nh, cnt, i, ti, j, tj)
-                return nh, state
+                ev = _site_point(geo, si, pos[i], idx[i])
+                ti, tj, state = _react(geo, kin, pt, n_gas, i, j, partner, lh_spec[2], t, ev, state)
+                return _push2(heap, nh, cnt, i, ti, j, tj), state
     te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
-    nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
-    return nh, state
+    return _push(heap, nh, cnt, i, te), state
