@@ -6,9 +6,13 @@ exact voxel traversal, no gas-gas collisions) and all of them advance together t
 heap, one pending event per particle, lazy invalidation by a per-particle counter), because adsorbed particles
 couple them. Events:
 
-- wall hit of a gas particle of species X on site s:
-  Eley-Rideal (X is the mechanism's gas partner and s holds its adsorbed partner: react with ``er_w``), else
-  adsorption (s active and empty: with probability ``ads[X]``), else a diffuse reflection;
+- wall hit of a gas particle of species X on site s, one uniform number deciding between the reactions open on
+  this hit (their probabilities add, thesis §4.3.1):
+  Eley-Rideal (X is the mechanism's gas partner and s holds its adsorbed partner: ``er_w``), its reverse (4.18:
+  X is the ER product and s is active and empty: ``er_reverse_w``; X turns into the gas reactant, which leaves,
+  and the adsorbed reactant appears on s), a side reaction (4.20-4.22: X → ``side_to[X]`` with ``side_w[X]``,
+  then a diffuse reflection); else adsorption (s active and empty: with probability ``ads[X]``), else a diffuse
+  reflection;
 - desorption of an adsorbed particle after its residence time (fixed or exponential of mean ``tau[X]``), emitted
   by the wall law with a thermal (flux-weighted Maxwell-Boltzmann) speed;
 - surface hop (rate ``hop[X]``): to one of the 4 in-face neighbour sites, rejected when it is occupied, inactive or
@@ -34,9 +38,11 @@ The arrays travel in a few tuples (numba passes heterogeneous tuples of arrays b
 
 - ``geo = (codes, h, periodic, cells, face_of, site_face, active, s)``: the pore and its sites (read only);
 - ``kin = (opts, vmean, ads, tau, hop)``: run options and per-species data (read only);
-- ``mech = (lh_spec, er_spec, w)``: mechanism species (a, b, product; -1 = off) and ``w = [lh_w, er_w]``;
+- ``mech = (lh_spec, er_spec, w, side_to, side_w)``: mechanism species (a, b, product; -1 = off),
+  ``w = [lh_w, er_w, er_reverse_w]`` and per species the side-reaction product (-1 = none) and probability;
 - ``pt = (sp, st, site, t_des, cnt, pos, idx, u, speed, tev)``: the particle slots;
-- ``surf = (occ, n_gas, n_ads)``: site occupation and the live counts per species;
+- ``surf = (occ, n_gas, n_ads, free)``: site occupation, the live counts per species and the stack of GONE slots
+  (``free[0]`` = its height);
 - ``heap = (ht, hi, hj, hci, hcj)``: the event calendar (its size ``nh`` travels beside it).
 """
 
@@ -62,16 +68,18 @@ from porepipe.diffusion._kernels import (
 
 GAS, ADSORBED, GONE = 0, 1, 2
 #: per-species columns of the block tally
-S_HITS, S_ADS, S_DES, S_HOP_TRY, S_HOP_OK, S_GAS_T, S_ADS_T = range(7)
-N_STALLY = 7
+S_HITS, S_ADS, S_DES, S_HOP_TRY, S_HOP_OK, S_GAS_T, S_ADS_T, S_SIDE = range(8)
+N_STALLY = 8
 #: reaction columns of the block tally
-X_LH, X_ER = range(2)
-N_XTALLY = 2
+X_LH, X_ER, X_ER_REV = range(3)
+N_XTALLY = 3
 _NEIGH = ((1, 0), (-1, 0), (0, 1), (0, -1))
 #: entries of the options array: wall law, exponential residence (1) or fixed (0), replenishment (1)
 O_LAW, O_REXP, O_REPL = range(3)
 #: entries of the mechanism probabilities
-W_LH, W_ER = range(2)
+W_LH, W_ER, W_REV = range(3)
+#: start site of a spare slot (GONE at the start: room for the B that a reverse Eley-Rideal reaction puts back)
+SPARE = -2
 
 
 @njit(cache=True)
@@ -238,8 +246,13 @@ def surface_kernel(
         np.zeros(n, dtype=np.int64),  # tev: face event of the pending wall hit
     )
     sp, st, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
-    surf = (np.full(active.shape[0], -1, dtype=np.int64), np.zeros(n_sp), np.zeros(n_sp))
-    occ, n_gas, n_ads = surf
+    surf = (
+        np.full(active.shape[0], -1, dtype=np.int64),
+        np.zeros(n_sp),
+        np.zeros(n_sp),
+        np.zeros(n + 1, np.int64),
+    )
+    occ, n_gas, n_ads, free = surf
     cap = 2 * n + 16
     heap = (np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64))
     heap = heap + (np.empty(cap, np.int64), np.empty(cap, np.int64))
@@ -247,6 +260,11 @@ def surface_kernel(
     state = _stream_state(seed, 0)
     # start: gas particles in equilibrium, adsorbed ones on their sites
     for i in range(n):
+        if site0[i] == SPARE:
+            st[i] = GONE
+            free[0] += 1
+            free[free[0]] = i
+            continue
         if site0[i] >= 0:
             st[i] = ADSORBED
             site[i] = site0[i]
@@ -300,28 +318,41 @@ def surface_kernel(
 
 @njit(cache=True)
 def _wall_hit(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state):
-    """A gas particle hits the wall: Eley-Rideal, else adsorption, else a diffuse reflection."""
+    """A gas particle hits the wall: Eley-Rideal, its reverse or a side reaction (one uniform number decides), else
+    adsorption, else a diffuse reflection.
+    """
     opts, vmean, ads, tau, _ = kin
-    lh_spec, er_spec, w = mech
+    _, er_spec, w, _, side_w = mech
     sp, st, site, t_des, cnt, pos, idx, _, _, tev = pt
-    occ, n_gas, n_ads = surf
+    occ, n_gas, n_ads, free = surf
     active = geo[6]
     x = sp[i]
     ev = tev[i]
     si = _site_of_hit(geo, pos[i], idx[i], ev)
     if bk >= 0:
         tally[bk, x, S_HITS] += 1
-    if er_spec[0] >= 0 and x == er_spec[0] and si >= 0 and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
+    p_er = 0.0
+    p_rev = 0.0
+    if er_spec[0] >= 0 and si >= 0:
+        if x == er_spec[0] and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
+            p_er = w[W_ER]
+        elif x == er_spec[2] and w[W_REV] > 0.0 and active[si] and occ[si] < 0 and free[0] > 0:
+            p_rev = w[W_REV]
+    if p_er + p_rev + side_w[x] > 0.0:
         y, state = _uniform(state)
-        if y < w[W_ER]:
+        if y < p_er:
             j = occ[si]
             occ[si] = -1
             n_ads[sp[j]] -= 1
             n_gas[x] -= 1
             if bk >= 0:
                 rtally[bk, X_ER] += 1
-            te, tj, state = _react(geo, kin, pt, n_gas, i, j, sp[j], er_spec[2], t, ev, state)
+            te, tj, state = _react(geo, kin, pt, surf, i, j, sp[j], er_spec[2], t, ev, state)
             return _push2(heap, nh, cnt, i, te, j, tj), state
+        if y < p_er + p_rev:
+            return _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state)
+        if y < p_er + p_rev + side_w[x]:
+            return _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, state)
     if si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
         y, state = _uniform(state)
         if y < ads[x]:
@@ -346,7 +377,7 @@ def _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, 
     """An adsorbed particle's event: desorption at its residence end, else a hop try."""
     opts, vmean, _, _, hop = kin
     sp, st, site, t_des, cnt, pos, idx, _, _, _ = pt
-    occ, n_gas, n_ads = surf
+    occ, n_gas, n_ads, _ = surf
     active, s = geo[6], geo[7]
     x = sp[i]
     si = site[i]
@@ -384,13 +415,14 @@ def _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, 
 
 
 @njit(cache=True)
-def _react(geo, kin, pt, n_gas, i, j, xj, product, t, ev, state):
+def _react(geo, kin, pt, surf, i, j, xj, product, t, ev, state):
     """Slots i (at a wall point, face ``ev``) and j (already off the counts) react: i becomes the product and
     leaves the wall into the gas, j is gone; with opts[O_REPL] both are put back as fresh gas reactants instead.
     Returns the next event times of i and j (-1: none) and the state.
     """
     opts, vmean = kin[0], kin[1]
     sp, st, site, _, cnt = pt[0], pt[1], pt[2], pt[3], pt[4]
+    n_gas, free = surf[1], surf[3]
     xi = sp[i]
     cnt[i] += 1
     cnt[j] += 1
@@ -407,6 +439,8 @@ def _react(geo, kin, pt, n_gas, i, j, xj, product, t, ev, state):
         return ti, tj, state
     st[i] = GAS
     st[j] = GONE
+    free[0] += 1
+    free[free[0]] = j
     sp[i] = product
     n_gas[product] += 1
     ti, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[product], state)
@@ -419,9 +453,9 @@ def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
     next surface event (or, after a reaction, the emissions). ``cnt[i]`` is already bumped.
     """
     hop = kin[4]
-    lh_spec, _, w = mech
+    lh_spec, w = mech[0], mech[2]
     sp, _, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
-    occ, n_gas, n_ads = surf
+    occ, _, n_ads, _ = surf
     s = geo[7]
     x = sp[i]
     si = site[i]
@@ -448,7 +482,59 @@ def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
                 if bk >= 0:
                     rtally[bk, X_LH] += 1
                 ev = _site_point(geo, si, pos[i], idx[i])
-                ti, tj, state = _react(geo, kin, pt, n_gas, i, j, partner, lh_spec[2], t, ev, state)
+                ti, tj, state = _react(geo, kin, pt, surf, i, j, partner, lh_spec[2], t, ev, state)
                 return _push2(heap, nh, cnt, i, ti, j, tj), state
     te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+    return _push(heap, nh, cnt, i, te), state
+
+
+@njit(cache=True)
+def _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state):
+    """Reverse Eley-Rideal (thesis 4.18) at the hit of product ``i`` on the empty active site ``si``: ``i`` turns
+    into the gas reactant and leaves the wall, a spare slot becomes the adsorbed reactant on ``si`` (and arrives
+    there: it may react by Langmuir-Hinshelwood at once).
+    """
+    opts, vmean, _, tau, _ = kin
+    x_a, x_b, x_p = mech[1][0], mech[1][1], mech[1][2]
+    sp, st, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
+    occ, n_gas, n_ads, free = surf
+    if bk >= 0:
+        rtally[bk, X_ER_REV] += 1
+    n_gas[x_p] -= 1
+    n_gas[x_a] += 1
+    sp[i] = x_a
+    te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[x_a], state)
+    cnt[i] += 1
+    nh = _push(heap, nh, cnt, i, te)
+    j = free[free[0]]
+    free[0] -= 1
+    sp[j] = x_b
+    st[j] = ADSORBED
+    site[j] = si
+    occ[si] = j
+    n_ads[x_b] += 1
+    _site_point(geo, si, pos[j], idx[j])
+    tau_j, state = _residence(tau[x_b], opts[O_REXP] == 1, state)
+    t_des[j] = t + tau_j
+    cnt[j] += 1
+    return _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, j, t, bk, state)
+
+
+@njit(cache=True)
+def _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, state):
+    """Side reaction (thesis 4.20-4.22) at a wall hit of gas particle ``i``: it turns into its by-product and is
+    reflected diffusely with the by-product's thermal speed.
+    """
+    opts, vmean = kin[0], kin[1]
+    sp, cnt = pt[0], pt[4]
+    n_gas = surf[1]
+    x = sp[i]
+    y = mech[3][x]
+    if bk >= 0:
+        tally[bk, x, S_SIDE] += 1
+    n_gas[x] -= 1
+    n_gas[y] += 1
+    sp[i] = y
+    te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[y], state)
+    cnt[i] += 1
     return _push(heap, nh, cnt, i, te), state
