@@ -196,6 +196,11 @@ class SurfaceSettings(BaseModel):
     sites_per_edge: int = Field(
         2, ge=1, description="sites per voxel-face edge (reactive distance = h / this)"
     )
+    neighbours: str = Field(
+        "face",
+        pattern="^(face|surface)$",
+        description="hop / LH partner sites: in-face only, or also across voxel edges (surface)",
+    )
     active_fraction: float = Field(1.0, gt=0, le=1, description="fraction of active sites (the thesis's a)")
     residence_law: str = Field(
         "exponential", pattern="^(fixed|exponential)$", description="fixed or exponential"

@@ -7,14 +7,17 @@ with every gas and adsorbed particle advancing through one event calendar (see
 
 Model (each choice stated so the analytic truths below are exact):
 
-- each wall face of a pore voxel carries ``s × s`` sites of area A_site = (face area)/s², a fraction
+- each wall face of a pore voxel carries ``s × s`` sites of area A_site = (face area)/s² (see
+  :mod:`porepipe.diffusion._surface_sites`), a fraction
   ``active_fraction`` of them active (the thesis's a); a site holds one particle;
 - a gas particle of species X hitting an active empty site adsorbs with probability ``adsorption``; it stays a
-  residence time (fixed or exponential of mean ``residence``), hops to an in-face neighbour site at rate ``hop_rate``
-  (rejected if that site is occupied, inactive or off the face) and desorbs by the wall law with a thermal speed;
+  residence time (fixed or exponential of mean ``residence``), hops to a neighbour site at rate ``hop_rate``
+  (rejected if that site is occupied, inactive or missing) and desorbs by the wall law with a thermal speed;
+  neighbours are the in-face sites (``neighbours="face"``) or also the sites across the voxel edges where two
+  wall faces meet (``"surface"``: 4 for every site, concave and convex edges alike);
 - Eley-Rideal A(g) + B(ads) → P: an A hit on a site that holds B reacts with probability ``w``; so per A hit the
   reaction probability is a·θ_B·w, the thesis's (4.16), with θ_B the coverage of the active sites;
-- Langmuir-Hinshelwood A(ads) + B(ads) → P: a particle arriving at a site tries each in-face neighbour holding its
+- Langmuir-Hinshelwood A(ads) + B(ads) → P: a particle arriving at a site tries each neighbour holding its
   partner with probability ``w`` (reactive distance = one site spacing);
 - ``replenish``: each reaction's product is counted and both reactants re-enter the gas (steady state).
 - reverse Eley-Rideal (thesis 4.18, ``Mechanism.w_reverse``): a product hit on an empty active site turns it back
@@ -29,7 +32,7 @@ Analytic truths (tests/validation/test_surface_mechanisms.py):
   F_X = n_X·v̄_X·A_site/4 per time, so each active site is a Markov chain empty ⇄ X with rates a_X·F_X and 1/τ_X:
   θ_X = K_X·n_X/(1 + Σ_Y K_Y·n_Y), K_X = a_X·v̄_X·A_site·τ_X/4 (:func:`langmuir_coverage`); hops (a symmetric
   exclusion process) do not change it.
-- LH encounters: with independent Bernoulli occupations (exact at w → 0) an arrival of X on a site with z in-face
+- LH encounters: with independent Bernoulli occupations (exact at w → 0) an arrival of X on a site with z
   neighbours reacts with probability 1 − (1 − w·θ_Y)^z, z − 1 for a hop (the site it came from is empty now)
   (:func:`lh_reaction_probability`).
 - ER with B fixed on the surface and no replenishment: −dN_B/dt = k·N_A·N_B, k = w·v̄_A·A_site/(4V), N_A − N_B
@@ -54,6 +57,7 @@ import numpy as np
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.rng import kernel_seed
 from porepipe.diffusion import _surface_kernels as S
+from porepipe.diffusion._surface_sites import site_neighbours, wall_sites
 
 STAGE = "diffusion"
 _LAWS = {"lambert": 1, "isotropic": 3, "cosine_dtheta": 2}
@@ -131,29 +135,6 @@ class SideReaction:
             raise PorepipeError(
                 f"side reaction {self.reactant} → {self.product}: product must differ from reactant"
             )
-
-
-def wall_sites(codes: np.ndarray, periodic) -> tuple[np.ndarray, np.ndarray]:
-    """Wall faces of the pore voxels: ``face_of`` ((n·6,) int64, face id or -1 per voxel and face event
-    2·axis + (step > 0)) and ``site_face`` ((m, 4) int64: voxel index and face event per face id).
-    """
-    pore = codes > 0
-    walls = []
-    for ax in range(3):
-        for up in (0, 1):
-            shifted = np.roll(pore, -1 if up else 1, axis=ax)
-            wall = pore & ~shifted
-            if not periodic[ax]:
-                edge = [slice(None)] * 3
-                edge[ax] = -1 if up else 0
-                wall[tuple(edge)] = pore[tuple(edge)]
-            walls.append(wall)
-    stack = np.stack(walls, axis=-1)  # (n0, n1, n2, 6)
-    face_of = np.full(stack.size, -1, dtype=np.int64)
-    flat = np.flatnonzero(stack.reshape(-1))
-    face_of[flat] = np.arange(flat.size)
-    vox = np.column_stack(np.unravel_index(flat // 6, codes.shape))
-    return face_of, np.column_stack([vox, flat % 6]).astype(np.int64)
 
 
 def _sites_and_activity(n_faces, s, active_fraction, seed):
@@ -257,6 +238,7 @@ def surface_run(
     t_end: float,
     t_warm: float = 0.0,
     sites_per_edge: int = 2,
+    neighbours: str = "face",
     active_fraction: float = 1.0,
     wall_law: str = "lambert",
     residence_law: str = "exponential",
@@ -268,6 +250,9 @@ def surface_run(
     seed: int = 0,
 ) -> dict:
     """Run the adsorbing, reacting Knudsen gas in a closed (or periodic) pore from 0 to ``t_end`` jiffies.
+
+    ``neighbours``: the sites a hop may reach and a Langmuir-Hinshelwood partner may sit on: "face" (the in-face
+    neighbours only) or "surface" (also across the voxel edges where two wall faces meet, so every site has 4).
 
     Returns per species (arrays in the order of ``species``) over the blocks after ``t_warm``: ``coverage`` (time
     mean adsorbed count / active sites) and its error, ``gas_density`` (time mean gas count / pore volume),
@@ -311,7 +296,8 @@ def surface_run(
     series = np.zeros((samples.size, n_sp, 2))
     final_sp = np.empty(kinds.size, np.int64)
     final_st = np.empty(kinds.size, np.int64)
-    geo = (geom.codes, geom.h, geom.periodic, geom.cells(), face_of, site_face, active, s)
+    nbr = site_neighbours(geom.codes, geom.periodic, face_of, site_face, s, neighbours)
+    geo = (geom.codes, geom.h, geom.periodic, geom.cells(), face_of, site_face, active, s, nbr)
     kin = (
         opts,
         np.array([sp.vmean for sp in species]),
@@ -389,20 +375,22 @@ def _in_face_neighbours(s: int) -> np.ndarray:
     return z if s > 1 else np.zeros((1, 1), int)
 
 
-def lh_reaction_probability(s: int, w: float, theta_partner: float, arrival: str) -> float:
+def lh_reaction_probability(
+    s: int, w: float, theta_partner: float, arrival: str, neighbours: str = "face"
+) -> float:
     """Mean probability that an arrival reacts under independent Bernoulli occupation with partner coverage θ.
 
     ``arrival`` "adsorption": a uniform (empty) site, 1 − (1 − wθ)^z averaged over the s×s sites;
-    "hop": an accepted hop from a site to a uniform in-face neighbour, 1 − (1 − wθ)^(z_target − 1) averaged over
-    the ordered neighbour pairs (source, target).
+    "hop": an accepted hop from a site to a uniform neighbour, 1 − (1 − wθ)^(z_target − 1) averaged over
+    the ordered neighbour pairs (source, target). ``neighbours`` "face": z of the in-face sites; "surface": z = 4.
     """
-    z = _in_face_neighbours(s)
+    z = _in_face_neighbours(s) if neighbours == "face" else np.full((s, s), 4)
     q = 1.0 - w * theta_partner
     if arrival == "adsorption":
         return float(np.mean(1.0 - q**z))
     if arrival != "hop":
         raise PorepipeError(f"arrival must be adsorption or hop, got {arrival!r}")
-    if s < 2:
+    if s < 2 and neighbours == "face":
         return 0.0
     # each target site is reached from its z neighbours: weight by z
     return float(np.sum(z * (1.0 - q ** (z - 1))) / np.sum(z))
@@ -494,6 +482,7 @@ def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
         t_end=ss.duration_jiffies,
         t_warm=ss.warmup_jiffies,
         sites_per_edge=ss.sites_per_edge,
+        neighbours=ss.neighbours,
         active_fraction=ss.active_fraction,
         wall_law=settings.wall_law.value,
         residence_law=ss.residence_law,

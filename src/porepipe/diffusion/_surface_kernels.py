@@ -15,10 +15,10 @@ couple them. Events:
   reflection;
 - desorption of an adsorbed particle after its residence time (fixed or exponential of mean ``tau[X]``), emitted
   by the wall law with a thermal (flux-weighted Maxwell-Boltzmann) speed;
-- surface hop (rate ``hop[X]``): to one of the 4 in-face neighbour sites, rejected when it is occupied, inactive or
-  off the face (a symmetric exclusion process: it leaves the Langmuir occupation measure unchanged).
+- surface hop (rate ``hop[X]``): to one of the 4 neighbour sites, rejected when it is occupied, inactive or
+  missing (a symmetric exclusion process: it leaves the Langmuir occupation measure unchanged).
 
-Langmuir-Hinshelwood: a particle of species A or B arriving at a site (by adsorption or by a hop) tries each in-face
+Langmuir-Hinshelwood: a particle of species A or B arriving at a site (by adsorption or by a hop) tries each
 neighbour site holding the other partner with probability ``lh_w`` (the reactive distance is one site spacing,
 h/s); on success both leave the surface and the product enters the gas from the arrival site.
 
@@ -36,7 +36,9 @@ Walls re-emit with a thermal speed (flux-weighted MB): then the mean time betwee
 
 The arrays travel in a few tuples (numba passes heterogeneous tuples of arrays by reference):
 
-- ``geo = (codes, h, periodic, cells, face_of, site_face, active, s)``: the pore and its sites (read only);
+- ``geo = (codes, h, periodic, cells, face_of, site_face, active, s, nbr)``: the pore, its sites and their
+  neighbour table (``nbr[site, k]``, k = +a, −a, +b, −b, -1 = none: in-face only or across voxel edges, see
+  :mod:`porepipe.diffusion._surface_sites`) (read only);
 - ``kin = (opts, vmean, ads, tau, hop)``: run options and per-species data (read only);
 - ``mech = (lh_spec, er_spec, w, side_to, side_w)``: mechanism species (a, b, product; -1 = off),
   ``w = [lh_w, er_w, er_reverse_w]`` and per species the side-reaction product (-1 = none) and probability;
@@ -73,7 +75,6 @@ N_STALLY = 8
 #: reaction columns of the block tally
 X_LH, X_ER, X_ER_REV = range(3)
 N_XTALLY = 3
-_NEIGH = ((1, 0), (-1, 0), (0, 1), (0, -1))
 #: entries of the options array: wall law, exponential residence (1) or fixed (0), replenishment (1)
 O_LAW, O_REXP, O_REPL = range(3)
 #: entries of the mechanism probabilities
@@ -85,7 +86,7 @@ SPARE = -2
 @njit(cache=True)
 def _site_of_hit(geo, pos, idx, ev):
     """Site index of a wall hit at ``pos`` on face ``ev`` of voxel ``idx`` (-1 if the face is not a wall face)."""
-    codes, h, _, _, face_of, _, _, s = geo
+    codes, h, face_of, s = geo[0], geo[1], geo[4], geo[7]
     shape = codes.shape
     f = face_of[((idx[0] * shape[1] + idx[1]) * shape[2] + idx[2]) * 6 + ev]
     if f < 0:
@@ -100,7 +101,7 @@ def _site_of_hit(geo, pos, idx, ev):
 @njit(cache=True)
 def _site_point(geo, site, pos, idx):
     """Put ``pos``/``idx`` at the centre of ``site`` (on its face plane); returns the face event (0..5)."""
-    _, h, _, _, _, site_face, _, s = geo
+    h, site_face, s = geo[1], geo[5], geo[7]
     f = site // (s * s)
     ia = (site // s) % s
     ib = site % s
@@ -378,7 +379,7 @@ def _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, 
     opts, vmean, _, _, hop = kin
     sp, st, site, t_des, cnt, pos, idx, _, _, _ = pt
     occ, n_gas, n_ads, _ = surf
-    active, s = geo[6], geo[7]
+    active, nbr = geo[6], geo[8]
     x = sp[i]
     si = site[i]
     if t >= t_des[i]:
@@ -396,11 +397,8 @@ def _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, 
     if bk >= 0:
         tally[bk, x, S_HOP_TRY] += 1
     y, state = _uniform(state)
-    k = min(int(y * 4.0), 3)
-    ia = (si // s) % s + _NEIGH[k][0]
-    ib = si % s + _NEIGH[k][1]
-    target = si - (si % (s * s)) + ia * s + ib
-    if 0 <= ia < s and 0 <= ib < s and active[target] and occ[target] < 0:
+    target = nbr[si, min(int(y * 4.0), 3)]
+    if target >= 0 and active[target] and occ[target] < 0:
         occ[si] = -1
         occ[target] = i
         site[i] = target
@@ -456,20 +454,15 @@ def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
     lh_spec, w = mech[0], mech[2]
     sp, _, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
     occ, _, n_ads, _ = surf
-    s = geo[7]
+    nbr = geo[8]
     x = sp[i]
     si = site[i]
     if lh_spec[0] >= 0 and (x == lh_spec[0] or x == lh_spec[1]):
         partner = lh_spec[1] if x == lh_spec[0] else lh_spec[0]
-        base = si - (si % (s * s))
-        ia0 = (si // s) % s
-        ib0 = si % s
         for k in range(4):
-            ia = ia0 + _NEIGH[k][0]
-            ib = ib0 + _NEIGH[k][1]
-            if not (0 <= ia < s and 0 <= ib < s):
+            nb = nbr[si, k]
+            if nb < 0:
                 continue
-            nb = base + ia * s + ib
             j = occ[nb]
             if j < 0 or sp[j] != partner:
                 continue
