@@ -83,11 +83,12 @@ W_LH, W_ER, W_REV = range(3)
 SPARE = -2
 
 
+# ---------------------------------------------------------------------------------------------------------------------
+# hot helpers: every event runs them, so they take the few arrays they need one by one (a tuple passed or unpacked per
+# event costs a reference count per member: the kernel ran at half speed when these took the tuples)
 @njit(cache=True)
-def _site_of_hit(geo, pos, idx, ev):
+def _site_of_hit(face_of, shape, h, s, pos, idx, ev):
     """Site index of a wall hit at ``pos`` on face ``ev`` of voxel ``idx`` (-1 if the face is not a wall face)."""
-    codes, h, face_of, s = geo[0], geo[1], geo[4], geo[7]
-    shape = codes.shape
     f = face_of[((idx[0] * shape[1] + idx[1]) * shape[2] + idx[2]) * 6 + ev]
     if f < 0:
         return -1
@@ -99,9 +100,8 @@ def _site_of_hit(geo, pos, idx, ev):
 
 
 @njit(cache=True)
-def _site_point(geo, site, pos, idx):
+def _site_point(site_face, h, s, site, pos, idx):
     """Put ``pos``/``idx`` at the centre of ``site`` (on its face plane); returns the face event (0..5)."""
-    h, site_face, s = geo[1], geo[5], geo[7]
     f = site // (s * s)
     ia = (site // s) % s
     ib = site % s
@@ -136,54 +136,37 @@ def _next_surface_time(t, t_des, hop, state):
 
 
 @njit(cache=True)
-def _emit_gas(geo, law, pt, i, t, ev, vmean, state):
-    """Diffuse emission of slot ``i`` from the wall face ``ev`` it sits on, thermal speed, fly to the next hit."""
-    codes, h, periodic = geo[0], geo[1], geo[2]
-    _, _, _, _, _, pos, idx, u, speed, tev = pt
-    d = u[i]
+def _flight(codes, h, periodic, law, ev, vmean, pos, idx, u, state):
+    """Diffuse emission from the wall face ``ev`` at ``pos`` (direction into ``u``), thermal speed, flight to the next
+    hit; returns (flight time, speed, face event of that hit, state).
+    """
     sign = -1.0 if (ev & 1) else 1.0
-    state = _emit(law, ev >> 1, sign, d, state)
+    state = _emit(law, ev >> 1, sign, u, state)
     v, state = _speed(SPEED_FLUX, vmean, state)
     img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(codes, h, periodic, -1, pos[i], idx[i], d, img)
-    speed[i] = v
-    tev[i] = e2
-    return t + ln / v, state
+    e2, ln, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
+    return ln / v, v, e2, state
 
 
 @njit(cache=True)
-def _insert_gas(geo, pt, i, t, vmean, state):
-    """Slot ``i`` as a fresh equilibrium gas particle (uniform, isotropic, Maxwell speed); returns its hit time."""
-    codes, h, periodic, cells = geo[0], geo[1], geo[2], geo[3]
-    _, _, _, _, _, pos, idx, u, speed, tev = pt
-    p = pos[i]
-    q = idx[i]
-    d = u[i]
-    state = _uniform_in_pore(cells, h, p, q, state)
-    state = _isotropic(d, state)
-    v, state = _speed(SPEED_MAXWELL, vmean, state)
-    img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(codes, h, periodic, -1, p, q, d, img)
-    speed[i] = v
-    tev[i] = e2
-    return t + ln / v, state
-
-
-@njit(cache=True)
-def _push(heap, nh, cnt, i, t):
-    """Schedule slot ``i``'s next event at ``t`` under its current counter."""
-    ht, hi, hj, hci, hcj = heap
-    return _heap_push(ht, hi, hj, hci, hcj, nh, t, i, -1, cnt[i], 0)
-
-
-@njit(cache=True)
-def _push2(heap, nh, cnt, i, ti, j, tj):
-    """Schedule the two slots of a reaction (a time < 0 = nothing to schedule)."""
-    if ti >= 0.0:
-        nh = _push(heap, nh, cnt, i, ti)
-    if tj >= 0.0:
-        nh = _push(heap, nh, cnt, j, tj)
-    return nh
+def _lh_partner(nbr, occ, sp, lh_spec, w_lh, si, x, state):
+    """Langmuir-Hinshelwood tries of species ``x`` just arrived on site ``si``: each neighbour holding its partner
+    reacts with ``w_lh``; returns (partner slot or -1, its site, state).
+    """
+    if lh_spec[0] < 0 or (x != lh_spec[0] and x != lh_spec[1]):
+        return -1, -1, state
+    partner = lh_spec[1] if x == lh_spec[0] else lh_spec[0]
+    for k in range(4):
+        nb = nbr[si, k]
+        if nb < 0:
+            continue
+        j = occ[nb]
+        if j < 0 or sp[j] != partner:
+            continue
+        y, state = _uniform(state)
+        if y < w_lh:
+            return j, nb, state
+    return -1, -1, state
 
 
 @njit(cache=True)
@@ -208,6 +191,19 @@ def _sample(series, k, n_gas, n_ads):
 
 
 @njit(cache=True)
+def _wall_odds(er_spec, w, free, sp, occ, active, x, si):
+    """Probabilities of Eley-Rideal and of its reverse at a hit of species ``x`` on site ``si``."""
+    if er_spec[0] < 0 or si < 0:
+        return 0.0, 0.0
+    if x == er_spec[0] and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
+        return w[W_ER], 0.0
+    if x == er_spec[2] and w[W_REV] > 0.0 and active[si] and occ[si] < 0 and free[0] > 0:
+        return 0.0, w[W_REV]
+    return 0.0, 0.0
+
+
+# ---------------------------------------------------------------------------------------------------------------------
+@njit(cache=True)
 def surface_kernel(
     geo,
     kin,
@@ -225,11 +221,15 @@ def surface_kernel(
     final_state,
 ):
     """Run to ``t_end``; tallies per time block after ``t_warm``; ``series[k, X, 0/1]`` = gas / adsorbed counts
-    of species X at ``t_samples[k]``. ``site0[i]`` >= 0 starts particle i adsorbed there. Returns the number of
-    events.
+    of species X at ``t_samples[k]``. ``site0[i]`` >= 0 starts particle i adsorbed there (``SPARE``: a spare slot).
+    Returns the number of events. The common events (reflection, adsorption, desorption, hop) run here on local
+    names; the reactions call helpers that take the tuples.
     """
-    opts, vmean, _, tau, hop = kin
-    active = geo[6]
+    codes, h, periodic, _, face_of, site_face, active, s, nbr = geo
+    opts, vmean, ads, tau, hop = kin
+    lh_spec, er_spec, w, _, side_w = mech
+    law = opts[O_LAW]
+    rexp = opts[O_REXP] == 1
     n = sp0.shape[0]
     n_sp = vmean.shape[0]
     n_blk = tally.shape[0]
@@ -246,7 +246,7 @@ def surface_kernel(
         np.ones(n),  # speed
         np.zeros(n, dtype=np.int64),  # tev: face event of the pending wall hit
     )
-    sp, st, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
+    sp, st, site, t_des, cnt, pos, idx, u, speed, tev = pt
     surf = (
         np.full(active.shape[0], -1, dtype=np.int64),
         np.zeros(n_sp),
@@ -257,9 +257,10 @@ def surface_kernel(
     cap = 2 * n + 16
     heap = (np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64))
     heap = heap + (np.empty(cap, np.int64), np.empty(cap, np.int64))
+    ht, hi, hj, hci, hcj = heap
     nh = 0
     state = _stream_state(seed, 0)
-    # start: gas particles in equilibrium, adsorbed ones on their sites
+    # start: gas particles in equilibrium, adsorbed ones on their sites, spare slots on the free stack
     for i in range(n):
         if site0[i] == SPARE:
             st[i] = GONE
@@ -270,20 +271,19 @@ def surface_kernel(
             st[i] = ADSORBED
             site[i] = site0[i]
             occ[site0[i]] = i
-            _site_point(geo, site0[i], pos[i], idx[i])
-            tau_i, state = _residence(tau[sp[i]], opts[O_REXP] == 1, state)
+            _site_point(site_face, h, s, site0[i], pos[i], idx[i])
+            tau_i, state = _residence(tau[sp[i]], rexp, state)
             t_des[i] = tau_i
             te, _, state = _next_surface_time(0.0, t_des[i], hop[sp[i]], state)
             n_ads[sp[i]] += 1
         else:
             te, state = _insert_gas(geo, pt, i, 0.0, vmean[sp[i]], state)
             n_gas[sp[i]] += 1
-        nh = _push(heap, nh, cnt, i, te)
+        nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
     t_last = 0.0
     k_sample = 0
     events = 0
     while nh > 0:
-        ht, hi, hj, hci, hcj = heap
         t = ht[0]
         i = hi[0]
         c_i = hci[0]
@@ -302,10 +302,92 @@ def surface_kernel(
             break
         events += 1
         bk = min(int((t - t_warm) / blk_len), n_blk - 1) if t >= t_warm else -1
+        x = sp[i]
+        emit_ev = -1  # >= 0: particle i leaves the wall face emit_ev into the gas
+        arrived = False  # particle i has just taken a site
         if st[i] == GAS:
-            nh, state = _wall_hit(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state)
+            # ---- wall hit: Eley-Rideal, its reverse or a side reaction (one uniform number), else adsorption, else
+            # a diffuse reflection
+            ev = tev[i]
+            si = _site_of_hit(face_of, codes.shape, h, s, pos[i], idx[i], ev)
+            if bk >= 0:
+                tally[bk, x, S_HITS] += 1
+            p_er, p_rev = _wall_odds(er_spec, w, free, sp, occ, active, x, si)
+            reacted = False
+            if p_er + p_rev + side_w[x] > 0.0:
+                y, state = _uniform(state)
+                reacted = y < p_er + p_rev + side_w[x]
+                if y < p_er:
+                    nh, state = _er_forward(
+                        geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state
+                    )
+                elif y < p_er + p_rev:
+                    nh, state = _er_reverse(
+                        geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state
+                    )
+                elif reacted:
+                    nh, state = _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, state)
+            if not reacted:
+                emit_ev = ev
+                if si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
+                    y, state = _uniform(state)
+                    if y < ads[x]:
+                        emit_ev = -1
+                        arrived = True
+                        st[i] = ADSORBED
+                        site[i] = si
+                        occ[si] = i
+                        n_gas[x] -= 1
+                        n_ads[x] += 1
+                        if bk >= 0:
+                            tally[bk, x, S_ADS] += 1
+                        tau_i, state = _residence(tau[x], rexp, state)
+                        t_des[i] = t + tau_i
+        elif t >= t_des[i]:
+            # ---- desorption
+            si = site[i]
+            occ[si] = -1
+            site[i] = -1
+            st[i] = GAS
+            n_ads[x] -= 1
+            n_gas[x] += 1
+            if bk >= 0:
+                tally[bk, x, S_DES] += 1
+            emit_ev = _site_point(site_face, h, s, si, pos[i], idx[i])
         else:
-            nh, state = _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state)
+            # ---- hop try to a neighbour site
+            si = site[i]
+            if bk >= 0:
+                tally[bk, x, S_HOP_TRY] += 1
+            y, state = _uniform(state)
+            target = nbr[si, min(int(y * 4.0), 3)]
+            if target >= 0 and active[target] and occ[target] < 0:
+                occ[si] = -1
+                occ[target] = i
+                site[i] = target
+                _site_point(site_face, h, s, target, pos[i], idx[i])
+                if bk >= 0:
+                    tally[bk, x, S_HOP_OK] += 1
+                arrived = True
+            else:
+                te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+                cnt[i] += 1
+                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+        if emit_ev >= 0:
+            dt, speed[i], tev[i], state = _flight(
+                codes, h, periodic, law, emit_ev, vmean[x], pos[i], idx[i], u[i], state
+            )
+            cnt[i] += 1
+            nh = _heap_push(ht, hi, hj, hci, hcj, nh, t + dt, i, -1, cnt[i], 0)
+        if arrived:
+            # Langmuir-Hinshelwood with the neighbours, else the next surface event
+            cnt[i] += 1
+            j, nb, state = _lh_partner(nbr, occ, sp, lh_spec, w[W_LH], site[i], x, state)
+            if j >= 0:
+                nh, state = _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state)
+            else:
+                te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
         if nh + 4 > ht.shape[0]:
             ht, hi, hj, hci, hcj, nh = _heap_room(ht, hi, hj, hci, hcj, nh, 4, cnt)
             heap = (ht, hi, hj, hci, hcj)
@@ -317,99 +399,41 @@ def surface_kernel(
     return events
 
 
+# ---------------------------------------------------------------------------------------------------------------------
+# reactions: rarer events, helpers on the tuples
 @njit(cache=True)
-def _wall_hit(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state):
-    """A gas particle hits the wall: Eley-Rideal, its reverse or a side reaction (one uniform number decides), else
-    adsorption, else a diffuse reflection.
-    """
-    opts, vmean, ads, tau, _ = kin
-    _, er_spec, w, _, side_w = mech
-    sp, st, site, t_des, cnt, pos, idx, _, _, tev = pt
-    occ, n_gas, n_ads, free = surf
-    active = geo[6]
-    x = sp[i]
-    ev = tev[i]
-    si = _site_of_hit(geo, pos[i], idx[i], ev)
-    if bk >= 0:
-        tally[bk, x, S_HITS] += 1
-    p_er = 0.0
-    p_rev = 0.0
-    if er_spec[0] >= 0 and si >= 0:
-        if x == er_spec[0] and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
-            p_er = w[W_ER]
-        elif x == er_spec[2] and w[W_REV] > 0.0 and active[si] and occ[si] < 0 and free[0] > 0:
-            p_rev = w[W_REV]
-    if p_er + p_rev + side_w[x] > 0.0:
-        y, state = _uniform(state)
-        if y < p_er:
-            j = occ[si]
-            occ[si] = -1
-            n_ads[sp[j]] -= 1
-            n_gas[x] -= 1
-            if bk >= 0:
-                rtally[bk, X_ER] += 1
-            te, tj, state = _react(geo, kin, pt, surf, i, j, sp[j], er_spec[2], t, ev, state)
-            return _push2(heap, nh, cnt, i, te, j, tj), state
-        if y < p_er + p_rev:
-            return _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state)
-        if y < p_er + p_rev + side_w[x]:
-            return _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, state)
-    if si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
-        y, state = _uniform(state)
-        if y < ads[x]:
-            st[i] = ADSORBED
-            site[i] = si
-            occ[si] = i
-            n_gas[x] -= 1
-            n_ads[x] += 1
-            if bk >= 0:
-                tally[bk, x, S_ADS] += 1
-            tau_i, state = _residence(tau[x], opts[O_REXP] == 1, state)
-            t_des[i] = t + tau_i
-            cnt[i] += 1
-            return _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state)
-    te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[x], state)
-    cnt[i] += 1
-    return _push(heap, nh, cnt, i, te), state
+def _emit_slot(geo, law, pt, i, t, ev, vmean, state):
+    """Slot ``i`` leaves the wall face ``ev`` it sits on (see :func:`_flight`); returns its next hit time."""
+    pos, idx, u, speed, tev = pt[5], pt[6], pt[7], pt[8], pt[9]
+    dt, speed[i], tev[i], state = _flight(geo[0], geo[1], geo[2], law, ev, vmean, pos[i], idx[i], u[i], state)
+    return t + dt, state
 
 
 @njit(cache=True)
-def _surface_event(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state):
-    """An adsorbed particle's event: desorption at its residence end, else a hop try."""
-    opts, vmean, _, _, hop = kin
-    sp, st, site, t_des, cnt, pos, idx, _, _, _ = pt
-    occ, n_gas, n_ads, _ = surf
-    active, nbr = geo[6], geo[8]
-    x = sp[i]
-    si = site[i]
-    if t >= t_des[i]:
-        occ[si] = -1
-        site[i] = -1
-        st[i] = GAS
-        n_ads[x] -= 1
-        n_gas[x] += 1
-        if bk >= 0:
-            tally[bk, x, S_DES] += 1
-        ev = _site_point(geo, si, pos[i], idx[i])
-        te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[x], state)
-        cnt[i] += 1
-        return _push(heap, nh, cnt, i, te), state
-    if bk >= 0:
-        tally[bk, x, S_HOP_TRY] += 1
-    y, state = _uniform(state)
-    target = nbr[si, min(int(y * 4.0), 3)]
-    if target >= 0 and active[target] and occ[target] < 0:
-        occ[si] = -1
-        occ[target] = i
-        site[i] = target
-        _site_point(geo, target, pos[i], idx[i])
-        if bk >= 0:
-            tally[bk, x, S_HOP_OK] += 1
-        cnt[i] += 1
-        return _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state)
-    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
-    cnt[i] += 1
-    return _push(heap, nh, cnt, i, te), state
+def _insert_gas(geo, pt, i, t, vmean, state):
+    """Slot ``i`` as a fresh equilibrium gas particle (uniform, isotropic, Maxwell speed); returns its hit time."""
+    codes, h, periodic, cells = geo[0], geo[1], geo[2], geo[3]
+    pos, idx, u, speed, tev = pt[5], pt[6], pt[7], pt[8], pt[9]
+    p = pos[i]
+    q = idx[i]
+    d = u[i]
+    state = _uniform_in_pore(cells, h, p, q, state)
+    state = _isotropic(d, state)
+    v, state = _speed(SPEED_MAXWELL, vmean, state)
+    img = np.zeros(3, dtype=np.int64)
+    e2, ln, _ = _fly(codes, h, periodic, -1, p, q, d, img)
+    speed[i] = v
+    tev[i] = e2
+    return t + ln / v, state
+
+
+@njit(cache=True)
+def _push(heap, nh, cnt, i, t):
+    """Schedule slot ``i``'s next event at ``t`` under its current counter (a time < 0 = nothing to schedule)."""
+    if t < 0.0:
+        return nh
+    ht, hi, hj, hci, hcj = heap
+    return _heap_push(ht, hi, hj, hci, hcj, nh, t, i, -1, cnt[i], 0)
 
 
 @njit(cache=True)
@@ -419,7 +443,7 @@ def _react(geo, kin, pt, surf, i, j, xj, product, t, ev, state):
     Returns the next event times of i and j (-1: none) and the state.
     """
     opts, vmean = kin[0], kin[1]
-    sp, st, site, _, cnt = pt[0], pt[1], pt[2], pt[3], pt[4]
+    sp, st, site, cnt = pt[0], pt[1], pt[2], pt[4]
     n_gas, free = surf[1], surf[3]
     xi = sp[i]
     cnt[i] += 1
@@ -441,43 +465,56 @@ def _react(geo, kin, pt, surf, i, j, xj, product, t, ev, state):
     free[free[0]] = j
     sp[i] = product
     n_gas[product] += 1
-    ti, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[product], state)
+    ti, state = _emit_slot(geo, opts[O_LAW], pt, i, t, ev, vmean[product], state)
     return ti, -1.0, state
 
 
 @njit(cache=True)
-def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
-    """Particle i has just arrived on its site: Langmuir-Hinshelwood tries with its in-face neighbours, then the
-    next surface event (or, after a reaction, the emissions). ``cnt[i]`` is already bumped.
-    """
-    hop = kin[4]
-    lh_spec, w = mech[0], mech[2]
-    sp, _, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
-    occ, _, n_ads, _ = surf
-    nbr = geo[8]
-    x = sp[i]
+def _er_forward(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state):
+    """Eley-Rideal at the hit of gas ``i`` on site ``si``, which holds its adsorbed partner."""
+    sp, cnt = pt[0], pt[4]
+    occ, n_gas, n_ads = surf[0], surf[1], surf[2]
+    j = occ[si]
+    occ[si] = -1
+    n_ads[sp[j]] -= 1
+    n_gas[sp[i]] -= 1
+    if bk >= 0:
+        rtally[bk, X_ER] += 1
+    ti, tj, state = _react(geo, kin, pt, surf, i, j, sp[j], mech[1][2], t, ev, state)
+    nh = _push(heap, nh, cnt, i, ti)
+    return _push(heap, nh, cnt, j, tj), state
+
+
+@njit(cache=True)
+def _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state):
+    """Langmuir-Hinshelwood of ``i`` (just arrived on its site) with ``j`` on the neighbour site ``nb``."""
+    sp, site, cnt, pos, idx = pt[0], pt[2], pt[4], pt[5], pt[6]
+    occ, n_ads = surf[0], surf[2]
     si = site[i]
-    if lh_spec[0] >= 0 and (x == lh_spec[0] or x == lh_spec[1]):
-        partner = lh_spec[1] if x == lh_spec[0] else lh_spec[0]
-        for k in range(4):
-            nb = nbr[si, k]
-            if nb < 0:
-                continue
-            j = occ[nb]
-            if j < 0 or sp[j] != partner:
-                continue
-            y, state = _uniform(state)
-            if y < w[W_LH]:
-                occ[si] = -1
-                occ[nb] = -1
-                n_ads[x] -= 1
-                n_ads[partner] -= 1
-                if bk >= 0:
-                    rtally[bk, X_LH] += 1
-                ev = _site_point(geo, si, pos[i], idx[i])
-                ti, tj, state = _react(geo, kin, pt, surf, i, j, partner, lh_spec[2], t, ev, state)
-                return _push2(heap, nh, cnt, i, ti, j, tj), state
-    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+    x, partner = sp[i], sp[j]
+    occ[si] = -1
+    occ[nb] = -1
+    n_ads[x] -= 1
+    n_ads[partner] -= 1
+    if bk >= 0:
+        rtally[bk, X_LH] += 1
+    ev = _site_point(geo[5], geo[1], geo[7], si, pos[i], idx[i])
+    ti, tj, state = _react(geo, kin, pt, surf, i, j, partner, mech[0][2], t, ev, state)
+    nh = _push(heap, nh, cnt, i, ti)
+    return _push(heap, nh, cnt, j, tj), state
+
+
+@njit(cache=True)
+def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
+    """Slot ``i`` has just taken its site (``cnt[i]`` already bumped): Langmuir-Hinshelwood, else its next
+    surface event.
+    """
+    sp, site, t_des, cnt = pt[0], pt[2], pt[3], pt[4]
+    x = sp[i]
+    j, nb, state = _lh_partner(geo[8], surf[0], sp, mech[0], mech[2][W_LH], site[i], x, state)
+    if j >= 0:
+        return _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state)
+    te, _, state = _next_surface_time(t, t_des[i], kin[4][x], state)
     return _push(heap, nh, cnt, i, te), state
 
 
@@ -496,7 +533,7 @@ def _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, st
     n_gas[x_p] -= 1
     n_gas[x_a] += 1
     sp[i] = x_a
-    te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[x_a], state)
+    te, state = _emit_slot(geo, opts[O_LAW], pt, i, t, ev, vmean[x_a], state)
     cnt[i] += 1
     nh = _push(heap, nh, cnt, i, te)
     j = free[free[0]]
@@ -506,7 +543,7 @@ def _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, st
     site[j] = si
     occ[si] = j
     n_ads[x_b] += 1
-    _site_point(geo, si, pos[j], idx[j])
+    _site_point(geo[5], geo[1], geo[7], si, pos[j], idx[j])
     tau_j, state = _residence(tau[x_b], opts[O_REXP] == 1, state)
     t_des[j] = t + tau_j
     cnt[j] += 1
@@ -528,6 +565,6 @@ def _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, stat
     n_gas[x] -= 1
     n_gas[y] += 1
     sp[i] = y
-    te, state = _emit_gas(geo, opts[O_LAW], pt, i, t, ev, vmean[y], state)
+    te, state = _emit_slot(geo, opts[O_LAW], pt, i, t, ev, vmean[y], state)
     cnt[i] += 1
     return _push(heap, nh, cnt, i, te), state
