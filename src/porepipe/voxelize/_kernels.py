@@ -150,12 +150,13 @@ def _reach_shell(status, mask, j, lo, hi):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges):
+def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges, out):
     """Mark the voxels of plane ``i`` that one ball reaches, by whole runs per voxel row (:func:`_row_ranges`).
 
-    The run inside the ball becomes FULL, the shell on either side one more reaching sphere (:func:`_reach_shell`).
+    The run inside the ball becomes FULL (grey value 216 in ``out``), the shell on either side one more reaching
+    sphere (:func:`_reach_shell`).
     Row ``j`` of the ball's y range ``[j0, j1)`` (:func:`porepipe._shared.sample_points.axis_range`) keeps its
-    ranges in ``ranges[j - j0]`` for :func:`_shell_grey`.
+    ranges and ``j`` in ``ranges[j - j0]`` (lo, hi, f_lo, f_hi, j) for :func:`_shell_grey`.
     """
     r2 = r * r
     eps = SLACK * (r + abs(cz))
@@ -171,9 +172,11 @@ def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges):
         ranges[j - j0, 1] = hi
         ranges[j - j0, 2] = f_lo
         ranges[j - j0, 3] = f_hi
+        ranges[j - j0, 4] = j
         _reach_shell(status, mask, j, lo, f_lo)
         for k in range(f_lo, f_hi):
             status[j, k] = FULL
+            out[j, k] = N_SAMPLES
         _reach_shell(status, mask, j, f_hi, hi)
 
 
@@ -184,22 +187,22 @@ FAR = 1e300
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _row_distances(dx2, j, cy, h, dxy):
+def _row_distances(dx2, dx2_min, dx2_max, j, cy, h, dxy):
     """Squared (x, y) distances ``dx2[sx] + dy*dy`` of the 36 sample rows of voxel row ``j`` into ``dxy``; (min, max).
 
     The same operations as :func:`_mark_points` (``dy`` from :func:`porepipe._shared.sample_points.sample_coord`).
+    Rounding is monotone in each term, so the smallest (largest) sum is the sum of the smallest (largest) terms.
     """
+    dy2_min = np.inf
+    dy2_max = 0.0
     for sy in range(SUB):
         dy = sample_coord(j, sy, h) - cy
         dy2 = dy * dy
+        dy2_min = min(dy2_min, dy2)
+        dy2_max = max(dy2_max, dy2)
         for sx in range(SUB):
             dxy[SUB * sx + sy] = dx2[sx] + dy2
-    d_min = dxy[0]
-    d_max = dxy[0]
-    for q in range(1, SUB * SUB):
-        d_min = min(d_min, dxy[q])
-        d_max = max(d_max, dxy[q])
-    return d_min, d_max
+    return dx2_min + dy2_min, dx2_max + dy2_max
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -301,31 +304,31 @@ def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, dx2, dxy, bits, o
     """
     r2 = r * r
     j0, j1 = axis_range(cy, r, h, ny)
+    dx2_min = np.inf
+    dx2_max = 0.0
     for sx in range(SUB):
         dx = sample_coord(i, sx, h) - cx
         dx2[sx] = dx * dx
+        dx2_min = min(dx2_min, dx2[sx])
+        dx2_max = max(dx2_max, dx2[sx])
     for j in range(j0, j1):
         lo, hi, f_lo, f_hi = ranges[j - j0, 0], ranges[j - j0, 1], ranges[j - j0, 2], ranges[j - j0, 3]
         if not (_needs_count(status, j, lo, f_lo) or _needs_count(status, j, f_hi, hi)):
             continue
-        d_min, d_max = _row_distances(dx2, j, cy, h, dxy)
+        d_min, d_max = _row_distances(dx2, dx2_min, dx2_max, j, cy, h, dxy)
         _add_shell(status, mask, j, lo, f_lo, dxy, d_min, d_max, cz, r2, h, bits, out)
         _add_shell(status, mask, j, f_hi, hi, dxy, d_min, d_max, cz, r2, h, bits, out)
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _grey_full_multi(status, mask, out):
-    """Finish a plane's grey values: 216 for FULL voxels, the union mask's popcount for MULTI ones; others stay."""
-    for j in range(status.shape[0]):
-        for k in range(status.shape[1]):
-            st = status[j, k]
-            if st == FULL:
-                out[j, k] = N_SAMPLES
-            elif st == MULTI:
-                bits = 0
-                for w in range(WORDS):
-                    bits += popcount64(mask[j, k, w])
-                out[j, k] = bits
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _multi_grey(status, mask, j, lo, hi, out):
+    """Grey values of the MULTI voxels among ``lo .. hi - 1`` of row ``j``: the popcount of their union masks."""
+    for k in range(lo, hi):
+        if status[j, k] == MULTI:
+            bits = 0
+            for w in range(WORDS):
+                bits += popcount64(mask[j, k, w])
+            out[j, k] = bits
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -334,7 +337,8 @@ def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, 
 
     First every ball marks the voxels it reaches (:func:`_classify`: runs of FULL voxels in bulk, the shell one by
     one); then each ball's samples are counted into the shell voxels that it alone reaches and ORed into the masks
-    of voxels two or more balls reach (:func:`_shell_grey`), so a sample counts once if it is in any ball.
+    of voxels two or more balls reach (:func:`_shell_grey`), so a sample counts once if it is in any ball; last the
+    MULTI voxels in the balls' shells get their masks' popcounts (:func:`_multi_grey`).
     """
     status[:, :] = UNTOUCHED
     out[:, :] = 0
@@ -345,14 +349,14 @@ def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, 
         if images[s, 0] + images[s, 3] >= plane_lo:
             j0, j1 = axis_range(images[s, 1], images[s, 3], h, ny)
             n_rows += j1 - j0
-    ranges = np.empty((n_rows, 4), dtype=np.int64)  # per ball, its voxel rows' ranges (_row_ranges)
+    ranges = np.empty((n_rows, 5), dtype=np.int64)  # per ball, its voxel rows' ranges (_row_ranges) and j
     row = 0
     for q in range(first, last):
         s = order[q]
         cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
         if cx + r >= plane_lo:
             j0, j1 = axis_range(cy, r, h, ny)
-            _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges[row : row + j1 - j0])
+            _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges[row : row + j1 - j0], out)
             row += j1 - j0
     row = 0
     for q in range(first, last):
@@ -363,7 +367,10 @@ def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, 
             rows = ranges[row : row + j1 - j0]
             _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, rows, dx2, dxy, bits, out)
             row += j1 - j0
-    _grey_full_multi(status, mask, out)
+    for t in range(row):  # every MULTI voxel lies in the shell of a ball that reaches it
+        j, lo, hi, f_lo, f_hi = ranges[t, 4], ranges[t, 0], ranges[t, 1], ranges[t, 2], ranges[t, 3]
+        _multi_grey(status, mask, j, lo, f_lo, out)
+        _multi_grey(status, mask, j, f_hi, hi, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
