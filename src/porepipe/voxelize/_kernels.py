@@ -272,16 +272,6 @@ def _or_voxel(mask, j, k, dxy, cz, r2, h, bits):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _needs_count(status, j, lo, hi):
-    """Whether voxels ``lo .. hi - 1`` of row ``j`` hold a PARTIAL or MULTI voxel (one that the ball's tests feed)."""
-    n = 0
-    for k in range(lo, hi):
-        st = status[j, k]
-        n += (st == PARTIAL) | (st == MULTI)
-    return n > 0
-
-
-@njit(cache=True, fastmath=FASTMATH, inline="always")
 def _add_shell(status, mask, j, lo, hi, dxy, d_min, d_max, cz, r2, h, bits, out):
     """Voxels ``lo .. hi - 1`` of row ``j``: add the ball's count to PARTIAL ones, OR its sample bits into MULTI ones."""
     for k in range(lo, hi):
@@ -296,9 +286,10 @@ def _add_shell(status, mask, j, lo, hi, dxy, d_min, d_max, cz, r2, h, bits, out)
 def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, dx2, dxy, bits, out):
     """Add one ball's samples to the shell voxels of plane ``i``: counts into ``out`` (PARTIAL), bits into masks (MULTI).
 
-    Per voxel row, the 36 squared (x, y) row distances are found only if a shell voxel (outside the untested FULL
-    run of :func:`_row_ranges`) is PARTIAL or MULTI. A ball that does not reach a PARTIAL voxel adds 0 to it (the
-    reach test is conservative), so summing into ``out`` leaves the count of the one ball that does. ``ranges``: the
+    Per voxel row with a shell (voxels outside the untested FULL run of :func:`_row_ranges`), the 36 squared (x, y)
+    row distances are found once; its PARTIAL and MULTI voxels are then tested, FULL ones (of another ball) skipped. A
+    ball that does not reach a PARTIAL voxel adds 0 to it (the reach test is conservative), so summing into ``out``
+    leaves the count of the one ball that does. ``ranges``: the
     rows' ranges from :func:`_classify`; ``dx2`` (6), ``dxy`` (N_ROWS, padded with FAR) and ``bits`` (N_ROWS) are
     scratch.
     """
@@ -313,7 +304,7 @@ def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, dx2, dxy, bits, o
         dx2_max = max(dx2_max, dx2[sx])
     for j in range(j0, j1):
         lo, hi, f_lo, f_hi = ranges[j - j0, 0], ranges[j - j0, 1], ranges[j - j0, 2], ranges[j - j0, 3]
-        if not (_needs_count(status, j, lo, f_lo) or _needs_count(status, j, f_hi, hi)):
+        if lo == f_lo and f_hi == hi:
             continue
         d_min, d_max = _row_distances(dx2, dx2_min, dx2_max, j, cy, h, dxy)
         _add_shell(status, mask, j, lo, f_lo, dxy, d_min, d_max, cz, r2, h, bits, out)
