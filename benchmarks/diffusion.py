@@ -178,6 +178,14 @@ def edmd_section(smoke: bool, out: str, reference: str | None = None, surface: b
             f"{r['us_per_particle_ps']:.3g} | {r['events_per_cpu_s_pairs_off']:.3g} |"
         )
     print("(cost per particle and simulated time grows like log N for an N log N method)")
+    for n in sizes if reference else ():
+        a, b = (r["final_state"] for r in rows if r["N"] == n)
+        print(
+            f"N = {n}: reference and current kernel end in the same state bit for bit (tally, positions, "
+            f"velocities): {a == b}"
+        )
+    for r in rows:
+        del r["final_state"]
     big = [r for r in rows if r["kernel"] == "current" and r["N"] == max(sizes)]
     if not smoke:
         rep = _replicas(max(sizes), steps, 2)
@@ -230,6 +238,7 @@ def _edmd_rate(D, kernel, n: int, steps: float) -> dict:
         D.advance(gas, steps / z)
         dt, cpu = time.perf_counter() - t0, time.process_time() - c0
         events = gas.tally[0] - e0
+        final = (gas.tally.tobytes(), gas.pos.tobytes(), gas.vel.tobytes())  # the whole run, bit for bit
         free = _knudsen_mode_rate(D, n, edge, steps / z)
     finally:
         D.E = current
@@ -241,6 +250,7 @@ def _edmd_rate(D, kernel, n: int, steps: float) -> dict:
         "events_per_cpu_s": events / cpu,
         "us_per_particle_ps": 1e6 * cpu / (n * steps / z),
         "log2N": math.log2(n),
+        "final_state": final,
     }
 
 
