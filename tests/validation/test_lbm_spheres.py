@@ -91,14 +91,36 @@ def test_interpolated_walls_within_0p3_percent_at_32_where_the_reference_has_fou
     assert abs(_drag(0.216, 32, "cli") / cal.ZICK_HOMSY_SC[0.216] - 1) < 0.003
 
 
-@pytest.mark.parametrize("walls", ["halfway", "cli"])
+@pytest.mark.slow
+def test_multireflection_walls_within_0p3_percent_at_32_averaged_over_the_lattice_position():
+    """c = 0.45 at 32.3 voxels per diameter, MR1 walls, the sphere at the five SUBVOXEL_SHIFTS: mean error against
+    Zick & Homsy's printed 28.1 below 0.3 % (measured +0.18 %: +0.14, +0.32, +0.10, +0.16, +0.19; CLI +0.41 … +0.53
+    at the first two). The printed value is itself ±0.18 %, so the true error lies in 0.00 … 0.36 %: 0.3 % holds
+    against the printed digits, not beyond them. What is left is mostly the voxel-sum quadrature of the superficial
+    velocity near the wall (in a slit MR1's nodes are exact and κ̂ differs from the integral by exactly that sum's
+    error, tests/hard/test_lbm_hard.py), which is why it moves with the sphere's place."""
+    ref = cal.ZICK_HOMSY_SC[0.45]
+    cells = cal.cells_for_diameter(0.45, 32)
+    errors = []
+    for shift in cal.SUBVOXEL_SHIFTS:
+        pore, geometry, a = cal.sphere_array(cells, 0.45, shift)
+        res = permeability(
+            pore, "x", Settings(walls="mr1", tolerance_kappa=1e-6), progress=False, geometry=geometry
+        )
+        assert res.converged and res.walls == "mr1"
+        errors.append(cal.drag_coefficient(res.kappa_lu, cells, a) / ref - 1)
+    assert abs(np.mean(errors)) < 0.003
+    assert max(errors) < 0.004  # no position far off (measured ≤ 0.32 %)
+
+
+@pytest.mark.parametrize("walls", ["halfway", "cli", "mr1"])
 def test_kappa_is_tau_independent_on_a_sphere_array(walls):
     """TRT Λ = 3/16: K at τ = 0.6, 1, 2 within 0.1 % (8 voxels per diameter, c = 0.125)."""
     ks = [_drag(0.125, 8, walls, tau) for tau in (0.6, 1.0, 2.0)]
     assert (max(ks) - min(ks)) / np.mean(ks) < 1e-3
 
 
-@pytest.mark.parametrize("walls", ["halfway", "cli"])
+@pytest.mark.parametrize("walls", ["halfway", "cli", "mr1"])
 def test_kappa_is_tau_independent_on_a_porous_sample(walls):
     """Random overlapping spheres with one-voxel gaps: κ̂ at τ = 0.6 and 2 within 0.1 % (measured 1.5e-4 and
     1.0e-4: the inertia of the faster flow at low viscosity, not the walls)."""
