@@ -102,7 +102,7 @@ def test_link_distances_of_every_set_up_match_the_plane_by_hand(setup, mirror):
     settings = Settings(walls="cli", setup=setup, mirror=mirror)
     prep = prepare(np.ascontiguousarray(pore), settings, keep_wall_links=True)
     lat = prep.lattice
-    node, pop, _ = lat.wall_links
+    node, pop, *_ = lat.wall_links
     q = link_distances(lat.pore, lat.periodic, node, pop, _domain_geometry(g, settings, 0, pore.shape[0]))
     z = np.argwhere(lat.pore)[node][:, 2] + 0.5
     coords = np.argwhere(lat.pore)[node] + 0.5
@@ -137,7 +137,7 @@ def test_mirror_fold_equals_an_explicitly_mirrored_packing():
     spheres = SphereWalls(centres, radii, tuple(float(s) for s in shape))
     settings = Settings(walls="cli", mirror=True, prune=False)
     lat = prepare(pore, settings, keep_wall_links=True).lattice
-    node, pop, _ = lat.wall_links
+    node, pop, *_ = lat.wall_links
     got = link_distances(lat.pore, lat.periodic, node, pop, _domain_geometry(spheres, settings, 0, shape[0]))
     mirrored = centres.copy()
     mirrored[:, 0] = 2 * shape[0] - centres[:, 0]
@@ -222,13 +222,13 @@ def test_grey_walls_in_the_mirror_and_chamber_set_ups_read_the_folded_voxels():
     grey = GreyWalls(solid, 0.5)
     mirror = Settings(walls="cli", mirror=True, prune=False)
     lat = prepare(pore, mirror, keep_wall_links=True).lattice
-    node, pop, _ = lat.wall_links
+    node, pop, *_ = lat.wall_links
     got = link_distances(lat.pore, lat.periodic, node, pop, _domain_geometry(grey, mirror, 0, 7))
     doubled = GreyWalls(np.concatenate([solid, solid[::-1]]), 0.5)
     np.testing.assert_array_equal(got, link_distances(lat.pore, lat.periodic, node, pop, doubled))
     chambers = Settings(walls="cli", setup="chambers", prune=False)
     lat = prepare(pore, chambers, keep_wall_links=True).lattice
-    node, pop, _ = lat.wall_links
+    node, pop, *_ = lat.wall_links
     got = link_distances(lat.pore, lat.periodic, node, pop, _domain_geometry(grey, chambers, 0, 7))
     coords = np.argwhere(lat.pore)[node]
     inside = (coords[:, 0] >= 10) & (coords[:, 0] < 17)
