@@ -754,12 +754,16 @@ def _apply_mr_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c, mr, s
         second = _get(src, far[k]) - _get(src, far_own[k])
         value = h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h)
         _set(f, s, value + np.float64(coef_d[k]) * second + np.float64(coef_e[k]) * state[k])
-    for k in range(lo, hi):
+    last = -1
+    jx = jy = jz = 0.0
+    for k in range(lo, hi):  # links by node, then population: the node's momentum once per node
         s = np.int64(slot[k])
         p = s // _TILE
         i = s - p * _TILE
         o = _OPP[p]
-        _, jx, jy, jz = _moments(f, i)
+        if i != last:
+            _, jx, jy, jz = _moments(f, i)
+            last = i
         cj = _CX[o] * jx + _CY[o] * jy + _CZ[o] * jz
         state[k] = g * (0.5 * (_pop(f, o, i) - _pop(f, p, i)) - 3.0 * _W[o] * cj)
 
