@@ -1,12 +1,13 @@
 """Simple-cubic sphere arrays against the published drag (Zick & Homsy 1982): κ̂ against resolution, halfway and
-interpolated (CLI) walls, TRT Λ = 3/16, flow along x.
+interpolated (CLI, MR1) walls, TRT Λ = 3/16, flow along x.
 
 Writes ``lbm_spheres.json`` into ``--out`` (default: results/benchmarks, where the report's permeability-cost
 section reads it) and prints one row per run: solid fraction
 c, voxels per diameter d, walls, K = L³/(6π a κ̂), its error against ZICK_HOMSY_SC, steps and CPU seconds.
 The order of convergence between two resolutions is log(e₁/e₂)/log(d₂/d₁) of |error|.
 
-Usage: python benchmarks/lbm_spheres.py [--fractions 0.125 0.343] [--diameters 8 12 16 24 32] [--shifts 5] [--smoke]
+Usage: python benchmarks/lbm_spheres.py [--fractions 0.125 0.343] [--diameters 8 12 16 24 32] [--shifts 5]
+[--walls halfway cli mr1] [--smoke]
 """
 
 from __future__ import annotations
@@ -20,9 +21,8 @@ from _common import add_out_argument, write_record
 from porepipe.lbm import Settings, permeability
 from porepipe.lbm import _calibration as cal
 
-#: Sub-voxel shifts of the sphere for ``--shifts N`` (the first N): centred, body-centred, half a voxel on one axis,
-#: a quarter on each, an irregular one.
-SHIFTS = ((0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (0.5, 0.0, 0.0), (0.25, 0.25, 0.25), (0.13, 0.37, 0.29))
+#: Sub-voxel shifts of the sphere for ``--shifts N`` (the first N).
+SHIFTS = cal.SUBVOXEL_SHIFTS
 
 
 def run(

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.lbm import Settings, StabilityError, permeability
+from porepipe.lbm import Settings, StabilityError, Walls, permeability
 from porepipe.lbm import _calibration as cal
+from porepipe.lbm._walls import Q_MIN, coefficients
 
 
 def test_one_voxel_wide_straight_throat():
@@ -111,6 +112,22 @@ def test_tau_too_close_to_half_is_refused_naming_tau():
         permeability(np.ones((4, 4, 4)), "x", Settings(tau=0.501), progress=False)
 
 
+def test_multireflection_walls_refuse_mrt_low_tau_and_mpi():
+    """walls=mr1 needs a two-rate operator (trt/bgk), τ ≥ 0.55 (it diverged below) and one process (it reads two
+    nodes behind the wall, the MPI slabs exchange one layer): each refused in one line naming the key."""
+    with pytest.raises(ValueError, match="walls=mr1 needs collision"):
+        Settings(walls="mr1", collision="mrt")
+    with pytest.raises(ValueError, match="walls=mr1 needs tau"):
+        Settings(walls="mr1", tau=0.52)
+    Settings(walls="mr1", collision="bgk", tau=0.55)
+
+    class _Distributed:
+        distributed = True
+
+    with pytest.raises(PorepipeError, match="walls = mr1 is not available under MPI"):
+        permeability(np.ones((4, 4, 4)), "x", Settings(walls="mr1"), progress=False, comm=_Distributed())
+
+
 def test_bad_volumes_are_refused():
     with pytest.raises(PorepipeError, match="binary"):
         permeability(np.full((4, 4, 4), 3), "x", progress=False)
@@ -151,10 +168,15 @@ def _slit_error(h, q, walls="cli", tau=0.857):
     return res.kappa_lu / (np.sum(z * (width - z) / 2) / (h + 1)) - 1
 
 
-@pytest.mark.parametrize("q", [1e-6, 1.0])
+@pytest.mark.parametrize("q", [Q_MIN, 1.0])
 def test_interpolated_walls_at_q_near_0_and_1_converge_at_second_order(q):
-    """Slit, walls at q → 0 (through the outer nodes) and q = 1 (at the next nodes): converged, τ-independent to
-    1e-5, error ≤ 6 % at h = 8 (measured +3.6 %, −5.0 %; halfway: +54 %, −28 %) and ≥ 3× smaller at h = 16."""
+    """Slit, walls at the smallest q kept (Q_MIN = 0.1 off the outer nodes) and q = 1 (at the next nodes): converged,
+    τ-independent to 1e-5, error ≤ 6 % at h = 8 (measured at q → 0 and 1: +3.6 %, −5.0 %; halfway: +54 %, −28 %)
+    and ≥ 3× smaller at h = 16. A wall closer than Q_MIN is treated as at Q_MIN."""
+    np.testing.assert_array_equal(
+        coefficients(np.array([1e-6]), np.array([True]), Walls.cli),
+        coefficients(np.array([Q_MIN]), np.array([True]), Walls.cli),
+    )
     e8 = _slit_error(8, q)
     assert abs(e8) < 0.06
     assert abs(_slit_error(8, q, tau=0.6) - e8) < 1e-5 and abs(_slit_error(8, q, tau=1.8) - e8) < 1e-5
@@ -162,12 +184,23 @@ def test_interpolated_walls_at_q_near_0_and_1_converge_at_second_order(q):
     assert abs(_slit_error(8, q, walls="halfway")) > 4 * abs(e8)
 
 
+@pytest.mark.parametrize("q", [Q_MIN, 0.3, 1.0])
+def test_multireflection_walls_are_exact_for_the_slit_parabola(q):
+    """MR1 (Ginzburg et al. 2008) is exact for Poiseuille flow at any q and τ: κ̂ equals the nodal sum of the exact
+    parabola to the run's stop tolerance 1e-5 (measured ≤ 9e-7 at τ = 0.6, ≤ 3e-9 at 1.8), where CLI is off by
+    +3.1, +1.7 and −5.0 % at q = 0.1, 0.3, 1 (h = 8)."""
+    for tau in (0.6, 1.8):
+        assert abs(_slit_error(8, q, walls="mr1", tau=tau)) < 1e-5
+    assert abs(_slit_error(8, q, walls="cli")) > 0.01
+
+
 @pytest.mark.parametrize("geometry", ["throat", "plate"])
 def test_interpolated_walls_do_not_diverge_where_halfway_converges(geometry):
     """One-voxel throat between two channels, and a one-voxel-thick plate with a 2 × 2 hole; random q ∈ (0, 1]
-    on every link (the worst mix of q → 0 and q → 1), τ = 0.51 … 2: CLI and BFL converge like halfway; CLI's κ̂
-    within a factor 2 of halfway's (measured 0.91-1.0); BFL's is τ-dependent (up to 3× at τ = 2), so only
-    finite and positive."""
+    on every link (the worst mix of q → 0 and q → 1), τ = 0.51 (MR1: 0.55, its floor) … 2: CLI, MR1 and BFL converge
+    like halfway; CLI's
+    and MR1's κ̂ within a factor 2 of halfway's (measured 0.91-1.0); BFL's is τ-dependent (up to 3× at τ = 2), so
+    only finite and positive."""
     pore = np.zeros((12, 6, 6), dtype=bool)
     pore[:, 1:5, 1:5] = True
     pore[6, 1:5, 1:5] = False
@@ -178,8 +211,8 @@ def test_interpolated_walls_do_not_diverge_where_halfway_converges(geometry):
         pore[6] = False
         pore[6, 2:4, 2:4] = True
     half = permeability(pore, "x", Settings(walls="halfway", tau=0.6), progress=False).kappa_lu
-    for walls in ("cli", "bfl"):
-        for tau in (0.51, 0.6, 2.0):
+    for walls in ("cli", "mr1", "bfl"):
+        for tau in (0.55 if walls == "mr1" else 0.51, 0.6, 2.0):
             res = permeability(
                 pore, "x", Settings(walls=walls, tau=tau), progress=False, geometry=_RandomQ(3)
             )

@@ -61,8 +61,9 @@ def test_a_shifted_sphere_array_is_the_same_array_moved():
 
 @pytest.mark.parametrize("c", [0.125, 0.343, 0.45])
 def test_interpolated_walls_within_one_percent_at_16_voxels_per_diameter(c):
-    """CLI walls: |K/K_ZH − 1| < 1 % at ~16 voxels per diameter (measured +0.51, +0.88, +0.94 %); halfway
-    bounce-back on the same lattice is worse (+5.9, +4.4, +6.5 %)."""
+    """CLI walls: |K/K_ZH − 1| < 1 % at ~16 voxels per diameter (measured +0.51, +0.88, +0.94 % before the floor
+    q ≥ Q_MIN = 0.1; c = 0.45 now +0.60 %); halfway bounce-back on the same lattice is worse (+5.9, +4.4, +6.5 %).
+    At other places of the sphere on the lattice c = 0.45 is up to +2.7 % (CLI) and +1.8 % (MR1)."""
     k_cli = _drag(c, 16, "cli")
     k_half = _drag(c, 16, "halfway")
     ref = cal.ZICK_HOMSY_SC[c]
@@ -91,14 +92,36 @@ def test_interpolated_walls_within_0p3_percent_at_32_where_the_reference_has_fou
     assert abs(_drag(0.216, 32, "cli") / cal.ZICK_HOMSY_SC[0.216] - 1) < 0.003
 
 
-@pytest.mark.parametrize("walls", ["halfway", "cli"])
+@pytest.mark.slow
+def test_multireflection_walls_within_0p3_percent_at_32_averaged_over_the_lattice_position():
+    """c = 0.45 at 32.3 voxels per diameter, MR1 walls, the sphere at the five SUBVOXEL_SHIFTS: mean error against
+    Zick & Homsy's printed 28.1 below 0.3 % (measured +0.15 %: +0.12, +0.29, +0.07, +0.12, +0.13; CLI +0.26 %:
+    +0.38, +0.49, −0.05, +0.28, +0.19). The printed value is itself ±0.18 % (28.05 … 28.15): the mean K = 28.142 is
+    within 0.3 % of every value in that interval above 28.058. What is left is mostly the voxel-sum quadrature of
+    the superficial velocity near the wall (in a slit MR1's nodes are exact and κ̂ differs from the integral by that
+    sum's error, tests/hard/test_lbm_hard.py), which is why it moves with the sphere's place."""
+    ref = cal.ZICK_HOMSY_SC[0.45]
+    cells = cal.cells_for_diameter(0.45, 32)
+    errors = []
+    for shift in cal.SUBVOXEL_SHIFTS:
+        pore, geometry, a = cal.sphere_array(cells, 0.45, shift)
+        res = permeability(
+            pore, "x", Settings(walls="mr1", tolerance_kappa=1e-6), progress=False, geometry=geometry
+        )
+        assert res.converged and res.walls == "mr1"
+        errors.append(cal.drag_coefficient(res.kappa_lu, cells, a) / ref - 1)
+    assert abs(np.mean(errors)) < 0.003
+    assert max(errors) < 0.004  # no position far off (measured ≤ 0.29 %)
+
+
+@pytest.mark.parametrize("walls", ["halfway", "cli", "mr1"])
 def test_kappa_is_tau_independent_on_a_sphere_array(walls):
     """TRT Λ = 3/16: K at τ = 0.6, 1, 2 within 0.1 % (8 voxels per diameter, c = 0.125)."""
     ks = [_drag(0.125, 8, walls, tau) for tau in (0.6, 1.0, 2.0)]
     assert (max(ks) - min(ks)) / np.mean(ks) < 1e-3
 
 
-@pytest.mark.parametrize("walls", ["halfway", "cli"])
+@pytest.mark.parametrize("walls", ["halfway", "cli", "mr1"])
 def test_kappa_is_tau_independent_on_a_porous_sample(walls):
     """Random overlapping spheres with one-voxel gaps: κ̂ at τ = 0.6 and 2 within 0.1 % (measured 1.5e-4 and
     1.0e-4: the inertia of the faster flow at low viscosity, not the walls)."""
@@ -112,13 +135,15 @@ def test_kappa_is_tau_independent_on_a_porous_sample(walls):
 
 def test_kappa_stop_ends_early_with_kappa_within_0p1_percent_of_a_tight_run():
     """stop=kappa (tolerance 1e-5 on the window change and on the tail estimate) against the thesis's density
-    rule (δρ < 1e-9, δv < 1e-4) on the porous sample with CLI walls at τ = 1: far fewer steps (measured
-    1500 vs 13 000), the same κ̂ within 0.1 % (measured 3e-6); each result names the rule that stopped it, and
-    the actual distance to the tight κ̂ stays within 10× the tolerance the error estimate certified."""
+    rule (δρ < 1e-9, δv < 1e-4) on the porous sample with CLI walls at τ = 1: no more steps, the same κ̂ within 0.1 %
+    (measured: equal); each result names the rule that stopped it, and the actual distance to the tight κ̂ stays
+    within 10× the tolerance the error estimate certified. (Both rules stop at 1500 steps here since Q_MIN: the
+    density rule's 13 000 steps before were the slow drift of links with q → 0; benchmarks/lbm_kappa_stop.py
+    compares the step counts on the larger porous samples.)"""
     pore, geometry = _porous()
     fast = permeability(pore, "x", Settings(tau=1.0), progress=False, geometry=geometry)
     tight = permeability(pore, "x", Settings(tau=1.0, stop="density"), progress=False, geometry=geometry)
     assert fast.stopped_by == "kappa" and tight.stopped_by == "density"
-    assert fast.steps * 4 < tight.steps
+    assert fast.steps <= tight.steps
     assert abs(fast.kappa_lu / tight.kappa_lu - 1) < 1e-3
     assert fast.kappa_error < 1e-5 and abs(fast.kappa_lu / tight.kappa_lu - 1) < 1e-4

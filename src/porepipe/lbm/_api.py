@@ -215,7 +215,12 @@ def _check_geometry(geometry, shape) -> None:
 
 
 def _check_distributable(settings: Settings) -> None:
-    """Refuse what an MPI run cannot do yet: field output."""
+    """Refuse what an MPI run cannot do yet: field output, multi-reflection walls."""
+    if settings.walls is Walls.mr1:
+        raise PorepipeError(
+            "permeability.walls = mr1 is not available under MPI (its links read two nodes behind the wall, the "
+            "slabs exchange one layer); use walls: cli with --mpi"
+        )
     if settings.write_fields or settings.write_vti:
         raise PorepipeError(
             "permeability.write_fields / write_vti are not available under MPI (the fields stay spread over the "

@@ -250,6 +250,12 @@ ZICK_HOMSY_SC_ROUNDING = {
 }
 
 
+#: Sub-voxel shifts of the sphere (voxels) that sample its place on the lattice: centred, body-centred, half a voxel on
+#: one axis, a quarter on each, an irregular one. The interpolated walls' error moves with the place (c = 0.45, 32
+#: voxels per diameter: CLI +0.10 … +0.53 %, MR1 +0.10 … +0.32 %); an average over these is the position-free error.
+SUBVOXEL_SHIFTS = ((0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (0.5, 0.0, 0.0), (0.25, 0.25, 0.25), (0.13, 0.37, 0.29))
+
+
 def sangani_acrivos_dilute(c: float) -> float:
     """K(c) of a simple-cubic array from the Hasimoto/Sangani-Acrivos series (1982, Eq. 4.2; good for c ≲ 0.2):
     K = 1/(1 − 1.7601 c^⅓ + c − 1.5593 c² + 3.9799 c^{8/3} − 3.0734 c^{10/3}).

@@ -62,9 +62,10 @@ class Lattice:
         Number of bounce-back links (populations whose pull source is their own node).
     window : (L1, L2) bool ndarray or None
         Part of the cross-section that belongs to S (None = all of it).
-    wall_links : ((K,), (K,), (K,)) int64 ndarrays or None
-        Node, population and the pull source of the opposite population (−1: solid behind) of every bounce-back
-        link, by node (see :func:`porepipe.lbm._kernels._wall_link_list`); kept only if asked for.
+    wall_links : ((K,), (K,), (K,), (K,)) int64 ndarrays or None
+        Node, population, the pull source of the opposite population (−1: solid behind) and that of the node
+        behind it (−1: solid) of every bounce-back link, by node (see
+        :func:`porepipe.lbm._kernels._wall_link_list`); kept only if asked for.
     """
 
     pore: np.ndarray
@@ -78,7 +79,9 @@ class Lattice:
     run_base: np.ndarray = dataclasses.field(repr=False)
     n_wall_links: int = 0
     window: np.ndarray | None = None
-    wall_links: tuple[np.ndarray, np.ndarray, np.ndarray] | None = dataclasses.field(default=None, repr=False)
+    wall_links: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = dataclasses.field(
+        default=None, repr=False
+    )
 
     @property
     def n_nodes(self) -> int:
@@ -172,10 +175,10 @@ def build_lattice(
     )
 
 
-def _list_wall_links(full: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    node, pop, behind = (np.empty(count, dtype=np.int64) for _ in range(3))
-    _wall_link_list(full, node, pop, behind)
-    return node, pop, behind
+def _list_wall_links(full: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    node, pop, behind, far = (np.empty(count, dtype=np.int64) for _ in range(4))
+    _wall_link_list(full, node, pop, behind, far)
+    return node, pop, behind, far
 
 
 def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:

@@ -219,12 +219,14 @@ def _compact_columns(table, keep):
 
 
 @njit(cache=True)
-def _wall_link_list(gather, node_out, pop_out, behind_out):
+def _wall_link_list(gather, node_out, pop_out, behind_out, far_out):
     """The bounce-back links of a full pull table, ordered by node then population; returns their number.
 
     Link k: population ``pop_out[k]`` of node ``node_out[k]`` pulls from a solid (or outside) upstream voxel.
     ``behind_out[k]`` is the pull source of the opposite population, the flat index of f*_ō at x + c_p (the node
     behind, away from the wall), or −1 if that neighbour is solid too (a one-voxel gap along the link).
+    ``far_out[k]`` is the flat index of f*_ō at x + 2 c_p (two nodes behind), or −1 if that voxel or the one
+    behind is solid (multi-reflection walls need both).
     """
     n_nodes = gather.shape[1]
     count = 0
@@ -235,6 +237,11 @@ def _wall_link_list(gather, node_out, pop_out, behind_out):
                 pop_out[count] = q
                 back = np.int64(gather[_OPP[q] - 1, n])
                 behind_out[count] = -1 if back == q * n_nodes + n else back
+                far_out[count] = -1
+                if back != q * n_nodes + n:
+                    m = back - _OPP[q] * n_nodes
+                    far = np.int64(gather[_OPP[q] - 1, m])
+                    far_out[count] = -1 if far == q * n_nodes + m else far
                 count += 1
     return count
 
@@ -723,6 +730,44 @@ def _apply_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c):
         _set(f, s, h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h))
 
 
+# -- multi-reflection (MR1) links add, per link, d (f*_ō(x + 2c_p) − f*_p(x + c_p)) (two flat indices into the source
+#    array) and a correction e g n⁻_ō(x): n⁻ the antisymmetric non-equilibrium part of the node's pre-collision
+#    populations in the previous step (equilibrium of j = Σ c f, no force shift), g = 1 − ω⁻/2; g n⁻ is kept per
+#    link in ``state``.
+@njit(**_NUMERIC)
+def _apply_mr_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c, mr, state, g):
+    """Interpolate the tile's links as :func:`_apply_links` plus the multi-reflection terms, then store each link's
+    g n⁻_ō(x) of the completed pre-collision populations for the next step.
+
+    ``mr`` = (far, far_own, coef_d, coef_e): flat indices of f*_ō(x + 2c_p) and f*_p(x + c_p), and the weights.
+    """
+    far, far_own, coef_d, coef_e = mr
+    tile = n0 // _TILE
+    lo, hi = tile_start[tile], tile_start[tile + 1]
+    for k in range(lo, hi):
+        s = np.int64(slot[k])
+        p = s // _TILE
+        i = s - p * _TILE
+        h = _get(f, s)
+        behind = _get(f, _OPP[p] * _TILE + i)
+        own = _get(src, p * n_nodes + n0 + i)
+        second = _get(src, far[k]) - _get(src, far_own[k])
+        value = h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h)
+        _set(f, s, value + np.float64(coef_d[k]) * second + np.float64(coef_e[k]) * state[k])
+    last = -1
+    jx = jy = jz = 0.0
+    for k in range(lo, hi):  # links by node, then population: the node's momentum once per node
+        s = np.int64(slot[k])
+        p = s // _TILE
+        i = s - p * _TILE
+        o = _OPP[p]
+        if i != last:
+            _, jx, jy, jz = _moments(f, i)
+            last = i
+        cj = _CX[o] * jx + _CY[o] * jy + _CZ[o] * jz
+        state[k] = g * (0.5 * (_pop(f, o, i) - _pop(f, p, i)) - 3.0 * _W[o] * cj)
+
+
 # -- the step kernel ------------------------------------------------------------------------------------------------
 BGK, TRT, MRT = 0, 1, 2
 
@@ -760,15 +805,20 @@ def _step(
     link_slot,
     link_b,
     link_c,
+    link_mr,
+    link_state,
 ):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
     step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
 
     Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, interpolate its boundary links
     (links of tile t: ``tile_start[t]:tile_start[t + 1]``; an empty ``link_slot`` for halfway bounce-back), collide,
-    store.
+    store. ``link_mr`` (flat indices and weights of the multi-reflection terms, :func:`_apply_mr_links`) is empty
+    for the linear schemes; ``link_state`` carries n⁻ of every multi-reflection link from step to step.
     """
     n_nodes = run_start[-1]
+    g = 1.0 - 0.5 * omega[1]
+    multi = link_mr[0].size > 0
     b3 = (force[0], force[1], force[2])
     w2 = (omega[0], omega[1])
     n_chunks = (n_nodes + _CHUNK - 1) // _CHUNK
@@ -782,7 +832,11 @@ def _step(
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
                 r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
-                if link_slot.size:
+                if multi:
+                    _apply_mr_links(
+                        f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c, link_mr, link_state, g
+                    )
+                elif link_slot.size:
                     _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
                 if keep:
                     _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields)

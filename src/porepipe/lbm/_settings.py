@@ -21,6 +21,7 @@ class Walls(str, enum.Enum):
     halfway = "halfway"  # wall halfway between the nodes (staircase, first order on curved walls)
     cli = "cli"  # Ginzburg's central linear interpolation: one formula for all q, Λ-parametrised with TRT
     bfl = "bfl"  # Bouzidi-Firdaouss-Lallemand linear interpolation (two branches, convex weights)
+    mr1 = "mr1"  # Ginzburg's multi-reflection MR1: exact for parabolic profiles, Λ-parametrised (TRT, BGK)
 
 
 class StopRule(str, enum.Enum):
@@ -89,6 +90,9 @@ TAU_MAX = 5.0
 #: bounce-back (exact only at Λ = 3/16): Λ = 1e9 "converged" to a κ 4× too high. Ginzburg's stable, accurate range
 #: is 1/12 … 1/4; 1/2 leaves room for studies of the Λ dependence.
 MAGIC_MAX = 0.5
+#: smallest τ̂ accepted with ``walls: mr1``: with random q on a one-voxel throat and a perforated plate it diverged
+#: at τ̂ = 0.51 and 0.52 (Λ = 3/16: τ⁻ = 19, 10) and converged from 0.55 on (tests/hard/test_lbm_hard.py).
+MR1_TAU_MIN = 0.55
 
 
 class Settings(BaseModel):
@@ -131,8 +135,9 @@ class Settings(BaseModel):
     )
     walls: Walls = Field(
         Walls.cli,
-        description="halfway bounce-back, or cli/bfl interpolated walls at the "
-        "sub-voxel distance q (needs a geometry: spheres or grey values; else halfway)",
+        description="halfway bounce-back, or cli/bfl/mr1 interpolated walls at the "
+        "sub-voxel distance q (needs a geometry: spheres or grey values; else halfway); mr1: second-order "
+        "multi-reflection (trt or bgk)",
     )
     setup: Setup = Field(Setup.periodic, description="periodic (body force everywhere) or chambers (thesis)")
     mirror: bool = Field(False, description="periodic set-up: append the sample mirrored along the flow axis")
@@ -202,6 +207,20 @@ class Settings(BaseModel):
                 "high); allowed: 0 < Λ ≤ 1/2 (3/16 = exact walls, 1/4 = most stable)"
             )
         return value
+
+    @model_validator(mode="after")
+    def _mr1_needs_two_rates(self):
+        if self.walls is Walls.mr1 and self.collision is Collision.mrt:
+            raise ValueError(
+                "walls=mr1 needs collision trt or bgk: its correction is built on the odd-moment rate ω⁻ of a "
+                "two-relaxation-time operator; use walls=cli with mrt"
+            )
+        if self.walls is Walls.mr1 and self.tau < MR1_TAU_MIN:
+            raise ValueError(
+                f"walls=mr1 needs tau ≥ {MR1_TAU_MIN} (got {self.tau}): below it its correction diverged on a "
+                "one-voxel throat and a perforated plate; raise `tau` or use walls=cli"
+            )
+        return self
 
     @model_validator(mode="after")
     def _force_inside_inlet(self):

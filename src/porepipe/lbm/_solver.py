@@ -93,6 +93,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
     rates = (0.0,) * 19  # MRT's s_k / |M_k|², a tuple: constants of the collision loop
     if settings.collision is Collision.bgk:
         op = K.BGK
+        omega[1] = omega[0]  # BGK is TRT with ω⁻ = ω (the multi-reflection walls read it)
     elif settings.collision is Collision.trt:
         op = K.TRT
         omega[1] = 1.0 / trt_minus_tau(tau, settings.magic)
@@ -129,6 +130,8 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
             links.slot,
             links.b,
             links.c,
+            links.mr,
+            links.state,
         )
 
     return step
@@ -166,19 +169,24 @@ def kappa_error(kappas, noise: float = ROUND_OFF) -> float:
 
 
 def _save_checkpoint(
-    path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict
+    path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict, state=None
 ) -> None:
+    """``state``: the multi-reflection links' carried n⁻ (:attr:`Links.state`), if any."""
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["key"] = key
         f.attrs["step"] = step
         f.create_dataset("populations", data=pops)
+        if state is not None and state.size:
+            f.create_dataset("link_state", data=state)
         f.create_dataset("fields", data=fields)
         for name, values in history.items():
             f.create_dataset(f"history/{name}", data=np.asarray(values))
 
 
-def _load_checkpoint(path: Path, key: str, pops: np.ndarray):
-    """(step, fields, history) from a matching checkpoint, or None."""
+def _load_checkpoint(path: Path, key: str, pops: np.ndarray, state=None):
+    """(step, fields, history) from a matching checkpoint, or None; fills ``pops`` (and ``state``, the
+    multi-reflection links' n⁻, if given and non-empty).
+    """
     if path is None or not path.is_file():
         return None
     try:
@@ -186,6 +194,8 @@ def _load_checkpoint(path: Path, key: str, pops: np.ndarray):
             if f.attrs.get("key") != key or f["populations"].shape != pops.shape:
                 return None
             pops[...] = f["populations"][...]
+            if state is not None and state.size:
+                state[...] = f["link_state"][...]
             history = (
                 {name: list(f[f"history/{name}"][...]) for name in f["history"]} if "history" in f else {}
             )
@@ -312,9 +322,9 @@ def _mass(src: np.ndarray, n: int, owned: slice, comm) -> float:
     return comm.sum(float(pops.shape[1] + np.sum(pops, dtype=np.float64)))
 
 
-def _resume(checkpoint, ckey, src, comm):
+def _resume(checkpoint, ckey, src, comm, state=None):
     """(step, fields, history) of this process's matching checkpoint, or None; every process must agree."""
-    resumed = _load_checkpoint(checkpoint, ckey, src)
+    resumed = _load_checkpoint(checkpoint, ckey, src, state)
     comm.agree(resumed[0] if resumed is not None else -1, checkpoint)
     return resumed
 
@@ -356,7 +366,8 @@ def _solve(
     names = ("step", "kappa", "delta_v", "delta_rho", "delta_kappa", "kappa_error", "mach")
     history: dict[str, list] = {k: [] for k in names}
     done = 0
-    resumed = _resume(checkpoint, ckey, src, comm)
+    state = links.state if links is not None else None
+    resumed = _resume(checkpoint, ckey, src, comm, state)
     if resumed is not None:
         done, fields, old_history = resumed
         history.update({k: list(v) for k, v in old_history.items() if k in history})
@@ -422,7 +433,7 @@ def _solve(
             converged, stopped_by = True, rule
             break
         if checkpoint is not None and comm.max(time.perf_counter() - last_ckpt) > settings.checkpoint_every_s:
-            _save_checkpoint(checkpoint, ckey, done, src, fields, history)
+            _save_checkpoint(checkpoint, ckey, done, src, fields, history, state)
             last_ckpt = time.perf_counter()
     if converged and not math.isfinite(est[key_name]):
         raise StabilityError(
@@ -430,7 +441,9 @@ def _solve(
             f"sample?): check the set-up or raise `body_force` (now {settings.body_force})"
         )
     if not converged and checkpoint is not None:
-        _save_checkpoint(checkpoint, ckey, done, src, fields, history)  # a rerun with more steps resumes here
+        _save_checkpoint(
+            checkpoint, ckey, done, src, fields, history, state
+        )  # a rerun with more steps resumes here
     n_owned = comm.sum(owned.stop - owned.start)
     step_wall = comm.max(step_wall)
     mlups = n_owned * (done - start) / max(step_wall, 1e-12) / 1e6

@@ -10,10 +10,19 @@ x − q c_p, q ∈ (0, 1] (halfway bounce-back puts it at q = ½ whatever the ge
 * ``bfl`` (Bouzidi, Firdaouss & Lallemand 2001, Phys. Fluids 13, 3452, linear): q < ½: (2q, 1 − 2q, 0);
   q ≥ ½: (1/(2q), 0, 1 − 1/(2q)) — convex weights, so no link amplifies a population;
 * ``cli`` (Ginzburg, Verhaeghe & d'Humières 2008, Commun. Comput. Phys. 3, 427, "central linear
-  interpolation"): (1, κ, −κ), κ = (1 − 2q)/(1 + 2q), one formula for all q.
+  interpolation"): (1, κ, −κ), κ = (1 − 2q)/(1 + 2q), one formula for all q;
+* ``mr1`` (the same paper's multi-reflection MR1, Eq. 4.1 with Table 3's coefficients and the post-collision
+  correction): f_p = h + κ₀ (f*_ō(x + c_p) − f*_p(x)) + κ₋₁ (f*_ō(x + 2c_p) − f*_p(x + c_p)) − α g n⁻_ō(x),
+  κ₀ = (1 − 2q − 2q²)/(1 + q)², κ₋₁ = q²/(1 + q)², α = 4/(1 + q)², g = 1 − ω⁻/2 and n⁻_ō(x) the antisymmetric
+  non-equilibrium part of the node's pre-collision populations one step earlier (equilibrium of j = Σ c f). Worked
+  through for a straight wall with the exact TRT solution of Poiseuille flow (n⁺ = −τ⁺ ∂e⁻, n⁻ = τ⁻(Λ⁺ ∂²e⁻ + F)):
+  the residual vanishes for every q and Λ when the measured velocity (j + F/2)/ρ is zero at the wall, so the
+  slit's κ̂ is the nodal sum of the parabola itself (tests/hard/test_lbm_hard.py). Needs two fluid
+  nodes behind the wall; with one it is ``cli``, with none halfway.
 
 Where the node behind is solid too (a one-voxel gap along the link) ``cli`` falls back to halfway bounce-back;
 ``bfl`` uses its local branch for q ≥ ½ and halfway bounce-back for q < ½. Both are exact for a linear profile.
+``cli`` and ``mr1`` keep halfway bounce-back at nodes with :data:`CROWDED_LINKS` wall links or more (stability).
 With TRT, ``cli`` (with halfway fallback) keeps κ̂ τ-independent like halfway bounce-back (sphere array: 1e-5
 for τ = 0.6 … 2; tests/validation/test_lbm_spheres.py); ``bfl`` does not (−7 % from τ = 0.6 to 2 at 10 voxels
 per diameter), and neither does BFL's local branch inside ``cli`` (0.24 % on a porous sample), hence the
@@ -41,11 +50,20 @@ import numpy as np
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.lbm._kernels import _TILE, _ray_grain_fractions, _ray_sphere_fractions
-from porepipe.lbm._lattice import C
+from porepipe.lbm._lattice import OPPOSITE, C
 from porepipe.lbm._settings import Walls
 
-#: q is kept at least this far from 0 (a wall through the node itself).
-Q_MIN = 1e-6
+#: q is kept at least this far from 0 (a wall through or next to the node itself): links with q → 0 (κ → 1 in CLI,
+#: the weight of f*_ō(x + c_p) − f*_p(x) largest) kept the driven flow on the decorated model at 8 µm drifting (κ̂
+#: +0.27 % from 20 000 to 150 000 steps, still moving); with q ≥ 0.1 it settles like halfway walls (3e-5 from 30 000
+#: to 60 000 steps). Such a wall sits at most 0.1 voxel off; halfway bounce-back there instead moved κ̂ 4.5× further.
+Q_MIN = 0.1
+#: A node with this many wall links or more (of 18) keeps halfway bounce-back on all of them with ``cli`` and ``mr1``:
+#: in crevices one or two voxels wide, links coupled through the node's few fluid neighbours grew a local mode (CLI
+#: ×1.01 and MR1 ×1.2 per 2000 steps, force-free, on the decorated fontainebleau-like model at 8 µm, where 31 % of the
+#: boundary nodes have ≥ 10 links); with this guard both decay there. Sphere arrays at c = 0.45 have none at 32 voxels
+#: per diameter (13 nodes at 16); the touching array has 41-81.
+CROWDED_LINKS = 10
 
 
 @dataclasses.dataclass(frozen=True)
@@ -392,6 +410,12 @@ class Links:
         Weights of f*_ō(x + c_p) − h and f*_p(x) − h, h = f*_ō(x) the halfway value (a = 1 − b − c).
     n_boundary : int
         All boundary links of the lattice, interpolated or not.
+    mr : tuple (far, far_own, d, e)
+        Multi-reflection only (else four empty arrays): (K,) int64 flat indices of f*_ō(x + 2c_p) and
+        f*_p(x + c_p) in the population array, (K,) float32 weight d of their difference and e of the
+        correction g n⁻_ō(x) (g = 1 − ω⁻/2, n⁻ of the previous step's pre-collision populations).
+    state : (K,) float64 ndarray
+        n⁻_ō(x) of every multi-reflection link, carried from step to step (zero at rest; part of a checkpoint).
     """
 
     tile_start: np.ndarray
@@ -399,6 +423,8 @@ class Links:
     b: np.ndarray
     c: np.ndarray
     n_boundary: int = 0
+    mr: tuple = dataclasses.field(default_factory=lambda: _no_mr())
+    state: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
     @classmethod
     def none(cls) -> Links:
@@ -408,6 +434,10 @@ class Links:
             np.zeros(0, dtype=np.float32),
             np.zeros(0, dtype=np.float32),
         )
+
+    @property
+    def multi_reflection(self) -> bool:
+        return bool(self.mr[0].size)
 
     @property
     def size(self) -> int:
@@ -420,18 +450,31 @@ class Links:
         return tiles * _TILE + slot % _TILE, slot // _TILE
 
 
-def coefficients(q: np.ndarray, has_behind: np.ndarray, scheme: Walls) -> np.ndarray:
-    """(K, 2) weights (b, c) for wall distances ``q``: f_p = h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h)."""
+def _no_mr() -> tuple:
+    empty = np.zeros(0, dtype=np.int64)
+    return empty, empty, np.zeros(0, dtype=np.float32), np.zeros(0, dtype=np.float32)
+
+
+def coefficients(q: np.ndarray, has_behind: np.ndarray, scheme: Walls, has_far=None) -> np.ndarray:
+    """(K, 4) weights (b, c, d, e) for wall distances ``q``: f_p = h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h)
+    + d (f*_ō(x + 2c_p) − f*_p(x + c_p)) + e g n⁻_ō(x), h = f*_ō(x); d = e = 0 but for ``mr1`` links with two
+    fluid nodes behind (``has_far``; ``mr1`` falls back to ``cli`` with one, to halfway with none).
+    """
     q = np.clip(np.asarray(q, dtype=np.float64), Q_MIN, 1.0)
-    coef = np.zeros((q.size, 2))  # halfway bounce-back
+    coef = np.zeros((q.size, 4))  # halfway bounce-back
     if scheme is Walls.bfl:
         far = q >= 0.5
         coef[far, 1] = 1.0 - 0.5 / q[far]  # local branch (needs no neighbour)
         near = ~far & has_behind
         coef[near, 0] = 1.0 - 2.0 * q[near]
-    elif scheme is Walls.cli:
+    elif scheme in (Walls.cli, Walls.mr1):
         k = (1.0 - 2.0 * q[has_behind]) / (1.0 + 2.0 * q[has_behind])
-        coef[has_behind] = np.column_stack([k, -k])
+        coef[has_behind, 0], coef[has_behind, 1] = k, -k
+        if scheme is Walls.mr1:
+            two = has_behind & np.asarray(has_far, dtype=bool)
+            common = (1.0 + q[two]) ** 2
+            kappa0 = (1.0 - 2.0 * q[two] - 2.0 * q[two] ** 2) / common
+            coef[two] = np.column_stack([kappa0, -kappa0, q[two] ** 2 / common, -4.0 / common])
     else:
         raise PorepipeError(f"walls={scheme.value!r} has no interpolation coefficients")
     return coef
@@ -464,18 +507,42 @@ def link_distances(pore, periodic, node, pop, geometry) -> np.ndarray:
     return q
 
 
-def build_links(pore, periodic, node, pop, behind, geometry, scheme: Walls) -> Links:
-    """Interpolated links of a lattice from its raw wall links (node, pop, behind = −1 if solid; by node)."""
+def build_links(pore, periodic, node, pop, behind, far, geometry, scheme: Walls) -> Links:
+    """Interpolated links of a lattice from its raw wall links (node, pop, behind and far = −1 if solid; by node)."""
     q = link_distances(pore, periodic, node, pop, geometry)
-    coef = coefficients(q, behind >= 0, scheme).astype(np.float32)
-    used = (coef[:, 0] != 0) | (coef[:, 1] != 0)
-    node, pop, coef = node[used], pop[used], coef[used]
+    usable = behind >= 0
+    if scheme is not Walls.bfl:  # BFL's convex weights need no guard
+        usable &= np.bincount(node, minlength=int(node.max(initial=0)) + 1)[node] < CROWDED_LINKS
+    coef = coefficients(q, usable, scheme, far >= 0).astype(np.float32)
+    used = np.any(coef != 0, axis=1)
+    node, pop, coef, behind, far = node[used], pop[used], coef[used], behind[used], far[used]
     n_nodes = int(np.count_nonzero(pore))
     n_tiles = (n_nodes + _TILE - 1) // _TILE
     tile_start = np.searchsorted(node, np.arange(n_tiles + 1) * _TILE).astype(np.int64)
     slot = (pop * _TILE + node % _TILE).astype(np.uint16)
+    mr, state = _no_mr(), np.zeros(0)
+    if scheme is Walls.mr1:
+        # f*_p(x + c_p): population p of the node behind (behind = ō N + m); links without two nodes behind
+        # (d = 0) read the link's own node
+        own_behind = np.where(
+            behind >= 0, behind - OPPOSITE[pop] * n_nodes + pop * n_nodes, pop * n_nodes + node
+        )
+        two = far >= 0
+        mr = (
+            np.where(two, far, own_behind).astype(np.int64),
+            own_behind.astype(np.int64),
+            np.ascontiguousarray(coef[:, 2]),
+            np.ascontiguousarray(coef[:, 3]),
+        )
+        state = np.zeros(node.size)
     return Links(
-        tile_start, slot, np.ascontiguousarray(coef[:, 0]), np.ascontiguousarray(coef[:, 1]), int(used.size)
+        tile_start,
+        slot,
+        np.ascontiguousarray(coef[:, 0]),
+        np.ascontiguousarray(coef[:, 1]),
+        int(used.size),
+        mr,
+        state,
     )
 
 

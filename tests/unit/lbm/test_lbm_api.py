@@ -75,6 +75,32 @@ def test_checkpoint_resume_gives_the_same_answer(tmp_path):
     assert not ckpt.exists(), "a converged run removes its checkpoint"
 
 
+class _PlaneQ:
+    """Every wall link cut at q = 0.3 (a slit's plates 0.3 off the outer nodes)."""
+
+    def permuted(self, order):
+        return self
+
+    def fractions(self, nodes, pops):
+        return np.full(len(pops), 0.3)
+
+
+def test_multireflection_checkpoint_carries_the_link_state(tmp_path):
+    """MR1 walls carry n⁻ per link from step to step; the checkpoint stores it, so a resumed run ends where an
+    uninterrupted one ends (1e-14: same arithmetic; starting the state from zero instead is off by 1e-10)."""
+    pore = _slit(h=8)
+    base = {"walls": "mr1", "window_steps": 50, "tolerance_kappa": 1e-8}
+    full = permeability(pore, "x", Settings(**base), progress=False, geometry=_PlaneQ())
+    ckpt = tmp_path / "mr1.ckpt.h5"
+    with pytest.raises(StabilityError, match="not converged"):
+        permeability(
+            pore, "x", Settings(**base, max_steps=200), checkpoint=ckpt, progress=False, geometry=_PlaneQ()
+        )
+    resumed = permeability(pore, "x", Settings(**base), checkpoint=ckpt, progress=False, geometry=_PlaneQ())
+    assert full.walls == "mr1" and resumed.steps == full.steps
+    assert resumed.kappa_lu == pytest.approx(full.kappa_lu, rel=1e-14)
+
+
 def _binary(tmp_path, pore, name="binary_a2.h5"):
     path = tmp_path / name
     with ResultWriter(path, stage="segment", scene="t", scene_hash="h") as w:

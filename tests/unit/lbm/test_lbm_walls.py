@@ -95,24 +95,32 @@ def test_interpolated_step_matches_dense_reference(scheme):
 
 
 def test_coefficients_reduce_to_halfway_at_one_half_and_follow_the_published_schemes():
-    """(b, c) with a = 1 − b − c. At q = ½ both schemes are plain bounce-back (b = c = 0). BFL (Bouzidi et al.
-    2001): q < ½: a = 2q, b = 1 − 2q; q ≥ ½: a = 1/(2q), c = 1 − 1/(2q). CLI (Ginzburg et al. 2008): a = 1,
-    b = −c = (1 − 2q)/(1 + 2q). Without a node behind: CLI halfway, BFL its local branch for q ≥ ½."""
+    """(b, c) with a = 1 − b − c. At q = ½ both linear schemes are plain bounce-back (b = c = 0). BFL (Bouzidi et
+    al. 2001): q < ½: a = 2q, b = 1 − 2q; q ≥ ½: a = 1/(2q), c = 1 − 1/(2q). CLI (Ginzburg et al. 2008): a = 1,
+    b = −c = (1 − 2q)/(1 + 2q). Without a node behind: CLI halfway, BFL its local branch for q ≥ ½. MR1 (the same
+    paper, Table 3): b = −c = κ₀ = (1 − 2q − 2q²)/(1 + q)², d = κ₋₁ = q²/(1 + q)², e = −α = −4/(1 + q)²; CLI with
+    one node behind, halfway with none."""
     q = np.array([0.5, 1e-6, 0.2, 0.7, 1.0])
     behind = np.ones(q.size, dtype=bool)
     for scheme in (Walls.cli, Walls.bfl):
-        np.testing.assert_allclose(coefficients(q, behind, scheme)[0], [0, 0], atol=1e-15)
+        np.testing.assert_allclose(coefficients(q, behind, scheme)[0], [0, 0, 0, 0], atol=1e-15)
     bfl = coefficients(q, behind, Walls.bfl)
-    np.testing.assert_allclose(bfl[2], [0.6, 0.0])
-    np.testing.assert_allclose(bfl[3], [0.0, 1 - 0.5 / 0.7])
-    np.testing.assert_allclose(bfl[4], [0.0, 0.5])
+    np.testing.assert_allclose(bfl[2, :2], [0.6, 0.0])
+    np.testing.assert_allclose(bfl[3, :2], [0.0, 1 - 0.5 / 0.7])
+    np.testing.assert_allclose(bfl[4, :2], [0.0, 0.5])
     cli = coefficients(q, behind, Walls.cli)
-    np.testing.assert_allclose(cli[2], [0.6 / 1.4, -0.6 / 1.4])
-    np.testing.assert_allclose(cli[4], [-1 / 3, 1 / 3])
+    np.testing.assert_allclose(cli[2, :2], [0.6 / 1.4, -0.6 / 1.4])
+    np.testing.assert_allclose(cli[4, :2], [-1 / 3, 1 / 3])
+    np.testing.assert_allclose(cli[:, 2:], 0.0)
     np.testing.assert_allclose(coefficients(q, ~behind, Walls.cli), 0.0)
     local = coefficients(q, ~behind, Walls.bfl)
     np.testing.assert_allclose(local[:, 0], 0.0)
-    np.testing.assert_allclose(local[3], [0.0, 1 - 0.5 / 0.7])
+    np.testing.assert_allclose(local[3, :2], [0.0, 1 - 0.5 / 0.7])
+    mr1 = coefficients(q, behind, Walls.mr1, behind)
+    np.testing.assert_allclose(mr1[0], [-0.5 / 2.25, 0.5 / 2.25, 0.25 / 2.25, -4 / 2.25])
+    np.testing.assert_allclose(mr1[4], [-0.75, 0.75, 0.25, -1.0])
+    np.testing.assert_allclose(coefficients(q, behind, Walls.mr1, ~behind), cli)
+    np.testing.assert_allclose(coefficients(q, ~behind, Walls.mr1, behind), 0.0)
 
 
 def test_ray_sphere_fractions_match_brute_force_with_periodic_images():
