@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.store import read_attrs
 from porepipe.granular import (
+    THESIS_SHAPES,
     THESIS_SILO,
     analyse_heap,
     analyse_silo,
@@ -25,6 +26,7 @@ from porepipe.granular import (
     janssen,
     lateral_pressure_bounds,
     read_granular,
+    shaped_sigma_zz,
 )
 from porepipe.report._figures import write_csv
 
@@ -38,6 +40,8 @@ def _fig(w=5.0, h=4.0, polar=False):
 
 def _kind(tables) -> str:
     names = [str(v) for v in tables["frames"]["wall_name"].values]
+    if "silo floor" in names:
+        return "silo"
     if not {"box left", "box right", "box floor"} <= set(names):
         return "heap"
     wv = tables["frames"]["wall_vertices_m"].values
@@ -49,40 +53,99 @@ def _kind(tables) -> str:
     return "silo" if pos[act, 1].max() - y0 > 2 * (x1 - x0) else "heap"
 
 
-def silo_pressure_figure(a: dict, path: Path, dpi: int = 110) -> list[dict]:
-    """Wall pressure against depth with the fitted Janssen curve and the thesis's (k 0.64, mu_j 0.33) beside."""
+def _theory_sxx(a: dict, z, k: float, mu_j: float):
+    """sigma_xx = k sigma_zz of the silo's theory (Janssen, or its shape's) at depth z below the fill surface."""
+    if a["theory"] is None:
+        return janssen(z, a["half_width_m"], k, mu_j, a["rho_g"])[1]
+    return k * shaped_sigma_zz(a["theory"], z, k, mu_j, a["rho_g"])
+
+
+def thesis_values(a: dict, mu: float | None) -> dict | None:
+    """The thesis's k and mu_j for this silo's shape and grain friction (``THESIS_SHAPES``), or None."""
+    return THESIS_SHAPES.get((a["shape"], round(mu, 2) if mu is not None else 0.4))
+
+
+def silo_pressure_figure(a: dict, path: Path, dpi: int = 110, mu: float | None = None) -> list[dict]:
+    """Wall pressure and slab stresses against depth with the fitted theory and the thesis's (k, mu_j) beside."""
     fig, ax = _fig()
     z = a["depth_m"]
-    ax.plot(a["wall_pressure"], z, "k.", ms=3, label="measured (windows)")
+    ax.plot(a["wall_pressure"], z, "k.", ms=3, label="wall sigma_xx (windows)")
     ax.plot(a["wall_running_mean"], z, "k-", lw=0.8, label="running mean")
-    zz = np.linspace(0, a["fill_height_m"], 200)
-    r, rg = a["half_width_m"], a["rho_g"]
+    ax.plot(a["slab_sigma_zz"], a["slab_depth_m"], "C0o", mfc="none", ms=4, label="sigma_zz (slab tensors)")
+    zz = np.linspace(0, a["fill_height_m"] * 0.995, 120)
+    name = "Janssen" if a["theory"] is None else f"{a['shape']} theory"
     fit = a["fit"]
-    ax.plot(
-        janssen(zz, r, fit["k"], fit["mu_j"], rg)[1],
-        zz,
-        "C0-",
-        label=f"Janssen fit k {fit['k']:.2f}, mu_j {fit['mu_j']:.3f}",
-    )
+    if a["theory"] is None:
+        ax.plot(
+            _theory_sxx(a, zz, fit["k"], fit["mu_j"]),
+            zz,
+            "C0-",
+            label=f"Janssen fit k {fit['k']:.2f}, mu_j {fit['mu_j']:.3f}",
+        )
     fk = a["fit_k_fixed"]
+    sxx = _theory_sxx(a, zz, fk["k"], fk["mu_j"])
+    ax.plot(sxx, zz, "C2--", label=f"{name}: k = {fk['k']:.2f} (stress), mu_j {fk['mu_j']:.3f}")
+    ax.plot(sxx / fk["k"], zz, "C2:", lw=0.8, label="its sigma_zz")
+    th = thesis_values(a, mu) or THESIS_SILO
     ax.plot(
-        janssen(zz, r, fk["k"], fk["mu_j"], rg)[1],
-        zz,
-        "C2--",
-        label=f"k = {fk['k']:.2f} (stress), mu_j {fk['mu_j']:.3f}",
+        _theory_sxx(a, zz, th["k"], th["mu_j"]), zz, "C3:", label=f"thesis k {th['k']}, mu_j {th['mu_j']}"
     )
-    th = THESIS_SILO
-    ax.plot(janssen(zz, r, th["k"], th["mu_j"], rg)[1], zz, "C3:", label="thesis k 0.64, mu_j 0.33")
     ax.axhline(a["fit_depth_max_m"], color="0.6", lw=0.6)
     ax.invert_yaxis()
-    ax.set_xlabel("wall pressure sigma_xx [N/m²]")
+    ax.set_xlabel("stress [N/m²]")
     ax.set_ylabel("depth below the fill surface [m]")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=6, loc="lower left")
     fig.savefig(path, dpi=dpi)
     return [
         {"depth_m": float(d), "wall_pressure_N_m2": float(p), "running_mean_N_m2": float(m)}
         for d, p, m in zip(z, a["wall_pressure"], a["wall_running_mean"], strict=True)
     ]
+
+
+def _silo_rows(a: dict, th: dict) -> list[list[str]]:
+    """The silo table: k, mu_j fits, wall friction, packing and the weight balance, the thesis's values beside."""
+    janssen_fit = a["theory"] is None
+    rows = [
+        [
+            "k = sigma_xx/sigma_zz (slab stress tensors)",
+            f"{a['k']:.2f} ± {a['k_std']:.2f}",
+            f"{th['k']} ± {th['k_err']}",
+        ]
+    ]
+    if janssen_fit:
+        rows += [
+            ["k (Janssen fit, k and mu_j free)", f"{a['fit']['k']:.2f} ± {a['fit']['k_err']:.2f}", "–"],
+            [
+                "mu_j (Janssen fit, k free)",
+                f"{a['fit']['mu_j']:.3f} ± {a['fit']['mu_j_err']:.3f}",
+                f"{th['mu_j']}",
+            ],
+        ]
+    rows += [
+        [
+            f"mu_j ({'Janssen' if janssen_fit else a['shape'] + ' theory'} fit, k fixed at the stress value)",
+            f"{a['fit_k_fixed']['mu_j']:.3f}",
+            f"{th['mu_j']}",
+        ],
+        ["mobilised wall friction (sum F_t / sum F_n, side walls)", f"{a['mu_wall_mobilised']:.3f}", "–"],
+        ["wall contacts at the Coulomb limit", f"{a['wall_at_coulomb_limit']:.0%}", "–"],
+        [
+            "rho_rel (hull-corrected, Eq. 2.45)",
+            f"{a['rho_rel']:.3f}",
+            f"{th['rho_rel']} ± {th['rho_rel_err']}" if "rho_rel" in th else "–",
+        ],
+        [
+            "weight carried by side walls / ledges / floor",
+            f"{a['side_share']:.0%} / {a['ledge_share']:.0%} / {a['floor_share']:.0%}",
+            "–",
+        ],
+        [
+            "static balance (sum of wall forces F_y - weight) / weight",
+            f"{a['force_balance']:.1e}",
+            "0 (exact)",
+        ],
+    ]
+    return rows
 
 
 def direction_figure(directions: dict, path: Path, dpi: int = 110) -> list[dict]:
@@ -178,7 +241,9 @@ def _table(columns, rows) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "auto", dpi: int = 110) -> str:
+def granular_section(
+    result, out_dir, *, mu: float | None = None, kind: str = "auto", dpi: int = 110, silo=None
+) -> str:
     """HTML of the granular section for one ``granular.h5`` (figures and CSVs written into ``out_dir``).
 
     Parameters
@@ -190,9 +255,12 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
     mu : float, optional
         Grain friction (for the Rankine/Jaky bounds).
     kind : {"auto", "silo", "heap"}
-        Read-out; auto: a silo when the fill is more than twice as tall as the box is wide.
+        Read-out; auto: a silo when the result has a ``silo floor`` or its fill is more than twice as tall as the
+        box is wide.
     dpi : int
         Figure resolution.
+    silo : porepipe.granular Silo settings, optional
+        The scene's ``granular.silo`` (its shape's theory is fitted).
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -205,38 +273,13 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
         f"{float(attrs.get('dt_s', 0)):.3g} s, {float(attrs.get('particle_steps_per_s', 0)):.3g} particle-steps/s"
     )
     if kind == "silo":
-        a = analyse_silo(tables, mu=mu)
+        a = analyse_silo(tables, mu=mu, shape=silo)
         write_csv(
             out_dir / "granular_wall_pressure.csv",
-            silo_pressure_figure(a, out_dir / "granular_wall_pressure.png", dpi),
+            silo_pressure_figure(a, out_dir / "granular_wall_pressure.png", dpi, mu=mu),
         )
-        th = THESIS_SILO
-        rows = [
-            [
-                "k = sigma_xx/sigma_zz (slab stress tensors)",
-                f"{a['k']:.2f} ± {a['k_std']:.2f}",
-                f"{th['k']} ± {th['k_err']}",
-            ],
-            ["k (Janssen fit, k and mu_j free)", f"{a['fit']['k']:.2f} ± {a['fit']['k_err']:.2f}", "–"],
-            [
-                "mu_j (Janssen fit, k free)",
-                f"{a['fit']['mu_j']:.3f} ± {a['fit']['mu_j_err']:.3f}",
-                f"{th['mu_j']}",
-            ],
-            [
-                "mu_j (Janssen fit, k fixed at the stress value)",
-                f"{a['fit_k_fixed']['mu_j']:.3f}",
-                f"{th['mu_j']}",
-            ],
-            ["mobilised wall friction (sum F_t / sum F_n)", f"{a['mu_wall_mobilised']:.3f}", "–"],
-            ["wall contacts at the Coulomb limit", f"{a['wall_at_coulomb_limit']:.0%}", "–"],
-            [
-                "rho_rel (hull-corrected, Eq. 2.45)",
-                f"{a['rho_rel']:.3f}",
-                f"{th['rho_rel']} ± {th['rho_rel_err']}",
-            ],
-            ["weight carried by the walls", f"{a['wall_share']:.0%}", "–"],
-        ]
+        th = thesis_values(a, mu) or {**THESIS_SILO, "section": "§3.1"}
+        rows = _silo_rows(a, th)
         if mu is not None:
             b = lateral_pressure_bounds(mu)
             rows.append(
@@ -247,12 +290,13 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
                 ]
             )
         parts += [
-            "<h2>Janssen silo</h2>",
-            f"<p>{a['n_particles']} grains in a {2 * a['half_width_m'] * 1e3:.0f} mm wide silo, fill "
-            f"{a['fill_height_m']:.3f} m; fits above the grey line (the lowest silo width is the floor's zone). "
+            f"<h2>{'Janssen' if a['theory'] is None else a['shape'].capitalize()} silo</h2>",
+            f"<p>{a['n_particles']} grains in a silo {2 * a['half_width_m'] * 1e3:.0f} mm wide at the fill "
+            f"surface and {2 * a['bottom_half_width_m'] * 1e3:.0f} mm at the floor, fill "
+            f"{a['fill_height_m']:.3f} m; fits above the grey line (the lowest bottom width is the floor's zone). "
             f"Cost: {html.escape(cost)}.</p>",
             "<img src='granular_wall_pressure.png' alt='wall pressure'>",
-            _table(["quantity", "this run", "thesis §3.1"], rows),
+            _table(["quantity", "this run", f"thesis {th['section']}"], rows),
             "<p class=note>Data: <a href='granular_wall_pressure.csv'>granular_wall_pressure.csv</a></p>",
         ]
         directions = force_directions(frame_contacts(tables, -1))
@@ -306,11 +350,11 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
 
 
 def granular_report(
-    result, out_html, *, scene_name: str = "", mu: float | None = None, kind: str = "auto"
+    result, out_html, *, scene_name: str = "", mu: float | None = None, kind: str = "auto", silo=None
 ) -> Path:
     """Write a stand-alone page with the granular section of ``result`` (a scene without a sweep)."""
     out_html = Path(out_html)
-    body = granular_section(result, out_html.parent, mu=mu, kind=kind)
+    body = granular_section(result, out_html.parent, mu=mu, kind=kind, silo=silo)
     page = (
         "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"
         f"<title>porepipe granular report {html.escape(scene_name)}</title></head><body>"

@@ -87,4 +87,6 @@ def _granular(scene, result: Path, out: Path) -> Path:
         )
     from porepipe.report._granular import granular_report
 
-    return granular_report(result, out, scene_name=scene.name, mu=scene.granular.material.friction)
+    return granular_report(
+        result, out, scene_name=scene.name, mu=scene.granular.material.friction, silo=scene.granular.silo
+    )
