@@ -21,6 +21,7 @@ _EXPORTS = {
     "coordination": "_measure",
     "diagonal_strain": "_measure",
     "displacement_grid": "_measure",
+    "elastic_constants": "_elastic",
     "ellipse_polygon": "_shapes",
     "fit_janssen": "_theory",
     "force_directions": "_measure",

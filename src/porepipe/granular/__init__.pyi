@@ -7,6 +7,7 @@ from porepipe.granular._api import Frame as Frame
 from porepipe.granular._api import Simulation as Simulation
 from porepipe.granular._api import polygon_overlap as polygon_overlap
 from porepipe.granular._api import time_step_rule as time_step_rule
+from porepipe.granular._elastic import elastic_constants as elastic_constants
 from porepipe.granular._galton import GaltonBoard as GaltonBoard
 from porepipe.granular._galton import chi2_binomial as chi2_binomial
 from porepipe.granular._galton import galton_paths as galton_paths
@@ -89,6 +90,7 @@ __all__ = [
     "coordination",
     "diagonal_strain",
     "displacement_grid",
+    "elastic_constants",
     "ellipse_polygon",
     "fit_janssen",
     "fit_shaped_mu_j",

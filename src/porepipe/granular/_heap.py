@@ -175,7 +175,7 @@ def heap_stress_angles(
     """Principal-axis angles of the coarse-grained stress (Eq. 2.52) over a heap, against Wittmer's FPA/BCC (§4.2).
 
     Test areas: a grid of squares holding ``grains_per_area`` grains each at the heap's packing (the thesis used
-    100-200); a square is kept when it holds at least ``fill`` of that, so squares cut by the surface drop out
+    100-200), its columns centred on the apex; a square is kept when it holds at least ``fill`` of that, so squares cut by the surface drop out
     (the thesis fitted its test areas to the contour). Each area's stress gives Psi (major axis from the vertical);
     ``psi_folded`` mirrors the left half onto the right (positive: leaning away from the axis going down).
 
@@ -205,16 +205,15 @@ def heap_stress_angles(
     xa, xb = heap["foot_m"]
     y0 = heap["floor_y_m"]
     apex_y = y0 + heap["height_m"]
+    xc = heap["apex_x_m"]
+    # columns centred on the apex (column 0 on the axis): the grid is its own mirror image about the axis
+    cols = np.arange(np.ceil((xa - xc) / side + 0.5), np.floor((xb - xc) / side - 0.5) + 1)
     rows = []
     for ya in np.arange(y0, apex_y - side, side):
-        for xlo in np.arange(xa, xb - side, side):
-            inside = (
-                act
-                & (cen[:, 0] >= xlo)
-                & (cen[:, 0] < xlo + side)
-                & (cen[:, 1] >= ya)
-                & (cen[:, 1] < ya + side)
-            )
+        for m in cols:
+            xlo = xc + (m - 0.5) * side
+            inside = act & (np.abs(cen[:, 0] - (xlo + 0.5 * side)) < 0.5 * side)
+            inside &= (cen[:, 1] >= ya) & (cen[:, 1] < ya + side)
             if inside.sum() < fill * grains_per_area:
                 continue
             st = M.stress_tensor(contacts, cen, members=inside)
@@ -225,7 +224,6 @@ def heap_stress_angles(
             f"heap_stress_angles: fewer than 2 test areas of {grains_per_area:g} grains fit in the heap"
         )
     x, y, psi, members = (np.array(v) for v in zip(*rows, strict=True))
-    xc = heap["apex_x_m"]
     S = np.abs(x - xc) * np.tan(phi) / np.maximum(apex_y - y, 1e-300)
     folded = -psi * np.sign(x - xc)
     model = wittmer_angles(S, phi)

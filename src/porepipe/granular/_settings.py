@@ -255,7 +255,9 @@ class Silo(_Strict):
     ledge, lower wall), a parabola ``segments`` straight slabs per side with their corners on the curve.
     """
 
-    shape: SiloShape
+    shape: SiloShape = Field(
+        description="r(z): straight, stepped (Eq. 3.14), hopper (3.16) or parabolic (3.19)"
+    )
     axis_x_m: Finite = Field(0.0, description="x of the silo's axis")
     bottom_m: Finite = Field(0.0, description="y of the floor's top surface")
     depth_m: PosFloat = Field(

@@ -14,6 +14,7 @@ from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
 
 from porepipe._shared.atomic import write_text_atomic
+from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs
 from porepipe.granular import (
     THESIS_SHAPES,
@@ -23,10 +24,12 @@ from porepipe.granular import (
     force_directions,
     frame_contacts,
     frame_particles,
+    heap_stress_angles,
     janssen,
     lateral_pressure_bounds,
     read_granular,
     shaped_sigma_zz,
+    wittmer_angles,
 )
 from porepipe.report._figures import write_csv
 
@@ -235,6 +238,51 @@ def heap_floor_figure(h: dict, path: Path, dpi: int = 110) -> list[dict]:
     ]
 
 
+def stress_angle_figure(a: dict, path: Path, dpi: int = 110) -> list[dict]:
+    """Folded principal-axis angle of each test area against S, with Wittmer's FPA and BCC (thesis Fig. 4.25)."""
+    fig, ax = _fig(5.0, 3.2)
+    ax.plot(a["S"], np.degrees(a["psi_folded_rad"]), "ko", ms=3, label="test areas (Eq. 2.52)")
+    S = np.linspace(1e-4, 1.0, 200)
+    model = wittmer_angles(S, a["phi_rad"])
+    ax.plot(S, np.degrees(model["FPA"]), "C3-", label="FPA (fixed principal axes)")
+    ax.plot(S, np.degrees(model["BCC"]), "C0--", label="BCC")
+    ax.set_xlabel("S = |x - apex| tan(phi) / depth below the apex")
+    ax.set_ylabel("Psi, leaning outwards [deg]")
+    ax.legend(fontsize=7)
+    fig.savefig(path, dpi=dpi)
+    return [
+        {"x_m": float(x), "y_m": float(y), "S": float(u), "psi_folded_deg": float(math.degrees(p))}
+        for x, y, u, p in zip(a["x_m"], a["y_m"], a["S"], a["psi_folded_rad"], strict=True)
+    ]
+
+
+def _stress_angle_part(tables, h: dict, mu: float | None, out_dir: Path, dpi: int) -> list[str]:
+    """The stress-angle comparison with Wittmer et al. for phi = atan(mu), when test areas of 30 grains fit."""
+    if mu is None:
+        return []
+    phi = math.atan(mu)
+    try:
+        a = heap_stress_angles(tables, h, phi=phi)
+    except PorepipeError as err:
+        return [f"<p class=note>Stress angles not measured: {html.escape(str(err))}.</p>"]
+    write_csv(
+        out_dir / "granular_stress_angles.csv",
+        stress_angle_figure(a, out_dir / "granular_stress_angles.png", dpi),
+    )
+    surface = math.degrees(a["model"]["surface"][0])
+    return [
+        "<h2>Principal stress axes</h2>",
+        f"<p>{len(a['S'])} test areas of ~30 grains (thesis: 100-200). Mean angle of the major axis, leaning "
+        f"outwards: {math.degrees(a['mean_folded_rad']):.1f}° ± {math.degrees(a['sem_folded_rad']):.1f}°; Wittmer's "
+        f"FPA predicts {surface:.1f}° everywhere for phi = atan({mu:g}) (rms deviation "
+        f"{math.degrees(a['rms_from_fpa_rad']):.1f}°). Thesis (§4.2.2, Fig. 4.25): a preferred direction in each "
+        "half, 'only poorly described' by the prediction for mu = 0.65 (28.5° at the surface); layered heaps: major "
+        "axis vertical at the centre, FPA not satisfied.</p>",
+        "<img src='granular_stress_angles.png' alt='stress angles'>",
+        "<p class=note>Data: <a href='granular_stress_angles.csv'>granular_stress_angles.csv</a></p>",
+    ]
+
+
 def _table(columns, rows) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in r) + "</tr>" for r in rows)
@@ -334,6 +382,7 @@ def granular_section(
             _table(["quantity", "this run"], rows),
             "<p class=note>Data: <a href='granular_floor_pressure.csv'>granular_floor_pressure.csv</a></p>",
         ]
+        parts += _stress_angle_part(tables, h, mu, out_dir, dpi)
         directions = h["directions"]
     write_csv(
         out_dir / "granular_directions.csv",
