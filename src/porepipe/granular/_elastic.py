@@ -60,10 +60,8 @@ def elastic_constants(
     grid = M.displacement_grid(cen0, cen1, xe, ye, active=act)
     u_xx, u_zz = M.diagonal_strain(grid)
     full = grid["count"] >= 0.7 * grains_per_cell
-    s0, s1 = (
-        _cell_stress(tables, loaded, cen0, act, xe, ye, full),
-        _cell_stress(tables, unloaded, cen0, act, xe, ye, full),
-    )
+    s0, area = _cell_stress(tables, loaded, cen0, act, xe, ye, full)
+    s1, _ = _cell_stress(tables, unloaded, cen0, act, xe, ye, full, areas=area)
     dsig = s0 - s1
     const = M.plane_strain_constants(dsig[..., 0], dsig[..., 1], u_xx, u_zz)
     ok = full & np.isfinite(const["nu"]) & (const["nu"] > -1) & (const["nu"] < 0.5) & (const["E"] > 0)
@@ -93,15 +91,28 @@ def elastic_constants(
     }
 
 
-def _cell_stress(tables, frame, cells_by, active, xe, ye, use) -> np.ndarray:
-    """(ny, nx, 2) sigma_xx, sigma_zz (Eq. 2.52) of the grains binned by ``cells_by`` in each used cell, else NaN."""
+def _cell_stress(tables, frame, cells_by, active, xe, ye, use, areas=None):
+    """sigma_xx, sigma_zz (Eq. 2.52) of the grains binned by ``cells_by`` in each used cell, and the areas V used.
+
+    Without ``areas`` V is the hull of the application points (the thesis's choice); the unloaded frame reuses
+    the loaded frame's V, as its grains may have lost their contacts (no contact: zero stress).
+    """
     parts = M.frame_particles(tables, frame)
     contacts = M.frame_contacts(tables, frame)
     ix = np.digitize(cells_by[:, 0], xe) - 1
     iy = np.digitize(cells_by[:, 1], ye) - 1
     out = np.full((len(ye) - 1, len(xe) - 1, 2), np.nan)
+    area = np.full(out.shape[:2], np.nan) if areas is None else areas
+    pad = np.zeros(max(int(contacts["j"].max(initial=0)) + 1 - len(active), 0), bool)
     for j, i in zip(*np.nonzero(use), strict=True):
         members = active & (ix == i) & (iy == j)
-        st = M.stress_tensor(contacts, parts["centroid"], members=members)
+        touching = np.concatenate([members, pad])
+        if areas is not None and not (touching[contacts["i"]].any() or touching[contacts["j"]].any()):
+            out[j, i] = 0.0
+            continue
+        st = M.stress_tensor(
+            contacts, parts["centroid"], members=members, area=None if areas is None else areas[j, i]
+        )
         out[j, i] = st["sigma"][0, 0], st["sigma"][1, 1]
-    return out
+        area[j, i] = st["area_m2"]
+    return out, area
