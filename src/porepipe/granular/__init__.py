@@ -38,6 +38,7 @@ _EXPORTS = {
     "shifted_silo": "_silo_shape",
     "silo_half_width": "_silo_shape",
     "silo_wall_slabs": "_silo_shape",
+    "unloading_frames": "_elastic",
     "wall_by_name": "_silo",
     "wall_profiles": "_silo",
     "hopper_sigma_zz": "_theory",

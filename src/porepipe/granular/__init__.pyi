@@ -8,6 +8,7 @@ from porepipe.granular._api import Simulation as Simulation
 from porepipe.granular._api import polygon_overlap as polygon_overlap
 from porepipe.granular._api import time_step_rule as time_step_rule
 from porepipe.granular._elastic import elastic_constants as elastic_constants
+from porepipe.granular._elastic import unloading_frames as unloading_frames
 from porepipe.granular._galton import GaltonBoard as GaltonBoard
 from porepipe.granular._galton import chi2_binomial as chi2_binomial
 from porepipe.granular._galton import galton_paths as galton_paths
@@ -134,6 +135,7 @@ __all__ = [
     "stress_tensor",
     "surface_profile",
     "time_step_rule",
+    "unloading_frames",
     "wall_by_name",
     "wall_contacts",
     "wall_profiles",

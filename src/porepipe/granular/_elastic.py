@@ -116,3 +116,18 @@ def _cell_stress(tables, frame, cells_by, active, xe, ye, use, areas=None):
         out[j, i] = st["sigma"][0, 0], st["sigma"][1, 1]
         area[j, i] = st["area_m2"]
     return out, area
+
+
+def unloading_frames(tables: dict, gravity) -> tuple[int, int] | None:
+    """(loaded, unloaded) frames of a run whose ``granular.gravity`` lowers g below 1 % of its start, else None.
+
+    Loaded: the last frame at or before the ramp's start; unloaded: the last frame, if it is at or after the ramp's
+    end.
+    """
+    if gravity is None or gravity.kind.value == "CONSTANT" or not gravity.g2_m_s2 < 0.01 * gravity.g1_m_s2:
+        return None
+    t = tables["frames"]["time_s"].values
+    before = np.nonzero(t <= gravity.time_s[0])[0]
+    if len(before) == 0 or t[-1] < gravity.time_s[1]:
+        return None
+    return int(before[-1]), len(t) - 1

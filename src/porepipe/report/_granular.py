@@ -21,6 +21,7 @@ from porepipe.granular import (
     THESIS_SILO,
     analyse_heap,
     analyse_silo,
+    elastic_constants,
     force_directions,
     frame_contacts,
     frame_particles,
@@ -29,6 +30,7 @@ from porepipe.granular import (
     lateral_pressure_bounds,
     read_granular,
     shaped_sigma_zz,
+    unloading_frames,
     wittmer_angles,
 )
 from porepipe.report._figures import write_csv
@@ -256,13 +258,15 @@ def stress_angle_figure(a: dict, path: Path, dpi: int = 110) -> list[dict]:
     ]
 
 
-def _stress_angle_part(tables, h: dict, mu: float | None, out_dir: Path, dpi: int) -> list[str]:
+def _stress_angle_part(
+    tables, h: dict, mu: float | None, out_dir: Path, dpi: int, frame: int = -1
+) -> list[str]:
     """The stress-angle comparison with Wittmer et al. for phi = atan(mu), when test areas of 30 grains fit."""
     if mu is None:
         return []
     phi = math.atan(mu)
     try:
-        a = heap_stress_angles(tables, h, phi=phi)
+        a = heap_stress_angles(tables, h, frame, phi=phi)
     except PorepipeError as err:
         return [f"<p class=note>Stress angles not measured: {html.escape(str(err))}.</p>"]
     write_csv(
@@ -283,6 +287,82 @@ def _stress_angle_part(tables, h: dict, mu: float | None, out_dir: Path, dpi: in
     ]
 
 
+def _heap_part(h: dict, cost: str, out_dir: Path, dpi: int) -> list[str]:
+    """Floor pressure, repose angles and packing of a heap, with the thesis's findings in words."""
+    write_csv(
+        out_dir / "granular_floor_pressure.csv",
+        heap_floor_figure(h, out_dir / "granular_floor_pressure.png", dpi),
+    )
+    rows = [
+        [
+            "repose angle, left / right flank fit [deg]",
+            f"{math.degrees(h['repose_left_rad']):.1f} / {math.degrees(h['repose_right_rad']):.1f}",
+        ],
+        [
+            "repose angle, integral method (Eq. 2.42) [deg]",
+            f"{math.degrees(h['repose_integral_rad']):.1f}",
+        ],
+        ["height / foot width [m]", f"{h['height_m']:.3f} / {h['foot_m'][1] - h['foot_m'][0]:.3f}"],
+        [
+            "floor-pressure dip 1 - p(apex)/p(flank maxima), window scatter",
+            f"{h['dip']['dip']:.2f}, {h['dip']['fluctuation']:.2f}",
+        ],
+        ["rho_rel in the core (Eq. 2.45)", f"{h['rho_rel']:.3f}"],
+        ["mean coordination", f"{h['coordination']['mean']:.2f}"],
+        ["floor load / weight", f"{h['floor_load_N_m'] / h['weight_N_m']:.3f}"],
+    ]
+    return [
+        "<h2>Heap</h2>",
+        f"<p>{h['n_particles']} grains. Cost: {html.escape(cost)}. Thesis (§4.2): poured 7-gons (2500 grains, "
+        "9 seeds) have repose angle 26.8° ± 2.0° and a floor-pressure dip under the apex reaching up to half the "
+        "heap's height; poured 13-gons and layered heaps (21° flanks) have none (the central lowering is "
+        "smaller than the fluctuations); experiments on conical piles: dips up to 0.5.</p>",
+        "<img src='granular_floor_pressure.png' alt='floor pressure'>",
+        _table(["quantity", "this run"], rows),
+        "<p class=note>Data: <a href='granular_floor_pressure.csv'>granular_floor_pressure.csv</a></p>",
+    ]
+
+
+def _elastic_part(tables, unload: tuple[int, int], young: float | None, out_dir: Path) -> list[str]:
+    """Elastic constants of the adiabatic unloading (§4.3.3), the thesis's beside them; per-cell values as CSV."""
+    try:
+        e = elastic_constants(tables, *unload, grains_per_cell=9)
+    except PorepipeError as err:
+        return [f"<p class=note>Elastic constants not measured: {html.escape(str(err))}.</p>"]
+    ratio = f"1/{young / e['E_median']:.0f}" if young else "–"
+    rows = [
+        [
+            "nu (plane strain, Eq. 4.4), mean ± std",
+            f"{e['nu_mean']:.2f} ± {e['nu_std']:.2f}",
+            "0.446 ± 0.137",
+        ],
+        ["E (Eq. 4.5) [N/m], mean ± std", f"{e['E_mean']:.3g} ± {e['E_std']:.3g}", "1.48e5 ± 1.08e5"],
+        ["E of the packing / E of its grains (median)", ratio, "1/68"],
+        ["K (Eq. 4.11) [N/m], mean", f"{e['K_mean']:.3g}", "–"],
+        ["test areas with -1 < nu < 1/2 and E > 0", f"{int(e['elastic'].sum())} of {e['cells']}", "–"],
+        [
+            "grain displacement, median / largest [diameters]",
+            f"{e['u_median_over_d']:.3f} / {e['u_max_over_d']:.3f}",
+            "< 0.01 (grains 1e7 N/m)",
+        ],
+    ]
+    j, i = np.nonzero(e["elastic"])
+    write_csv(
+        out_dir / "granular_elastic.csv",
+        [
+            {"cell_x": int(a), "cell_y": int(b), "nu": float(e["nu"][b, a]), "E_N_m": float(e["E"][b, a])}
+            for a, b in zip(i, j, strict=True)
+        ],
+    )
+    return [
+        "<h2>Elastic constants (adiabatic unloading)</h2>",
+        f"<p>g lowered to ~0 between frames {unload[0]} and {unload[1]}; test areas of 9 grains. The contacts "
+        "stiffen with load, so E is the secant modulus of the whole unloading.</p>",
+        _table(["quantity", "this run", "thesis §4.3.3"], rows),
+        "<p class=note>Data: <a href='granular_elastic.csv'>granular_elastic.csv</a></p>",
+    ]
+
+
 def _table(columns, rows) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in r) + "</tr>" for r in rows)
@@ -290,7 +370,15 @@ def _table(columns, rows) -> str:
 
 
 def granular_section(
-    result, out_dir, *, mu: float | None = None, kind: str = "auto", dpi: int = 110, silo=None
+    result,
+    out_dir,
+    *,
+    mu: float | None = None,
+    kind: str = "auto",
+    dpi: int = 110,
+    silo=None,
+    gravity=None,
+    young: float | None = None,
 ) -> str:
     """HTML of the granular section for one ``granular.h5`` (figures and CSVs written into ``out_dir``).
 
@@ -309,13 +397,18 @@ def granular_section(
         Figure resolution.
     silo : porepipe.granular Silo settings, optional
         The scene's ``granular.silo`` (its shape's theory is fitted).
+    gravity : porepipe.granular Gravity settings, optional
+        The scene's ``granular.gravity``: a ramp of g to ~0 makes the heap read-out use the last frame before it
+        and adds the elastic constants of the unloading (§4.3.3).
+    young : float, optional
+        The grains' Young's modulus (N/m), set beside the packing's.
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     tables = read_granular(result)
     attrs = read_attrs(result)
     kind = _kind(tables) if kind == "auto" else kind
-    parts = []
+    parts, frame = [], -1
     cost = (
         f"{int(attrs.get('n_particles', 0))} particles, {int(attrs.get('steps', 0))} steps of "
         f"{float(attrs.get('dt_s', 0)):.3g} s, {float(attrs.get('particle_steps_per_s', 0)):.3g} particle-steps/s"
@@ -349,46 +442,21 @@ def granular_section(
         ]
         directions = force_directions(frame_contacts(tables, -1))
     else:
-        h = analyse_heap(tables)
-        write_csv(
-            out_dir / "granular_floor_pressure.csv",
-            heap_floor_figure(h, out_dir / "granular_floor_pressure.png", dpi),
-        )
-        rows = [
-            [
-                "repose angle, left / right flank fit [deg]",
-                f"{math.degrees(h['repose_left_rad']):.1f} / {math.degrees(h['repose_right_rad']):.1f}",
-            ],
-            [
-                "repose angle, integral method (Eq. 2.42) [deg]",
-                f"{math.degrees(h['repose_integral_rad']):.1f}",
-            ],
-            ["height / foot width [m]", f"{h['height_m']:.3f} / {h['foot_m'][1] - h['foot_m'][0]:.3f}"],
-            [
-                "floor-pressure dip 1 - p(apex)/p(flank maxima), window scatter",
-                f"{h['dip']['dip']:.2f}, {h['dip']['fluctuation']:.2f}",
-            ],
-            ["rho_rel in the core (Eq. 2.45)", f"{h['rho_rel']:.3f}"],
-            ["mean coordination", f"{h['coordination']['mean']:.2f}"],
-            ["floor load / weight", f"{h['floor_load_N_m'] / h['weight_N_m']:.3f}"],
-        ]
-        parts += [
-            "<h2>Heap</h2>",
-            f"<p>{h['n_particles']} grains. Cost: {html.escape(cost)}. Thesis (§4.2): poured 7-gons (2500 grains, "
-            "9 seeds) have repose angle 26.8° ± 2.0° and a floor-pressure dip under the apex reaching up to half the "
-            "heap's height; poured 13-gons and layered heaps (21° flanks) have none (the central lowering is "
-            "smaller than the fluctuations); experiments on conical piles: dips up to 0.5.</p>",
-            "<img src='granular_floor_pressure.png' alt='floor pressure'>",
-            _table(["quantity", "this run"], rows),
-            "<p class=note>Data: <a href='granular_floor_pressure.csv'>granular_floor_pressure.csv</a></p>",
-        ]
-        parts += _stress_angle_part(tables, h, mu, out_dir, dpi)
+        unload = unloading_frames(tables, gravity)
+        frame = -1 if unload is None else unload[0]
+        h = analyse_heap(tables, frame)
+        parts += _heap_part(h, cost, out_dir, dpi)
+        parts += _stress_angle_part(tables, h, mu, out_dir, dpi, frame)
+        if unload is not None:
+            parts += _elastic_part(tables, unload, young, out_dir)
         directions = h["directions"]
     write_csv(
         out_dir / "granular_directions.csv",
         direction_figure(directions, out_dir / "granular_directions.png", dpi),
     )
-    write_csv(out_dir / "granular_network.csv", network_figure(tables, out_dir / "granular_network.png", dpi))
+    write_csv(
+        out_dir / "granular_network.csv", network_figure(tables, out_dir / "granular_network.png", dpi, frame)
+    )
     parts += [
         "<h2>Fabric</h2>",
         "<img src='granular_directions.png' alt='P(alpha)'> <img src='granular_network.png' alt='force network'>",
@@ -399,11 +467,21 @@ def granular_section(
 
 
 def granular_report(
-    result, out_html, *, scene_name: str = "", mu: float | None = None, kind: str = "auto", silo=None
+    result,
+    out_html,
+    *,
+    scene_name: str = "",
+    mu: float | None = None,
+    kind: str = "auto",
+    silo=None,
+    gravity=None,
+    young: float | None = None,
 ) -> Path:
     """Write a stand-alone page with the granular section of ``result`` (a scene without a sweep)."""
     out_html = Path(out_html)
-    body = granular_section(result, out_html.parent, mu=mu, kind=kind, silo=silo)
+    body = granular_section(
+        result, out_html.parent, mu=mu, kind=kind, silo=silo, gravity=gravity, young=young
+    )
     page = (
         "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"
         f"<title>porepipe granular report {html.escape(scene_name)}</title></head><body>"

@@ -14,7 +14,15 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from porepipe.granular import elastic_constants, plane_strain_constants, read_granular, run, stress_tensor
+from porepipe.granular import (
+    elastic_constants,
+    plane_strain_constants,
+    read_granular,
+    run,
+    stress_tensor,
+    unloading_frames,
+)
+from porepipe.granular._settings import Gravity
 from porepipe.scene import load_scene
 
 SCENES = Path(__file__).parents[3] / "config" / "scenes"
@@ -79,6 +87,19 @@ def test_affine_unloading_gives_its_strain_and_stress_change_exactly():
         assert out["E"][jj, ii] == pytest.approx(float(want["E"]), rel=1e-8)
 
 
+def test_unloading_frames_pick_the_last_frame_before_the_ramp_and_the_end():
+    tables = {"frames": xr.Dataset({"time_s": (("frame",), np.array([0.0, 0.9, 1.0, 1.1, 1.6, 2.0]))})}
+    ramp = Gravity(kind="LINEAR", g1_m_s2=9.81, g2_m_s2=0.00245, time_s=(1.0, 1.8))
+    assert unloading_frames(tables, ramp) == (2, 5)
+    assert unloading_frames(tables, None) is None
+    assert (
+        unloading_frames(tables, Gravity(kind="LINEAR", g2_m_s2=4.9, time_s=(1.0, 1.8))) is None
+    )  # not to ~0
+    assert (
+        unloading_frames(tables, ramp.model_copy(update={"time_s": (1.0, 2.5)})) is None
+    )  # run ends mid-ramp
+
+
 @pytest.mark.slow
 def test_unloaded_heap_against_the_thesis(tmp_path):
     """Measured (9 grains per test area): nu 0.20 ± 0.16 in 16 of 39 areas, E 6.0e4 N/m = grains/50 (thesis:
@@ -87,10 +108,19 @@ def test_unloaded_heap_against_the_thesis(tmp_path):
     to two orders of magnitude softer than its grains."""
     scene = load_scene(SCENES / "granular-heap-unload-ci.yaml")
     tables = read_granular(run(scene.granular, tmp_path / "granular.h5", seed=scene.seed, progress=False))
-    t = tables["frames"]["time_s"].values
-    loaded = int(np.nonzero(t <= scene.granular.gravity.time_s[0])[0][-1])
-    out = elastic_constants(tables, loaded, -1, grains_per_cell=9)
+    out = elastic_constants(tables, *unloading_frames(tables, scene.granular.gravity), grains_per_cell=9)
     assert out["u_median_over_d"] < 0.1 and out["u_max_over_d"] < 0.2
     assert out["elastic"].sum() >= 0.3 * out["cells"]
     assert 0 < out["nu_mean"] < 0.5
     assert 1 / 300 < out["E_median"] / scene.granular.material.young_N_m < 1 / 10
+    from porepipe.report._granular import granular_report
+
+    g = scene.granular
+    page = granular_report(
+        tmp_path / "granular.h5",
+        tmp_path / "index.html",
+        mu=0.6,
+        gravity=g.gravity,
+        young=g.material.young_N_m,
+    ).read_text()
+    assert "Elastic constants" in page and "0.446 ± 0.137" in page and f"{out['nu_mean']:.2f}" in page
