@@ -234,7 +234,7 @@ def analyse_silo(
     fill = top - y0
     xb0, xb1 = inner_extent(polys_w, y0 + 0.5 * d_grain, x_axis)
     r_bottom = 0.5 * (xb1 - xb0)
-    if fill < 4 * d_grain + 2 * d_grain:
+    if fill < (slab_rows + 2) * d_grain:
         raise PorepipeError(f"analyse_silo: fill of {fill:.3g} m is too low for a bulk test area")
     polys = [p for p, a in zip(parts["polygons"], act, strict=True) if a]
     slab = slab_rows * d_grain
