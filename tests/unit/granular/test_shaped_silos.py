@@ -37,7 +37,7 @@ def shaped(request, tmp_path_factory):
     )
     mu = scene.granular.material.friction
     a = analyse_silo(read_granular(out), shape=scene.granular.silo, mu=mu)
-    return request.param, a, mu
+    return request.param, a, mu, out, scene
 
 
 def test_walls_and_floor_carry_the_weight_exactly(shaped):
