@@ -320,6 +320,8 @@ MAKERS = {
     "granular-silo-stepped-ci": granular,
     "granular-silo-hopper-ci": granular,
     "granular-silo-parabolic-ci": granular,
+    "granular-silo-hopper-mu07": granular,
+    "granular-silo-parabolic-mu07": granular,
     "knudsen-capillary-ci": capillary,
     "knudsen-length-series": capillary,
     "knudsen-length-series-ci": capillary,
