@@ -31,6 +31,12 @@ MEASURED = {
     "image-to-model": "131 s (`--cores 1`, shared loaded 2-core machine, numba cache partly warm)",
     "granular-heap-ci": "30 s (`--cores 1`, shared loaded 2-core machine, numba cache partly warm)",
     "granular-silo-ci": "66 s (`--cores 1`, shared loaded 2-core machine, numba cache partly warm)",
+    "granular-silo-stepped-ci": "granular stage alone: 189 s wall, 36 s CPU (one thread, shared 2-core machine at load ~7)",
+    "granular-silo-hopper-ci": "granular stage alone: 208 s wall, 38 s CPU (one thread, shared 2-core machine at load ~7)",
+    "granular-silo-parabolic-ci": "granular stage alone: 76 s wall, 24 s CPU (one thread, shared 2-core machine at load ~7)",
+    "granular-silo-hopper-mu07": "granular stage alone: 131 s wall, 35 s CPU (one thread, shared 2-core machine at load ~7)",
+    "granular-silo-parabolic-mu07": "granular stage alone: 114 s wall, 24 s CPU (one thread, shared 2-core machine at load ~7)",
+    "granular-heap-unload-ci": "granular stage alone: 152 s wall, 25 s CPU (one thread, shared 2-core machine at load ~7)",
     "filled-packing": "3.1 min and 1.1 GB for `porepipe pack` (2 cores)",
     "rough-walls": "6.6 min and 1.3 GB for `porepipe pack` (2 cores)",
 }

@@ -7,9 +7,15 @@ from porepipe.granular._api import Frame as Frame
 from porepipe.granular._api import Simulation as Simulation
 from porepipe.granular._api import polygon_overlap as polygon_overlap
 from porepipe.granular._api import time_step_rule as time_step_rule
+from porepipe.granular._elastic import elastic_constants as elastic_constants
+from porepipe.granular._elastic import unloading_frames as unloading_frames
 from porepipe.granular._galton import GaltonBoard as GaltonBoard
 from porepipe.granular._galton import chi2_binomial as chi2_binomial
 from porepipe.granular._galton import galton_paths as galton_paths
+from porepipe.granular._heap import analyse_heap as analyse_heap
+from porepipe.granular._heap import heap_ensemble as heap_ensemble
+from porepipe.granular._heap import heap_stress_angles as heap_stress_angles
+from porepipe.granular._heap import wittmer_angles as wittmer_angles
 from porepipe.granular._measure import contact_persistence as contact_persistence
 from porepipe.granular._measure import coordination as coordination
 from porepipe.granular._measure import diagonal_strain as diagonal_strain
@@ -39,10 +45,18 @@ from porepipe.granular._shapes import ellipse_polygon as ellipse_polygon
 from porepipe.granular._shapes import polygon_properties as polygon_properties
 from porepipe.granular._shapes import rectangle as rectangle
 from porepipe.granular._shapes import regular_polygon as regular_polygon
+from porepipe.granular._silo import THESIS_SHAPES as THESIS_SHAPES
 from porepipe.granular._silo import THESIS_SILO as THESIS_SILO
-from porepipe.granular._silo import analyse_heap as analyse_heap
 from porepipe.granular._silo import analyse_silo as analyse_silo
-from porepipe.granular._silo import heap_ensemble as heap_ensemble
+from porepipe.granular._silo import inner_extent as inner_extent
+from porepipe.granular._silo import resolve_wall_contacts as resolve_wall_contacts
+from porepipe.granular._silo import wall_by_name as wall_by_name
+from porepipe.granular._silo import wall_profiles as wall_profiles
+from porepipe.granular._silo_shape import fit_shaped_mu_j as fit_shaped_mu_j
+from porepipe.granular._silo_shape import shaped_sigma_zz as shaped_sigma_zz
+from porepipe.granular._silo_shape import shifted_silo as shifted_silo
+from porepipe.granular._silo_shape import silo_half_width as silo_half_width
+from porepipe.granular._silo_shape import silo_wall_slabs as silo_wall_slabs
 from porepipe.granular._theory import closure_ife as closure_ife
 from porepipe.granular._theory import closure_linear as closure_linear
 from porepipe.granular._theory import fit_janssen as fit_janssen
@@ -59,6 +73,7 @@ from porepipe.granular._theory import stepped_silo as stepped_silo
 from porepipe.granular._theory import wedge_stress as wedge_stress
 
 __all__ = [
+    "THESIS_SHAPES",
     "THESIS_SILO",
     "AngleMode",
     "Dist",
@@ -76,15 +91,19 @@ __all__ = [
     "coordination",
     "diagonal_strain",
     "displacement_grid",
+    "elastic_constants",
     "ellipse_polygon",
     "fit_janssen",
+    "fit_shaped_mu_j",
     "force_directions",
     "force_magnitudes",
     "frame_contacts",
     "frame_particles",
     "galton_paths",
     "heap_ensemble",
+    "heap_stress_angles",
     "hopper_sigma_zz",
+    "inner_extent",
     "janssen",
     "lateral_pressure_bounds",
     "packing_fraction",
@@ -103,14 +122,23 @@ __all__ = [
     "regular_polygon",
     "repose_angle_fit",
     "repose_angle_integral",
+    "resolve_wall_contacts",
     "run",
     "scaled_profile",
+    "shaped_sigma_zz",
+    "shifted_silo",
+    "silo_half_width",
     "silo_sigma_zz",
+    "silo_wall_slabs",
     "silo_xi",
     "stepped_silo",
     "stress_tensor",
     "surface_profile",
     "time_step_rule",
+    "unloading_frames",
+    "wall_by_name",
     "wall_contacts",
+    "wall_profiles",
     "wedge_stress",
+    "wittmer_angles",
 ]

@@ -239,6 +239,80 @@ class Box(_Strict):
     closed_top: bool = False
 
 
+class SiloShape(str, enum.Enum):
+    straight = "straight"  # r = r_m (Janssen, §3.1)
+    stepped = "stepped"  # r = r1 above depth h0, r2 below (Eq. 3.14, §3.3)
+    hopper = "hopper"  # r = slope z + b (slanted walls, Eq. 3.16, §3.4)
+    parabolic = "parabolic"  # r = sqrt((b - z)/a) (Eq. 3.19, §3.5)
+
+
+class Silo(_Strict):
+    """Convenience: side walls and floor of a 2-D silo of half-width r(z) about ``axis_x_m`` (Schinner 2001 ch. 3).
+
+    z is the depth below the silo's top (the thesis's z), the top is ``bottom_m + depth_m`` high and the floor
+    closes the silo at z = ``depth_m`` (a hopper or parabola is cut there, as the thesis cut its apex to keep at least
+    10 grains across). Straight and slanted walls are one slab per side, a stepped silo three (upper wall, the step's
+    ledge, lower wall), a parabola ``segments`` straight slabs per side with their corners on the curve.
+    """
+
+    shape: SiloShape = Field(
+        description="r(z): straight, stepped (Eq. 3.14), hopper (3.16) or parabolic (3.19)"
+    )
+    axis_x_m: Finite = Field(0.0, description="x of the silo's axis")
+    bottom_m: Finite = Field(0.0, description="y of the floor's top surface")
+    depth_m: PosFloat = Field(
+        description="height of the side walls above the floor (the floor is at z = depth_m)"
+    )
+    r_m: PosFloat | None = Field(None, description="straight: half-width")
+    r1_m: PosFloat | None = Field(None, description="stepped: half-width above the step")
+    r2_m: PosFloat | None = Field(None, description="stepped: half-width below the step (r2 < r1, Eq. 3.15)")
+    h0_m: PosFloat | None = Field(None, description="stepped: depth of the step below the top")
+    slope: Finite | None = Field(None, description="hopper: a of r = a z + b (a < 0: narrowing downwards)")
+    a_per_m: PosFloat | None = Field(None, description="parabolic: a of r = sqrt((b - z)/a), 1/m")
+    b_m: PosFloat | None = Field(
+        None, description="hopper: half-width b at the top; parabolic: depth b of the vertex"
+    )
+    segments: int = Field(16, ge=1, description="parabolic: straight wall slabs per side")
+    thickness_m: PosFloat = Field(0.005, description="wall and floor thickness")
+
+    @model_validator(mode="after")
+    def _keys_of_shape(self):
+        need = SILO_KEYS[self.shape]
+        missing = [k for k in need if getattr(self, k) is None]
+        if missing:
+            raise ValueError(f"shape {self.shape.value} needs {', '.join(missing)}")
+        extra = [k for k in ALL_SILO_KEYS - set(need) if getattr(self, k) is not None]
+        if extra:
+            raise ValueError(f"{', '.join(sorted(extra))} is not a key of shape {self.shape.value}")
+        d, t = self.depth_m, self.thickness_m
+        if self.shape is SiloShape.stepped and not self.r2_m < self.r1_m:
+            raise ValueError(
+                f"r2_m = {self.r2_m} must be below r1_m = {self.r1_m} (a narrowing step, Eq. 3.15)"
+            )
+        if self.shape is SiloShape.stepped and not self.h0_m + t < d:
+            raise ValueError(
+                f"h0_m + thickness_m = {self.h0_m + t:g} m must be above the floor (depth_m {d:g})"
+            )
+        if self.shape is SiloShape.hopper and not (self.slope < 0 and self.slope * d + self.b_m > 0):
+            raise ValueError(
+                f"slope = {self.slope} must be negative and the walls must not meet above the floor "
+                f"(slope depth_m + b_m = {self.slope * d + self.b_m:.4g} m must be > 0)"
+            )
+        if self.shape is SiloShape.parabolic and not d < self.b_m:
+            raise ValueError(f"depth_m = {d} must be above the vertex at b_m = {self.b_m}")
+        return self
+
+
+#: the size keys each silo shape needs (and the only ones it accepts)
+SILO_KEYS = {
+    SiloShape.straight: ("r_m",),
+    SiloShape.stepped: ("r1_m", "r2_m", "h0_m"),
+    SiloShape.hopper: ("slope", "b_m"),
+    SiloShape.parabolic: ("a_per_m", "b_m"),
+}
+ALL_SILO_KEYS = {k for keys in SILO_KEYS.values() for k in keys}
+
+
 class Gravity(_Strict):
     """Time-dependent gravity magnitude along the scene's gravity direction (App. B.1.2.2)."""
 
@@ -299,6 +373,7 @@ class Settings(_Strict):
     drop_sources: list[DropSource] = Field(default_factory=list)
     walls: list[Wall] = Field(default_factory=list)
     box: Box | None = None
+    silo: Silo | None = Field(None, description="side walls and floor of a shaped silo (ch. 3)")
     drag_springs: list[DragSpring] = Field(default_factory=list)
     size_change: SizeChange | None = Field(None, description="global particle size s(t) (effect size_change)")
     guard: Guard = Guard()

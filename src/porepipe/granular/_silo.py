@@ -1,9 +1,16 @@
-"""Silo and heap read-outs of a granular result: the measurements of §1.10 put together as the thesis did in ch. 3-4.
+"""Silo read-out of a granular result: the measurements of §1.10 put together as the thesis did in ch. 3.
 
-:func:`analyse_silo` turns a settled silo (a ``box`` or two vertical side walls and a floor) into the wall-pressure
-profile, the bulk packing fraction, k = sigma_xx/sigma_zz from stress tensors in horizontal slabs, the share of the
-weight the walls carry, and the Janssen fits (k and mu_j free; mu_j with k fixed at the measured mean).
-:func:`analyse_heap` gives the floor-pressure profile, repose angles, packing fraction and fabric of a heap.
+:func:`analyse_silo` turns a settled silo (a ``box``, a shaped ``silo`` of the scene, or any side walls and a
+floor) into the wall stresses against depth, the bulk packing fraction, k = sigma_xx/sigma_zz and the principal
+angle from stress tensors in horizontal slabs, the share of the weight each wall carries, and the fits of the
+silo theory (Janssen for straight walls; Eqs. 3.15, 3.18, 3.24 for stepped, slanted and parabolic walls).
+
+Walls may have any orientation. Each wall contact is resolved along the nearest face of its wall: the normal
+force F_n and the tangential force F_t (wall-normal and wall-shear stress per wall length), and their horizontal
+and vertical components (per unit height: the horizontal one is the thesis's wall pressure sigma_xx). A face is a
+side wall where its normal is closer to horizontal than to vertical; the others (a step's ledge, the floor) are
+ledges. The weight is carried by all walls together: sum of their vertical forces = weight, exactly in static
+equilibrium (``force_balance``).
 """
 
 from __future__ import annotations
@@ -12,18 +19,71 @@ import numpy as np
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.granular import _measure as M
+from porepipe.granular import _silo_shape as S
 from porepipe.granular import _theory as T
+from porepipe.granular._settings import Silo, SiloShape
 
 #: the thesis's Janssen silo (§3.1): k, its spread, fitted wall friction, bulk packing fraction and its spread
 THESIS_SILO = {"k": 0.64, "k_err": 0.19, "mu_j": 0.33, "rho_rel": 0.78, "rho_rel_err": 0.03, "mu": 0.4}
 
+#: the thesis's shaped silos (§3.3-3.5), keyed by (shape, grain friction mu): k ± spread and the fitted mu_j
+THESIS_SHAPES = {
+    ("straight", 0.4): {"k": 0.64, "k_err": 0.19, "mu_j": 0.33, "section": "§3.1"},
+    ("stepped", 0.4): {"k": 0.64, "k_err": 0.19, "mu_j": 0.33, "section": "§3.3"},
+    ("hopper", 0.4): {"k": 0.77, "k_err": 0.24, "mu_j": 0.30, "section": "§3.4"},
+    ("hopper", 0.7): {"k": 0.76, "k_err": 0.12, "mu_j": 0.37, "section": "§3.4"},
+    ("parabolic", 0.4): {"k": 0.86, "k_err": 0.14, "mu_j": 0.30, "section": "§3.5"},
+    ("parabolic", 0.7): {"k": 0.89, "k_err": 0.11, "mu_j": 0.47, "section": "§3.5"},
+}
 
-def _wall(tables, name):
+
+def wall_by_name(tables, name):
+    """(index, world corners) of the wall called ``name`` in a granular result; one clear error if absent."""
     names = [str(v) for v in tables["frames"]["wall_name"].values]
     if name not in names:
         raise PorepipeError(f"granular result has no wall {name!r} (walls: {', '.join(names) or 'none'})")
     k = names.index(name)
-    return k, tables["frames"]["wall_vertices_m"].values[k]
+    v = tables["frames"]["wall_vertices_m"].values[k]
+    return k, v[np.isfinite(v).all(axis=1)]
+
+
+def _floor_name(tables) -> str:
+    names = [str(v) for v in tables["frames"]["wall_name"].values]
+    for name in ("box floor", "silo floor"):
+        if name in names:
+            return name
+    raise PorepipeError(
+        f"analyse_silo: give floor= (no 'box floor' or 'silo floor' among {', '.join(names)})"
+    )
+
+
+def inner_extent(polygons, y: float, x_axis: float) -> tuple[float, float]:
+    """x-range free of walls at height y around ``x_axis``: the innermost crossing of the line with each side.
+
+    Parameters
+    ----------
+    polygons : sequence of (n, 2) arrays
+        Wall outlines.
+    y : float
+        Height of the horizontal line.
+    x_axis : float
+        A point between the walls (the silo's axis).
+    """
+    left, right = -np.inf, np.inf
+    for w in polygons:
+        xs = []
+        for (xa, ya), (xb, yb) in zip(w, np.roll(w, -1, axis=0), strict=True):
+            if ya == yb == y:
+                xs += [xa, xb]
+            elif min(ya, yb) <= y <= max(ya, yb) and ya != yb:
+                xs.append(xa + (y - ya) / (yb - ya) * (xb - xa))
+        if not xs:
+            continue
+        if max(xs) <= x_axis:
+            left = max(left, float(max(xs)))
+        elif min(xs) >= x_axis:
+            right = min(right, float(min(xs)))
+    return left, right
 
 
 def _surface_height(centroid, x0, x1, width):
@@ -32,19 +92,87 @@ def _surface_height(centroid, x0, x1, width):
     return float(np.nanmean(top))
 
 
+def resolve_wall_contacts(contacts: dict, n_particles: int, walls: list[tuple[int, np.ndarray]]) -> dict:
+    """Every contact of the given walls resolved along its wall face (see the module text).
+
+    Returns
+    -------
+    dict of arrays over the contacts
+        ``wall`` (wall index), ``point`` (K, 2), ``normal`` (K, 2, towards the grains), ``fn`` (normal force, >0
+        pressing), ``ft_up`` (tangential force on the grain along the face's upward tangent; a horizontal face's
+        tangent points to +x), ``fx``, ``fy`` (force on the grain), ``side`` (bool: a side-wall face).
+    """
+    rows = []
+    for k, v in walls:
+        w = M.wall_contacts(contacts, n_particles, k, v)
+        sel = contacts["j"] == n_particles + k
+        n = w["normal"]
+        up = np.column_stack([-n[:, 1], n[:, 0]])
+        flip = (up[:, 1] < 0) | ((up[:, 1] == 0) & (up[:, 0] < 0))
+        up[flip] *= -1
+        f = np.column_stack([contacts["fx_N"][sel], contacts["fy_N"][sel]])
+        rows.append(
+            {
+                "wall": np.full(len(n), k),
+                "point": w["point"],
+                "normal": n,
+                "fn": w["normal_force"],
+                "ft_up": np.einsum("ij,ij->i", f, up),
+                "fx": f[:, 0],
+                "fy": f[:, 1],
+                "side": np.abs(n[:, 0]) > np.abs(n[:, 1]),
+            }
+        )
+    return {key: np.concatenate([r[key] for r in rows]) for key in rows[0]}
+
+
+def wall_profiles(wc: dict, depth, centres, fill: float, contacts_per_window: float) -> dict:
+    """Side-wall stresses against depth, both sides pooled (divided by 2), sliding windows of the thesis (2.36-2.40).
+
+    Per unit height: ``sigma_xx`` (horizontal force pressing on the walls: the thesis's wall pressure) and
+    ``vertical`` (the walls' upward traction); per wall length (ds = dz/|n_x|): ``normal`` (wall-normal stress) and
+    ``shear`` (wall-shear stress, upward along the wall). ``running_mean`` smooths ``sigma_xx`` once more.
+    """
+    side = wc["side"]
+    z = np.asarray(depth)[side]
+    nx = np.abs(wc["normal"][side, 0])
+    press = wc["fx"][side] * np.sign(wc["normal"][side, 0])
+    out = {}
+    for key, values in (
+        ("sigma_xx", press),
+        ("vertical", wc["fy"][side]),
+        ("normal", wc["fn"][side] * nx),
+        ("shear", wc["ft_up"][side] * nx),
+    ):
+        prof = M.pressure_profile(
+            z,
+            values,
+            2 * fill,
+            centres=centres,
+            contacts_per_window=2 * contacts_per_window,
+            extent=(0.0, fill),
+        )
+        out[key] = 0.5 * prof["pressure"]
+        if key == "sigma_xx":
+            out["running_mean"] = 0.5 * prof["running_mean"]
+            out["half_width"] = prof["half_width"]
+    return out
+
+
 def analyse_silo(
     tables: dict,
     frame: int = -1,
     *,
-    walls: tuple[str, str] = ("box left", "box right"),
-    floor: str = "box floor",
+    shape: Silo | None = None,
+    walls: tuple[str, ...] | None = None,
+    floor: str | None = None,
     g: float = 9.81,
     contacts_per_window: float = 15.0,
     slab_rows: float = 4.0,
     floor_zone: float = 1.0,
     mu: float | None = None,
 ) -> dict:
-    """Janssen read-out of a settled 2-D silo.
+    """Read-out of a settled 2-D silo of any shape (thesis ch. 3).
 
     Parameters
     ----------
@@ -52,10 +180,13 @@ def analyse_silo(
         :func:`porepipe.granular.read_granular` output.
     frame : int
         Frame to read (default the last).
-    walls : (str, str)
-        Names of the left and right side walls.
-    floor : str
-        Name of the floor wall.
+    shape : Silo, optional
+        The scene's ``granular.silo``: the theory of its shape is fitted (mu_j, k fixed at the stress tensors'
+        mean). Without it the side walls are taken as straight and Janssen (Eq. 3.4) is fitted.
+    walls : tuple of str, optional
+        Names of the side walls (default: every wall but the floor).
+    floor : str, optional
+        Name of the floor (default ``box floor`` or ``silo floor``).
     g : float
         Gravity (m/s²) for rho g.
     contacts_per_window : float
@@ -63,244 +194,180 @@ def analyse_silo(
     slab_rows : float
         Height of the stress-tensor slabs, in mean grain diameters.
     floor_zone : float
-        The fits leave out the lowest ``floor_zone`` silo widths (the floor restrains the grains there and the
-        wall pressure drops below Janssen's, as in real flat-bottomed silos).
+        The fits leave out the lowest ``floor_zone`` bottom widths (the floor restrains the grains there).
     mu : float, optional
-        Grain-wall friction of the scene: gives ``wall_at_coulomb_limit``, the fraction of wall contacts with
-        |F_t| >= 0.98 mu F_n (sliding or about to).
+        Grain-wall friction of the scene: gives ``wall_at_coulomb_limit`` and the Rankine/Jaky ``bounds``.
 
     Returns
     -------
     dict
-        ``half_width_m``, ``fill_height_m``, ``rho_rel`` (hull-corrected), ``rho_rel_naive``, ``rho_g``,
-        ``depth_m`` / ``wall_pressure`` / ``wall_running_mean`` (profile, both walls averaged), ``k_local``
-        (per slab), ``slab_depth_m``, ``k``, ``k_std``, ``fit`` (k, mu_j free), ``fit_k_fixed``, ``floor_share``
-        and ``wall_share`` (of the weight), ``mu_wall_mobilised`` (sum of the walls' upward traction over the sum of
-        their normal forces: the mu_j that Janssen's tau_w = mu_j sigma_xx assumes), ``wall_at_coulomb_limit``, ``bounds`` (Rankine/Jaky for the scene's mu if given), ``n_particles``.
+        ``shape`` (name), ``half_width_m`` (at the fill surface), ``bottom_half_width_m``, ``fill_height_m``,
+        ``grain_diameter_m``, ``rho_rel`` (hull-corrected, slabs of the bulk), ``rho_rel_naive``, ``rho_g``;
+        profiles over ``depth_m``: ``wall_pressure`` (sigma_xx per unit height), ``wall_running_mean``,
+        ``wall_normal_stress``, ``wall_shear_stress``, ``wall_vertical_traction``; slabs over ``slab_depth_m``:
+        ``k_local``, ``slab_sigma_xx``, ``slab_sigma_zz``, ``slab_psi_rad`` (major axis from the vertical);
+        ``k``, ``k_std``, ``fit`` (k and mu_j: Janssen with both free, or the shape's theory with k fixed),
+        ``fit_k_fixed``, ``theory`` (the fill-relative :class:`Silo`, or None for Janssen); ``segments`` (per wall:
+        name, contacts, sums of F_n, F_t, F_x, F_y); ``floor_share``, ``wall_share``, ``ledge_share`` (of the
+        weight), ``force_balance`` ((sum of all walls' F_y - weight)/weight), ``horizontal_balance`` (sum F_x /
+        weight), ``mu_wall_mobilised`` (side walls' upward shear over their normal force: Janssen's mu_j),
+        ``wall_at_coulomb_limit``, ``bounds``, ``n_particles``, ``weight_N_m``.
     """
     parts = M.frame_particles(tables, frame)
     contacts = M.frame_contacts(tables, frame)
     n = len(parts["centroid"])
     act = parts["active"]
-    left_k, left_v = _wall(tables, walls[0])
-    right_k, right_v = _wall(tables, walls[1])
-    floor_k, floor_v = _wall(tables, floor)
-    x0 = float(np.nanmax(left_v[:, 0]))
-    x1 = float(np.nanmin(right_v[:, 0]))
-    y0 = float(np.nanmax(floor_v[:, 1]))
-    if not x1 > x0:
-        raise PorepipeError(f"analyse_silo: walls {walls} do not enclose a gap (x0 = {x0}, x1 = {x1})")
-    r = 0.5 * (x1 - x0)
+    names = [str(v) for v in tables["frames"]["wall_name"].values]
+    floor = _floor_name(tables) if floor is None else floor
+    floor_k, floor_v = wall_by_name(tables, floor)
+    side_names = [w for w in names if w != floor] if walls is None else list(walls)
+    sides = [wall_by_name(tables, w) for w in side_names]
+    y0 = float(floor_v[:, 1].max())
     cen = parts["centroid"][act]
+    x_axis = float(shape.axis_x_m) if shape is not None else float(np.median(cen[:, 0]))
+    polys_w = [v for _, v in sides]
     d_grain = 2 * float(np.sqrt(np.mean(parts["area"][act]) / np.pi))
-    top = _surface_height(cen, x0, x1, d_grain)
-    bulk = (x0 + d_grain, y0 + 2 * d_grain, x1 - d_grain, top - 2 * d_grain)
-    if bulk[3] <= bulk[1]:
-        raise PorepipeError(f"analyse_silo: fill of {top - y0:.3g} m is too low for a bulk test area")
-    pf = M.packing_fraction([p for p, a in zip(parts["polygons"], act, strict=True) if a], bulk)
+    xl, xr = inner_extent(polys_w, float(cen[:, 1].max()) - d_grain, x_axis)
+    if not (np.isfinite(xl) and np.isfinite(xr) and xr > xl):
+        raise PorepipeError(f"analyse_silo: walls {side_names} do not enclose the fill on both sides")
+    top = _surface_height(cen, xl, xr, d_grain)
+    fill = top - y0
+    xb0, xb1 = inner_extent(polys_w, y0 + 0.5 * d_grain, x_axis)
+    r_bottom = 0.5 * (xb1 - xb0)
+    if fill < (slab_rows + 2) * d_grain:
+        raise PorepipeError(f"analyse_silo: fill of {fill:.3g} m is too low for a bulk test area")
+    polys = [p for p, a in zip(parts["polygons"], act, strict=True) if a]
+    slab = slab_rows * d_grain
+    slab_lo = np.arange(y0 + d_grain, top - slab - d_grain, slab)
+    pf = _bulk_packing(polys, polys_w, slab_lo, slab, x_axis, d_grain)
     rho_p = float(np.median(tables["frames"]["mass_kg"].values / parts["area"]))
     rho_g = pf["corrected"] * rho_p * g
 
-    lw = M.wall_contacts(contacts, n, left_k, left_v)
-    rw = M.wall_contacts(contacts, n, right_k, right_v)
-    depth = top - np.concatenate([lw["point"][:, 1], rw["point"][:, 1]])
-    fn = np.concatenate([lw["normal_force"], rw["normal_force"]])
-    centres = np.linspace(d_grain, top - y0 - d_grain, 40)
-    prof = M.pressure_profile(
-        depth,
-        fn,
-        2 * (top - y0),
-        centres=centres,
-        contacts_per_window=2 * contacts_per_window,
-        extent=(0.0, top - y0),
-    )
-    wall_p = 0.5 * prof["pressure"]  # two walls pooled
+    wc = resolve_wall_contacts(contacts, n, sides)
+    centres = np.linspace(d_grain, fill - d_grain, 40)
+    prof = wall_profiles(wc, top - wc["point"][:, 1], centres, fill, contacts_per_window)
+    slabs = _slab_stresses(contacts, parts["centroid"], act, slab_lo, slab, top)
+    k_mean = float(np.nanmean(slabs["k"])) if len(slabs["k"]) else float("nan")
 
-    slab = slab_rows * d_grain
-    k_loc, slab_depth = [], []
-    for ya in np.arange(y0 + d_grain, top - slab - d_grain, slab):
-        st = M.stress_tensor(
-            contacts, parts["centroid"], members=act & _in_box(parts["centroid"], (x0, ya, x1, ya + slab))
-        )
-        k_loc.append(st["k"])
-        slab_depth.append(top - ya - 0.5 * slab)
-    k_loc = np.asarray(k_loc)
-    k_mean = float(np.nanmean(k_loc)) if len(k_loc) else float("nan")
-
-    zmax = top - y0 - floor_zone * 2 * r
+    xt0, xt1 = inner_extent(polys_w, top - 0.5 * d_grain, x_axis)
+    r_top = 0.5 * (xt1 - xt0)
+    zmax = fill - floor_zone * 2 * r_bottom
     use = centres <= zmax
-    weight = float(tables["frames"]["mass_kg"].values[act].sum() * g)
-    on_floor = contacts["j"] == n + floor_k
-    on_walls = (contacts["j"] == n + left_k) | (contacts["j"] == n + right_k)
-    out = {
-        "half_width_m": r,
-        "fill_height_m": top - y0,
+    theory = (
+        None
+        if shape is None or shape.shape is SiloShape.straight
+        else S.shifted_silo(shape, shape.depth_m - fill)
+    )
+    if theory is None:
+        fit = T.fit_janssen(centres[use], prof["sigma_xx"][use], r_top, rho_g)
+        fit_k = T.fit_janssen(centres[use], prof["sigma_xx"][use], r_top, rho_g, k=k_mean)
+    else:
+        fit_k = {"k": k_mean, **S.fit_shaped_mu_j(theory, centres[use], prof["sigma_xx"][use], k_mean, rho_g)}
+        fit = fit_k
+    balance = _balance(wc, contacts, n, floor_k, tables["frames"]["mass_kg"].values[act].sum() * g)
+    side = wc["side"]
+    return {
+        "shape": "straight" if shape is None else shape.shape.value,
+        "half_width_m": r_top,
+        "bottom_half_width_m": r_bottom,
+        "fill_height_m": fill,
         "grain_diameter_m": d_grain,
         "rho_rel": pf["corrected"],
         "rho_rel_naive": pf["naive"],
         "rho_g": rho_g,
         "depth_m": centres,
-        "wall_pressure": wall_p,
-        "wall_running_mean": 0.5 * prof["running_mean"],
+        "wall_pressure": prof["sigma_xx"],
+        "wall_running_mean": prof["running_mean"],
+        "wall_normal_stress": prof["normal"],
+        "wall_shear_stress": prof["shear"],
+        "wall_vertical_traction": prof["vertical"],
         "window_half_width_m": prof["half_width"],
-        "k_local": k_loc,
-        "slab_depth_m": np.asarray(slab_depth),
+        "k_local": slabs["k"],
+        "slab_depth_m": slabs["depth"],
+        "slab_sigma_xx": slabs["xx"],
+        "slab_sigma_zz": slabs["zz"],
+        "slab_psi_rad": slabs["psi"],
         "k": k_mean,
-        "k_std": float(np.nanstd(k_loc)) if len(k_loc) else float("nan"),
+        "k_std": float(np.nanstd(slabs["k"])) if len(slabs["k"]) else float("nan"),
         "fit_depth_max_m": zmax,
-        "fit": T.fit_janssen(centres[use], wall_p[use], r, rho_g),
-        "fit_k_fixed": T.fit_janssen(centres[use], wall_p[use], r, rho_g, k=k_mean),
-        "floor_share": float(contacts["fy_N"][on_floor].sum() / weight),
-        "wall_share": float(contacts["fy_N"][on_walls].sum() / weight),
-        # mobilised wall friction: upward wall traction over wall pressure, summed over both walls
-        "mu_wall_mobilised": float(contacts["fy_N"][on_walls].sum() / fn.sum()),
-        "wall_at_coulomb_limit": _at_limit(contacts, on_walls, mu),
+        "fit": fit,
+        "fit_k_fixed": fit_k,
+        "theory": theory,
+        "segments": _segments(wc, sides, names),
+        **balance,
+        "mu_wall_mobilised": float(wc["ft_up"][side].sum() / wc["fn"][side].sum()),
+        "wall_at_coulomb_limit": _at_limit(contacts, np.isin(contacts["j"], [n + k for k, _ in sides]), mu),
+        "bounds": T.lateral_pressure_bounds(mu) if mu is not None else None,
         "n_particles": int(act.sum()),
     }
-    return out
+
+
+def _bulk_packing(polys, walls, slab_lo, slab, x_axis, d_grain) -> dict:
+    """Hull-corrected packing fraction of the bulk: slabs one grain inside the walls, pooled by solid area."""
+    solid, hull, area = 0.0, 0.0, 0.0
+    for ya in slab_lo[1:]:
+        e0, e1 = inner_extent(walls, ya, x_axis), inner_extent(walls, ya + slab, x_axis)
+        box = (max(e0[0], e1[0]) + d_grain, ya, min(e0[1], e1[1]) - d_grain, ya + slab)
+        if box[2] <= box[0]:
+            continue
+        pf = M.packing_fraction(polys, box)
+        solid, hull, area = solid + pf["solid_m2"], hull + pf["hull_m2"], area + pf["area_m2"]
+    if not area > 0:
+        raise PorepipeError("analyse_silo: no bulk test area fits between the walls")
+    return {"corrected": solid / hull, "naive": solid / area}
+
+
+def _slab_stresses(contacts, centroid, active, slab_lo, slab, top) -> dict:
+    """Stress tensor (Eq. 2.52) of every horizontal slab of grains: k, sigma_xx, sigma_zz, principal angle."""
+    out = {"k": [], "xx": [], "zz": [], "psi": [], "depth": []}
+    for ya in slab_lo:
+        inside = active & (centroid[:, 1] >= ya) & (centroid[:, 1] < ya + slab)
+        if inside.sum() < 3:
+            continue
+        st = M.stress_tensor(contacts, centroid, members=inside)
+        out["k"].append(st["k"])
+        out["xx"].append(st["sigma"][0, 0])
+        out["zz"].append(st["sigma"][1, 1])
+        out["psi"].append(st["psi_rad"])
+        out["depth"].append(top - ya - 0.5 * slab)
+    return {key: np.asarray(v, dtype=np.float64) for key, v in out.items()}
+
+
+def _balance(wc, contacts, n, floor_k, weight) -> dict:
+    """Shares of the weight carried by floor, side walls and ledges; the static balance of all wall forces."""
+    on_floor = contacts["j"] == n + floor_k
+    floor_fy = float(contacts["fy_N"][on_floor].sum())
+    floor_fx = float(contacts["fx_N"][on_floor].sum())
+    side, ledge = wc["side"], ~wc["side"]
+    return {
+        "floor_share": floor_fy / weight,
+        "wall_share": float(wc["fy"].sum()) / weight,
+        "ledge_share": float(wc["fy"][ledge].sum()) / weight,
+        "side_share": float(wc["fy"][side].sum()) / weight,
+        "force_balance": (floor_fy + float(wc["fy"].sum()) - weight) / weight,
+        "horizontal_balance": (floor_fx + float(wc["fx"].sum())) / weight,
+        "weight_N_m": float(weight),
+    }
+
+
+def _segments(wc, sides, names) -> list[dict]:
+    rows = []
+    for k, _ in sides:
+        on = wc["wall"] == k
+        rows.append(
+            {
+                "name": names[k],
+                "contacts": int(on.sum()),
+                "fn_N_m": float(wc["fn"][on].sum()),
+                "ft_up_N_m": float(wc["ft_up"][on].sum()),
+                "fx_N_m": float(wc["fx"][on].sum()),
+                "fy_N_m": float(wc["fy"][on].sum()),
+            }
+        )
+    return rows
 
 
 def _at_limit(contacts, rows, mu):
     if mu is None or not rows.any():
         return float("nan")
     return float(np.mean(np.abs(contacts["ft_N"][rows]) >= 0.98 * mu * contacts["fn_N"][rows]))
-
-
-def _in_box(xy, box):
-    x0, y0, x1, y1 = box
-    return (xy[:, 0] >= x0) & (xy[:, 0] < x1) & (xy[:, 1] >= y0) & (xy[:, 1] < y1)
-
-
-def analyse_heap(
-    tables: dict, frame: int = -1, *, floor: str = "box floor", g: float = 9.81, bins: int = 18
-) -> dict:
-    """Floor pressure and its dip, repose angles, packing fraction and fabric of a heap on a floor.
-
-    The heap's foot is where the floor carries it: the x-range between the 1 % and 99 % quantiles of the floor
-    load (grains that rolled away along the floor do not widen it). Repose fits, the integral method and the
-    scaled profile use the foot; the floor-pressure profile covers every floor contact.
-
-    Returns
-    -------
-    dict
-        ``floor_x_m`` / ``floor_pressure`` (sliding windows of ~15 contacts) and ``floor_running_mean``,
-        ``floor_mean``, ``apex_x_m``, ``height_m``, ``base_m`` (x-extent of the grains), ``foot_m`` (x0, x1),
-        ``repose_left_rad`` / ``repose_right_rad`` (highest-centroid fits on the flanks' middle halves),
-        ``repose_integral_rad`` (Eq. 2.42 on each half, averaged), ``rho_rel`` (hull-corrected, in the core),
-        ``rho_g_h`` (bulk rho g h, the thesis's pressure scale), ``dip`` (:func:`pressure_dip` of the running mean:
-        ``dip``, ``fluctuation``, ...), ``coordination``, ``directions`` (P(alpha)), ``magnitudes`` (P(F/<F>)),
-        ``n_particles``, ``weight_N_m``, ``floor_load_N_m``.
-    """
-    parts = M.frame_particles(tables, frame)
-    contacts = M.frame_contacts(tables, frame)
-    n = len(parts["centroid"])
-    act = parts["active"]
-    fk, fv = _wall(tables, floor)
-    y0 = float(np.nanmax(fv[:, 1]))
-    cen = parts["centroid"][act]
-    polys = [p for p, a in zip(parts["polygons"], act, strict=True) if a]
-    allv = np.concatenate(polys)
-    d_grain = 2 * float(np.sqrt(np.mean(parts["area"][act]) / np.pi))
-    wc = M.wall_contacts(contacts, n, fk, fv)
-    if len(wc["normal_force"]) < 3:
-        raise PorepipeError(f"analyse_heap: fewer than 3 grains rest on {floor!r}")
-    xa, xb = _foot(wc["point"][:, 0], wc["normal_force"])
-    xs, tops = M.surface_profile(cen, np.linspace(xa, xb, max(int((xb - xa) / d_grain), 2) + 1))
-    xc = float(xs[np.nanargmax(tops)])
-    height = float(np.nanmax(allv[:, 1]) - y0)
-    x_lo, x_hi = float(wc["point"][:, 0].min()), float(wc["point"][:, 0].max())
-    prof = M.pressure_profile(
-        wc["point"][:, 0], wc["normal_force"], xb - xa, centres=np.linspace(x_lo, x_hi, 80)
-    )
-    left = M.repose_angle_fit(
-        cen, (xa + 0.25 * (xc - xa), xc - 0.25 * (xc - xa), max(int(0.5 * (xc - xa) / d_grain), 2))
-    )
-    right = M.repose_angle_fit(
-        cen, (xc + 0.25 * (xb - xc), xb - 0.25 * (xb - xc), max(int(0.5 * (xb - xc) / d_grain), 2))
-    )
-    on_foot = (cen[:, 0] >= xa) & (cen[:, 0] <= xb)
-    solid = sum(M.polygon_area(p) for p, keep in zip(polys, on_foot, strict=True) if keep)
-    pf = M.packing_fraction(
-        polys, (xc - 0.3 * (xc - xa), y0 + d_grain, xc + 0.3 * (xb - xc), y0 + 0.5 * height)
-    )
-    # Eq. 2.42 per half: the material's area (solid area / packing fraction) over half the base
-    area = solid / pf["corrected"]
-    integral = 0.5 * (
-        M.repose_angle_integral(area * (xc - xa) / (xb - xa), xc - xa)
-        + M.repose_angle_integral(area * (xb - xc) / (xb - xa), xb - xc)
-    )
-    rho_p = float(np.median(tables["frames"]["mass_kg"].values / parts["area"]))
-    return {
-        "floor_x_m": prof["centres"],
-        "floor_pressure": prof["pressure"],
-        "floor_running_mean": prof["running_mean"],
-        "floor_mean": prof["mean"],
-        "apex_x_m": xc,
-        "height_m": height,
-        "base_m": float(allv[:, 0].max() - allv[:, 0].min()),
-        "foot_m": (xa, xb),
-        "repose_left_rad": left["angle_rad"],
-        "repose_right_rad": right["angle_rad"],
-        "repose_integral_rad": integral,
-        "rho_rel": pf["corrected"],
-        "rho_g_h": pf["corrected"] * rho_p * g * height,
-        "dip": M.pressure_dip(prof["centres"], prof["running_mean"], xc, noise=prof["pressure"]),
-        "coordination": M.coordination(contacts, n, active=act),
-        "directions": M.force_directions(contacts, bins=bins),
-        "magnitudes": M.force_magnitudes(contacts),
-        "n_particles": int(act.sum()),
-        "weight_N_m": float(tables["frames"]["mass_kg"].values[act].sum() * g),
-        "floor_load_N_m": float(wc["normal_force"].sum()),
-    }
-
-
-def _foot(x, load, tail: float = 0.01) -> tuple[float, float]:
-    """x-range between the ``tail`` and ``1 - tail`` quantiles of the floor load."""
-    order = np.argsort(x)
-    cum = np.cumsum(np.asarray(load, dtype=np.float64)[order])
-    cum /= cum[-1]
-    xs = np.asarray(x, dtype=np.float64)[order]
-    return float(xs[np.searchsorted(cum, tail)]), float(xs[min(np.searchsorted(cum, 1 - tail), len(xs) - 1)])
-
-
-def heap_ensemble(heaps: list[dict], points: int = 81) -> dict:
-    """Average the floor pressure of several heaps (realisations differing in the seed, as the thesis's 9).
-
-    Each :func:`analyse_heap` result's running-mean profile is put on the thesis's axes (x from the apex in units
-    of half the foot width, pressure over rho g h), the profiles are averaged where each covers, and the dip of the
-    mean profile is measured.
-
-    Returns
-    -------
-    dict
-        ``s`` (grid on [-1.2, 1.2]), ``mean`` and ``std`` (scaled pressure), ``dip`` (:func:`pressure_dip` of the
-        mean), ``dips`` (each heap's own dip), ``repose_deg`` (mean and std of the flank fits), ``n``.
-    """
-    if not heaps:
-        raise PorepipeError("heap_ensemble: no heaps given")
-    grid = np.linspace(-1.2, 1.2, points)
-    rows = np.array(
-        [
-            M.scaled_profile(
-                h["floor_x_m"],
-                h["floor_running_mean"],
-                h["apex_x_m"],
-                0.5 * (h["foot_m"][1] - h["foot_m"][0]),
-                h["rho_g_h"],
-                grid,
-            )
-            for h in heaps
-        ]
-    )
-    mean = np.nanmean(rows, axis=0)
-    ok = ~np.isnan(mean)
-    repose = np.degrees([[h["repose_left_rad"], h["repose_right_rad"]] for h in heaps]).ravel()
-    return {
-        "s": grid,
-        "mean": mean,
-        "std": np.nanstd(rows, axis=0),
-        "dip": M.pressure_dip(grid[ok], mean[ok], 0.0),
-        "dips": [h["dip"]["dip"] for h in heaps],
-        "repose_deg": (float(repose.mean()), float(repose.std())),
-        "n": len(heaps),
-    }

@@ -18,6 +18,7 @@ from porepipe.granular._shapes import (
     polygon_properties,
     rectangle,
 )
+from porepipe.granular._silo_shape import silo_wall_slabs
 
 STAGE = "granular"
 
@@ -141,7 +142,7 @@ def collect_bodies(settings: Settings, seed: int) -> Bodies:
 
 
 def wall_polygons(settings: Settings) -> list[tuple[str, np.ndarray, Wall | None]]:
-    """World-frame corners of every wall (explicit walls, then the four slabs of ``box``)."""
+    """World-frame corners of every wall (explicit walls, the slabs of ``box``, then those of ``silo``)."""
     out = []
     for w in settings.walls:
         v = np.asarray(w.vertices_m, dtype=np.float64)
@@ -164,6 +165,8 @@ def wall_polygons(settings: Settings) -> list[tuple[str, np.ndarray, Wall | None
             slabs.append(("box top", (x0, y1, x1, y1 + d)))
         for name, (a0, b0, a1, b1) in slabs:
             out.append((name, np.array([(a0, b0), (a1, b0), (a1, b1), (a0, b1)]), None))
+    if settings.silo is not None:
+        out += [(name, v, None) for name, v in silo_wall_slabs(settings.silo)]
     return out
 
 

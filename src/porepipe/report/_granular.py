@@ -14,17 +14,24 @@ from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
 
 from porepipe._shared.atomic import write_text_atomic
+from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs
 from porepipe.granular import (
+    THESIS_SHAPES,
     THESIS_SILO,
     analyse_heap,
     analyse_silo,
+    elastic_constants,
     force_directions,
     frame_contacts,
     frame_particles,
+    heap_stress_angles,
     janssen,
     lateral_pressure_bounds,
     read_granular,
+    shaped_sigma_zz,
+    unloading_frames,
+    wittmer_angles,
 )
 from porepipe.report._figures import write_csv
 
@@ -38,6 +45,8 @@ def _fig(w=5.0, h=4.0, polar=False):
 
 def _kind(tables) -> str:
     names = [str(v) for v in tables["frames"]["wall_name"].values]
+    if "silo floor" in names:
+        return "silo"
     if not {"box left", "box right", "box floor"} <= set(names):
         return "heap"
     wv = tables["frames"]["wall_vertices_m"].values
@@ -49,40 +58,99 @@ def _kind(tables) -> str:
     return "silo" if pos[act, 1].max() - y0 > 2 * (x1 - x0) else "heap"
 
 
-def silo_pressure_figure(a: dict, path: Path, dpi: int = 110) -> list[dict]:
-    """Wall pressure against depth with the fitted Janssen curve and the thesis's (k 0.64, mu_j 0.33) beside."""
+def _theory_sxx(a: dict, z, k: float, mu_j: float):
+    """sigma_xx = k sigma_zz of the silo's theory (Janssen, or its shape's) at depth z below the fill surface."""
+    if a["theory"] is None:
+        return janssen(z, a["half_width_m"], k, mu_j, a["rho_g"])[1]
+    return k * shaped_sigma_zz(a["theory"], z, k, mu_j, a["rho_g"])
+
+
+def thesis_values(a: dict, mu: float | None) -> dict | None:
+    """The thesis's k and mu_j for this silo's shape and grain friction (``THESIS_SHAPES``), or None."""
+    return THESIS_SHAPES.get((a["shape"], round(mu, 2) if mu is not None else 0.4))
+
+
+def silo_pressure_figure(a: dict, path: Path, dpi: int = 110, mu: float | None = None) -> list[dict]:
+    """Wall pressure and slab stresses against depth with the fitted theory and the thesis's (k, mu_j) beside."""
     fig, ax = _fig()
     z = a["depth_m"]
-    ax.plot(a["wall_pressure"], z, "k.", ms=3, label="measured (windows)")
+    ax.plot(a["wall_pressure"], z, "k.", ms=3, label="wall sigma_xx (windows)")
     ax.plot(a["wall_running_mean"], z, "k-", lw=0.8, label="running mean")
-    zz = np.linspace(0, a["fill_height_m"], 200)
-    r, rg = a["half_width_m"], a["rho_g"]
+    ax.plot(a["slab_sigma_zz"], a["slab_depth_m"], "C0o", mfc="none", ms=4, label="sigma_zz (slab tensors)")
+    zz = np.linspace(0, a["fill_height_m"] * 0.995, 120)
+    name = "Janssen" if a["theory"] is None else f"{a['shape']} theory"
     fit = a["fit"]
-    ax.plot(
-        janssen(zz, r, fit["k"], fit["mu_j"], rg)[1],
-        zz,
-        "C0-",
-        label=f"Janssen fit k {fit['k']:.2f}, mu_j {fit['mu_j']:.3f}",
-    )
+    if a["theory"] is None:
+        ax.plot(
+            _theory_sxx(a, zz, fit["k"], fit["mu_j"]),
+            zz,
+            "C0-",
+            label=f"Janssen fit k {fit['k']:.2f}, mu_j {fit['mu_j']:.3f}",
+        )
     fk = a["fit_k_fixed"]
+    sxx = _theory_sxx(a, zz, fk["k"], fk["mu_j"])
+    ax.plot(sxx, zz, "C2--", label=f"{name}: k = {fk['k']:.2f} (stress), mu_j {fk['mu_j']:.3f}")
+    ax.plot(sxx / fk["k"], zz, "C2:", lw=0.8, label="its sigma_zz")
+    th = thesis_values(a, mu) or THESIS_SILO
     ax.plot(
-        janssen(zz, r, fk["k"], fk["mu_j"], rg)[1],
-        zz,
-        "C2--",
-        label=f"k = {fk['k']:.2f} (stress), mu_j {fk['mu_j']:.3f}",
+        _theory_sxx(a, zz, th["k"], th["mu_j"]), zz, "C3:", label=f"thesis k {th['k']}, mu_j {th['mu_j']}"
     )
-    th = THESIS_SILO
-    ax.plot(janssen(zz, r, th["k"], th["mu_j"], rg)[1], zz, "C3:", label="thesis k 0.64, mu_j 0.33")
     ax.axhline(a["fit_depth_max_m"], color="0.6", lw=0.6)
     ax.invert_yaxis()
-    ax.set_xlabel("wall pressure sigma_xx [N/m²]")
+    ax.set_xlabel("stress [N/m²]")
     ax.set_ylabel("depth below the fill surface [m]")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=6, loc="lower left")
     fig.savefig(path, dpi=dpi)
     return [
         {"depth_m": float(d), "wall_pressure_N_m2": float(p), "running_mean_N_m2": float(m)}
         for d, p, m in zip(z, a["wall_pressure"], a["wall_running_mean"], strict=True)
     ]
+
+
+def _silo_rows(a: dict, th: dict) -> list[list[str]]:
+    """The silo table: k, mu_j fits, wall friction, packing and the weight balance, the thesis's values beside."""
+    janssen_fit = a["theory"] is None
+    rows = [
+        [
+            "k = sigma_xx/sigma_zz (slab stress tensors)",
+            f"{a['k']:.2f} ± {a['k_std']:.2f}",
+            f"{th['k']} ± {th['k_err']}",
+        ]
+    ]
+    if janssen_fit:
+        rows += [
+            ["k (Janssen fit, k and mu_j free)", f"{a['fit']['k']:.2f} ± {a['fit']['k_err']:.2f}", "–"],
+            [
+                "mu_j (Janssen fit, k free)",
+                f"{a['fit']['mu_j']:.3f} ± {a['fit']['mu_j_err']:.3f}",
+                f"{th['mu_j']}",
+            ],
+        ]
+    rows += [
+        [
+            f"mu_j ({'Janssen' if janssen_fit else a['shape'] + ' theory'} fit, k fixed at the stress value)",
+            f"{a['fit_k_fixed']['mu_j']:.3f}",
+            f"{th['mu_j']}",
+        ],
+        ["mobilised wall friction (sum F_t / sum F_n, side walls)", f"{a['mu_wall_mobilised']:.3f}", "–"],
+        ["wall contacts at the Coulomb limit", f"{a['wall_at_coulomb_limit']:.0%}", "–"],
+        [
+            "rho_rel (hull-corrected, Eq. 2.45)",
+            f"{a['rho_rel']:.3f}",
+            f"{th['rho_rel']} ± {th['rho_rel_err']}" if "rho_rel" in th else "–",
+        ],
+        [
+            "weight carried by side walls / ledges / floor",
+            f"{a['side_share']:.0%} / {a['ledge_share']:.0%} / {a['floor_share']:.0%}",
+            "–",
+        ],
+        [
+            "static balance (sum of wall forces F_y - weight) / weight",
+            f"{a['force_balance']:.1e}",
+            "0 (exact)",
+        ],
+    ]
+    return rows
 
 
 def direction_figure(directions: dict, path: Path, dpi: int = 110) -> list[dict]:
@@ -172,13 +240,146 @@ def heap_floor_figure(h: dict, path: Path, dpi: int = 110) -> list[dict]:
     ]
 
 
+def stress_angle_figure(a: dict, path: Path, dpi: int = 110) -> list[dict]:
+    """Folded principal-axis angle of each test area against S, with Wittmer's FPA and BCC (thesis Fig. 4.25)."""
+    fig, ax = _fig(5.0, 3.2)
+    ax.plot(a["S"], np.degrees(a["psi_folded_rad"]), "ko", ms=3, label="test areas (Eq. 2.52)")
+    S = np.linspace(1e-4, 1.0, 200)
+    model = wittmer_angles(S, a["phi_rad"])
+    ax.plot(S, np.degrees(model["FPA"]), "C3-", label="FPA (fixed principal axes)")
+    ax.plot(S, np.degrees(model["BCC"]), "C0--", label="BCC")
+    ax.set_xlabel("S = |x - apex| tan(phi) / depth below the apex")
+    ax.set_ylabel("Psi, leaning outwards [deg]")
+    ax.legend(fontsize=7)
+    fig.savefig(path, dpi=dpi)
+    return [
+        {"x_m": float(x), "y_m": float(y), "S": float(u), "psi_folded_deg": float(math.degrees(p))}
+        for x, y, u, p in zip(a["x_m"], a["y_m"], a["S"], a["psi_folded_rad"], strict=True)
+    ]
+
+
+def _stress_angle_part(
+    tables, h: dict, mu: float | None, out_dir: Path, dpi: int, frame: int = -1
+) -> list[str]:
+    """The stress-angle comparison with Wittmer et al. for phi = atan(mu), when test areas of 30 grains fit."""
+    if mu is None:
+        return []
+    phi = math.atan(mu)
+    try:
+        a = heap_stress_angles(tables, h, frame, phi=phi)
+    except PorepipeError as err:
+        return [f"<p class=note>Stress angles not measured: {html.escape(str(err))}.</p>"]
+    write_csv(
+        out_dir / "granular_stress_angles.csv",
+        stress_angle_figure(a, out_dir / "granular_stress_angles.png", dpi),
+    )
+    surface = math.degrees(a["model"]["surface"][0])
+    return [
+        "<h2>Principal stress axes</h2>",
+        f"<p>{len(a['S'])} test areas of ~30 grains (thesis: 100-200). Mean angle of the major axis, leaning "
+        f"outwards: {math.degrees(a['mean_folded_rad']):.1f}° ± {math.degrees(a['sem_folded_rad']):.1f}°; Wittmer's "
+        f"FPA predicts {surface:.1f}° everywhere for phi = atan({mu:g}) (rms deviation "
+        f"{math.degrees(a['rms_from_fpa_rad']):.1f}°). Thesis (§4.2.2, Fig. 4.25): a preferred direction in each "
+        "half, 'only poorly described' by the prediction for mu = 0.65 (28.5° at the surface); layered heaps: major "
+        "axis vertical at the centre, FPA not satisfied.</p>",
+        "<img src='granular_stress_angles.png' alt='stress angles'>",
+        "<p class=note>Data: <a href='granular_stress_angles.csv'>granular_stress_angles.csv</a></p>",
+    ]
+
+
+def _heap_part(h: dict, cost: str, out_dir: Path, dpi: int) -> list[str]:
+    """Floor pressure, repose angles and packing of a heap, with the thesis's findings in words."""
+    write_csv(
+        out_dir / "granular_floor_pressure.csv",
+        heap_floor_figure(h, out_dir / "granular_floor_pressure.png", dpi),
+    )
+    rows = [
+        [
+            "repose angle, left / right flank fit [deg]",
+            f"{math.degrees(h['repose_left_rad']):.1f} / {math.degrees(h['repose_right_rad']):.1f}",
+        ],
+        [
+            "repose angle, integral method (Eq. 2.42) [deg]",
+            f"{math.degrees(h['repose_integral_rad']):.1f}",
+        ],
+        ["height / foot width [m]", f"{h['height_m']:.3f} / {h['foot_m'][1] - h['foot_m'][0]:.3f}"],
+        [
+            "floor-pressure dip 1 - p(apex)/p(flank maxima), window scatter",
+            f"{h['dip']['dip']:.2f}, {h['dip']['fluctuation']:.2f}",
+        ],
+        ["rho_rel in the core (Eq. 2.45)", f"{h['rho_rel']:.3f}"],
+        ["mean coordination", f"{h['coordination']['mean']:.2f}"],
+        ["floor load / weight", f"{h['floor_load_N_m'] / h['weight_N_m']:.3f}"],
+    ]
+    return [
+        "<h2>Heap</h2>",
+        f"<p>{h['n_particles']} grains. Cost: {html.escape(cost)}. Thesis (§4.2): poured 7-gons (2500 grains, "
+        "9 seeds) have repose angle 26.8° ± 2.0° and a floor-pressure dip under the apex reaching up to half the "
+        "heap's height; poured 13-gons and layered heaps (21° flanks) have none (the central lowering is "
+        "smaller than the fluctuations); experiments on conical piles: dips up to 0.5.</p>",
+        "<img src='granular_floor_pressure.png' alt='floor pressure'>",
+        _table(["quantity", "this run"], rows),
+        "<p class=note>Data: <a href='granular_floor_pressure.csv'>granular_floor_pressure.csv</a></p>",
+    ]
+
+
+def _elastic_part(tables, unload: tuple[int, int], young: float | None, out_dir: Path) -> list[str]:
+    """Elastic constants of the adiabatic unloading (§4.3.3), the thesis's beside them; per-cell values as CSV."""
+    try:
+        e = elastic_constants(tables, *unload, grains_per_cell=9)
+    except PorepipeError as err:
+        return [f"<p class=note>Elastic constants not measured: {html.escape(str(err))}.</p>"]
+    ratio = f"1/{young / e['E_median']:.0f}" if young else "–"
+    rows = [
+        [
+            "nu (plane strain, Eq. 4.4), mean ± std",
+            f"{e['nu_mean']:.2f} ± {e['nu_std']:.2f}",
+            "0.446 ± 0.137",
+        ],
+        ["E (Eq. 4.5) [N/m], mean ± std", f"{e['E_mean']:.3g} ± {e['E_std']:.3g}", "1.48e5 ± 1.08e5"],
+        ["E of the packing / E of its grains (median)", ratio, "1/68"],
+        ["K (Eq. 4.11) [N/m], mean", f"{e['K_mean']:.3g}", "–"],
+        ["test areas with -1 < nu < 1/2 and E > 0", f"{int(e['elastic'].sum())} of {e['cells']}", "–"],
+        [
+            "grain displacement, median / largest [diameters]",
+            f"{e['u_median_over_d']:.3f} / {e['u_max_over_d']:.3f}",
+            "< 0.01 (grains 1e7 N/m)",
+        ],
+    ]
+    j, i = np.nonzero(e["elastic"])
+    write_csv(
+        out_dir / "granular_elastic.csv",
+        [
+            {"cell_x": int(a), "cell_y": int(b), "nu": float(e["nu"][b, a]), "E_N_m": float(e["E"][b, a])}
+            for a, b in zip(i, j, strict=True)
+        ],
+    )
+    return [
+        "<h2>Elastic constants (adiabatic unloading)</h2>",
+        f"<p>g lowered to ~0 between frames {unload[0]} and {unload[1]}; test areas of 9 grains. The contacts "
+        "stiffen with load, so E is the secant modulus of the whole unloading.</p>",
+        _table(["quantity", "this run", "thesis §4.3.3"], rows),
+        "<p class=note>Data: <a href='granular_elastic.csv'>granular_elastic.csv</a></p>",
+    ]
+
+
 def _table(columns, rows) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in r) + "</tr>" for r in rows)
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "auto", dpi: int = 110) -> str:
+def granular_section(
+    result,
+    out_dir,
+    *,
+    mu: float | None = None,
+    kind: str = "auto",
+    dpi: int = 110,
+    silo=None,
+    gravity=None,
+    young: float | None = None,
+) -> str:
     """HTML of the granular section for one ``granular.h5`` (figures and CSVs written into ``out_dir``).
 
     Parameters
@@ -190,53 +391,36 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
     mu : float, optional
         Grain friction (for the Rankine/Jaky bounds).
     kind : {"auto", "silo", "heap"}
-        Read-out; auto: a silo when the fill is more than twice as tall as the box is wide.
+        Read-out; auto: a silo when the result has a ``silo floor`` or its fill is more than twice as tall as the
+        box is wide.
     dpi : int
         Figure resolution.
+    silo : porepipe.granular Silo settings, optional
+        The scene's ``granular.silo`` (its shape's theory is fitted).
+    gravity : porepipe.granular Gravity settings, optional
+        The scene's ``granular.gravity``: a ramp of g to ~0 makes the heap read-out use the last frame before it
+        and adds the elastic constants of the unloading (§4.3.3).
+    young : float, optional
+        The grains' Young's modulus (N/m), set beside the packing's.
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     tables = read_granular(result)
     attrs = read_attrs(result)
     kind = _kind(tables) if kind == "auto" else kind
-    parts = []
+    parts, frame = [], -1
     cost = (
         f"{int(attrs.get('n_particles', 0))} particles, {int(attrs.get('steps', 0))} steps of "
         f"{float(attrs.get('dt_s', 0)):.3g} s, {float(attrs.get('particle_steps_per_s', 0)):.3g} particle-steps/s"
     )
     if kind == "silo":
-        a = analyse_silo(tables, mu=mu)
+        a = analyse_silo(tables, mu=mu, shape=silo)
         write_csv(
             out_dir / "granular_wall_pressure.csv",
-            silo_pressure_figure(a, out_dir / "granular_wall_pressure.png", dpi),
+            silo_pressure_figure(a, out_dir / "granular_wall_pressure.png", dpi, mu=mu),
         )
-        th = THESIS_SILO
-        rows = [
-            [
-                "k = sigma_xx/sigma_zz (slab stress tensors)",
-                f"{a['k']:.2f} ± {a['k_std']:.2f}",
-                f"{th['k']} ± {th['k_err']}",
-            ],
-            ["k (Janssen fit, k and mu_j free)", f"{a['fit']['k']:.2f} ± {a['fit']['k_err']:.2f}", "–"],
-            [
-                "mu_j (Janssen fit, k free)",
-                f"{a['fit']['mu_j']:.3f} ± {a['fit']['mu_j_err']:.3f}",
-                f"{th['mu_j']}",
-            ],
-            [
-                "mu_j (Janssen fit, k fixed at the stress value)",
-                f"{a['fit_k_fixed']['mu_j']:.3f}",
-                f"{th['mu_j']}",
-            ],
-            ["mobilised wall friction (sum F_t / sum F_n)", f"{a['mu_wall_mobilised']:.3f}", "–"],
-            ["wall contacts at the Coulomb limit", f"{a['wall_at_coulomb_limit']:.0%}", "–"],
-            [
-                "rho_rel (hull-corrected, Eq. 2.45)",
-                f"{a['rho_rel']:.3f}",
-                f"{th['rho_rel']} ± {th['rho_rel_err']}",
-            ],
-            ["weight carried by the walls", f"{a['wall_share']:.0%}", "–"],
-        ]
+        th = thesis_values(a, mu) or {**THESIS_SILO, "section": "§3.1"}
+        rows = _silo_rows(a, th)
         if mu is not None:
             b = lateral_pressure_bounds(mu)
             rows.append(
@@ -247,55 +431,32 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
                 ]
             )
         parts += [
-            "<h2>Janssen silo</h2>",
-            f"<p>{a['n_particles']} grains in a {2 * a['half_width_m'] * 1e3:.0f} mm wide silo, fill "
-            f"{a['fill_height_m']:.3f} m; fits above the grey line (the lowest silo width is the floor's zone). "
+            f"<h2>{'Janssen' if a['theory'] is None else a['shape'].capitalize()} silo</h2>",
+            f"<p>{a['n_particles']} grains in a silo {2 * a['half_width_m'] * 1e3:.0f} mm wide at the fill "
+            f"surface and {2 * a['bottom_half_width_m'] * 1e3:.0f} mm at the floor, fill "
+            f"{a['fill_height_m']:.3f} m; fits above the grey line (the lowest bottom width is the floor's zone). "
             f"Cost: {html.escape(cost)}.</p>",
             "<img src='granular_wall_pressure.png' alt='wall pressure'>",
-            _table(["quantity", "this run", "thesis §3.1"], rows),
+            _table(["quantity", "this run", f"thesis {th['section']}"], rows),
             "<p class=note>Data: <a href='granular_wall_pressure.csv'>granular_wall_pressure.csv</a></p>",
         ]
         directions = force_directions(frame_contacts(tables, -1))
     else:
-        h = analyse_heap(tables)
-        write_csv(
-            out_dir / "granular_floor_pressure.csv",
-            heap_floor_figure(h, out_dir / "granular_floor_pressure.png", dpi),
-        )
-        rows = [
-            [
-                "repose angle, left / right flank fit [deg]",
-                f"{math.degrees(h['repose_left_rad']):.1f} / {math.degrees(h['repose_right_rad']):.1f}",
-            ],
-            [
-                "repose angle, integral method (Eq. 2.42) [deg]",
-                f"{math.degrees(h['repose_integral_rad']):.1f}",
-            ],
-            ["height / foot width [m]", f"{h['height_m']:.3f} / {h['foot_m'][1] - h['foot_m'][0]:.3f}"],
-            [
-                "floor-pressure dip 1 - p(apex)/p(flank maxima), window scatter",
-                f"{h['dip']['dip']:.2f}, {h['dip']['fluctuation']:.2f}",
-            ],
-            ["rho_rel in the core (Eq. 2.45)", f"{h['rho_rel']:.3f}"],
-            ["mean coordination", f"{h['coordination']['mean']:.2f}"],
-            ["floor load / weight", f"{h['floor_load_N_m'] / h['weight_N_m']:.3f}"],
-        ]
-        parts += [
-            "<h2>Heap</h2>",
-            f"<p>{h['n_particles']} grains. Cost: {html.escape(cost)}. Thesis (§4.2): poured 7-gons (2500 grains, "
-            "9 seeds) have repose angle 26.8° ± 2.0° and a floor-pressure dip under the apex reaching up to half the "
-            "heap's height; poured 13-gons and layered heaps (21° flanks) have none (the central lowering is "
-            "smaller than the fluctuations); experiments on conical piles: dips up to 0.5.</p>",
-            "<img src='granular_floor_pressure.png' alt='floor pressure'>",
-            _table(["quantity", "this run"], rows),
-            "<p class=note>Data: <a href='granular_floor_pressure.csv'>granular_floor_pressure.csv</a></p>",
-        ]
+        unload = unloading_frames(tables, gravity)
+        frame = -1 if unload is None else unload[0]
+        h = analyse_heap(tables, frame)
+        parts += _heap_part(h, cost, out_dir, dpi)
+        parts += _stress_angle_part(tables, h, mu, out_dir, dpi, frame)
+        if unload is not None:
+            parts += _elastic_part(tables, unload, young, out_dir)
         directions = h["directions"]
     write_csv(
         out_dir / "granular_directions.csv",
         direction_figure(directions, out_dir / "granular_directions.png", dpi),
     )
-    write_csv(out_dir / "granular_network.csv", network_figure(tables, out_dir / "granular_network.png", dpi))
+    write_csv(
+        out_dir / "granular_network.csv", network_figure(tables, out_dir / "granular_network.png", dpi, frame)
+    )
     parts += [
         "<h2>Fabric</h2>",
         "<img src='granular_directions.png' alt='P(alpha)'> <img src='granular_network.png' alt='force network'>",
@@ -306,11 +467,21 @@ def granular_section(result, out_dir, *, mu: float | None = None, kind: str = "a
 
 
 def granular_report(
-    result, out_html, *, scene_name: str = "", mu: float | None = None, kind: str = "auto"
+    result,
+    out_html,
+    *,
+    scene_name: str = "",
+    mu: float | None = None,
+    kind: str = "auto",
+    silo=None,
+    gravity=None,
+    young: float | None = None,
 ) -> Path:
     """Write a stand-alone page with the granular section of ``result`` (a scene without a sweep)."""
     out_html = Path(out_html)
-    body = granular_section(result, out_html.parent, mu=mu, kind=kind)
+    body = granular_section(
+        result, out_html.parent, mu=mu, kind=kind, silo=silo, gravity=gravity, young=young
+    )
     page = (
         "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"
         f"<title>porepipe granular report {html.escape(scene_name)}</title></head><body>"

@@ -87,4 +87,13 @@ def _granular(scene, result: Path, out: Path) -> Path:
         )
     from porepipe.report._granular import granular_report
 
-    return granular_report(result, out, scene_name=scene.name, mu=scene.granular.material.friction)
+    g = scene.granular
+    return granular_report(
+        result,
+        out,
+        scene_name=scene.name,
+        mu=g.material.friction,
+        silo=g.silo,
+        gravity=g.gravity,
+        young=g.material.young_N_m,
+    )

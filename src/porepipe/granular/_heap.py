@@ -1,0 +1,245 @@
+"""Heap read-outs of a granular result: floor pressure and its dip, repose angles, packing and fabric (ch. 4).
+
+:func:`analyse_heap` gives the floor-pressure profile, repose angles, packing fraction and fabric of a heap;
+:func:`heap_ensemble` averages several heaps on the thesis's scaled axes; :func:`heap_stress_angles` compares the
+principal axes of the stress with Wittmer, Cates and Claudin's closures.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from porepipe._shared.errors import PorepipeError
+from porepipe.granular import _measure as M
+from porepipe.granular import _theory as T
+from porepipe.granular._silo import wall_by_name
+
+
+def analyse_heap(
+    tables: dict, frame: int = -1, *, floor: str = "box floor", g: float = 9.81, bins: int = 18
+) -> dict:
+    """Floor pressure and its dip, repose angles, packing fraction and fabric of a heap on a floor.
+
+    The heap's foot is where the floor carries it: the x-range between the 1 % and 99 % quantiles of the floor
+    load (grains that rolled away along the floor do not widen it). Repose fits, the integral method and the
+    scaled profile use the foot; the floor-pressure profile covers every floor contact.
+
+    Returns
+    -------
+    dict
+        ``floor_x_m`` / ``floor_pressure`` (sliding windows of ~15 contacts) and ``floor_running_mean``,
+        ``floor_mean``, ``apex_x_m``, ``height_m``, ``base_m`` (x-extent of the grains), ``foot_m`` (x0, x1),
+        ``repose_left_rad`` / ``repose_right_rad`` (highest-centroid fits on the flanks' middle halves),
+        ``repose_integral_rad`` (Eq. 2.42 on each half, averaged), ``rho_rel`` (hull-corrected, in the core),
+        ``rho_g_h`` (bulk rho g h, the thesis's pressure scale), ``dip`` (:func:`pressure_dip` of the running mean:
+        ``dip``, ``fluctuation``, ...), ``coordination``, ``directions`` (P(alpha)), ``magnitudes`` (P(F/<F>)),
+        ``n_particles``, ``floor_y_m``, ``weight_N_m``, ``floor_load_N_m``.
+    """
+    parts = M.frame_particles(tables, frame)
+    contacts = M.frame_contacts(tables, frame)
+    n = len(parts["centroid"])
+    act = parts["active"]
+    fk, fv = wall_by_name(tables, floor)
+    y0 = float(np.nanmax(fv[:, 1]))
+    cen = parts["centroid"][act]
+    polys = [p for p, a in zip(parts["polygons"], act, strict=True) if a]
+    allv = np.concatenate(polys)
+    d_grain = 2 * float(np.sqrt(np.mean(parts["area"][act]) / np.pi))
+    wc = M.wall_contacts(contacts, n, fk, fv)
+    if len(wc["normal_force"]) < 3:
+        raise PorepipeError(f"analyse_heap: fewer than 3 grains rest on {floor!r}")
+    xa, xb = _foot(wc["point"][:, 0], wc["normal_force"])
+    xs, tops = M.surface_profile(cen, np.linspace(xa, xb, max(int((xb - xa) / d_grain), 2) + 1))
+    xc = float(xs[np.nanargmax(tops)])
+    height = float(np.nanmax(allv[:, 1]) - y0)
+    x_lo, x_hi = float(wc["point"][:, 0].min()), float(wc["point"][:, 0].max())
+    prof = M.pressure_profile(
+        wc["point"][:, 0], wc["normal_force"], xb - xa, centres=np.linspace(x_lo, x_hi, 80)
+    )
+    left = M.repose_angle_fit(
+        cen, (xa + 0.25 * (xc - xa), xc - 0.25 * (xc - xa), max(int(0.5 * (xc - xa) / d_grain), 2))
+    )
+    right = M.repose_angle_fit(
+        cen, (xc + 0.25 * (xb - xc), xb - 0.25 * (xb - xc), max(int(0.5 * (xb - xc) / d_grain), 2))
+    )
+    on_foot = (cen[:, 0] >= xa) & (cen[:, 0] <= xb)
+    solid = sum(M.polygon_area(p) for p, keep in zip(polys, on_foot, strict=True) if keep)
+    pf = M.packing_fraction(
+        polys, (xc - 0.3 * (xc - xa), y0 + d_grain, xc + 0.3 * (xb - xc), y0 + 0.5 * height)
+    )
+    # Eq. 2.42 per half: the material's area (solid area / packing fraction) over half the base
+    area = solid / pf["corrected"]
+    integral = 0.5 * (
+        M.repose_angle_integral(area * (xc - xa) / (xb - xa), xc - xa)
+        + M.repose_angle_integral(area * (xb - xc) / (xb - xa), xb - xc)
+    )
+    rho_p = float(np.median(tables["frames"]["mass_kg"].values / parts["area"]))
+    return {
+        "floor_x_m": prof["centres"],
+        "floor_pressure": prof["pressure"],
+        "floor_running_mean": prof["running_mean"],
+        "floor_mean": prof["mean"],
+        "apex_x_m": xc,
+        "height_m": height,
+        "base_m": float(allv[:, 0].max() - allv[:, 0].min()),
+        "foot_m": (xa, xb),
+        "repose_left_rad": left["angle_rad"],
+        "repose_right_rad": right["angle_rad"],
+        "repose_integral_rad": integral,
+        "rho_rel": pf["corrected"],
+        "rho_g_h": pf["corrected"] * rho_p * g * height,
+        "dip": M.pressure_dip(prof["centres"], prof["running_mean"], xc, noise=prof["pressure"]),
+        "coordination": M.coordination(contacts, n, active=act),
+        "directions": M.force_directions(contacts, bins=bins),
+        "magnitudes": M.force_magnitudes(contacts),
+        "n_particles": int(act.sum()),
+        "floor_y_m": y0,
+        "weight_N_m": float(tables["frames"]["mass_kg"].values[act].sum() * g),
+        "floor_load_N_m": float(wc["normal_force"].sum()),
+    }
+
+
+def _foot(x, load, tail: float = 0.01) -> tuple[float, float]:
+    """x-range between the ``tail`` and ``1 - tail`` quantiles of the floor load."""
+    order = np.argsort(x)
+    cum = np.cumsum(np.asarray(load, dtype=np.float64)[order])
+    cum /= cum[-1]
+    xs = np.asarray(x, dtype=np.float64)[order]
+    return float(xs[np.searchsorted(cum, tail)]), float(xs[min(np.searchsorted(cum, 1 - tail), len(xs) - 1)])
+
+
+def heap_ensemble(heaps: list[dict], points: int = 81) -> dict:
+    """Average the floor pressure of several heaps (realisations differing in the seed, as the thesis's 9).
+
+    Each :func:`analyse_heap` result's running-mean profile is put on the thesis's axes (x from the apex in units
+    of half the foot width, pressure over rho g h), the profiles are averaged where each covers, and the dip of the
+    mean profile is measured.
+
+    Returns
+    -------
+    dict
+        ``s`` (grid on [-1.2, 1.2]), ``mean`` and ``std`` (scaled pressure), ``dip`` (:func:`pressure_dip` of the
+        mean), ``dips`` (each heap's own dip), ``repose_deg`` (mean and std of the flank fits), ``n``.
+    """
+    if not heaps:
+        raise PorepipeError("heap_ensemble: no heaps given")
+    grid = np.linspace(-1.2, 1.2, points)
+    rows = np.array(
+        [
+            M.scaled_profile(
+                h["floor_x_m"],
+                h["floor_running_mean"],
+                h["apex_x_m"],
+                0.5 * (h["foot_m"][1] - h["foot_m"][0]),
+                h["rho_g_h"],
+                grid,
+            )
+            for h in heaps
+        ]
+    )
+    mean = np.nanmean(rows, axis=0)
+    ok = ~np.isnan(mean)
+    repose = np.degrees([[h["repose_left_rad"], h["repose_right_rad"]] for h in heaps]).ravel()
+    return {
+        "s": grid,
+        "mean": mean,
+        "std": np.nanstd(rows, axis=0),
+        "dip": M.pressure_dip(grid[ok], mean[ok], 0.0),
+        "dips": [h["dip"]["dip"] for h in heaps],
+        "repose_deg": (float(repose.mean()), float(repose.std())),
+        "n": len(heaps),
+    }
+
+
+def wittmer_angles(S, phi: float) -> dict[str, np.ndarray]:
+    """Principal-axis angle Psi(S) of the Wittmer-Cates-Claudin wedge for the FPA and BCC closures (Eqs. 1.19-1.31).
+
+    Psi is the major axis's angle from the vertical, positive when it leans away from the heap's axis going down
+    (the sign of the right flank; the left is its mirror image). Both meet the IFS surface value (pi/2 - phi)/2 in
+    the outer region; FPA keeps it everywhere ("fixed principal axes"), BCC turns to vertical at the axis.
+    """
+    S = np.abs(np.asarray(S, dtype=np.float64))
+    out = {}
+    # beyond the wedge's surface (S >= 1, an area on a flank flatter than phi) the IFS limit S -> 1 is used
+    for model in ("FPA", "BCC"):
+        eta, mu = T.closure_linear(model, phi)
+        s = T.wedge_stress(np.minimum(S, 1.0 - 1e-9), phi, eta, mu)
+        out[model] = T.principal_angle(s["xx"], s["zz"], s["xz"])
+    out["surface"] = np.full(S.shape, 0.5 * (0.5 * np.pi - phi))
+    return out
+
+
+def heap_stress_angles(
+    tables: dict, heap: dict, frame: int = -1, *, phi: float, grains_per_area: float = 30.0, fill: float = 0.7
+) -> dict:
+    """Principal-axis angles of the coarse-grained stress (Eq. 2.52) over a heap, against Wittmer's FPA/BCC (§4.2).
+
+    Test areas: a grid of squares holding ``grains_per_area`` grains each at the heap's packing (the thesis used
+    100-200), its columns centred on the apex; a square is kept when it holds at least ``fill`` of that, so squares cut by the surface drop out
+    (the thesis fitted its test areas to the contour). Each area's stress gives Psi (major axis from the vertical);
+    ``psi_folded`` mirrors the left half onto the right (positive: leaning away from the axis going down).
+
+    Parameters
+    ----------
+    tables : dict
+        :func:`porepipe.granular.read_granular` output.
+    heap : dict
+        :func:`analyse_heap` of the same frame (apex, foot, height, packing fraction).
+    phi : float
+        Wittmer's angle (rad): the thesis used the friction angle atan(0.65) = 33° (Psi at the surface 28.5°).
+
+    Returns
+    -------
+    dict
+        Per area: ``x_m``, ``y_m`` (members' mean centroid), ``S`` (= |x - apex| tan(phi)/(depth below the apex)),
+        ``x_scaled`` ((x - apex)/half the foot), ``psi_rad``, ``psi_folded_rad``, ``members``; ``model`` (FPA, BCC,
+        surface: Psi at each area's S); ``S_c_fpa`` (inner/outer boundary of FPA); ``mean_folded_rad`` and
+        ``sem_folded_rad`` (mean and standard error over areas), ``rms_from_fpa_rad``.
+    """
+    parts = M.frame_particles(tables, frame)
+    contacts = M.frame_contacts(tables, frame)
+    act = parts["active"]
+    cen = parts["centroid"]
+    grain = float(np.mean(parts["area"][act]))
+    side = float(np.sqrt(grains_per_area * grain / heap["rho_rel"]))
+    xa, xb = heap["foot_m"]
+    y0 = heap["floor_y_m"]
+    apex_y = y0 + heap["height_m"]
+    xc = heap["apex_x_m"]
+    # columns centred on the apex (column 0 on the axis): the grid is its own mirror image about the axis
+    cols = np.arange(np.ceil((xa - xc) / side + 0.5), np.floor((xb - xc) / side - 0.5) + 1)
+    rows = []
+    for ya in np.arange(y0, apex_y - side, side):
+        for m in cols:
+            xlo = xc + (m - 0.5) * side
+            inside = act & (np.abs(cen[:, 0] - (xlo + 0.5 * side)) < 0.5 * side)
+            inside &= (cen[:, 1] >= ya) & (cen[:, 1] < ya + side)
+            if inside.sum() < fill * grains_per_area:
+                continue
+            st = M.stress_tensor(contacts, cen, members=inside)
+            x, y = cen[inside].mean(axis=0)
+            rows.append((x, y, st["psi_rad"], int(inside.sum())))
+    if len(rows) < 2:
+        raise PorepipeError(
+            f"heap_stress_angles: fewer than 2 test areas of {grains_per_area:g} grains fit in the heap"
+        )
+    x, y, psi, members = (np.array(v) for v in zip(*rows, strict=True))
+    S = np.abs(x - xc) * np.tan(phi) / np.maximum(apex_y - y, 1e-300)
+    folded = -psi * np.sign(x - xc)
+    model = wittmer_angles(S, phi)
+    return {
+        "x_m": x,
+        "y_m": y,
+        "S": S,
+        "x_scaled": (x - xc) / (0.5 * (xb - xa)),
+        "psi_rad": psi,
+        "psi_folded_rad": folded,
+        "members": members,
+        "model": model,
+        "S_c_fpa": T.wedge_stress(0.0, phi, *T.closure_linear("FPA", phi))["S_c"],
+        "mean_folded_rad": float(folded.mean()),
+        "sem_folded_rad": float(folded.std(ddof=1) / np.sqrt(len(folded))),
+        "rms_from_fpa_rad": float(np.sqrt(np.mean((folded - model["FPA"]) ** 2))),
+        "phi_rad": phi,
+        "side_m": side,
+    }
