@@ -7,7 +7,7 @@ when it passes half a row pitch below the last row, and the ball then leaves the
 
     python benchmarks/granular_galton.py --balls 400 --p 0.5
     python benchmarks/granular_galton.py --balls 400 --p 0.6667 --row-shift 0.0003
-    python benchmarks/granular_galton.py --smoke        # 40 balls, for CI (no figures to quote)
+    python benchmarks/granular_galton.py --smoke        # 30 balls, for CI (no figures to quote)
 """
 
 from __future__ import annotations
@@ -36,11 +36,11 @@ def main() -> None:
     ap.add_argument("--spacing", type=float, default=dflt.spacing_m, help="nail spacing D, m")
     ap.add_argument("--nail", type=float, default=dflt.nail_r_m, help="nail circumradius, m")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--smoke", action="store_true", help="40 balls (CI smoke; no figures to quote)")
+    ap.add_argument("--smoke", action="store_true", help="30 balls (CI smoke; no figures to quote)")
     add_out_argument(ap)
     args = ap.parse_args()
     if args.smoke:
-        args.balls = 40
+        args.balls = 30
     board = GaltonBoard(
         spacing_m=args.spacing,
         nail_r_m=args.nail,
