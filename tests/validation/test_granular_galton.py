@@ -56,7 +56,60 @@ matches would not make the decisions independent (gamma 1.25 matches the varianc
 issue's check "bin counts pass a chi² test against the binomial" is not met by either set-up; the tests below pin
 the measured behaviour and the power of the chi² test that the binomial check uses.
 
-PART3
+Part 3, a board with independent decisions (GaltonBoard defaults), measured 2026-12-03 on the loaded 2-core
+machine. What Parts 1-2 lack: a ball must not carry its sideways momentum from one row to the next, and the state it
+arrives with at a nail must be spread by chaos, not contracted by damping. Both hold when the gaps are barely wider
+than a ball and the balls are fairly elastic: a ball rattles between the two pins of a gap (each bounce on a convex
+pin spreads its state, as in a dispersing billiard), the pins turn its sideways velocity around, and it leaves the
+gap near its centre -- right above the next pin's apex -- with a fresh random offset. Board: round pins (16-gons,
+r = 1.9 mm) at D = 8 mm, gaps 1.05 ball diameters; gamma = 0.15 (restitution of a disk on a plane 0.83-0.87 at
+0.1-0.6 m/s, like glass or steel balls), mu = 0.3; an entry row of pins under the funnel (without it the first
+bounce, off the top pin, flew over the top row's nails: 3 of 40 balls skipped one); one ball per 0.5 s (about four
+in the board at a time: a ball takes up to ~2.5 s through it).
+
+One ball per board (Part 2's set-up, released at rest on the top pin), variance against 2.5, lag-1 correlation r1
+of successive decisions, chi² p against Binomial(10, 1/2) (decision = change of the nearest lattice bin):
+
+    pins     gap/d  gamma  mu   balls  variance  r1      chi² p
+    round    1.05   0.10   0.3  200    2.47      +0.015  0.79
+    round    1.05   0.15   0.3  200    2.38      -0.038  0.80
+    round    1.075  0.15   0.3  200    2.67      +0.028  0.80
+    round    1.075  0.25   0.3  200    2.88      +0.081  0.30
+    round    1.05   0.15   0.1  200    2.70      -0.003  0.21
+    round    1.05   0.15   0.0  200    2.35      -0.023  0.71   (37 skipped nails: balls slide over)
+    round    1.25   0.15   0.3  200    3.64      +0.114  0.012  (47 skipped nails: wide gaps keep momentum)
+    round    1.05   1.0    0.3  200    0.25      -0.889  0      (deterministic zig-zag: damping contracts)
+    hexagon  1.05   0.15   0.3  200    2.66      +0.024  0.25   (the thesis's nail shape works as well)
+Many-ball board (GaltonBoard(), balls through the funnel), p = 1/2:
+
+    balls  s per ball  seed  variance  r1      P(right)  chi² p
+    300    0.5         1     2.36      -0.013  0.498     0.46
+    300    0.5         2     2.38      -0.049  0.500     0.58
+    300    0.5         3     2.16      -0.044  0.496     0.37
+    600    0.5         4     2.82      -0.041  0.509     0.69
+    300    0.25        1     2.41      -0.050  0.506     0.15
+BIGROW
+So chi² passes for every seed and ball count; the decisions are independent to within a weak anti-persistence,
+r1 = -0.035 +- 0.011 pooled (at 0.1 s per ball the funnel clogs: two balls arch across the entry gap, the
+queue reaches the release point by t = 2.3 s and the run stops at the overlap guard).
+
+p = 2/3 by moving each row 0.32 mm to the left against the row above (row_shift_m = -0.00032, calibrated: 0.30 mm
+gave P(right) 0.646); Binomial(10, 2/3) has variance 2.22:
+
+    balls  seed  row shift  variance  r1      P(right)  chi² p (against 2/3)
+    300    1     0.30 mm    2.02      -0.099  0.646     0.044
+    300    5     0.32 mm    1.77      -0.082  0.667     0.20
+    300    6     0.32 mm    2.22      -0.044  0.663     0.94
+
+chi² passes, but a biased board is more anti-persistent (r1 -0.04 to -0.10, variance 0.8-1.0 of binomial; one
+ball per board gives the same: r1 -0.12 at a 0.3 mm shift, and a tilted board, P(right) 0.64, r1 -0.06, variance
+0.76 of binomial): at 300 balls chi² has little power against that; thousands of balls would see it.
+
+Part 4, why a many-ball board jams (the thesis-like board stopped with 2 of 40 balls stuck, at rest): not a ball
+held on a nail's apex but two balls side by side across a gap, each on a nail's upper side corner, pushing each
+other sideways -- a two-particle arch, as in a clogged hopper. Friction holds it (mu >= 0.05 measured), without
+friction it tips over (test_two_ball_arch_across_a_gap_is_held_by_friction). Any gap under two ball diameters can
+hold one, so the default board feeds balls slowly enough that two seldom meet in a gap.
 """
 
 import math
@@ -171,10 +224,15 @@ def test_single_ball_galton_board_width_is_set_by_damping_not_binomial():
 MANY = 200  # balls per CI board (the 2300-ball board of the thesis: benchmarks/granular_galton.py, report)
 
 
+STUCK = (
+    5  # the thesis-like board may jam: up to this many balls held in two-ball arches (Part 4) are left out
+)
+
+
 @pytest.fixture(scope="module")
 def fair_board():
     board = GaltonBoard.thesis_like()
-    return galton_paths(board.simulation(MANY), board)
+    return galton_paths(board.simulation(MANY), board, max_stuck=STUCK)
 
 
 @pytest.mark.slow
@@ -187,7 +245,7 @@ def test_many_ball_board_is_symmetric_but_a_walk_with_memory(fair_board):
     # decisions are not independent Bernoulli trials, so the bins cannot be binomial.
     decisions, bins = fair_board
     var = bins.var(ddof=1)
-    assert abs(bins.mean() - 5) < 3 * math.sqrt(var / MANY), bins.mean()
+    assert abs(bins.mean() - 5) < 3 * math.sqrt(var / len(bins)), bins.mean()
     assert var > 1.5 * 2.5, var
     prev, nxt = decisions[:, :-1].ravel(), decisions[:, 1:].ravel()
     assert np.corrcoef(prev, nxt)[0, 1] > 0.1
@@ -200,8 +258,8 @@ def test_shifted_nail_tips_make_the_board_asymmetric():
     # shallow right-hand faces hold balls and the stream jams): measured at 300 balls P(right) 0.54-0.62 per row
     # and mean bin 6.02 (SE 0.18). Asserted: mean bin > 5 + 3 SE.
     board = GaltonBoard.thesis_like(spacing_m=0.012, damping=0.5, tip_shift_m=-0.001)
-    _, bins = galton_paths(board.simulation(MANY), board)
-    assert bins.mean() > 5 + 3 * math.sqrt(bins.var(ddof=1) / MANY), bins.mean()
+    _, bins = galton_paths(board.simulation(MANY), board, max_stuck=STUCK)
+    assert bins.mean() > 5 + 3 * math.sqrt(bins.var(ddof=1) / len(bins)), bins.mean()
 
 
 @pytest.mark.slow
@@ -245,6 +303,16 @@ def test_galton_board_bins_pass_chi2_against_binomial():
     decisions, bins = galton_paths(board.simulation(300, seed=2), board)
     _assert_binomial(decisions, bins, 0.5, 300, r_bound=0.1)
     assert abs(bins.var(ddof=1) - 2.5) < 3 * 2.5 * math.sqrt(2 / 299)
+
+
+@pytest.mark.slow
+def test_row_shift_gives_p_two_thirds():
+    # The issue's check, p = 2/3: each row moved 0.32 mm to the left against the row above; 300 balls. Measured
+    # (module docstring, Part 3): P(right) 0.663-0.667, chi² p 0.20-0.94 against Binomial(10, 2/3), and a biased
+    # board is more anti-persistent, r1 = -0.04 to -0.10 (SE 0.019), so |r1| < 0.15 here (3 SE beyond -0.10).
+    board = GaltonBoard(row_shift_m=-0.00032)
+    decisions, bins = galton_paths(board.simulation(300, seed=6), board)
+    _assert_binomial(decisions, bins, 2 / 3, 300, r_bound=0.15)
 
 
 def test_two_ball_arch_across_a_gap_is_held_by_friction():
