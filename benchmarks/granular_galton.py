@@ -2,17 +2,19 @@
 
 One board, balls fed through a funnel (drop source above a V hopper). Defaults (GaltonBoard): round pins with gaps
 of 1.05 ball diameters, gamma 0.15, one ball every 0.5 s; p = 2/3 by moving each row of pins sideways against the
-row above. The thesis's hexagonal nails: --nail-corners 6 (p = 2/3 by --tip-shift). Each ball's bin is recorded
-when it passes half a row pitch below the last row, and the ball then leaves the run.
+row above. The thesis-like board (hexagonal nails, gamma 1, 50 balls/s): --thesis (p = 2/3 by --tip-shift).
+Each ball's bin is recorded when it passes half a row pitch below the last row, and the ball then leaves the run.
 
     python benchmarks/granular_galton.py --balls 400 --p 0.5
-    python benchmarks/granular_galton.py --balls 400 --p 0.6667 --row-shift 0.0003
+    python benchmarks/granular_galton.py --balls 300 --p 0.6667 --row-shift 0.00032
+    python benchmarks/granular_galton.py --thesis --balls 2300 --max-stuck 5     # the thesis-like board
     python benchmarks/granular_galton.py --smoke        # 30 balls, for CI (no figures to quote)
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
 import numpy as np
@@ -24,36 +26,41 @@ from porepipe.granular import GaltonBoard, chi2_binomial, galton_paths
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    dflt = GaltonBoard()
     ap.add_argument("--balls", type=int, default=400)
     ap.add_argument("--p", type=float, default=0.5, help="the binomial p compared with")
-    ap.add_argument("--nail-corners", type=int, default=dflt.nail_corners, help="16 round pins, 6 hexagons")
-    ap.add_argument("--tip-shift", type=float, default=0.0, help="hexagon tips moved left by this, m")
-    ap.add_argument("--row-shift", type=float, default=0.0, help="each row moved left by this, m")
-    ap.add_argument("--damping", type=float, default=dflt.damping)
-    ap.add_argument("--friction", type=float, default=dflt.friction)
-    ap.add_argument("--every", type=float, default=dflt.every_s, help="seconds between drops")
-    ap.add_argument("--spacing", type=float, default=dflt.spacing_m, help="nail spacing D, m")
-    ap.add_argument("--nail", type=float, default=dflt.nail_r_m, help="nail circumradius, m")
+    ap.add_argument(
+        "--thesis", action="store_true", help="GaltonBoard.thesis_like(): hexagons, gamma 1, 50 balls/s"
+    )
+    ap.add_argument("--nail-corners", type=int, help="16 round pins (default), 6 hexagons")
+    ap.add_argument("--tip-shift", type=float, help="hexagon tips moved left by this, m")
+    ap.add_argument("--row-shift", type=float, help="each row moved left by this against the row above, m")
+    ap.add_argument("--damping", type=float)
+    ap.add_argument("--friction", type=float)
+    ap.add_argument("--every", type=float, help="seconds between drops")
+    ap.add_argument("--spacing", type=float, help="nail spacing D, m")
+    ap.add_argument("--nail", type=float, help="nail circumradius, m")
+    ap.add_argument("--max-stuck", type=int, default=0, help="balls that may stay in the board (arches)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--smoke", action="store_true", help="30 balls (CI smoke; no figures to quote)")
     add_out_argument(ap)
     args = ap.parse_args()
     if args.smoke:
         args.balls = 30
-    board = GaltonBoard(
-        spacing_m=args.spacing,
-        nail_r_m=args.nail,
-        nail_corners=args.nail_corners,
-        tip_shift_m=-args.tip_shift,
-        row_shift_m=-args.row_shift,
-        damping=args.damping,
-        friction=args.friction,
-        every_s=args.every,
-    )
+    fields = {
+        "spacing_m": args.spacing,
+        "nail_r_m": args.nail,
+        "nail_corners": args.nail_corners,
+        "tip_shift_m": None if args.tip_shift is None else -args.tip_shift,
+        "row_shift_m": None if args.row_shift is None else -args.row_shift,
+        "damping": args.damping,
+        "friction": args.friction,
+        "every_s": args.every,
+    }
+    changes = {k: v for k, v in fields.items() if v is not None}  # options given replace the board's defaults
+    board = GaltonBoard.thesis_like(**changes) if args.thesis else GaltonBoard(**changes)
     sim = board.simulation(args.balls, args.seed)
     t0 = time.perf_counter()
-    dec, bins = galton_paths(sim, board, progress=True)
+    dec, bins = galton_paths(sim, board, progress=True, max_stuck=args.max_stuck)
     wall = time.perf_counter() - t0
     counts = np.bincount(np.clip(bins, 0, 10), minlength=11)  # outer bins take any beyond
     exp = len(bins) * stats.binom.pmf(np.arange(11), 10, args.p)
@@ -72,9 +79,11 @@ def main() -> None:
     )
     write_record(
         args.out,
-        f"granular_galton_p{args.p:.3f}_n{args.nail_corners}_g{args.damping}_mu{args.friction}_d{args.spacing}.json",
+        f"granular_galton_p{args.p:.3f}_n{board.nail_corners}_g{board.damping}_mu{board.friction}"
+        f"_d{board.spacing_m}_s{args.seed}.json",
         {
             "args": vars(args) | {"out": str(args.out)},
+            "board": dataclasses.asdict(board),
             "counts": counts.tolist(),
             "chi2": chi2,
             "lag1": float(pooled),
