@@ -124,6 +124,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from porepipe._shared.errors import PorepipeError
 from porepipe.granular import GaltonBoard, Settings, Simulation, chi2_binomial, galton_paths, regular_polygon
 
 ROWS = 10
@@ -359,6 +360,15 @@ def test_two_ball_arch_across_a_gap_is_held_by_friction():
             assert moved < 5e-4 and np.abs(sim.velocity[:, :2]).max() < 1e-5, (mu, moved)
         else:
             assert moved > d, (mu, moved)
+
+
+def test_clogged_funnel_is_one_clear_error():
+    # 10 balls/s is too fast for the default board: two balls arch across the entry gap, the queue reaches the
+    # release point (measured: by t = 2.3 s) and the next ball is released onto it -- an error naming the clog and
+    # the feed, not the overlap guard's advice to shrink dt.
+    board = GaltonBoard(every_s=0.1)
+    with pytest.raises(PorepipeError, match="funnel clogged .* every_s = 0.1 s"):
+        galton_paths(board.simulation(60), board)
 
 
 def test_board_refuses_what_it_cannot_build():

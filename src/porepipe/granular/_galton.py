@@ -217,8 +217,8 @@ def galton_paths(
     Raises
     ------
     PorepipeError
-        More than ``max_stuck`` balls are still in the board at ``t_max_s`` (default: last drop + 10 s), e.g. the
-        outlet jammed.
+        More than ``max_stuck`` balls are still in the board at ``t_max_s`` (default: last drop + 10 s), e.g. two
+        held in an arch; or the funnel clogged (balls queued up to where the next one is released).
     """
     n = sim.n_mob
     t_max = (sim.insert_s.max() + 10.0) if t_max_s is None else t_max_s
@@ -235,7 +235,7 @@ def galton_paths(
                 f"galton: {int((~done).sum())} balls still in the board at t = {sim.time_s:.3g} s "
                 f"(max_stuck = {max_stuck})"
             )
-        sim.advance(chunk)
+        _advance(sim, board, chunk)
         p = sim.position
         live = (sim.active[:n] == 1) & ~done
         for _ in range(ROWS):  # a fast ball may cross more than one level per chunk (rare): loop until none
@@ -260,6 +260,20 @@ def galton_paths(
     decisions = np.diff(np.column_stack([np.zeros(n, np.int64), lattice]), axis=1)
     bins = lattice[:, -1]
     return decisions, bins
+
+
+def _advance(sim: Simulation, board: GaltonBoard, steps: int) -> None:
+    """``sim.advance``; a ball released onto balls queued in the funnel (overlap guard) is a clogged funnel."""
+    try:
+        sim.advance(steps)
+    except PorepipeError as err:
+        queued = int(((sim.active[: sim.n_mob] == 1) & (sim.position[:, 1] > board.outlet[1])).sum())
+        if queued < 3:
+            raise
+        raise PorepipeError(
+            f"galton: the funnel clogged at t = {sim.time_s:.3g} s ({queued} balls queued above its outlet, the "
+            f"next one released onto them); feed slower than every_s = {board.every_s:g} s"
+        ) from err
 
 
 def chi2_binomial(bins, p: float, n: int = ROWS, min_expected: float = 5.0):
