@@ -1,16 +1,20 @@
-"""Galton board of thesis §2.5.4 with many interacting balls: bin counts against the binomial law (Eq. 2.58).
+"""Galton board of thesis §2.5.4 with many balls in one board: bin counts against the binomial law (Eq. 2.58).
 
-One board, balls fed through a funnel (drop source above a V hopper), hexagonal nails with the tip up; p = 2/3
-by shifting the tips sideways. Each ball's bin is recorded when it passes half a row pitch below the last row,
-and the ball then leaves the run (the bins below would only hold it).
+One board, balls fed through a funnel (drop source above a V hopper). Defaults (GaltonBoard): round pins with gaps
+of 1.05 ball diameters, gamma 0.15, one ball every 0.5 s; p = 2/3 by moving each row of pins sideways against the
+row above. The thesis-like board (hexagonal nails, gamma 1, 50 balls/s): --thesis (p = 2/3 by --tip-shift).
+Each ball's bin is recorded when it passes half a row pitch below the last row, and the ball then leaves the run.
 
-    python benchmarks/granular_galton.py --balls 2300 --p 0.5
-    python benchmarks/granular_galton.py --smoke        # 100 balls, for CI (no figures to quote)
+    python benchmarks/granular_galton.py --balls 400 --p 0.5
+    python benchmarks/granular_galton.py --balls 300 --p 0.6667 --row-shift 0.00032
+    python benchmarks/granular_galton.py --thesis --balls 2300 --max-stuck 5     # the thesis-like board
+    python benchmarks/granular_galton.py --smoke        # 30 balls, for CI (no figures to quote)
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
 import numpy as np
@@ -22,24 +26,41 @@ from porepipe.granular import GaltonBoard, chi2_binomial, galton_paths
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--balls", type=int, default=2300)
+    ap.add_argument("--balls", type=int, default=400)
     ap.add_argument("--p", type=float, default=0.5, help="the binomial p compared with")
-    ap.add_argument("--tip-shift", type=float, default=0.0, help="nail tips moved left by this, m")
-    ap.add_argument("--damping", type=float, default=1.0)
-    ap.add_argument("--friction", type=float, default=0.3)
-    ap.add_argument("--every", type=float, default=0.02, help="seconds between drops")
-    ap.add_argument("--spacing", type=float, default=0.010, help="nail spacing D, m")
-    ap.add_argument("--nail", type=float, default=0.002, help="nail (hexagon) circumradius, m")
+    ap.add_argument(
+        "--thesis", action="store_true", help="GaltonBoard.thesis_like(): hexagons, gamma 1, 50 balls/s"
+    )
+    ap.add_argument("--nail-corners", type=int, help="16 round pins (default), 6 hexagons")
+    ap.add_argument("--tip-shift", type=float, help="hexagon tips moved left by this, m")
+    ap.add_argument("--row-shift", type=float, help="each row moved left by this against the row above, m")
+    ap.add_argument("--damping", type=float)
+    ap.add_argument("--friction", type=float)
+    ap.add_argument("--every", type=float, help="seconds between drops")
+    ap.add_argument("--spacing", type=float, help="nail spacing D, m")
+    ap.add_argument("--nail", type=float, help="nail circumradius, m")
+    ap.add_argument("--max-stuck", type=int, default=0, help="balls that may stay in the board (arches)")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--smoke", action="store_true", help="100 balls (CI smoke; no figures to quote)")
+    ap.add_argument("--smoke", action="store_true", help="30 balls (CI smoke; no figures to quote)")
     add_out_argument(ap)
     args = ap.parse_args()
     if args.smoke:
-        args.balls = 100
-    board = GaltonBoard(args.spacing, args.nail, -args.tip_shift, args.damping, args.friction, args.every)
+        args.balls = 30
+    fields = {
+        "spacing_m": args.spacing,
+        "nail_r_m": args.nail,
+        "nail_corners": args.nail_corners,
+        "tip_shift_m": None if args.tip_shift is None else -args.tip_shift,
+        "row_shift_m": None if args.row_shift is None else -args.row_shift,
+        "damping": args.damping,
+        "friction": args.friction,
+        "every_s": args.every,
+    }
+    changes = {k: v for k, v in fields.items() if v is not None}  # options given replace the board's defaults
+    board = GaltonBoard.thesis_like(**changes) if args.thesis else GaltonBoard(**changes)
     sim = board.simulation(args.balls, args.seed)
     t0 = time.perf_counter()
-    dec, bins = galton_paths(sim, board, progress=True)
+    dec, bins = galton_paths(sim, board, progress=True, max_stuck=args.max_stuck)
     wall = time.perf_counter() - t0
     counts = np.bincount(np.clip(bins, 0, 10), minlength=11)  # outer bins take any beyond
     exp = len(bins) * stats.binom.pmf(np.arange(11), 10, args.p)
@@ -47,6 +68,8 @@ def main() -> None:
     print("P(right) per row", np.round(dec.mean(axis=0), 3).tolist())
     r = [np.corrcoef(dec[:, k], dec[:, k + 1])[0, 1] for k in range(dec.shape[1] - 1)]
     print("corr(successive decisions)", np.round(r, 3).tolist())
+    pooled = np.corrcoef(dec[:, :-1].ravel(), dec[:, 1:].ravel())[0, 1]
+    print(f"pooled lag-1 correlation {pooled:.3f}; {int(((dec != 0) & (dec != 1)).sum())} skipped nails")
     print(f"{len(bins)} balls, {wall:.0f} s wall, {sim.step} steps, t = {sim.time_s:.2f} s")
     print("counts  ", counts.tolist(), f"({int(np.sum((bins < 0) | (bins > 10)))} beyond 0..10)")
     print("binomial", np.round(exp, 1).tolist())
@@ -56,11 +79,15 @@ def main() -> None:
     )
     write_record(
         args.out,
-        f"granular_galton_p{args.p:.3f}_g{args.damping}_mu{args.friction}_d{args.spacing}.json",
+        f"granular_galton_p{args.p:.3f}_n{board.nail_corners}_g{board.damping}_mu{board.friction}"
+        f"_d{board.spacing_m}_s{args.seed}.json",
         {
             "args": vars(args) | {"out": str(args.out)},
+            "board": dataclasses.asdict(board),
             "counts": counts.tolist(),
             "chi2": chi2,
+            "lag1": float(pooled),
+            "variance": float(bins.var(ddof=1)),
             "pvalue": pval,
         },
     )

@@ -1,13 +1,27 @@
-"""Galton board of thesis §2.5.4: one board, many interacting balls fed through a funnel, hexagonal nails.
+"""Galton board of thesis §2.5.4: one board, many balls fed through a funnel, 10 rows of nails.
 
-Geometry (:class:`GaltonBoard`, lengths in m): nails are hexagons with a tip up on a triangular lattice of spacing D
-(row pitch D sqrt(3)/2), ``ROWS`` rows filling the board between two side walls; row 0 has a nail at x = 0 right
-under the funnel's outlet. Balls are 16-gons of radius ``BALL_R``, dropped into a V hopper above the board at one
-every ``every_s`` seconds. p != 1/2 is made as in the thesis (Fig. 2.39): every nail's tip is
-moved sideways by ``tip_shift_m`` (to the left for p > 1/2, so more balls pass on the right).
+Geometry (:class:`GaltonBoard`, lengths in m): nails on a triangular lattice of spacing D (row pitch D sqrt(3)/2),
+``ROWS`` rows filling the board between two side walls; row 0 has a nail at x = 0 right under the funnel's outlet.
+Balls are 16-gons of radius ``BALL_R``, dropped into a V hopper above the board at one every ``every_s`` seconds.
 
-A ball's path is read off where its centre passes half a pitch below each row: the ten decisions (right = 1)
-and its bin k = number of rights (= nearest integer to x/D + ROWS/2 below the last row). Once below the last
+The default board's decisions are independent but for a weak anti-persistence (measured: bins pass chi² against
+Binomial(10, 1/2) for every seed and ball count tried, up to 2300; lag-1 correlation of successive decisions
+-0.040 +- 0.005): round pins (16-gons) with gaps of 1.05 ball diameters, fairly elastic balls (gamma = 0.15,
+restitution ~0.85) and a feed slow enough that balls seldom meet (a gap under two ball diameters can hold a
+two-ball arch). A ball
+rattles between the two pins of a gap, so it cannot carry its sideways momentum past the next pin, and each bounce
+on a convex pin spreads its state (chaotic scattering), so it arrives at the next pin's apex with a fresh random
+offset. The thesis-like board (:meth:`GaltonBoard.thesis_like`: hexagons with a tip up, wider gaps, gamma = 1)
+is a persistent walk instead (successive decisions correlated 0.2-0.4; tests/validation/test_granular_galton.py).
+
+p != 1/2: for round pins every row is moved sideways by ``row_shift_m`` against the row above (the thesis's "a nail
+not under the middle of two nails but offset"), for hexagons the tip is moved by ``tip_shift_m`` (its Fig. 2.39);
+negative: to the left, so more balls pass on the right (p > 1/2). p = 2/3 needs row_shift_m = -0.32 mm; that
+board's decisions are anti-persistent (lag-1 correlation -0.07), so chi² against Binomial(10, 2/3) passes at 300
+balls but rejects at 2300 (variance 1.93 against 2.22).
+
+A ball's path is read off where its centre passes half a pitch below each row: its bin there is the number of
+rights so far (nearest lattice position), a decision is the change of that bin (right = 1). Once below the last
 row it leaves the run (deactivated): the bins underneath would only hold it.
 """
 
@@ -22,6 +36,7 @@ from scipy import stats
 from porepipe._shared.errors import PorepipeError
 from porepipe.granular._api import Simulation
 from porepipe.granular._settings import Settings
+from porepipe.granular._shapes import regular_polygon
 
 ROWS = 10
 BALL_R, BALL_CORNERS = 0.002, 16
@@ -30,55 +45,117 @@ HOPPER_W, HOPPER_H = 0.06, 0.05  # hopper top width and height
 
 @dataclasses.dataclass(frozen=True)
 class GaltonBoard:
-    """Geometry and material of the board (lengths in m)."""
+    """Geometry and material of the board (lengths in m); defaults: the board with independent decisions."""
 
-    spacing_m: float = 0.010  # nail spacing D: gaps of 1.6 ball diameters (1.4 jams the stream)
-    nail_r_m: float = 0.002  # hexagon circumradius
-    tip_shift_m: float = 0.0  # tips moved by this (negative: to the left, p > 1/2)
-    damping: float = 1.0
+    spacing_m: float = 0.008  # nail spacing D: gaps of 1.05 ball diameters between round pins
+    nail_r_m: float = 0.0019  # pin (circum)radius
+    nail_corners: int = 16  # 16: round pins; 6: the thesis's hexagons with a tip up
+    tip_shift_m: float = 0.0  # hexagons only: tips moved by this (negative: to the left, p > 1/2)
+    row_shift_m: float = 0.0  # each row moved by this against the row above (negative: to the left, p > 1/2)
+    damping: float = 0.15
     friction: float = 0.3
-    every_s: float = 0.02  # one ball dropped into the hopper every this many seconds
-    outlet_m: float = 2.5 * 2 * BALL_R  # funnel outlet: wide enough not to clog, feeds the top nail only
+    every_s: float = 0.5  # one ball dropped into the hopper every this many seconds
+    # balls are released this high above the funnel outlet (the hopper's top: HOPPER_H + 2 BALL_R)
+    drop_m: float = 4 * BALL_R
+    # an entry row of nails one pitch above the top row, whose central gap the funnel feeds: a ball enters the
+    # board as it leaves any gap, and the first bounce cannot fly over the top row's nails
+    entry_row: bool = True
+    # funnel outlet width and height above the top row's centres; None: on the centres of the entry row's two
+    # central nails (without an entry row, 2.5 ball diameters at nail_r_m + 3 BALL_R: the thesis-like feed of
+    # 50 balls/s does not clog it)
+    outlet_m: float | None = None
+    outlet_y_m: float | None = None
+
+    def __post_init__(self):
+        if self.tip_shift_m and self.nail_corners != 6:
+            raise ValueError(
+                f"GaltonBoard: tip_shift_m needs hexagonal nails (nail_corners=6), got {self.nail_corners}"
+            )
+        if self.spacing_m - np.ptp(self.nail()[:, 0]) <= 2 * BALL_R:
+            raise ValueError(
+                f"GaltonBoard: spacing_m {self.spacing_m:g} leaves no gap wider than a ball ({2 * BALL_R:g} m) "
+                f"between nails of radius {self.nail_r_m:g}"
+            )
+
+    @classmethod
+    def thesis_like(cls, **changes) -> GaltonBoard:
+        """The board as the thesis describes it: hexagons tip up (D = 10 mm), gamma = 1, 50 balls/s into the hopper.
+
+        Not binomial (successive decisions correlated 0.2-0.4, tests/validation/test_granular_galton.py);
+        ``changes`` replace fields.
+        """
+        base = {
+            "spacing_m": 0.010,
+            "nail_r_m": 0.002,
+            "nail_corners": 6,
+            "damping": 1.0,
+            "every_s": 0.02,
+            "entry_row": False,
+            "drop_m": HOPPER_H + 2 * BALL_R,
+        }
+        return cls(**(base | changes))
 
     @property
     def pitch_m(self) -> float:
         return self.spacing_m * math.sqrt(3) / 2
 
+    @property
+    def outlet(self) -> tuple[float, float, float]:
+        """Funnel outlet (width, height above the top row's centres, centre x), m; centred over nail (0, 0)."""
+        if self.entry_row:
+            w, h = self.spacing_m, self.pitch_m + self.nail_r_m
+        else:
+            w, h = 2.5 * 2 * BALL_R, self.nail_r_m + 3 * BALL_R
+        w = w if self.outlet_m is None else self.outlet_m
+        h = h if self.outlet_y_m is None else self.outlet_y_m
+        return float(w), float(h), float(self.nail_x(-1, -0.5))
+
     def nail(self) -> np.ndarray:
-        """Hexagon with a tip up, its top corner moved sideways by ``tip_shift_m``."""
-        ang = np.pi / 2 + np.pi / 3 * np.arange(6)
-        v = self.nail_r_m * np.column_stack([np.cos(ang), np.sin(ang)])
+        """A pin (regular polygon, a corner up), for hexagons with its top corner moved by ``tip_shift_m``."""
+        v = regular_polygon(self.nail_corners, self.nail_r_m, phase_rad=np.pi / 2)
         v[0, 0] += self.tip_shift_m
         return v
 
+    def nail_x(self, row: int, j) -> np.ndarray:
+        """Centre x of nail(s) j in a row (row 0: nail 0 at x = 0)."""
+        return (np.asarray(j) + 0.5 * (row % 2)) * self.spacing_m + row * self.row_shift_m
+
+    def bin_of(self, x, rows_passed: int) -> np.ndarray:
+        """Number of rights after ``rows_passed`` rows of a ball at x (nearest position over the next row's nails)."""
+        return np.rint((np.asarray(x) - rows_passed * self.row_shift_m) / self.spacing_m + rows_passed / 2)
+
     def walls(self) -> list:
         """Nails, side walls (at +-7 D), the V hopper with its outlet above nail (0, 0) (board top at y = 0)."""
-        d, pitch, half_w = self.spacing_m, self.pitch_m, 7 * self.spacing_m
-        walls, hexagon = [], self.nail()
-        for k in range(ROWS):
+        pitch, half_w = self.pitch_m, 7 * self.spacing_m
+        walls, pin = [], self.nail()
+        for k in range(-1 if self.entry_row else 0, ROWS):
             for j in range(-8, 9):
-                x = (j + 0.5 * (k % 2)) * d
+                x = float(self.nail_x(k, j))
                 # no nail closer to a side wall than a ball diameter plus a radius: no pocket to stick in
                 if half_w - abs(x) - self.nail_r_m > 3 * BALL_R:
-                    corners = [tuple(p + (x, -k * pitch)) for p in hexagon]
+                    corners = [tuple(p + (x, -k * pitch)) for p in pin]
                     walls.append({"name": f"nail{k}_{j}", "vertices_m": corners})
-        y_out = self.nail_r_m + 3 * BALL_R  # funnel outlet height: a ball leaving it falls onto the top nail
+        w, y_out, xc = self.outlet  # a ball leaving the outlet falls onto the top nail
         bottom, top = -(ROWS + 0.5) * pitch, y_out + HOPPER_H
-        w = self.outlet_m  # each wall runs so that its outside is on its left
+        # each wall runs so that its outside is on its left
         walls.append(_slab("left", (-half_w, bottom), (-half_w, y_out)))
         walls.append(_slab("right", (half_w, y_out), (half_w, bottom)))
-        walls.append(_slab("funnel_left", (-0.5 * w, y_out), (-0.5 * HOPPER_W, top)))
-        walls.append(_slab("funnel_right", (0.5 * HOPPER_W, top), (0.5 * w, y_out)))
+        walls.append(_slab("funnel_left", (xc - 0.5 * w, y_out), (xc - 0.5 * HOPPER_W, top)))
+        walls.append(_slab("funnel_right", (xc + 0.5 * HOPPER_W, top), (xc + 0.5 * w, y_out)))
         return walls
 
     def simulation(self, n_balls: int, seed: int = 1) -> Simulation:
-        """The board with ``n_balls`` balls to be dropped into the hopper (velocity Verlet)."""
-        top = self.nail_r_m + 3 * BALL_R + HOPPER_H
+        """The board with ``n_balls`` balls dropped into the funnel, ``drop_m`` above its outlet (velocity Verlet).
+
+        A ball starts at rest (but for a downward ``3 BALL_R / every_s``) at a uniform random x across the funnel.
+        """
+        w, y_out, xc = self.outlet
+        funnel_w = min(HOPPER_W, w + (HOPPER_W - w) * self.drop_m / HOPPER_H)
         ball = {"size_m": (BALL_R, BALL_R), "corners": BALL_CORNERS, "orientation_dist": "EQUAL"}
         source = {
-            "x_m": 0.0,
-            "y_m": top + 2 * BALL_R,
-            "width_m": HOPPER_W - 6 * BALL_R,
+            "x_m": xc,
+            "y_m": y_out + self.drop_m,
+            "width_m": funnel_w - 6 * BALL_R,  # clear of the funnel's walls
             "every_s": self.every_s,
             "to_s": (n_balls - 0.5) * self.every_s,
             # a ball has moved on by more than its diameter when the next one is dropped
@@ -113,9 +190,15 @@ def _slab(name, a, b, thick=0.002):
 
 
 def galton_paths(
-    sim: Simulation, board: GaltonBoard, t_max_s: float | None = None, chunk: int = 40, progress: bool = False
+    sim: Simulation,
+    board: GaltonBoard,
+    t_max_s: float | None = None,
+    chunk: int = 40,
+    progress: bool = False,
+    max_stuck: int = 0,
 ):
-    """Run until every ball has left the board; return (decisions (N, ROWS) of 0/1, bins (N,)).
+    """Run until every ball has left the board; return (decisions (N, ROWS): 1 right, 0 left, other values
+    a ball that skipped a nail; bins (N,)) of the N balls through.
 
     Parameters
     ----------
@@ -129,11 +212,15 @@ def galton_paths(
         Steps between readings of the positions (a ball falls well under a row pitch in ``chunk`` steps).
     progress : bool
         Print the count of balls through once per simulated second.
+    max_stuck : int
+        Balls that may still be in the board at ``t_max_s`` (e.g. two held in an arch across a gap); they are
+        left out of the result.
 
     Raises
     ------
     PorepipeError
-        A ball is still in the board at ``t_max_s`` (default: last drop + 10 s), e.g. the outlet jammed.
+        More than ``max_stuck`` balls are still in the board at ``t_max_s`` (default: last drop + 10 s), e.g. two
+        held in an arch; or the funnel clogged (balls queued up to where the next one is released).
     """
     n = sim.n_mob
     t_max = (sim.insert_s.max() + 10.0) if t_max_s is None else t_max_s
@@ -144,10 +231,13 @@ def galton_paths(
     last = 0.0
     while not done.all():
         if sim.time_s > t_max:
+            if (~done).sum() <= max_stuck:
+                break
             raise PorepipeError(
-                f"galton: {int((~done).sum())} balls still in the board at t = {sim.time_s:.3g} s"
+                f"galton: {int((~done).sum())} balls still in the board at t = {sim.time_s:.3g} s "
+                f"(max_stuck = {max_stuck})"
             )
-        sim.advance(chunk)
+        _advance(sim, board, chunk)
         p = sim.position
         live = (sim.active[:n] == 1) & ~done
         for _ in range(ROWS):  # a fast ball may cross more than one level per chunk (rare): loop until none
@@ -165,10 +255,27 @@ def galton_paths(
         if progress and sim.time_s - last > 1.0:
             last = sim.time_s
             print(f"t = {sim.time_s:.1f} s: {int(done.sum())}/{n} balls through", flush=True)
-    steps = np.diff(np.column_stack([np.zeros(n), xs]), axis=1)
-    decisions = (steps > 0).astype(np.int64)
-    bins = np.rint(xs[:, -1] / board.spacing_m + ROWS / 2).astype(np.int64)
+    passed = np.arange(1, ROWS + 1)
+    xs, n = xs[done], int(done.sum())
+    lattice = board.bin_of(xs, passed).astype(np.int64)  # bin after each row
+    # 1 right, 0 left (else a skipped nail)
+    decisions = np.diff(np.column_stack([np.zeros(n, np.int64), lattice]), axis=1)
+    bins = lattice[:, -1]
     return decisions, bins
+
+
+def _advance(sim: Simulation, board: GaltonBoard, steps: int) -> None:
+    """``sim.advance``; a ball released onto balls queued in the funnel (overlap guard) is a clogged funnel."""
+    try:
+        sim.advance(steps)
+    except PorepipeError as err:
+        queued = int(((sim.active[: sim.n_mob] == 1) & (sim.position[:, 1] > board.outlet[1])).sum())
+        if queued < 3:
+            raise
+        raise PorepipeError(
+            f"galton: the funnel clogged at t = {sim.time_s:.3g} s ({queued} balls queued above its outlet, the "
+            f"next one released onto them); feed slower than every_s = {board.every_s:g} s"
+        ) from err
 
 
 def chi2_binomial(bins, p: float, n: int = ROWS, min_expected: float = 5.0):
