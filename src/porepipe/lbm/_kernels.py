@@ -38,9 +38,18 @@ _CHUNK = 16384
 STREAMING_BYTES = 16 * 2**20
 
 
-def streams(src) -> bool:
-    """Whether the step kernels should write ``src``'s populations (and its twin's) non-temporally."""
-    return 2 * src.nbytes > STREAMING_BYTES
+#: how a step kernel writes the populations: through the cache, non-temporally with aligned vector stores, or
+#: element by element with the non-temporal hint (the kernel before issue 22: the loop does not vectorise, and on
+#: x86 without SSE4a the scalar float64 stores lose the hint, so every line is read for ownership; kept so that
+#: benchmarks/lbm.py can time the old kernel beside the new one in the same run).
+STORE_CACHED, STORE_STREAM, STORE_STREAM_SCALAR = 0, 1, 2
+
+
+def streams(src) -> int:
+    """How the step kernels should write ``src``'s populations (and its twin's): STORE_STREAM for arrays larger
+    than the cache can hold (:data:`STREAMING_BYTES`), else STORE_CACHED.
+    """
+    return STORE_STREAM if 2 * src.nbytes > STREAMING_BYTES else STORE_CACHED
 
 
 # -- unchecked element access (no negative-index wrap test: indices must be in range) ---------------------------------
@@ -92,6 +101,68 @@ def _set(typingctx, arr, idx, val):
 def _stream_store(typingctx, arr, idx, val):
     """``arr[idx] = val`` as a non-temporal store (no wrap-around test)."""
     return types.void(arr, idx, val), _store_codegen(True)
+
+
+#: bytes per vector non-temporal store: one cache line (8 float64 or 16 float32 populations).
+_LINE = 64
+
+
+def _line_elements(arrty) -> int:
+    return _LINE // (arrty.dtype.bitwidth // 8)
+
+
+@intrinsic
+def _per_line(typingctx, arr):
+    """Elements of ``arr`` per cache line (a compile-time constant)."""
+    sig = types.intp(arr)
+
+    def codegen(context, builder, signature, args):
+        return ir.Constant(ir.IntType(64), _line_elements(signature.args[0]))
+
+    return sig, codegen
+
+
+@intrinsic
+def _misalign(typingctx, arr, idx):
+    """Position of ``arr[idx]`` within its cache line, in elements (0: the line starts there)."""
+    sig = types.intp(arr, idx)
+
+    def codegen(context, builder, signature, args):
+        ptr = _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
+        address = builder.ptrtoint(ptr, ir.IntType(64))
+        offset = builder.and_(address, ir.Constant(ir.IntType(64), _LINE - 1))
+        return builder.udiv(offset, ir.Constant(ir.IntType(64), signature.args[0].dtype.bitwidth // 8))
+
+    return sig, codegen
+
+
+@intrinsic
+def _stream_line(typingctx, dst, idx, src, sidx):
+    """One cache line of ``dst`` from ``idx`` on = ``src[sidx:…]`` (converted to dst's type), written with one
+    non-temporal vector store; ``dst[idx]`` must start a line (:func:`_misalign` is 0), ``src`` may be unaligned.
+
+    The loop vectoriser emits no non-temporal vector store whose alignment it cannot prove, and x86 without SSE4a
+    has no scalar non-temporal float store (LLVM writes such stores through the cache).
+    """
+    sig = types.void(dst, idx, src, sidx)
+
+    def codegen(context, builder, signature, args):
+        dty, ity, sty, sity = signature.args
+        lanes = _line_elements(dty)
+        s_type = context.get_value_type(sty.dtype)
+        d_type = context.get_value_type(dty.dtype)
+        sp = _item_pointer(context, builder, sty, args[2], sity, args[3])
+        dp = _item_pointer(context, builder, dty, args[0], ity, args[1])
+        value = builder.load(builder.bitcast(sp, ir.VectorType(s_type, lanes).as_pointer()), align=8)
+        if dty.dtype != sty.dtype:
+            value = builder.fptrunc(value, ir.VectorType(d_type, lanes))
+        store = builder.store(
+            value, builder.bitcast(dp, ir.VectorType(d_type, lanes).as_pointer()), align=_LINE
+        )
+        store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
+        return context.get_dummy_value()
+
+    return sig, codegen
 
 
 @intrinsic
@@ -438,11 +509,21 @@ def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
 
 @njit(**_NUMERIC)
 def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
-    """Write a tile's post-collision populations (non-temporal stores if ``streaming``)."""
+    """Write a tile's post-collision populations the way ``streaming`` says (STORE_CACHED, STORE_STREAM, …)."""
     for q in range(19):
         base = q * n_nodes + n0
-        if streaming:  # a pure copy loop: non-temporal stores would keep a compute loop from vectorising
+        if streaming == STORE_STREAM_SCALAR:
             for i in range(cnt):
+                _stream_store(dst, base + i, _get(f, _ix(q, i)))
+        elif streaming == STORE_STREAM:  # element-wise up to the first whole line and after the last one
+            line = _per_line(dst)
+            head = min(cnt, (line - _misalign(dst, base)) & (line - 1))
+            body = head + (cnt - head) // line * line
+            for i in range(head):
+                _stream_store(dst, base + i, _get(f, _ix(q, i)))
+            for i in range(head, body, line):
+                _stream_line(dst, base + i, f, _ix(q, i))
+            for i in range(body, cnt):
                 _stream_store(dst, base + i, _get(f, _ix(q, i)))
         else:
             for i in range(cnt):
@@ -762,7 +843,7 @@ def _step(
     link_c,
 ):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
-    step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
+    step if ``store``. ``streaming``: how to write the populations (STORE_CACHED, STORE_STREAM, … :func:`streams`).
 
     Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, interpolate its boundary links
     (links of tile t: ``tile_start[t]:tile_start[t + 1]``; an empty ``link_slot`` for halfway bounce-back), collide,
@@ -789,7 +870,7 @@ def _step(
                 _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
                 _store_tile(b, n0, cnt, n_nodes, f, streaming)
                 n0 += cnt
-            if streaming:
+            if streaming != STORE_CACHED:
                 _store_fence()
 
 
