@@ -129,7 +129,7 @@ def test_store_modes_write_identical_populations(precision, geometry):
     lat = build_lattice(pore, (True, False, True), (0, 5), (0, 5))
     start = (1e-2 * np.random.default_rng(6).standard_normal(19 * lat.n_nodes)).astype(precision)
     results = []
-    for mode in (_kernels.STORE_CACHED, _kernels.STORE_STREAM, _kernels.STORE_STREAM_SCALAR):
+    for mode in (_kernels.STORE_CACHED, _kernels.STORE_STREAM, _kernels.LEGACY):
         src, dst = start.copy(), np.zeros_like(start)
         make_stepper(Settings(body_force=1e-4, precision=precision), lat, stores=mode)(
             src, dst, np.zeros((4, 0)), False, 3
