@@ -13,6 +13,8 @@ loaded run by run), so its collision loop has full length however short the runs
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from llvmlite import ir
 from numba import njit, prange, types
@@ -33,9 +35,21 @@ _OPP = OPPOSITE.copy()
 _TILE = 256
 #: nodes per parallel work chunk (a multiple of _TILE; one scratch allocation and one store fence per chunk).
 _CHUNK = 16384
+
+
+def _last_level_cache_bytes(default: int = 16 * 2**20) -> int:
+    """Size of the CPU's last-level cache (Linux sysfs), or ``default`` where it cannot be read."""
+    try:
+        text = Path("/sys/devices/system/cpu/cpu0/cache/index3/size").read_text().strip()
+        return int(text[:-1]) * {"K": 2**10, "M": 2**20}[text[-1]] if text[-1] in "KM" else int(text)
+    except (OSError, ValueError):
+        return default
+
+
 #: population arrays larger than this (bytes, both buffers) are written with non-temporal stores: they cannot stay
 #: in cache until the next step reads them, and bypassing the cache saves the read-for-ownership of every line.
-STREAMING_BYTES = 16 * 2**20
+#: Below it cached stores win (porous 128³, 128 MB in a 480 MB L3: non-temporal stores cost 35 % there).
+STREAMING_BYTES = max(16 * 2**20, _last_level_cache_bytes())
 
 
 #: how a step kernel writes the populations: through the cache, non-temporally with aligned vector stores, or
@@ -582,7 +596,8 @@ def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
 @njit(inline="always", **_NUMERIC)
 def _scratch_view(f):
     """Source and rows None: the scratch at q * _TILE, one array at compile-time constant offsets, so the compiler
-    sees that the rows do not overlap."""
+    sees that the rows do not overlap.
+    """
     return (None, None, None, f)
 
 
@@ -639,7 +654,15 @@ def _moments(f, i):
     """(δρ, j_x, j_y, j_z) of tile node i: Σ f̃_q and Σ c_q f̃_q, summed in population order."""
     d = _pop(f, 0, i) + _pop(f, 1, i) + _pop(f, 2, i) + _pop(f, 3, i) + _pop(f, 4, i) + _pop(f, 5, i)
     d = d + _pop(f, 6, i) + _pop(f, 7, i) + _pop(f, 8, i) + _pop(f, 9, i) + _pop(f, 10, i) + _pop(f, 11, i)
-    d = d + _pop(f, 12, i) + _pop(f, 13, i) + _pop(f, 14, i) + _pop(f, 15, i) + _pop(f, 16, i) + _pop(f, 17, i)
+    d = (
+        d
+        + _pop(f, 12, i)
+        + _pop(f, 13, i)
+        + _pop(f, 14, i)
+        + _pop(f, 15, i)
+        + _pop(f, 16, i)
+        + _pop(f, 17, i)
+    )
     d = d + _pop(f, 18, i)  # literal populations: a loop over q would index a view's rows at run time
     jx = (
         _pop(f, 1, i)
@@ -908,13 +931,30 @@ BGK, TRT, MRT = 0, 1, 2
 
 
 @njit(inline="always", **_NUMERIC)
+def _mostly_regular(run_start, run_offset, r, n0, cnt):
+    """Whether regular runs hold at least half the tile n0 … n0+cnt-1 (``r``: the run holding n0 or an earlier one).
+
+    Such tiles collide run by run straight from the population array (:func:`_pull_collide`); the others go through
+    the scratch as a whole: on a porous sample (1 % of the nodes in regular runs) run by run was 12 % slower.
+    """
+    regular = 0
+    while run_start[r] < n0 + cnt:
+        if run_offset[r, 0] >= 0:
+            regular += min(run_start[r + 1], n0 + cnt) - max(run_start[r], n0)
+        r += 1
+    return 2 * regular >= cnt
+
+
+@njit(inline="always", **_NUMERIC)
 def _has_links(n0, tile_start, link_slot):
     """Whether the tile at n0 has interpolated boundary links."""
     return link_slot.size > 0 and tile_start[n0 // _TILE] < tile_start[n0 // _TILE + 1]
 
 
 @njit(**_NUMERIC)
-def _pull_collide(op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, keep, fz, force, fields, w, s):
+def _pull_collide(
+    op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, keep, fz, force, fields, w, s
+):
     """Collide the tile at n0 (cnt nodes, no interpolated links) into the scratch ``f``, run by run: a regular run's
     nodes read their populations straight from ``src`` (:func:`_run_view`), an irregular run is pulled into the
     scratch first. ``fz`` = (force_lo, force_hi); the fields of the pulled populations if ``keep``. ``r`` is the run
@@ -945,7 +985,8 @@ def _pull_collide(op, src, gather, run_start, run_offset, run_base, r, n0, cnt, 
 @njit(**_NUMERIC)
 def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
     """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only),
-    ``rates`` (s_k/|M_k|²) for MRT."""
+    ``rates`` (s_k/|M_k|²) for MRT.
+    """
     if op == BGK:
         _collide_bgk(v, lo, hi, n0, force_lo, force_hi, force, omega[0])
     elif op == TRT:
@@ -1000,9 +1041,28 @@ def _step(
             r = np.searchsorted(run_start, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
-                if fuse and not _has_links(n0, tile_start, link_slot):
+                if (
+                    fuse
+                    and not _has_links(n0, tile_start, link_slot)
+                    and _mostly_regular(run_start, run_offset, r, n0, cnt)
+                ):
                     r = _pull_collide(
-                        op, a, gather, run_start, run_offset, run_base, r, n0, cnt, f, keep, fz, b3, fields, w2, rates
+                        op,
+                        a,
+                        gather,
+                        run_start,
+                        run_offset,
+                        run_base,
+                        r,
+                        n0,
+                        cnt,
+                        f,
+                        keep,
+                        fz,
+                        b3,
+                        fields,
+                        w2,
+                        rates,
                     )
                 else:
                     r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
