@@ -6,9 +6,13 @@ source index that already encodes halfway bounce-back (the node's own opposite p
 is solid), so the hot loop has no branch. Runs of nodes whose 18 sources all advance with the node (the open
 interior of the pore space, nearly the whole of a dense box) stream by a constant offset per population:
 contiguous copies, no index traffic; the other (irregular) runs read their sources from a table that holds only
-their nodes. One step kernel serves the three collision operators; a tile of nodes is pulled into an L1 scratch,
-collided in one vectorised loop over its nodes (BGK, TRT, MRT) and stored; a tile may span several runs (it is
-loaded run by run), so its collision loop has full length however short the runs are.
+their nodes. One step kernel serves the three collision operators and works a tile of nodes at a time: a tile at
+least half in regular runs collides run by run straight from the population array into an L1 scratch (one
+vectorised loop per run; the reads carry alias-scope metadata so the loop needs no overlap tests); any other tile
+(mostly irregular, or with interpolated wall links) is first pulled into the scratch, so its collision loop has
+full length however short its runs are. The scratch is then stored, with one non-temporal vector store per cache
+line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
+element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits.
 """
 
 from __future__ import annotations
