@@ -6,18 +6,24 @@ source index that already encodes halfway bounce-back (the node's own opposite p
 is solid), so the hot loop has no branch. Runs of nodes whose 18 sources all advance with the node (the open
 interior of the pore space, nearly the whole of a dense box) stream by a constant offset per population:
 contiguous copies, no index traffic; the other (irregular) runs read their sources from a table that holds only
-their nodes. One step kernel serves the three collision operators; a tile of nodes is pulled into an L1 scratch,
-collided in one vectorised loop over its nodes (BGK, TRT, MRT) and stored; a tile may span several runs (it is
-loaded run by run), so its collision loop has full length however short the runs are.
+their nodes. One step kernel serves the three collision operators and works a tile of nodes at a time: a tile at
+least half in regular runs collides run by run straight from the population array into an L1 scratch (one
+vectorised loop per run; the reads carry alias-scope metadata so the loop needs no overlap tests); any other tile
+(mostly irregular, or with interpolated wall links) is first pulled into the scratch, so its collision loop has
+full length however short its runs are. The scratch is then stored, with one non-temporal vector store per cache
+line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
+element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 from llvmlite import ir
 from numba import njit, prange, types
 from numba.core import cgutils
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 
 from porepipe._shared.numba_config import FASTMATH
 from porepipe.lbm._lattice import OPPOSITE, C, W
@@ -33,14 +39,35 @@ _OPP = OPPOSITE.copy()
 _TILE = 256
 #: nodes per parallel work chunk (a multiple of _TILE; one scratch allocation and one store fence per chunk).
 _CHUNK = 16384
+
+
+def _last_level_cache_bytes(default: int = 16 * 2**20) -> int:
+    """Size of the CPU's last-level cache (Linux sysfs), or ``default`` where it cannot be read."""
+    try:
+        text = Path("/sys/devices/system/cpu/cpu0/cache/index3/size").read_text().strip()
+        return int(text[:-1]) * {"K": 2**10, "M": 2**20}[text[-1]] if text[-1] in "KM" else int(text)
+    except (OSError, ValueError):
+        return default
+
+
 #: population arrays larger than this (bytes, both buffers) are written with non-temporal stores: they cannot stay
 #: in cache until the next step reads them, and bypassing the cache saves the read-for-ownership of every line.
-STREAMING_BYTES = 16 * 2**20
+#: Below it cached stores win (porous 128³, 128 MB in a 480 MB L3: non-temporal stores cost 35 % there).
+STREAMING_BYTES = max(16 * 2**20, _last_level_cache_bytes())
 
 
-def streams(src) -> bool:
-    """Whether the step kernels should write ``src``'s populations (and its twin's) non-temporally."""
-    return 2 * src.nbytes > STREAMING_BYTES
+#: how a step kernel writes the populations: through the cache, non-temporally with aligned vector stores, or
+#: element by element with the non-temporal hint (the kernel before issue 22: the loop does not vectorise, and on
+#: x86 without SSE4a the scalar float64 stores lose the hint, so every line is read for ownership; kept so that
+#: benchmarks/lbm.py can time the old kernel beside the new one in the same run).
+STORE_CACHED, STORE_STREAM, LEGACY = 0, 1, 2
+
+
+def streams(src) -> int:
+    """How the step kernels should write ``src``'s populations (and its twin's): STORE_STREAM for arrays larger
+    than the cache can hold (:data:`STREAMING_BYTES`), else STORE_CACHED.
+    """
+    return STORE_STREAM if 2 * src.nbytes > STREAMING_BYTES else STORE_CACHED
 
 
 # -- unchecked element access (no negative-index wrap test: indices must be in range) ---------------------------------
@@ -64,6 +91,51 @@ def _get(typingctx, arr, idx):
         return builder.load(
             _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
         )
+
+    return sig, codegen
+
+
+def _population_scope(builder):
+    """Alias-scope list of the reads of a population array inside a collision loop: the scratch writes of the loop
+    carry it as ``!noalias``, so the vectoriser needs no run-time overlap test between 19 source rows and 19 scratch
+    rows (it would give up: too many tests).
+    """
+    module = builder.module
+    domain = module.add_metadata([ir.MetaDataString(module, "porepipe.lbm")])
+    scope = module.add_metadata([ir.MetaDataString(module, "porepipe.lbm.populations"), domain])
+    return module.add_metadata([scope])
+
+
+@intrinsic
+def _read(typingctx, arr, idx, scoped):
+    """``arr[idx]`` as float64 (no wrap-around test); ``scoped`` (a type tag: ``()`` or None) puts the read in the
+    population scope: only for arrays the scratch ``f`` written by :func:`_put` is not (the population arrays).
+    """
+    sig = types.float64(arr, idx, scoped)
+
+    def codegen(context, builder, signature, args):
+        ptr = _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
+        value = builder.load(ptr)
+        if not isinstance(signature.args[2], types.NoneType):
+            value.set_metadata("alias.scope", _population_scope(builder))
+        return context.cast(builder, value, signature.args[0].dtype, types.float64)
+
+    return sig, codegen
+
+
+@intrinsic
+def _put(typingctx, arr, idx, val):
+    """``arr[idx] = val`` (no wrap-around test) for the tile scratch: it does not alias a scoped :func:`_read`."""
+    sig = types.void(arr, idx, val)
+
+    def codegen(context, builder, signature, args):
+        ptr = _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
+        value = context.cast(builder, args[2], signature.args[2], signature.args[0].dtype)
+        builder.store(value, ptr).set_metadata("noalias", _population_scope(builder))
+        # the collision loops are compute-bound in the cache: whole AVX-512 vectors where the CPU has them (LLVM's
+        # default for recent Intel cores is 256 bits; llvmlite's attribute set knows no string attributes)
+        set.add(builder.function.attributes, '"prefer-vector-width"="512"')
+        return context.get_dummy_value()
 
     return sig, codegen
 
@@ -92,6 +164,68 @@ def _set(typingctx, arr, idx, val):
 def _stream_store(typingctx, arr, idx, val):
     """``arr[idx] = val`` as a non-temporal store (no wrap-around test)."""
     return types.void(arr, idx, val), _store_codegen(True)
+
+
+#: bytes per vector non-temporal store: one cache line (8 float64 or 16 float32 populations).
+_LINE = 64
+
+
+def _line_elements(arrty) -> int:
+    return _LINE // (arrty.dtype.bitwidth // 8)
+
+
+@intrinsic
+def _per_line(typingctx, arr):
+    """Elements of ``arr`` per cache line (a compile-time constant)."""
+    sig = types.intp(arr)
+
+    def codegen(context, builder, signature, args):
+        return ir.Constant(ir.IntType(64), _line_elements(signature.args[0]))
+
+    return sig, codegen
+
+
+@intrinsic
+def _misalign(typingctx, arr, idx):
+    """Position of ``arr[idx]`` within its cache line, in elements (0: the line starts there)."""
+    sig = types.intp(arr, idx)
+
+    def codegen(context, builder, signature, args):
+        ptr = _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
+        address = builder.ptrtoint(ptr, ir.IntType(64))
+        offset = builder.and_(address, ir.Constant(ir.IntType(64), _LINE - 1))
+        return builder.udiv(offset, ir.Constant(ir.IntType(64), signature.args[0].dtype.bitwidth // 8))
+
+    return sig, codegen
+
+
+@intrinsic
+def _stream_line(typingctx, dst, idx, src, sidx):
+    """One cache line of ``dst`` from ``idx`` on = ``src[sidx:…]`` (converted to dst's type), written with one
+    non-temporal vector store; ``dst[idx]`` must start a line (:func:`_misalign` is 0), ``src`` may be unaligned.
+
+    The loop vectoriser emits no non-temporal vector store whose alignment it cannot prove, and x86 without SSE4a
+    has no scalar non-temporal float store (LLVM writes such stores through the cache).
+    """
+    sig = types.void(dst, idx, src, sidx)
+
+    def codegen(context, builder, signature, args):
+        dty, ity, sty, sity = signature.args
+        lanes = _line_elements(dty)
+        s_type = context.get_value_type(sty.dtype)
+        d_type = context.get_value_type(dty.dtype)
+        sp = _item_pointer(context, builder, sty, args[2], sity, args[3])
+        dp = _item_pointer(context, builder, dty, args[0], ity, args[1])
+        value = builder.load(builder.bitcast(sp, ir.VectorType(s_type, lanes).as_pointer()), align=8)
+        if dty.dtype != sty.dtype:
+            value = builder.fptrunc(value, ir.VectorType(d_type, lanes))
+        store = builder.store(
+            value, builder.bitcast(dp, ir.VectorType(d_type, lanes).as_pointer()), align=_LINE
+        )
+        store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
+        return context.get_dummy_value()
+
+    return sig, codegen
 
 
 @intrinsic
@@ -445,29 +579,102 @@ def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
 
 @njit(**_NUMERIC)
 def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
-    """Write a tile's post-collision populations (non-temporal stores if ``streaming``)."""
+    """Write a tile's post-collision populations the way ``streaming`` says (STORE_CACHED, STORE_STREAM, …)."""
     for q in range(19):
         base = q * n_nodes + n0
-        if streaming:  # a pure copy loop: non-temporal stores would keep a compute loop from vectorising
+        if streaming == LEGACY:
             for i in range(cnt):
+                _stream_store(dst, base + i, _get(f, _ix(q, i)))
+        elif streaming == STORE_STREAM:  # element-wise up to the first whole line and after the last one
+            line = _per_line(dst)
+            head = min(cnt, (line - _misalign(dst, base)) & (line - 1))
+            body = head + (cnt - head) // line * line
+            for i in range(head):
+                _stream_store(dst, base + i, _get(f, _ix(q, i)))
+            for i in range(head, body, line):
+                _stream_line(dst, base + i, f, _ix(q, i))
+            for i in range(body, cnt):
                 _stream_store(dst, base + i, _get(f, _ix(q, i)))
         else:
             for i in range(cnt):
                 _set(dst, base + i, _get(f, _ix(q, i)))
 
 
+# -- a tile view v = (source, rows, scope, f): the collision reads population q of tile node i from
+#    ``source[rows[q] + i]`` and writes it to the scratch ``f``. Either the scratch itself (:func:`_scratch_view`, after
+#    the tile was pulled into it) or, for a whole tile inside one regular run, the population array at the run's
+#    stream offsets (:func:`_run_view`): the pull then happens in the collision loop, one pass over the tile less.
 @njit(inline="always", **_NUMERIC)
-def _pop(f, q, i):
+def _scratch_view(f):
+    """Source and rows None: the scratch at q * _TILE, one array at compile-time constant offsets, so the compiler
+    sees that the rows do not overlap.
+    """
+    return (None, None, None, f)
+
+
+def _source(source, f):
+    """The array a tile view reads (``source`` None: the scratch ``f``)."""
+    return f if source is None else source
+
+
+@overload(_source, inline="always")
+def _source_overload(source, f):
+    if isinstance(source, types.NoneType):
+        return lambda source, f: f
+    return lambda source, f: source
+
+
+def _row_start(rows, q):
+    """Where population q's row of a tile view starts (``rows`` None: in the scratch)."""
+    return q * _TILE if rows is None else rows[q]
+
+
+@overload(_row_start, inline="always")
+def _row_start_overload(rows, q):
+    if isinstance(rows, types.NoneType):
+        return lambda rows, q: q * _TILE
+    return lambda rows, q: rows[q]
+
+
+@njit(inline="always", **_NUMERIC)
+def _run_view(src, run_offset, r, n0, f):
+    o = run_offset[r]
+    rows = (
+        n0,
+        *(o[0] + n0, o[1] + n0, o[2] + n0, o[3] + n0, o[4] + n0, o[5] + n0, o[6] + n0, o[7] + n0, o[8] + n0),
+        *(o[9] + n0, o[10] + n0, o[11] + n0, o[12] + n0, o[13] + n0, o[14] + n0, o[15] + n0, o[16] + n0),
+        o[17] + n0,
+    )
+    return (src, rows, (), f)
+
+
+@njit(inline="always", **_NUMERIC)
+def _pop(v, q, i):
     """Population q of tile node i (unchecked: the node loop vectorises)."""
-    return _get(f, q * _TILE + i)
+    return _read(_source(v[0], v[3]), _row_start(v[1], q) + i, v[2])
+
+
+@njit(inline="always", **_NUMERIC)
+def _out(v, q, i, value):
+    """Write the post-collision population q of tile node i to the scratch."""
+    _put(v[3], q * _TILE + i, value)
 
 
 @njit(inline="always", **_NUMERIC)
 def _moments(f, i):
     """(δρ, j_x, j_y, j_z) of tile node i: Σ f̃_q and Σ c_q f̃_q, summed in population order."""
-    d = 0.0
-    for q in range(19):
-        d += _pop(f, q, i)
+    d = _pop(f, 0, i) + _pop(f, 1, i) + _pop(f, 2, i) + _pop(f, 3, i) + _pop(f, 4, i) + _pop(f, 5, i)
+    d = d + _pop(f, 6, i) + _pop(f, 7, i) + _pop(f, 8, i) + _pop(f, 9, i) + _pop(f, 10, i) + _pop(f, 11, i)
+    d = (
+        d
+        + _pop(f, 12, i)
+        + _pop(f, 13, i)
+        + _pop(f, 14, i)
+        + _pop(f, 15, i)
+        + _pop(f, 16, i)
+        + _pop(f, 17, i)
+    )
+    d = d + _pop(f, 18, i)  # literal populations: a loop over q would index a view's rows at run time
     jx = (
         _pop(f, 1, i)
         - _pop(f, 2, i)
@@ -514,9 +721,9 @@ def _force_on(n, force_lo, force_hi):
 
 
 @njit(**_NUMERIC)
-def _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields):
-    """δρ and u = (j + ρb/2)/ρ of the gathered (pre-collision) populations of a tile."""
-    for i in range(cnt):
+def _fields_tile(f, lo, hi, n0, force_lo, force_hi, force, fields):
+    """δρ and u = (j + ρb/2)/ρ of the pulled (pre-collision) populations of tile lanes lo … hi-1."""
+    for i in range(lo, hi):
         d, jx, jy, jz = _moments(f, i)
         inv = 1.0 / (1.0 + d)
         on = 0.5 * _force_on(n0 + i, force_lo, force_hi)
@@ -554,19 +761,19 @@ def _rest_equilibrium(d, jj, inv):
 def _bgk_pair(f, i, p, cj, d, jj, inv, rho_on, force, omega):
     e_p, e_r = _equilibria(cj, d, jj, inv, _W[p])
     f_p, f_r = _pop(f, p, i), _pop(f, p + 1, i)
-    _set(f, _ix(p, i), f_p + (omega * (e_p - f_p) + _force_coefficient(p, force) * rho_on))
-    _set(f, _ix(p + 1, i), f_r + (omega * (e_r - f_r) + _force_coefficient(p + 1, force) * rho_on))
+    _out(f, p, i, f_p + (omega * (e_p - f_p) + _force_coefficient(p, force) * rho_on))
+    _out(f, p + 1, i, f_r + (omega * (e_r - f_r) + _force_coefficient(p + 1, force) * rho_on))
 
 
 @njit(**_NUMERIC)
-def _collide_bgk(f, cnt, n0, force_lo, force_hi, force, omega):
-    for i in range(cnt):
+def _collide_bgk(f, lo, hi, n0, force_lo, force_hi, force, omega):
+    for i in range(lo, hi):
         d, jx, jy, jz = _moments(f, i)
         rho = 1.0 + d
         inv = 1.0 / rho
         jj = jx * jx + jy * jy + jz * jz
         on = rho * _force_on(n0 + i, force_lo, force_hi)
-        _set(f, i, _pop(f, 0, i) + omega * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
+        _out(f, 0, i, _pop(f, 0, i) + omega * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
         _bgk_pair(f, i, 1, jx, d, jj, inv, on, force, omega)
         _bgk_pair(f, i, 3, jy, d, jj, inv, on, force, omega)
         _bgk_pair(f, i, 5, jz, d, jj, inv, on, force, omega)
@@ -584,21 +791,21 @@ def _trt_pair(f, i, p, cj, d, jj, inv, rho_on, force, half_plus, half_minus):
     f_p, f_r = _pop(f, p, i), _pop(f, p + 1, i)
     sym = half_plus * (e_p + e_r - f_p - f_r)
     anti = half_minus * (e_p - e_r - f_p + f_r)
-    _set(f, _ix(p, i), f_p + (sym + anti + _force_coefficient(p, force) * rho_on))
-    _set(f, _ix(p + 1, i), f_r + (sym - anti + _force_coefficient(p + 1, force) * rho_on))
+    _out(f, p, i, f_p + (sym + anti + _force_coefficient(p, force) * rho_on))
+    _out(f, p + 1, i, f_r + (sym - anti + _force_coefficient(p + 1, force) * rho_on))
 
 
 @njit(**_NUMERIC)
-def _collide_trt(f, cnt, n0, force_lo, force_hi, force, omega_plus, omega_minus):
+def _collide_trt(f, lo, hi, n0, force_lo, force_hi, force, omega_plus, omega_minus):
     hp = 0.5 * omega_plus
     hm = 0.5 * omega_minus
-    for i in range(cnt):
+    for i in range(lo, hi):
         d, jx, jy, jz = _moments(f, i)
         rho = 1.0 + d
         inv = 1.0 / rho
         jj = jx * jx + jy * jy + jz * jz
         on = rho * _force_on(n0 + i, force_lo, force_hi)
-        _set(f, i, _pop(f, 0, i) + omega_plus * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
+        _out(f, 0, i, _pop(f, 0, i) + omega_plus * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
         _trt_pair(f, i, 1, jx, d, jj, inv, on, force, hp, hm)
         _trt_pair(f, i, 3, jy, d, jj, inv, on, force, hp, hm)
         _trt_pair(f, i, 5, jz, d, jj, inv, on, force, hp, hm)
@@ -666,8 +873,8 @@ def _mrt_odd(bx, by, bz, b7, b9, b11, b13, b15, b17, s):
 @njit(inline="always", **_NUMERIC)
 def _mrt_set(f, i, p, even, odd, rho_on, force):
     """Post-collision pair (p, p + 1): f_p − (even + odd) + φ_p, f_p+1 − (even − odd) + φ_p+1."""
-    _set(f, _ix(p, i), _pop(f, p, i) - (even + odd) + _force_coefficient(p, force) * rho_on)
-    _set(f, _ix(p + 1, i), _pop(f, p + 1, i) - (even - odd) + _force_coefficient(p + 1, force) * rho_on)
+    _out(f, p, i, _pop(f, p, i) - (even + odd) + _force_coefficient(p, force) * rho_on)
+    _out(f, p + 1, i, _pop(f, p + 1, i) - (even - odd) + _force_coefficient(p + 1, force) * rho_on)
 
 
 @njit(inline="always", **_NUMERIC)
@@ -697,7 +904,7 @@ def _mrt_node(f, i, on, force, s):
     )
     od = _mrt_odd(bx, by, bz, b7, b9, b11, b13, b15, b17, s)
     rho_on = rho * on
-    _set(f, i, r - ev[0])
+    _out(f, 0, i, r - ev[0])
     _mrt_set(f, i, 1, ev[1], od[0], rho_on, force)
     _mrt_set(f, i, 3, ev[2], od[1], rho_on, force)
     _mrt_set(f, i, 5, ev[3], od[2], rho_on, force)
@@ -707,8 +914,8 @@ def _mrt_node(f, i, on, force, s):
 
 
 @njit(**_NUMERIC)
-def _collide_mrt(f, cnt, n0, force_lo, force_hi, force, s):
-    for i in range(cnt):
+def _collide_mrt(f, lo, hi, n0, force_lo, force_hi, force, s):
+    for i in range(lo, hi):
         _mrt_node(f, i, _force_on(n0 + i, force_lo, force_hi), force, s)
 
 
@@ -772,15 +979,69 @@ def _apply_mr_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c, mr, s
 BGK, TRT, MRT = 0, 1, 2
 
 
+@njit(inline="always", **_NUMERIC)
+def _mostly_regular(run_start, run_offset, r, n0, cnt):
+    """Whether regular runs hold at least half the tile n0 … n0+cnt-1 (``r``: the run holding n0 or an earlier one).
+
+    Such tiles collide run by run straight from the population array (:func:`_pull_collide`); the others go through
+    the scratch as a whole: on a porous sample (1 % of the nodes in regular runs) run by run was 12 % slower.
+    """
+    regular = 0
+    while run_start[r] < n0 + cnt:
+        if run_offset[r, 0] >= 0:
+            regular += min(run_start[r + 1], n0 + cnt) - max(run_start[r], n0)
+        r += 1
+    return 2 * regular >= cnt
+
+
+@njit(inline="always", **_NUMERIC)
+def _has_links(n0, tile_start, link_slot):
+    """Whether the tile at n0 has interpolated boundary links."""
+    return link_slot.size > 0 and tile_start[n0 // _TILE] < tile_start[n0 // _TILE + 1]
+
+
 @njit(**_NUMERIC)
-def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
-    """Collide a tile with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only), ``rates`` (s_k/|M_k|²) for MRT."""
+def _pull_collide(
+    op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, keep, fz, force, fields, w, s
+):
+    """Collide the tile at n0 (cnt nodes, no interpolated links) into the scratch ``f``, run by run: a regular run's
+    nodes read their populations straight from ``src`` (:func:`_run_view`), an irregular run is pulled into the
+    scratch first. ``fz`` = (force_lo, force_hi); the fields of the pulled populations if ``keep``. ``r`` is the run
+    holding n0 or an earlier one; returns the run holding the tile's last node.
+    """
+    scratch = _scratch_view(f)
+    t = 0
+    while t < cnt:
+        while run_start[r + 1] <= n0 + t:
+            r += 1
+        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        if run_offset[r, 0] >= 0:
+            view = _run_view(src, run_offset, r, n0, f)
+            if keep:
+                _fields_tile(view, t, t + seg, n0, fz[0], fz[1], force, fields)
+            _collide(op, view, t, t + seg, n0, fz[0], fz[1], force, w, s)
+        else:
+            for i in range(seg):
+                _set(f, t + i, _get(src, n0 + t + i))
+            _load_segment(src, gather, run_offset, run_base, r, n0 + t, seg, t, f)
+            if keep:
+                _fields_tile(scratch, t, t + seg, n0, fz[0], fz[1], force, fields)
+            _collide(op, scratch, t, t + seg, n0, fz[0], fz[1], force, w, s)
+        t += seg
+    return r
+
+
+@njit(**_NUMERIC)
+def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
+    """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only),
+    ``rates`` (s_k/|M_k|²) for MRT.
+    """
     if op == BGK:
-        _collide_bgk(f, lanes, n0, force_lo, force_hi, force, omega[0])
+        _collide_bgk(v, lo, hi, n0, force_lo, force_hi, force, omega[0])
     elif op == TRT:
-        _collide_trt(f, lanes, n0, force_lo, force_hi, force, omega[0], omega[1])
+        _collide_trt(v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[1])
     else:
-        _collide_mrt(f, lanes, n0, force_lo, force_hi, force, rates)
+        _collide_mrt(v, lo, hi, n0, force_lo, force_hi, force, rates)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
@@ -809,7 +1070,7 @@ def _step(
     link_state,
 ):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
-    step if ``store``. ``streaming``: write the populations with non-temporal stores (see :data:`STREAMING_BYTES`).
+    step if ``store``. ``streaming``: how to write the populations (STORE_CACHED, STORE_STREAM, … :func:`streams`).
 
     Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, interpolate its boundary links
     (links of tile t: ``tile_start[t]:tile_start[t + 1]``; an empty ``link_slot`` for halfway bounce-back), collide,
@@ -819,6 +1080,8 @@ def _step(
     n_nodes = run_start[-1]
     g = 1.0 - 0.5 * omega[1]
     multi = link_mr[0].size > 0
+    fuse = streaming != LEGACY
+    fz = (force_lo, force_hi)
     b3 = (force[0], force[1], force[2])
     w2 = (omega[0], omega[1])
     n_chunks = (n_nodes + _CHUNK - 1) // _CHUNK
@@ -827,23 +1090,48 @@ def _step(
         keep = store and s == n_steps - 1
         for c in prange(n_chunks):
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
+            scratch = _scratch_view(f)
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
             r = np.searchsorted(run_start, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
-                r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
-                if multi:
-                    _apply_mr_links(
-                        f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c, link_mr, link_state, g
+                if (
+                    fuse
+                    and not _has_links(n0, tile_start, link_slot)
+                    and _mostly_regular(run_start, run_offset, r, n0, cnt)
+                ):
+                    r = _pull_collide(
+                        op,
+                        a,
+                        gather,
+                        run_start,
+                        run_offset,
+                        run_base,
+                        r,
+                        n0,
+                        cnt,
+                        f,
+                        keep,
+                        fz,
+                        b3,
+                        fields,
+                        w2,
+                        rates,
                     )
-                elif link_slot.size:
-                    _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
-                if keep:
-                    _fields_tile(f, cnt, n0, force_lo, force_hi, force, fields)
-                _collide(op, f, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
+                else:
+                    r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
+                    if multi:
+                        _apply_mr_links(
+                            f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c, link_mr, link_state, g
+                        )
+                    elif link_slot.size:
+                        _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
+                    if keep:
+                        _fields_tile(scratch, 0, cnt, n0, force_lo, force_hi, b3, fields)
+                    _collide(op, scratch, 0, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
                 _store_tile(b, n0, cnt, n_nodes, f, streaming)
                 n0 += cnt
-            if streaming:
+            if streaming != STORE_CACHED:
                 _store_fence()
 
 

@@ -81,9 +81,10 @@ def check_tau(settings: Settings) -> None:
         )
 
 
-def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
+def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, stores: int | None = None):
     """``step(src, dst, fields, store, n_steps)`` for the chosen operator (its parameters are fixed once, here);
-    ``links``: interpolated boundary links (None: halfway bounce-back everywhere).
+    ``links``: interpolated boundary links (None: halfway bounce-back everywhere); ``stores``: how the kernel writes
+    the populations (``_kernels.STORE_*``; None: :func:`porepipe.lbm._kernels.streams` chooses by array size).
     """
     links = links if links is not None else Links.none()
     lo, hi = lat.force_nodes
@@ -123,7 +124,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None):
             fields,
             store,
             n,
-            K.streams(src),
+            K.streams(src) if stores is None else stores,
             omega,
             rates,
             links.tile_start,
