@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, by_threads
 
 #: exponents of the generalised Lennard-Jones branch (5.2.2); the closed forms below assume m = 2n = 16
 LJ_M = 16
@@ -248,7 +248,7 @@ def _scan_half(
     return cnt
 
 
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
+@by_threads(cache=True, fastmath=FASTMATH)
 def _half_counts(
     x,
     r,
@@ -291,7 +291,7 @@ def _half_counts(
         )
 
 
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
+@by_threads(cache=True, fastmath=FASTMATH)
 def _half_fill(
     x,
     r,
@@ -381,7 +381,7 @@ def _sphere_aux(i, x_old, x_new, v, x_build, r, r_build, box, periodic, cut, mas
 _REDUCE_CHUNKS = 64
 
 
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
+@by_threads(cache=True, fastmath=FASTMATH)
 def _step_reductions(sig, conv, aux):
     """One pass over the per-sphere results of a step: (converged count, kinetic energy, max sigma, sum and count of
     finite sigma, largest step displacement and its sphere, list staleness, first non-finite sphere or -1).
@@ -551,7 +551,8 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
     """Return the step kernel compiled with exactly the requested optional effects.
 
     The flags are closure constants, so numba removes the code of a switched-off effect entirely; each flag
-    combination is compiled (and cached on disk) once.
+    combination is compiled (and cached on disk) once per thread mode (serial for one thread, parallel for more:
+    :class:`porepipe._shared.numba_config.ByThreads`; the same forces and sums either way).
 
     Parameters
     ----------
@@ -567,7 +568,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         return _STEP_CACHE[key]
     FREEZE, STOCH, WALLS = key
 
-    @njit(cache=True, fastmath=FASTMATH, parallel=True)
+    @by_threads(cache=True, fastmath=FASTMATH)
     def _step(
         x_old,
         x_new,
