@@ -19,7 +19,7 @@ from numba import literally, njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, by_threads
 from porepipe.lbm._lattice import OPPOSITE, C, W
 
 _CX = C[:, 0].astype(np.float64)
@@ -120,7 +120,7 @@ def _node_ids(pore_flat, ids_out):
     return count
 
 
-@njit(cache=True, parallel=True)
+@by_threads(cache=True)
 def _gather_table(ids, shape, periodic, n_nodes, gather_out):
     """Pull source index of every population q = 1..18 of every node (flat index into the population array).
 
@@ -759,7 +759,7 @@ def _collide_one_operator(op, f, lanes, n0, force_lo, force_hi, force, omega, ra
     )
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
+@by_threads(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _step(
     op,
     src,
@@ -815,7 +815,7 @@ def _step(
 
 
 # -- reductions ---------------------------------------------------------------------------------------------------------
-@njit(cache=True, parallel=True)
+@by_threads(cache=True)
 def _finite_and_max_speed2(fields):
     """(all finite?, max |u|²) over the nodes of a (4, N) field array."""
     n = fields.shape[1]
@@ -831,7 +831,7 @@ def _finite_and_max_speed2(fields):
     return bad == 0, vmax
 
 
-@njit(cache=True, parallel=True)
+@by_threads(cache=True)
 def _max_rel_change(new, old, floor):
     """max_n |new − old| / max(|new|, floor) (thesis Eq. 6.1.30 with a floor against division by ~0)."""
     best = 0.0
