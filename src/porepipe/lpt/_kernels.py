@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, by_threads
 
 #: Λ bits in the output of :func:`_percolation_cells`: x, y, z, all three, at least one.
 BIT_X, BIT_Y, BIT_Z, BIT_ALL, BIT_ANY = 1, 2, 4, 8, 16
@@ -71,7 +71,7 @@ def _fill_slice(field, x, wy, wz, my, mz, tmp, out):
             out[y0, z0] = np.int64(out[y0 - 1, z0]) + tmp[y0 + wy - 1, z0] - tmp[y0 - 1, z0]
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
+@by_threads(cache=True, fastmath=FASTMATH)
 def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum, ksq, rec_stride, rec):
     """Histogram (and optionally record) the box sums of ``fields`` at all grid positions.
 
@@ -270,7 +270,7 @@ def _path_fits(record, origin, size, axis):
     return True
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
+@by_threads(cache=True, fastmath=FASTMATH)
 def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, want, stop, n_chunks, out):
     """Local percolation indicators of many cells.
 
