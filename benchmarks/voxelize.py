@@ -1,17 +1,17 @@
 """Voxelisation throughput: the chord method (``boundary``) vs brute force (216 points per voxel), same packing.
 
 Prints Mvoxel/s of both methods at 1 and 2 threads, the speed-up, and checks the two grey volumes are identical.
-Usage: python benchmarks/voxelize.py [--smoke] [--json out.json]
+Usage: python benchmarks/voxelize.py [--smoke] [--out DIR]   (writes voxelize.json into --out, default results/benchmarks/)
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 import numba
 import numpy as np
+from _common import add_out_argument, write_record
 
 from porepipe.voxelize import VoxelizeMethod, voxelize
 
@@ -52,7 +52,7 @@ def run_case(box, n, a, r_min, r_max, threads):
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--smoke", action="store_true", help="tiny sizes, for CI")
-    ap.add_argument("--json")
+    add_out_argument(ap)
     args = ap.parse_args()
     r_min, r_max = 5.0, 10.0
     # same packing density (number of spheres per volume) at every resolution; ~8 Mvoxel per case
@@ -79,9 +79,7 @@ def main():
         "216 point tests for every voxel in a sphere's bounding box; grey values of both are asserted identical; "
         "goal (issue #22): speed-up >= 20x at every sphere span"
     )
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    write_record(args.out, "voxelize.json", rows)
 
 
 if __name__ == "__main__":

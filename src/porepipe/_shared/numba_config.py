@@ -51,7 +51,11 @@ def _renamed(py_func, suffix: str):
     qualified name (not after the compile options), so each variant needs its own name to keep its own cache.
     """
     twin = types.FunctionType(
-        py_func.__code__, py_func.__globals__, py_func.__name__ + suffix, py_func.__defaults__, py_func.__closure__
+        py_func.__code__,
+        py_func.__globals__,
+        py_func.__name__ + suffix,
+        py_func.__defaults__,
+        py_func.__closure__,
     )
     twin.__qualname__ = py_func.__qualname__ + suffix
     twin.__module__ = py_func.__module__

@@ -745,7 +745,9 @@ def _collide(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
 def _collide_one_operator(op, f, lanes, n0, force_lo, force_hi, force, omega, rates):
     """The jitted :func:`_collide` of the one operator the literal ``op`` names."""
     if not isinstance(op, types.IntegerLiteral):
-        raise TypeError("_collide: op must be a literal (call it with literally(op)), so one operator compiles")
+        raise TypeError(
+            "_collide: op must be a literal (call it with literally(op)), so one operator compiles"
+        )
     if op.literal_value == BGK:
         return lambda op, f, lanes, n0, force_lo, force_hi, force, omega, rates: _collide_bgk(
             f, lanes, n0, force_lo, force_hi, force, omega[0]
