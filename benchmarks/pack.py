@@ -260,8 +260,7 @@ def main() -> None:
         "engine_spheres": n_engine,
         "engine_s_per_step": {str(k): v for k, v in eng.items()},
     }
-    if not args.smoke:
-        write_record(args.out, "pack.json", out)
+    write_record(args.out, "pack_smoke.json" if args.smoke else "pack.json", out)
 
 
 if __name__ == "__main__":
