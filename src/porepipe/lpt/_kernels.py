@@ -343,7 +343,8 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                         ok = True
                     elif _path_fits(by_z[axis, origin[2]], origin, size, axis):
                         ok = True
-                        last[axis, :] = by_z[axis, origin[2]]
+                        for q in range(7):  # element by element: a slice copy compiles numba's shape-error path
+                            last[axis, q] = by_z[axis, origin[2], q]
                     else:
                         if gen == _WALL - np.uint32(1):  # generations exhausted: clear the inside marks
                             for v in range(p * p * p):
@@ -371,7 +372,8 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                             for d in range(3):
                                 last[axis, 1 + d] = origin[d] + box[d] - 1
                                 last[axis, 4 + d] = origin[d] + box[3 + d] - 1
-                            by_z[axis, origin[2], :] = last[axis]
+                            for q in range(7):
+                                by_z[axis, origin[2], q] = last[axis, q]
                     if ok:
                         bits |= 1 << axis
                     if (stop == STOP_ON_FAIL and not ok) or (stop == STOP_ON_SUCCESS and ok):
