@@ -247,7 +247,7 @@ def main() -> None:
             per_step = per_step_engine * n / n_engine
             print(
                 f"| {threads} | {effect} | {per_step:.4g} | {per_step / bare:.3f} | "
-                f"{per_step / per_effect['none']:.3f} |"
+                f"{per_step_engine / per_effect['none']:.3f} |"
             )
     print(
         "\n'none' vs bare kernel = what the engine adds to a scene without optional effects (target <= 1.05)."

@@ -343,7 +343,9 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                         ok = True
                     elif _path_fits(by_z[axis, origin[2]], origin, size, axis):
                         ok = True
-                        for q in range(7):  # element by element: a slice copy compiles numba's shape-error path
+                        for q in range(
+                            7
+                        ):  # element by element: a slice copy compiles numba's shape-error path
                             last[axis, q] = by_z[axis, origin[2], q]
                     else:
                         if gen == _WALL - np.uint32(1):  # generations exhausted: clear the inside marks

@@ -1,5 +1,5 @@
-"""A packing run compiles each kernel once, in the variant its thread count needs: a mini-scene pack on one thread
-compiles only the serial kernels (about half the compile time of the parallel ones), one signature each; a
+"""A packing run compiles each kernel once, in the variant it needs: a small pack on one thread compiles only the
+serial kernels (about half the compile time of the parallel ones), one signature each; a
 read-only ``periodic`` array passed by a caller compiles nothing more (it used to compile every kernel twice)."""
 
 import subprocess
@@ -65,5 +65,7 @@ def test_both_variants_give_the_same_bits_and_are_picked_by_the_thread_count():
         numba.set_num_threads(1)
         _chunk_sums(x, np.empty(8))
         assert len(_chunk_sums.serial.signatures) == 1
+        big = np.zeros(_chunk_sums.serial_max_elements + 1)  # a large call runs the faster parallel code
+        assert _chunk_sums.pick(big, np.empty(8)) is _chunk_sums.parallel
     finally:
         numba.set_num_threads(before)
