@@ -61,7 +61,7 @@ def test_capillary_size_that_is_no_whole_voxel_count_stops_the_dry_run(tmp_path)
 
 
 def test_mesopore_scenes_load_and_plan_capillary_diffusion_and_report(tmp_path):
-    """The capillaries A/B/C of Mahler 2001 §4.2.3 (full and CI size): valid scenes, the thesis's reaction study
+    """The capillaries A/B/C of Mahler 2001 §4.2.3 (full, CI and thesis size): valid scenes, the thesis's reaction study
     (every set of Tables 4.2-4.4), and a DAG capillary → diffusion → sweep → report; the length-series scenes
     (§3.6.4) run their longest length on the whole capillary."""
     from porepipe.report._reaction_tables import THESIS
@@ -69,7 +69,7 @@ def test_mesopore_scenes_load_and_plan_capillary_diffusion_and_report(tmp_path):
 
     kinds = {"a": "constricted", "b": "pocketed", "c": "rough"}
     for k, kind in kinds.items():
-        for suffix in ("", "-ci"):
+        for suffix in ("", "-ci", "-thesis"):
             scene = load_scene(ROOT / "config" / "scenes" / f"mesopore-{k}{suffix}.yaml")
             assert scene.diffusion.geometry.kind.value == kind
             sets = {(s.w, s.w_reverse, s.w_follow) for s in scene.diffusion.reactions.series}

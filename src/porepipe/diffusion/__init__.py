@@ -19,6 +19,7 @@ _EXPORTS = {
     "SPECIES": "_species",
     "Settings": "_settings",
     "Setup": "_settings",
+    "SideReaction": "_surface",
     "SpeedDist": "_settings",
     "WallLaw": "_settings",
     "WallSpeed": "_settings",

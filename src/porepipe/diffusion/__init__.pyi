@@ -42,6 +42,7 @@ from porepipe.diffusion._species import SPECIES as SPECIES
 from porepipe.diffusion._species import mean_speed as mean_speed
 from porepipe.diffusion._surface import Adsorbate as Adsorbate
 from porepipe.diffusion._surface import Mechanism as Mechanism
+from porepipe.diffusion._surface import SideReaction as SideReaction
 from porepipe.diffusion._surface import surface_run as surface_run
 
 __all__ = [
@@ -59,6 +60,7 @@ __all__ = [
     "ReactionSettings",
     "Settings",
     "Setup",
+    "SideReaction",
     "SpeedDist",
     "WallLaw",
     "WallSpeed",

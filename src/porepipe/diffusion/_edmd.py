@@ -453,6 +453,7 @@ def reactive_pore(
     w_reverse: float = 0.0,
     w_follow: float = 0.0,
     wall_law: str = "lambert",
+    inlet_law: str = "lambert",
     voxel_um=1.0,
     periodic=(False, False, False),
     particles: int = 20000,
@@ -482,6 +483,8 @@ def reactive_pore(
     ``adsorption`` > 0: probability that a wall hit adsorbs the particle for ``residence`` jiffies (``residence_law``
     fixed or exponential); ``adsorbed_fraction`` = residence time over particle time (beyond the thesis, which
     designed but never ran adsorption).
+    ``inlet_law``: direction of an entering particle, "lambert" (an equilibrium reservoir's flux) or "isotropic"
+    (the thesis's inlet, an isotropic scatterer, §4.1 and §5.2).
     Lengths in units of the smallest voxel edge, times in jiffies (v̄ = 1 voxel/jiffie).
     """
     from porepipe.diffusion._api import _ratio, prepare
@@ -492,6 +495,8 @@ def reactive_pore(
             raise PorepipeError(f"reaction probability {name} must lie in [0, 1], got {value!r}")
     if wall_law not in _LAW:
         raise PorepipeError(f"wall_law must be one of {', '.join(_LAW)}, got {wall_law!r}")
+    if inlet_law not in ("lambert", "isotropic"):
+        raise PorepipeError(f"inlet_law must be lambert or isotropic, got {inlet_law!r}")
     geom = prepare(pore, voxel_um, periodic, axis)
     if not 0.0 <= adsorption <= 1.0 or residence < 0 or residence_law not in ("fixed", "exponential"):
         raise PorepipeError(
@@ -508,7 +513,7 @@ def reactive_pore(
             raise PorepipeError(f"sites must be finite, >= 0 and of the pore's shape {np.shape(pore)}")
     kernel = E.make_reactive_kernel(
         K.wall_flags(_LAW[wall_law], 1.0, False),
-        K.LAMBERT,
+        _LAW[inlet_law],
         K.SPEED_FLUX,
         w_reverse > 0,
         w_follow > 0,
@@ -691,6 +696,7 @@ def reaction_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0
         w_reverse=rs.w_reverse,
         w_follow=rs.w_follow,
         wall_law=settings.wall_law.value,
+        inlet_law=settings.inlet_law.value,
         voxel_um=voxel_um,
         periodic=periodic,
         particles=rs.particles,

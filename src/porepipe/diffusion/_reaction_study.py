@@ -76,6 +76,7 @@ def study_result(pore, settings, axis: int, voxel_um, periodic, seed: int = 0):
         axis,
         rs.series,
         wall_law=settings.wall_law.value,
+        inlet_law=settings.inlet_law.value,
         voxel_um=voxel_um,
         periodic=periodic,
         particles=rs.particles,

@@ -157,6 +157,24 @@ class SurfaceMechanism(BaseModel):
     b: str = Field(description="second reactant (adsorbed)")
     product: str = Field(description="product species")
     w: float = Field(ge=0, le=1, description="reaction probability per encounter (LH) or per hit on b (ER)")
+    w_reverse: float = Field(
+        0.0,
+        ge=0,
+        le=1,
+        description="ER only: product hit on an empty active site → gas a + adsorbed b (4.18)",
+    )
+
+
+class SurfaceSideReaction(BaseModel):
+    """A side or consecutive reaction of setup ``surface`` (thesis 4.20-4.22): a gas wall hit of ``reactant``
+    turns it into ``product`` with probability ``w``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    reactant: str = Field(description="species hitting the wall (A, B or the product P)")
+    product: str = Field(description="by-product species (S, S', S'')")
+    w: float = Field(ge=0, le=1, description="probability per gas wall hit")
 
 
 class SurfaceSettings(BaseModel):
@@ -170,10 +188,18 @@ class SurfaceSettings(BaseModel):
     mechanisms: list[SurfaceMechanism] = Field(
         default_factory=list, description="LH and/or ER (at most one each)"
     )
+    side_reactions: list[SurfaceSideReaction] = Field(
+        default_factory=list, description="side reactions at gas wall hits (at most one per reactant)"
+    )
     duration_jiffies: float = Field(1000.0, gt=0, description="simulated time")
     warmup_jiffies: float = Field(100.0, ge=0, description="time before the tallies start")
     sites_per_edge: int = Field(
         2, ge=1, description="sites per voxel-face edge (reactive distance = h / this)"
+    )
+    neighbours: str = Field(
+        "face",
+        pattern="^(face|surface)$",
+        description="hop / LH partner sites: in-face only, or also across voxel edges (surface)",
     )
     active_fraction: float = Field(1.0, gt=0, le=1, description="fraction of active sites (the thesis's a)")
     residence_law: str = Field(

@@ -7,16 +7,24 @@ with every gas and adsorbed particle advancing through one event calendar (see
 
 Model (each choice stated so the analytic truths below are exact):
 
-- each wall face of a pore voxel carries ``s × s`` sites of area A_site = (face area)/s², a fraction
+- each wall face of a pore voxel carries ``s × s`` sites of area A_site = (face area)/s² (see
+  :mod:`porepipe.diffusion._surface_sites`), a fraction
   ``active_fraction`` of them active (the thesis's a); a site holds one particle;
 - a gas particle of species X hitting an active empty site adsorbs with probability ``adsorption``; it stays a
-  residence time (fixed or exponential of mean ``residence``), hops to an in-face neighbour site at rate ``hop_rate``
-  (rejected if that site is occupied, inactive or off the face) and desorbs by the wall law with a thermal speed;
+  residence time (fixed or exponential of mean ``residence``), hops to a neighbour site at rate ``hop_rate``
+  (rejected if that site is occupied, inactive or missing) and desorbs by the wall law with a thermal speed;
+  neighbours are the in-face sites (``neighbours="face"``) or also the sites across the voxel edges where two
+  wall faces meet (``"surface"``: 4 for every site, concave and convex edges alike);
 - Eley-Rideal A(g) + B(ads) → P: an A hit on a site that holds B reacts with probability ``w``; so per A hit the
   reaction probability is a·θ_B·w, the thesis's (4.16), with θ_B the coverage of the active sites;
-- Langmuir-Hinshelwood A(ads) + B(ads) → P: a particle arriving at a site tries each in-face neighbour holding its
+- Langmuir-Hinshelwood A(ads) + B(ads) → P: a particle arriving at a site tries each neighbour holding its
   partner with probability ``w`` (reactive distance = one site spacing);
 - ``replenish``: each reaction's product is counted and both reactants re-enter the gas (steady state).
+- reverse Eley-Rideal (thesis 4.18, ``Mechanism.w_reverse``): a product hit on an empty active site turns it back
+  into gas A (which leaves the wall) and B adsorbed on that site, with probability ``w_reverse``;
+- side and consecutive reactions (thesis 4.20-4.22, :class:`SideReaction`): a gas wall hit of X turns it into its
+  by-product with probability w (A → S, B → S′, P → S″; at most one per reactant). The reactions open on one hit
+  (ER or its reverse, and the side reaction) share one uniform number: their probabilities add.
 
 Analytic truths (tests/validation/test_surface_mechanisms.py):
 
@@ -24,11 +32,19 @@ Analytic truths (tests/validation/test_surface_mechanisms.py):
   F_X = n_X·v̄_X·A_site/4 per time, so each active site is a Markov chain empty ⇄ X with rates a_X·F_X and 1/τ_X:
   θ_X = K_X·n_X/(1 + Σ_Y K_Y·n_Y), K_X = a_X·v̄_X·A_site·τ_X/4 (:func:`langmuir_coverage`); hops (a symmetric
   exclusion process) do not change it.
-- LH encounters: with independent Bernoulli occupations (exact at w → 0) an arrival of X on a site with z in-face
+- LH encounters: with independent Bernoulli occupations (exact at w → 0) an arrival of X on a site with z
   neighbours reacts with probability 1 − (1 − w·θ_Y)^z, z − 1 for a hop (the site it came from is empty now)
   (:func:`lh_reaction_probability`).
 - ER with B fixed on the surface and no replenishment: −dN_B/dt = k·N_A·N_B, k = w·v̄_A·A_site/(4V), N_A − N_B
   constant: the second-order law (:func:`second_order_remaining`), first order when A is in excess.
+- ER with its reverse (B never desorbs, all sites active, M sites): x = N_P obeys
+  dx/dt = k_f·(N_A0 − x)(N_B0 − x) − k_r·x·(M − N_B0 + x), k_f = w·v̄_A·A_site/(4V), k_r = w′·v̄_P·A_site/(4V), a
+  Riccati equation with constant coefficients (:func:`reversible_er_products`); at equilibrium
+  N_P·N_empty/(N_A·N_B) = k_f/k_r.
+- Side reactions with first-order rates k_X = w_X·v̄_X·S/(4V) (S the wall area): A ⇌ S relaxes exponentially with
+  rate k_A + k_S to N_S/N_A = k_A/k_S; competing with ER on fixed B, every A hit branches with w_S against w on a B
+  site, so the by-product count is S = (w_S·n_sites/w)·(H(N_B0) − H(N_B)) in the mean, harmonic numbers H
+  (:func:`side_products_per_er`).
 """
 
 from __future__ import annotations
@@ -41,6 +57,7 @@ import numpy as np
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.rng import kernel_seed
 from porepipe.diffusion import _surface_kernels as S
+from porepipe.diffusion._surface_sites import site_neighbours, wall_sites
 
 STAGE = "diffusion"
 _LAWS = {"lambert": 1, "isotropic": 3, "cosine_dtheta": 2}
@@ -74,42 +91,50 @@ class Adsorbate:
 
 @dataclass(frozen=True)
 class Mechanism:
-    """A + B → product, bimolecular: ``kind`` "LH" (both adsorbed) or "ER" (``a`` from the gas, ``b`` adsorbed)."""
+    """A + B → product, bimolecular: ``kind`` "LH" (both adsorbed) or "ER" (``a`` from the gas, ``b`` adsorbed).
+
+    ``w_reverse`` (ER only, thesis 4.18): probability that a hit of the product on an empty active site turns it back
+    into gas ``a`` and adsorbed ``b`` on that site.
+    """
 
     kind: str
     a: str
     b: str
     product: str
     w: float
+    w_reverse: float = 0.0
 
     def __post_init__(self):
         if self.kind not in ("LH", "ER"):
             raise PorepipeError(f"mechanism kind must be LH or ER, got {self.kind!r}")
+        for key in ("w", "w_reverse"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise PorepipeError(
+                    f"mechanism {self.kind}: {key} must lie in [0, 1], got {getattr(self, key)!r}"
+                )
+        if self.kind == "LH" and self.w_reverse > 0.0:
+            raise PorepipeError("mechanism LH: w_reverse is only for ER (thesis 4.18)")
+        if self.product in (self.a, self.b):
+            raise PorepipeError(f"mechanism {self.kind}: product {self.product!r} must differ from a and b")
+
+
+@dataclass(frozen=True)
+class SideReaction:
+    """Side or consecutive reaction at a gas wall hit (thesis 4.20-4.22): ``reactant`` → ``product`` with ``w``."""
+
+    reactant: str
+    product: str
+    w: float
+
+    def __post_init__(self):
         if not 0.0 <= self.w <= 1.0:
-            raise PorepipeError(f"mechanism {self.kind}: w must lie in [0, 1], got {self.w!r}")
-
-
-def wall_sites(codes: np.ndarray, periodic) -> tuple[np.ndarray, np.ndarray]:
-    """Wall faces of the pore voxels: ``face_of`` ((n·6,) int64, face id or -1 per voxel and face event
-    2·axis + (step > 0)) and ``site_face`` ((m, 4) int64: voxel index and face event per face id).
-    """
-    pore = codes > 0
-    walls = []
-    for ax in range(3):
-        for up in (0, 1):
-            shifted = np.roll(pore, -1 if up else 1, axis=ax)
-            wall = pore & ~shifted
-            if not periodic[ax]:
-                edge = [slice(None)] * 3
-                edge[ax] = -1 if up else 0
-                wall[tuple(edge)] = pore[tuple(edge)]
-            walls.append(wall)
-    stack = np.stack(walls, axis=-1)  # (n0, n1, n2, 6)
-    face_of = np.full(stack.size, -1, dtype=np.int64)
-    flat = np.flatnonzero(stack.reshape(-1))
-    face_of[flat] = np.arange(flat.size)
-    vox = np.column_stack(np.unravel_index(flat // 6, codes.shape))
-    return face_of, np.column_stack([vox, flat % 6]).astype(np.int64)
+            raise PorepipeError(
+                f"side reaction {self.reactant} → {self.product}: w must lie in [0, 1], got {self.w!r}"
+            )
+        if self.reactant == self.product:
+            raise PorepipeError(
+                f"side reaction {self.reactant} → {self.product}: product must differ from reactant"
+            )
 
 
 def _sites_and_activity(n_faces, s, active_fraction, seed):
@@ -121,8 +146,10 @@ def _sites_and_activity(n_faces, s, active_fraction, seed):
     return n_sites, active
 
 
-def _start_sites(species, active, seed):
-    """Start site per particle (-1 = gas): the pre-adsorbed ones on distinct random active sites."""
+def _start_sites(species, active, seed, spare_of=-1):
+    """Start site per particle (-1 = gas): the pre-adsorbed ones on distinct random active sites; one spare slot
+    (site ``S.SPARE``) per starting particle of species ``spare_of`` (the reverse ER product) at the end.
+    """
     n_pre = sum(int(sp.adsorbed) for sp in species)
     free = np.flatnonzero(active)
     if n_pre > free.size:
@@ -134,12 +161,16 @@ def _start_sites(species, active, seed):
         kinds += [x] * (int(sp.gas) + int(sp.adsorbed))
         sites += [-1] * int(sp.gas) + list(chosen[k : k + int(sp.adsorbed)])
         k += int(sp.adsorbed)
+    if spare_of >= 0:
+        n_spare = int(species[spare_of].gas) + int(species[spare_of].adsorbed)
+        kinds += [spare_of] * n_spare
+        sites += [S.SPARE] * n_spare
     return np.array(kinds, dtype=np.int64), np.array(sites, dtype=np.int64)
 
 
 def _mechanism_arrays(mechanisms, names):
     lh, er = np.full(3, -1, np.int64), np.full(3, -1, np.int64)
-    lh_w = er_w = 0.0
+    lh_w = er_w = er_rev = 0.0
     seen = set()
     for m in mechanisms:
         for key in ("a", "b", "product"):
@@ -156,18 +187,58 @@ def _mechanism_arrays(mechanisms, names):
         if m.kind == "LH":
             lh, lh_w = spec, m.w
         else:
-            er, er_w = spec, m.w
-    return lh, lh_w, er, er_w
+            er, er_w, er_rev = spec, m.w, m.w_reverse
+    return lh, er, np.array([lh_w, er_w, er_rev])
+
+
+def _side_arrays(side_reactions, names):
+    """Per species: side-reaction product index (-1 = none) and probability per gas wall hit."""
+    to, w = np.full(len(names), -1, np.int64), np.zeros(len(names))
+    for r in side_reactions:
+        for key in ("reactant", "product"):
+            if getattr(r, key) not in names:
+                raise PorepipeError(f"side reaction: {key} = {getattr(r, key)!r} is not a species ({names})")
+        x = names.index(r.reactant)
+        if to[x] >= 0:
+            raise PorepipeError(f"at most one side reaction per reactant, got two for {r.reactant!r}")
+        if r.w > 0.0:  # zero probability: off, no random number drawn for it
+            to[x], w[x] = names.index(r.product), r.w
+    return to, w
+
+
+def _mechanism_tuple(mechanisms, side_reactions, names, replenish):
+    """The kernel's ``mech`` tuple, after the checks that tie mechanisms and side reactions together."""
+    lh, er, w = _mechanism_arrays(mechanisms, names)
+    side_to, side_w = _side_arrays(side_reactions, names)
+    w_er = {int(er[0]): w[S.W_ER], int(er[2]): w[S.W_REV]} if er[0] >= 0 else {}
+    for x, p in w_er.items():
+        if p + side_w[x] > 1.0:
+            raise PorepipeError(
+                f"species {names[x]!r}: Eley-Rideal ({p}) and side reaction ({side_w[x]}) probabilities per hit "
+                "add up to more than 1"
+            )
+    if w[S.W_REV] > 0.0:
+        if replenish:
+            raise PorepipeError(
+                "the reverse Eley-Rideal reaction needs replenish: false (no product stays in the gas)"
+            )
+        if er[2] in side_to:
+            raise PorepipeError(
+                f"with the reverse Eley-Rideal reaction no side reaction may make its product {names[er[2]]!r}"
+            )
+    return lh, er, w, side_to, side_w
 
 
 def surface_run(
     pore,
     species,
     mechanisms=(),
+    side_reactions=(),
     *,
     t_end: float,
     t_warm: float = 0.0,
     sites_per_edge: int = 2,
+    neighbours: str = "face",
     active_fraction: float = 1.0,
     wall_law: str = "lambert",
     residence_law: str = "exponential",
@@ -180,10 +251,13 @@ def surface_run(
 ) -> dict:
     """Run the adsorbing, reacting Knudsen gas in a closed (or periodic) pore from 0 to ``t_end`` jiffies.
 
+    ``neighbours``: the sites a hop may reach and a Langmuir-Hinshelwood partner may sit on: "face" (the in-face
+    neighbours only) or "surface" (also across the voxel edges where two wall faces meet, so every site has 4).
+
     Returns per species (arrays in the order of ``species``) over the blocks after ``t_warm``: ``coverage`` (time
     mean adsorbed count / active sites) and its error, ``gas_density`` (time mean gas count / pore volume),
-    ``adsorptions``, ``desorptions``, ``hops``, ``hop_tries``, ``wall_hits``; ``lh_reactions``/``er_reactions``
-    (counts after ``t_warm``) and their rates per time; ``series`` (gas and adsorbed counts at ``t_samples``,
+    ``adsorptions``, ``desorptions``, ``hops``, ``hop_tries``, ``wall_hits``, ``side_reactions`` (by reactant);
+    ``lh_reactions``/``er_reactions``/``er_reverse_reactions`` (counts after ``t_warm``) and their rates per time; ``series`` (gas and adsorbed counts at ``t_samples``,
     shape (k, species, 2)); ``final_counts`` (gas + adsorbed slots per species at the end); geometry data
     (``pore_volume``, ``sites``, ``site_area``, ``active_sites``) and ``events``.
     """
@@ -203,14 +277,15 @@ def surface_run(
         raise PorepipeError(
             f"need 0 <= t_warm < t_end and blocks >= 1, got {t_warm!r}, {t_end!r}, {blocks!r}"
         )
-    lh, lh_w, er, er_w = _mechanism_arrays(mechanisms, names)
+    mech = _mechanism_tuple(mechanisms, side_reactions, names, replenish)
     geom = prepare(pore, voxel_um, periodic, axis=None)
     if not np.allclose(geom.h, 1.0):
         raise PorepipeError(f"the adsorbing gas needs cubic voxels, got voxel_um {geom.voxel_um.tolist()}")
     face_of, site_face = wall_sites(geom.codes, geom.periodic)
     s = int(sites_per_edge)
     n_sites, active = _sites_and_activity(site_face.shape[0], s, active_fraction, seed)
-    kinds, site0 = _start_sites(species, active, seed)
+    reverse = mech[2][S.W_REV] > 0.0
+    kinds, site0 = _start_sites(species, active, seed, int(mech[1][2]) if reverse else -1)
     if kinds.size == 0:
         raise PorepipeError("no particles: give some species a gas or adsorbed count > 0")
     opts = np.array([_LAWS[wall_law], int(residence_law == "exponential"), int(bool(replenish))], np.int64)
@@ -221,35 +296,19 @@ def surface_run(
     series = np.zeros((samples.size, n_sp, 2))
     final_sp = np.empty(kinds.size, np.int64)
     final_st = np.empty(kinds.size, np.int64)
-    events = S.surface_kernel(
+    nbr = site_neighbours(geom.codes, geom.periodic, face_of, site_face, s, neighbours)
+    geo = (geom.codes, geom.h, geom.periodic, geom.cells(), face_of, site_face, active, s, nbr)
+    kin = (
         opts,
-        geom.codes,
-        geom.h,
-        geom.periodic,
-        geom.cells(),
-        face_of,
-        site_face,
-        s,
-        active,
-        kinds,
-        site0,
         np.array([sp.vmean for sp in species]),
         np.array([sp.adsorption for sp in species]),
         np.array([sp.residence for sp in species]),
         np.array([sp.hop_rate for sp in species]),
-        lh,
-        lh_w,
-        er,
-        er_w,
-        kernel_seed(seed, STAGE, 21),
-        float(t_end),
-        float(t_warm),
-        samples,
-        tally,
-        rtally,
-        series,
-        final_sp,
-        final_st,
+    )
+    seed_k = kernel_seed(seed, STAGE, 21)
+    out = (tally, rtally, series, final_sp, final_st)
+    events = S.surface_kernel(
+        geo, kin, mech, kinds, site0, seed_k, float(t_end), float(t_warm), samples, *out
     )
     return _summary(
         tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, t_end - t_warm, events
@@ -276,6 +335,8 @@ def _summary(tally, rtally, series, final_sp, final_st, geom, n_sites, active, s
         "hops": total[:, S.S_HOP_OK],
         "lh_reactions": int(rtally[:, S.X_LH].sum()),
         "er_reactions": int(rtally[:, S.X_ER].sum()),
+        "er_reverse_reactions": int(rtally[:, S.X_ER_REV].sum()),
+        "side_reactions": total[:, S.S_SIDE],
         "lh_blocks": rtally[:, S.X_LH],
         "er_blocks": rtally[:, S.X_ER],
         "blocks_tally": tally,
@@ -314,20 +375,22 @@ def _in_face_neighbours(s: int) -> np.ndarray:
     return z if s > 1 else np.zeros((1, 1), int)
 
 
-def lh_reaction_probability(s: int, w: float, theta_partner: float, arrival: str) -> float:
+def lh_reaction_probability(
+    s: int, w: float, theta_partner: float, arrival: str, neighbours: str = "face"
+) -> float:
     """Mean probability that an arrival reacts under independent Bernoulli occupation with partner coverage θ.
 
     ``arrival`` "adsorption": a uniform (empty) site, 1 − (1 − wθ)^z averaged over the s×s sites;
-    "hop": an accepted hop from a site to a uniform in-face neighbour, 1 − (1 − wθ)^(z_target − 1) averaged over
-    the ordered neighbour pairs (source, target).
+    "hop": an accepted hop from a site to a uniform neighbour, 1 − (1 − wθ)^(z_target − 1) averaged over
+    the ordered neighbour pairs (source, target). ``neighbours`` "face": z of the in-face sites; "surface": z = 4.
     """
-    z = _in_face_neighbours(s)
+    z = _in_face_neighbours(s) if neighbours == "face" else np.full((s, s), 4)
     q = 1.0 - w * theta_partner
     if arrival == "adsorption":
         return float(np.mean(1.0 - q**z))
     if arrival != "hop":
         raise PorepipeError(f"arrival must be adsorption or hop, got {arrival!r}")
-    if s < 2:
+    if s < 2 and neighbours == "face":
         return 0.0
     # each target site is reached from its z neighbours: weight by z
     return float(np.sum(z * (1.0 - q ** (z - 1))) / np.sum(z))
@@ -343,6 +406,48 @@ def second_order_remaining(n_a0: float, n_b0: float, k: float, t) -> np.ndarray:
     return d * n_b0 * e / (n_a0 - n_b0 * e)
 
 
+def first_order_rate(w: float, vmean: float, wall_area: float, pore_volume: float) -> float:
+    """Rate per particle w·v̄·S/(4V) of a wall reaction of probability w per hit (equilibrium wall flux v̄/4)."""
+    return w * vmean * wall_area / (4.0 * pore_volume)
+
+
+def reversible_first_order(n_total: float, k_f: float, k_r: float, t) -> np.ndarray:
+    """N_A(t) for A ⇌ S with rates k_f, k_r per particle, all A at t = 0: exponential relaxation with rate k_f + k_r
+    to N_A = n_total·k_r/(k_f + k_r) (so N_S/N_A → k_f/k_r).
+    """
+    t = np.asarray(t, float)
+    eq = n_total * k_r / (k_f + k_r)
+    return eq + (n_total - eq) * np.exp(-(k_f + k_r) * t)
+
+
+def reversible_er_products(n_a0: float, n_b0: float, sites: float, k_f: float, k_r: float, t) -> np.ndarray:
+    """N_P(t) of A(g) + B(ads) ⇌ P(g) on ``sites`` active sites, no P at t = 0 (exact Riccati solution).
+
+    dx/dt = k_f(N_A0 − x)(N_B0 − x) − k_r·x·(M − N_B0 + x) = α(x − r₁)(x − r₂), α = k_f − k_r; r₁ is the root in
+    [0, min(N_A0, N_B0)] (the equilibrium) and x = r₁(1 − E)/(1 − (r₁/r₂)E), E = exp(α(r₁ − r₂)t); written with
+    q = α·r₂ so that α = 0 (linear relaxation) needs no special case.
+    """
+    t = np.asarray(t, float)
+    beta = -k_f * (n_a0 + n_b0) - k_r * (sites - n_b0)
+    gamma = k_f * n_a0 * n_b0
+    alpha = k_f - k_r
+    q = 0.5 * (-beta + math.sqrt(beta * beta - 4.0 * alpha * gamma))  # > 0: α·r₂
+    r1 = gamma / q
+    e = np.exp((alpha * r1 - q) * t)
+    return r1 * (1.0 - e) / (1.0 - alpha * r1 / q * e)
+
+
+def side_products_per_er(c: float, n_b0: int, n_b: int) -> tuple[float, float]:
+    """Mean and variance of the side-product count of A once Eley-Rideal has taken fixed B from ``n_b0`` to ``n_b``.
+
+    Every A hit reacts with B with probability w·N_B/n_sites and to the by-product with w_S, whatever N_A: between
+    two ER events at N_B = j the side events are geometric with mean c/j, c = w_S·n_sites/w. Sum over j = n_b + 1 …
+    n_b0: mean c·(H(n_b0) − H(n_b)) (→ c·ln(n_b0/n_b)), variance Σ (c/j)(1 + c/j).
+    """
+    m = c / np.arange(n_b + 1, n_b0 + 1, dtype=float)
+    return float(m.sum()), float((m * (1.0 + m)).sum())
+
+
 # ---------------------------------------------------------------------------------------------------------------------
 # setup surface of the diffusion stage
 def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
@@ -351,7 +456,7 @@ def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
     Speeds: the species' mean speeds at ``settings.temperature_K`` relative to the fastest (v̄ = 1 voxel/jiffie).
     Values per species ``<name>_coverage`` (± ``_err``), ``<name>_gas_density`` (per voxel³), ``<name>_langmuir``
     (the competitive isotherm at the measured densities, meaningful without reactions; NaN when a species that adsorbs
-    never desorbs); reaction counts and rates.
+    never desorbs); reaction counts and rates (LH, ER, reverse ER) and side reactions per reactant.
     """
     from porepipe.diffusion._api import DiffusionResult
     from porepipe.diffusion._species import mean_speed
@@ -366,15 +471,18 @@ def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
         )
         for sp, v in zip(ss.species, speeds)
     ]
-    mechanisms = [Mechanism(m.kind, m.a, m.b, m.product, m.w) for m in ss.mechanisms]
+    mechanisms = [Mechanism(m.kind, m.a, m.b, m.product, m.w, m.w_reverse) for m in ss.mechanisms]
+    side = [SideReaction(r.reactant, r.product, r.w) for r in ss.side_reactions]
     t = np.linspace(0.0, ss.duration_jiffies, ss.samples) if ss.samples else ()
     run = surface_run(
         pore,
         species,
         mechanisms,
+        side,
         t_end=ss.duration_jiffies,
         t_warm=ss.warmup_jiffies,
         sites_per_edge=ss.sites_per_edge,
+        neighbours=ss.neighbours,
         active_fraction=ss.active_fraction,
         wall_law=settings.wall_law.value,
         residence_law=ss.residence_law,
@@ -398,7 +506,10 @@ def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
         v[f"{sp.name}_gas_density"] = float(run["gas_density"][x])
         v[f"{sp.name}_langmuir"] = float(theta[x])
     span = run["span"]
-    v.update(lh_reactions=run["lh_reactions"], er_reactions=run["er_reactions"])
-    v.update(lh_rate=run["lh_reactions"] / span, er_rate=run["er_reactions"] / span)
+    counts = {k: run[f"{k}_reactions"] for k in ("lh", "er", "er_reverse")}
+    v.update({f"{k}_reactions": n for k, n in counts.items()})
+    v.update({f"{k}_rate": n / span for k, n in counts.items()})
+    for x, sp in enumerate(species):
+        v[f"{sp.name}_side_reactions"] = float(run["side_reactions"][x])
     arrays = {"series_counts": run["series"], "series_time_jiffies": np.asarray(t, float)}
     return DiffusionResult("surface", "-", v, arrays)

@@ -6,15 +6,19 @@ exact voxel traversal, no gas-gas collisions) and all of them advance together t
 heap, one pending event per particle, lazy invalidation by a per-particle counter), because adsorbed particles
 couple them. Events:
 
-- wall hit of a gas particle of species X on site s:
-  Eley-Rideal (X is the mechanism's gas partner and s holds its adsorbed partner: react with ``er_w``), else
-  adsorption (s active and empty: with probability ``ads[X]``), else a diffuse reflection;
+- wall hit of a gas particle of species X on site s, one uniform number deciding between the reactions open on
+  this hit (their probabilities add, thesis §4.3.1):
+  Eley-Rideal (X is the mechanism's gas partner and s holds its adsorbed partner: ``er_w``), its reverse (4.18:
+  X is the ER product and s is active and empty: ``er_reverse_w``; X turns into the gas reactant, which leaves,
+  and the adsorbed reactant appears on s), a side reaction (4.20-4.22: X → ``side_to[X]`` with ``side_w[X]``,
+  then a diffuse reflection); else adsorption (s active and empty: with probability ``ads[X]``), else a diffuse
+  reflection;
 - desorption of an adsorbed particle after its residence time (fixed or exponential of mean ``tau[X]``), emitted
   by the wall law with a thermal (flux-weighted Maxwell-Boltzmann) speed;
-- surface hop (rate ``hop[X]``): to one of the 4 in-face neighbour sites, rejected when it is occupied, inactive or
-  off the face (a symmetric exclusion process: it leaves the Langmuir occupation measure unchanged).
+- surface hop (rate ``hop[X]``): to one of the 4 neighbour sites, rejected when it is occupied, inactive or
+  missing (a symmetric exclusion process: it leaves the Langmuir occupation measure unchanged).
 
-Langmuir-Hinshelwood: a particle of species A or B arriving at a site (by adsorption or by a hop) tries each in-face
+Langmuir-Hinshelwood: a particle of species A or B arriving at a site (by adsorption or by a hop) tries each
 neighbour site holding the other partner with probability ``lh_w`` (the reactive distance is one site spacing,
 h/s); on success both leave the surface and the product enters the gas from the arrival site.
 
@@ -29,6 +33,22 @@ few untaken branches per event.
 
 Walls re-emit with a thermal speed (flux-weighted MB): then the mean time between wall hits of every particle is
 4V/(v̄S) whatever its history, so reactions that consume fast particles first cannot bias the rate laws.
+
+The arrays travel in a few tuples (heterogeneous tuples of arrays). Passing or unpacking a tuple costs a reference
+count per member, so the kernel unpacks them once and runs the common events (reflection, adsorption, desorption,
+hop, Langmuir-Hinshelwood tries) on those names with helpers that take their few arrays one by one; only the
+reactions, rarer, call helpers on the tuples (per-event tuple passing had halved the speed):
+
+- ``geo = (codes, h, periodic, cells, face_of, site_face, active, s, nbr)``: the pore, its sites and their
+  neighbour table (``nbr[site, k]``, k = +a, −a, +b, −b, -1 = none: in-face only or across voxel edges, see
+  :mod:`porepipe.diffusion._surface_sites`) (read only);
+- ``kin = (opts, vmean, ads, tau, hop)``: run options and per-species data (read only);
+- ``mech = (lh_spec, er_spec, w, side_to, side_w)``: mechanism species (a, b, product; -1 = off),
+  ``w = [lh_w, er_w, er_reverse_w]`` and per species the side-reaction product (-1 = none) and probability;
+- ``pt = (sp, st, site, t_des, cnt, pos, idx, u, speed, tev)``: the particle slots;
+- ``surf = (occ, n_gas, n_ads, free)``: site occupation, the live counts per species and the stack of GONE slots
+  (``free[0]`` = its height);
+- ``heap = (ht, hi, hj, hci, hcj)``: the event calendar (its size ``nh`` travels beside it).
 """
 
 from __future__ import annotations
@@ -53,16 +73,22 @@ from porepipe.diffusion._kernels import (
 
 GAS, ADSORBED, GONE = 0, 1, 2
 #: per-species columns of the block tally
-S_HITS, S_ADS, S_DES, S_HOP_TRY, S_HOP_OK, S_GAS_T, S_ADS_T = range(7)
-N_STALLY = 7
+S_HITS, S_ADS, S_DES, S_HOP_TRY, S_HOP_OK, S_GAS_T, S_ADS_T, S_SIDE = range(8)
+N_STALLY = 8
 #: reaction columns of the block tally
-X_LH, X_ER = range(2)
-N_XTALLY = 2
-_NEIGH = ((1, 0), (-1, 0), (0, 1), (0, -1))
+X_LH, X_ER, X_ER_REV = range(3)
+N_XTALLY = 3
 #: entries of the options array: wall law, exponential residence (1) or fixed (0), replenishment (1)
 O_LAW, O_REXP, O_REPL = range(3)
+#: entries of the mechanism probabilities
+W_LH, W_ER, W_REV = range(3)
+#: start site of a spare slot (GONE at the start: room for the B that a reverse Eley-Rideal reaction puts back)
+SPARE = -2
 
 
+# ---------------------------------------------------------------------------------------------------------------------
+# hot helpers: every event runs them, so they take the few arrays they need one by one (a tuple passed or unpacked per
+# event costs a reference count per member: the kernel ran at half speed when these took the tuples)
 @njit(cache=True)
 def _site_of_hit(face_of, shape, h, s, pos, idx, ev):
     """Site index of a wall hit at ``pos`` on face ``ev`` of voxel ``idx`` (-1 if the face is not a wall face)."""
@@ -113,58 +139,80 @@ def _next_surface_time(t, t_des, hop, state):
 
 
 @njit(cache=True)
-def _emit_gas(opts, geom, h, periodic, i, t, ev, vmean, pos, idx, u, speed, tev, state):
-    """Diffuse emission of slot ``i`` from the wall face ``ev`` it sits on, thermal speed, fly to the next hit."""
-    p = pos[i]
-    q = idx[i]
-    d = u[i]
+def _flight(codes, h, periodic, law, ev, vmean, pos, idx, u, state):
+    """Diffuse emission from the wall face ``ev`` at ``pos`` (direction into ``u``), thermal speed, flight to the next
+    hit; returns (flight time, speed, face event of that hit, state).
+    """
     sign = -1.0 if (ev & 1) else 1.0
-    state = _emit(opts[O_LAW], ev >> 1, sign, d, state)
+    state = _emit(law, ev >> 1, sign, u, state)
     v, state = _speed(SPEED_FLUX, vmean, state)
     img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(geom, h, periodic, -1, p, q, d, img)
-    speed[i] = v
-    tev[i] = e2
-    return t + ln / v, state
+    e2, ln, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
+    return ln / v, v, e2, state
 
 
 @njit(cache=True)
-def _insert_gas(geom, h, periodic, cells, i, t, vmean, pos, idx, u, speed, tev, state):
-    """Slot ``i`` as a fresh equilibrium gas particle (uniform, isotropic, Maxwell speed); returns its hit time."""
-    p = pos[i]
-    q = idx[i]
-    d = u[i]
-    state = _uniform_in_pore(cells, h, p, q, state)
-    state = _isotropic(d, state)
-    v, state = _speed(SPEED_MAXWELL, vmean, state)
-    img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(geom, h, periodic, -1, p, q, d, img)
-    speed[i] = v
-    tev[i] = e2
-    return t + ln / v, state
+def _lh_partner(nbr, occ, sp, lh_spec, w_lh, si, x, state):
+    """Langmuir-Hinshelwood tries of species ``x`` just arrived on site ``si``: each neighbour holding its partner
+    reacts with ``w_lh``; returns (partner slot or -1, its site, state).
+    """
+    if lh_spec[0] < 0 or (x != lh_spec[0] and x != lh_spec[1]):
+        return -1, -1, state
+    partner = lh_spec[1] if x == lh_spec[0] else lh_spec[0]
+    for k in range(4):
+        nb = nbr[si, k]
+        if nb < 0:
+            continue
+        j = occ[nb]
+        if j < 0 or sp[j] != partner:
+            continue
+        y, state = _uniform(state)
+        if y < w_lh:
+            return j, nb, state
+    return -1, -1, state
 
 
+@njit(cache=True)
+def _tally_time(tally, t_last, t, t_warm, blk_len, n_gas, n_ads):
+    """Add the gas and adsorbed count integrals over (t_last, t] to the time blocks after ``t_warm``."""
+    n_blk = tally.shape[0]
+    a0 = max(t_last, t_warm)
+    while a0 < t:
+        bk = min(int((a0 - t_warm) / blk_len), n_blk - 1)
+        a1 = min(t, t_warm + (bk + 1) * blk_len) if bk < n_blk - 1 else t
+        for x in range(n_gas.shape[0]):
+            tally[bk, x, S_GAS_T] += n_gas[x] * (a1 - a0)
+            tally[bk, x, S_ADS_T] += n_ads[x] * (a1 - a0)
+        a0 = a1
+
+
+@njit(cache=True)
+def _sample(series, k, n_gas, n_ads):
+    for x in range(n_gas.shape[0]):
+        series[k, x, 0] = n_gas[x]
+        series[k, x, 1] = n_ads[x]
+
+
+@njit(cache=True)
+def _wall_odds(er_spec, w, free, sp, occ, active, x, si):
+    """Probabilities of Eley-Rideal and of its reverse at a hit of species ``x`` on site ``si``."""
+    if er_spec[0] < 0 or si < 0:
+        return 0.0, 0.0
+    if x == er_spec[0] and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
+        return w[W_ER], 0.0
+    if x == er_spec[2] and w[W_REV] > 0.0 and active[si] and occ[si] < 0 and free[0] > 0:
+        return 0.0, w[W_REV]
+    return 0.0, 0.0
+
+
+# ---------------------------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def surface_kernel(
-    opts,
-    geom,
-    h,
-    periodic,
-    cells,
-    face_of,
-    site_face,
-    s,
-    active,
+    geo,
+    kin,
+    mech,
     sp0,
     site0,
-    vmean,
-    ads,
-    tau,
-    hop,
-    lh_spec,
-    lh_w,
-    er_spec,
-    er_w,
     seed,
     t_end,
     t_warm,
@@ -176,48 +224,65 @@ def surface_kernel(
     final_state,
 ):
     """Run to ``t_end``; tallies per time block after ``t_warm``; ``series[k, X, 0/1]`` = gas / adsorbed counts
-    of species X at ``t_samples[k]``. ``site0[i]`` >= 0 starts particle i adsorbed there. Returns the number of
-    events.
+    of species X at ``t_samples[k]``. ``site0[i]`` >= 0 starts particle i adsorbed there (``SPARE``: a spare slot).
+    Returns the number of events. The common events (reflection, adsorption, desorption, hop) run here on local
+    names; the reactions call helpers that take the tuples.
     """
+    codes, h, periodic, _, face_of, site_face, active, s, nbr = geo
+    opts, vmean, ads, tau, hop = kin
+    lh_spec, er_spec, w, _, side_w = mech
+    law = opts[O_LAW]
+    rexp = opts[O_REXP] == 1
     n = sp0.shape[0]
     n_sp = vmean.shape[0]
     n_blk = tally.shape[0]
     blk_len = (t_end - t_warm) / n_blk
-    sp = sp0.copy()
-    st = np.zeros(n, dtype=np.int64)
-    pos = np.zeros((n, 3))
-    idx = np.zeros((n, 3), dtype=np.int64)
-    u = np.zeros((n, 3))
-    speed = np.ones(n)
-    tev = np.zeros(n, dtype=np.int64)  # face event of the pending wall hit
-    site = np.full(n, -1, dtype=np.int64)
-    t_des = np.zeros(n)
-    cnt = np.zeros(n, dtype=np.int64)
-    occ = np.full(active.shape[0], -1, dtype=np.int64)
-    n_gas = np.zeros(n_sp)
-    n_ads = np.zeros(n_sp)
+    pt = (
+        sp0.copy(),
+        np.zeros(n, dtype=np.int64),  # st
+        np.full(n, -1, dtype=np.int64),  # site
+        np.zeros(n),  # t_des
+        np.zeros(n, dtype=np.int64),  # cnt
+        np.zeros((n, 3)),  # pos
+        np.zeros((n, 3), dtype=np.int64),  # idx
+        np.zeros((n, 3)),  # u
+        np.ones(n),  # speed
+        np.zeros(n, dtype=np.int64),  # tev: face event of the pending wall hit
+    )
+    sp, st, site, t_des, cnt, pos, idx, u, speed, tev = pt
+    surf = (
+        np.full(active.shape[0], -1, dtype=np.int64),
+        np.zeros(n_sp),
+        np.zeros(n_sp),
+        np.zeros(n + 1, np.int64),
+    )
+    occ, n_gas, n_ads, free = surf
     cap = 2 * n + 16
-    ht, hi, hj = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64)
-    hci, hcj = np.empty(cap, np.int64), np.empty(cap, np.int64)
+    heap = (np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64))
+    heap = heap + (np.empty(cap, np.int64), np.empty(cap, np.int64))
+    ht, hi, hj, hci, hcj = heap
     nh = 0
     state = _stream_state(seed, 0)
-    # start: gas particles in equilibrium, adsorbed ones on their sites
+    # start: gas particles in equilibrium, adsorbed ones on their sites, spare slots on the free stack
     for i in range(n):
+        if site0[i] == SPARE:
+            st[i] = GONE
+            free[0] += 1
+            free[free[0]] = i
+            continue
         if site0[i] >= 0:
             st[i] = ADSORBED
             site[i] = site0[i]
             occ[site0[i]] = i
             _site_point(site_face, h, s, site0[i], pos[i], idx[i])
-            tau_i, state = _residence(tau[sp[i]], opts[O_REXP] == 1, state)
+            tau_i, state = _residence(tau[sp[i]], rexp, state)
             t_des[i] = tau_i
             te, _, state = _next_surface_time(0.0, t_des[i], hop[sp[i]], state)
             n_ads[sp[i]] += 1
         else:
-            te, state = _insert_gas(
-                geom, h, periodic, cells, i, 0.0, vmean[sp[i]], pos, idx, u, speed, tev, state
-            )
+            te, state = _insert_gas(geo, pt, i, 0.0, vmean[sp[i]], state)
             n_gas[sp[i]] += 1
-        nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, 0, 0)
+        nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
     t_last = 0.0
     k_sample = 0
     events = 0
@@ -232,254 +297,158 @@ def surface_kernel(
             t = t_end
         # time integrals and samples up to t
         while k_sample < t_samples.shape[0] and t_samples[k_sample] <= t:
-            for x in range(n_sp):
-                series[k_sample, x, 0] = n_gas[x]
-                series[k_sample, x, 1] = n_ads[x]
+            _sample(series, k_sample, n_gas, n_ads)
             k_sample += 1
-        a0 = max(t_last, t_warm)
-        while a0 < t:
-            bk = min(int((a0 - t_warm) / blk_len), n_blk - 1)
-            a1 = min(t, t_warm + (bk + 1) * blk_len) if bk < n_blk - 1 else t
-            for x in range(n_sp):
-                tally[bk, x, S_GAS_T] += n_gas[x] * (a1 - a0)
-                tally[bk, x, S_ADS_T] += n_ads[x] * (a1 - a0)
-            a0 = a1
+        _tally_time(tally, t_last, t, t_warm, blk_len, n_gas, n_ads)
         t_last = t
         if t >= t_end:
             break
         events += 1
         bk = min(int((t - t_warm) / blk_len), n_blk - 1) if t >= t_warm else -1
         x = sp[i]
+        emit_ev = -1  # >= 0: particle i leaves the wall face emit_ev into the gas
+        arrived = False  # particle i has just taken a site
         if st[i] == GAS:
-            # ---- wall hit
+            # ---- wall hit: Eley-Rideal, its reverse or a side reaction (one uniform number), else adsorption, else
+            # a diffuse reflection
             ev = tev[i]
-            si = _site_of_hit(face_of, geom.shape, h, s, pos[i], idx[i], ev)
+            si = _site_of_hit(face_of, codes.shape, h, s, pos[i], idx[i], ev)
             if bk >= 0:
                 tally[bk, x, S_HITS] += 1
-            done = False
-            if er_spec[0] >= 0 and x == er_spec[0] and si >= 0 and occ[si] >= 0 and sp[occ[si]] == er_spec[1]:
+            p_er, p_rev = _wall_odds(er_spec, w, free, sp, occ, active, x, si)
+            reacted = False
+            if p_er + p_rev + side_w[x] > 0.0:
                 y, state = _uniform(state)
-                if y < er_w:
-                    j = occ[si]
-                    occ[si] = -1
-                    n_ads[sp[j]] -= 1
-                    n_gas[x] -= 1
-                    if bk >= 0:
-                        rtally[bk, X_ER] += 1
-                    te, tj, state = _react(
-                        opts,
-                        geom,
-                        h,
-                        periodic,
-                        cells,
-                        i,
-                        j,
-                        x,
-                        sp[j],
-                        er_spec[2],
-                        t,
-                        ev,
-                        vmean,
-                        sp,
-                        st,
-                        site,
-                        cnt,
-                        pos,
-                        idx,
-                        u,
-                        speed,
-                        tev,
-                        n_gas,
-                        state,
+                reacted = y < p_er + p_rev + side_w[x]
+                if y < p_er:
+                    nh, state = _er_forward(
+                        geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state
                     )
-                    nh = _push2(ht, hi, hj, hci, hcj, nh, cnt, i, te, j, tj)
-                    done = True
-            if not done and si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
-                y, state = _uniform(state)
-                if y < ads[x]:
-                    st[i] = ADSORBED
-                    site[i] = si
-                    occ[si] = i
-                    n_gas[x] -= 1
-                    n_ads[x] += 1
-                    if bk >= 0:
-                        tally[bk, x, S_ADS] += 1
-                    tau_i, state = _residence(tau[x], opts[O_REXP] == 1, state)
-                    t_des[i] = t + tau_i
-                    cnt[i] += 1
-                    nh, state = _arrive(
-                        opts,
-                        geom,
-                        h,
-                        periodic,
-                        cells,
-                        face_of,
-                        site_face,
-                        s,
-                        i,
-                        t,
-                        bk,
-                        vmean,
-                        hop,
-                        lh_spec,
-                        lh_w,
-                        sp,
-                        st,
-                        site,
-                        occ,
-                        t_des,
-                        cnt,
-                        pos,
-                        idx,
-                        u,
-                        speed,
-                        tev,
-                        n_gas,
-                        n_ads,
-                        rtally,
-                        ht,
-                        hi,
-                        hj,
-                        hci,
-                        hcj,
-                        nh,
-                        state,
+                elif y < p_er + p_rev:
+                    nh, state = _er_reverse(
+                        geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state
                     )
-                    done = True
-            if not done:
-                te, state = _emit_gas(
-                    opts, geom, h, periodic, i, t, ev, vmean[x], pos, idx, u, speed, tev, state
-                )
-                cnt[i] += 1
-                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
-        else:
-            # ---- adsorbed: desorption or hop
+                elif reacted:
+                    nh, state = _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, state)
+            if not reacted:
+                emit_ev = ev
+                if si >= 0 and ads[x] > 0.0 and active[si] and occ[si] < 0:
+                    y, state = _uniform(state)
+                    if y < ads[x]:
+                        emit_ev = -1
+                        arrived = True
+                        st[i] = ADSORBED
+                        site[i] = si
+                        occ[si] = i
+                        n_gas[x] -= 1
+                        n_ads[x] += 1
+                        if bk >= 0:
+                            tally[bk, x, S_ADS] += 1
+                        tau_i, state = _residence(tau[x], rexp, state)
+                        t_des[i] = t + tau_i
+        elif t >= t_des[i]:
+            # ---- desorption
             si = site[i]
-            if t >= t_des[i]:
+            occ[si] = -1
+            site[i] = -1
+            st[i] = GAS
+            n_ads[x] -= 1
+            n_gas[x] += 1
+            if bk >= 0:
+                tally[bk, x, S_DES] += 1
+            emit_ev = _site_point(site_face, h, s, si, pos[i], idx[i])
+        else:
+            # ---- hop try to a neighbour site
+            si = site[i]
+            if bk >= 0:
+                tally[bk, x, S_HOP_TRY] += 1
+            y, state = _uniform(state)
+            target = nbr[si, min(int(y * 4.0), 3)]
+            if target >= 0 and active[target] and occ[target] < 0:
                 occ[si] = -1
-                site[i] = -1
-                st[i] = GAS
-                n_ads[x] -= 1
-                n_gas[x] += 1
+                occ[target] = i
+                site[i] = target
+                _site_point(site_face, h, s, target, pos[i], idx[i])
                 if bk >= 0:
-                    tally[bk, x, S_DES] += 1
-                ev = _site_point(site_face, h, s, si, pos[i], idx[i])
-                te, state = _emit_gas(
-                    opts, geom, h, periodic, i, t, ev, vmean[x], pos, idx, u, speed, tev, state
-                )
+                    tally[bk, x, S_HOP_OK] += 1
+                arrived = True
+            else:
+                te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
                 cnt[i] += 1
                 nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+        if emit_ev >= 0:
+            dt, speed[i], tev[i], state = _flight(
+                codes, h, periodic, law, emit_ev, vmean[x], pos[i], idx[i], u[i], state
+            )
+            cnt[i] += 1
+            nh = _heap_push(ht, hi, hj, hci, hcj, nh, t + dt, i, -1, cnt[i], 0)
+        if arrived:
+            # Langmuir-Hinshelwood with the neighbours, else the next surface event
+            cnt[i] += 1
+            j, nb, state = _lh_partner(nbr, occ, sp, lh_spec, w[W_LH], site[i], x, state)
+            if j >= 0:
+                nh, state = _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state)
             else:
-                if bk >= 0:
-                    tally[bk, x, S_HOP_TRY] += 1
-                y, state = _uniform(state)
-                k = min(int(y * 4.0), 3)
-                ia = (si // s) % s + _NEIGH[k][0]
-                ib = si % s + _NEIGH[k][1]
-                target = si - (si % (s * s)) + ia * s + ib
-                if 0 <= ia < s and 0 <= ib < s and active[target] and occ[target] < 0:
-                    occ[si] = -1
-                    occ[target] = i
-                    site[i] = target
-                    _site_point(site_face, h, s, target, pos[i], idx[i])
-                    if bk >= 0:
-                        tally[bk, x, S_HOP_OK] += 1
-                    cnt[i] += 1
-                    nh, state = _arrive(
-                        opts,
-                        geom,
-                        h,
-                        periodic,
-                        cells,
-                        face_of,
-                        site_face,
-                        s,
-                        i,
-                        t,
-                        bk,
-                        vmean,
-                        hop,
-                        lh_spec,
-                        lh_w,
-                        sp,
-                        st,
-                        site,
-                        occ,
-                        t_des,
-                        cnt,
-                        pos,
-                        idx,
-                        u,
-                        speed,
-                        tev,
-                        n_gas,
-                        n_ads,
-                        rtally,
-                        ht,
-                        hi,
-                        hj,
-                        hci,
-                        hcj,
-                        nh,
-                        state,
-                    )
-                else:
-                    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
-                    cnt[i] += 1
-                    nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+                te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
         if nh + 4 > ht.shape[0]:
             ht, hi, hj, hci, hcj, nh = _heap_room(ht, hi, hj, hci, hcj, nh, 4, cnt)
+            heap = (ht, hi, hj, hci, hcj)
     while k_sample < t_samples.shape[0]:
-        for x in range(n_sp):
-            series[k_sample, x, 0] = n_gas[x]
-            series[k_sample, x, 1] = n_ads[x]
+        _sample(series, k_sample, n_gas, n_ads)
         k_sample += 1
     final_species[:] = sp
     final_state[:] = st
     return events
 
 
+# ---------------------------------------------------------------------------------------------------------------------
+# reactions: rarer events, helpers on the tuples
 @njit(cache=True)
-def _push2(ht, hi, hj, hci, hcj, nh, cnt, i, ti, j, tj):
-    """Schedule the two slots of a reaction (a time < 0 = nothing to schedule)."""
-    if ti >= 0.0:
-        nh = _heap_push(ht, hi, hj, hci, hcj, nh, ti, i, -1, cnt[i], 0)
-    if tj >= 0.0:
-        nh = _heap_push(ht, hi, hj, hci, hcj, nh, tj, j, -1, cnt[j], 0)
-    return nh
+def _emit_slot(geo, law, pt, i, t, ev, vmean, state):
+    """Slot ``i`` leaves the wall face ``ev`` it sits on (see :func:`_flight`); returns its next hit time."""
+    pos, idx, u, speed, tev = pt[5], pt[6], pt[7], pt[8], pt[9]
+    dt, speed[i], tev[i], state = _flight(geo[0], geo[1], geo[2], law, ev, vmean, pos[i], idx[i], u[i], state)
+    return t + dt, state
 
 
 @njit(cache=True)
-def _react(
-    opts,
-    geom,
-    h,
-    periodic,
-    cells,
-    i,
-    j,
-    xi,
-    xj,
-    product,
-    t,
-    ev,
-    vmean,
-    sp,
-    st,
-    site,
-    cnt,
-    pos,
-    idx,
-    u,
-    speed,
-    tev,
-    n_gas,
-    state,
-):
+def _insert_gas(geo, pt, i, t, vmean, state):
+    """Slot ``i`` as a fresh equilibrium gas particle (uniform, isotropic, Maxwell speed); returns its hit time."""
+    codes, h, periodic, cells = geo[0], geo[1], geo[2], geo[3]
+    pos, idx, u, speed, tev = pt[5], pt[6], pt[7], pt[8], pt[9]
+    p = pos[i]
+    q = idx[i]
+    d = u[i]
+    state = _uniform_in_pore(cells, h, p, q, state)
+    state = _isotropic(d, state)
+    v, state = _speed(SPEED_MAXWELL, vmean, state)
+    img = np.zeros(3, dtype=np.int64)
+    e2, ln, _ = _fly(codes, h, periodic, -1, p, q, d, img)
+    speed[i] = v
+    tev[i] = e2
+    return t + ln / v, state
+
+
+@njit(cache=True)
+def _push(heap, nh, cnt, i, t):
+    """Schedule slot ``i``'s next event at ``t`` under its current counter (a time < 0 = nothing to schedule)."""
+    if t < 0.0:
+        return nh
+    ht, hi, hj, hci, hcj = heap
+    return _heap_push(ht, hi, hj, hci, hcj, nh, t, i, -1, cnt[i], 0)
+
+
+@njit(cache=True)
+def _react(geo, kin, pt, surf, i, j, xj, product, t, ev, state):
     """Slots i (at a wall point, face ``ev``) and j (already off the counts) react: i becomes the product and
     leaves the wall into the gas, j is gone; with opts[O_REPL] both are put back as fresh gas reactants instead.
     Returns the next event times of i and j (-1: none) and the state.
     """
+    opts, vmean = kin[0], kin[1]
+    sp, st, site, cnt = pt[0], pt[1], pt[2], pt[4]
+    n_gas, free = surf[1], surf[3]
+    xi = sp[i]
     cnt[i] += 1
     cnt[j] += 1
     site[i] = -1
@@ -487,116 +456,118 @@ def _react(
     if opts[O_REPL] == 1:
         st[i] = GAS
         st[j] = GAS
-        sp[i] = xi
         sp[j] = xj
         n_gas[xi] += 1
         n_gas[xj] += 1
-        ti, state = _insert_gas(geom, h, periodic, cells, i, t, vmean[xi], pos, idx, u, speed, tev, state)
-        tj, state = _insert_gas(geom, h, periodic, cells, j, t, vmean[xj], pos, idx, u, speed, tev, state)
+        ti, state = _insert_gas(geo, pt, i, t, vmean[xi], state)
+        tj, state = _insert_gas(geo, pt, j, t, vmean[xj], state)
         return ti, tj, state
     st[i] = GAS
     st[j] = GONE
+    free[0] += 1
+    free[free[0]] = j
     sp[i] = product
     n_gas[product] += 1
-    ti, state = _emit_gas(opts, geom, h, periodic, i, t, ev, vmean[product], pos, idx, u, speed, tev, state)
+    ti, state = _emit_slot(geo, opts[O_LAW], pt, i, t, ev, vmean[product], state)
     return ti, -1.0, state
 
 
 @njit(cache=True)
-def _arrive(
-    opts,
-    geom,
-    h,
-    periodic,
-    cells,
-    face_of,
-    site_face,
-    s,
-    i,
-    t,
-    bk,
-    vmean,
-    hop,
-    lh_spec,
-    lh_w,
-    sp,
-    st,
-    site,
-    occ,
-    t_des,
-    cnt,
-    pos,
-    idx,
-    u,
-    speed,
-    tev,
-    n_gas,
-    n_ads,
-    rtally,
-    ht,
-    hi,
-    hj,
-    hci,
-    hcj,
-    nh,
-    state,
-):
-    """Particle i has just arrived on its site: Langmuir-Hinshelwood tries with its in-face neighbours, then the
-    next surface event (or, after a reaction, the emissions). ``cnt[i]`` is already bumped.
-    """
-    x = sp[i]
+def _er_forward(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state):
+    """Eley-Rideal at the hit of gas ``i`` on site ``si``, which holds its adsorbed partner."""
+    sp, cnt = pt[0], pt[4]
+    occ, n_gas, n_ads = surf[0], surf[1], surf[2]
+    j = occ[si]
+    occ[si] = -1
+    n_ads[sp[j]] -= 1
+    n_gas[sp[i]] -= 1
+    if bk >= 0:
+        rtally[bk, X_ER] += 1
+    ti, tj, state = _react(geo, kin, pt, surf, i, j, sp[j], mech[1][2], t, ev, state)
+    nh = _push(heap, nh, cnt, i, ti)
+    return _push(heap, nh, cnt, j, tj), state
+
+
+@njit(cache=True)
+def _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state):
+    """Langmuir-Hinshelwood of ``i`` (just arrived on its site) with ``j`` on the neighbour site ``nb``."""
+    sp, site, cnt, pos, idx = pt[0], pt[2], pt[4], pt[5], pt[6]
+    occ, n_ads = surf[0], surf[2]
     si = site[i]
-    if lh_spec[0] >= 0 and (x == lh_spec[0] or x == lh_spec[1]):
-        partner = lh_spec[1] if x == lh_spec[0] else lh_spec[0]
-        base = si - (si % (s * s))
-        ia0 = (si // s) % s
-        ib0 = si % s
-        for k in range(4):
-            ia = ia0 + _NEIGH[k][0]
-            ib = ib0 + _NEIGH[k][1]
-            if not (0 <= ia < s and 0 <= ib < s):
-                continue
-            nb = base + ia * s + ib
-            j = occ[nb]
-            if j < 0 or sp[j] != partner:
-                continue
-            y, state = _uniform(state)
-            if y < lh_w:
-                occ[si] = -1
-                occ[nb] = -1
-                n_ads[x] -= 1
-                n_ads[partner] -= 1
-                if bk >= 0:
-                    rtally[bk, X_LH] += 1
-                ev = _site_point(site_face, h, s, si, pos[i], idx[i])
-                ti, tj, state = _react(
-                    opts,
-                    geom,
-                    h,
-                    periodic,
-                    cells,
-                    i,
-                    j,
-                    x,
-                    partner,
-                    lh_spec[2],
-                    t,
-                    ev,
-                    vmean,
-                    sp,
-                    st,
-                    site,
-                    cnt,
-                    pos,
-                    idx,
-                    u,
-                    speed,
-                    tev,
-                    n_gas,
-                    state,
-                )
-                nh = _push2(ht, hi, hj, hci, hcj, nh, cnt, i, ti, j, tj)
-                return nh, state
-    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
-    nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
-    return nh, state
+    x, partner = sp[i], sp[j]
+    occ[si] = -1
+    occ[nb] = -1
+    n_ads[x] -= 1
+    n_ads[partner] -= 1
+    if bk >= 0:
+        rtally[bk, X_LH] += 1
+    ev = _site_point(geo[5], geo[1], geo[7], si, pos[i], idx[i])
+    ti, tj, state = _react(geo, kin, pt, surf, i, j, partner, mech[0][2], t, ev, state)
+    nh = _push(heap, nh, cnt, i, ti)
+    return _push(heap, nh, cnt, j, tj), state
+
+
+@njit(cache=True)
+def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
+    """Slot ``i`` has just taken its site (``cnt[i]`` already bumped): Langmuir-Hinshelwood, else its next
+    surface event.
+    """
+    sp, site, t_des, cnt = pt[0], pt[2], pt[3], pt[4]
+    x = sp[i]
+    j, nb, state = _lh_partner(geo[8], surf[0], sp, mech[0], mech[2][W_LH], site[i], x, state)
+    if j >= 0:
+        return _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state)
+    te, _, state = _next_surface_time(t, t_des[i], kin[4][x], state)
+    return _push(heap, nh, cnt, i, te), state
+
+
+@njit(cache=True)
+def _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state):
+    """Reverse Eley-Rideal (thesis 4.18) at the hit of product ``i`` on the empty active site ``si``: ``i`` turns
+    into the gas reactant and leaves the wall, a spare slot becomes the adsorbed reactant on ``si`` (and arrives
+    there: it may react by Langmuir-Hinshelwood at once).
+    """
+    opts, vmean, _, tau, _ = kin
+    x_a, x_b, x_p = mech[1][0], mech[1][1], mech[1][2]
+    sp, st, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
+    occ, n_gas, n_ads, free = surf
+    if bk >= 0:
+        rtally[bk, X_ER_REV] += 1
+    n_gas[x_p] -= 1
+    n_gas[x_a] += 1
+    sp[i] = x_a
+    te, state = _emit_slot(geo, opts[O_LAW], pt, i, t, ev, vmean[x_a], state)
+    cnt[i] += 1
+    nh = _push(heap, nh, cnt, i, te)
+    j = free[free[0]]
+    free[0] -= 1
+    sp[j] = x_b
+    st[j] = ADSORBED
+    site[j] = si
+    occ[si] = j
+    n_ads[x_b] += 1
+    _site_point(geo[5], geo[1], geo[7], si, pos[j], idx[j])
+    tau_j, state = _residence(tau[x_b], opts[O_REXP] == 1, state)
+    t_des[j] = t + tau_j
+    cnt[j] += 1
+    return _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, j, t, bk, state)
+
+
+@njit(cache=True)
+def _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, state):
+    """Side reaction (thesis 4.20-4.22) at a wall hit of gas particle ``i``: it turns into its by-product and is
+    reflected diffusely with the by-product's thermal speed.
+    """
+    opts, vmean = kin[0], kin[1]
+    sp, cnt = pt[0], pt[4]
+    n_gas = surf[1]
+    x = sp[i]
+    y = mech[3][x]
+    if bk >= 0:
+        tally[bk, x, S_SIDE] += 1
+    n_gas[x] -= 1
+    n_gas[y] += 1
+    sp[i] = y
+    te, state = _emit_slot(geo, opts[O_LAW], pt, i, t, ev, vmean[y], state)
+    cnt[i] += 1
+    return _push(heap, nh, cnt, i, te), state

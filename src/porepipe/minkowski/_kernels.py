@@ -3,11 +3,12 @@
 A cell is the 2x2x2 block of voxels with lower corner (i, j, k). Its 8-bit code has bit ``dx + 2*dy + 4*dz`` set when
 voxel (i+dx, j+dy, k+dz) is foreground (non-zero). Axis order is (x, y, z) = array axes (0, 1, 2), z contiguous.
 
-The code is built with a rolling scheme that loads every voxel of a plane pair once per row pair:
-``p[k] = v(i,j,k) | v(i+1,j,k) << 1`` (x pair), ``q[k] = p_j[k] | p_{j+1}[k] << 2`` (2x2 column), and
-``code = q[k] | q[k+1] << 4``, so the x-pair row ``p_{j+1}`` is reused as ``p_j`` of the next row and the column code
-``q[k+1]`` is reused along z. Counts go to four interleaved sub-histograms (cell index mod 4) so that runs of the same
-code (large pure regions) do not serialise on one counter; all counters are int64.
+Per cell row (fixed i, j) the codes are first written to a byte buffer in one branch-free loop that vectorises:
+``q[k] = v(i,j,k) | v(i+1,j,k) << 1 | v(i,j+1,k) << 2 | v(i+1,j+1,k) << 3`` (the 2x2 column) and
+``code = q[k] | q[k+1] << 4``. The buffer is then counted 8 codes per 64-bit word into eight interleaved
+sub-histograms (byte b of the word into sub-histogram b), so that runs of one code do not serialise on one counter;
+a word of eight pure cells (code 0 or 255 throughout, the bulk of a porous medium) is counted with one addition.
+All counters are int64.
 """
 
 import numpy as np
@@ -16,41 +17,53 @@ from numba import njit, prange
 from porepipe._shared.numba_config import FASTMATH
 
 N_CODES = 256
-_LANES = 4
+_LANES = 8
+_ALL_FULL = 0xFFFFFFFFFFFFFFFF  # eight cells of code 255
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _xpair(row0, row1, out):
-    """``out[k] = (row0[k] != 0) | (row1[k] != 0) << 1`` for one row of two x-adjacent planes."""
-    for k in range(out.shape[0]):
-        out[k] = np.uint8(row0[k] != 0) | (np.uint8(row1[k] != 0) << np.uint8(1))
+def _column(a0, a1, b0, b1, k):
+    """2x2 column code of index ``k``: bit 0/1 = rows ``a0``/``a1`` (x pair at y), bit 2/3 = ``b0``/``b1`` (at y+1)."""
+    return (
+        np.uint8(a0[k] != 0)
+        | (np.uint8(a1[k] != 0) << np.uint8(1))
+        | (np.uint8(b0[k] != 0) << np.uint8(2))
+        | (np.uint8(b1[k] != 0) << np.uint8(3))
+    )
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _count_row(p_lo, p_hi, q, wrap_z, lanes):
-    """Add the cells of one row (fixed i, j) to ``lanes``; ``q`` is scratch of the row length."""
-    nz = q.shape[0]
-    for k in range(nz):
-        q[k] = p_lo[k] | (p_hi[k] << np.uint8(2))
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _row_codes(a0, a1, b0, b1, wrap_z, code):
+    """Cell codes of one row into ``code[:n]``; returns n (nz with ``wrap_z``, else nz - 1).
+
+    ``a0, a1`` are row y of planes x and x+1, ``b0, b1`` row y+1 of the same planes (each length nz).
+    """
+    nz = a0.shape[0]
     for k in range(nz - 1):
-        lanes[k & 3, q[k] | (q[k + 1] << np.uint8(4))] += 1
-    if wrap_z:
-        lanes[(nz - 1) & 3, q[nz - 1] | (q[0] << np.uint8(4))] += 1
+        code[k] = _column(a0, a1, b0, b1, k) | (_column(a0, a1, b0, b1, k + 1) << np.uint8(4))
+    if not wrap_z:
+        return nz - 1
+    code[nz - 1] = _column(a0, a1, b0, b1, nz - 1) | (_column(a0, a1, b0, b1, 0) << np.uint8(4))
+    return nz
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _count_plane_pair(plane0, plane1, wrap_y, wrap_z, p_first, p_lo, p_hi, q, lanes):
-    """Add all cells between two x-adjacent planes (each (ny, nz)) to ``lanes`` (4, 256)."""
-    ny = plane0.shape[0]
-    _xpair(plane0[0], plane1[0], p_lo)
-    if wrap_y:
-        p_first[:] = p_lo
-    for j in range(ny - 1):
-        _xpair(plane0[j + 1], plane1[j + 1], p_hi)
-        _count_row(p_lo, p_hi, q, wrap_z, lanes)
-        p_lo, p_hi = p_hi, p_lo
-    if wrap_y:
-        _count_row(p_lo, p_first, q, wrap_z, lanes)
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _count_codes(code, n, lanes):
+    """Add ``code[:n]`` to ``lanes`` (8, 256): byte b of each 64-bit word to lane b, a pure word in one addition.
+
+    ``code`` is padded to a multiple of 8 bytes; the ``n % 8`` codes after the last whole word go to lane 0.
+    """
+    words = code.view(np.uint64)
+    n_words = n >> 3
+    for t in range(n_words):
+        w = words[t]
+        if w == 0 or w == _ALL_FULL:
+            lanes[0, w & np.uint64(255)] += 8
+            continue
+        for b in range(_LANES):
+            lanes[b, (w >> np.uint64(8 * b)) & np.uint64(255)] += 1
+    for k in range(n_words << 3, n):
+        lanes[0, code[k]] += 1
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
@@ -59,21 +72,23 @@ def _configuration_histogram(volume, wrap_x, wrap_y, wrap_z, n_blocks, out):
 
     Cells between consecutive x planes of ``volume`` are counted, plus the pair (last, first) when ``wrap_x``; along
     y and z the last cell wraps to index 0 when ``wrap_y`` / ``wrap_z``. The x-plane pairs are split into ``n_blocks``
-    contiguous blocks run in parallel, each with its own (4, 256) counters, reduced after the loop.
+    contiguous blocks run in parallel, each with its own (8, 256) counters, reduced after the loop.
     """
     nx, ny, nz = volume.shape
     n_pairs = nx - 1 + (1 if wrap_x else 0)
+    n_rows = ny - 1 + (1 if wrap_y else 0)
     partial = np.zeros((n_blocks, _LANES, N_CODES), dtype=np.int64)
     for b in prange(n_blocks):
-        p_first = np.empty(nz, dtype=np.uint8)
-        p_lo = np.empty(nz, dtype=np.uint8)
-        p_hi = np.empty(nz, dtype=np.uint8)
-        q = np.empty(nz, dtype=np.uint8)
+        code = np.empty(((nz + 7) // 8) * 8, dtype=np.uint8)
         start = (n_pairs * b) // n_blocks
         stop = (n_pairs * (b + 1)) // n_blocks
         for i in range(start, stop):
-            i1 = i + 1 if i + 1 < nx else 0
-            _count_plane_pair(volume[i], volume[i1], wrap_y, wrap_z, p_first, p_lo, p_hi, q, partial[b])
+            plane0 = volume[i]
+            plane1 = volume[i + 1 if i + 1 < nx else 0]
+            for j in range(n_rows):
+                j1 = j + 1 if j + 1 < ny else 0
+                n = _row_codes(plane0[j], plane1[j], plane0[j1], plane1[j1], wrap_z, code)
+                _count_codes(code, n, partial[b])
     for b in range(n_blocks):
         for lane in range(_LANES):
             for c in range(N_CODES):

@@ -88,7 +88,9 @@ def iter_grey_slabs(
     bar = Progress(f"voxelize a={voxel_um:g}um", total=shape[0]) if progress else None
     for i0 in range(0, shape[0], slab_planes):
         i1 = min(i0 + slab_planes, shape[0])
-        slab = np.zeros((i1 - i0, shape[1], shape[2]), dtype=np.uint8)
+        # the kernels write every voxel of a plane, so the slab needs clearing only where they do not run
+        alloc = np.empty if len(prep.images) else np.zeros
+        slab = alloc((i1 - i0, shape[1], shape[2]), dtype=np.uint8)
         if len(prep.images):
             _voxelize_slab(
                 i0,
@@ -143,12 +145,11 @@ def voxelize(
     Zauner (2020) §4.7.2 and §7.1. A point on a sphere surface counts as matrix (closed balls).
     """
     shape = grid_shape(box_um, voxel_um)
-    out = np.empty(shape, dtype=np.uint8)
-    for i0, slab in iter_grey_slabs(
+    # one slab of all planes: the volume itself, without a copy
+    ((_, grey),) = iter_grey_slabs(
         centres_um, radii_um, box_um, voxel_um, periodic, method, slab_planes=shape[0]
-    ):
-        out[i0 : i0 + len(slab)] = slab
-    return out
+    )
+    return grey
 
 
 def grey_histogram(grey: np.ndarray) -> np.ndarray:

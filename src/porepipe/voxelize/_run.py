@@ -12,7 +12,7 @@ from porepipe._shared.store import ResultWriter, result_hash
 from porepipe.scene import scene_part
 from porepipe.voxelize._api import grid_shape, iter_grey_slabs
 
-#: bytes per voxel of a plane each thread works on (voxel status, 4 words of sample bits, chord counts)
+#: bytes per voxel of a plane each thread works on (voxel status, 4 words of sample bits, counts)
 _THREAD_BYTES_PER_VOXEL = 1 + 32 + 4
 
 

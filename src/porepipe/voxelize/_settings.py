@@ -6,7 +6,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 
 class VoxelizeMethod(str, enum.Enum):
-    """``boundary``: the chord method (exact chords of sample rows, bit masks only where spheres meet); ``brute``: all
+    """``boundary``: interior voxel rows in bulk, only shell voxels tested (bit masks only where spheres meet); ``brute``: all
     216 points of every voxel near a sphere (the thesis's method, kept as oracle and for the benchmark). Both give
     identical grey values.
     """

@@ -175,7 +175,7 @@ def test_lh_probability_closed_forms():
         (lambda: Mechanism("XY", "A", "B", "P", 0.1), "kind"),
         (lambda: Mechanism("LH", "A", "B", "P", 2.0), "w must"),
         (
-            lambda: surface_run(BOX, [Adsorbate("A", gas=1)], [Mechanism("LH", "A", "Q", "A", 0.1)], t_end=1),
+            lambda: surface_run(BOX, [Adsorbate("A", gas=1)], [Mechanism("LH", "A", "Q", "Z", 0.1)], t_end=1),
             "'Q'",
         ),
         (lambda: surface_run(BOX, [Adsorbate("A", adsorbed=10**5)], t_end=1), "do not fit"),

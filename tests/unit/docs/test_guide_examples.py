@@ -29,3 +29,6 @@ def test_every_python_block_of_the_guide_runs_in_order(tmp_path, monkeypatch, ca
     # adsorption: competitive Langmuir isotherm, 4 standard errors plus 0.3 % (tests/unit/diffusion/test_surface_*)
     theta = ns["surf"]["coverage"][0]
     assert abs(theta - ns["theta_langmuir"]) <= 4 * ns["surf"]["coverage_err"][0] + 3e-3 * theta
+    # reverse Eley-Rideal and a side reaction of the product: A and B atoms conserved exactly
+    a, b, p, s = ns["rev"]["final_counts"]
+    assert (a + p + s, b + p + s) == (2000, 800) and ns["rev"]["er_reverse_reactions"] > 0

@@ -36,6 +36,34 @@ def test_histogram_matches_roll_reference(shape):
         assert hist.dtype == np.int64
 
 
+@pytest.mark.parametrize("nz", [1, 2, 7, 8, 9, 15, 16, 17, 24, 33])
+def test_pure_words_and_row_tails_match_roll_reference(nz):
+    # The counter takes 8 codes per 64-bit word and a word of eight pure cells (code 0 or 255) in one addition: long
+    # pure runs broken at every offset within a word, rows whose length is and is not a multiple of 8, and
+    # foreground values other than 1 must give the np.roll reference's counts exactly.
+    rng = np.random.default_rng(nz)
+    shape = (6, 5, nz)
+    volume = np.zeros(shape, np.uint8)
+    volume[:, :3] = rng.choice(np.array([1, 2, 255], np.uint8), size=(6, 3, nz))  # pure foreground blocks
+    for j in range(5):  # a short run of the other phase at offset j, length j + 1
+        volume[j % 6, j, j % nz : j % nz + 1 + j] = 0
+    volume[5, 4, rng.integers(0, nz)] = 7
+    for periodic in FLAGS:
+        if _valid(shape, periodic):
+            hist = configuration_histogram(volume, periodic)
+            np.testing.assert_array_equal(
+                hist, histogram_naive(volume, periodic), err_msg=f"nz={nz} {periodic}"
+            )
+
+
+@pytest.mark.parametrize("value", [0, 1, 200])
+def test_uniform_volume_is_one_code(value):
+    # every cell of an all-matrix (all-pore) volume is code 0 (255): the pure-word path alone
+    volume = np.full((4, 3, 19), value, np.uint8)
+    hist = configuration_histogram(volume, (True, False, True))
+    assert hist[255 if value else 0] == n_cells(volume.shape, (True, False, True)) == hist.sum()
+
+
 def test_bool_input_and_thread_counts_agree():
     rng = np.random.default_rng(3)
     volume = rng.random((23, 19, 40)) < 0.3

@@ -127,3 +127,22 @@ def test_large_spheres_cut_by_faces_equal_brute_force(a, periodic):
     # exact: brute force is the 6^3 sample definition (checked against the numpy oracle above)
     np.testing.assert_array_equal(fast, brute)
     assert (fast == 216).mean() > 0.1 and ((fast > 0) & (fast < 216)).any()
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_overlapping_spheres_with_samples_on_their_surfaces(periodic):
+    # Dense overlaps with surfaces through samples: many shell voxels are reached by two or more spheres (their
+    # grey value is the popcount of a union bit mask, not one sphere's count) and are partly filled; centres on sample
+    # points and radii n*h with h = 1/8 make dx*dx + dy*dy + dz*dz == r*r exact for lattice points on a surface
+    a = 0.75
+    h = a / 6
+    box = (4.5, 4.5, 3.0)
+    rng = np.random.default_rng(3)
+    c = (rng.integers(0, 36, (30, 3)) % [36, 36, 24] + 0.5) * h
+    r = rng.choice(np.array([3, 5, 7, 9, 13]), 30) * h
+    g = _both_equal_oracle(c, r, box, a, periodic)
+    alone = sum(
+        grey_values_naive(c[n : n + 1], r[n : n + 1], box, a, periodic).astype(np.int64) for n in range(30)
+    )
+    shared = (alone > g) & (g > 0) & (g < 216)  # partly filled voxels where two spheres share samples
+    assert shared.sum() >= 20
