@@ -38,4 +38,4 @@ def test_small_volumes_get_one_thread_large_ones_every_core(tmp_path):
     # voxelize: one thread per 2^20 voxels, at most 4; permeability: one per 2^15, at most every core
     assert jobs[("voxelize", "4")] == 1 and jobs[("voxelize", "1")] == 1 and jobs[("voxelize", "0.5")] == 4
     assert jobs[("permeability", "4")] == 1 and jobs[("permeability", "0.5")] == 4
-    assert jobs[("lpt", "4")] == 2 and jobs[("segment", "0.5")] == 1  # fixed counts stay as they were
+    assert jobs[("lpt", "4")] == 1 and jobs[("lpt", "0.5")] == 2 and jobs[("segment", "0.5")] == 1

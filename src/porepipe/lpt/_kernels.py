@@ -71,6 +71,10 @@ def _fill_slice(field, x, wy, wz, my, mz, tmp, out):
             out[y0, z0] = np.int64(out[y0 - 1, z0]) + tmp[y0 + wy - 1, z0] - tmp[y0 - 1, z0]
 
 
+#: the low 32 bits of an int64 (the two-word exact sum of k²)
+_LOW32 = np.int64(0xFFFFFFFF)
+
+
 @by_threads(cache=True, fastmath=FASTMATH)
 def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum, ksq, rec_stride, rec):
     """Histogram (and optionally record) the box sums of ``fields`` at all grid positions.
@@ -93,8 +97,9 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
         Largest possible box sum (sets the binning, see :func:`_bin_of`).
     hist, ksum : (nt, n_bins) int64 ndarray
         Per-thread-block counts and sums of k per bin (added to).
-    ksq : (nt,) float64 ndarray
-        Per-thread-block sum of k² (added to).
+    ksq : (nt, 2) int64 ndarray
+        Per-thread-block sum of k², exact: ``ksq[t, 0] * 2**32 + ksq[t, 1]`` (added to). Integers, so the total is
+        the same for any thread count (a float sum was not: its rounding depended on the blocks).
     rec_stride : int
         Record the box sums at origins that are multiples of it into ``rec``; 0 = do not record.
     rec : (ceil(mx/rs), ceil(my/rs), ceil(mz/rs)) int64 ndarray
@@ -149,7 +154,10 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
                             j = _bin_of(k, k_max, n_bins)
                             hist[t, j] += 1
                             ksum[t, j] += k
-                            ksq[t] += float(k) * float(k)
+                            sq = k * k  # k <= k_max < 3·10^9: fits int64
+                            low = ksq[t, 1] + (sq & _LOW32)
+                            ksq[t, 0] += (sq >> 32) + (low >> 32)
+                            ksq[t, 1] = low & _LOW32
                     if rec_stride > 0 and x0 % rec_stride == 0 and y0 % rec_stride == 0:
                         for z0 in range(0, mz, rec_stride):
                             rec[x0 // rec_stride, y0 // rec_stride, z0 // rec_stride] = row[z0]
