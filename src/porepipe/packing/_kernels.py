@@ -13,9 +13,9 @@ from numba import njit, prange
 
 from porepipe._shared.numba_config import FASTMATH, by_threads
 
-#: one-thread calls on arrays up to this many elements (~2 700 spheres) run the serial kernels: they compile in half
+#: one-thread calls on arrays up to this many elements (~1 300 spheres) run the serial kernels: they compile in half
 #: the time, but step 2.2x slower than the parallel code on one thread, so only short runs of small packings gain
-_SERIAL_MAX = 2**13
+_SERIAL_MAX = 2**12
 
 #: exponents of the generalised Lennard-Jones branch (5.2.2); the closed forms below assume m = 2n = 16
 LJ_M = 16
