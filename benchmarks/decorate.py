@@ -2,17 +2,17 @@
 
 Prints Mvoxel/s of both methods at 1 and 2 threads, the boundary-only speed-up, the same for sphere grains (the
 foundation's case) as reference, and checks that boundary-only and brute-force grey volumes are identical.
-Usage: python benchmarks/decorate.py [--smoke] [--json out.json]
+Usage: python benchmarks/decorate.py [--smoke] [--out DIR]   (writes decorate.json into --out, default results/benchmarks/)
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 import numba
 import numpy as np
+from _common import add_out_argument, write_record
 
 from porepipe.decorate import build_library, decorate, voxelize_grains
 from porepipe.decorate._settings import Settings
@@ -52,7 +52,7 @@ def run_case(deco, label, box, a, threads):
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--smoke", action="store_true", help="tiny sizes, for CI")
-    ap.add_argument("--json")
+    add_out_argument(ap)
     args = ap.parse_args()
     box, n, a = (40.0, 12, 1.0) if args.smoke else (80.0, 96, 0.5)  # 4.1 Mvoxel, ~20 % of the box covered
     rng = np.random.default_rng(0)
@@ -93,9 +93,7 @@ def main():
         "216 point tests (each against up to 18 planes) for every voxel in a grain's bounding box; grey values of "
         "both methods are asserted identical"
     )
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    write_record(args.out, "decorate.json", rows)
 
 
 if __name__ == "__main__":

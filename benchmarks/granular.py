@@ -201,13 +201,12 @@ def main() -> None:
         f"{per_core:.3g} per CPU-s, i.e. {2 * per_core:.3g} on 2 idle cores at perfect scaling "
         f"(load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)"
     )
-    if not args.smoke:
-        builds_out = [{"spread": k[0], "method": k[1], "seconds": v} for k, v in builds.items()]
-        write_record(
-            args.out,
-            "granular.json",
-            {"rows": rows, "builds": builds_out, "effects": cost, "peers": PEERS},
-        )
+    builds_out = [{"spread": k[0], "method": k[1], "seconds": v} for k, v in builds.items()]
+    write_record(
+        args.out,
+        "granular_smoke.json" if args.smoke else "granular.json",
+        {"rows": rows, "builds": builds_out, "effects": cost, "peers": PEERS},
+    )
 
 
 if __name__ == "__main__":

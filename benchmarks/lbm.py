@@ -410,6 +410,7 @@ def main(argv=None) -> int:
     md = _table(rows, walls, peer, bw)
     (out / "lbm_benchmark.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
+    print(f"record: {out / 'lbm_benchmark.json'} and lbm_benchmark.md")
     return 0
 
 

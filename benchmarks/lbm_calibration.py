@@ -317,6 +317,7 @@ def main(argv=None) -> int:
     ]
     (out / "lbm_calibration.md").write_text("\n".join(md))
     print("\n".join(md))
+    print(f"record: {out / 'lbm_calibration.json'} and lbm_calibration.md")
     return 0
 
 

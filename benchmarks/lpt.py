@@ -1,7 +1,7 @@
 """Benchmark of the lpt stage: μ(φ, L) for all positions and λ_α(φ, L) on a stride grid, on a 512³ volume.
 
 Usage: python benchmarks/lpt.py [--n 512] [--sizes 16 32 64 128] [--lambda-cells 100000] [--threads 1 2]
-       [--json out.json] [--smoke]
+       [--out DIR] [--smoke]   (writes lpt.json into --out, default results/benchmarks/)
 
 The volume is a thresholded Gaussian random field (correlation length ~ 3 voxels, porosity 0.2), a stand-in for a
 sandstone image. Prints cells per second and wall time per L and thread count, a peer comparison for the
@@ -13,12 +13,12 @@ work) they are noisy and pessimistic.
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import time
 
 import numba
 import numpy as np
+from _common import add_out_argument, write_record
 from scipy import ndimage
 
 from porepipe._shared.numba_config import set_threads
@@ -68,7 +68,7 @@ def main() -> None:
         help="percolation cells per L up to L = 64; for larger L scaled by (64/L)^3 (same voxel work)",
     )
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--json", help="also write the rows as JSON to this file")
+    add_out_argument(parser)
     parser.add_argument("--smoke", action="store_true", help="64^3, L = 8 and 16, 2000 cells, 1 thread (CI)")
     args = parser.parse_args()
     if args.smoke:
@@ -139,9 +139,7 @@ def main() -> None:
         "peer_scipy_label_cells_per_s": peer,
         "peer_L": size,
     }
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(record, f, indent=1)
+    write_record(args.out, "lpt.json", record)
     print(
         "\n| threads | L | mu cells | mu s | Mcells/s | lambda stride | lambda cells | lambda_3 s | cells/s |"
     )

@@ -247,7 +247,7 @@ def main() -> None:
             per_step = per_step_engine * n / n_engine
             print(
                 f"| {threads} | {effect} | {per_step:.4g} | {per_step / bare:.3f} | "
-                f"{per_step / per_effect['none']:.3f} |"
+                f"{per_step_engine / per_effect['none']:.3f} |"
             )
     print(
         "\n'none' vs bare kernel = what the engine adds to a scene without optional effects (target <= 1.05)."
@@ -260,8 +260,7 @@ def main() -> None:
         "engine_spheres": n_engine,
         "engine_s_per_step": {str(k): v for k, v in eng.items()},
     }
-    if not args.smoke:
-        write_record(args.out, "pack.json", out)
+    write_record(args.out, "pack_smoke.json" if args.smoke else "pack.json", out)
 
 
 if __name__ == "__main__":

@@ -3,18 +3,18 @@
 Prints Mvoxel/s of both methods at 1 and 2 threads, the speed-up of the kernel alone and of the whole ``voxelize()``
 call (both timed interleaved in one process, best of 3, with the load average: the machine is shared), and checks
 the two grey volumes are identical.
-Usage: python benchmarks/voxelize.py [--smoke] [--json out.json]
+Usage: python benchmarks/voxelize.py [--smoke] [--out DIR]   (writes voxelize.json into --out, default results/benchmarks/)
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 
 import numba
 import numpy as np
+from _common import add_out_argument, write_record
 
 from porepipe._shared.sample_points import SUB
 from porepipe.voxelize import VoxelizeMethod, grid_shape, voxelize
@@ -79,7 +79,7 @@ def run_case(box, n, a, r_min, r_max, threads):
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--smoke", action="store_true", help="tiny sizes, for CI")
-    ap.add_argument("--json")
+    add_out_argument(ap)
     args = ap.parse_args()
     r_min, r_max = 5.0, 10.0
     # same packing density (number of spheres per volume) at every resolution; ~8 Mvoxel per case
@@ -107,9 +107,7 @@ def main():
         "speed-up = whole voxelize() call, kernel alone = the slab kernel without sphere images and allocation; "
         "goal (issue #22): speed-up >= 20x at every sphere span"
     )
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+    write_record(args.out, "voxelize.json", rows)
 
 
 if __name__ == "__main__":

@@ -292,6 +292,21 @@ def every_core(cluster_threads):
     return threads
 
 
+def threads_by_volume(most, voxels_per_thread):
+    """The `threads` of a job whose parallel kernels pay off only on large volumes: `most` (a number, or a function
+    of the wildcards such as every_core(8)), but no more than one thread per `voxels_per_thread` voxels of the
+    rule's volume, and at least one. Small jobs then share the cores: on 2 cores two one-thread jobs of the mini
+    scene run side by side, where a two-thread job ran alone with its second core idle while the first compiled
+    its kernels. The results are the same for any thread count.
+    """
+
+    def threads(wildcards):
+        cap = most(wildcards) if callable(most) else most
+        return max(1, min(cap, math.ceil(voxels(wildcards) / voxels_per_thread)))
+
+    return threads
+
+
 def cpus_per_task(wildcards, threads):
     """The `resources: cpus_per_task` of every rule: one Slurm CPU per thread the rule runs."""
     return threads

@@ -15,7 +15,7 @@ rule lpt:
         "results/{scene}/cost/lpt_a{a}{sub}.tsv"
     conda:
         "../envs/porepipe.yaml"
-    threads: 2
+    threads: threads_by_volume(2, voxels_per_thread=2**20)
     resources:
         cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=24),

@@ -16,7 +16,7 @@ rule permeability:
         axis="[xyz]",
     conda:
         "../envs/porepipe.yaml"
-    threads: every_core(8)
+    threads: threads_by_volume(every_core(8), voxels_per_thread=2**15)  # below: 1-2 parallel chunks of nodes
     resources:
         cpus_per_task=cpus_per_task,
         # 19 populations x 2 copies in float64 per node, plus the fields and the index arrays

@@ -13,7 +13,7 @@ rule voxelize:
         "results/{scene}/cost/voxelize_a{a}.tsv"
     conda:
         "../envs/porepipe.yaml"
-    threads: 4
+    threads: threads_by_volume(4, voxels_per_thread=2**20)
     resources:
         cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=4),

@@ -10,6 +10,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+# the values flood() writes, "no axis" and "no seed yet", as typed int64, not literals: numba compiles a callee once
+# per literal argument value, so 3, 4, 5 and -1 written into the calls compiled flood five times (~6 CPU-s cold)
+_FILLED, _REFILLED, _WRAPPED = np.int64(3), np.int64(4), np.int64(5)
+_NO_AXIS = _NO_SEED = np.int64(-1)
+
 
 @njit(cache=True)
 def _grow(queue, head, count):
@@ -147,7 +152,7 @@ def spanning(state, offsets, periodic, axis, keep_all, queue):
     fresh[1] = True
     kept = np.zeros(256, dtype=np.bool_)
     kept[3] = True
-    best_size, best_seed, found = 0, -1, 0
+    best_size, best_seed, found = 0, _NO_SEED, 0
     for f in range(flat.size):
         if flat[f] != 1:
             continue
@@ -158,16 +163,16 @@ def spanning(state, offsets, periodic, axis, keep_all, queue):
         # fill straight into "kept" (3); a cluster that is not kept after all is refilled to 4. Distinct clusters
         # never touch, so a fill over value 3 from a seed stays in that seed's cluster. The large (spanning) cluster
         # is filled once; only losers and a dethroned best are filled twice.
-        size, low, high, queue = flood(state, f, fresh, 3, offsets, periodic, axis, queue)
+        size, low, high, queue = flood(state, f, fresh, _FILLED, offsets, periodic, axis, queue)
         joins = high if axis >= 0 else True
         if joins:
             found += 1
         if joins and (keep_all or size > best_size):
             if not keep_all and best_seed >= 0:
-                queue = flood(state, best_seed, kept, 4, offsets, periodic, axis, queue)[3]
+                queue = flood(state, best_seed, kept, _REFILLED, offsets, periodic, axis, queue)[3]
             best_size, best_seed = size, f
         else:
-            queue = flood(state, f, kept, 4, offsets, periodic, axis, queue)[3]
+            queue = flood(state, f, kept, _REFILLED, offsets, periodic, axis, queue)[3]
     return found
 
 
@@ -179,7 +184,7 @@ def grow_wrapped(state, offsets, periodic, queue):
     pore[1] = pore[3] = pore[4] = True
     for f in range(flat.size):
         if flat[f] == 3:
-            queue = flood(state, f, pore, 5, offsets, periodic, -1, queue)[3]
+            queue = flood(state, f, pore, _WRAPPED, offsets, periodic, _NO_AXIS, queue)[3]
 
 
 @njit(cache=True)

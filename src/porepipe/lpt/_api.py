@@ -188,7 +188,7 @@ def _box_histogram(
     nt = numba.get_num_threads()
     hist = np.zeros((nt, n_bins), np.int64)
     ksum = np.zeros((nt, n_bins), np.int64)
-    ksq = np.zeros(nt, np.float64)
+    ksq = np.zeros((nt, 2), np.int64)  # exact Σk² in two 32-bit words per thread block
     if record_stride > 0:
         rec = np.zeros(tuple(-(-m // record_stride) for m in grid.npos), np.int64)
     else:
@@ -210,7 +210,7 @@ def _box_histogram(
     return BoxHistogram(
         hist.sum(axis=0),
         ksum.sum(axis=0),
-        float(ksq.sum()),
+        float(sum((int(high) << 32) + int(low) for high, low in ksq)),  # exact integer, then one rounding
         k_lo,
         k_hi,
         k_max,

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, by_threads
 
 #: Λ bits in the output of :func:`_percolation_cells`: x, y, z, all three, at least one.
 BIT_X, BIT_Y, BIT_Z, BIT_ALL, BIT_ANY = 1, 2, 4, 8, 16
@@ -71,7 +71,11 @@ def _fill_slice(field, x, wy, wz, my, mz, tmp, out):
             out[y0, z0] = np.int64(out[y0 - 1, z0]) + tmp[y0 + wy - 1, z0] - tmp[y0 - 1, z0]
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
+#: the low 32 bits of an int64 (the two-word exact sum of k²)
+_LOW32 = np.int64(0xFFFFFFFF)
+
+
+@by_threads(cache=True, fastmath=FASTMATH)
 def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum, ksq, rec_stride, rec):
     """Histogram (and optionally record) the box sums of ``fields`` at all grid positions.
 
@@ -93,8 +97,9 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
         Largest possible box sum (sets the binning, see :func:`_bin_of`).
     hist, ksum : (nt, n_bins) int64 ndarray
         Per-thread-block counts and sums of k per bin (added to).
-    ksq : (nt,) float64 ndarray
-        Per-thread-block sum of k² (added to).
+    ksq : (nt, 2) int64 ndarray
+        Per-thread-block sum of k², exact: ``ksq[t, 0] * 2**32 + ksq[t, 1]`` (added to). Integers, so the total is
+        the same for any thread count (a float sum was not: its rounding depended on the blocks).
     rec_stride : int
         Record the box sums at origins that are multiples of it into ``rec``; 0 = do not record.
     rec : (ceil(mx/rs), ceil(my/rs), ceil(mz/rs)) int64 ndarray
@@ -149,7 +154,10 @@ def _box_sum_histogram(fields, wins, npos, ring, hist_stride, k_max, hist, ksum,
                             j = _bin_of(k, k_max, n_bins)
                             hist[t, j] += 1
                             ksum[t, j] += k
-                            ksq[t] += float(k) * float(k)
+                            sq = k * k  # k <= k_max < 3·10^9: fits int64
+                            low = ksq[t, 1] + (sq & _LOW32)
+                            ksq[t, 0] += (sq >> 32) + (low >> 32)
+                            ksq[t, 1] = low & _LOW32
                     if rec_stride > 0 and x0 % rec_stride == 0 and y0 % rec_stride == 0:
                         for z0 in range(0, mz, rec_stride):
                             rec[x0 // rec_stride, y0 // rec_stride, z0 // rec_stride] = row[z0]
@@ -270,7 +278,7 @@ def _path_fits(record, origin, size, axis):
     return True
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
+@by_threads(cache=True, fastmath=FASTMATH)
 def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, want, stop, n_chunks, out):
     """Local percolation indicators of many cells.
 
@@ -343,7 +351,10 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                         ok = True
                     elif _path_fits(by_z[axis, origin[2]], origin, size, axis):
                         ok = True
-                        last[axis, :] = by_z[axis, origin[2]]
+                        for q in range(
+                            7
+                        ):  # element by element: a slice copy compiles numba's shape-error path
+                            last[axis, q] = by_z[axis, origin[2], q]
                     else:
                         if gen == _WALL - np.uint32(1):  # generations exhausted: clear the inside marks
                             for v in range(p * p * p):
@@ -371,7 +382,8 @@ def _percolation_cells(pore, origins, counts, size, offs_by_axis, lin_by_axis, w
                             for d in range(3):
                                 last[axis, 1 + d] = origin[d] + box[d] - 1
                                 last[axis, 4 + d] = origin[d] + box[3 + d] - 1
-                            by_z[axis, origin[2], :] = last[axis]
+                            for q in range(7):
+                                by_z[axis, origin[2], q] = last[axis, q]
                     if ok:
                         bits |= 1 << axis
                     if (stop == STOP_ON_FAIL and not ok) or (stop == STOP_ON_SUCCESS and ok):

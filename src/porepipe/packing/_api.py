@@ -523,8 +523,7 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     conv = np.zeros(n, dtype=np.uint8)
     if n == 0:
         return sig, conv
-    box = np.asarray(box_um, dtype=np.float64)
-    per = np.broadcast_to(np.asarray(periodic, dtype=np.bool_), (3,))
+    box, per = _as_box(box_um, periodic)  # a writable `per`: a read-only one would compile every kernel again
     x = x.copy()
     x[:, per] = np.mod(x[:, per], box[per])  # the kernels assume periodic coordinates in [0, L)
     lists = build_neighbours(x, r, types, box, per, pair_on, 1.0, 0.0, half=True)

@@ -11,7 +11,11 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, by_threads
+
+#: one-thread calls on arrays up to this many elements (~1 300 spheres) run the serial kernels: they compile in half
+#: the time, but step 2.2x slower than the parallel code on one thread, so only short runs of small packings gain
+_SERIAL_MAX = 2**12
 
 #: exponents of the generalised Lennard-Jones branch (5.2.2); the closed forms below assume m = 2n = 16
 LJ_M = 16
@@ -248,7 +252,7 @@ def _scan_half(
     return cnt
 
 
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
+@by_threads(_SERIAL_MAX, cache=True, fastmath=FASTMATH)
 def _half_counts(
     x,
     r,
@@ -291,7 +295,7 @@ def _half_counts(
         )
 
 
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
+@by_threads(_SERIAL_MAX, cache=True, fastmath=FASTMATH)
 def _half_fill(
     x,
     r,
@@ -381,7 +385,7 @@ def _sphere_aux(i, x_old, x_new, v, x_build, r, r_build, box, periodic, cut, mas
 _REDUCE_CHUNKS = 64
 
 
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
+@by_threads(_SERIAL_MAX, cache=True, fastmath=FASTMATH)
 def _step_reductions(sig, conv, aux):
     """One pass over the per-sphere results of a step: (converged count, kinetic energy, max sigma, sum and count of
     finite sigma, largest step displacement and its sphere, list staleness, first non-finite sphere or -1).
@@ -551,7 +555,8 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
     """Return the step kernel compiled with exactly the requested optional effects.
 
     The flags are closure constants, so numba removes the code of a switched-off effect entirely; each flag
-    combination is compiled (and cached on disk) once.
+    combination is compiled (and cached on disk) once per thread mode (serial for one thread, parallel for more:
+    :class:`porepipe._shared.numba_config.ByThreads`; the same forces and sums either way).
 
     Parameters
     ----------
@@ -567,7 +572,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         return _STEP_CACHE[key]
     FREEZE, STOCH, WALLS = key
 
-    @njit(cache=True, fastmath=FASTMATH, parallel=True)
+    @by_threads(_SERIAL_MAX, cache=True, fastmath=FASTMATH)
     def _step(
         x_old,
         x_new,

@@ -119,7 +119,7 @@ def build_neighbours(
         order = cell_items
         x_um, r_um, types, cls = x_um[order], r_um[order], types[order], cls[order]
         cell_items = np.arange(n, dtype=np.int64)
-    per = np.asarray(periodic, dtype=np.bool_)
+    per = np.array(periodic, dtype=np.bool_)  # a copy: a read-only array would compile the kernels once more
     args = (
         x_um,
         r_um,
