@@ -161,20 +161,31 @@ class SurfaceMechanism(BaseModel):
         0.0,
         ge=0,
         le=1,
-        description="ER only: product hit on an empty active site → gas a + adsorbed b (4.18)",
+        description=(
+            "ER: product hit on an empty active site → gas a + adsorbed b (4.18); LH: an arriving product tries "
+            "each empty active neighbour site → a on its site + b there (§4.3.2; needs replenish: false)"
+        ),
     )
 
 
 class SurfaceSideReaction(BaseModel):
-    """A side or consecutive reaction of setup ``surface`` (thesis 4.20-4.22): a gas wall hit of ``reactant``
-    turns it into ``product`` with probability ``w``.
+    """A side or consecutive reaction of setup ``surface``: ``reactant`` turns into ``product`` with probability
+    ``w`` at a gas wall hit (``phase: gas``, thesis 4.20-4.22) or when it arrives on a site (``phase: adsorbed``,
+    by-products of adsorbed species, thesis §4.3.2; the by-product stays on the site).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
-    reactant: str = Field(description="species hitting the wall (A, B or the product P)")
+    reactant: str = Field(
+        description="species hitting the wall or arriving on a site (A, B or the product P)"
+    )
     product: str = Field(description="by-product species (S, S', S'')")
-    w: float = Field(ge=0, le=1, description="probability per gas wall hit")
+    w: float = Field(ge=0, le=1, description="probability per gas wall hit (gas) or per arrival (adsorbed)")
+    phase: str = Field(
+        "gas",
+        pattern="^(gas|adsorbed)$",
+        description="gas: at a wall hit of the gas reactant; adsorbed: on arrival (adsorption or hop) on a site",
+    )
 
 
 class SurfaceSettings(BaseModel):
@@ -189,7 +200,8 @@ class SurfaceSettings(BaseModel):
         default_factory=list, description="LH and/or ER (at most one each)"
     )
     side_reactions: list[SurfaceSideReaction] = Field(
-        default_factory=list, description="side reactions at gas wall hits (at most one per reactant)"
+        default_factory=list,
+        description="side reactions at gas wall hits or on the surface (at most one per reactant and phase)",
     )
     duration_jiffies: float = Field(1000.0, gt=0, description="simulated time")
     warmup_jiffies: float = Field(100.0, ge=0, description="time before the tallies start")

@@ -22,9 +22,15 @@ Model (each choice stated so the analytic truths below are exact):
 - ``replenish``: each reaction's product is counted and both reactants re-enter the gas (steady state).
 - reverse Eley-Rideal (thesis 4.18, ``Mechanism.w_reverse``): a product hit on an empty active site turns it back
   into gas A (which leaves the wall) and B adsorbed on that site, with probability ``w_reverse``;
+- reverse Langmuir-Hinshelwood (thesis §4.3.2: an adsorbing product "with a residence time" may react back): a
+  product arriving on a site (adsorption or hop) tries each empty active neighbour with ``w_reverse`` (the order of
+  the forward tries) and splits into A on its site and B on that neighbour; the two do not try each other at once;
 - side and consecutive reactions (thesis 4.20-4.22, :class:`SideReaction`): a gas wall hit of X turns it into its
-  by-product with probability w (A → S, B → S′, P → S″; at most one per reactant). The reactions open on one hit
-  (ER or its reverse, and the side reaction) share one uniform number: their probabilities add.
+  by-product with probability w (A → S, B → S′, P → S″; at most one per reactant and phase). The reactions open on
+  one hit (ER or its reverse, and the side reaction) share one uniform number: their probabilities add;
+- side reactions on the surface (``phase="adsorbed"``, thesis §4.3.2's by-products of adsorbed species): an X
+  arriving on a site turns into its by-product there with probability w, tried before any Langmuir-Hinshelwood
+  reaction; the by-product keeps the site for its own residence time.
 
 Analytic truths (tests/validation/test_surface_mechanisms.py):
 
@@ -41,6 +47,12 @@ Analytic truths (tests/validation/test_surface_mechanisms.py):
   dx/dt = k_f·(N_A0 − x)(N_B0 − x) − k_r·x·(M − N_B0 + x), k_f = w·v̄_A·A_site/(4V), k_r = w′·v̄_P·A_site/(4V), a
   Riccati equation with constant coefficients (:func:`reversible_er_products`); at equilibrium
   N_P·N_empty/(N_A·N_B) = k_f/k_r.
+- Reverse Langmuir-Hinshelwood on an empty surface: a product adsorbing on a site splits with probability
+  1 − (1 − w′)^z, z its empty neighbours (:func:`lh_reaction_probability` with θ = 1, averaged over the sites);
+  a surface side reaction before it takes w_S of the arrivals, the split (1 − w_S) of that.
+- A(g) + B(ads) ⇌ P(g) by LH and its reverse with A and P adsorbing only for an instant and B hopping fast (well
+  mixed: its sites a uniform random subset): a one-variable rate law with hypergeometric neighbour counts
+  (:func:`reversible_lh_products`), exact in that limit up to O(1/N) fluctuations.
 - Side reactions with first-order rates k_X = w_X·v̄_X·S/(4V) (S the wall area): A ⇌ S relaxes exponentially with
   rate k_A + k_S to N_S/N_A = k_A/k_S; competing with ER on fixed B, every A hit branches with w_S against w on a B
   site, so the by-product count is S = (w_S·n_sites/w)·(H(N_B0) − H(N_B)) in the mean, harmonic numbers H
@@ -93,8 +105,9 @@ class Adsorbate:
 class Mechanism:
     """A + B → product, bimolecular: ``kind`` "LH" (both adsorbed) or "ER" (``a`` from the gas, ``b`` adsorbed).
 
-    ``w_reverse`` (ER only, thesis 4.18): probability that a hit of the product on an empty active site turns it back
-    into gas ``a`` and adsorbed ``b`` on that site.
+    ``w_reverse``: ER (thesis 4.18): probability that a hit of the product on an empty active site turns it back
+    into gas ``a`` and adsorbed ``b`` on that site; LH (thesis §4.3.2, an adsorbing product): a product arriving on a
+    site tries each empty active neighbour with this probability and splits into ``a`` on its site and ``b`` there.
     """
 
     kind: str
@@ -112,21 +125,27 @@ class Mechanism:
                 raise PorepipeError(
                     f"mechanism {self.kind}: {key} must lie in [0, 1], got {getattr(self, key)!r}"
                 )
-        if self.kind == "LH" and self.w_reverse > 0.0:
-            raise PorepipeError("mechanism LH: w_reverse is only for ER (thesis 4.18)")
         if self.product in (self.a, self.b):
             raise PorepipeError(f"mechanism {self.kind}: product {self.product!r} must differ from a and b")
 
 
 @dataclass(frozen=True)
 class SideReaction:
-    """Side or consecutive reaction at a gas wall hit (thesis 4.20-4.22): ``reactant`` → ``product`` with ``w``."""
+    """Side or consecutive reaction ``reactant`` → ``product`` with probability ``w``: ``phase`` "gas" at a wall hit
+    of the gas reactant (thesis 4.20-4.22), "adsorbed" when the reactant arrives on a site (by adsorption or a hop;
+    thesis §4.3.2: by-products of adsorbed species), the by-product staying on that site.
+    """
 
     reactant: str
     product: str
     w: float
+    phase: str = "gas"
 
     def __post_init__(self):
+        if self.phase not in ("gas", "adsorbed"):
+            raise PorepipeError(
+                f"side reaction {self.reactant} → {self.product}: phase must be gas or adsorbed, got {self.phase!r}"
+            )
         if not 0.0 <= self.w <= 1.0:
             raise PorepipeError(
                 f"side reaction {self.reactant} → {self.product}: w must lie in [0, 1], got {self.w!r}"
@@ -146,9 +165,10 @@ def _sites_and_activity(n_faces, s, active_fraction, seed):
     return n_sites, active
 
 
-def _start_sites(species, active, seed, spare_of=-1):
+def _start_sites(species, active, seed, spare_of=()):
     """Start site per particle (-1 = gas): the pre-adsorbed ones on distinct random active sites; one spare slot
-    (site ``S.SPARE``) per starting particle of species ``spare_of`` (the reverse ER product) at the end.
+    (site ``S.SPARE``) per starting particle of each species in ``spare_of`` (the products of reverse reactions) at
+    the end.
     """
     n_pre = sum(int(sp.adsorbed) for sp in species)
     free = np.flatnonzero(active)
@@ -161,16 +181,16 @@ def _start_sites(species, active, seed, spare_of=-1):
         kinds += [x] * (int(sp.gas) + int(sp.adsorbed))
         sites += [-1] * int(sp.gas) + list(chosen[k : k + int(sp.adsorbed)])
         k += int(sp.adsorbed)
-    if spare_of >= 0:
-        n_spare = int(species[spare_of].gas) + int(species[spare_of].adsorbed)
-        kinds += [spare_of] * n_spare
+    for x in spare_of:
+        n_spare = int(species[x].gas) + int(species[x].adsorbed)
+        kinds += [x] * n_spare
         sites += [S.SPARE] * n_spare
     return np.array(kinds, dtype=np.int64), np.array(sites, dtype=np.int64)
 
 
 def _mechanism_arrays(mechanisms, names):
     lh, er = np.full(3, -1, np.int64), np.full(3, -1, np.int64)
-    lh_w = er_w = er_rev = 0.0
+    w = np.zeros(4)
     seen = set()
     for m in mechanisms:
         for key in ("a", "b", "product"):
@@ -182,34 +202,65 @@ def _mechanism_arrays(mechanisms, names):
             raise PorepipeError(f"at most one {m.kind} mechanism, got two")
         seen.add(m.kind)
         spec = np.array([names.index(m.a), names.index(m.b), names.index(m.product)], np.int64)
-        if m.w == 0.0:
+        if m.w == 0.0 and m.w_reverse == 0.0:
             continue  # a zero-probability mechanism is off: not one random number drawn for it
         if m.kind == "LH":
-            lh, lh_w = spec, m.w
+            lh, w[S.W_LH], w[S.W_LH_REV] = spec, m.w, m.w_reverse
         else:
-            er, er_w, er_rev = spec, m.w, m.w_reverse
-    return lh, er, np.array([lh_w, er_w, er_rev])
+            er, w[S.W_ER], w[S.W_REV] = spec, m.w, m.w_reverse
+    return lh, er, w
 
 
-def _side_arrays(side_reactions, names):
-    """Per species: side-reaction product index (-1 = none) and probability per gas wall hit."""
+def _side_arrays(side_reactions, names, phase):
+    """Per species: the ``phase`` side reaction's product index (-1 = none) and probability per hit / arrival."""
     to, w = np.full(len(names), -1, np.int64), np.zeros(len(names))
     for r in side_reactions:
         for key in ("reactant", "product"):
             if getattr(r, key) not in names:
                 raise PorepipeError(f"side reaction: {key} = {getattr(r, key)!r} is not a species ({names})")
+        if r.phase != phase:
+            continue
         x = names.index(r.reactant)
         if to[x] >= 0:
-            raise PorepipeError(f"at most one side reaction per reactant, got two for {r.reactant!r}")
+            raise PorepipeError(
+                f"at most one side reaction per reactant and phase, got two {phase} ones for {r.reactant!r}"
+            )
         if r.w > 0.0:  # zero probability: off, no random number drawn for it
             to[x], w[x] = names.index(r.product), r.w
     return to, w
 
 
-def _mechanism_tuple(mechanisms, side_reactions, names, replenish):
+def _reverse_checks(kind, product, species, er, replenish, makers):
+    """A reverse reaction needs products that stay (no replenishment), no other source of its product (each product
+    slot keeps a spare slot for the second reactant it splits into) and, for LH, a product that reaches a site.
+    """
+    names = [sp.name for sp in species]
+    if replenish:
+        raise PorepipeError(
+            f"the reverse {kind} reaction needs replenish: false (no product stays in the gas)"
+        )
+    if product in makers:
+        raise PorepipeError(
+            f"with the reverse {kind} reaction no side reaction may make its product {names[product]!r}"
+        )
+    if kind == "Langmuir-Hinshelwood" and not _arrives(species[product], product, er):
+        raise PorepipeError(
+            f"mechanism LH: w_reverse needs its product {names[product]!r} to reach a site "
+            "(adsorption > 0 or hop_rate > 0)"
+        )
+
+
+def _arrives(sp, x, er):
+    """Whether species ``x`` can arrive on a site: by adsorption, a hop, or as the reverse Eley-Rideal's ``b``."""
+    return sp.adsorption > 0.0 or sp.hop_rate > 0.0 or (x == er[1] and er[0] >= 0)
+
+
+def _mechanism_tuple(mechanisms, side_reactions, species, replenish):
     """The kernel's ``mech`` tuple, after the checks that tie mechanisms and side reactions together."""
+    names = [sp.name for sp in species]
     lh, er, w = _mechanism_arrays(mechanisms, names)
-    side_to, side_w = _side_arrays(side_reactions, names)
+    side_to, side_w = _side_arrays(side_reactions, names, "gas")
+    surf_to, surf_w = _side_arrays(side_reactions, names, "adsorbed")
     w_er = {int(er[0]): w[S.W_ER], int(er[2]): w[S.W_REV]} if er[0] >= 0 else {}
     for x, p in w_er.items():
         if p + side_w[x] > 1.0:
@@ -217,16 +268,18 @@ def _mechanism_tuple(mechanisms, side_reactions, names, replenish):
                 f"species {names[x]!r}: Eley-Rideal ({p}) and side reaction ({side_w[x]}) probabilities per hit "
                 "add up to more than 1"
             )
-    if w[S.W_REV] > 0.0:
-        if replenish:
+    er_b = er if w[S.W_REV] > 0.0 else np.full(3, -1, np.int64)  # the reverse ER puts b on a site
+    for x in np.flatnonzero(surf_w > 0.0):
+        if not _arrives(species[x], x, er_b):
             raise PorepipeError(
-                "the reverse Eley-Rideal reaction needs replenish: false (no product stays in the gas)"
+                f"side reaction {names[x]} → {names[surf_to[x]]} (phase adsorbed): {names[x]!r} never arrives on "
+                "a site (adsorption > 0 or hop_rate > 0 needed)"
             )
-        if er[2] in side_to:
-            raise PorepipeError(
-                f"with the reverse Eley-Rideal reaction no side reaction may make its product {names[er[2]]!r}"
-            )
-    return lh, er, w, side_to, side_w
+    makers = set(side_to[side_to >= 0].tolist()) | set(surf_to[surf_to >= 0].tolist())
+    for kind, spec, rev in (("Eley-Rideal", er, S.W_REV), ("Langmuir-Hinshelwood", lh, S.W_LH_REV)):
+        if w[rev] > 0.0:
+            _reverse_checks(kind, int(spec[2]), species, er_b, replenish, makers)
+    return lh, er, w, side_to, side_w, surf_to, surf_w
 
 
 def surface_run(
@@ -257,7 +310,8 @@ def surface_run(
     Returns per species (arrays in the order of ``species``) over the blocks after ``t_warm``: ``coverage`` (time
     mean adsorbed count / active sites) and its error, ``gas_density`` (time mean gas count / pore volume),
     ``adsorptions``, ``desorptions``, ``hops``, ``hop_tries``, ``wall_hits``, ``side_reactions`` (by reactant);
-    ``lh_reactions``/``er_reactions``/``er_reverse_reactions`` (counts after ``t_warm``) and their rates per time; ``series`` (gas and adsorbed counts at ``t_samples``,
+    ``surface_side_reactions`` (phase adsorbed, by reactant); ``lh_reactions``/``er_reactions``/``er_reverse_reactions``/
+    ``lh_reverse_reactions`` (counts after ``t_warm``); ``series`` (gas and adsorbed counts at ``t_samples``,
     shape (k, species, 2)); ``final_counts`` (gas + adsorbed slots per species at the end); geometry data
     (``pore_volume``, ``sites``, ``site_area``, ``active_sites``) and ``events``.
     """
@@ -277,15 +331,15 @@ def surface_run(
         raise PorepipeError(
             f"need 0 <= t_warm < t_end and blocks >= 1, got {t_warm!r}, {t_end!r}, {blocks!r}"
         )
-    mech = _mechanism_tuple(mechanisms, side_reactions, names, replenish)
+    mech = _mechanism_tuple(mechanisms, side_reactions, species, replenish)
     geom = prepare(pore, voxel_um, periodic, axis=None)
     if not np.allclose(geom.h, 1.0):
         raise PorepipeError(f"the adsorbing gas needs cubic voxels, got voxel_um {geom.voxel_um.tolist()}")
     face_of, site_face = wall_sites(geom.codes, geom.periodic)
     s = int(sites_per_edge)
     n_sites, active = _sites_and_activity(site_face.shape[0], s, active_fraction, seed)
-    reverse = mech[2][S.W_REV] > 0.0
-    kinds, site0 = _start_sites(species, active, seed, int(mech[1][2]) if reverse else -1)
+    spare_of = {int(mech[k][2]) for k, rev in ((1, S.W_REV), (0, S.W_LH_REV)) if mech[2][rev] > 0.0}
+    kinds, site0 = _start_sites(species, active, seed, sorted(spare_of))
     if kinds.size == 0:
         raise PorepipeError("no particles: give some species a gas or adsorbed count > 0")
     opts = np.array([_LAWS[wall_law], int(residence_law == "exponential"), int(bool(replenish))], np.int64)
@@ -336,7 +390,9 @@ def _summary(tally, rtally, series, final_sp, final_st, geom, n_sites, active, s
         "lh_reactions": int(rtally[:, S.X_LH].sum()),
         "er_reactions": int(rtally[:, S.X_ER].sum()),
         "er_reverse_reactions": int(rtally[:, S.X_ER_REV].sum()),
+        "lh_reverse_reactions": int(rtally[:, S.X_LH_REV].sum()),
         "side_reactions": total[:, S.S_SIDE],
+        "surface_side_reactions": total[:, S.S_SURF_SIDE],
         "lh_blocks": rtally[:, S.X_LH],
         "er_blocks": rtally[:, S.X_ER],
         "blocks_tally": tally,
@@ -437,6 +493,54 @@ def reversible_er_products(n_a0: float, n_b0: float, sites: float, k_f: float, k
     return r1 * (1.0 - e) / (1.0 - alpha * r1 / q * e)
 
 
+def _hypergeometric_pgf(q: float, hits: float, pool: float, draws: int) -> float:
+    """E[q^n] for n ~ Hypergeometric(``pool`` sites, ``hits`` marked, ``draws`` drawn), continued to real ``hits``:
+    Σ_k C(draws, k)·(q − 1)^k·(hits)_k/(pool)_k with falling factorials (the factorial moments of n).
+    """
+    total, ratio = 0.0, 1.0
+    for k in range(draws + 1):
+        total += math.comb(draws, k) * (q - 1.0) ** k * ratio
+        ratio *= (hits - k) / (pool - k)
+    return total
+
+
+def reversible_lh_products(
+    n_a0: float,
+    n_b0: float,
+    sites: int,
+    nu: tuple,
+    adsorption: tuple,
+    w: float,
+    w_reverse: float,
+    t,
+    z: int = 4,
+) -> np.ndarray:
+    """N_P(t) of A(g) + B(ads) ⇌ P(g) through Langmuir-Hinshelwood and its reverse in the well-mixed limit.
+
+    A and P adsorb on an empty site (probabilities ``adsorption`` = (a_A, a_P)) and leave at once (residence → 0);
+    B never desorbs and hops fast enough that its N_B sites are a uniform random subset of the ``sites`` sites, each
+    with ``z`` distinct neighbours. An A adsorbing on an empty site reacts when one of its n_B neighbours holding B
+    takes its try (w each), a P adsorbing splits into A + B when one of its z − n_B empty neighbours takes its try
+    (w_reverse each); n_B is hypergeometric. With gas wall hits ν = (ν_A, ν_P) per particle and time (v̄·S/(4V)):
+    dx/dt = ν_A·(N_A0 − x)·g_A(N_B0 − x) − ν_P·x·g_P(N_B0 − x), g_A = a_A·(1 − θ)·(1 − E[(1 − w)^n_B]),
+    g_P = a_P·(1 − θ)·(1 − E[(1 − w_reverse)^(z − n_B)]), θ = N_B/M; integrated to 1e-10 (solve_ivp).
+    """
+    from scipy.integrate import solve_ivp
+
+    t = np.asarray(t, float)
+    m = float(sites)
+
+    def rhs(_, y):
+        nb = n_b0 - y[0]
+        empty = 1.0 - nb / m
+        g_a = adsorption[0] * empty * (1.0 - _hypergeometric_pgf(1.0 - w, nb, m - 1.0, z))
+        g_p = adsorption[1] * empty * (1.0 - _hypergeometric_pgf(1.0 - w_reverse, m - 1.0 - nb, m - 1.0, z))
+        return [nu[0] * (n_a0 - y[0]) * g_a - nu[1] * y[0] * g_p]
+
+    sol = solve_ivp(rhs, (0.0, float(t.max())), [0.0], t_eval=t, rtol=1e-10, atol=1e-8, method="LSODA")
+    return sol.y[0]
+
+
 def side_products_per_er(c: float, n_b0: int, n_b: int) -> tuple[float, float]:
     """Mean and variance of the side-product count of A once Eley-Rideal has taken fixed B from ``n_b0`` to ``n_b``.
 
@@ -472,7 +576,7 @@ def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
         for sp, v in zip(ss.species, speeds)
     ]
     mechanisms = [Mechanism(m.kind, m.a, m.b, m.product, m.w, m.w_reverse) for m in ss.mechanisms]
-    side = [SideReaction(r.reactant, r.product, r.w) for r in ss.side_reactions]
+    side = [SideReaction(r.reactant, r.product, r.w, r.phase) for r in ss.side_reactions]
     t = np.linspace(0.0, ss.duration_jiffies, ss.samples) if ss.samples else ()
     run = surface_run(
         pore,
@@ -506,10 +610,11 @@ def surface_result(pore, settings, voxel_um, periodic, seed: int = 0):
         v[f"{sp.name}_gas_density"] = float(run["gas_density"][x])
         v[f"{sp.name}_langmuir"] = float(theta[x])
     span = run["span"]
-    counts = {k: run[f"{k}_reactions"] for k in ("lh", "er", "er_reverse")}
+    counts = {k: run[f"{k}_reactions"] for k in ("lh", "er", "er_reverse", "lh_reverse")}
     v.update({f"{k}_reactions": n for k, n in counts.items()})
     v.update({f"{k}_rate": n / span for k, n in counts.items()})
     for x, sp in enumerate(species):
         v[f"{sp.name}_side_reactions"] = float(run["side_reactions"][x])
+        v[f"{sp.name}_surface_side_reactions"] = float(run["surface_side_reactions"][x])
     arrays = {"series_counts": run["series"], "series_time_jiffies": np.asarray(t, float)}
     return DiffusionResult("surface", "-", v, arrays)

@@ -18,12 +18,21 @@ couple them. Events:
 - surface hop (rate ``hop[X]``): to one of the 4 neighbour sites, rejected when it is occupied, inactive or
   missing (a symmetric exclusion process: it leaves the Langmuir occupation measure unchanged).
 
-Langmuir-Hinshelwood: a particle of species A or B arriving at a site (by adsorption or by a hop) tries each
-neighbour site holding the other partner with probability ``lh_w`` (the reactive distance is one site spacing,
-h/s); on success both leave the surface and the product enters the gas from the arrival site.
+Arrival of a particle at a site (by adsorption or by a hop), in this order:
+
+- side reaction on the surface (``surf_side_w[X]``, one try): X turns into ``surf_side_to[X]`` on that site;
+- Langmuir-Hinshelwood: a particle of species A or B tries each neighbour site holding the other partner with
+  probability ``lh_w`` (the reactive distance is one site spacing, h/s); on success both leave the surface and the
+  product enters the gas from the arrival site;
+- reverse Langmuir-Hinshelwood: the product tries each empty active neighbour with ``lh_reverse_w``; on success it
+  becomes A on its site and a spare slot becomes B on that neighbour (neither tries Langmuir-Hinshelwood now).
+
+The arrival path with the side reaction and the reverse reaction (:func:`_arrive`) runs only for a species that has
+one of them; every other arrival takes the inline Langmuir-Hinshelwood path of the kernel loop.
 
 Slots: particle ``i`` keeps its index for the whole run; a reaction turns one reactant slot into the product and
-removes the other (state GONE). With ``replenish`` the product is counted and the two reactant slots are put back
+removes the other (state GONE); a reverse reaction takes a GONE slot back (one spare slot per starting product
+particle keeps the stack from running dry). With ``replenish`` the product is counted and the two reactant slots are put back
 into the gas, uniform in the pore with an isotropic direction and a Maxwell-Boltzmann speed (stoichiometric
 replenishment, thesis §4.3.1: the totals of A and B stay constant, so the system reaches a steady state).
 
@@ -43,8 +52,9 @@ reactions, rarer, call helpers on the tuples (per-event tuple passing had halved
   neighbour table (``nbr[site, k]``, k = +a, −a, +b, −b, -1 = none: in-face only or across voxel edges, see
   :mod:`porepipe.diffusion._surface_sites`) (read only);
 - ``kin = (opts, vmean, ads, tau, hop)``: run options and per-species data (read only);
-- ``mech = (lh_spec, er_spec, w, side_to, side_w)``: mechanism species (a, b, product; -1 = off),
-  ``w = [lh_w, er_w, er_reverse_w]`` and per species the side-reaction product (-1 = none) and probability;
+- ``mech = (lh_spec, er_spec, w, side_to, side_w, surf_side_to, surf_side_w)``: mechanism species (a, b, product;
+  -1 = off), ``w = [lh_w, er_w, er_reverse_w, lh_reverse_w]`` and per species the side-reaction product (-1 = none)
+  and probability at a gas wall hit and on arrival at a site;
 - ``pt = (sp, st, site, t_des, cnt, pos, idx, u, speed, tev)``: the particle slots;
 - ``surf = (occ, n_gas, n_ads, free)``: site occupation, the live counts per species and the stack of GONE slots
   (``free[0]`` = its height);
@@ -72,16 +82,16 @@ from porepipe.diffusion._kernels import (
 )
 
 GAS, ADSORBED, GONE = 0, 1, 2
-#: per-species columns of the block tally
-S_HITS, S_ADS, S_DES, S_HOP_TRY, S_HOP_OK, S_GAS_T, S_ADS_T, S_SIDE = range(8)
-N_STALLY = 8
+#: per-species columns of the block tally (S_SIDE: side reactions at gas wall hits, S_SURF_SIDE: on the surface)
+S_HITS, S_ADS, S_DES, S_HOP_TRY, S_HOP_OK, S_GAS_T, S_ADS_T, S_SIDE, S_SURF_SIDE = range(9)
+N_STALLY = 9
 #: reaction columns of the block tally
-X_LH, X_ER, X_ER_REV = range(3)
-N_XTALLY = 3
+X_LH, X_ER, X_ER_REV, X_LH_REV = range(4)
+N_XTALLY = 4
 #: entries of the options array: wall law, exponential residence (1) or fixed (0), replenishment (1)
 O_LAW, O_REXP, O_REPL = range(3)
 #: entries of the mechanism probabilities
-W_LH, W_ER, W_REV = range(3)
+W_LH, W_ER, W_REV, W_LH_REV = range(4)
 #: start site of a spare slot (GONE at the start: room for the B that a reverse Eley-Rideal reaction puts back)
 SPARE = -2
 
@@ -156,7 +166,7 @@ def _lh_partner(nbr, occ, sp, lh_spec, w_lh, si, x, state):
     """Langmuir-Hinshelwood tries of species ``x`` just arrived on site ``si``: each neighbour holding its partner
     reacts with ``w_lh``; returns (partner slot or -1, its site, state).
     """
-    if lh_spec[0] < 0 or (x != lh_spec[0] and x != lh_spec[1]):
+    if lh_spec[0] < 0 or w_lh <= 0.0 or (x != lh_spec[0] and x != lh_spec[1]):
         return -1, -1, state
     partner = lh_spec[1] if x == lh_spec[0] else lh_spec[0]
     for k in range(4):
@@ -230,7 +240,7 @@ def surface_kernel(
     """
     codes, h, periodic, _, face_of, site_face, active, s, nbr = geo
     opts, vmean, ads, tau, hop = kin
-    lh_spec, er_spec, w, _, side_w = mech
+    lh_spec, er_spec, w, _, side_w, _, surf_side_w = mech
     law = opts[O_LAW]
     rexp = opts[O_REXP] == 1
     n = sp0.shape[0]
@@ -326,7 +336,7 @@ def surface_kernel(
                     )
                 elif y < p_er + p_rev:
                     nh, state = _er_reverse(
-                        geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state
+                        geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, si, t, ev, bk, state
                     )
                 elif reacted:
                     nh, state = _side_reaction(geo, kin, mech, pt, surf, heap, nh, tally, i, t, ev, bk, state)
@@ -383,14 +393,18 @@ def surface_kernel(
             cnt[i] += 1
             nh = _heap_push(ht, hi, hj, hci, hcj, nh, t + dt, i, -1, cnt[i], 0)
         if arrived:
-            # Langmuir-Hinshelwood with the neighbours, else the next surface event
             cnt[i] += 1
-            j, nb, state = _lh_partner(nbr, occ, sp, lh_spec, w[W_LH], site[i], x, state)
-            if j >= 0:
-                nh, state = _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state)
+            if surf_side_w[x] > 0.0 or (x == lh_spec[2] and w[W_LH_REV] > 0.0):
+                # rarer: a surface side reaction or the reverse Langmuir-Hinshelwood reaction is open to x
+                nh, state = _arrive(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state)
             else:
-                te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
-                nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
+                # Langmuir-Hinshelwood with the neighbours, else the next surface event
+                j, nb, state = _lh_partner(nbr, occ, sp, lh_spec, w[W_LH], site[i], x, state)
+                if j >= 0:
+                    nh, state = _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state)
+                else:
+                    te, _, state = _next_surface_time(t, t_des[i], hop[x], state)
+                    nh = _heap_push(ht, hi, hj, hci, hcj, nh, te, i, -1, cnt[i], 0)
         if nh + 4 > ht.shape[0]:
             ht, hi, hj, hci, hcj, nh = _heap_room(ht, hi, hj, hci, hcj, nh, 4, cnt)
             heap = (ht, hi, hj, hci, hcj)
@@ -508,29 +522,115 @@ def _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state
 
 
 @njit(cache=True)
-def _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, i, t, bk, state):
-    """Slot ``i`` has just taken its site (``cnt[i]`` already bumped): Langmuir-Hinshelwood, else its next
-    surface event.
+def _arrive(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, t, bk, state):
+    """Slot ``i`` has just taken its site (``cnt[i]`` already bumped): its surface side reaction (one try), else
+    Langmuir-Hinshelwood with a neighbour partner, else (``i`` the LH product) the reverse LH reaction with an empty
+    neighbour, else its next surface event.
     """
     sp, site, t_des, cnt = pt[0], pt[2], pt[3], pt[4]
+    lh_spec, w, surf_side_w = mech[0], mech[2], mech[6]
     x = sp[i]
-    j, nb, state = _lh_partner(geo[8], surf[0], sp, mech[0], mech[2][W_LH], site[i], x, state)
+    if surf_side_w[x] > 0.0:
+        y, state = _uniform(state)
+        if y < surf_side_w[x]:
+            return _surface_side(kin, mech, pt, surf, heap, nh, tally, i, t, bk, state)
+    j, nb, state = _lh_partner(geo[8], surf[0], sp, lh_spec, w[W_LH], site[i], x, state)
     if j >= 0:
         return _lh_react(geo, kin, mech, pt, surf, heap, nh, rtally, i, j, nb, t, bk, state)
+    if x == lh_spec[2] and w[W_LH_REV] > 0.0 and surf[3][0] > 0:
+        nb, state = _empty_neighbour(geo[8], surf[0], geo[6], w[W_LH_REV], site[i], state)
+        if nb >= 0:
+            return _lh_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, nb, t, bk, state)
     te, _, state = _next_surface_time(t, t_des[i], kin[4][x], state)
     return _push(heap, nh, cnt, i, te), state
 
 
 @njit(cache=True)
-def _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, state):
+def _empty_neighbour(nbr, occ, active, w_rev, si, state):
+    """Reverse Langmuir-Hinshelwood tries from site ``si``: each empty active neighbour with ``w_rev`` (the order of
+    :func:`_lh_partner`); returns (that site or -1, state).
+    """
+    for k in range(4):
+        nb = nbr[si, k]
+        if nb < 0 or not active[nb] or occ[nb] >= 0:
+            continue
+        y, state = _uniform(state)
+        if y < w_rev:
+            return nb, state
+    return -1, state
+
+
+@njit(cache=True)
+def _place(kin, pt, surf, j, x, si, t, state):
+    """Slot ``j`` (GONE, or on ``si`` already, off the counts) becomes species ``x`` adsorbed on ``si`` (its position
+    set by the caller) with a fresh residence time and a bumped counter.
+    """
+    sp, st, site, t_des, cnt = pt[0], pt[1], pt[2], pt[3], pt[4]
+    occ, n_ads = surf[0], surf[2]
+    sp[j] = x
+    st[j] = ADSORBED
+    site[j] = si
+    occ[si] = j
+    n_ads[x] += 1
+    tau_j, state = _residence(kin[3][x], kin[0][O_REXP] == 1, state)
+    t_des[j] = t + tau_j
+    cnt[j] += 1
+    return state
+
+
+@njit(cache=True)
+def _adsorb_slot(kin, pt, surf, j, x, si, t, state):
+    """:func:`_place`, then the next surface event time (no Langmuir-Hinshelwood try: the slot did not arrive)."""
+    state = _place(kin, pt, surf, j, x, si, t, state)
+    te, _, state = _next_surface_time(t, pt[3][j], kin[4][x], state)
+    return te, state
+
+
+@njit(cache=True)
+def _lh_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, nb, t, bk, state):
+    """Reverse Langmuir-Hinshelwood (thesis §4.3.2): the product ``i``, just arrived on its site, splits into the
+    reactant ``a`` on that site and ``b`` (a spare slot) on the empty active neighbour ``nb``. Neither tries a
+    Langmuir-Hinshelwood reaction now (they would re-form the product they came from); both get fresh residence
+    times and their next surface events.
+    """
+    x_a, x_b, x_p = mech[0][0], mech[0][1], mech[0][2]
+    pos, idx = pt[5], pt[6]
+    n_ads, free = surf[2], surf[3]
+    if bk >= 0:
+        rtally[bk, X_LH_REV] += 1
+    n_ads[x_p] -= 1
+    ti, state = _adsorb_slot(kin, pt, surf, i, x_a, pt[2][i], t, state)
+    j = free[free[0]]
+    free[0] -= 1
+    _site_point(geo[5], geo[1], geo[7], nb, pos[j], idx[j])
+    tj, state = _adsorb_slot(kin, pt, surf, j, x_b, nb, t, state)
+    nh = _push(heap, nh, pt[4], i, ti)
+    return _push(heap, nh, pt[4], j, tj), state
+
+
+@njit(cache=True)
+def _surface_side(kin, mech, pt, surf, heap, nh, tally, i, t, bk, state):
+    """Side reaction on the surface (thesis §4.3.2, by-products of adsorbed species): ``i``, just arrived on its
+    site, turns into its by-product there, which gets a fresh residence time and its next surface event.
+    """
+    x = pt[0][i]
+    if bk >= 0:
+        tally[bk, x, S_SURF_SIDE] += 1
+    surf[2][x] -= 1
+    te, state = _adsorb_slot(kin, pt, surf, i, mech[5][x], pt[2][i], t, state)
+    return _push(heap, nh, pt[4], i, te), state
+
+
+@njit(cache=True)
+def _er_reverse(geo, kin, mech, pt, surf, heap, nh, tally, rtally, i, si, t, ev, bk, state):
     """Reverse Eley-Rideal (thesis 4.18) at the hit of product ``i`` on the empty active site ``si``: ``i`` turns
     into the gas reactant and leaves the wall, a spare slot becomes the adsorbed reactant on ``si`` (and arrives
     there: it may react by Langmuir-Hinshelwood at once).
     """
-    opts, vmean, _, tau, _ = kin
+    opts, vmean = kin[0], kin[1]
     x_a, x_b, x_p = mech[1][0], mech[1][1], mech[1][2]
-    sp, st, site, t_des, cnt, pos, idx = pt[0], pt[1], pt[2], pt[3], pt[4], pt[5], pt[6]
-    occ, n_gas, n_ads, free = surf
+    sp, cnt, pos, idx = pt[0], pt[4], pt[5], pt[6]
+    n_gas, free = surf[1], surf[3]
     if bk >= 0:
         rtally[bk, X_ER_REV] += 1
     n_gas[x_p] -= 1
@@ -541,16 +641,9 @@ def _er_reverse(geo, kin, mech, pt, surf, heap, nh, rtally, i, si, t, ev, bk, st
     nh = _push(heap, nh, cnt, i, te)
     j = free[free[0]]
     free[0] -= 1
-    sp[j] = x_b
-    st[j] = ADSORBED
-    site[j] = si
-    occ[si] = j
-    n_ads[x_b] += 1
     _site_point(geo[5], geo[1], geo[7], si, pos[j], idx[j])
-    tau_j, state = _residence(tau[x_b], opts[O_REXP] == 1, state)
-    t_des[j] = t + tau_j
-    cnt[j] += 1
-    return _arrive(geo, kin, mech, pt, surf, heap, nh, rtally, j, t, bk, state)
+    state = _place(kin, pt, surf, j, x_b, si, t, state)
+    return _arrive(geo, kin, mech, pt, surf, heap, nh, tally, rtally, j, t, bk, state)
 
 
 @njit(cache=True)
