@@ -146,7 +146,10 @@ ER = Mechanism("ER", "A", "B", "P", 0.5, w_reverse=0.2)
         (lambda: SideReaction("A", "A", 0.1), "must differ"),
         (lambda: SideReaction("A", "S", -0.1), "w must"),
         (lambda: surface_run(BOX, SP, [], [SideReaction("A", "Q", 0.1)], t_end=1), "'Q'"),
-        (lambda: surface_run(BOX, SP, [], [SideReaction("A", "S", 0.1)] * 2, t_end=1), "one side reaction per reactant"),
+        (
+            lambda: surface_run(BOX, SP, [], [SideReaction("A", "S", 0.1)] * 2, t_end=1),
+            "one side reaction per reactant",
+        ),
         (lambda: surface_run(BOX, SP, [ER], [SideReaction("A", "S", 0.6)], t_end=1), "more than 1"),
         (lambda: surface_run(BOX, SP, [ER], t_end=1, replenish=True), "replenish"),
         (lambda: surface_run(BOX, SP, [ER], [SideReaction("S", "P", 0.1)], t_end=1), "its product"),
