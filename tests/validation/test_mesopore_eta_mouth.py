@@ -9,12 +9,14 @@ so η(0.5) ≈ 1.6/E[H]; the thesis's 0.15 needs E[H] ≈ 11 where our C has 13.
 Inlet law: the scenes already use the thesis's isotropic inlet; a Lambert inlet lowers η(0.5) by a further 0.011
 (B) to 0.025 (A) (measured, 100 000 histories).
 
-Geometry: with throats or pockets (A, B) a 2-number search moves the deficit between the w's (A: radius 7, length
-14, throats of radius 1 gives −0.002 at w = 0.5, worst −0.034 at w = 0.01; B trades w = 0.5 against w = 0.05). For a
-uniformly rough channel (C) no size helps: over 60 rough channels (width 6-14, length 10-40, roughness 0-0.6) every
-one with η(0.01) near the thesis's 0.78 has η(0.5) ≤ 0.127, 0.02-0.05 below the slab-Thiele value of its own
-η(0.01), while the thesis's column C lies on that Thiele curve (Φ² = 85·w, test_mesopore_eta_columns.py). At w = 0.5
-the reaction zone is shallower than one free path, where a voxel channel is no continuum. The tests pin that
+Geometry: with throats or pockets (A, B) the size moves the deficit. A with radius 7, length 14 (scene: 6, 18) and
+throats of radius 1 gives all six values of Table 4.2 within 0.021 (+0.005 at w = 0.5, the scene −0.028; 200 000
+histories), Table 4.3 within 0.014 but Table 4.4 set (1) +0.041 (100 000); B trades w = 0.5 against w = 0.05 (a 7 × 7
+channel with 30-deep pockets: −0.026 at 0.5, +0.034 at 0.05). For a uniformly rough channel (C) no size helps: over
+60 rough channels (width 6-14, length 10-40, roughness 0-0.6) every one with η(0.01) near the thesis's 0.78 has
+η(0.5) ≤ 0.127, 0.02-0.05 below the slab-Thiele value of its own η(0.01), while the thesis's column C lies on that
+Thiele curve (Φ² = 85·w, test_mesopore_eta_columns.py). At w = 0.5 the reaction zone is shallower than one free path,
+where a voxel channel is no continuum. The tests pin that
 measurement on three channels of the scan (40 000 histories each, ~1 s together).
 """
 
