@@ -16,8 +16,8 @@ channel with 30-deep pockets: −0.026 at 0.5, +0.034 at 0.05). For a uniformly 
 60 rough channels (width 6-14, length 10-40, roughness 0-0.6) every one with η(0.01) near the thesis's 0.78 has
 η(0.5) ≤ 0.127, 0.02-0.05 below the slab-Thiele value of its own η(0.01), while the thesis's column C lies on that
 Thiele curve (Φ² = 85·w, test_mesopore_eta_columns.py). At w = 0.5 the reaction zone is shallower than one free path,
-where a voxel channel is no continuum. The tests pin that
-measurement on three channels of the scan (40 000 histories each, ~1 s together).
+where a voxel channel is no continuum. The tests pin that measurement on three channels of the scan (40 000
+histories each, ~1 s together).
 """
 
 import numpy as np
