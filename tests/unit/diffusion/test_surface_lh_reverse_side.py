@@ -3,7 +3,8 @@ to a reverse reaction or to by-products"; the equations were images and the thes
 of a closed 8³ box with Lambert walls (every site hit at the same rate), against exact kinetics:
 
 - branching per arrival on an empty surface: a surface side reaction takes w_S of the product's arrivals, the
-  reverse reaction (1 − w_S)·(1 − (1 − w′)^z), z the site's neighbours (4 across edges; 2, 3, 4 in-face at s = 3);
+  reverse reaction (1 − w_S)·(1 − (1 − w′)^z), z the site's empty neighbours (4 across edges; 2, 3, 4 in-face at
+  s = 3), by adsorption and by hops (geometric number of hops per product, bracketed by the coverage);
 - A(g) + B(ads) ⇌ P(g) with A and P adsorbing only for an instant and B hopping: the well-mixed rate law with
   hypergeometric neighbour counts (:func:`reversible_lh_products`) and detailed balance (forward = reverse count) at
   equilibrium;
@@ -57,6 +58,31 @@ def test_reverse_lh_and_surface_side_reaction_branch_by_their_probabilities(neig
     a, b, p, s_ = run["final_counts"]
     assert n > 3000 and a == b == run["lh_reverse_reactions"] and a + p + s_ == 3000
     assert run["lh_reactions"] == 0  # w = 0: the forward reaction is off
+
+
+def test_reverse_lh_and_surface_side_reaction_on_hop_arrivals():
+    """P starts adsorbed (900 on 13 824 sites, never desorbs) and hops; every arrival ends it with
+    q = w_S + (1 − w_S)·(1 − (1 − w′)·(1 − w′(1 − θ))³) (the site it came from is empty, the other 3 neighbours hold
+    another P with θ ≤ 899/13 822, falling as P splits): the arrivals per P, 1/q, are geometric, so 900/hops within
+    4σ = 4q·√((1 − q)/900) of [q(θ_max), q(0)]; the side share of the ends is w_S/q within 4 binomial σ."""
+    box = closed_box((24, 24, 24)).pore
+    species = [
+        Adsorbate("A", 1.0, residence=INSTANT),
+        Adsorbate("B", 0.8, residence=INSTANT),
+        Adsorbate("P", 0.6, adsorbed=900, hop_rate=1.0),
+        Adsorbate("S", 0.9, residence=INSTANT),
+    ]
+    mech = [Mechanism("LH", "A", "B", "P", 0.0, w_reverse=0.1)]
+    side = [SideReaction("P", "S", 0.1, phase="adsorbed")]
+    run = surface_run(box, species, mech, side, t_end=200, neighbours="surface", seed=15)
+    rev, ends = run["lh_reverse_reactions"], run["surface_side_reactions"][2]
+    assert rev + ends == 900  # every P has split or turned into S
+    theta = 899 / (run["sites"] - 2)
+    q = [0.1 + 0.9 * (1 - 0.9 * (1 - 0.1 * (1 - th)) ** 3) for th in (theta, 0.0)]
+    sigma = max(q) * math.sqrt((1 - min(q)) / 900)
+    assert q[0] - 4 * sigma <= 900 / run["hops"][2] <= q[1] + 4 * sigma
+    share = 0.1 / np.mean(q)
+    assert abs(ends / 900 - share) <= 4 * math.sqrt(share * (1 - share) / 900) + (0.1 / q[0] - 0.1 / q[1])
 
 
 def test_reverse_lh_follows_the_well_mixed_rate_law_to_detailed_balance():
