@@ -22,9 +22,6 @@ from porepipe.decorate._api import (
     mean_overlap_volume as mean_overlap_volume,
 )
 from porepipe.decorate._api import (
-    minimise_overlap as minimise_overlap,
-)
-from porepipe.decorate._api import (
     neighbour_pairs as neighbour_pairs,
 )
 from porepipe.decorate._api import (
@@ -69,6 +66,12 @@ from porepipe.decorate._library import (
 from porepipe.decorate._library import (
     sphere_type as sphere_type,
 )
+from porepipe.decorate._minimiser import (
+    minimise_overlap as minimise_overlap,
+)
+from porepipe.decorate._minimiser import (
+    om_cells as om_cells,
+)
 from porepipe.decorate._rotation import (
     anisotropic_rotations as anisotropic_rotations,
 )
@@ -96,6 +99,7 @@ __all__ = [
     "mean_overlap_volume",
     "minimise_overlap",
     "neighbour_pairs",
+    "om_cells",
     "pair_overlap_volume",
     "points_in_grains",
     "polyhedron",

@@ -181,6 +181,8 @@ def decorate(
     if orient.mode is OrientationMode.overlap_minimizer:
         if box_um is None:
             raise PorepipeError("decoration.orientation.mode overlap_minimizer needs the box (box_um)")
+        from porepipe.decorate._minimiser import minimise_overlap  # the minimiser builds on this module
+
         deco = minimise_overlap(
             deco,
             box_um,
@@ -190,6 +192,9 @@ def decorate(
             orient.points_per_grain,
             _rng(seed, _STREAM_MINIMISER),
             progress,
+            size_window=orient.size_window,
+            volume_weight=orient.volume_weight,
+            cell_volume_um3=orient.cell_volume_um3,
         )
     return deco
 
@@ -349,15 +354,27 @@ def _wrap(centres, box, periodic):
 
 def neighbour_pairs(deco: Decoration, box_um, periodic: bool = True) -> np.ndarray:
     """(K, 2) pairs i < j whose circumscribed spheres overlap (nearest periodic image)."""
-    box = np.asarray(box_um, dtype=np.float64)
     circ = np.array([t.circumradius for t in deco.library])[deco.types] * deco.scales
-    tree = cKDTree(_wrap(deco.centres_um, box, periodic), boxsize=box if periodic else None)
-    pairs = tree.query_pairs(2.0 * float(circ.max(initial=0.0)), output_type="ndarray")
-    if len(pairs) == 0:
+    return pairs_within(deco.centres_um, circ, np.asarray(box_um, dtype=np.float64), periodic)
+
+
+def pairs_within(centres, reach, box, periodic: bool, subset=None) -> np.ndarray:
+    """(K, 2) index pairs (into ``centres``) of grains closer than reach_i + reach_j (nearest periodic image).
+
+    ``subset`` restricts the search to those grain indices (a cell); pairs are returned in global indices.
+    """
+    idx = np.arange(len(centres)) if subset is None else np.asarray(subset, dtype=np.int64)
+    if len(idx) < 2:
         return np.zeros((0, 2), dtype=np.int64)
-    d = _separation(deco.centres_um, pairs[:, 0], pairs[:, 1], box, periodic)
-    keep = np.linalg.norm(d, axis=1) < circ[pairs[:, 0]] + circ[pairs[:, 1]]
-    return pairs[keep].astype(np.int64)
+    pts = _wrap(centres[idx], box, periodic)
+    tree = cKDTree(pts, boxsize=box if periodic else None)
+    cand = tree.query_pairs(2.0 * float(reach[idx].max()), output_type="ndarray")
+    if len(cand) == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    i, j = idx[cand[:, 0]], idx[cand[:, 1]]
+    d = np.linalg.norm(_separation(centres, i, j, box, periodic), axis=1)
+    keep = d < reach[i] + reach[j]
+    return np.column_stack([i[keep], j[keep]]).astype(np.int64)
 
 
 def _separation(centres, i, j, box, periodic):
@@ -412,78 +429,3 @@ def _type_points(t: GrainType, n: int, rng) -> np.ndarray:
         p = rng.uniform(lo, hi, size=(4 * n, 3))
         out = np.vstack([out, p[np.all(p @ t.normals.T <= t.offsets, axis=1)]])
     return out[:n]
-
-
-def minimise_overlap(
-    deco: Decoration,
-    box_um,
-    periodic: bool = True,
-    trials: int = 5,
-    passes: int = 3,
-    points_per_grain: int = 512,
-    rng=None,
-    progress: bool = False,
-) -> Decoration:
-    """Overlap minimiser (§8.2.2): per pass and grain, try ``trials`` − 1 new uniform orientations besides the current
-    one and keep the one whose grain overlaps its neighbours least.
-
-    The overlap volume Σ_j |G_i ∩ G_j| is estimated with ``points_per_grain`` fixed quadrature points of the grain's
-    type (uniform in the body, the same points for every trial, so trials are compared with common random numbers).
-    Neighbours are the grains whose circumscribed spheres meet (a k-d tree over the periodic box) — the thesis's cells
-    of volume V^OM are replaced by this exact neighbour list.
-    """
-    rng = _rng(0, _STREAM_MINIMISER) if rng is None else rng
-    box = np.asarray(box_um, dtype=np.float64)
-    rotations = deco.rotations.copy()
-    cur = dataclasses.replace(deco, rotations=rotations)
-    world = world_grains(cur)
-    pairs = neighbour_pairs(cur, box, periodic)
-    nbrs = [[] for _ in range(len(cur))]
-    for i, j in pairs:
-        nbrs[i].append(j)
-        nbrs[j].append(i)
-    local = [_type_points(t, points_per_grain, rng) for t in cur.library]
-    bar = Progress("overlap minimiser", total=passes * len(cur)) if progress else None
-    for p in range(passes):
-        for step, i in enumerate(rng.permutation(len(cur))):
-            if nbrs[i]:
-                _best_rotation(
-                    cur,
-                    world,
-                    i,
-                    np.array(nbrs[i], dtype=np.int64),
-                    local[cur.types[i]],
-                    trials,
-                    box,
-                    periodic,
-                    rng,
-                )
-            if bar is not None:
-                bar.update(p * len(cur) + step + 1)
-    return cur
-
-
-def _best_rotation(deco, world, i, nb, local, trials, box, periodic, rng) -> None:
-    """Replace rotations[i] (and grain i's world planes) by the best of the current and ``trials`` − 1 new ones."""
-    d = _separation(deco.centres_um, np.full(len(nb), i), nb, box, periodic)
-    candidates = np.concatenate([deco.rotations[i][None], uniform_rotations(rng, trials - 1)])
-    hits = np.zeros(len(local), dtype=np.int64)
-    best, best_count = 0, None
-    for c, rot in enumerate(candidates):
-        pts = np.ascontiguousarray(local @ rot.T * deco.scales[i])
-        _points_inside(
-            pts, np.ascontiguousarray(d), world.kind, world.radius, world.plane_ptr, world.planes, nb, hits
-        )
-        count = int(hits.sum())
-        if best_count is None or count < best_count:
-            best, best_count = c, count
-    if best:
-        deco.rotations[i] = candidates[best]
-        t = deco.library[deco.types[i]]
-        if t.kind is Kind.POLYHEDRON:
-            world.planes[world.plane_ptr[i] : world.plane_ptr[i + 1]] = _grain_planes(
-                t, candidates[best], deco.scales[i]
-            )
-            world.half_um[i] = (
-                np.abs(t.vertices @ candidates[best].T).max(axis=0) * deco.scales[i] * (1 + 1e-12)
-            )
