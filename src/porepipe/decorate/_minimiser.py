@@ -36,7 +36,7 @@ from porepipe.decorate._api import (
     pairs_within,
     world_grains,
 )
-from porepipe.decorate._kernels import _points_inside
+from porepipe.decorate._kernels import _points_inside_serial
 from porepipe.decorate._library import Kind
 from porepipe.decorate._rotation import uniform_rotations
 
@@ -147,7 +147,7 @@ def trial_objectives(
     overlap = np.empty(len(scales))
     for c, (rot, s) in enumerate(zip(rotations, scales)):
         pts = np.ascontiguousarray(local @ rot.T * s)
-        _points_inside(pts, d, world.kind, world.radius, world.plane_ptr, world.planes, nb, hits)
+        _points_inside_serial(pts, d, world.kind, world.radius, world.plane_ptr, world.planes, nb, hits)
         overlap[c] = hits.sum() / len(local) * volume[c]
     return overlap, volume
 
