@@ -86,7 +86,7 @@ class PermeabilityResult:
                 {"units": "voxel^2", "long_name": "κ̂ by pressure-gradient/velocity method"},
             ),
         }
-        for name, unit in (("mean_velocity_um_s", "um/s"), ("velocity_variance_um2_s2", "um^2/s^2")):
+        for name, unit in (("mean_velocity_um_s", "µm/s"), ("velocity_variance_um2_s2", "µm^2/s^2")):
             data[name] = ((), getattr(self, name), {"units": unit, "long_name": _VELOCITY_NAMES[name]})
         for name, values in self.history.items():  # κ̂ in voxel² like kappa_lu; steps, changes, Mach: "1"
             units = "voxel^2" if name == "kappa" else "1"

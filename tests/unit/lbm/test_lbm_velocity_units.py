@@ -38,7 +38,7 @@ def test_slit_mean_and_variance_are_the_parabolas(sound_speed):
     assert res.velocity_variance_um2_s2 == pytest.approx(v.var(), rel=1e-5)
     ds = res.to_dataset()
     assert (
-        ds.mean_velocity_um_s.attrs["units"] == "um/s"
+        ds.mean_velocity_um_s.attrs["units"] == "µm/s"
         and float(ds.mean_velocity_um_s) == res.mean_velocity_um_s
     )
     assert res.attrs()["time_step_s"] == pytest.approx(time_step_s(3.7, sound_speed))
