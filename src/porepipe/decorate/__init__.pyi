@@ -10,9 +10,6 @@ from porepipe.decorate._api import (
     build_library as build_library,
 )
 from porepipe.decorate._api import (
-    decorate as decorate,
-)
-from porepipe.decorate._api import (
     grain_images as grain_images,
 )
 from porepipe.decorate._api import (
@@ -31,13 +28,16 @@ from porepipe.decorate._api import (
     points_in_grains as points_in_grains,
 )
 from porepipe.decorate._api import (
-    scale_factors as scale_factors,
-)
-from porepipe.decorate._api import (
     voxelize_grains as voxelize_grains,
 )
 from porepipe.decorate._api import (
     world_grains as world_grains,
+)
+from porepipe.decorate._decorate import (
+    decorate as decorate,
+)
+from porepipe.decorate._decorate import (
+    scale_factors as scale_factors,
 )
 from porepipe.decorate._io import (
     decoration_dataset as decoration_dataset,
