@@ -29,4 +29,3 @@ def test_scene_has_table_8_3s_parameters(name):
     om = scene.decoration.orientation
     assert (om.mode.value, om.passes, om.trials_per_grain) == ("overlap_minimizer", 3, 5)  # N_Z^OM, N_K^OM
     assert om.cell_volume_um3 == pytest.approx(500.0**3)  # "500 µm³" read as (500 µm)³
-
