@@ -345,6 +345,8 @@ MAKERS = {
     "thesis-5.6.1": radii,
     "thesis-5.6.1-pp": radii,
     "thesis-5.6.2": radii,
+    "bentheimer-8.3-ci": packed,
+    "bentheimer-8.3": radii,
 }
 
 

@@ -26,7 +26,11 @@ QUANTITIES = [
     ("grains_per_mm3", "grain density", "mm^-3"),
     ("mean_equivalent_radius_um", "mean grain radius", "µm"),
 ]
-PERMEABILITY = [("kappa_mD", "κ", "mD")]
+PERMEABILITY = [
+    ("mean_velocity_um_s", "mean flow velocity", "µm/s"),
+    ("velocity_variance_um2_s2", "variance of flow velocity", "µm²/s²"),
+    ("kappa_mD", "κ", "mD"),
+]
 
 
 def _groups(path) -> dict[str, xr.Dataset]:
@@ -54,6 +58,8 @@ def _table(exp: dict, mod: dict) -> xr.Dataset:
         e.append(_scalar(exp[""], name)), m.append(_scalar(mod[""], name))
     if "permeability" in exp and "permeability" in mod:
         for name, label, unit in PERMEABILITY:
+            if name not in exp["permeability"] or name not in mod["permeability"]:
+                continue  # velocities: statistics written before they were recorded
             names.append(name), labels.append(label), units.append(unit)
             e.append(float(exp["permeability"][name])), m.append(float(mod["permeability"][name]))
     e, m = np.asarray(e), np.asarray(m)

@@ -10,9 +10,6 @@ from porepipe.decorate._api import (
     build_library as build_library,
 )
 from porepipe.decorate._api import (
-    decorate as decorate,
-)
-from porepipe.decorate._api import (
     grain_images as grain_images,
 )
 from porepipe.decorate._api import (
@@ -20,9 +17,6 @@ from porepipe.decorate._api import (
 )
 from porepipe.decorate._api import (
     mean_overlap_volume as mean_overlap_volume,
-)
-from porepipe.decorate._api import (
-    minimise_overlap as minimise_overlap,
 )
 from porepipe.decorate._api import (
     neighbour_pairs as neighbour_pairs,
@@ -34,13 +28,16 @@ from porepipe.decorate._api import (
     points_in_grains as points_in_grains,
 )
 from porepipe.decorate._api import (
-    scale_factors as scale_factors,
-)
-from porepipe.decorate._api import (
     voxelize_grains as voxelize_grains,
 )
 from porepipe.decorate._api import (
     world_grains as world_grains,
+)
+from porepipe.decorate._decorate import (
+    decorate as decorate,
+)
+from porepipe.decorate._decorate import (
+    scale_factors as scale_factors,
 )
 from porepipe.decorate._io import (
     decoration_dataset as decoration_dataset,
@@ -69,6 +66,12 @@ from porepipe.decorate._library import (
 from porepipe.decorate._library import (
     sphere_type as sphere_type,
 )
+from porepipe.decorate._minimiser import (
+    minimise_overlap as minimise_overlap,
+)
+from porepipe.decorate._minimiser import (
+    om_cells as om_cells,
+)
 from porepipe.decorate._rotation import (
     anisotropic_rotations as anisotropic_rotations,
 )
@@ -96,6 +99,7 @@ __all__ = [
     "mean_overlap_volume",
     "minimise_overlap",
     "neighbour_pairs",
+    "om_cells",
     "pair_overlap_volume",
     "points_in_grains",
     "polyhedron",

@@ -13,7 +13,6 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.rng import stream as rng_stream
 from porepipe._shared.sample_points import SUB
-from porepipe._shared.spheres import check_spheres
 from porepipe.decorate._kernels import KIND_POLYHEDRON, KIND_SPHERE, _points_inside, _voxelize_grains_slab
 from porepipe.decorate._library import (
     GrainType,
@@ -24,8 +23,7 @@ from porepipe.decorate._library import (
     read_plane_file,
     sphere_type,
 )
-from porepipe.decorate._rotation import anisotropic_rotations, uniform_rotations
-from porepipe.decorate._settings import Generator, OrientationMode, ScaleRule, Settings
+from porepipe.decorate._settings import Generator, Settings
 from porepipe.voxelize import VoxelizeMethod, grid_shape
 
 #: sub-streams of the scene seed
@@ -92,106 +90,6 @@ def build_library(settings: Settings, seed: int = 0, base_dir=".") -> tuple[list
         library += types
         family_of += [f_index] * len(types)
     return library, np.array(family_of, dtype=np.int64)
-
-
-# -- decoration ------------------------------------------------------------------------------------------------------
-def _assign_types(radii, sphere_types, settings, families, rng) -> np.ndarray:
-    n_fam = len(settings.families)
-    names = [f.name for f in settings.families]
-    probs = np.full((len(radii), n_fam), 1.0 / n_fam)
-    done = np.zeros(len(radii), dtype=bool)
-    for rule in settings.assign:
-        match = ~done & (radii >= rule.radius_min_um) & (radii < rule.radius_max_um)
-        if rule.sphere_type is not None:
-            match &= sphere_types == rule.sphere_type
-        row = np.array([rule.probabilities.get(nm, 0.0) for nm in names])
-        probs[match] = row / row.sum()
-        done |= match
-    cum = np.cumsum(probs, axis=1)
-    fam = np.minimum((rng.uniform(size=(len(radii), 1)) > cum).sum(axis=1), n_fam - 1)
-    members = [np.flatnonzero(families == f) for f in range(n_fam)]
-    pick = rng.uniform(size=len(radii))
-    return np.array([members[f][int(u * len(members[f]))] for f, u in zip(fam, pick)], dtype=np.int64)
-
-
-def scale_factors(library, types, radii, rule: ScaleRule) -> np.ndarray:
-    """Scale s of each grain so that it matches its sphere of radius r.
-
-    ``equal_volume``: s³ V_type = 4/3 π r³; ``circumscribed``: s · R_circ = r (grain inside the sphere);
-    ``inscribed``: s · min(d) = r (grain contains the sphere, both centred at the centroid). A sphere type has s = r
-    under every rule.
-    """
-    rule = ScaleRule(rule)
-    if rule is ScaleRule.equal_volume:
-        unit = np.array([(4.0 / 3.0 * np.pi / t.volume) ** (1.0 / 3.0) for t in library])
-    elif rule is ScaleRule.circumscribed:
-        unit = np.array([1.0 / t.circumradius for t in library])
-    else:
-        unit = np.array([1.0 / t.centre_inradius for t in library])
-    return unit[types] * radii
-
-
-def decorate(
-    centres_um,
-    radii_um,
-    settings: Settings,
-    seed: int = 0,
-    sphere_types=None,
-    box_um=None,
-    periodic: bool = True,
-    base_dir=".",
-    library=None,
-    progress: bool = False,
-) -> Decoration:
-    """Give every sphere a grain type, a rotation and a scale (Zauner 2020, §4.7.1 step 3, §8.2.2).
-
-    Parameters
-    ----------
-    centres_um : (N, 3) array_like
-    radii_um : (N,) array_like
-    settings : decorate Settings
-        The scene's ``decoration`` section.
-    seed : int
-        Scene seed; library, assignment and orientations use their own sub-streams.
-    sphere_types : (N,) array_like of int, optional
-        Sphere type per sphere (packing ``types``); default all 0.
-    box_um, periodic
-        The box (needed by the overlap minimiser to find neighbours across periodic faces).
-    library : (list of GrainType, families), optional
-        A prebuilt library instead of generating one from ``settings``.
-    """
-    centres, radii = check_spheres(centres_um, radii_um)
-    st = (
-        np.zeros(len(radii), dtype=np.int64)
-        if sphere_types is None
-        else np.asarray(sphere_types, dtype=np.int64)
-    )
-    if st.shape != radii.shape:
-        raise PorepipeError(f"sphere types need shape {radii.shape}, got {st.shape}")
-    lib, families = library if library is not None else build_library(settings, seed, base_dir)
-    types = _assign_types(radii, st, settings, families, _rng(seed, _STREAM_ASSIGN))
-    scales = scale_factors(lib, types, radii, settings.scale)
-    orient = settings.orientation
-    rng = _rng(seed, _STREAM_ORIENT)
-    if orient.mode is OrientationMode.anisotropic:
-        rotations = anisotropic_rotations(rng, len(radii), orient.axis, orient.concentration)
-    else:
-        rotations = uniform_rotations(rng, len(radii))
-    deco = Decoration(centres, types, rotations, scales, lib, families)
-    if orient.mode is OrientationMode.overlap_minimizer:
-        if box_um is None:
-            raise PorepipeError("decoration.orientation.mode overlap_minimizer needs the box (box_um)")
-        deco = minimise_overlap(
-            deco,
-            box_um,
-            periodic,
-            orient.trials_per_grain,
-            orient.passes,
-            orient.points_per_grain,
-            _rng(seed, _STREAM_MINIMISER),
-            progress,
-        )
-    return deco
 
 
 # -- world geometry --------------------------------------------------------------------------------------------------
@@ -349,15 +247,27 @@ def _wrap(centres, box, periodic):
 
 def neighbour_pairs(deco: Decoration, box_um, periodic: bool = True) -> np.ndarray:
     """(K, 2) pairs i < j whose circumscribed spheres overlap (nearest periodic image)."""
-    box = np.asarray(box_um, dtype=np.float64)
     circ = np.array([t.circumradius for t in deco.library])[deco.types] * deco.scales
-    tree = cKDTree(_wrap(deco.centres_um, box, periodic), boxsize=box if periodic else None)
-    pairs = tree.query_pairs(2.0 * float(circ.max(initial=0.0)), output_type="ndarray")
-    if len(pairs) == 0:
+    return pairs_within(deco.centres_um, circ, np.asarray(box_um, dtype=np.float64), periodic)
+
+
+def pairs_within(centres, reach, box, periodic: bool, subset=None) -> np.ndarray:
+    """(K, 2) index pairs (into ``centres``) of grains closer than reach_i + reach_j (nearest periodic image).
+
+    ``subset`` restricts the search to those grain indices (a cell); pairs are returned in global indices.
+    """
+    idx = np.arange(len(centres)) if subset is None else np.asarray(subset, dtype=np.int64)
+    if len(idx) < 2:
         return np.zeros((0, 2), dtype=np.int64)
-    d = _separation(deco.centres_um, pairs[:, 0], pairs[:, 1], box, periodic)
-    keep = np.linalg.norm(d, axis=1) < circ[pairs[:, 0]] + circ[pairs[:, 1]]
-    return pairs[keep].astype(np.int64)
+    pts = _wrap(centres[idx], box, periodic)
+    tree = cKDTree(pts, boxsize=box if periodic else None)
+    cand = tree.query_pairs(2.0 * float(reach[idx].max()), output_type="ndarray")
+    if len(cand) == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    i, j = idx[cand[:, 0]], idx[cand[:, 1]]
+    d = np.linalg.norm(_separation(centres, i, j, box, periodic), axis=1)
+    keep = d < reach[i] + reach[j]
+    return np.column_stack([i[keep], j[keep]]).astype(np.int64)
 
 
 def _separation(centres, i, j, box, periodic):
@@ -412,78 +322,3 @@ def _type_points(t: GrainType, n: int, rng) -> np.ndarray:
         p = rng.uniform(lo, hi, size=(4 * n, 3))
         out = np.vstack([out, p[np.all(p @ t.normals.T <= t.offsets, axis=1)]])
     return out[:n]
-
-
-def minimise_overlap(
-    deco: Decoration,
-    box_um,
-    periodic: bool = True,
-    trials: int = 5,
-    passes: int = 3,
-    points_per_grain: int = 512,
-    rng=None,
-    progress: bool = False,
-) -> Decoration:
-    """Overlap minimiser (§8.2.2): per pass and grain, try ``trials`` − 1 new uniform orientations besides the current
-    one and keep the one whose grain overlaps its neighbours least.
-
-    The overlap volume Σ_j |G_i ∩ G_j| is estimated with ``points_per_grain`` fixed quadrature points of the grain's
-    type (uniform in the body, the same points for every trial, so trials are compared with common random numbers).
-    Neighbours are the grains whose circumscribed spheres meet (a k-d tree over the periodic box) — the thesis's cells
-    of volume V^OM are replaced by this exact neighbour list.
-    """
-    rng = _rng(0, _STREAM_MINIMISER) if rng is None else rng
-    box = np.asarray(box_um, dtype=np.float64)
-    rotations = deco.rotations.copy()
-    cur = dataclasses.replace(deco, rotations=rotations)
-    world = world_grains(cur)
-    pairs = neighbour_pairs(cur, box, periodic)
-    nbrs = [[] for _ in range(len(cur))]
-    for i, j in pairs:
-        nbrs[i].append(j)
-        nbrs[j].append(i)
-    local = [_type_points(t, points_per_grain, rng) for t in cur.library]
-    bar = Progress("overlap minimiser", total=passes * len(cur)) if progress else None
-    for p in range(passes):
-        for step, i in enumerate(rng.permutation(len(cur))):
-            if nbrs[i]:
-                _best_rotation(
-                    cur,
-                    world,
-                    i,
-                    np.array(nbrs[i], dtype=np.int64),
-                    local[cur.types[i]],
-                    trials,
-                    box,
-                    periodic,
-                    rng,
-                )
-            if bar is not None:
-                bar.update(p * len(cur) + step + 1)
-    return cur
-
-
-def _best_rotation(deco, world, i, nb, local, trials, box, periodic, rng) -> None:
-    """Replace rotations[i] (and grain i's world planes) by the best of the current and ``trials`` − 1 new ones."""
-    d = _separation(deco.centres_um, np.full(len(nb), i), nb, box, periodic)
-    candidates = np.concatenate([deco.rotations[i][None], uniform_rotations(rng, trials - 1)])
-    hits = np.zeros(len(local), dtype=np.int64)
-    best, best_count = 0, None
-    for c, rot in enumerate(candidates):
-        pts = np.ascontiguousarray(local @ rot.T * deco.scales[i])
-        _points_inside(
-            pts, np.ascontiguousarray(d), world.kind, world.radius, world.plane_ptr, world.planes, nb, hits
-        )
-        count = int(hits.sum())
-        if best_count is None or count < best_count:
-            best, best_count = c, count
-    if best:
-        deco.rotations[i] = candidates[best]
-        t = deco.library[deco.types[i]]
-        if t.kind is Kind.POLYHEDRON:
-            world.planes[world.plane_ptr[i] : world.plane_ptr[i + 1]] = _grain_planes(
-                t, candidates[best], deco.scales[i]
-            )
-            world.half_um[i] = (
-                np.abs(t.vertices @ candidates[best].T).max(axis=0) * deco.scales[i] * (1 + 1e-12)
-            )

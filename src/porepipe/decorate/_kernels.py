@@ -270,23 +270,44 @@ def _voxelize_grains_slab(
             )
 
 
+@njit(cache=True, fastmath=FASTMATH)
+def _point_hits(points, q, centre, kind, radius, plane_ptr, planes, grain_ids):
+    """Number of the grains ``grain_ids`` (centre[t] for grain_ids[t], no periodic wrap) containing points[q].
+
+    A point beyond a grain's circumscribed sphere (radius[g], widened by 1e-9 against rounding) is outside it: the
+    plane tests, which decide, run only inside that sphere.
+    """
+    n = 0
+    for t in range(grain_ids.shape[0]):
+        g = grain_ids[t]
+        dx = points[q, 0] - centre[t, 0]
+        dy = points[q, 1] - centre[t, 1]
+        dz = points[q, 2] - centre[t, 2]
+        d2 = (dx * dx + dy * dy) + dz * dz
+        if kind[g] == KIND_SPHERE:
+            inside = d2 <= radius[g] * radius[g]
+        elif d2 > radius[g] * radius[g] * (1.0 + 1e-9):
+            inside = False
+        else:
+            inside = True
+            for p in range(plane_ptr[g], plane_ptr[g + 1]):
+                if (planes[p, 0] * dx + planes[p, 1] * dy) + planes[p, 2] * dz > planes[p, 3]:
+                    inside = False
+                    break
+        if inside:
+            n += 1
+    return n
+
+
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
 def _points_inside(points, centre, kind, radius, plane_ptr, planes, grain_ids, out):
-    """out[q] = number of the grains ``grain_ids`` (centre[t] for grain_ids[t], no periodic wrap) containing points[q]."""
+    """out[q] = number of the grains ``grain_ids`` containing points[q] (see :func:`_point_hits`), parallel."""
     for q in prange(points.shape[0]):
-        out[q] = 0
-        for t in range(grain_ids.shape[0]):
-            g = grain_ids[t]
-            dx = points[q, 0] - centre[t, 0]
-            dy = points[q, 1] - centre[t, 1]
-            dz = points[q, 2] - centre[t, 2]
-            if kind[g] == KIND_SPHERE:
-                inside = (dx * dx + dy * dy) + dz * dz <= radius[g] * radius[g]
-            else:
-                inside = True
-                for p in range(plane_ptr[g], plane_ptr[g + 1]):
-                    if (planes[p, 0] * dx + planes[p, 1] * dy) + planes[p, 2] * dz > planes[p, 3]:
-                        inside = False
-                        break
-            if inside:
-                out[q] += 1
+        out[q] = _point_hits(points, q, centre, kind, radius, plane_ptr, planes, grain_ids)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _points_inside_serial(points, centre, kind, radius, plane_ptr, planes, grain_ids, out):
+    """:func:`_points_inside` in one thread: for the minimiser's many small calls, where starting threads costs more."""
+    for q in range(points.shape[0]):
+        out[q] = _point_hits(points, q, centre, kind, radius, plane_ptr, planes, grain_ids)

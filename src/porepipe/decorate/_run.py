@@ -12,7 +12,8 @@ from porepipe._shared.grey import write_grey_volume
 from porepipe._shared.numba_config import set_threads
 from porepipe._shared.spheres import spheres_from_scene
 from porepipe._shared.store import ResultWriter, result_hash
-from porepipe.decorate._api import decorate, iter_grain_slabs
+from porepipe.decorate._api import iter_grain_slabs
+from porepipe.decorate._decorate import decorate
 from porepipe.decorate._io import decoration_dataset, read_grains
 from porepipe.scene import scene_part
 from porepipe.voxelize import grid_shape

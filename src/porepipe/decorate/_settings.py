@@ -110,6 +110,23 @@ class Orientation(_Strict):
     points_per_grain: int = Field(
         512, ge=16, description="quadrature points per grain for the overlap volume"
     )
+    size_window: float = Field(
+        0.0,
+        ge=0.0,
+        lt=1.0,
+        allow_inf_nan=False,
+        description="w: the minimiser also tries sizes s_nom·[1 − w, 1 + w] (0 = orientations only)",
+    )
+    volume_weight: float = Field(
+        0.3,
+        ge=0.0,
+        le=1.0,
+        allow_inf_nan=False,
+        description="μ: a trial's cost is its overlap − μ·its volume (sizes only; see decorate._minimiser)",
+    )
+    cell_volume_um3: PosFloat | None = Field(
+        None, description="V^OM: cells of the minimiser (None = exact neighbour lists)"
+    )
 
     @field_validator("axis")
     @classmethod
@@ -117,6 +134,16 @@ class Orientation(_Strict):
         if not all(math.isfinite(v) for v in axis) or math.hypot(*axis) == 0:
             raise ValueError(f"axis {axis} must be a finite non-zero vector")
         return axis
+
+    @model_validator(mode="after")
+    def _minimiser_only(self):
+        if self.mode is not OrientationMode.overlap_minimizer:
+            given = [k for k in ("size_window", "cell_volume_um3") if k in self.model_fields_set]
+            if given:
+                raise ValueError(
+                    f"{', '.join(given)} need mode overlap_minimizer (mode is {self.mode.value})"
+                )
+        return self
 
 
 class Settings(BaseModel):

@@ -15,7 +15,13 @@ from porepipe.lbm._mpi import Serial
 from porepipe.lbm._settings import Axis, Lateral, Settings, Setup, Walls
 from porepipe.lbm._solver import Run, StabilityError, check_tau, solve
 from porepipe.lbm._throats import throat_warning
+from porepipe.lbm._velocity import flow_velocity_stats, time_step_s
 from porepipe.lbm._walls import GrainWalls, GreyWalls, MirroredWalls, ShiftedWalls, SphereWalls, build_links
+
+_VELOCITY_NAMES = {
+    "mean_velocity_um_s": "mean flow velocity over the sample's pore voxels (c_s of the settings)",
+    "velocity_variance_um2_s2": "variance of the flow velocity over the sample's pore voxels",
+}
 
 #: 1 darcy in m² (9.869233e-13; thesis §4.4: 1 D = 0.9869 µm²).
 DARCY_M2 = 9.869233e-13
@@ -63,6 +69,8 @@ class PermeabilityResult:
     throat_voxels: float = float("nan")
     warning: str = ""
     ranks: int = 1  # MPI ranks of the run (1: one process)
+    mean_velocity_um_s: float = float("nan")  # flow component over the sample's pore voxels (Table 8.5)
+    velocity_variance_um2_s2: float = float("nan")
 
     def to_dataset(self) -> xr.Dataset:
         """Tables of the result (κ in all units, estimates, convergence history) as an xarray Dataset."""
@@ -78,6 +86,8 @@ class PermeabilityResult:
                 {"units": "voxel^2", "long_name": "κ̂ by pressure-gradient/velocity method"},
             ),
         }
+        for name, unit in (("mean_velocity_um_s", "µm/s"), ("velocity_variance_um2_s2", "µm^2/s^2")):
+            data[name] = ((), getattr(self, name), {"units": unit, "long_name": _VELOCITY_NAMES[name]})
         for name, values in self.history.items():  # κ̂ in voxel² like kappa_lu; steps, changes, Mach: "1"
             units = "voxel^2" if name == "kappa" else "1"
             data[f"history_{name}"] = ("check", np.asarray(values, dtype=np.float64), {"units": units})
@@ -121,6 +131,8 @@ class PermeabilityResult:
             "throat_voxels": self.throat_voxels,
             "warning": self.warning,
             "mpi_ranks": self.ranks,
+            "sound_speed_m_s": s.sound_speed_m_s,
+            "time_step_s": time_step_s(self.voxel_um, s.sound_speed_m_s),
         }
 
 
@@ -183,6 +195,22 @@ def _fields_to_sample(prep: Prepared, run: Run, axis: int, sample_shape) -> tupl
     pressure = np.where(lat.pore[s0 : s0 + n_s], CS2 * (1.0 + internal[0]), np.nan)
     velocity = np.moveaxis(velocity, 1, axis + 1)
     return velocity, np.moveaxis(pressure, 0, axis)
+
+
+def _velocity_stats(
+    prep: Prepared, run: Run, internal: np.ndarray, settings: Settings, comm
+) -> tuple[float, float]:
+    """Mean and variance of the flow velocity in µm/s over the sample's pore voxels (NaN for an MPI run: each rank
+    holds only its slab).
+    """
+    if comm.distributed:
+        return float("nan"), float("nan")
+    lat = prep.lattice
+    layer = np.nonzero(lat.pore)[0]
+    s0 = lat.sample_layers[0]
+    return flow_velocity_stats(
+        run.fields[1], layer, (s0, s0 + internal.shape[0]), int(internal.sum()), settings.sound_speed_m_s
+    )
 
 
 def _interpolating(settings: Settings, geometry) -> bool:
@@ -366,6 +394,7 @@ def permeability(
     if run.converged and checkpoint is not None:
         Path(checkpoint).unlink(missing_ok=True)
     velocity = pressure = None
+    stats = _velocity_stats(prep, run, internal, settings, comm)
     if settings.write_fields or settings.write_vti:
         velocity, pressure = _fields_to_sample(prep, run, axis.index, internal.shape)
     return PermeabilityResult(
@@ -385,5 +414,7 @@ def permeability(
         kappa_error=run.kappa_error,
         walls=settings.walls.value if interpolate else Walls.halfway.value,
         n_links=comm.owned_links(links, prep.lattice) if links is not None else 0,
+        mean_velocity_um_s=stats[0],
+        velocity_variance_um2_s2=stats[1],
         **base,
     )

@@ -148,6 +148,12 @@ class Settings(BaseModel):
         5, ge=1, description="chambers: force zone F = first layers of the inlet chamber"
     )
     body_force: float = Field(1e-6, gt=0, description="acceleration b̂ in lattice units (thesis: 1e-6)")
+    sound_speed_m_s: float = Field(
+        1.0,
+        gt=0,
+        allow_inf_nan=False,
+        description="c_s of the pseudo-fluid; Δt = Δx/(√3 c_s) turns velocities into µm/s (thesis §6.2: 1 m/s)",
+    )
     gradient: Gradient = Field(Gradient.ends, description="chambers: pressure-gradient method (Table 6.3)")
     trim_layers: int = Field(
         10, ge=0, description="chambers, gradient fit_trimmed: slices dropped at each end"

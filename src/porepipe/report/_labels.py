@@ -30,6 +30,8 @@ NAMES = {
     "S_max": ("S_max", "specific surface, upper bound"),
     "phi_mean_grey": ("φ_grey", "porosity from the mean grey value"),
     "estimate_lu": ("κ̂", "permeability estimate (lattice units)"),
+    "mean_velocity_um_s": ("v̄", "mean flow velocity over the pore voxels"),
+    "velocity_variance_um2_s2": ("Var v", "variance of the flow velocity"),
 }
 #: same quantity in another unit: only the first of each family is plotted and tabled
 SAME_AS = {"kappa_m2": "kappa_mD", "kappa_D": "kappa_mD", "kappa_lu": "kappa_mD", "estimate_lu": "kappa_mD"}
