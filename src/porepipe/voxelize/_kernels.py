@@ -6,20 +6,20 @@ Sample point k (0..5) of voxel i along an axis sits at ``(6*i + k + 0.5) * (a/6)
 shell method bit-identical to brute force.
 
 Brute force (:func:`_voxelize_plane`) tests all 216 points of every voxel near a sphere. The shell method
-(:func:`_shell_plane`) classifies whole voxel rows first: per voxel row (fixed x, y) and ball, square roots give the
-run of voxels wholly inside (set to 216 without a test) and the shell around it (:func:`_classify`). Only shell
-voxels are tested, with the exact predicate: the smallest and largest squared distance of a voxel's samples decide an
-empty or full voxel in one test each (rounding is monotone), the others get all 216 tests in one branch-free loop
-that vectorises over the 36 sample rows (:func:`_voxel_count`): counted straight into a voxel one ball alone
-reaches, ORed as bit masks into voxels that two or more balls reach.
+(:func:`_shell_plane`) adds the balls one after the other in one pass per plane (:func:`_ball_plane`): per voxel row
+(fixed x, y), square roots give the run of voxels wholly inside (written as 216 without a test) and the shell around
+it (:func:`_row_ranges`). Only shell voxels are tested, with the exact predicate, all 216 tests in one branch-free
+loop that vectorises over the 36 sample rows (:func:`_voxel_count`). A voxel keeps the count of the first ball that
+puts samples in it and that ball as its ``owner``; when a second ball adds samples, the voxel's grey value becomes
+the popcount of the union of the balls' sample bit masks (:func:`_share`), so a sample counts once if it is in any
+ball.
 """
 
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
 from porepipe._shared.sample_points import (
-    FULL,
     MARGIN,
     N_SAMPLES,
     PARTIAL,
@@ -95,12 +95,6 @@ def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mas
     grey_from_status(status, mask, out)
 
 
-#: voxel state of the shell method beyond those of :mod:`porepipe._shared.sample_points`: two or more spheres reach
-#: into the voxel (its grey value is the popcount of the union mask, not the count of one ball)
-MULTI = 3
-assert (UNTOUCHED, PARTIAL, FULL, MULTI) == (0, 1, 2, 3)  # the branch-free step of _reach_shell relies on it
-
-
 #: relative slack (of r + |cz|, µm) on the z extent of a ball in one voxel row: far above the rounding of the square
 #: root and divisions of :func:`_row_ranges` (~1e-8 r at worst), far below any voxel
 SLACK = 1e-7
@@ -135,51 +129,6 @@ def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
     return lo, hi, f_lo, f_hi
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _reach_shell(status, mask, j, lo, hi):
-    """One more ball reaches voxels ``lo .. hi - 1`` of row ``j``: the first makes a voxel PARTIAL, a second MULTI.
-
-    Branch-free: UNTOUCHED (0) -> PARTIAL (1) -> MULTI (3), FULL (2) stays, as ``st + (st < FULL) * (st + 1)``. The
-    union masks are cleared for :func:`_shell_grey` (no mask is ORed before every ball is classified).
-    """
-    for k in range(lo, hi):
-        st = status[j, k]
-        status[j, k] = st + (st < FULL) * (st + 1)
-        for w in range(WORDS):
-            mask[j, k, w] = 0
-
-
-@njit(cache=True, fastmath=FASTMATH)
-def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges, out):
-    """Mark the voxels of plane ``i`` that one ball reaches, by whole runs per voxel row (:func:`_row_ranges`).
-
-    The run inside the ball becomes FULL (grey value 216 in ``out``), the shell on either side one more reaching
-    sphere (:func:`_reach_shell`).
-    Row ``j`` of the ball's y range ``[j0, j1)`` (:func:`porepipe._shared.sample_points.axis_range`) keeps its
-    ranges and ``j`` in ``ranges[j - j0]`` (lo, hi, f_lo, f_hi, j) for :func:`_shell_grey`.
-    """
-    r2 = r * r
-    eps = SLACK * (r + abs(cz))
-    nx_, fx_ = hull_gap(cx, i, h)
-    j0, j1 = axis_range(cy, r, h, ny)
-    k0, k1 = axis_range(cz, r, h, nz)
-    for j in range(j0, j1):
-        ny_, fy_ = hull_gap(cy, j, h)
-        lo, hi, f_lo, f_hi = _row_ranges(
-            cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
-        )
-        ranges[j - j0, 0] = lo
-        ranges[j - j0, 1] = hi
-        ranges[j - j0, 2] = f_lo
-        ranges[j - j0, 3] = f_hi
-        ranges[j - j0, 4] = j
-        _reach_shell(status, mask, j, lo, f_lo)
-        for k in range(f_lo, f_hi):
-            status[j, k] = FULL
-            out[j, k] = N_SAMPLES
-        _reach_shell(status, mask, j, f_hi, hi)
-
-
 #: sample rows per voxel row: the 36 (x, y) rows q = 6·sx + sy, padded to a multiple of the vector width with rows at
 #: squared distance FAR, none of whose samples is ever inside (r*r < FAR for every finite radius below 1e150 µm)
 N_ROWS = 40
@@ -187,50 +136,46 @@ FAR = 1e300
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _row_distances(dx2, dx2_min, dx2_max, j, cy, h, dxy):
-    """Squared (x, y) distances ``dx2[sx] + dy*dy`` of the 36 sample rows of voxel row ``j`` into ``dxy``; (min, max).
+def _plane_distances(i, cx, h, dx2):
+    """Squared x distances of the 6 sample planes of voxel plane ``i`` into ``dx2`` (as in :func:`_mark_points`)."""
+    for sx in range(SUB):
+        dx = sample_coord(i, sx, h) - cx
+        dx2[sx] = dx * dx
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _row_distances(dx2, j, cy, h, dxy):
+    """Squared (x, y) distances ``dx2[sx] + dy*dy`` of the 36 sample rows of voxel row ``j`` into ``dxy``.
 
     The same operations as :func:`_mark_points` (``dy`` from :func:`porepipe._shared.sample_points.sample_coord`).
-    Rounding is monotone in each term, so the smallest (largest) sum is the sum of the smallest (largest) terms.
     """
-    dy2_min = np.inf
-    dy2_max = 0.0
     for sy in range(SUB):
         dy = sample_coord(j, sy, h) - cy
         dy2 = dy * dy
-        dy2_min = min(dy2_min, dy2)
-        dy2_max = max(dy2_max, dy2)
         for sx in range(SUB):
             dxy[SUB * sx + sy] = dx2[sx] + dy2
-    return dx2_min + dy2_min, dx2_max + dy2_max
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _z_distances(k, cz, h):
-    """Squared z distances of the 6 samples of voxel ``k`` along z (as in :func:`_mark_points`), with their min, max."""
+    """Squared z distances of the 6 samples of voxel ``k`` along z (as in :func:`_mark_points`)."""
     d0 = sample_coord(k, 0, h) - cz
     d1 = sample_coord(k, 1, h) - cz
     d2 = sample_coord(k, 2, h) - cz
     d3 = sample_coord(k, 3, h) - cz
     d4 = sample_coord(k, 4, h) - cz
     d5 = sample_coord(k, 5, h) - cz
-    t = (d0 * d0, d1 * d1, d2 * d2, d3 * d3, d4 * d4, d5 * d5)
-    return t, min(t), max(t)
+    return d0 * d0, d1 * d1, d2 * d2, d3 * d3, d4 * d4, d5 * d5
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _voxel_count(dxy, d_min, d_max, k, cz, r2, h):
+def _voxel_count(dxy, k, cz, r2, h):
     """Samples of voxel ``k`` of a voxel row inside the ball: all 216 exact tests ``dxy + dz*dz <= r*r``, vectorised.
 
-    ``dxy`` (N_ROWS) and its min/max over the 36 rows from :func:`_row_distances`. Rounding is monotone, so when the
-    smallest squared distance fails the test no sample passes (0), and when the largest passes all do (216).
+    ``dxy`` (N_ROWS, padded with FAR) from :func:`_row_distances`. No early exit for empty or full voxels: shell
+    voxels are mostly partly filled, and the branch cost more than it saved (measured).
     """
-    t, t_min, t_max = _z_distances(k, cz, h)
-    if d_min + t_min > r2:
-        return 0
-    if d_max + t_max <= r2:
-        return N_SAMPLES
-    t0, t1, t2, t3, t4, t5 = t
+    t0, t1, t2, t3, t4, t5 = _z_distances(k, cz, h)
     total = 0
     for q in range(N_ROWS):  # branch-free: vectorises over the rows
         d = dxy[q]
@@ -252,8 +197,7 @@ def _or_voxel(mask, j, k, dxy, cz, r2, h, bits):
     Row q's 6 bits (bit sz = sample sz along z) are found for all rows in one vectorised loop into ``bits``
     (N_ROWS int64), then packed in the layout of :func:`porepipe._shared.sample_points.or_row`.
     """
-    t, _, _ = _z_distances(k, cz, h)
-    t0, t1, t2, t3, t4, t5 = t
+    t0, t1, t2, t3, t4, t5 = _z_distances(k, cz, h)
     for q in range(N_ROWS):
         d = dxy[q]
         bits[q] = (
@@ -271,97 +215,93 @@ def _or_voxel(mask, j, k, dxy, cz, r2, h, bits):
         mask[j, k, w] |= acc
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_shell(status, mask, j, lo, hi, dxy, d_min, d_max, cz, r2, h, bits, out):
-    """Voxels ``lo .. hi - 1`` of row ``j``: add the ball's count to PARTIAL ones, OR its sample bits into MULTI ones."""
-    for k in range(lo, hi):
-        st = status[j, k]
-        if st == PARTIAL:
-            out[j, k] += _voxel_count(dxy, d_min, d_max, k, cz, r2, h)
-        elif st == MULTI:
-            _or_voxel(mask, j, k, dxy, cz, r2, h, bits)
+#: ``owner`` of a voxel whose grey value is the popcount of its union mask (two or more balls put samples in it)
+SHARED = -1
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, dx2, dxy, bits, out):
-    """Add one ball's samples to the shell voxels of plane ``i``: counts into ``out`` (PARTIAL), bits into masks (MULTI).
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+def _share(i, j, k, images, h, owner, mask, dxy, cz, r2, dx2, odxy, bits, out):
+    """A ball (row distances ``dxy``, centre z ``cz``) adds samples to voxel (j, k), where another ball counted before.
 
-    Per voxel row with a shell (voxels outside the untested FULL run of :func:`_row_ranges`), the 36 squared (x, y)
-    row distances are found once; its PARTIAL and MULTI voxels are then tested, FULL ones (of another ball) skipped. A
-    ball that does not reach a PARTIAL voxel adds 0 to it (the reach test is conservative), so summing into ``out``
-    leaves the count of the one ball that does. ``ranges``: the
-    rows' ranges from :func:`_classify`; ``dx2`` (6), ``dxy`` (N_ROWS, padded with FAR) and ``bits`` (N_ROWS) are
-    scratch.
+    The first time, the mask starts as the samples of the owner ball (its row distances recomputed into ``dx2`` and
+    ``odxy``, padded with FAR) and the voxel becomes SHARED; then this ball's samples are ORed in, and the grey value
+    is the mask's popcount.
     """
-    r2 = r * r
-    j0, j1 = axis_range(cy, r, h, ny)
-    dx2_min = np.inf
-    dx2_max = 0.0
-    for sx in range(SUB):
-        dx = sample_coord(i, sx, h) - cx
-        dx2[sx] = dx * dx
-        dx2_min = min(dx2_min, dx2[sx])
-        dx2_max = max(dx2_max, dx2[sx])
-    for j in range(j0, j1):
-        lo, hi, f_lo, f_hi = ranges[j - j0, 0], ranges[j - j0, 1], ranges[j - j0, 2], ranges[j - j0, 3]
-        if lo == f_lo and f_hi == hi:
+    o = owner[j, k]
+    if o != SHARED:
+        for w in range(WORDS):
+            mask[j, k, w] = 0
+        _plane_distances(i, images[o, 0], h, dx2)
+        _row_distances(dx2, j, images[o, 1], h, odxy)
+        _or_voxel(mask, j, k, odxy, images[o, 2], images[o, 3] * images[o, 3], h, bits)
+        owner[j, k] = SHARED
+    _or_voxel(mask, j, k, dxy, cz, r2, h, bits)
+    count = 0
+    for w in range(WORDS):
+        count += popcount64(mask[j, k, w])
+    out[j, k] = count
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _add_shell(i, j, k0, k1, s, images, h, dxy, cz, r2, owner, mask, dx2, odxy, bits, out):
+    """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j`` (row distances ``dxy``).
+
+    A voxel nothing counted in yet (0) takes the count and ``s`` as its owner; a full one (216) stays; any other
+    voxel the ball adds samples to gets the union of the balls' masks (:func:`_share`).
+    """
+    for k in range(k0, k1):
+        g = out[j, k]
+        if g == N_SAMPLES:
             continue
-        d_min, d_max = _row_distances(dx2, dx2_min, dx2_max, j, cy, h, dxy)
-        _add_shell(status, mask, j, lo, f_lo, dxy, d_min, d_max, cz, r2, h, bits, out)
-        _add_shell(status, mask, j, f_hi, hi, dxy, d_min, d_max, cz, r2, h, bits, out)
+        c = _voxel_count(dxy, k, cz, r2, h)
+        if c == 0:
+            continue
+        if g == 0 or c == N_SAMPLES:
+            out[j, k] = c
+            owner[j, k] = s
+        else:
+            _share(i, j, k, images, h, owner, mask, dxy, cz, r2, dx2, odxy, bits, out)
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _multi_grey(status, mask, j, lo, hi, out):
-    """Grey values of the MULTI voxels among ``lo .. hi - 1`` of row ``j``: the popcount of their union masks."""
-    for k in range(lo, hi):
-        if status[j, k] == MULTI:
-            bits = 0
-            for w in range(WORDS):
-                bits += popcount64(mask[j, k, w])
-            out[j, k] = bits
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out):
+    """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
+
+    ``dx2`` (2, SUB), ``dxy``/``odxy`` (N_ROWS, padded with FAR) and ``bits`` (N_ROWS) are scratch.
+    """
+    cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
+    r2 = r * r
+    eps = SLACK * (r + abs(cz))
+    nx_, fx_ = hull_gap(cx, i, h)
+    j0, j1 = axis_range(cy, r, h, ny)
+    k0, k1 = axis_range(cz, r, h, nz)
+    _plane_distances(i, cx, h, dx2[0])
+    for j in range(j0, j1):
+        ny_, fy_ = hull_gap(cy, j, h)
+        lo, hi, f_lo, f_hi = _row_ranges(
+            cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
+        )
+        for k in range(f_lo, f_hi):
+            out[j, k] = N_SAMPLES
+        if lo < f_lo or f_hi < hi:
+            _row_distances(dx2[0], j, cy, h, dxy)
+            _add_shell(i, j, lo, f_lo, s, images, h, dxy, cz, r2, owner, mask, dx2[1], odxy, bits, out)
+            _add_shell(i, j, f_hi, hi, s, images, h, dxy, cz, r2, owner, mask, dx2[1], odxy, bits, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, dx2, dxy, bits, out):
-    """Grey values of plane x = i, interior runs in bulk and shell voxels tested (bit-identical to brute force).
+def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out):
+    """Grey values of plane x = i, ball after ball in one pass (bit-identical to brute force).
 
-    First every ball marks the voxels it reaches (:func:`_classify`: runs of FULL voxels in bulk, the shell one by
-    one); then each ball's samples are counted into the shell voxels that it alone reaches and ORed into the masks
-    of voxels two or more balls reach (:func:`_shell_grey`), so a sample counts once if it is in any ball; last the
-    MULTI voxels in the balls' shells get their masks' popcounts (:func:`_multi_grey`).
+    ``owner`` (ny, nz) int64 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey
+    value a ball of this plane has already set to 1..215.
     """
-    status[:, :] = UNTOUCHED
     out[:, :] = 0
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
-    n_rows = 0
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            j0, j1 = axis_range(images[s, 1], images[s, 3], h, ny)
-            n_rows += j1 - j0
-    ranges = np.empty((n_rows, 5), dtype=np.int64)  # per ball, its voxel rows' ranges (_row_ranges) and j
-    row = 0
-    for q in range(first, last):
-        s = order[q]
-        cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
-        if cx + r >= plane_lo:
-            j0, j1 = axis_range(cy, r, h, ny)
-            _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges[row : row + j1 - j0], out)
-            row += j1 - j0
-    row = 0
-    for q in range(first, last):
-        s = order[q]
-        cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
-        if cx + r >= plane_lo:
-            j0, j1 = axis_range(cy, r, h, ny)
-            rows = ranges[row : row + j1 - j0]
-            _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, rows, dx2, dxy, bits, out)
-            row += j1 - j0
-    for t in range(row):  # every MULTI voxel lies in the shell of a ball that reaches it
-        j, lo, hi, f_lo, f_hi = ranges[t, 4], ranges[t, 0], ranges[t, 1], ranges[t, 2], ranges[t, 3]
-        _multi_grey(status, mask, j, lo, f_lo, out)
-        _multi_grey(status, mask, j, f_hi, hi, out)
+            _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
@@ -375,9 +315,11 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
     per = (nplanes + nthreads - 1) // nthreads
     for t in prange(nthreads):
         status = np.empty((ny, nz), dtype=np.uint8)
+        owner = np.empty((ny, nz), dtype=np.int64)
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
-        dx2 = np.empty(SUB)
+        dx2 = np.empty((2, SUB))
         dxy = np.full(N_ROWS, FAR)  # rows 36.. stay FAR: padding without a sample inside
+        odxy = np.full(N_ROWS, FAR)
         bits = np.empty(N_ROWS, dtype=np.int64)
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
@@ -385,7 +327,7 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
             i = i0 + p
             if boundary_only:
                 _shell_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, dx2, dxy, bits, out[p]
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out[p]
                 )
             else:
                 _voxelize_plane(
