@@ -9,7 +9,8 @@ Brute force (:func:`_voxelize_plane`) tests all 216 points of every voxel near a
 (:func:`_shell_plane`) adds the balls one after the other in one pass per plane (:func:`_ball_plane`): per voxel row
 (fixed x, y), square roots give the run of voxels wholly inside (written as 216 without a test) and the shell around
 it (:func:`_row_ranges`). Only shell voxels are tested, with the exact predicate, all 216 tests in one branch-free
-loop that vectorises over the 36 sample rows (:func:`_voxel_count`). A voxel keeps the count of the first ball that
+loop that vectorises over the 36 sample rows (:func:`_voxel_count`; the squared z distances of a ball's samples are
+found once per plane). A voxel keeps the count of the first ball that
 puts samples in it and that ball as its ``owner``; when a second ball adds samples, the voxel's grey value becomes
 the popcount of the union of the balls' sample bit masks (:func:`_share`), so a sample counts once if it is in any
 ball.
@@ -23,7 +24,6 @@ from porepipe._shared.sample_points import (
     MARGIN,
     N_SAMPLES,
     PARTIAL,
-    ROWS_PER_WORD,
     SUB,
     UNTOUCHED,
     WORDS,
@@ -129,10 +129,9 @@ def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
     return lo, hi, f_lo, f_hi
 
 
-#: sample rows per voxel row: the 36 (x, y) rows q = 6·sx + sy, padded to a multiple of the vector width with rows at
-#: squared distance FAR, none of whose samples is ever inside (r*r < FAR for every finite radius below 1e150 µm)
-N_ROWS = 40
-FAR = 1e300
+#: sample rows per voxel row: q = 6·sy + sx (the order is the shell method's own: only popcounts of its masks are
+#: read, never a single bit)
+N_ROWS = SUB * SUB
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -145,7 +144,7 @@ def _plane_distances(i, cx, h, dx2):
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _row_distances(dx2, j, cy, h, dxy):
-    """Squared (x, y) distances ``dx2[sx] + dy*dy`` of the 36 sample rows of voxel row ``j`` into ``dxy``.
+    """Squared (x, y) distances ``dx2[sx] + dy*dy`` of the 36 sample rows of voxel row ``j`` into ``dxy`` (row 6·sy + sx).
 
     The same operations as :func:`_mark_points` (``dy`` from :func:`porepipe._shared.sample_points.sample_coord`).
     """
@@ -153,7 +152,7 @@ def _row_distances(dx2, j, cy, h, dxy):
         dy = sample_coord(j, sy, h) - cy
         dy2 = dy * dy
         for sx in range(SUB):
-            dxy[SUB * sx + sy] = dx2[sx] + dy2
+            dxy[SUB * sy + sx] = dx2[sx] + dy2
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -169,13 +168,15 @@ def _z_distances(k, cz, h):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _voxel_count(dxy, k, cz, r2, h):
+def _voxel_count(dxy, tz, k, r2):
     """Samples of voxel ``k`` of a voxel row inside the ball: all 216 exact tests ``dxy + dz*dz <= r*r``, vectorised.
 
-    ``dxy`` (N_ROWS, padded with FAR) from :func:`_row_distances`. No early exit for empty or full voxels: shell
-    voxels are mostly partly filled, and the branch cost more than it saved (measured).
+    ``dxy`` (N_ROWS) from :func:`_row_distances`; ``tz[6k .. 6k + 5]`` the squared z distances of the voxel's
+    samples (:func:`_z_distances`). No early exit for empty or full voxels: shell voxels are mostly partly filled,
+    and the branch cost more than it saved (measured).
     """
-    t0, t1, t2, t3, t4, t5 = _z_distances(k, cz, h)
+    m = SUB * k
+    t0, t1, t2, t3, t4, t5 = tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5]
     total = 0
     for q in range(N_ROWS):  # branch-free: vectorises over the rows
         d = dxy[q]
@@ -191,14 +192,15 @@ def _voxel_count(dxy, k, cz, r2, h):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _or_voxel(mask, j, k, dxy, cz, r2, h, bits):
+def _or_voxel(mask, j, k, dxy, t, r2, bits):
     """OR the samples of voxel ``k`` inside the ball into its union mask (the 216 tests of :func:`_voxel_count`).
 
-    Row q's 6 bits (bit sz = sample sz along z) are found for all rows in one vectorised loop into ``bits``
-    (N_ROWS int64), then packed in the layout of :func:`porepipe._shared.sample_points.or_row`.
+    ``t``: the voxel's 6 squared z distances. Row q's 6 bits (bit sz = sample sz along z), shifted to bits
+    6·(q // 4) .. + 5 of word q % 4, are found for all rows in one vectorised loop into ``bits`` (N_ROWS int64), then
+    ORed word by word.
     """
-    t0, t1, t2, t3, t4, t5 = _z_distances(k, cz, h)
-    for q in range(N_ROWS):
+    t0, t1, t2, t3, t4, t5 = t
+    for q in range(N_ROWS):  # row q in bits 6 (q // 4) .. + 5 of word q % 4
         d = dxy[q]
         bits[q] = (
             np.int64(d + t0 <= r2)
@@ -207,12 +209,17 @@ def _or_voxel(mask, j, k, dxy, cz, r2, h, bits):
             | (np.int64(d + t3 <= r2) << 3)
             | (np.int64(d + t4 <= r2) << 4)
             | (np.int64(d + t5 <= r2) << 5)
-        )
-    for w in range(WORDS):
-        acc = np.uint64(0)
-        for q in range(ROWS_PER_WORD * w, min(ROWS_PER_WORD * (w + 1), SUB * SUB)):
-            acc |= np.uint64(bits[q]) << np.uint64(SUB * (q - ROWS_PER_WORD * w))
-        mask[j, k, w] |= acc
+        ) << (SUB * (q // WORDS))
+    a0 = a1 = a2 = a3 = 0
+    for g in range(0, N_ROWS, WORDS):
+        a0 |= bits[g]
+        a1 |= bits[g + 1]
+        a2 |= bits[g + 2]
+        a3 |= bits[g + 3]
+    mask[j, k, 0] |= np.uint64(a0)
+    mask[j, k, 1] |= np.uint64(a1)
+    mask[j, k, 2] |= np.uint64(a2)
+    mask[j, k, 3] |= np.uint64(a3)
 
 
 #: ``owner`` of a voxel whose grey value is the popcount of its union mask (two or more balls put samples in it)
@@ -220,11 +227,11 @@ SHARED = -1
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _share(i, j, k, images, h, owner, mask, dxy, cz, r2, dx2, odxy, bits, out):
-    """A ball (row distances ``dxy``, centre z ``cz``) adds samples to voxel (j, k), where another ball counted before.
+def _share(i, j, k, images, h, owner, mask, dxy, tz, r2, dx2, odxy, bits, out):
+    """A ball (row distances ``dxy``, squared z distances ``tz``) adds samples to voxel (j, k), where another ball counted before.
 
     The first time, the mask starts as the samples of the owner ball (its row distances recomputed into ``dx2`` and
-    ``odxy``, padded with FAR) and the voxel becomes SHARED; then this ball's samples are ORed in, and the grey value
+    ``odxy``) and the voxel becomes SHARED; then this ball's samples are ORed in, and the grey value
     is the mask's popcount.
     """
     o = owner[j, k]
@@ -233,9 +240,10 @@ def _share(i, j, k, images, h, owner, mask, dxy, cz, r2, dx2, odxy, bits, out):
             mask[j, k, w] = 0
         _plane_distances(i, images[o, 0], h, dx2)
         _row_distances(dx2, j, images[o, 1], h, odxy)
-        _or_voxel(mask, j, k, odxy, images[o, 2], images[o, 3] * images[o, 3], h, bits)
+        _or_voxel(mask, j, k, odxy, _z_distances(k, images[o, 2], h), images[o, 3] * images[o, 3], bits)
         owner[j, k] = SHARED
-    _or_voxel(mask, j, k, dxy, cz, r2, h, bits)
+    m = SUB * k
+    _or_voxel(mask, j, k, dxy, (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5]), r2, bits)
     count = 0
     for w in range(WORDS):
         count += popcount64(mask[j, k, w])
@@ -243,8 +251,8 @@ def _share(i, j, k, images, h, owner, mask, dxy, cz, r2, dx2, odxy, bits, out):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_shell(i, j, k0, k1, s, images, h, dxy, cz, r2, owner, mask, dx2, odxy, bits, out):
-    """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j`` (row distances ``dxy``).
+def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, mask, dx2, odxy, bits, out):
+    """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j`` (:func:`_voxel_count`).
 
     A voxel nothing counted in yet (0) takes the count and ``s`` as its owner; a full one (216) stays; any other
     voxel the ball adds samples to gets the union of the balls' masks (:func:`_share`).
@@ -253,21 +261,22 @@ def _add_shell(i, j, k0, k1, s, images, h, dxy, cz, r2, owner, mask, dx2, odxy, 
         g = out[j, k]
         if g == N_SAMPLES:
             continue
-        c = _voxel_count(dxy, k, cz, r2, h)
+        c = _voxel_count(dxy, tz, k, r2)
         if c == 0:
             continue
         if g == 0 or c == N_SAMPLES:
             out[j, k] = c
             owner[j, k] = s
         else:
-            _share(i, j, k, images, h, owner, mask, dxy, cz, r2, dx2, odxy, bits, out)
+            _share(i, j, k, images, h, owner, mask, dxy, tz, r2, dx2, odxy, bits, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out):
+def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out):
     """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
 
-    ``dx2`` (2, SUB), ``dxy``/``odxy`` (N_ROWS, padded with FAR) and ``bits`` (N_ROWS) are scratch.
+    ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS) and ``tz`` (6 nz: the squared z distances of the samples in
+    the ball's reach, found once per plane) are scratch.
     """
     cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
     r2 = r * r
@@ -276,6 +285,9 @@ def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out)
     j0, j1 = axis_range(cy, r, h, ny)
     k0, k1 = axis_range(cz, r, h, nz)
     _plane_distances(i, cx, h, dx2[0])
+    for m in range(SUB * k0, SUB * k1):  # squared z distances of the samples in reach, as in _z_distances
+        dz = (m + 0.5) * h - cz
+        tz[m] = dz * dz
     for j in range(j0, j1):
         ny_, fy_ = hull_gap(cy, j, h)
         lo, hi, f_lo, f_hi = _row_ranges(
@@ -285,12 +297,12 @@ def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out)
             out[j, k] = N_SAMPLES
         if lo < f_lo or f_hi < hi:
             _row_distances(dx2[0], j, cy, h, dxy)
-            _add_shell(i, j, lo, f_lo, s, images, h, dxy, cz, r2, owner, mask, dx2[1], odxy, bits, out)
-            _add_shell(i, j, f_hi, hi, s, images, h, dxy, cz, r2, owner, mask, dx2[1], odxy, bits, out)
+            _add_shell(i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, mask, dx2[1], odxy, bits, out)
+            _add_shell(i, j, f_hi, hi, s, images, h, dxy, tz, r2, owner, mask, dx2[1], odxy, bits, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out):
+def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out):
     """Grey values of plane x = i, ball after ball in one pass (bit-identical to brute force).
 
     ``owner`` (ny, nz) int64 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey
@@ -301,7 +313,7 @@ def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, d
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out)
+            _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
@@ -318,16 +330,32 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
         owner = np.empty((ny, nz), dtype=np.int64)
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
         dx2 = np.empty((2, SUB))
-        dxy = np.full(N_ROWS, FAR)  # rows 36.. stay FAR: padding without a sample inside
-        odxy = np.full(N_ROWS, FAR)
+        dxy = np.empty(N_ROWS)
+        odxy = np.empty(N_ROWS)
         bits = np.empty(N_ROWS, dtype=np.int64)
+        tz = np.empty(SUB * nz)
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             i = i0 + p
             if boundary_only:
                 _shell_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, out[p]
+                    i,
+                    images,
+                    order,
+                    xmin_sorted,
+                    r_max,
+                    h,
+                    ny,
+                    nz,
+                    owner,
+                    mask,
+                    dx2,
+                    dxy,
+                    odxy,
+                    bits,
+                    tz,
+                    out[p],
                 )
             else:
                 _voxelize_plane(
