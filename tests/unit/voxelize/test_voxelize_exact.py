@@ -159,7 +159,8 @@ def test_voxels_shared_by_three_or_more_spheres(periodic):
     centre = np.array([2.2, 2.3, 1.6])
     c = centre + rng.uniform(-0.6, 0.6, (12, 3))
     r = rng.uniform(0.35, 0.9, 12)
-    c = np.vstack([c, (np.array([[17, 18, 12], [19, 17, 14]]) + 0.5) * h])  # two more with surfaces on samples
+    # two more whose surfaces pass through samples
+    c = np.vstack([c, (np.array([[17, 18, 12], [19, 17, 14]]) + 0.5) * h])
     r = np.concatenate([r, [3 * h, 5 * h]])
     box = (4.5, 4.5, 3.0)
     g = _both_equal_oracle(c, r, box, a, periodic)
