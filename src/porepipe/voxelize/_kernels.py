@@ -293,8 +293,8 @@ def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, 
         lo, hi, f_lo, f_hi = _row_ranges(
             cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
         )
-        if f_hi > f_lo:
-            out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)  # slice fill: ~2x faster than a loop over short runs (measured)
+        if f_hi > f_lo:  # a slice fill: ~2x faster than a loop over these short runs (measured)
+            out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
         if lo < f_lo or f_hi < hi:
             _row_distances(dx2[0], j, cy, h, dxy)
             _add_shell(i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, mask, dx2[1], odxy, bits, out)
