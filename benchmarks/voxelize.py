@@ -3,14 +3,20 @@
 Prints Mvoxel/s of both methods at 1 and 2 threads, the speed-up of the kernel alone and of the whole ``voxelize()``
 call (both timed interleaved in one process, best of 3, with the load average: the machine is shared), and checks
 the two grey volumes are identical.
-Usage: python benchmarks/voxelize.py [--smoke] [--out DIR]   (writes voxelize.json into --out, default results/benchmarks/)
+Usage: python benchmarks/voxelize.py [--smoke] [--out DIR] [--reference FILE]
+(writes voxelize.json into --out, default results/benchmarks/). ``--reference`` names a copy of an earlier
+``porepipe/voxelize/_kernels.py`` (for instance ``git show main:src/porepipe/voxelize/_kernels.py > old_kernels.py``):
+its shell-method kernel is timed in the same rounds, and its grey values are asserted identical.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
+import sys
 import time
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -27,42 +33,63 @@ def packing(n, box, r_min, r_max, seed=0):
     return rng.uniform(0, box, (n, 3)), rng.uniform(r_min, r_max, n)
 
 
-def kernel(prep, shape, a, boundary):
+def kernel(prep, shape, a, boundary, slab=_voxelize_slab):
     """The slab kernel alone on the whole volume (no sphere images, no allocation of the result)."""
     out = np.zeros(shape, np.uint8)
     args = (prep.images, prep.order, prep.xmin_sorted, prep.r_max, a / SUB, shape[1], shape[2], boundary, out)
-    return lambda: _voxelize_slab(0, shape[0], *args) or out
+    return lambda: slab(0, shape[0], *args) or out
+
+
+def load_reference(path):
+    """The module of an earlier _kernels.py, imported under its file name (numba's cache refers to it by name)."""
+    name = Path(path).stem
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 def best_interleaved(fns, rounds=3):
-    """Best time and last result of each of ``fns`` over ``rounds`` rounds that run them one after the other."""
-    best, results = [np.inf] * len(fns), [None] * len(fns)
+    """Best wall time, best CPU time and last result of each of ``fns`` over ``rounds`` rounds run one after the other.
+
+    CPU time (all threads of the process) is what other processes on a shared machine disturb least.
+    """
+    best, best_cpu, results = [np.inf] * len(fns), [np.inf] * len(fns), [None] * len(fns)
     for _ in range(rounds):
         for n, fn in enumerate(fns):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             results[n] = fn()
             best[n] = min(best[n], time.perf_counter() - t0)
-    return best, results
+            best_cpu[n] = min(best_cpu[n], time.process_time() - c0)
+    return best, best_cpu, results
 
 
-def run_case(box, n, a, r_min, r_max, threads):
+def run_case(box, n, a, r_min, r_max, threads, reference=None):
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     c, r = packing(n, box, r_min, r_max)
     shape = grid_shape((box,) * 3, a)
     prep = _Prepared(c, r, (box,) * 3, True)
     nvox = float(np.prod(shape))
-    (t_kb, t_kf, t_b, t_f), (k_b, k_f, g_b, g_f) = best_interleaved(
-        [
-            kernel(prep, shape, a, True),
-            kernel(prep, shape, a, False),
-            lambda: voxelize(c, r, (box,) * 3, a, method=VoxelizeMethod.boundary),
-            lambda: voxelize(c, r, (box,) * 3, a, method=VoxelizeMethod.brute),
-        ]
+    fns = [
+        kernel(prep, shape, a, True),
+        kernel(prep, shape, a, False),
+        lambda: voxelize(c, r, (box,) * 3, a, method=VoxelizeMethod.boundary),
+        lambda: voxelize(c, r, (box,) * 3, a, method=VoxelizeMethod.brute),
+    ]
+    if reference is not None:
+        fns.append(kernel(prep, shape, a, True, reference._voxelize_slab))
+    (t_kb, t_kf, t_b, t_f, *t_ref), (c_kb, c_kf, _, _, *c_ref), (k_b, k_f, g_b, g_f, *k_ref) = (
+        best_interleaved(fns)
     )
     assert np.array_equal(g_b, g_f) and np.array_equal(k_b, g_b) and np.array_equal(k_f, g_f), (
         "methods differ"
     )
-    return {
+    assert all(np.array_equal(k, k_b) for k in k_ref), "reference kernel differs"
+    extra = {}
+    if k_ref:
+        extra = {"reference_kernel_speedup": t_kf / t_ref[0], "reference_kernel_cpu_speedup": c_kf / c_ref[0]}
+    return extra | {
         "threads": threads,
         "voxel_um": a,
         "span_voxels": f"{2 * r_min / a:g}-{2 * r_max / a:g}",
@@ -71,6 +98,7 @@ def run_case(box, n, a, r_min, r_max, threads):
         "brute_mvox_s": nvox / t_f / 1e6,
         "speedup": t_f / t_b,
         "kernel_speedup": t_kf / t_kb,
+        "kernel_cpu_speedup": c_kf / c_kb,
         "load_1min": os.getloadavg()[0],
         "mixed_fraction": float(((g_b > 0) & (g_b < 216)).mean()),
     }
@@ -79,34 +107,48 @@ def run_case(box, n, a, r_min, r_max, threads):
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--smoke", action="store_true", help="tiny sizes, for CI")
+    ap.add_argument("--reference", help="earlier _kernels.py whose shell-method kernel is timed alongside")
     add_out_argument(ap)
     args = ap.parse_args()
+    reference = load_reference(args.reference) if args.reference else None
     r_min, r_max = 5.0, 10.0
     # same packing density (number of spheres per volume) at every resolution; ~8 Mvoxel per case
     cases = [(40.0, 12, 1.0)] if args.smoke else [(200.0, 1500, 1.0), (100.0, 188, 0.5), (50.0, 24, 0.25)]
     voxelize(np.zeros((1, 3)), np.ones(1), (4.0,) * 3, 1.0)  # compile
-    rows = [run_case(box, n, a, r_min, r_max, threads) for box, n, a in cases for threads in (1, 2)]
+    rows = [
+        run_case(box, n, a, r_min, r_max, threads, reference) for box, n, a in cases for threads in (1, 2)
+    ]
     print(
         f"voxelize: spheres r = {r_min}-{r_max} µm, ~19 % of the box covered, 6^3 sample points per voxel; "
         "timings on a shared, loaded machine"
     )
     print(
         "| a µm | sphere span (voxels) | threads | Mvoxel | shell method Mvoxel/s | brute force Mvoxel/s | speed-up |"
-        " kernel alone speed-up | mixed voxels | load (1 min) |"
+        " kernel alone speed-up | kernel alone, CPU time | mixed voxels | load (1 min) |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for row in rows:
         print(
             f"| {row['voxel_um']} | {row['span_voxels']} | {row['threads']} | {row['mvoxel']:.1f} | "
             f"{row['boundary_mvox_s']:.1f} | {row['brute_mvox_s']:.2f} | {row['speedup']:.1f}x | "
-            f"{row['kernel_speedup']:.1f}x | {row['mixed_fraction']:.3f} | {row['load_1min']:.1f} |"
+            f"{row['kernel_speedup']:.1f}x | {row['kernel_cpu_speedup']:.1f}x | {row['mixed_fraction']:.3f} | "
+            f"{row['load_1min']:.1f} |"
         )
     print(
         "machine limit: writing a uint8 volume once runs at ~1000+ Mvoxel/s (memory bandwidth); brute force = all "
         "216 point tests for every voxel in a sphere's bounding box; grey values of both are asserted identical; "
-        "speed-up = whole voxelize() call, kernel alone = the slab kernel without sphere images and allocation; "
+        "speed-up = whole voxelize() call, kernel alone = the slab kernel without sphere images and allocation (wall time, "
+        "and CPU time of all threads: the steadier figure on a loaded machine); "
         "goal (issue #22): speed-up >= 20x at every sphere span"
     )
+    if reference is not None:
+        print(f"reference kernel ({args.reference}), same rounds, kernel alone speed-up over brute force:")
+        for row in rows:
+            print(
+                f"  {row['span_voxels']} voxels, {row['threads']} thread(s): reference "
+                f"{row['reference_kernel_speedup']:.1f}x (CPU time {row['reference_kernel_cpu_speedup']:.1f}x), "
+                f"current {row['kernel_speedup']:.1f}x ({row['kernel_cpu_speedup']:.1f}x); grey values identical"
+            )
     write_record(args.out, "voxelize.json", rows)
 
 

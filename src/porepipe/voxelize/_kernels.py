@@ -6,24 +6,24 @@ Sample point k (0..5) of voxel i along an axis sits at ``(6*i + k + 0.5) * (a/6)
 shell method bit-identical to brute force.
 
 Brute force (:func:`_voxelize_plane`) tests all 216 points of every voxel near a sphere. The shell method
-(:func:`_shell_plane`) classifies whole voxel rows first: per voxel row (fixed x, y) and ball, square roots give the
-run of voxels wholly inside (set to 216 without a test) and the shell around it (:func:`_classify`). Only shell
-voxels are tested, with the exact predicate: the smallest and largest squared distance of a voxel's samples decide an
-empty or full voxel in one test each (rounding is monotone), the others get all 216 tests in one branch-free loop
-that vectorises over the 36 sample rows (:func:`_voxel_count`): counted straight into a voxel one ball alone
-reaches, ORed as bit masks into voxels that two or more balls reach.
+(:func:`_shell_plane`) adds the balls one after the other in one pass per plane (:func:`_ball_plane`): per voxel row
+(fixed x, y), square roots give the run of voxels wholly inside (written as 216 without a test) and the shell around
+it (:func:`_row_ranges`). Only shell voxels are tested, with the exact predicate, all 216 tests in one branch-free
+loop that vectorises over the 36 sample rows (:func:`_voxel_count`; the squared z distances of a ball's samples are
+found once per plane). A voxel keeps the count of the first ball that
+puts samples in it and that ball as its ``owner``; when a second ball adds samples, the voxel's grey value becomes
+the popcount of the union of the balls' sample bit masks (:func:`_share`), so a sample counts once if it is in any
+ball.
 """
 
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
+from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
 from porepipe._shared.sample_points import (
-    FULL,
     MARGIN,
     N_SAMPLES,
     PARTIAL,
-    ROWS_PER_WORD,
     SUB,
     UNTOUCHED,
     WORDS,
@@ -95,12 +95,6 @@ def _voxelize_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mas
     grey_from_status(status, mask, out)
 
 
-#: voxel state of the shell method beyond those of :mod:`porepipe._shared.sample_points`: two or more spheres reach
-#: into the voxel (its grey value is the popcount of the union mask, not the count of one ball)
-MULTI = 3
-assert (UNTOUCHED, PARTIAL, FULL, MULTI) == (0, 1, 2, 3)  # the branch-free step of _reach_shell relies on it
-
-
 #: relative slack (of r + |cz|, µm) on the z extent of a ball in one voxel row: far above the rounding of the square
 #: root and divisions of :func:`_row_ranges` (~1e-8 r at worst), far below any voxel
 SLACK = 1e-7
@@ -135,102 +129,54 @@ def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
     return lo, hi, f_lo, f_hi
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _reach_shell(status, mask, j, lo, hi):
-    """One more ball reaches voxels ``lo .. hi - 1`` of row ``j``: the first makes a voxel PARTIAL, a second MULTI.
-
-    Branch-free: UNTOUCHED (0) -> PARTIAL (1) -> MULTI (3), FULL (2) stays, as ``st + (st < FULL) * (st + 1)``. The
-    union masks are cleared for :func:`_shell_grey` (no mask is ORed before every ball is classified).
-    """
-    for k in range(lo, hi):
-        st = status[j, k]
-        status[j, k] = st + (st < FULL) * (st + 1)
-        for w in range(WORDS):
-            mask[j, k, w] = 0
-
-
-@njit(cache=True, fastmath=FASTMATH)
-def _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges, out):
-    """Mark the voxels of plane ``i`` that one ball reaches, by whole runs per voxel row (:func:`_row_ranges`).
-
-    The run inside the ball becomes FULL (grey value 216 in ``out``), the shell on either side one more reaching
-    sphere (:func:`_reach_shell`).
-    Row ``j`` of the ball's y range ``[j0, j1)`` (:func:`porepipe._shared.sample_points.axis_range`) keeps its
-    ranges and ``j`` in ``ranges[j - j0]`` (lo, hi, f_lo, f_hi, j) for :func:`_shell_grey`.
-    """
-    r2 = r * r
-    eps = SLACK * (r + abs(cz))
-    nx_, fx_ = hull_gap(cx, i, h)
-    j0, j1 = axis_range(cy, r, h, ny)
-    k0, k1 = axis_range(cz, r, h, nz)
-    for j in range(j0, j1):
-        ny_, fy_ = hull_gap(cy, j, h)
-        lo, hi, f_lo, f_hi = _row_ranges(
-            cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
-        )
-        ranges[j - j0, 0] = lo
-        ranges[j - j0, 1] = hi
-        ranges[j - j0, 2] = f_lo
-        ranges[j - j0, 3] = f_hi
-        ranges[j - j0, 4] = j
-        _reach_shell(status, mask, j, lo, f_lo)
-        for k in range(f_lo, f_hi):
-            status[j, k] = FULL
-            out[j, k] = N_SAMPLES
-        _reach_shell(status, mask, j, f_hi, hi)
-
-
-#: sample rows per voxel row: the 36 (x, y) rows q = 6·sx + sy, padded to a multiple of the vector width with rows at
-#: squared distance FAR, none of whose samples is ever inside (r*r < FAR for every finite radius below 1e150 µm)
-N_ROWS = 40
-FAR = 1e300
+#: sample rows per voxel row: q = 6·sy + sx (the order is the shell method's own: only popcounts of its masks are
+#: read, never a single bit)
+N_ROWS = SUB * SUB
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _row_distances(dx2, dx2_min, dx2_max, j, cy, h, dxy):
-    """Squared (x, y) distances ``dx2[sx] + dy*dy`` of the 36 sample rows of voxel row ``j`` into ``dxy``; (min, max).
+def _plane_distances(i, cx, h, dx2):
+    """Squared x distances of the 6 sample planes of voxel plane ``i`` into ``dx2`` (as in :func:`_mark_points`)."""
+    for sx in range(SUB):
+        dx = sample_coord(i, sx, h) - cx
+        dx2[sx] = dx * dx
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _row_distances(dx2, j, cy, h, dxy):
+    """Squared (x, y) distances ``dx2[sx] + dy*dy`` of the 36 sample rows of voxel row ``j`` into ``dxy`` (row 6·sy + sx).
 
     The same operations as :func:`_mark_points` (``dy`` from :func:`porepipe._shared.sample_points.sample_coord`).
-    Rounding is monotone in each term, so the smallest (largest) sum is the sum of the smallest (largest) terms.
     """
-    dy2_min = np.inf
-    dy2_max = 0.0
     for sy in range(SUB):
         dy = sample_coord(j, sy, h) - cy
         dy2 = dy * dy
-        dy2_min = min(dy2_min, dy2)
-        dy2_max = max(dy2_max, dy2)
         for sx in range(SUB):
-            dxy[SUB * sx + sy] = dx2[sx] + dy2
-    return dx2_min + dy2_min, dx2_max + dy2_max
+            dxy[SUB * sy + sx] = dx2[sx] + dy2
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _z_distances(k, cz, h):
-    """Squared z distances of the 6 samples of voxel ``k`` along z (as in :func:`_mark_points`), with their min, max."""
+    """Squared z distances of the 6 samples of voxel ``k`` along z (as in :func:`_mark_points`)."""
     d0 = sample_coord(k, 0, h) - cz
     d1 = sample_coord(k, 1, h) - cz
     d2 = sample_coord(k, 2, h) - cz
     d3 = sample_coord(k, 3, h) - cz
     d4 = sample_coord(k, 4, h) - cz
     d5 = sample_coord(k, 5, h) - cz
-    t = (d0 * d0, d1 * d1, d2 * d2, d3 * d3, d4 * d4, d5 * d5)
-    return t, min(t), max(t)
+    return d0 * d0, d1 * d1, d2 * d2, d3 * d3, d4 * d4, d5 * d5
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _voxel_count(dxy, d_min, d_max, k, cz, r2, h):
+def _voxel_count(dxy, tz, k, r2):
     """Samples of voxel ``k`` of a voxel row inside the ball: all 216 exact tests ``dxy + dz*dz <= r*r``, vectorised.
 
-    ``dxy`` (N_ROWS) and its min/max over the 36 rows from :func:`_row_distances`. Rounding is monotone, so when the
-    smallest squared distance fails the test no sample passes (0), and when the largest passes all do (216).
+    ``dxy`` (N_ROWS) from :func:`_row_distances`; ``tz[6k .. 6k + 5]`` the squared z distances of the voxel's
+    samples (:func:`_z_distances`). No early exit for empty or full voxels: shell voxels are mostly partly filled,
+    and the branch cost more than it saved (measured).
     """
-    t, t_min, t_max = _z_distances(k, cz, h)
-    if d_min + t_min > r2:
-        return 0
-    if d_max + t_max <= r2:
-        return N_SAMPLES
-    t0, t1, t2, t3, t4, t5 = t
+    m = SUB * k
+    t0, t1, t2, t3, t4, t5 = tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5]
     total = 0
     for q in range(N_ROWS):  # branch-free: vectorises over the rows
         d = dxy[q]
@@ -246,15 +192,15 @@ def _voxel_count(dxy, d_min, d_max, k, cz, r2, h):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _or_voxel(mask, j, k, dxy, cz, r2, h, bits):
+def _or_voxel(mask, j, k, dxy, t, r2, bits):
     """OR the samples of voxel ``k`` inside the ball into its union mask (the 216 tests of :func:`_voxel_count`).
 
-    Row q's 6 bits (bit sz = sample sz along z) are found for all rows in one vectorised loop into ``bits``
-    (N_ROWS int64), then packed in the layout of :func:`porepipe._shared.sample_points.or_row`.
+    ``t``: the voxel's 6 squared z distances. Row q's 6 bits (bit sz = sample sz along z), shifted to bits
+    6·(q // 4) .. + 5 of word q % 4, are found for all rows in one vectorised loop into ``bits`` (N_ROWS int64), then
+    ORed word by word.
     """
-    t, _, _ = _z_distances(k, cz, h)
     t0, t1, t2, t3, t4, t5 = t
-    for q in range(N_ROWS):
+    for q in range(N_ROWS):  # row q in bits 6 (q // 4) .. + 5 of word q % 4
         d = dxy[q]
         bits[q] = (
             np.int64(d + t0 <= r2)
@@ -263,105 +209,111 @@ def _or_voxel(mask, j, k, dxy, cz, r2, h, bits):
             | (np.int64(d + t3 <= r2) << 3)
             | (np.int64(d + t4 <= r2) << 4)
             | (np.int64(d + t5 <= r2) << 5)
-        )
+        ) << (SUB * (q // WORDS))
+    a0 = a1 = a2 = a3 = 0
+    for g in range(0, N_ROWS, WORDS):
+        a0 |= bits[g]
+        a1 |= bits[g + 1]
+        a2 |= bits[g + 2]
+        a3 |= bits[g + 3]
+    mask[j, k, 0] |= np.uint64(a0)
+    mask[j, k, 1] |= np.uint64(a1)
+    mask[j, k, 2] |= np.uint64(a2)
+    mask[j, k, 3] |= np.uint64(a3)
+
+
+#: ``owner`` of a voxel whose grey value is the popcount of its union mask (two or more balls put samples in it)
+SHARED = -1
+
+
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+def _share(i, j, k, images, h, owner, mask, dxy, tz, r2, dx2, odxy, bits, out):
+    """A ball (row distances ``dxy``, squared z distances ``tz``) adds samples to voxel (j, k), where another ball counted before.
+
+    The first time, the mask starts as the samples of the owner ball (its row distances recomputed into ``dx2`` and
+    ``odxy``) and the voxel becomes SHARED; then this ball's samples are ORed in, and the grey value
+    is the mask's popcount.
+    """
+    o = owner[j, k]
+    if o != SHARED:
+        for w in range(WORDS):
+            mask[j, k, w] = 0
+        _plane_distances(i, images[o, 0], h, dx2)
+        _row_distances(dx2, j, images[o, 1], h, odxy)
+        _or_voxel(mask, j, k, odxy, _z_distances(k, images[o, 2], h), images[o, 3] * images[o, 3], bits)
+        owner[j, k] = SHARED
+    m = SUB * k
+    _or_voxel(mask, j, k, dxy, (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5]), r2, bits)
+    count = 0
     for w in range(WORDS):
-        acc = np.uint64(0)
-        for q in range(ROWS_PER_WORD * w, min(ROWS_PER_WORD * (w + 1), SUB * SUB)):
-            acc |= np.uint64(bits[q]) << np.uint64(SUB * (q - ROWS_PER_WORD * w))
-        mask[j, k, w] |= acc
+        count += popcount64(mask[j, k, w])
+    out[j, k] = count
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_shell(status, mask, j, lo, hi, dxy, d_min, d_max, cz, r2, h, bits, out):
-    """Voxels ``lo .. hi - 1`` of row ``j``: add the ball's count to PARTIAL ones, OR its sample bits into MULTI ones."""
-    for k in range(lo, hi):
-        st = status[j, k]
-        if st == PARTIAL:
-            out[j, k] += _voxel_count(dxy, d_min, d_max, k, cz, r2, h)
-        elif st == MULTI:
-            _or_voxel(mask, j, k, dxy, cz, r2, h, bits)
+def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, mask, dx2, odxy, bits, out):
+    """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j`` (:func:`_voxel_count`).
 
-
-@njit(cache=True, fastmath=FASTMATH)
-def _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, ranges, dx2, dxy, bits, out):
-    """Add one ball's samples to the shell voxels of plane ``i``: counts into ``out`` (PARTIAL), bits into masks (MULTI).
-
-    Per voxel row with a shell (voxels outside the untested FULL run of :func:`_row_ranges`), the 36 squared (x, y)
-    row distances are found once; its PARTIAL and MULTI voxels are then tested, FULL ones (of another ball) skipped. A
-    ball that does not reach a PARTIAL voxel adds 0 to it (the reach test is conservative), so summing into ``out``
-    leaves the count of the one ball that does. ``ranges``: the
-    rows' ranges from :func:`_classify`; ``dx2`` (6), ``dxy`` (N_ROWS, padded with FAR) and ``bits`` (N_ROWS) are
-    scratch.
+    A voxel nothing counted in yet (0) takes the count and ``s`` as its owner; a full one (216) stays; any other
+    voxel the ball adds samples to gets the union of the balls' masks (:func:`_share`).
     """
-    r2 = r * r
-    j0, j1 = axis_range(cy, r, h, ny)
-    dx2_min = np.inf
-    dx2_max = 0.0
-    for sx in range(SUB):
-        dx = sample_coord(i, sx, h) - cx
-        dx2[sx] = dx * dx
-        dx2_min = min(dx2_min, dx2[sx])
-        dx2_max = max(dx2_max, dx2[sx])
-    for j in range(j0, j1):
-        lo, hi, f_lo, f_hi = ranges[j - j0, 0], ranges[j - j0, 1], ranges[j - j0, 2], ranges[j - j0, 3]
-        if lo == f_lo and f_hi == hi:
+    for k in range(k0, k1):
+        g = out[j, k]
+        if g == N_SAMPLES:
             continue
-        d_min, d_max = _row_distances(dx2, dx2_min, dx2_max, j, cy, h, dxy)
-        _add_shell(status, mask, j, lo, f_lo, dxy, d_min, d_max, cz, r2, h, bits, out)
-        _add_shell(status, mask, j, f_hi, hi, dxy, d_min, d_max, cz, r2, h, bits, out)
+        c = _voxel_count(dxy, tz, k, r2)
+        if c == 0:
+            continue
+        if g == 0 or c == N_SAMPLES:
+            out[j, k] = c
+            owner[j, k] = s
+        else:
+            _share(i, j, k, images, h, owner, mask, dxy, tz, r2, dx2, odxy, bits, out)
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _multi_grey(status, mask, j, lo, hi, out):
-    """Grey values of the MULTI voxels among ``lo .. hi - 1`` of row ``j``: the popcount of their union masks."""
-    for k in range(lo, hi):
-        if status[j, k] == MULTI:
-            bits = 0
-            for w in range(WORDS):
-                bits += popcount64(mask[j, k, w])
-            out[j, k] = bits
+@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out):
+    """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
+
+    ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS) and ``tz`` (6 nz: the squared z distances of the samples in
+    the ball's reach, found once per plane) are scratch.
+    """
+    cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
+    r2 = r * r
+    eps = SLACK * (r + abs(cz))
+    nx_, fx_ = hull_gap(cx, i, h)
+    j0, j1 = axis_range(cy, r, h, ny)
+    k0, k1 = axis_range(cz, r, h, nz)
+    _plane_distances(i, cx, h, dx2[0])
+    for m in range(SUB * k0, SUB * k1):  # squared z distances of the samples in reach, as in _z_distances
+        dz = (m + 0.5) * h - cz
+        tz[m] = dz * dz
+    for j in range(j0, j1):
+        ny_, fy_ = hull_gap(cy, j, h)
+        lo, hi, f_lo, f_hi = _row_ranges(
+            cz, r2, eps, nx_ * nx_ + ny_ * ny_, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1
+        )
+        if f_hi > f_lo:  # a slice fill: ~2x faster than a loop over these short runs (measured)
+            out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
+        if lo < f_lo or f_hi < hi:
+            _row_distances(dx2[0], j, cy, h, dxy)
+            _add_shell(i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, mask, dx2[1], odxy, bits, out)
+            _add_shell(i, j, f_hi, hi, s, images, h, dxy, tz, r2, owner, mask, dx2[1], odxy, bits, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, dx2, dxy, bits, out):
-    """Grey values of plane x = i, interior runs in bulk and shell voxels tested (bit-identical to brute force).
+def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out):
+    """Grey values of plane x = i, ball after ball in one pass (bit-identical to brute force).
 
-    First every ball marks the voxels it reaches (:func:`_classify`: runs of FULL voxels in bulk, the shell one by
-    one); then each ball's samples are counted into the shell voxels that it alone reaches and ORed into the masks
-    of voxels two or more balls reach (:func:`_shell_grey`), so a sample counts once if it is in any ball; last the
-    MULTI voxels in the balls' shells get their masks' popcounts (:func:`_multi_grey`).
+    ``owner`` (ny, nz) int64 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey
+    value a ball of this plane has already set to 1..215.
     """
-    status[:, :] = UNTOUCHED
     out[:, :] = 0
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
-    n_rows = 0
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            j0, j1 = axis_range(images[s, 1], images[s, 3], h, ny)
-            n_rows += j1 - j0
-    ranges = np.empty((n_rows, 5), dtype=np.int64)  # per ball, its voxel rows' ranges (_row_ranges) and j
-    row = 0
-    for q in range(first, last):
-        s = order[q]
-        cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
-        if cx + r >= plane_lo:
-            j0, j1 = axis_range(cy, r, h, ny)
-            _classify(i, cx, cy, cz, r, h, ny, nz, status, mask, ranges[row : row + j1 - j0], out)
-            row += j1 - j0
-    row = 0
-    for q in range(first, last):
-        s = order[q]
-        cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
-        if cx + r >= plane_lo:
-            j0, j1 = axis_range(cy, r, h, ny)
-            rows = ranges[row : row + j1 - j0]
-            _shell_grey(i, cx, cy, cz, r, h, ny, status, mask, rows, dx2, dxy, bits, out)
-            row += j1 - j0
-    for t in range(row):  # every MULTI voxel lies in the shell of a ball that reaches it
-        j, lo, hi, f_lo, f_hi = ranges[t, 4], ranges[t, 0], ranges[t, 1], ranges[t, 2], ranges[t, 3]
-        _multi_grey(status, mask, j, lo, f_lo, out)
-        _multi_grey(status, mask, j, f_hi, hi, out)
+            _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
@@ -375,17 +327,35 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
     per = (nplanes + nthreads - 1) // nthreads
     for t in prange(nthreads):
         status = np.empty((ny, nz), dtype=np.uint8)
+        owner = np.empty((ny, nz), dtype=np.int64)
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
-        dx2 = np.empty(SUB)
-        dxy = np.full(N_ROWS, FAR)  # rows 36.. stay FAR: padding without a sample inside
+        dx2 = np.empty((2, SUB))
+        dxy = np.empty(N_ROWS)
+        odxy = np.empty(N_ROWS)
         bits = np.empty(N_ROWS, dtype=np.int64)
+        tz = np.empty(SUB * nz)
         scratch = np.empty((3, SUB))
         words = np.empty(WORDS, dtype=np.uint64)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             i = i0 + p
             if boundary_only:
                 _shell_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, dx2, dxy, bits, out[p]
+                    i,
+                    images,
+                    order,
+                    xmin_sorted,
+                    r_max,
+                    h,
+                    ny,
+                    nz,
+                    owner,
+                    mask,
+                    dx2,
+                    dxy,
+                    odxy,
+                    bits,
+                    tz,
+                    out[p],
                 )
             else:
                 _voxelize_plane(

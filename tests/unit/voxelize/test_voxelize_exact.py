@@ -146,3 +146,24 @@ def test_overlapping_spheres_with_samples_on_their_surfaces(periodic):
     )
     shared = (alone > g) & (g > 0) & (g < 216)  # partly filled voxels where two spheres share samples
     assert shared.sum() >= 20
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_voxels_shared_by_three_or_more_spheres(periodic):
+    # A cluster of spheres around one point: the voxels there get samples from three or more spheres, one after
+    # the other (the first owns the count, the second makes it a union mask, later ones OR into it); spheres that
+    # reach a voxel without a sample in it must leave it alone. Fails if a later sphere overwrites or double-counts.
+    a = 0.75
+    h = a / 6
+    rng = np.random.default_rng(11)
+    centre = np.array([2.2, 2.3, 1.6])
+    c = centre + rng.uniform(-0.6, 0.6, (12, 3))
+    r = rng.uniform(0.35, 0.9, 12)
+    # two more whose surfaces pass through samples
+    c = np.vstack([c, (np.array([[17, 18, 12], [19, 17, 14]]) + 0.5) * h])
+    r = np.concatenate([r, [3 * h, 5 * h]])
+    box = (4.5, 4.5, 3.0)
+    g = _both_equal_oracle(c, r, box, a, periodic)
+    singles = [grey_values_naive(c[n : n + 1], r[n : n + 1], box, a, periodic) for n in range(len(r))]
+    partly = sum(((s > 0) & (s < 216)).astype(np.int64) for s in singles)
+    assert ((partly >= 3) & (g < 216)).sum() >= 5  # voxels where three or more spheres each put some samples
