@@ -120,12 +120,12 @@ def _silo_rows(a: dict, th: dict) -> list[list[str]]:
         [
             f"k, slabs ≥ {THESIS_MIN_WIDTH_GRAINS:g} grains across ({a['k_wide_slabs']} of {len(a['k_local'])})",
             "–" if a["k_wide_slabs"] == 0 else f"{a['k_wide']:.2f} ± {a['k_wide_std']:.2f}",
-            "thesis: silos narrower than 10 grains not meaningful",
+            f"{th['k']} ± {th['k_err']} (it cut silos narrower than 10 grains)",
         ],
         [
             "k in the upper / middle / lower third of the fill",
             " / ".join(f"{v:.2f}" for v in a["k_thirds"]),
-            "thesis: local k independent of position (§3.3)",
+            "– (local k independent of position, §3.3)",
         ],
     ]
     if janssen_fit:
