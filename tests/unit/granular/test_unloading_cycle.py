@@ -16,7 +16,10 @@ Truths (statics and elasticity, not a fit):
   displacement is ~4 % of the loading one and the half-way stresses differ by ~5 % (the same with a 2x slower ramp,
   so friction, not the ramp rate). The test requires at least 10x the shallow cycle's residual: it tells the two
   regimes apart.
-Runtime: ~100 000 steps of 96 grains (~8 s CPU).
+- the thesis's full unloading (g' = 2.45e-3 m/s², granular-heap-unload-ci) is far outside it: after preconditioning
+  the residual is 33 % of the unloading displacement (60 % in the first cycle) and sigma_xx ends 11 % off (measured); a secant constant read
+  from it mixes elastic response with sliding. Required: residual above 10 %.
+Runtime: ~150 000 steps of 96 grains (~10 s CPU).
 """
 
 import numpy as np
@@ -27,6 +30,7 @@ from porepipe.granular import Simulation, stress_tensor
 from porepipe.granular._settings import Settings
 
 G = 9.81
+G_PRIME = 2.45e-3  # the thesis's unloaded gravity (§4.3.3)
 RAMP_S, HOLD_S = 0.2, 0.05
 
 
@@ -69,8 +73,11 @@ def _advance_to(sim, t):
 def _state(sim) -> dict:
     x = sim.position[:, :2].copy()
     lower = x[:, 1] < np.percentile(x[:, 1], 80)
-    sigma = stress_tensor(sim.contacts(), x, members=lower)["sigma"]
-    return {"x": x, "sigma": np.diag(sigma).copy(), "height": float(x[:, 1].mean()), "g": sim.gravity_now()}
+    try:
+        sigma = np.diag(stress_tensor(sim.contacts(), x, members=lower)["sigma"]).copy()
+    except PorepipeError:  # at g' ~ 0 too few contacts are left for a test area: no stress
+        sigma = np.zeros(2)
+    return {"x": x, "sigma": sigma, "height": float(x[:, 1].mean()), "g": sim.gravity_now()}
 
 
 def _cycle(sim, ratio) -> dict:
@@ -95,7 +102,7 @@ def _residual(c) -> float:
 @pytest.fixture(scope="module")
 def cycles():
     out = {}
-    for ratio in (0.8, 0.5):
+    for ratio in (0.8, 0.5, G_PRIME / G):
         sim = _settled_block()
         out[ratio] = [_cycle(sim, ratio) for _ in range(2)]
     return out
@@ -129,6 +136,12 @@ def test_a_deep_cycle_leaves_the_elastic_regime(cycles):
     assert _residual(deep) > 10 * _residual(shallow)
     half = deep["half_down"]["sigma"][1] / deep["half_up"]["sigma"][1] - 1
     assert abs(half) > 1e-2  # a hysteresis loop, wider than the shallow cycle's tolerance
+
+
+def test_the_thesis_full_unloading_is_not_reversible(cycles):
+    c = cycles[G_PRIME / G][1]
+    assert c["unloaded"]["g"] == pytest.approx(G_PRIME, rel=1e-9)
+    assert _residual(c) > 0.1
 
 
 def test_ramp_gravity_refuses_a_scene_without_g_of_t_and_bad_values():
