@@ -16,9 +16,10 @@ Truths (statics and elasticity, not a fit):
   displacement is ~4 % of the loading one and the half-way stresses differ by ~5 % (the same with a 2x slower ramp,
   so friction, not the ramp rate). The test requires at least 10x the shallow cycle's residual: it tells the two
   regimes apart.
-- the thesis's full unloading (g' = 2.45e-3 m/s², granular-heap-unload-ci) is far outside it: after preconditioning
-  the residual is 33 % of the unloading displacement (60 % in the first cycle) and sigma_xx ends 11 % off (measured); a secant constant read
-  from it mixes elastic response with sliding. Required: residual above 10 %.
+- the thesis's full unloading (g' = 2.45e-3 m/s², granular-heap-unload-ci) is far outside it: after
+  preconditioning the residual is 33 % of the unloading displacement (60 % in the first cycle) and sigma_xx ends
+  11 % off (measured); a secant constant read from it mixes elastic response with sliding. Required: residual
+  above 10 %.
 Runtime: ~150 000 steps of 96 grains (~10 s CPU).
 """
 
