@@ -11,6 +11,7 @@ _EXPORTS = {
     "Simulation": "_api",
     "THESIS_SILO": "_silo",
     "THESIS_SHAPES": "_silo",
+    "THESIS_MIN_WIDTH_GRAINS": "_silo",
     "analyse_heap": "_heap",
     "analyse_silo": "_silo",
     "check_convex": "_shapes",

@@ -45,6 +45,7 @@ from porepipe.granular._shapes import ellipse_polygon as ellipse_polygon
 from porepipe.granular._shapes import polygon_properties as polygon_properties
 from porepipe.granular._shapes import rectangle as rectangle
 from porepipe.granular._shapes import regular_polygon as regular_polygon
+from porepipe.granular._silo import THESIS_MIN_WIDTH_GRAINS as THESIS_MIN_WIDTH_GRAINS
 from porepipe.granular._silo import THESIS_SHAPES as THESIS_SHAPES
 from porepipe.granular._silo import THESIS_SILO as THESIS_SILO
 from porepipe.granular._silo import analyse_silo as analyse_silo
@@ -73,6 +74,7 @@ from porepipe.granular._theory import stepped_silo as stepped_silo
 from porepipe.granular._theory import wedge_stress as wedge_stress
 
 __all__ = [
+    "THESIS_MIN_WIDTH_GRAINS",
     "THESIS_SHAPES",
     "THESIS_SILO",
     "AngleMode",

@@ -323,6 +323,38 @@ class Simulation:
             return 1.0
         return float(K._size_scale(self.heat, self.time_s if t is None else t))
 
+    def gravity_now(self) -> float:
+        """|g| at the present time (m/s²): the scene's g(t), or |gravity_m_s2| without ``granular.gravity``."""
+        if self.settings.gravity is None:
+            return float(np.linalg.norm(self.gvec))
+        return float(K._gravity_scale(self.gpar, self.time_s))
+
+    def ramp_gravity(self, g_to_m_s2: float, duration_s: float) -> None:
+        """From now on ramp |g| linearly from its present value to ``g_to_m_s2`` over ``duration_s``, then hold it.
+
+        Replaces the scene's g(t) for the rest of the run: a sequence of calls loads and unloads a packing in
+        cycles (§4.3.3's adiabatic unloading and its reversal). Needs ``granular.gravity`` in the scene, which
+        selects the kernel with a time-dependent g.
+        """
+        if self.settings.gravity is None:
+            raise PorepipeError(
+                "ramp_gravity: the scene needs granular.gravity (the time-dependent g kernel)"
+            )
+        if not (np.isfinite(g_to_m_s2) and g_to_m_s2 >= 0 and np.isfinite(duration_s) and duration_s > 0):
+            raise PorepipeError(
+                f"ramp_gravity: g_to_m_s2 must be >= 0 and duration_s > 0 (got {g_to_m_s2}, {duration_s})"
+            )
+        g_from = self.gravity_now()
+        self.gpar[:] = (
+            _GKIND[GravityKind.linear],
+            g_from,
+            g_to_m_s2,
+            self.time_s,
+            self.time_s + duration_s,
+            1,
+            0,
+        )
+
     def _place_all(self):
         n = self.n_mob
         for w in range(n, self.nc.shape[0]):

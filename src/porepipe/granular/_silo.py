@@ -36,6 +36,10 @@ THESIS_SHAPES = {
     ("parabolic", 0.7): {"k": 0.89, "k_err": 0.11, "mu_j": 0.47, "section": "§3.5"},
 }
 
+#: the thesis's smallest meaningful silo width, in grains across (§3.4: "ein Silodurchmesser kleiner als 10 Teilchen
+#: ist nicht sinnvoll": it cut its hopper's apex there; it also called the stresses unreliable below ~25 across)
+THESIS_MIN_WIDTH_GRAINS = 10.0
+
 
 def wall_by_name(tables, name):
     """(index, world corners) of the wall called ``name`` in a granular result; one clear error if absent."""
@@ -171,6 +175,7 @@ def analyse_silo(
     slab_rows: float = 4.0,
     floor_zone: float = 1.0,
     mu: float | None = None,
+    min_width_grains: float = THESIS_MIN_WIDTH_GRAINS,
 ) -> dict:
     """Read-out of a settled 2-D silo of any shape (thesis ch. 3).
 
@@ -197,6 +202,9 @@ def analyse_silo(
         The fits leave out the lowest ``floor_zone`` bottom widths (the floor restrains the grains there).
     mu : float, optional
         Grain-wall friction of the scene: gives ``wall_at_coulomb_limit`` and the Rankine/Jaky ``bounds``.
+    min_width_grains : float
+        ``k_wide`` averages only the slabs at least this many mean grain diameters wide (default: the thesis's
+        smallest meaningful silo width, 10). ``k`` averages all slabs.
 
     Returns
     -------
@@ -206,7 +214,9 @@ def analyse_silo(
         profiles over ``depth_m``: ``wall_pressure`` (sigma_xx per unit height), ``wall_running_mean``,
         ``wall_normal_stress``, ``wall_shear_stress``, ``wall_vertical_traction``; slabs over ``slab_depth_m``:
         ``k_local``, ``slab_sigma_xx``, ``slab_sigma_zz``, ``slab_psi_rad`` (major axis from the vertical);
-        ``k``, ``k_std``, ``fit`` (k and mu_j: Janssen with both free, or the shape's theory with k fixed),
+        ``slab_width_grains``; ``k``, ``k_std`` (all slabs), ``k_wide``, ``k_wide_std``, ``k_wide_slabs`` (slabs
+        at least ``min_width_grains`` wide; NaN if none), ``k_thirds`` (mean k of the slabs in the upper, middle
+        and lower third of the fill), ``fit`` (k and mu_j: Janssen with both free, or the shape's theory with k fixed),
         ``fit_k_fixed``, ``theory`` (the fill-relative :class:`Silo`, or None for Janssen); ``segments`` (per wall:
         name, contacts, sums of F_n, F_t, F_x, F_y); ``floor_share``, ``wall_share``, ``ledge_share`` (of the
         weight), ``force_balance`` ((sum of all walls' F_y - weight)/weight), ``horizontal_balance`` (sum F_x /
@@ -247,6 +257,9 @@ def analyse_silo(
     centres = np.linspace(d_grain, fill - d_grain, 40)
     prof = wall_profiles(wc, top - wc["point"][:, 1], centres, fill, contacts_per_window)
     slabs = _slab_stresses(contacts, parts["centroid"], act, slab_lo, slab, top)
+    slabs["width"] = (
+        np.array([np.diff(inner_extent(polys_w, top - z, x_axis))[0] for z in slabs["depth"]]) / d_grain
+    )
     k_mean = float(np.nanmean(slabs["k"])) if len(slabs["k"]) else float("nan")
 
     xt0, xt1 = inner_extent(polys_w, top - 0.5 * d_grain, x_axis)
@@ -287,8 +300,10 @@ def analyse_silo(
         "slab_sigma_xx": slabs["xx"],
         "slab_sigma_zz": slabs["zz"],
         "slab_psi_rad": slabs["psi"],
+        "slab_width_grains": slabs["width"],
         "k": k_mean,
         "k_std": float(np.nanstd(slabs["k"])) if len(slabs["k"]) else float("nan"),
+        **_k_by_region(slabs, fill, min_width_grains),
         "fit_depth_max_m": zmax,
         "fit": fit,
         "fit_k_fixed": fit_k,
@@ -331,6 +346,21 @@ def _slab_stresses(contacts, centroid, active, slab_lo, slab, top) -> dict:
         out["psi"].append(st["psi_rad"])
         out["depth"].append(top - ya - 0.5 * slab)
     return {key: np.asarray(v, dtype=np.float64) for key, v in out.items()}
+
+
+def _k_by_region(slabs: dict, fill: float, min_width_grains: float) -> dict:
+    """Mean k of the slabs wide enough for the thesis (``k_wide``) and of the upper, middle, lower third of the fill."""
+    k = slabs["k"]
+    wide = slabs["width"] >= min_width_grains
+    third = np.minimum((3 * slabs["depth"] / fill).astype(int), 2)
+    return {
+        "k_wide": float(np.nanmean(k[wide])) if wide.any() else float("nan"),
+        "k_wide_std": float(np.nanstd(k[wide])) if wide.any() else float("nan"),
+        "k_wide_slabs": int(wide.sum()),
+        "k_thirds": tuple(
+            float(np.nanmean(k[third == t])) if (third == t).any() else float("nan") for t in range(3)
+        ),
+    }
 
 
 def _balance(wc, contacts, n, floor_k, weight) -> dict:

@@ -17,6 +17,7 @@ from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs
 from porepipe.granular import (
+    THESIS_MIN_WIDTH_GRAINS,
     THESIS_SHAPES,
     THESIS_SILO,
     analyse_heap,
@@ -115,7 +116,17 @@ def _silo_rows(a: dict, th: dict) -> list[list[str]]:
             "k = sigma_xx/sigma_zz (slab stress tensors)",
             f"{a['k']:.2f} ± {a['k_std']:.2f}",
             f"{th['k']} ± {th['k_err']}",
-        ]
+        ],
+        [
+            f"k, slabs ≥ {THESIS_MIN_WIDTH_GRAINS:g} grains across ({a['k_wide_slabs']} of {len(a['k_local'])})",
+            "–" if a["k_wide_slabs"] == 0 else f"{a['k_wide']:.2f} ± {a['k_wide_std']:.2f}",
+            f"{th['k']} ± {th['k_err']} (it cut silos narrower than 10 grains)",
+        ],
+        [
+            "k in the upper / middle / lower third of the fill",
+            " / ".join(f"{v:.2f}" for v in a["k_thirds"]),
+            "– (local k independent of position, §3.3)",
+        ],
     ]
     if janssen_fit:
         rows += [
