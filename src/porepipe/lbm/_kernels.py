@@ -946,9 +946,9 @@ def _apply_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c):
 #    link in ``state``.
 @njit(**_NUMERIC)
 def _momentum_tile(f, cnt, j):
-    """j = Σ c_q f̃_q of tile lanes 0 … cnt-1 (rounded up to whole vectors) into ``j`` (3 · _TILE: x, y, z rows), in one
-    vectorised pass: the multi-reflection state needs it at most nodes of a porous tile, and node by node it cost
-    as much as the rest of the link (benchmarks/lbm.py: MR1 ns per link).
+    """Momenta Σ c_q f̃_q of tile lanes 0 … cnt-1 (rounded up to whole vectors) into ``j`` (3 · _TILE: x, y, z rows),
+    in one vectorised pass: the multi-reflection state needs them at most nodes of a porous tile, and node by node
+    they cost as much as the rest of the link (benchmarks/lbm.py: MR1 ns per link).
     """
     view = _scratch_view(f)
     for i in range(_lanes(cnt)):
@@ -1159,7 +1159,19 @@ def _step(
                     r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
                     if multi:
                         _apply_mr_links(
-                            f, a, n0, cnt, n_nodes, tile_start, link_slot, link_b, link_c, link_mr, link_state, g, j
+                            f,
+                            a,
+                            n0,
+                            cnt,
+                            n_nodes,
+                            tile_start,
+                            link_slot,
+                            link_b,
+                            link_c,
+                            link_mr,
+                            link_state,
+                            g,
+                            j,
                         )
                     elif link_slot.size:
                         _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
