@@ -22,7 +22,7 @@ only within one run. Each table row also gives MLUPS per CPU second of the proce
 
 Usage: python benchmarks/lbm.py [--size 128] [--steps 4] [--rounds 5] [--out DIR] [--no-lbmpy] [--smoke]
 Writes lbm_benchmark.json and lbm_benchmark.md into --out (default: results/benchmarks/ of the checkout). The
-default run takes 2–4 minutes here; --rounds 15 for steadier head-to-head figures.
+default run takes 3–5 minutes here; --rounds 15 for steadier head-to-head figures.
 """
 
 from __future__ import annotations
