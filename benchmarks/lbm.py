@@ -14,7 +14,7 @@ operator).
 
 Then, new kernel only: BGK / TRT / MRT in float64 and float32 at 1 and 2 threads on both geometries (float32
 stores 152 B per update: the bound doubles), and the cost of interpolated walls (TRT float64 on the porous sample,
-halfway bounce-back against CLI walls at the exact sphere surfaces). Regular runs (all 18 pull sources advance with
+halfway bounce-back against CLI and MR1 walls at the exact sphere surfaces, at porosity 0.2 and 0.46). Regular runs (all 18 pull sources advance with
 the node) read no index; the others also read 18 uint32 neighbour indices (72 B), which the bound does not count.
 
 Timings come from a shared, loaded 2-core machine: treat them as lower bounds of what the code can do, and compare
@@ -22,7 +22,7 @@ only within one run. Each table row also gives MLUPS per CPU second of the proce
 
 Usage: python benchmarks/lbm.py [--size 128] [--steps 4] [--rounds 5] [--out DIR] [--no-lbmpy] [--smoke]
 Writes lbm_benchmark.json and lbm_benchmark.md into --out (default: results/benchmarks/ of the checkout). The
-default run takes 2–4 minutes here; --rounds 15 for steadier head-to-head figures.
+default run takes 3–5 minutes here; --rounds 15 for steadier head-to-head figures.
 """
 
 from __future__ import annotations
@@ -117,34 +117,65 @@ def time_lattice(
     return wall, cpu
 
 
-def wall_cost(size: int, thread_counts, steps: int, repeats: int = 5) -> list[dict]:
-    """Per-step CPU cost of CLI interpolated walls against halfway bounce-back on the porous sample (TRT, f64)."""
-    pore, geometry = porous_sample(size, spheres=True)
-    lat = periodic_setup(pore, mirror=False, lateral_periodic=True, prune=True, keep_wall_links=True).lattice
-    links = build_links(lat.pore, lat.periodic, *lat.wall_links, geometry, Walls.cli)
+def _wall_steppers(lat, geometry) -> tuple[dict, dict]:
+    """(steppers, links): TRT float64 steps of ``lat`` with halfway, CLI and MR1 walls (τ̂ = 0.857)."""
+    wall_links = lat.wall_links
+    links = {w: build_links(lat.pore, lat.periodic, *wall_links, geometry, Walls(w)) for w in ("cli", "mr1")}
     lat.wall_links = None
+    steppers = {"halfway": make_stepper(Settings(walls="halfway"), lat)}
+    steppers.update({w: make_stepper(Settings(walls=w), lat, links[w]) for w in links})
+    return steppers, links
+
+
+def wall_cost(size: int, thread_counts, steps: int, rounds: int = 5, porosities=(0.2, 0.46)) -> list[dict]:
+    """Per-step CPU cost of CLI and MR1 interpolated walls against halfway bounce-back on porous samples (TRT, f64,
+    exact sphere walls), timed in interleaved rounds (best of each), and the extra CPU time per interpolated link.
+    """
     out = []
-    for threads in thread_counts:
-        best = {}
-        for name, lk in (("halfway", None), ("cli", links)):
-            best[name] = time_lattice(lat, "trt", "float64", threads, steps, repeats, links=lk)[1]
-        half_ms, cli_ms = (lat.n_nodes / best[k] / 1e3 for k in ("halfway", "cli"))  # CPU ms per step
-        row = {
-            "threads": threads,
-            "nodes": lat.n_nodes,
-            "links": links.size,
-            "links_per_node": links.size / lat.n_nodes,
-            "halfway_ms": half_ms,
-            "cli_ms": cli_ms,
-            "extra": cli_ms / half_ms - 1,
-            "ns_per_link": (cli_ms - half_ms) * 1e6 / max(links.size, 1),
-        }
-        out.append(row)
-        print(
-            f"walls porous {threads}t: halfway {half_ms:.2f} ms/step, cli {cli_ms:.2f} ms/step "
-            f"({row['extra']:+.1%}, {row['links_per_node']:.2f} links per node)",
-            flush=True,
-        )
+    for porosity in porosities:
+        pore, geometry = porous_sample(size, porosity=porosity, spheres=True)
+        lat = periodic_setup(
+            pore, mirror=False, lateral_periodic=True, prune=True, keep_wall_links=True
+        ).lattice
+        steppers, links = _wall_steppers(lat, geometry)
+        n = lat.n_nodes
+        src, dst, none = np.zeros(19 * n), np.zeros(19 * n), np.zeros((4, 0))
+        for threads in thread_counts:
+            numba.set_num_threads(threads)
+            for step in steppers.values():
+                step(src, dst, none, False, 2)  # compile / warm up
+            best = dict.fromkeys(steppers, float("inf"))
+            for _ in range(rounds):
+                for name, step in steppers.items():
+                    c0 = time.process_time()
+                    step(src, dst, none, False, steps)
+                    best[name] = min(best[name], (time.process_time() - c0) / steps * 1e3)  # CPU ms per step
+            half = best["halfway"]
+            row = {
+                "porosity": float(pore.mean()),
+                "threads": threads,
+                "nodes": n,
+                "halfway_ms": half,
+                "load": os.getloadavg()[0],
+            }
+            for w, lk in links.items():
+                row[w] = {
+                    "links": lk.size,
+                    "links_per_node": lk.size / n,
+                    "ms": best[w],
+                    "extra": best[w] / half - 1,
+                    "ns_per_link": (best[w] - half) * 1e6 / max(lk.size, 1),
+                }
+            out.append(row)
+            print(
+                f"walls porous phi={row['porosity']:.2f} {threads}t: halfway {half:.2f} ms/step, "
+                + ", ".join(
+                    f"{w} {row[w]['ms']:.2f} ({row[w]['extra']:+.1%}, {row[w]['ns_per_link']:.1f} ns per link, "
+                    f"{row[w]['links_per_node']:.2f} links per node)"
+                    for w in links
+                ),
+                flush=True,
+            )
     return out
 
 
@@ -320,14 +351,17 @@ def _table(rows, wall_rows, peer_rows, bw) -> list[str]:
     ]
     md += [
         "",
-        "Interpolated walls (porous sample, TRT float64, CPU time per step; best of the repeats):",
+        "Interpolated walls (porous samples, exact sphere walls, TRT float64, CPU time per step; best of interleaved "
+        "rounds; ns per link = extra CPU time over halfway per interpolated link):",
         "",
-        "| threads | links per node | halfway ms/step | cli ms/step | extra | ns per link |",
-        "|---" * 6 + "|",
+        "| porosity | threads | halfway ms/step | cli ms/step | cli extra | cli ns/link | mr1 ms/step | mr1 extra | "
+        "mr1 ns/link | cli links/node | load |",
+        "|---" * 11 + "|",
     ]
     md += [
-        f"| {w['threads']} | {w['links_per_node']:.2f} | {w['halfway_ms']:.2f} | {w['cli_ms']:.2f} | "
-        f"{w['extra']:+.1%} | {w['ns_per_link']:.2f} |"
+        f"| {w['porosity']:.2f} | {w['threads']} | {w['halfway_ms']:.2f} | {w['cli']['ms']:.2f} | "
+        f"{w['cli']['extra']:+.1%} | {w['cli']['ns_per_link']:.2f} | {w['mr1']['ms']:.2f} | {w['mr1']['extra']:+.1%} | "
+        f"{w['mr1']['ns_per_link']:.2f} | {w['cli']['links_per_node']:.2f} | {w['load']:.1f} |"
         for w in wall_rows
     ]
     return md
@@ -402,7 +436,7 @@ def main(argv=None) -> int:
                         f"({cpu:5.1f} per CPU s), bound {bound:6.1f} ({mlups / bound:.0%})",
                         flush=True,
                     )
-    walls = wall_cost(size, thread_counts, args.steps)
+    walls = wall_cost(size, thread_counts, args.steps, args.rounds)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     record = {"bandwidth_gbs": bw, "checks": checks, "head_to_head": peer, "rows": rows, "walls": walls}

@@ -945,11 +945,26 @@ def _apply_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c):
 #    populations in the previous step (equilibrium of j = Σ c f, no force shift), g = 1 − ω⁻/2; g n⁻ is kept per
 #    link in ``state``.
 @njit(**_NUMERIC)
-def _apply_mr_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c, mr, state, g):
+def _momentum_tile(f, cnt, j):
+    """Momenta Σ c_q f̃_q of tile lanes 0 … cnt-1 (rounded up to whole vectors) into ``j`` (3 · _TILE: x, y, z rows),
+    in one vectorised pass: the multi-reflection state needs them at most nodes of a porous tile, and node by node
+    they cost as much as the rest of the link (benchmarks/lbm.py: MR1 ns per link).
+    """
+    view = _scratch_view(f)
+    for i in range(_lanes(cnt)):
+        _, jx, jy, jz = _moments(view, i)
+        _set(j, i, jx)
+        _set(j, _TILE + i, jy)
+        _set(j, 2 * _TILE + i, jz)
+
+
+@njit(**_NUMERIC)
+def _apply_mr_links(f, src, n0, cnt, n_nodes, tile_start, slot, coef_b, coef_c, mr, state, g, j):
     """Interpolate the tile's links as :func:`_apply_links` plus the multi-reflection terms, then store each link's
     g n⁻_ō(x) of the completed pre-collision populations for the next step.
 
-    ``mr`` = (far, far_own, coef_d, coef_e): flat indices of f*_ō(x + 2c_p) and f*_p(x + c_p), and the weights.
+    ``mr`` = (far, far_own, coef_d, coef_e): flat indices of f*_ō(x + 2c_p) and f*_p(x + c_p), and the weights;
+    ``j``: scratch for the tile's momenta (:func:`_momentum_tile`).
     """
     far, far_own, coef_d, coef_e = mr
     tile = n0 // _TILE
@@ -964,19 +979,14 @@ def _apply_mr_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c, mr, s
         second = _get(src, far[k]) - _get(src, far_own[k])
         value = h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h)
         _set(f, s, value + np.float64(coef_d[k]) * second + np.float64(coef_e[k]) * state[k])
-    view = _scratch_view(f)
-    last = -1
-    jx = jy = jz = 0.0
-    for k in range(lo, hi):  # links by node, then population: the node's momentum once per node
+    _momentum_tile(f, cnt, j)
+    for k in range(lo, hi):
         s = np.int64(slot[k])
         p = s // _TILE
         i = s - p * _TILE
         o = _OPP[p]
-        if i != last:
-            _, jx, jy, jz = _moments(view, i)
-            last = i
-        cj = _CX[o] * jx + _CY[o] * jy + _CZ[o] * jz
-        state[k] = g * (0.5 * (_pop(view, o, i) - _pop(view, p, i)) - 3.0 * _W[o] * cj)
+        cj = _CX[o] * _get(j, i) + _CY[o] * _get(j, _TILE + i) + _CZ[o] * _get(j, 2 * _TILE + i)
+        state[k] = g * (0.5 * (_get(f, o * _TILE + i) - _get(f, s)) - 3.0 * _W[o] * cj)
 
 
 # -- the step kernel ------------------------------------------------------------------------------------------------
@@ -1116,6 +1126,7 @@ def _step(
         keep = store and s == n_steps - 1
         for c in prange(n_chunks):
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
+            j = np.zeros(3 * _TILE if multi else 0)
             scratch = _scratch_view(f)
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
             r = np.searchsorted(run_start, n0, side="right") - 1
@@ -1148,7 +1159,19 @@ def _step(
                     r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
                     if multi:
                         _apply_mr_links(
-                            f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c, link_mr, link_state, g
+                            f,
+                            a,
+                            n0,
+                            cnt,
+                            n_nodes,
+                            tile_start,
+                            link_slot,
+                            link_b,
+                            link_c,
+                            link_mr,
+                            link_state,
+                            g,
+                            j,
                         )
                     elif link_slot.size:
                         _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
