@@ -453,6 +453,65 @@ def _step_reductions(sig, conv, aux):
 
 # ---------------------------------------------------------------------------------------------------------------------
 # the step: forces at x^{s-1}, damped velocity-Störmer-Verlet update (§5.3), per-sphere overlap and convergence
+#: rows of the per-owner scratch of :func:`_pair_terms`: the pair force (3), sigma_ij, the distance, the reach flag
+_TERMS = 6
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _pair_terms(i, start, stop, x_old, r, types, half_idx, box, half_box, kpair, hcoef, sigp, cut, terms):
+    """Force, sigma_ij, distance and reach flag of every pair (i, j) of sphere i's half list, into ``terms[:, k]``.
+
+    No branch and no store to another sphere, so the loop vectorises (gathers of x_j, r_j, the type tables): the
+    minimum image is two selects against ``half_box`` (L/2 on periodic axes, inf on walled ones), the force law
+    :func:`_pair_force_over_dist` selects its branch. Each term is computed by the same operations in the same
+    order as a scalar loop would, so the values are bit for bit those of one pair at a time. The pair force of
+    coincident centres (distance 0) is not finite here; :func:`_owner_pairs` replaces it.
+    """
+    ti = types[i]
+    ri = r[i]
+    xi0 = x_old[i, 0]
+    xi1 = x_old[i, 1]
+    xi2 = x_old[i, 2]
+    for p in range(start, stop):
+        k = p - start
+        j = half_idx[p]
+        d0 = xi0 - x_old[j, 0]
+        d0 = d0 - box[0] if d0 > half_box[0] else d0
+        d0 = d0 + box[0] if d0 < -half_box[0] else d0
+        d1 = xi1 - x_old[j, 1]
+        d1 = d1 - box[1] if d1 > half_box[1] else d1
+        d1 = d1 + box[1] if d1 < -half_box[1] else d1
+        d2 = xi2 - x_old[j, 2]
+        d2 = d2 - box[2] if d2 > half_box[2] else d2
+        d2 = d2 + box[2] if d2 < -half_box[2] else d2
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        rj = r[j]
+        tj = types[j]
+        rsum = ri + rj
+        rmin2 = rsum - abs(ri - rj)
+        dxeq = rsum - 0.5 * sigp[ti, tj] * rmin2
+        in_reach = dist <= cut * dxeq
+        g = _pair_force_over_dist(dist, dxeq, kpair[ti, tj], hcoef[ti, tj])
+        g = g if in_reach else 0.0
+        terms[0, k] = g * d0
+        terms[1, k] = g * d1
+        terms[2, k] = g * d2
+        terms[3, k] = (rsum - dist) / rmin2
+        terms[4, k] = dist
+        terms[5, k] = 1.0 if in_reach else 0.0
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _tie_force(i, j, r, types, ids, hcoef, sigp, axis):
+    """Component ``axis`` of the pair force on i from j when their centres coincide: the harmonic force at
+    distance 0, hcoef / dx_eq, along the pair's random direction :func:`_tie_axis`.
+    """
+    rsum = r[i] + r[j]
+    rmin2 = rsum - abs(r[i] - r[j])
+    dxeq = rsum - 0.5 * sigp[types[i], types[j]] * rmin2
+    return hcoef[types[i], types[j]] / dxeq * _tie_axis(ids[i], ids[j], axis)
+
+
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _owner_pairs(
     i,
@@ -464,7 +523,7 @@ def _owner_pairs(
     half_start,
     half_idx,
     box,
-    periodic,
+    half_box,
     kpair,
     hcoef,
     sigp,
@@ -473,17 +532,18 @@ def _owner_pairs(
     sig_max,
     conv,
     freeze,
-    walls,
+    terms,
 ):
     """Every pair (i, j) of sphere i's half list, evaluated once and applied to both ends (Newton's third law).
 
-    Adds the pair force to f_new[i] (summed over the list first) and its negative to f_new[j] (both ends see
-    bitwise-negated differences), raises sig_max of both to sigma_ij (one division, a max: no branch) and sets
-    conv of both to 1 when the partner is within reach (the flag the step's stochastic forces read). The caller
-    runs spheres that share a partner in one thread, in a fixed order.
+    Two passes: :func:`_pair_terms` evaluates the pairs (vectorised), then this loop scatters them: adds the pair
+    force to f_new[i] (summed over the list first) and its negative to f_new[j], raises sig_max of both to
+    sigma_ij and sets conv of both to 1 when the partner is within reach (the flag the step's stochastic forces
+    read). The caller runs spheres that share a partner in one thread, in a fixed order.
     """
-    ti = types[i]
-    ri = r[i]
+    start = half_start[i]
+    stop = half_start[i + 1]
+    _pair_terms(i, start, stop, x_old, r, types, half_idx, box, half_box, kpair, hcoef, sigp, cut, terms)
     fro_i = False
     if freeze:
         fro_i = frozen[i] != 0
@@ -492,22 +552,10 @@ def _owner_pairs(
     fz = 0.0
     smax = sig_max[i]
     reach_any = 0
-    for p in range(half_start[i], half_start[i + 1]):
+    for p in range(start, stop):
+        k = p - start
         j = half_idx[p]
-        tj = types[j]
-        rj = r[j]
-        if walls:
-            dx0 = _min_image(x_old[i, 0] - x_old[j, 0], box[0], periodic[0])
-            dx1 = _min_image(x_old[i, 1] - x_old[j, 1], box[1], periodic[1])
-            dx2 = _min_image(x_old[i, 2] - x_old[j, 2], box[2], periodic[2])
-        else:
-            dx0 = _min_image(x_old[i, 0] - x_old[j, 0], box[0], True)
-            dx1 = _min_image(x_old[i, 1] - x_old[j, 1], box[1], True)
-            dx2 = _min_image(x_old[i, 2] - x_old[j, 2], box[2], True)
-        dist = math.sqrt(dx0 * dx0 + dx1 * dx1 + dx2 * dx2)
-        rsum = ri + rj
-        rmin2 = rsum - abs(ri - rj)
-        sig_ij = (rsum - dist) / rmin2
+        sig_ij = terms[3, k]
         smax = max(smax, sig_ij)
         sig_max[j] = max(sig_max[j], sig_ij)
         fro_j = False
@@ -515,19 +563,15 @@ def _owner_pairs(
             fro_j = frozen[j] != 0
             if fro_i and fro_j:
                 continue
-        dxeq = rsum - 0.5 * sigp[ti, tj] * rmin2
-        in_reach = dist <= cut * dxeq
-        if dist > 0.0:
-            g = _pair_force_over_dist(dist, dxeq, kpair[ti, tj], hcoef[ti, tj])
-            g = g if in_reach else 0.0  # a select, not a branch: skin-region partners cost the same
-            c0 = g * dx0
-            c1 = g * dx1
-            c2 = g * dx2
+        in_reach = terms[5, k] != 0.0
+        if terms[4, k] > 0.0:
+            c0 = terms[0, k]
+            c1 = terms[1, k]
+            c2 = terms[2, k]
         elif in_reach:
-            f = hcoef[ti, tj] / dxeq
-            c0 = f * _tie_axis(ids[i], ids[j], 0)
-            c1 = f * _tie_axis(ids[i], ids[j], 1)
-            c2 = f * _tie_axis(ids[i], ids[j], 2)
+            c0 = _tie_force(i, j, r, types, ids, hcoef, sigp, 0)
+            c1 = _tie_force(i, j, r, types, ids, hcoef, sigp, 1)
+            c2 = _tie_force(i, j, r, types, ids, hcoef, sigp, 2)
         else:
             continue  # coincident centres out of reach: no force
         reach_any |= in_reach
@@ -546,6 +590,16 @@ def _owner_pairs(
     sig_max[i] = smax
     if reach_any:
         conv[i] = 1
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _max_degree(half_start, slab_items, lo, hi):
+    """Most half-list partners of one sphere among ``slab_items[lo:hi]`` (the scratch length of a slab)."""
+    most = 0
+    for m in range(lo, hi):
+        i = slab_items[m]
+        most = max(most, half_start[i + 1] - half_start[i])
+    return most
 
 
 _STEP_CACHE: dict = {}
@@ -618,9 +672,17 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         # number mod 3) share no sphere and run in parallel, each in sphere order: the same sums for any thread
         # count
         nslab = slab_start.size - 1
+        half_box = np.empty(3)
+        for a in range(3):
+            half_box[a] = (
+                0.5 * box[a] if periodic[a] or not WALLS else np.inf
+            )  # minimum image on periodic axes
         for colour in range(min(nslab, 3)):
             for k in prange((nslab - colour + 2) // 3):
                 s = colour + 3 * k
+                terms = np.empty(
+                    (_TERMS, _max_degree(half_start, slab_items, slab_start[s], slab_start[s + 1]))
+                )
                 for m in range(slab_start[s], slab_start[s + 1]):
                     _owner_pairs(
                         slab_items[m],
@@ -632,7 +694,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                         half_start,
                         half_idx,
                         box,
-                        periodic,
+                        half_box,
                         kpair,
                         hcoef,
                         sigp,
@@ -641,7 +703,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                         sig_max,
                         conv,
                         FREEZE,
-                        WALLS,
+                        terms,
                     )
         half_dt2_m = 0.5 * dt * dt / mass
         for i in prange(n):
