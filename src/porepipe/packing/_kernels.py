@@ -453,125 +453,124 @@ def _step_reductions(sig, conv, aux):
 
 # ---------------------------------------------------------------------------------------------------------------------
 # the step: forces at x^{s-1}, damped velocity-Störmer-Verlet update (§5.3), per-sphere overlap and convergence
-#: rows of the per-owner scratch of :func:`_pair_terms`: the pair force (3), sigma_ij, the distance, the reach flag
-_TERMS = 6
+#: rows of the pair scratch: what :func:`_gather_pairs` copies in (differences of centres x, y, z, r_i, r_j and the
+#: type-pair k, hcoef, sigma*) and what :func:`_pair_terms` writes (force x, y, z, sigma_ij, distance, reach flag)
+_D0, _RI, _RJ, _KP, _HC, _SP, _C0, _SIG, _DIST, _REACH, _ROWS = 0, 3, 4, 5, 6, 7, 8, 11, 12, 13, 14
+#: pairs evaluated per batch (the scratch holds at least one sphere's whole list besides)
+_BATCH = 512
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _pair_terms(i, start, stop, x_old, r, types, half_idx, box, half_box, kpair, hcoef, sigp, cut, terms):
-    """Force, sigma_ij, distance and reach flag of every pair (i, j) of sphere i's half list, into ``terms[:, k]``.
+def _gather_pairs(i, half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k):
+    """Copy what the pairs of sphere i need into columns k, k+1, ... of the scratch w; return the next column.
 
-    No branch and no store to another sphere, so the loop vectorises (gathers of x_j, r_j, the type tables): the
-    minimum image is two selects against ``half_box`` (L/2 on periodic axes, inf on walled ones), the force law
-    :func:`_pair_force_over_dist` selects its branch. Each term is computed by the same operations in the same
-    order as a scalar loop would, so the values are bit for bit those of one pair at a time. The pair force of
-    coincident centres (distance 0) is not finite here; :func:`_owner_pairs` replaces it.
+    The scattered reads (x_j, r_j, the type tables) happen here, in a plain loop, so that :func:`_pair_terms` reads
+    contiguous rows only and vectorises.
     """
     ti = types[i]
-    ri = r[i]
-    xi0 = x_old[i, 0]
-    xi1 = x_old[i, 1]
-    xi2 = x_old[i, 2]
-    for p in range(start, stop):
-        k = p - start
+    for p in range(half_start[i], half_start[i + 1]):
         j = half_idx[p]
-        d0 = xi0 - x_old[j, 0]
-        d0 = d0 - box[0] if d0 > half_box[0] else d0
-        d0 = d0 + box[0] if d0 < -half_box[0] else d0
-        d1 = xi1 - x_old[j, 1]
-        d1 = d1 - box[1] if d1 > half_box[1] else d1
-        d1 = d1 + box[1] if d1 < -half_box[1] else d1
-        d2 = xi2 - x_old[j, 2]
-        d2 = d2 - box[2] if d2 > half_box[2] else d2
-        d2 = d2 + box[2] if d2 < -half_box[2] else d2
-        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        rj = r[j]
         tj = types[j]
+        w[_D0, k] = xr[i, 0] - xr[j, 0]
+        w[_D0 + 1, k] = xr[i, 1] - xr[j, 1]
+        w[_D0 + 2, k] = xr[i, 2] - xr[j, 2]
+        w[_RI, k] = xr[i, 3]
+        w[_RJ, k] = xr[j, 3]
+        w[_KP, k] = kpair[ti, tj]
+        w[_HC, k] = hcoef[ti, tj]
+        w[_SP, k] = sigp[ti, tj]
+        k += 1
+    return k
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _min_image_select(d, length, half):
+    """:func:`_min_image` as two selects (half = L/2 on periodic axes, inf on walled ones): the same value."""
+    d = d - length if d > half else d
+    return d + length if d < -half else d
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _pair_terms(w, npairs, box, half_box, cut):
+    """Force, sigma_ij, distance and reach flag of the first ``npairs`` gathered pairs of the scratch w.
+
+    Contiguous rows in and out, no branch (selects for the minimum image and the force law's two branches), no
+    division check (numpy's error model): the loop vectorises. Each value comes from the same operations in the
+    same order as one pair at a time, so the results are bit for bit those of a scalar loop. The force of
+    coincident centres (distance 0) is not finite here; :func:`_scatter_pairs` replaces it.
+    """
+    b0, b1, b2 = box[0], box[1], box[2]
+    h0, h1, h2 = half_box[0], half_box[1], half_box[2]
+    for k in range(npairs):
+        d0 = _min_image_select(w[_D0, k], b0, h0)
+        d1 = _min_image_select(w[_D0 + 1, k], b1, h1)
+        d2 = _min_image_select(w[_D0 + 2, k], b2, h2)
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        ri = w[_RI, k]
+        rj = w[_RJ, k]
         rsum = ri + rj
         rmin2 = rsum - abs(ri - rj)
-        dxeq = rsum - 0.5 * sigp[ti, tj] * rmin2
+        dxeq = rsum - 0.5 * w[_SP, k] * rmin2
         in_reach = dist <= cut * dxeq
-        g = _pair_force_over_dist(dist, dxeq, kpair[ti, tj], hcoef[ti, tj])
+        g = _pair_force_over_dist(dist, dxeq, w[_KP, k], w[_HC, k])
         g = g if in_reach else 0.0
-        terms[0, k] = g * d0
-        terms[1, k] = g * d1
-        terms[2, k] = g * d2
-        terms[3, k] = (rsum - dist) / rmin2
-        terms[4, k] = dist
-        terms[5, k] = 1.0 if in_reach else 0.0
+        w[_C0, k] = g * d0
+        w[_C0 + 1, k] = g * d1
+        w[_C0 + 2, k] = g * d2
+        w[_SIG, k] = (rsum - dist) / rmin2
+        w[_DIST, k] = dist
+        w[_REACH, k] = 1.0 if in_reach else 0.0
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _tie_force(i, j, r, types, ids, hcoef, sigp, axis):
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _tie_force(i, j, xr, types, ids, hcoef, sigp, axis):
     """Component ``axis`` of the pair force on i from j when their centres coincide: the harmonic force at
     distance 0, hcoef / dx_eq, along the pair's random direction :func:`_tie_axis`.
     """
-    rsum = r[i] + r[j]
-    rmin2 = rsum - abs(r[i] - r[j])
+    rsum = xr[i, 3] + xr[j, 3]
+    rmin2 = rsum - abs(xr[i, 3] - xr[j, 3])
     dxeq = rsum - 0.5 * sigp[types[i], types[j]] * rmin2
     return hcoef[types[i], types[j]] / dxeq * _tie_axis(ids[i], ids[j], axis)
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _owner_pairs(
-    i,
-    x_old,
-    r,
-    types,
-    ids,
-    frozen,
-    half_start,
-    half_idx,
-    box,
-    half_box,
-    kpair,
-    hcoef,
-    sigp,
-    cut,
-    f_new,
-    sig_max,
-    conv,
-    freeze,
-    terms,
-):
-    """Every pair (i, j) of sphere i's half list, evaluated once and applied to both ends (Newton's third law).
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, sigp, acc, conv, freeze, w):
+    """Apply the evaluated pairs of sphere i (scratch columns from k on) to both ends (Newton's third law); return
+    the next column.
 
-    Two passes: :func:`_pair_terms` evaluates the pairs (vectorised), then this loop scatters them: adds the pair
-    force to f_new[i] (summed over the list first) and its negative to f_new[j], raises sig_max of both to
-    sigma_ij and sets conv of both to 1 when the partner is within reach (the flag the step's stochastic forces
-    read). The caller runs spheres that share a partner in one thread, in a fixed order.
+    Adds the pair force to acc[i, :3] (summed over the list first) and its negative to acc[j, :3], raises the max
+    sigma acc[:, 3] of both to sigma_ij and sets conv of both to 1 when the partner is within reach (the flag the
+    step's stochastic forces read). The caller runs spheres that share a partner in one thread, in a fixed order.
     """
-    start = half_start[i]
-    stop = half_start[i + 1]
-    _pair_terms(i, start, stop, x_old, r, types, half_idx, box, half_box, kpair, hcoef, sigp, cut, terms)
     fro_i = False
     if freeze:
         fro_i = frozen[i] != 0
     fx = 0.0
     fy = 0.0
     fz = 0.0
-    smax = sig_max[i]
+    smax = acc[i, 3]
     reach_any = 0
-    for p in range(start, stop):
-        k = p - start
+    for p in range(half_start[i], half_start[i + 1]):
         j = half_idx[p]
-        sig_ij = terms[3, k]
+        sig_ij = w[_SIG, k]
         smax = max(smax, sig_ij)
-        sig_max[j] = max(sig_max[j], sig_ij)
+        acc[j, 3] = max(acc[j, 3], sig_ij)
+        col = k
+        k += 1
         fro_j = False
         if freeze:
             fro_j = frozen[j] != 0
             if fro_i and fro_j:
                 continue
-        in_reach = terms[5, k] != 0.0
-        if terms[4, k] > 0.0:
-            c0 = terms[0, k]
-            c1 = terms[1, k]
-            c2 = terms[2, k]
+        in_reach = w[_REACH, col] != 0.0
+        if w[_DIST, col] > 0.0:
+            c0 = w[_C0, col]
+            c1 = w[_C0 + 1, col]
+            c2 = w[_C0 + 2, col]
         elif in_reach:
-            c0 = _tie_force(i, j, r, types, ids, hcoef, sigp, 0)
-            c1 = _tie_force(i, j, r, types, ids, hcoef, sigp, 1)
-            c2 = _tie_force(i, j, r, types, ids, hcoef, sigp, 2)
+            c0 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 0)
+            c1 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 1)
+            c2 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 2)
         else:
             continue  # coincident centres out of reach: no force
         reach_any |= in_reach
@@ -581,25 +580,57 @@ def _owner_pairs(
             fy += c1
             fz += c2
         if not fro_j:
-            f_new[j, 0] -= c0
-            f_new[j, 1] -= c1
-            f_new[j, 2] -= c2
-    f_new[i, 0] += fx
-    f_new[i, 1] += fy
-    f_new[i, 2] += fz
-    sig_max[i] = smax
+            acc[j, 0] -= c0
+            acc[j, 1] -= c1
+            acc[j, 2] -= c2
+    acc[i, 0] += fx
+    acc[i, 1] += fy
+    acc[i, 2] += fz
+    acc[i, 3] = smax
     if reach_any:
         conv[i] = 1
+    return k
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _max_degree(half_start, slab_items, lo, hi):
-    """Most half-list partners of one sphere among ``slab_items[lo:hi]`` (the scratch length of a slab)."""
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _slab_pairs(
+    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair, hcoef, sigp, cut,
+    acc, conv, freeze,
+):  # fmt: skip
+    """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
+    pairs: gather, evaluate (vectorised), scatter.
+    """
     most = 0
     for m in range(lo, hi):
         i = slab_items[m]
         most = max(most, half_start[i + 1] - half_start[i])
-    return most
+    w = np.empty((_ROWS, _BATCH + most))
+    m = lo
+    while m < hi:
+        first = m
+        k = 0
+        while m < hi and k < _BATCH:
+            k = _gather_pairs(slab_items[m], half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k)
+            m += 1
+        _pair_terms(w, k, box, half_box, cut)
+        k = 0
+        for mm in range(first, m):
+            k = _scatter_pairs(
+                slab_items[mm],
+                k,
+                half_start,
+                half_idx,
+                xr,
+                types,
+                ids,
+                frozen,
+                hcoef,
+                sigp,
+                acc,
+                conv,
+                freeze,
+                w,
+            )
 
 
 _STEP_CACHE: dict = {}
@@ -662,10 +693,14 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         aux,
     ):
         n = x_old.shape[0]
+        xr = np.empty((n, 4))  # what the pair pass reads of a partner, in one 32-byte row: x, y, z, r
+        acc = np.empty((n, 4))  # what it adds to a partner, likewise: force x, y, z, max sigma
         for i in prange(n):
             for a in range(3):
-                f_new[i, a] = 0.0
-            sig_max[i] = _NEG_INF
+                xr[i, a] = x_old[i, a]
+                acc[i, a] = 0.0
+            xr[i, 3] = r[i]
+            acc[i, 3] = _NEG_INF
             conv[i] = 0
         # forces: each pair once, from its owner's half list, applied to both ends. The spheres sit in slabs at
         # least one pair reach wide, so a pair spans two neighbouring slabs at most; slabs of one colour (slab
@@ -680,31 +715,10 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         for colour in range(min(nslab, 3)):
             for k in prange((nslab - colour + 2) // 3):
                 s = colour + 3 * k
-                terms = np.empty(
-                    (_TERMS, _max_degree(half_start, slab_items, slab_start[s], slab_start[s + 1]))
-                )
-                for m in range(slab_start[s], slab_start[s + 1]):
-                    _owner_pairs(
-                        slab_items[m],
-                        x_old,
-                        r,
-                        types,
-                        ids,
-                        frozen,
-                        half_start,
-                        half_idx,
-                        box,
-                        half_box,
-                        kpair,
-                        hcoef,
-                        sigp,
-                        cut,
-                        f_new,
-                        sig_max,
-                        conv,
-                        FREEZE,
-                        terms,
-                    )
+                _slab_pairs(
+                    slab_start[s], slab_start[s + 1], slab_items, half_start, half_idx, xr, types, ids, frozen,
+                    box, half_box, kpair, hcoef, sigp, cut, acc, conv, FREEZE,
+                )  # fmt: skip
         half_dt2_m = 0.5 * dt * dt / mass
         for i in prange(n):
             ti = types[i]
@@ -712,11 +726,12 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
             is_frozen = False
             if FREEZE:
                 is_frozen = frozen[i] != 0
-            fx = f_new[i, 0]
-            fy = f_new[i, 1]
-            fz = f_new[i, 2]
+            fx = acc[i, 0]
+            fy = acc[i, 1]
+            fz = acc[i, 2]
             nforce = conv[i]
-            smax = sig_max[i]
+            smax = acc[i, 3]
+            sig_max[i] = smax
             ok = smax > 0.0 and smax <= sig_t[ti]
             conv[i] = 1 if ok else 0
             if FREEZE:
