@@ -461,24 +461,25 @@ _BATCH = 512
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _gather_pairs(i, half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k):
+def _gather_pairs(i, half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k, one_type):
     """Copy what the pairs of sphere i need into columns k, k+1, ... of the scratch w; return the next column.
 
     The scattered reads (x_j, r_j, the type tables) happen here, in a plain loop, so that :func:`_pair_terms` reads
-    contiguous rows only and vectorises.
+    contiguous rows only and vectorises. With ``one_type`` the type-pair rows hold their one value already.
     """
     ti = types[i]
     for p in range(half_start[i], half_start[i + 1]):
         j = half_idx[p]
-        tj = types[j]
         w[_D0, k] = xr[i, 0] - xr[j, 0]
         w[_D0 + 1, k] = xr[i, 1] - xr[j, 1]
         w[_D0 + 2, k] = xr[i, 2] - xr[j, 2]
         w[_RI, k] = xr[i, 3]
         w[_RJ, k] = xr[j, 3]
-        w[_KP, k] = kpair[ti, tj]
-        w[_HC, k] = hcoef[ti, tj]
-        w[_SP, k] = sigp[ti, tj]
+        if not one_type:
+            tj = types[j]
+            w[_KP, k] = kpair[ti, tj]
+            w[_HC, k] = hcoef[ti, tj]
+            w[_SP, k] = sigp[ti, tj]
         k += 1
     return k
 
@@ -605,12 +606,19 @@ def _slab_pairs(
         i = slab_items[m]
         most = max(most, half_start[i + 1] - half_start[i])
     w = np.empty((_ROWS, _BATCH + most))
+    one_type = kpair.size == 1
+    if one_type:
+        w[_KP, :] = kpair[0, 0]
+        w[_HC, :] = hcoef[0, 0]
+        w[_SP, :] = sigp[0, 0]
     m = lo
     while m < hi:
         first = m
         k = 0
         while m < hi and k < _BATCH:
-            k = _gather_pairs(slab_items[m], half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k)
+            k = _gather_pairs(
+                slab_items[m], half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k, one_type
+            )
             m += 1
         _pair_terms(w, k, box, half_box, cut)
         k = 0
