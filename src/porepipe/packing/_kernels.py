@@ -535,12 +535,14 @@ def _tie_force(i, j, xr, types, ids, hcoef, sigp, axis):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, sigp, acc, conv, freeze, w):
+def _scatter_pairs(
+    i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, sigp, f_new, sig_max, conv, freeze, w
+):
     """Apply the evaluated pairs of sphere i (scratch columns from k on) to both ends (Newton's third law); return
     the next column.
 
-    Adds the pair force to acc[i, :3] (summed over the list first) and its negative to acc[j, :3], raises the max
-    sigma acc[:, 3] of both to sigma_ij and sets conv of both to 1 when the partner is within reach (the flag the
+    Adds the pair force to f_new[i] (summed over the list first) and its negative to f_new[j], raises sig_max of
+    both to sigma_ij and sets conv of both to 1 when the partner is within reach (the flag the
     step's stochastic forces read). The caller runs spheres that share a partner in one thread, in a fixed order.
     """
     fro_i = False
@@ -549,13 +551,13 @@ def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, si
     fx = 0.0
     fy = 0.0
     fz = 0.0
-    smax = acc[i, 3]
+    smax = sig_max[i]
     reach_any = 0
     for p in range(half_start[i], half_start[i + 1]):
         j = half_idx[p]
         sig_ij = w[_SIG, k]
         smax = max(smax, sig_ij)
-        acc[j, 3] = max(acc[j, 3], sig_ij)
+        sig_max[j] = max(sig_max[j], sig_ij)
         col = k
         k += 1
         fro_j = False
@@ -581,13 +583,13 @@ def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, si
             fy += c1
             fz += c2
         if not fro_j:
-            acc[j, 0] -= c0
-            acc[j, 1] -= c1
-            acc[j, 2] -= c2
-    acc[i, 0] += fx
-    acc[i, 1] += fy
-    acc[i, 2] += fz
-    acc[i, 3] = smax
+            f_new[j, 0] -= c0
+            f_new[j, 1] -= c1
+            f_new[j, 2] -= c2
+    f_new[i, 0] += fx
+    f_new[i, 1] += fy
+    f_new[i, 2] += fz
+    sig_max[i] = smax
     if reach_any:
         conv[i] = 1
     return k
@@ -596,7 +598,7 @@ def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, si
 @njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
 def _slab_pairs(
     lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair, hcoef, sigp, cut,
-    acc, conv, freeze,
+    f_new, sig_max, conv, freeze,
 ):  # fmt: skip
     """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
     pairs: gather, evaluate (vectorised), scatter.
@@ -634,7 +636,8 @@ def _slab_pairs(
                 frozen,
                 hcoef,
                 sigp,
-                acc,
+                f_new,
+                sig_max,
                 conv,
                 freeze,
                 w,
@@ -702,13 +705,12 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
     ):
         n = x_old.shape[0]
         xr = np.empty((n, 4))  # what the pair pass reads of a partner, in one 32-byte row: x, y, z, r
-        acc = np.empty((n, 4))  # what it adds to a partner, likewise: force x, y, z, max sigma
         for i in prange(n):
             for a in range(3):
                 xr[i, a] = x_old[i, a]
-                acc[i, a] = 0.0
+                f_new[i, a] = 0.0
             xr[i, 3] = r[i]
-            acc[i, 3] = _NEG_INF
+            sig_max[i] = _NEG_INF
             conv[i] = 0
         # forces: each pair once, from its owner's half list, applied to both ends. The spheres sit in slabs at
         # least one pair reach wide, so a pair spans two neighbouring slabs at most; slabs of one colour (slab
@@ -725,7 +727,7 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                 s = colour + 3 * k
                 _slab_pairs(
                     slab_start[s], slab_start[s + 1], slab_items, half_start, half_idx, xr, types, ids, frozen,
-                    box, half_box, kpair, hcoef, sigp, cut, acc, conv, FREEZE,
+                    box, half_box, kpair, hcoef, sigp, cut, f_new, sig_max, conv, FREEZE,
                 )  # fmt: skip
         half_dt2_m = 0.5 * dt * dt / mass
         for i in prange(n):
@@ -734,12 +736,11 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
             is_frozen = False
             if FREEZE:
                 is_frozen = frozen[i] != 0
-            fx = acc[i, 0]
-            fy = acc[i, 1]
-            fz = acc[i, 2]
+            fx = f_new[i, 0]
+            fy = f_new[i, 1]
+            fz = f_new[i, 2]
             nforce = conv[i]
-            smax = acc[i, 3]
-            sig_max[i] = smax
+            smax = sig_max[i]
             ok = smax > 0.0 and smax <= sig_t[ti]
             conv[i] = 1 if ok else 0
             if FREEZE:
