@@ -730,6 +730,11 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
                     box, half_box, kpair, hcoef, sigp, cut, f_new, sig_max, conv, FREEZE,
                 )  # fmt: skip
         half_dt2_m = 0.5 * dt * dt / mass
+        decay_t = np.empty(cm_t.size)  # velocity decay and force kick per type: no division per sphere
+        kick_t = np.empty(cm_t.size)
+        for t in range(cm_t.size):
+            decay_t[t] = cm_t[t] / cp_t[t]
+            kick_t[t] = dt / (2.0 * mass * cp_t[t])
         for i in prange(n):
             ti = types[i]
             ri = r[i]
@@ -761,8 +766,8 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
             f_new[i, 1] = fy
             f_new[i, 2] = fz
             cm = cm_t[ti]
-            decay = cm / cp_t[ti]
-            kick = dt / (2.0 * mass * cp_t[ti])
+            decay = decay_t[ti]
+            kick = kick_t[ti]
             for a in range(3):
                 va = decay * v[i, a] + (f_prev[i, a] + f_new[i, a]) * kick
                 xa = x_old[i, a] + cm * va * dt + f_new[i, a] * half_dt2_m
