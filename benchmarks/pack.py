@@ -93,6 +93,7 @@ class Bench:
             "sig": np.empty(n),
             "conv": np.empty(n, np.uint8),
             "aux": np.empty((n, 3)),
+            "work": (np.empty((n, 4)),) if name == CURRENT else (),  # the current kernel's (N, 4) work array
         }
         ids, types, per = np.arange(n, dtype=np.int64), np.zeros(n, np.int64), np.ones(3, bool)
         frozen, one_t = np.zeros(n, np.uint8), np.ones(1)
@@ -103,7 +104,7 @@ class Bench:
             kernel(
                 x_old, x_new, state["v"], f_old, f_new, self.r, types, ids, frozen, *nbr, self.box, per,
                 *self.tables, np.array([0.3]), 0.9 * one_t, 1.1 * one_t, np.zeros(1), 1.3, 0.01, 1.0, 7, s,
-                self.x, self.r, state["sig"], state["conv"], state["aux"],
+                self.x, self.r, state["sig"], state["conv"], state["aux"], *state["work"],
             )  # fmt: skip
             state["bufs"][:] = [x_new, x_old, f_new, f_old]
 

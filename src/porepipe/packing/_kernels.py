@@ -662,6 +662,10 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         Add uniform random forces in [-f_max, f_max]^3 to spheres that feel no pair force and are not converged.
     walls : bool
         Some axes are closed by reflecting walls (centres stay in [0, L]); otherwise every axis is periodic.
+
+    The kernel's last argument is a (N, 4) float64 work array (its contents on entry do not matter): the step
+    copies x, y, z, r of every sphere into one 32-byte row there, so the pair pass reads one cache line per
+    partner. The caller allocates it once per run: a fresh 32 MB array per step (10^6 spheres) costs page faults.
     """
     key = (bool(freeze), bool(stochastic), bool(walls))
     if key in _STEP_CACHE:
@@ -702,9 +706,9 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         sig_max,
         conv,
         aux,
+        xr,
     ):
         n = x_old.shape[0]
-        xr = np.empty((n, 4))  # what the pair pass reads of a partner, in one 32-byte row: x, y, z, r
         for i in prange(n):
             for a in range(3):
                 xr[i, a] = x_old[i, a]

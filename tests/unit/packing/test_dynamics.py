@@ -69,6 +69,7 @@ class Run:
             self.sigmax,
             self.conv,
             np.empty((len(self.r), 3)),
+            np.empty((len(self.r), 4)),
         )
         self.x, self.f = xn, fn
 
