@@ -1,8 +1,8 @@
 """Benchmark of the DEM packing step: pair evaluations per second against the earlier kernels and LAMMPS, cost of each
 optional effect, engine overhead.
 
-    python benchmarks/pack.py            # 2·10^5 spheres: kernels and engine (about 3 CPU-minutes)
-    python benchmarks/pack.py --full     # 10^6 spheres, the issue's size (about 15 CPU-minutes)
+    python benchmarks/pack.py            # 2·10^5 spheres: kernels and engine (107 s, 110 CPU-s, quiet 2-core machine)
+    python benchmarks/pack.py --full     # 10^6 spheres, the issue's size (not timed whole: each step 7x longer)
     python benchmarks/pack.py --small    # 20 000 spheres
     python benchmarks/pack.py --smoke    # 2 000 spheres, 3 steps (CI smoke, no figures to quote)
 
@@ -310,7 +310,7 @@ def main() -> None:
     )
     if not (args.full or args.smoke):
         print(
-            f"\nThe issue's size, {FULL_SPHERES} spheres: python benchmarks/pack.py --full (about 15 CPU-minutes)."
+            f"\nThe issue's size, {FULL_SPHERES} spheres: python benchmarks/pack.py --full (each step about 7x longer)."
         )
     out = {
         "n": n,
