@@ -1,15 +1,21 @@
-"""Benchmark of the DEM packing step: sphere-steps per second, cost of each optional effect, engine overhead.
+"""Benchmark of the DEM packing step: pair evaluations per second against the earlier kernels and LAMMPS, cost of each
+optional effect, engine overhead.
 
-    python benchmarks/pack.py            # kernel on 10^6 spheres, engine effects on 2·10^5 (a few minutes)
-    python benchmarks/pack.py --full     # engine effects on 10^6 spheres too (over 10 minutes here)
+    python benchmarks/pack.py            # 2·10^5 spheres: kernels and engine (107 s, 110 CPU-s, quiet 2-core machine)
+    python benchmarks/pack.py --full     # 10^6 spheres, the issue's size (not timed whole: each step 7x longer)
     python benchmarks/pack.py --small    # 20 000 spheres
+    python benchmarks/pack.py --smoke    # 2 000 spheres, 3 steps (CI smoke, no figures to quote)
 
-Prints a markdown table and writes pack.json into --out (default results/benchmarks/). Reference: LAMMPS's granular
-chute benchmark (frictional Hooke/history pair style, half neighbour lists with Newton's 3rd law, 3 neighbours per
-atom) ran 1.67e7 atom-steps/s per core on the 2-core development machine, i.e. about 5e7 pair evaluations/s. porepipe's
-kernel also evaluates each listed pair once (half list, Newton's 3rd law; listed pairs include the skin region), so
-compare pair evaluations per second: it prints both. Timings are taken on a shared, loaded machine (2 cores shared by
-several jobs): treat them as lower bounds.
+Prints markdown tables and writes pack.json into --out (default results/benchmarks/). The current step kernel is
+timed in the same run as its two predecessors (benchmarks/_pack_previous.py: the full-list kernel before issue 22
+and the first half-list kernel), on the same spheres, and its forces and overlaps are checked against both first:
+bit for bit against the half-list kernel (same pairs, same order of sums), to 1e-12 of the largest force against
+the full-list one (each pair summed from both ends there, so the order of sums differs). Reference: LAMMPS's
+granular chute benchmark (frictional Hooke/history pair style, half neighbour lists with Newton's 3rd law,
+3 neighbours per atom) ran 1.67e7 atom-steps/s per core on the 2-core development machine, i.e. about 5e7 pair
+evaluations/s; porepipe's kernels evaluate each listed pair once too (listed pairs include the skin region), so
+compare pair evaluations per second: it prints both. Timings on a shared, loaded machine are lower bounds; the
+CPU seconds of each one-thread run are printed beside its wall time.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ from pathlib import Path
 import numba
 import numpy as np
 from _common import add_out_argument, write_record
+from _pack_previous import make_kernel as make_previous_kernel
 
 from porepipe.packing import Settings, build_neighbours, pack_spheres
 from porepipe.packing import _kernels as K
@@ -30,8 +37,23 @@ from porepipe.packing._api import pair_tables
 #: LAMMPS chute benchmark on the development machine: atom-steps/s per core and neighbours (unique pairs) per atom
 LAMMPS_CHUTE_PER_CORE = 1.67e7
 LAMMPS_CHUTE_PAIRS_PER_ATOM = 3.0
-#: spheres of the engine-effect runs by default (the kernel table always uses the full N)
-ENGINE_SPHERES = 200_000
+#: spheres of the default run; --full runs the issue's 10^6
+DEFAULT_SPHERES = 200_000
+FULL_SPHERES = 1_000_000
+#: the step kernels compared on the same spheres: which lists they walk, and how they are made
+KERNELS = {
+    "full list, before #22": ("full", lambda flags: make_previous_kernel("original", *flags)),
+    "half list, Newton III (previous)": ("half", lambda flags: make_previous_kernel("previous", *flags)),
+    "half list, vectorised pair pass (current)": ("half", lambda flags: K.make_step_kernel(*flags)),
+}
+CURRENT = "half list, vectorised pair pass (current)"
+#: effects compiled into the current kernel, none of them active
+VARIANTS = {
+    "freezing": (True, False, False),
+    "stochastic forces": (False, True, False),
+    "walls": (False, False, True),
+    "all compiled in, switched off": (True, True, True),
+}
 
 
 def polydisperse(n: int, seed: int = 0):
@@ -43,67 +65,94 @@ def polydisperse(n: int, seed: int = 0):
     return rng.random((n, 3)) * box, r, box
 
 
-def time_kernel(x, r, box, nbr, flags, steps, threads):
-    numba.set_num_threads(threads)
-    n = r.size
-    kernel = K.make_step_kernel(*flags)
-    types = np.zeros(n, np.int64)
-    ids = np.arange(n, dtype=np.int64)
-    per = np.ones(3, bool)
-    args = dict(
-        frozen=np.zeros(n, np.uint8),
-        k=np.array([20.0]),
-        sig=np.array([0.3]),
-        cm=np.array([0.9]),
-        cp=np.array([1.1]),
-        fmax=np.zeros(1),
-    )
-    xa, xb = x.copy(), np.empty_like(x)
-    v, fa, fb = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
-    sig, conv, aux = np.empty(n), np.empty(n, np.uint8), np.empty((n, 3))
-    tables = pair_tables(args["k"], args["sig"])
+class Bench:
+    """One packing in cell order with both neighbour lists, and a driver that steps any of the kernels on it."""
 
-    bufs = [xa, xb, fa, fb]
+    def __init__(self, n: int):
+        x, r, box = polydisperse(n)
+        args = (np.zeros(n, np.int64), box, np.ones(3, bool), np.ones((1, 1), np.uint8), 1.3, 0.3)
+        t0 = time.perf_counter()
+        *half, order = build_neighbours(x, r, *args, reorder=True, half=True)
+        self.build_s = time.perf_counter() - t0
+        # the engine keeps spheres in cell order (memory locality), and so does the benchmark
+        self.x, self.r, self.box = x[order], r[order], box
+        self.lists = {"half": tuple(half), "full": build_neighbours(self.x, self.r, *args)}
+        self.pairs = (
+            half[1].size / n
+        )  # unique pairs per sphere: each kernel evaluates this many per sphere-step
+        self.tables = pair_tables(np.array([20.0]), np.array([0.3]))
 
-    def one(s):
-        # like the engine: positions and forces alternate between two buffers (so does the memory traffic)
-        x_old, x_new, f_old, f_new = bufs
-        kernel(
-            x_old,
-            x_new,
-            v,
-            f_old,
-            f_new,
-            r,
-            types,
-            ids,
-            args["frozen"],
-            *nbr,
-            box,
-            per,
-            *tables,
-            args["sig"],
-            args["cm"],
-            args["cp"],
-            args["fmax"],
-            1.3,
-            0.01,
-            1.0,
-            7,
-            s,
-            x,
-            r,
-            sig,
-            conv,
-            aux,
+    def stepper(self, name: str, flags: tuple):
+        """A function s -> one step of kernel ``name`` compiled with ``flags``, on fresh state; and that state."""
+        kind, make = KERNELS[name]
+        kernel, nbr = make(flags), self.lists[kind]
+        n = self.r.size
+        state = {
+            "bufs": [self.x.copy(), np.empty_like(self.x), np.zeros((n, 3)), np.zeros((n, 3))],
+            "v": np.zeros((n, 3)),
+            "sig": np.empty(n),
+            "conv": np.empty(n, np.uint8),
+            "aux": np.empty((n, 3)),
+            "work": (np.empty((n, 4)),) if name == CURRENT else (),  # the current kernel's (N, 4) work array
+        }
+        ids, types, per = np.arange(n, dtype=np.int64), np.zeros(n, np.int64), np.ones(3, bool)
+        frozen, one_t = np.zeros(n, np.uint8), np.ones(1)
+
+        def step(s):
+            # like the engine: positions and forces alternate between two buffers (so does the memory traffic)
+            x_old, x_new, f_old, f_new = state["bufs"]
+            kernel(
+                x_old, x_new, state["v"], f_old, f_new, self.r, types, ids, frozen, *nbr, self.box, per,
+                *self.tables, np.array([0.3]), 0.9 * one_t, 1.1 * one_t, np.zeros(1), 1.3, 0.01, 1.0, 7, s,
+                self.x, self.r, state["sig"], state["conv"], state["aux"], *state["work"],
+            )  # fmt: skip
+            state["bufs"][:] = [x_new, x_old, f_new, f_old]
+
+        return step, state
+
+    def first_step(self, name: str):
+        """Forces and max overlaps after one step of kernel ``name`` from the benchmark packing at rest."""
+        step, state = self.stepper(name, (False, False, False))
+        step(1)
+        return state["bufs"][2].copy(), state["sig"].copy()
+
+    def time(self, name: str, flags: tuple, steps: int, threads: int, repeats: int):
+        """Best (wall, CPU) seconds per step of ``repeats`` runs of ``steps`` steps on ``threads`` threads."""
+        numba.set_num_threads(threads)
+        step, _ = self.stepper(name, flags)
+        step(0)  # compile / load from cache
+        best = (np.inf, np.inf)
+        for _ in range(repeats):
+            t0, c0 = time.perf_counter(), time.process_time()
+            for s in range(1, steps + 1):
+                step(s)
+            best = min(best, ((time.perf_counter() - t0) / steps, (time.process_time() - c0) / steps))
+        return best
+
+
+def check_kernels(bench: Bench, full_list: bool = True) -> list[str]:
+    """The current kernel's forces and overlaps against its predecessors' (raises if they differ); what was checked."""
+    f_cur, s_cur = bench.first_step(CURRENT)
+    f_half, s_half = bench.first_step("half list, Newton III (previous)")
+    if f_cur.tobytes() != f_half.tobytes() or s_cur.tobytes() != s_half.tobytes():
+        raise AssertionError(
+            "current kernel's forces/overlaps differ from the previous half-list kernel's bits"
         )
-        bufs[:] = [x_new, x_old, f_new, f_old]
-
-    one(0)  # compile / load from cache
-    t0 = time.perf_counter()
-    for s in range(1, steps + 1):
-        one(s)
-    return (time.perf_counter() - t0) / steps
+    if not full_list:
+        return ["forces and max overlaps bit-identical to the previous half-list kernel"]
+    f_full, s_full = bench.first_step("full list, before #22")
+    scale = np.abs(f_full).max()
+    with np.errstate(invalid="ignore"):  # -inf on both sides (no partner) is equal
+        ds = np.where(s_cur == s_full, 0.0, np.abs(s_cur - s_full)).max()
+    if np.abs(f_cur - f_full).max() > 1e-12 * scale or ds > 1e-14:
+        raise AssertionError(
+            "current kernel's forces/overlaps differ from the full-list kernel's beyond round-off"
+        )
+    return [
+        "forces and max overlaps bit-identical to the previous half-list kernel",
+        f"forces within {np.abs(f_cur - f_full).max() / scale:.1e} of the largest force of the full-list kernel, "
+        f"overlaps within {ds:.1e} (limits 1e-12, 1e-14: summation order only)",
+    ]
 
 
 #: effects switched on in the benchmark scene, one at a time (the stage block, or a closed axis for walls)
@@ -152,112 +201,123 @@ def time_engine(xyzr, box, steps, threads, effect="none", repeats=4):
     return best
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--small", action="store_true", help="20 000 spheres instead of 10^6 (CI smoke)")
-    ap.add_argument(
-        "--smoke", action="store_true", help="2 000 spheres, 3 steps (CI smoke, no figures to quote)"
-    )
-    ap.add_argument("--steps", type=int, default=None)
-    ap.add_argument(
-        "--full", action="store_true", help="time the engine's effects on all 10^6 spheres (default: 2·10^5)"
-    )
-    add_out_argument(ap)
-    args = ap.parse_args()
-    n = 2_000 if args.smoke else 20_000 if args.small else 1_000_000
-    steps = args.steps or (10 if args.smoke else 50 if args.small else 10)
-    x, r, box = polydisperse(n)
-    t0 = time.perf_counter()
-    *nbr, order = build_neighbours(
-        x,
-        r,
-        np.zeros(n, np.int64),
-        box,
-        np.ones(3, bool),
-        np.ones((1, 1), np.uint8),
-        1.3,
-        0.3,
-        reorder=True,
-        half=True,
-    )
-    build_s = time.perf_counter() - t0
-    x, r = (
-        x[order],
-        r[order],
-    )  # the engine keeps spheres in cell order (memory locality), and so does the benchmark
+def kernel_rows(bench: Bench, steps: int, repeats: int, smoke: bool = False) -> list[dict]:
+    """Per-step times of the three kernels (bare) and of the current one with each effect compiled in, 1 and 2
+    threads, interleaved so that each comparison sees the same machine load (smoke: the bare kernels, 1 thread).
+    """
+    n = bench.r.size
+    runs = [(name, (False, False, False)) for name in KERNELS] + [(CURRENT, f) for f in VARIANTS.values()]
+    labels = list(KERNELS) + [f"current, {v}" for v in VARIANTS]
+    if smoke:  # the two half-list kernels only: the smoke compiles as little as it can
+        runs, labels = runs[1 : len(KERNELS)], labels[1 : len(KERNELS)]
+    bench.time(CURRENT, (False, False, False), steps, 1, 1)  # warm-up: first touch of every page
     rows = []
-    variants = {
-        "bare (no effects)": (False, False, False),
-        "freezing": (True, False, False),
-        "stochastic forces": (False, True, False),
-        "walls": (False, False, True),
-        "all compiled in, switched off": (True, True, True),
-    }
-    time_kernel(x, r, box, nbr, (False, False, False), steps, 1)  # warm-up: first touch of every page
-    for threads in (1, 2):
-        base = None
-        for label, flags in variants.items():
-            dt_step = min(time_kernel(x, r, box, nbr, flags, steps, threads) for _ in range(4))
-            base = dt_step if base is None else base
+    for threads in (1,) if smoke else (1, 2):
+        for label, (name, flags) in zip(labels, runs, strict=True):
+            wall, cpu = bench.time(name, flags, steps, threads, repeats)
             rows.append(
                 {
                     "threads": threads,
                     "kernel": label,
-                    "s_per_step": dt_step,
-                    "sphere_steps_per_s": n / dt_step,
-                    "vs_bare": dt_step / base,
+                    "s_per_step": wall,
+                    "cpu_s_per_step": cpu,
+                    "sphere_steps_per_s": n / wall,
+                    "pairs_per_s": n * bench.pairs / wall,
+                    "pairs_per_cpu_s": n * bench.pairs / cpu,
                 }
             )
-    # the whole engine per effect: 2 thread counts x 6 effects x 5 runs; on 10^6 spheres that alone takes over
-    # 10 minutes here, so by default it runs on a smaller packing of the same distribution (--full: all of them)
-    n_engine = n if args.full else min(n, ENGINE_SPHERES)
-    x_e, r_e, box_e = (x, r, box) if n_engine == n else polydisperse(n_engine)
-    with tempfile.TemporaryDirectory() as tmp:
-        xyzr = Path(tmp) / "bench.xyzr"
-        np.savetxt(xyzr, np.column_stack([x_e, r_e]), fmt="%.17g")
-        eng = {
-            threads: {e: time_engine(xyzr, box_e, steps, threads, e) for e in ENGINE_EFFECTS}
-            for threads in (1, 2)
-        }
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-    pairs = nbr[1].size / n
+    for row in rows:
+        # speed-ups on CPU time (the work a step costs, robust to the machine's load); thread scaling on wall time
+        same = {r_["kernel"]: r_["cpu_s_per_step"] for r_ in rows if r_["threads"] == row["threads"]}
+        row["vs_full_list"] = same.get("full list, before #22", np.nan) / row["cpu_s_per_step"]
+        row["vs_previous"] = same["half list, Newton III (previous)"] / row["cpu_s_per_step"]
+        one = next(r_ for r_ in rows if r_["threads"] == 1 and r_["kernel"] == row["kernel"])
+        row["thread_scaling"] = one["s_per_step"] / row["s_per_step"]
+    return rows
+
+
+def print_kernel_rows(
+    rows: list[dict], n: int, pairs: float, build_s: float, steps: int, repeats: int
+) -> None:
     print(
-        f"# porepipe pack benchmark: N = {n} polydisperse spheres (r in [1, 4] µm), {pairs:.1f} list pairs per "
-        f"sphere, list build {build_s:.2f} s; best of 4 runs of {steps} steps\n"
+        f"# porepipe pack benchmark: N = {n} polydisperse spheres (r in [1, 4] µm), {pairs:.1f} listed pairs per "
+        f"sphere (unique), list build {build_s:.2f} s; best of {repeats} runs of {steps} steps\n"
     )
     lammps_pairs = LAMMPS_CHUTE_PER_CORE * LAMMPS_CHUTE_PAIRS_PER_ATOM
     print(
-        "| threads | kernel (compiled effects, none active) | s/step | sphere-steps/s | pair evaluations/s | "
-        f"vs bare | pairs/s vs LAMMPS chute ({lammps_pairs:.3g} per core) |"
+        "| threads | step kernel | s/step | CPU s/step | sphere-steps/s | pair evaluations/s | pairs per CPU-s | "
+        "CPU-time speed-up vs full list | vs previous | 1 -> 2 threads (wall) | pairs per CPU-s vs LAMMPS chute "
+        f"({lammps_pairs:.3g} per core) |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for row in rows:
-        row["pairs_per_s"] = row["sphere_steps_per_s"] * pairs
-        frac = row["pairs_per_s"] / (lammps_pairs * row["threads"])
+        frac = row["pairs_per_cpu_s"] / lammps_pairs
         print(
-            f"| {row['threads']} | {row['kernel']} | {row['s_per_step']:.4g} | {row['sphere_steps_per_s']:.3g} | "
-            f"{row['pairs_per_s']:.3g} | {row['vs_bare']:.3f} | {frac:.2f} |"
+            f"| {row['threads']} | {row['kernel']} | {row['s_per_step']:.4g} | {row['cpu_s_per_step']:.4g} | "
+            f"{row['sphere_steps_per_s']:.3g} | {row['pairs_per_s']:.3g} | {row['pairs_per_cpu_s']:.3g} | "
+            f"{row['vs_full_list']:.2f} | "
+            f"{row['vs_previous']:.2f} | {row['thread_scaling']:.2f} | {frac:.2f} |"
         )
-    print(f"\nEngine runs on {n_engine} spheres (per-step times scaled to N = {n} for the comparison).")
+    print(
+        "\nTargets (issue 22): >= 2x the full-list kernel, past LAMMPS per core (last column > 1), "
+        ">= 1.8x from 1 to 2 threads (needs 2 idle cores: compare CPU s/step with s/step for the load)."
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--small", action="store_true", help="20 000 spheres")
+    ap.add_argument(
+        "--smoke", action="store_true", help="2 000 spheres, 3 steps (CI smoke, no figures to quote)"
+    )
+    ap.add_argument(
+        "--full", action="store_true", help=f"{FULL_SPHERES} spheres (default: {DEFAULT_SPHERES})"
+    )
+    ap.add_argument("--steps", type=int, default=None, help="steps per timed run (default 10, smoke 3)")
+    add_out_argument(ap)
+    args = ap.parse_args()
+    n = 2_000 if args.smoke else 20_000 if args.small else FULL_SPHERES if args.full else DEFAULT_SPHERES
+    steps = args.steps or (3 if args.smoke else 10)
+    repeats = 1 if args.smoke else 3
+    bench = Bench(n)
+    checked = check_kernels(bench, full_list=not args.smoke)
+    rows = kernel_rows(bench, steps, repeats, args.smoke)
+    with tempfile.TemporaryDirectory() as tmp:
+        xyzr = Path(tmp) / "bench.xyzr"
+        np.savetxt(xyzr, np.column_stack([bench.x, bench.r]), fmt="%.17g")
+        effects = (
+            ["none"] if args.smoke else list(ENGINE_EFFECTS)
+        )  # smoke: compile nothing beyond the bare kernel
+        eng = {
+            threads: {e: time_engine(xyzr, bench.box, steps, threads, e, repeats) for e in effects}
+            for threads in ((1,) if args.smoke else (1, 2))
+        }
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    print_kernel_rows(rows, n, bench.pairs, bench.build_s, steps, repeats)
+    print("\nChecked before timing: " + "; ".join(checked) + ".")
     print("\n| threads | engine, effect switched on | s/step | vs bare kernel | vs engine without effects |")
     print("|---|---|---|---|---|")
     for threads, per_effect in eng.items():
-        bare = next(r_["s_per_step"] for r_ in rows if r_["threads"] == threads)
-        for effect, per_step_engine in per_effect.items():
-            per_step = per_step_engine * n / n_engine
+        bare = next(r_["s_per_step"] for r_ in rows if r_["threads"] == threads and r_["kernel"] == CURRENT)
+        for effect, per_step in per_effect.items():
             print(
                 f"| {threads} | {effect} | {per_step:.4g} | {per_step / bare:.3f} | "
-                f"{per_step_engine / per_effect['none']:.3f} |"
+                f"{per_step / per_effect['none']:.3f} |"
             )
     print(
         "\n'none' vs bare kernel = what the engine adds to a scene without optional effects (target <= 1.05)."
     )
+    if not (args.full or args.smoke):
+        print(
+            f"\nThe issue's size, {FULL_SPHERES} spheres: python benchmarks/pack.py --full (each step about 7x longer)."
+        )
     out = {
         "n": n,
-        "pairs_per_sphere": pairs,
-        "build_s": build_s,
+        "pairs_per_sphere": bench.pairs,
+        "build_s": bench.build_s,
+        "checked": checked,
         "kernels": rows,
-        "engine_spheres": n_engine,
         "engine_s_per_step": {str(k): v for k, v in eng.items()},
     }
     write_record(args.out, "pack_smoke.json" if args.smoke else "pack.json", out)

@@ -340,6 +340,7 @@ def _integrate(
     sig = np.full(n, -np.inf)
     conv = np.zeros(n, dtype=np.uint8)
     aux = np.zeros((n, 3))
+    work = np.empty((n, 4))  # the step kernel's work array (allocated once: see make_step_kernel)
     nbr = None
     prog = (
         Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s, target=0.5)
@@ -405,6 +406,7 @@ def _integrate(
             sig,
             conv,
             aux,
+            work,
         )
         stats = _step_stats(sig, conv, aux)
         nconv, ke, smax, ssum, scnt, dmax, darg, stale, bad = stats
@@ -563,6 +565,7 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
         sig,
         conv,
         np.empty((n, 3)),
+        np.empty((n, 4)),
     )
     return sig, conv
 

@@ -453,37 +453,98 @@ def _step_reductions(sig, conv, aux):
 
 # ---------------------------------------------------------------------------------------------------------------------
 # the step: forces at x^{s-1}, damped velocity-Störmer-Verlet update (§5.3), per-sphere overlap and convergence
-@njit(cache=True, fastmath=FASTMATH, inline="always")
-def _owner_pairs(
-    i,
-    x_old,
-    r,
-    types,
-    ids,
-    frozen,
-    half_start,
-    half_idx,
-    box,
-    periodic,
-    kpair,
-    hcoef,
-    sigp,
-    cut,
-    f_new,
-    sig_max,
-    conv,
-    freeze,
-    walls,
-):
-    """Every pair (i, j) of sphere i's half list, evaluated once and applied to both ends (Newton's third law).
+#: rows of the pair scratch: what :func:`_gather_pairs` copies in (differences of centres x, y, z, r_i, r_j and the
+#: type-pair k, hcoef, sigma*) and what :func:`_pair_terms` writes (force x, y, z, sigma_ij, distance, reach flag)
+_D0, _RI, _RJ, _KP, _HC, _SP, _C0, _SIG, _DIST, _REACH, _ROWS = 0, 3, 4, 5, 6, 7, 8, 11, 12, 13, 14
+#: pairs evaluated per batch (the scratch holds at least one sphere's whole list besides)
+_BATCH = 512
 
-    Adds the pair force to f_new[i] (summed over the list first) and its negative to f_new[j] (both ends see
-    bitwise-negated differences), raises sig_max of both to sigma_ij (one division, a max: no branch) and sets
-    conv of both to 1 when the partner is within reach (the flag the step's stochastic forces read). The caller
-    runs spheres that share a partner in one thread, in a fixed order.
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _gather_pairs(i, half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k, one_type):
+    """Copy what the pairs of sphere i need into columns k, k+1, ... of the scratch w; return the next column.
+
+    The scattered reads (x_j, r_j, the type tables) happen here, in a plain loop, so that :func:`_pair_terms` reads
+    contiguous rows only and vectorises. With ``one_type`` the type-pair rows hold their one value already.
     """
     ti = types[i]
-    ri = r[i]
+    for p in range(half_start[i], half_start[i + 1]):
+        j = half_idx[p]
+        w[_D0, k] = xr[i, 0] - xr[j, 0]
+        w[_D0 + 1, k] = xr[i, 1] - xr[j, 1]
+        w[_D0 + 2, k] = xr[i, 2] - xr[j, 2]
+        w[_RI, k] = xr[i, 3]
+        w[_RJ, k] = xr[j, 3]
+        if not one_type:
+            tj = types[j]
+            w[_KP, k] = kpair[ti, tj]
+            w[_HC, k] = hcoef[ti, tj]
+            w[_SP, k] = sigp[ti, tj]
+        k += 1
+    return k
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _min_image_select(d, length, half):
+    """:func:`_min_image` as two selects (half = L/2 on periodic axes, inf on walled ones): the same value."""
+    d = d - length if d > half else d
+    return d + length if d < -half else d
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _pair_terms(w, npairs, box, half_box, cut):
+    """Force, sigma_ij, distance and reach flag of the first ``npairs`` gathered pairs of the scratch w.
+
+    Contiguous rows in and out, no branch (selects for the minimum image and the force law's two branches), no
+    division check (numpy's error model): the loop vectorises. Each value comes from the same operations in the
+    same order as one pair at a time, so the results are bit for bit those of a scalar loop. The force of
+    coincident centres (distance 0) is not finite here; :func:`_scatter_pairs` replaces it.
+    """
+    b0, b1, b2 = box[0], box[1], box[2]
+    h0, h1, h2 = half_box[0], half_box[1], half_box[2]
+    for k in range(npairs):
+        d0 = _min_image_select(w[_D0, k], b0, h0)
+        d1 = _min_image_select(w[_D0 + 1, k], b1, h1)
+        d2 = _min_image_select(w[_D0 + 2, k], b2, h2)
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        ri = w[_RI, k]
+        rj = w[_RJ, k]
+        rsum = ri + rj
+        rmin2 = rsum - abs(ri - rj)
+        dxeq = rsum - 0.5 * w[_SP, k] * rmin2
+        in_reach = dist <= cut * dxeq
+        g = _pair_force_over_dist(dist, dxeq, w[_KP, k], w[_HC, k])
+        g = g if in_reach else 0.0
+        w[_C0, k] = g * d0
+        w[_C0 + 1, k] = g * d1
+        w[_C0 + 2, k] = g * d2
+        w[_SIG, k] = (rsum - dist) / rmin2
+        w[_DIST, k] = dist
+        w[_REACH, k] = 1.0 if in_reach else 0.0
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _tie_force(i, j, xr, types, ids, hcoef, sigp, axis):
+    """Component ``axis`` of the pair force on i from j when their centres coincide: the harmonic force at
+    distance 0, hcoef / dx_eq, along the pair's random direction :func:`_tie_axis`.
+    """
+    rsum = xr[i, 3] + xr[j, 3]
+    rmin2 = rsum - abs(xr[i, 3] - xr[j, 3])
+    dxeq = rsum - 0.5 * sigp[types[i], types[j]] * rmin2
+    return hcoef[types[i], types[j]] / dxeq * _tie_axis(ids[i], ids[j], axis)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _scatter_pairs(
+    i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, sigp, f_new, sig_max, conv, freeze, w
+):
+    """Apply the evaluated pairs of sphere i (scratch columns from k on) to both ends (Newton's third law); return
+    the next column.
+
+    Adds the pair force to f_new[i] (summed over the list first) and its negative to f_new[j], raises sig_max of
+    both to sigma_ij and sets conv of both to 1 when the partner is within reach (the flag the
+    step's stochastic forces read). The caller runs spheres that share a partner in one thread, in a fixed order.
+    """
     fro_i = False
     if freeze:
         fro_i = frozen[i] != 0
@@ -494,40 +555,25 @@ def _owner_pairs(
     reach_any = 0
     for p in range(half_start[i], half_start[i + 1]):
         j = half_idx[p]
-        tj = types[j]
-        rj = r[j]
-        if walls:
-            dx0 = _min_image(x_old[i, 0] - x_old[j, 0], box[0], periodic[0])
-            dx1 = _min_image(x_old[i, 1] - x_old[j, 1], box[1], periodic[1])
-            dx2 = _min_image(x_old[i, 2] - x_old[j, 2], box[2], periodic[2])
-        else:
-            dx0 = _min_image(x_old[i, 0] - x_old[j, 0], box[0], True)
-            dx1 = _min_image(x_old[i, 1] - x_old[j, 1], box[1], True)
-            dx2 = _min_image(x_old[i, 2] - x_old[j, 2], box[2], True)
-        dist = math.sqrt(dx0 * dx0 + dx1 * dx1 + dx2 * dx2)
-        rsum = ri + rj
-        rmin2 = rsum - abs(ri - rj)
-        sig_ij = (rsum - dist) / rmin2
+        sig_ij = w[_SIG, k]
         smax = max(smax, sig_ij)
         sig_max[j] = max(sig_max[j], sig_ij)
+        col = k
+        k += 1
         fro_j = False
         if freeze:
             fro_j = frozen[j] != 0
             if fro_i and fro_j:
                 continue
-        dxeq = rsum - 0.5 * sigp[ti, tj] * rmin2
-        in_reach = dist <= cut * dxeq
-        if dist > 0.0:
-            g = _pair_force_over_dist(dist, dxeq, kpair[ti, tj], hcoef[ti, tj])
-            g = g if in_reach else 0.0  # a select, not a branch: skin-region partners cost the same
-            c0 = g * dx0
-            c1 = g * dx1
-            c2 = g * dx2
+        in_reach = w[_REACH, col] != 0.0
+        if w[_DIST, col] > 0.0:
+            c0 = w[_C0, col]
+            c1 = w[_C0 + 1, col]
+            c2 = w[_C0 + 2, col]
         elif in_reach:
-            f = hcoef[ti, tj] / dxeq
-            c0 = f * _tie_axis(ids[i], ids[j], 0)
-            c1 = f * _tie_axis(ids[i], ids[j], 1)
-            c2 = f * _tie_axis(ids[i], ids[j], 2)
+            c0 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 0)
+            c1 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 1)
+            c2 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 2)
         else:
             continue  # coincident centres out of reach: no force
         reach_any |= in_reach
@@ -546,6 +592,56 @@ def _owner_pairs(
     sig_max[i] = smax
     if reach_any:
         conv[i] = 1
+    return k
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
+def _slab_pairs(
+    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair, hcoef, sigp, cut,
+    f_new, sig_max, conv, freeze,
+):  # fmt: skip
+    """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
+    pairs: gather, evaluate (vectorised), scatter.
+    """
+    most = 0
+    for m in range(lo, hi):
+        i = slab_items[m]
+        most = max(most, half_start[i + 1] - half_start[i])
+    w = np.empty((_ROWS, _BATCH + most))
+    one_type = kpair.size == 1
+    if one_type:
+        w[_KP, :] = kpair[0, 0]
+        w[_HC, :] = hcoef[0, 0]
+        w[_SP, :] = sigp[0, 0]
+    m = lo
+    while m < hi:
+        first = m
+        k = 0
+        while m < hi and k < _BATCH:
+            k = _gather_pairs(
+                slab_items[m], half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k, one_type
+            )
+            m += 1
+        _pair_terms(w, k, box, half_box, cut)
+        k = 0
+        for mm in range(first, m):
+            k = _scatter_pairs(
+                slab_items[mm],
+                k,
+                half_start,
+                half_idx,
+                xr,
+                types,
+                ids,
+                frozen,
+                hcoef,
+                sigp,
+                f_new,
+                sig_max,
+                conv,
+                freeze,
+                w,
+            )
 
 
 _STEP_CACHE: dict = {}
@@ -566,6 +662,10 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         Add uniform random forces in [-f_max, f_max]^3 to spheres that feel no pair force and are not converged.
     walls : bool
         Some axes are closed by reflecting walls (centres stay in [0, L]); otherwise every axis is periodic.
+
+    The kernel's last argument is a (N, 4) float64 work array (its contents on entry do not matter): the step
+    copies x, y, z, r of every sphere into one 32-byte row there, so the pair pass reads one cache line per
+    partner. The caller allocates it once per run: a fresh 32 MB array per step (10^6 spheres) costs page faults.
     """
     key = (bool(freeze), bool(stochastic), bool(walls))
     if key in _STEP_CACHE:
@@ -606,11 +706,14 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         sig_max,
         conv,
         aux,
+        xr,
     ):
         n = x_old.shape[0]
         for i in prange(n):
             for a in range(3):
+                xr[i, a] = x_old[i, a]
                 f_new[i, a] = 0.0
+            xr[i, 3] = r[i]
             sig_max[i] = _NEG_INF
             conv[i] = 0
         # forces: each pair once, from its owner's half list, applied to both ends. The spheres sit in slabs at
@@ -618,32 +721,24 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         # number mod 3) share no sphere and run in parallel, each in sphere order: the same sums for any thread
         # count
         nslab = slab_start.size - 1
+        half_box = np.empty(3)
+        for a in range(3):
+            half_box[a] = (
+                0.5 * box[a] if periodic[a] or not WALLS else np.inf
+            )  # minimum image on periodic axes
         for colour in range(min(nslab, 3)):
             for k in prange((nslab - colour + 2) // 3):
                 s = colour + 3 * k
-                for m in range(slab_start[s], slab_start[s + 1]):
-                    _owner_pairs(
-                        slab_items[m],
-                        x_old,
-                        r,
-                        types,
-                        ids,
-                        frozen,
-                        half_start,
-                        half_idx,
-                        box,
-                        periodic,
-                        kpair,
-                        hcoef,
-                        sigp,
-                        cut,
-                        f_new,
-                        sig_max,
-                        conv,
-                        FREEZE,
-                        WALLS,
-                    )
+                _slab_pairs(
+                    slab_start[s], slab_start[s + 1], slab_items, half_start, half_idx, xr, types, ids, frozen,
+                    box, half_box, kpair, hcoef, sigp, cut, f_new, sig_max, conv, FREEZE,
+                )  # fmt: skip
         half_dt2_m = 0.5 * dt * dt / mass
+        decay_t = np.empty(cm_t.size)  # velocity decay and force kick per type: no division per sphere
+        kick_t = np.empty(cm_t.size)
+        for t in range(cm_t.size):
+            decay_t[t] = cm_t[t] / cp_t[t]
+            kick_t[t] = dt / (2.0 * mass * cp_t[t])
         for i in prange(n):
             ti = types[i]
             ri = r[i]
@@ -675,8 +770,8 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
             f_new[i, 1] = fy
             f_new[i, 2] = fz
             cm = cm_t[ti]
-            decay = cm / cp_t[ti]
-            kick = dt / (2.0 * mass * cp_t[ti])
+            decay = decay_t[ti]
+            kick = kick_t[ti]
             for a in range(3):
                 va = decay * v[i, a] + (f_prev[i, a] + f_new[i, a]) * kick
                 xa = x_old[i, a] + cm * va * dt + f_new[i, a] * half_dt2_m

@@ -1,5 +1,7 @@
 """Step kernel: Newton's third law, pair relaxation to dx_eq, damping (§5.3), neighbour lists vs all pairs."""
 
+import itertools
+
 import numba
 import numpy as np
 import pytest
@@ -67,6 +69,7 @@ class Run:
             self.sigmax,
             self.conv,
             np.empty((len(self.r), 3)),
+            np.empty((len(self.r), 4)),
         )
         self.x, self.f = xn, fn
 
@@ -111,16 +114,19 @@ def _all_pairs_forces(x, r, types, box, per, k_t, sig_t, cut):
     return (f[..., None] * d / dist[..., None]).sum(1)
 
 
+@pytest.mark.parametrize("ntypes", [1, 2])
 @pytest.mark.parametrize("periodic", [True, [True, False, True]])
-def test_forces_and_overlaps_equal_all_pairs_for_any_thread_count(periodic):
+def test_forces_and_overlaps_equal_all_pairs_for_any_thread_count(periodic, ntypes):
     """Each listed pair is evaluated once and applied to both ends, slab colours one after another: the forces equal
     an all-pairs sum of the force law to round-off (1e-12 of the largest force: only the summation order differs),
-    max sigma equals the all-pairs maximum, and 1 and 2 threads give the same bits (box wide enough for 12 slabs)."""
+    max sigma equals the all-pairs maximum, and 1 and 2 threads give the same bits (box wide enough for 12 slabs).
+    A slab holds more pairs than one evaluation batch (K._BATCH), so batch boundaries are crossed; one type takes
+    the kernel's path without type tables."""
     rng = np.random.default_rng(3)
     box = np.array([30.0, 150.0, 40.0])
-    x, r = _random_spheres(rng, 700, box, 2.0, 4.0)
-    types = rng.integers(0, 2, r.size)
-    k_t, sig_t = np.array([40.0, 10.0]), np.array([0.3, 0.2])
+    x, r = _random_spheres(rng, 1000, box, 2.0, 4.0)
+    types = rng.integers(0, ntypes, r.size)
+    k_t, sig_t = np.array([40.0, 10.0])[:ntypes], np.array([0.3, 0.2])[:ntypes]
     got = []
     for threads in (1, 2):
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
@@ -137,6 +143,8 @@ def test_forces_and_overlaps_equal_all_pairs_for_any_thread_count(periodic):
     sig_ref = max_overlaps(x, np.asarray(r), box, run.per)
     np.testing.assert_allclose(np.maximum(got[0][1], 0.0), np.maximum(sig_ref, 0.0), rtol=0, atol=1e-14)
     assert got[0][0].tobytes() == got[1][0].tobytes() and got[0][1].tobytes() == got[1][1].tobytes()
+    degree, (slab_start, slab_items) = np.diff(run.nbr[0]), run.nbr[2:]
+    assert max(degree[slab_items[a:b]].sum() for a, b in itertools.pairwise(slab_start)) > K._BATCH
 
 
 @pytest.mark.parametrize("ta,tb", [(0, 0), (0, 1), (1, 1)])
