@@ -124,6 +124,8 @@ def make_stepper(
     surface_velocity: bool,
     piston: bool = False,
     size_change: bool = False,
+    *,
+    trim: bool = True,
 ):
     """Return the step-loop kernel compiled with exactly the requested effects (closure constants).
 
@@ -148,6 +150,9 @@ def make_stepper(
         Force-controlled piston walls (App. B.1.5.1), integrated by symplectic Euler with a speed cap.
     size_change : bool
         Global particle size s(t) (Eqs. 2.30-2.32): corners x s, l x s, moment of inertia x s².
+    trim : bool
+        Narrow phase: cut each polygon to its facing chain before clipping (the default, see
+        :func:`porepipe.granular._contact._clip_polygons`); False clips the whole polygon (the reference).
 
     Returns
     -------
@@ -163,10 +168,11 @@ def make_stepper(
         bool(surface_velocity),
         bool(piston),
         bool(size_change),
+        bool(trim),
     )
     if key in _STEPPERS:
         return _STEPPERS[key]
-    COH, WEAK, VIB, VARG, DRAG, SURF, PIST, SIZE = key
+    COH, WEAK, VIB, VARG, DRAG, SURF, PIST, SIZE, TRIM = key
 
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
     def _steps(
@@ -190,6 +196,7 @@ def make_stepper(
         tr_p,
         ft,
         aold,
+        hint,
         pout,
         x_build,
         scratch,
@@ -221,6 +228,7 @@ def make_stepper(
         n_blocks = (n_mob + BLOCK - 1) // BLOCK
         kmax = body.shape[1]
         half_dt2 = 0.5 * dt * dt
+        inv_dt = 1.0 / dt  # multiplications in the pair loop instead of divisions
         # clipping buffers of each work block, allocated once per call (not per block and step)
         bufs_a = np.empty((n_blocks, 2 * kmax + 4, 2))
         bufs_b = np.empty((n_blocks, 2 * kmax + 4, 2))
@@ -314,7 +322,24 @@ def make_stepper(
                         xj = G[0, j, 0]
                         yj = G[0, j, 1]
                         _overlap_geometry(
-                            wv[i], nc[i], wv[j], nc[j], xi, yi, xj, yj, buf_a, tag_a, buf_b, tag_b, side, geo
+                            wv,
+                            i,
+                            nc[i],
+                            j,
+                            nc[j],
+                            xi,
+                            yi,
+                            xj,
+                            yj,
+                            buf_a,
+                            tag_a,
+                            buf_b,
+                            tag_b,
+                            side,
+                            geo,
+                            TRIM,
+                            hint,
+                            p,
                         )
                         A = geo[0]
                         if A <= 0.0:
@@ -335,9 +360,9 @@ def make_stepper(
                         riy = sy - yi
                         rjx = sx - xj
                         rjy = sy - yj
-                        wi = G[1, i, 2] / dt
-                        vix = G[1, i, 0] / dt - wi * riy
-                        viy = G[1, i, 1] / dt + wi * rix
+                        wi = G[1, i, 2] * inv_dt
+                        vix = G[1, i, 0] * inv_dt - wi * riy
+                        viy = G[1, i, 1] * inv_dt + wi * rix
                         if wall:
                             vjx = wall_vel[j, 0]
                             vjy = wall_vel[j, 1]
@@ -345,16 +370,16 @@ def make_stepper(
                                 vjx -= surf[j] * tx
                                 vjy -= surf[j] * ty
                         else:
-                            wj = G[1, j, 2] / dt
-                            vjx = G[1, j, 0] / dt - wj * rjy
-                            vjy = G[1, j, 1] / dt + wj * rjx
+                            wj = G[1, j, 2] * inv_dt
+                            vjx = G[1, j, 0] * inv_dt - wj * rjy
+                            vjy = G[1, j, 1] * inv_dt + wj * rjx
                         vt = (vix - vjx) * tx + (viy - vjy) * ty
-                        ell = 1.0 / (inv_r[i] + inv_r[j])
+                        inv_ell = inv_r[i] + inv_r[j]  # 1/l = 1/r_i + 1/r_j
                         if SIZE:
-                            ell *= sc
-                        fel = E * A / ell
+                            inv_ell /= sc
+                        fel = E * A * inv_ell
                         m_n = 1.0 / (inv_m[i] + inv_m[j])
-                        damp = gam * sqE * math.sqrt(m_n) * (A - aold[p]) / (ell * dt)
+                        damp = gam * sqE * math.sqrt(m_n) * (A - aold[p]) * inv_ell * inv_dt
                         fn = fel + max(damp, -fel)
                         if COH:
                             fn -= kcoh * L
