@@ -261,9 +261,11 @@ def _overlap_geometry(
     out[0] = 0.5 * a2
     out[7] = ox + gx / (3.0 * a2)
     out[8] = oy + gy / (3.0 * a2)
-    # boundary crossings: incoming and outgoing edge tags from different polygons; keep the farthest pair
+    # boundary crossings: incoming and outgoing edge tags from different polygons; keep the farthest pair (the
+    # crossings met so far are listed in tag_b, free after the clipping: usually two in all)
     best = -1.0
     ext = 0.0
+    n_cross = 0
     for v in range(m):
         tin = tag_a[v - 1] if v > 0 else tag_a[m - 1]
         dx = buf_a[v, 0] - out[7]
@@ -271,10 +273,10 @@ def _overlap_geometry(
         ext = max(ext, dx * dx + dy * dy)
         if (tin < 0) == (tag_a[v] < 0):
             continue
-        for w in range(v):
-            tw = tag_a[w - 1] if w > 0 else tag_a[m - 1]
-            if (tw < 0) == (tag_a[w] < 0):
-                continue
+        tag_b[n_cross] = v
+        n_cross += 1
+        for c in range(n_cross - 1):
+            w = tag_b[c]
             dx = buf_a[v, 0] - buf_a[w, 0]
             dy = buf_a[v, 1] - buf_a[w, 1]
             d2 = dx * dx + dy * dy
