@@ -3,10 +3,11 @@ corner found by climbing from the previous step's, against the whole-polygon cli
 independent intersection (shapely, i.e. GEOS's overlay) on many random convex pairs; and the simulation with it
 against the simulation with the reference clipping.
 
-Tolerances: areas to 1e-12 relative to the overlap (both are sums of a few cross products of coordinates of order
-1, so they differ by rounding: observed <= 1e-12 on this sample); contact line, normal and application point
-to 1e-12 absolute on polygons of size ~1 (the same crossings computed along different edge orders); GEOS to 1e-9
-of the polygons' area (it snaps and orders differently).
+Tolerances: areas to 1e-12 relative to the overlap, contact point, centroid and normal to 1e-12 absolute on
+polygons of size ~1, GEOS's area to 1e-12 of p's area. Both clippings sum a few cross products of coordinates of
+order 1 along different edge orders, so they differ by round-off only: observed on the 2000-pair sample (1257
+overlapping, 1243 with a contact line) 1e-14 relative in area, 7e-16 in point, centroid and normal, 3e-16
+against GEOS; the margin of 100x covers other platforms' rounding of the same sums.
 """
 
 import math
@@ -52,14 +53,14 @@ def _same_contact(a, b):
 def test_facing_chain_equals_whole_polygon_clipping_and_geos():
     gen = np.random.default_rng(2026)
     proper = 0
-    for p, q in _pairs(gen, 3000):
+    for p, q in _pairs(gen, 2000):
         new = polygon_overlap(p, q)
         old = polygon_overlap(p, q, trim=False)
         _same_contact(new, old)
         geos = shapely.Polygon(p).intersection(shapely.Polygon(q)).area
-        assert new["area_m2"] == pytest.approx(geos, abs=1e-9 * shapely.Polygon(p).area)
+        assert new["area_m2"] == pytest.approx(geos, abs=1e-12 * shapely.Polygon(p).area)
         proper += new["area_m2"] > 0 and np.isfinite(new["c1_m"]).all()
-    assert proper > 1500  # most of the sample are proper contacts with a contact line
+    assert proper > 1000  # most of the sample are proper contacts with a contact line
 
 
 def test_facing_chain_on_long_thin_and_many_cornered_partners():
@@ -105,3 +106,29 @@ def test_climb_does_not_depend_on_its_start():
                 _overlap_geometry(both, 0, len(p), 1, len(q), *cp, *cq, *bufs, geo, True, hint, 0)
                 outs.append(np.concatenate([geo, hint[0]]))
         assert all(np.array_equal(o, outs[0]) for o in outs)
+
+
+def test_simulation_with_facing_chain_follows_the_reference():
+    # 30 random 7-gons (5 mm) falling onto the floor of a box and each other, 3000 steps (impacts, 50 list
+    # rebuilds): the default stepper against one compiled with the whole-polygon clipping. The two differ by
+    # round-off, which colliding grains amplify: observed 1.4e-13 m in position and 1.1e-9 of the largest normal
+    # force (10 N); asserted to 1e-11 m and 1e-7 of it.
+    from porepipe.granular import Settings, Simulation
+    from porepipe.granular import _kernels as K
+
+    box = {"lower_m": (0, 0), "upper_m": (0.06, 0.1)}
+    shape = {"size_m": (0.005, 0.005), "corners": 7, "angle_mode": "RAND1", "orientation_dist": "EQUAL"}
+    block = {"lower_m": (0, 0), "upper_m": (0.06, 0.05), "grid_m": (0.0095, 0.0095), "shape": shape}
+    s = Settings.model_validate({"dt_s": 2e-5, "gravity_m_s2": (0, -9.81), "box": box, "blocks": [block]})
+    sims = []
+    for trim in (True, False):
+        sim = Simulation(s, 1)
+        sim._stepper = K.make_stepper(*sim.effects.values(), trim=trim)
+        sim.advance(3000)
+        sims.append(sim)
+    a, b = sims
+    assert a.rebuilds > 10 and len(a.contacts()["i"]) > 5
+    np.testing.assert_allclose(a.G[0, : a.n_mob, :2], b.G[0, : b.n_mob, :2], rtol=0, atol=1e-11)
+    fa, fb = a.contacts()["fn_N"], b.contacts()["fn_N"]
+    assert fa.shape == fb.shape
+    np.testing.assert_allclose(fa, fb, rtol=0, atol=1e-7 * np.abs(fb).max())
