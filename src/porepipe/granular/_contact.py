@@ -5,10 +5,11 @@ remembers whether it lies on the boundary of P (tag < 0) or on edge k of Q (tag 
 and outgoing edges belong to different polygons is a boundary crossing point. Two crossings c1, c2 give the
 contact line of Fig. 2.4.
 
-Only the chains of P and Q that face each other along the centre line take part (``trim``, the default): the
+With ``trim``, only the chains of P and Q that face each other along the centre line take part: the
 facing corner of each polygon is found by climbing from the previous step's (a per-pair hint), P is cut to its
 corners beyond Q's lowest one and clipped by Q's edges below P's highest one. In a dense pile that is 3-5
-corners against 3-4 edges instead of 9 against 4-5; whole-polygon clipping stays as the tested reference.
+corners against 3-4 edges instead of 9 against 4-5. Without it (the default), all of P is clipped by Q's facing
+chain, bit-identical to earlier versions.
 """
 
 from __future__ import annotations
