@@ -6,7 +6,8 @@ inside a box, under gravity, with friction and damping; it is stepped a little t
 then timed (best of 3). Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
 list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
 distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
-optional effect compiled in (with neutral values), i.e. what the compile-time switches save.
+optional effect compiled in (with neutral values), i.e. what the compile-time switches save, and the narrow
+phase against the whole-polygon clipping it replaced (same pile, interleaved).
 
     python benchmarks/granular.py            # N = 10 000
     python benchmarks/granular.py --smoke    # N = 300, 1 thread, no effect row: seconds once compiled
@@ -151,6 +152,30 @@ def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
     return out
 
 
+def narrow_phase(n: int, warm: int, steps: int, repeats: int, threads: int) -> dict:
+    """Whole-polygon clipping (the default, ``trim=False``) vs the facing-chain narrow phase (``trim=True``) on
+    the same pile, interleaved rounds, best of each; both per wall and per CPU second. Also what was checked:
+    the largest position difference between the two runs (round-off of a chaotic system: grows with steps).
+    """
+    numba.set_num_threads(threads)
+    sims = {}
+    for label, trim in (("whole-polygon clipping", False), ("facing chain", True)):
+        sim = Simulation(pile(n, 0.1, "swap"), seed=1)
+        sim._stepper = K.make_stepper(*sim.effects.values(), trim=trim)
+        sim.advance(warm)
+        sims[label] = sim
+    out = {label: [0.0, 0.0] for label in sims}
+    for _ in range(repeats + 1):
+        for label, sim in sims.items():
+            rate, rate_cpu = _time(sim, steps, 1)
+            out[label] = [max(out[label][0], rate), max(out[label][1], rate_cpu)]
+    a, b = sims.values()
+    out["max_position_difference_m"] = float(np.abs(a.G[0, : a.n_mob, :2] - b.G[0, : b.n_mob, :2]).max())
+    out["steps"] = a.step
+    out["threads"] = threads
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke", action="store_true", help="300 particles, a few steps, 1 thread")
@@ -181,6 +206,15 @@ def main() -> None:
                     f"(coordination {r['coordination']:.2f}, {r['rebuilds']} list builds)",
                     flush=True,
                 )
+    narrow = [narrow_phase(n, warm, steps, repeats, t) for t in ((1,) if args.smoke else (1, 2))]
+    for r in narrow:
+        ref, new = r["whole-polygon clipping"], r["facing chain"]
+        print(
+            f"narrow phase, {r['threads']} thr: whole-polygon clipping (default) {ref[0]:.3g} polygon-steps/s ({ref[1]:.3g} per "
+            f"CPU-s), facing chain {new[0]:.3g} ({new[1]:.3g} per CPU-s): {new[1] / ref[1]:.2f}x per CPU-s; "
+            f"positions agree to {r['max_position_difference_m']:.1e} m after {r['steps']} steps",
+            flush=True,
+        )
     cost = effect_cost(n, warm, steps, repeats)
     print(
         f"effects: bare {cost['bare']:.3g}, all compiled in {cost['all effects compiled in']:.3g} "
@@ -205,7 +239,7 @@ def main() -> None:
     write_record(
         args.out,
         "granular_smoke.json" if args.smoke else "granular.json",
-        {"rows": rows, "builds": builds_out, "effects": cost, "peers": PEERS},
+        {"rows": rows, "builds": builds_out, "effects": cost, "narrow_phase": narrow, "peers": PEERS},
     )
 
 

@@ -63,13 +63,16 @@ _WAVE = {Waveform.cosinus: 1, Waveform.sawtooth: 2, Waveform.tapping: 3, Wavefor
 _GKIND = {GravityKind.constant: 0, GravityKind.linear: 1, GravityKind.step: 2, GravityKind.smooth_step: 3}
 
 
-def polygon_overlap(p, q):
+def polygon_overlap(p, q, trim: bool = False):
     """Overlap of two convex polygons (world frame): area, contact line, application point and normal.
 
     Parameters
     ----------
     p, q : (N, 2) and (M, 2) array_like
         Corners in m (either orientation).
+    trim : bool
+        Cut p to its facing chain before clipping (``make_stepper(trim=True)``); False (default, as the
+        simulation) clips all of p. Both agree to round-off.
 
     Returns
     -------
@@ -85,9 +88,11 @@ def polygon_overlap(p, q):
     tag_a, tag_b = np.empty(kmax, np.int64), np.empty(kmax, np.int64)
     geo = np.empty(11)
     cp, cq = p.mean(axis=0), q.mean(axis=0)
-    _overlap_geometry(
-        p, len(p), q, len(q), cp[0], cp[1], cq[0], cq[1], buf_a, tag_a, buf_b, tag_b, np.empty(kmax), geo
-    )
+    both = np.zeros((2, max(len(p), len(q)), 2))
+    both[0, : len(p)], both[1, : len(q)] = p, q
+    bufs = (buf_a, tag_a, buf_b, tag_b, np.empty(kmax))
+    hint = np.zeros((1, 2), np.int64)
+    _overlap_geometry(both, 0, len(p), 1, len(q), *cp, *cq, *bufs, geo, trim, hint, 0)
     out = {"area_m2": float(geo[0]), "centroid_m": geo[7:9].copy(), "point_m": geo[5:7].copy()}
     if geo[0] <= 0:
         return out | {
@@ -393,6 +398,9 @@ class Simulation:
         ft, aold, pout = np.zeros(len(nb_j)), np.zeros(len(nb_j)), np.zeros((len(nb_j), len(K.POUT)))
         _carry_state(self.nb_start, self.nb_j, self.ft, self.aold, self.pout, start, nb_j, ft, aold, pout)
         self.nb_start, self.nb_j, self.ft, self.aold, self.pout = start, nb_j, ft, aold, pout
+        # each pair's facing corners of the last step, where the narrow phase starts its search (a hint only:
+        # the contact does not depend on it, so it is neither carried over nor checkpointed)
+        self.hint = np.zeros((len(nb_j), 2), np.int64)
         self.tr_start, self.tr_p = _transpose(n, start, nb_j)
         self.x_build = x.copy()
         self.scratch = np.zeros((n, 6))
@@ -476,6 +484,7 @@ class Simulation:
                 self.tr_p,
                 self.ft,
                 self.aold,
+                self.hint,
                 self.pout,
                 self.x_build,
                 self.scratch,
@@ -595,4 +604,5 @@ class Simulation:
         self.time_s = self.step * self.dt
         self.scratch = np.zeros((self.n_mob, 6))
         self.swap = SwapState(self.n_mob)  # rebuilt from scratch at the next list build: the same pairs
+        self.hint = np.zeros((len(self.nb_j), 2), np.int64)  # search hints, one per pair of the restored list
         self._place_all()
