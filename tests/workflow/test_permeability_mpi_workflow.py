@@ -28,7 +28,8 @@ def _dry_run(tmp_path, permeability: dict) -> str:
 def test_mpi_ranks_launch_the_permeability_job_under_mpirun(tmp_path):
     text = _dry_run(tmp_path, {"mpi_ranks": 2, "walls": "halfway"})
     assert "mpirun -n 2 porepipe permeability" in text
-    assert "--threads 2 --mpi" in text  # the job's 4 cores shared by its 2 ranks
+    # the mini volume earns one thread (threads_by_volume), but an MPI job takes a core per rank: 2 cores, 1 per rank
+    assert "--threads 1 --mpi" in text and "cpus_per_task=1" in text
     assert "tasks=2" in text and "mpi=mpirun" in text  # the resources an executor (slurm: --ntasks) reads
 
 

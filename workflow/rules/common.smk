@@ -359,6 +359,18 @@ def permeability_ranks(wildcards):
     return max(1, scene_of(wildcards).permeability.mpi_ranks)
 
 
+def permeability_threads(wildcards):
+    """The LBM job's threads: one per 2^15 voxels up to every core (threads_by_volume), but at least one per MPI rank,
+    so that an MPI job never runs more ranks than it has cores."""
+    by_volume = threads_by_volume(every_core(8), voxels_per_thread=2**15)(wildcards)
+    return max(by_volume, permeability_ranks(wildcards))
+
+
+def permeability_cpus_per_task(wildcards, threads):
+    """Slurm's --cpus-per-task of the LBM job: its threads shared among its --ntasks MPI ranks."""
+    return max(1, threads // permeability_ranks(wildcards))
+
+
 def permeability_mpi(wildcards):
     return "mpirun" if permeability_ranks(wildcards) > 1 else None
 
@@ -373,7 +385,7 @@ def permeability_launch(wildcards, resources):
 def permeability_rank_args(wildcards, threads, resources):
     """`--mpi` for an MPI job, and the numba threads of each rank (the job's threads shared among its ranks)."""
     ranks = resources.tasks if resources.get("mpi") else 1
-    return f"--threads {max(1, threads // ranks)}" + (" --mpi" if ranks > 1 else "")
+    return f"--threads {resources.cpus_per_task}" + (" --mpi" if ranks > 1 else "")
 
 
 #: analysis name -> function(scene) -> list of final outputs; each rule file registers its analysis here.

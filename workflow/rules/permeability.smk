@@ -16,9 +16,9 @@ rule permeability:
         axis="[xyz]",
     conda:
         "../envs/porepipe.yaml"
-    threads: threads_by_volume(every_core(8), voxels_per_thread=2**15)  # below: 1-2 parallel chunks of nodes
+    threads: permeability_threads  # below: 1-2 parallel chunks of nodes; an MPI job: at least a core per rank
     resources:
-        cpus_per_task=cpus_per_task,
+        cpus_per_task=permeability_cpus_per_task,  # per MPI rank
         # 19 populations x 2 copies in float64 per node, plus the fields and the index arrays
         mem_mb=mem_mb(bytes_per_voxel=400, base_mb=1000),
         runtime=720,
