@@ -926,18 +926,24 @@ def _collide_mrt(f, lo, hi, n0, force_lo, force_hi, force, s):
 #    h = f*_ō(x), and the slot of population ō holds f*_ō(x + c_p) (pulled from the node behind). The link becomes
 #    f_p = h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h) (porepipe.lbm._walls). Per link only its slot in the tile
 #    (uint16: p · _TILE + i) and b, c (float32) are stored, grouped by tile; the one extra read is f*_p(x).
+@njit(inline="always", **_NUMERIC)
+def _linear_link(f, src, s, n0, n_nodes, b, c):
+    """Linear link value h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h) of the link in scratch slot ``s`` (p · _TILE + i)."""
+    p = s // _TILE
+    i = s - p * _TILE
+    h = _get(f, s)
+    behind = _get(f, _OPP[p] * _TILE + i)
+    own = _get(src, p * n_nodes + n0 + i)
+    return h + np.float64(b) * (behind - h) + np.float64(c) * (own - h)
+
+
 @njit(**_NUMERIC)
 def _apply_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c):
     """Interpolate the boundary links of the tile that starts at node n0 (a multiple of _TILE)."""
     tile = n0 // _TILE
     for k in range(tile_start[tile], tile_start[tile + 1]):
         s = np.int64(slot[k])
-        p = s // _TILE
-        i = s - p * _TILE
-        h = _get(f, s)
-        behind = _get(f, _OPP[p] * _TILE + i)
-        own = _get(src, p * n_nodes + n0 + i)
-        _set(f, s, h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h))
+        _set(f, s, _linear_link(f, src, s, n0, n_nodes, coef_b[k], coef_c[k]))
 
 
 # -- multi-reflection (MR1) links add, per link, d (f*_ō(x + 2c_p) − f*_p(x + c_p)) (two flat indices into the source
@@ -971,13 +977,8 @@ def _apply_mr_links(f, src, n0, cnt, n_nodes, tile_start, slot, coef_b, coef_c, 
     lo, hi = tile_start[tile], tile_start[tile + 1]
     for k in range(lo, hi):
         s = np.int64(slot[k])
-        p = s // _TILE
-        i = s - p * _TILE
-        h = _get(f, s)
-        behind = _get(f, _OPP[p] * _TILE + i)
-        own = _get(src, p * n_nodes + n0 + i)
         second = _get(src, far[k]) - _get(src, far_own[k])
-        value = h + np.float64(coef_b[k]) * (behind - h) + np.float64(coef_c[k]) * (own - h)
+        value = _linear_link(f, src, s, n0, n_nodes, coef_b[k], coef_c[k])
         _set(f, s, value + np.float64(coef_d[k]) * second + np.float64(coef_e[k]) * state[k])
     _momentum_tile(f, cnt, j)
     for k in range(lo, hi):
