@@ -4,11 +4,8 @@ Head to head (issue 22), in one run and interleaved round by round, so that the 
 engine alike: the STREAM-like copy bandwidth (numba, same thread count) and the roofline it gives, 304 B per
 float64 update (19 populations read and written); porepipe's step kernel as it was before issue 22 (``LEGACY``:
 every tile pulled into an L1 scratch, collided, copied out with element-wise stores, which on x86 compile to
-cached scalar stores), as it is now (regular runs collide straight from the population array; where the arrays
-exceed the cache, the whole cache lines of a run are written straight from the collision loop with non-temporal
-vector stores, the rest from the scratch, one cache line per non-temporal vector store) and, where the arrays
-exceed the cache, without the straight writes ("scratch": populations off the cache-line grid, every tile stored
-from the scratch, the kernel before them); lbmpy's generated D3Q19 SRT stream-collide kernel alone (no periodic ghost-layer
+cached scalar stores) and as it is now (regular runs collide straight from the population array, one cache line
+per non-temporal vector store); lbmpy's generated D3Q19 SRT stream-collide kernel alone (no periodic ghost-layer
 copy, no Python time loop; the ``bench`` extra) and its full step. Dense periodic 128³ box and a porous 128³ sample
 (overlapping spheres, porosity ≈ 0.2, only the percolating pore nodes stored; MLUPS per fluid node). Each figure is
 the best of the rounds (short bursts catch the quiet moments of a loaded machine), with the 1-minute load average
@@ -44,7 +41,7 @@ from scipy import ndimage
 
 from porepipe.lbm import Settings, SphereWalls, Walls
 from porepipe.lbm._domain import build_lattice, periodic_setup
-from porepipe.lbm._kernels import LEGACY, STREAMING_BYTES, aligned_zeros
+from porepipe.lbm._kernels import LEGACY
 from porepipe.lbm._solver import make_stepper
 from porepipe.lbm._walls import build_links
 
@@ -106,8 +103,8 @@ def time_lattice(
     """
     numba.set_num_threads(threads)
     n = lat.n_nodes
-    src = aligned_zeros(19 * n, precision)
-    dst = aligned_zeros(19 * n, precision)
+    src = np.zeros(19 * n, dtype=precision)
+    dst = np.zeros_like(src)
     step = make_stepper(Settings(collision=collision, precision=precision), lat, links)
     none = np.zeros((4, 0))
     step(src, dst, none, False, 2)  # compile / warm up
@@ -142,7 +139,7 @@ def wall_cost(size: int, thread_counts, steps: int, rounds: int = 5, porosities=
         ).lattice
         steppers, links = _wall_steppers(lat, geometry)
         n = lat.n_nodes
-        src, dst, none = aligned_zeros(19 * n), aligned_zeros(19 * n), np.zeros((4, 0))
+        src, dst, none = np.zeros(19 * n), np.zeros(19 * n), np.zeros((4, 0))
         for threads in thread_counts:
             numba.set_num_threads(threads)
             for step in steppers.values():
@@ -221,15 +218,12 @@ def lbmpy_engines(size: int, threads: int):
     return run_kernel, sc.run
 
 
-def porepipe_engine(lat, collision: str, stores: int | None, aligned: bool = True):
+def porepipe_engine(lat, collision: str, stores: int | None):
     """``run(steps)`` of porepipe's float64 step kernel on ``lat`` (``stores``: LEGACY for the kernel before issue 22,
-    None for the current one). ``aligned`` False: populations one element past a cache line, so the kernel cannot
-    write from the collision loop straight into them and stores every tile from the scratch (the kernel before the
-    direct writes).
+    None for the current one).
     """
-    skip = 0 if aligned else 1
-    src = aligned_zeros(19 * lat.n_nodes + skip)[skip:]
-    dst = aligned_zeros(19 * lat.n_nodes + skip)[skip:]
+    src = np.zeros(19 * lat.n_nodes)
+    dst = np.zeros_like(src)
     step = make_stepper(Settings(collision=collision), lat, stores=stores)
     none = np.zeros((4, 0))
 
@@ -246,8 +240,7 @@ def same_bits(lat, collision: str, steps: int = 3) -> bool:
     start = 1e-3 * np.random.default_rng(1).standard_normal(19 * lat.n_nodes)
     out = []
     for stores in (None, LEGACY):
-        src, dst = aligned_zeros(start.size), aligned_zeros(start.size)
-        src[:] = start
+        src, dst = start.copy(), np.zeros_like(start)
         make_stepper(Settings(collision=collision, body_force=1e-5), lat, stores=stores)(
             src, dst, np.zeros((4, 0)), False, steps
         )
@@ -291,11 +284,6 @@ def compare(size: int, dense, porous, thread_counts, rounds: int, steps: int, us
                     engines[f"{kernel} {collision} {geometry}"] = (
                         lat.n_nodes,
                         porepipe_engine(lat, collision, stores),
-                    )
-                if 2 * 19 * 8 * lat.n_nodes > STREAMING_BYTES:  # non-temporal stores (streams())
-                    engines[f"scratch {collision} {geometry}"] = (
-                        lat.n_nodes,
-                        porepipe_engine(lat, collision, None, aligned=False),
                     )
         peer = lbmpy_engines(size, threads) if use_lbmpy else None
         if peer is not None:

@@ -11,10 +11,7 @@ least half in regular runs collides run by run straight from the population arra
 vectorised loop per run; the reads carry alias-scope metadata so the loop needs no overlap tests); any other tile
 (mostly irregular, or with interpolated wall links) is first pulled into the scratch, so its collision loop has
 full length however short its runs are. The scratch is then stored, with one non-temporal vector store per cache
-line where the arrays exceed the last-level cache. There, if the destination is line-aligned with whole lines per
-population (float64, :func:`aligned_zeros`, node count a multiple of 8), the whole cache lines of a regular run are
-written straight from the collision loop as aligned non-temporal vector stores, one scratch pass less (dense 128³,
-2 threads: +24 %); the scratch then holds only the partial lines at run ends. Issue 22: the kernel before (every tile through the scratch,
+line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
 element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits.
 """
 
@@ -74,16 +71,6 @@ def streams(src) -> int:
     than the cache can hold (:data:`STREAMING_BYTES`), else STORE_CACHED.
     """
     return STORE_STREAM if 2 * src.nbytes > STREAMING_BYTES else STORE_CACHED
-
-
-def aligned_zeros(size: int, dtype=np.float64) -> np.ndarray:
-    """A zeroed 1-D array whose first element starts a cache line: float64 population arrays of whole lines per
-    population are then written by the step kernels straight from the collision loop (:func:`_direct_writes`).
-    """
-    itemsize = np.dtype(dtype).itemsize
-    raw = np.zeros(size * itemsize + _LINE, dtype=np.uint8)
-    skip = -raw.ctypes.data % _LINE
-    return raw[skip : skip + size * itemsize].view(dtype)
 
 
 # -- unchecked element access (no negative-index wrap test: indices must be in range) ---------------------------------
@@ -239,52 +226,6 @@ def _stream_line(typingctx, dst, idx, src, sidx):
             value, builder.bitcast(dp, ir.VectorType(d_type, lanes).as_pointer()), align=_LINE
         )
         store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
-        return context.get_dummy_value()
-
-    return sig, codegen
-
-
-def _row_scopes(builder):
-    """One alias scope per population row of a direct write (:func:`_put_line`), in the population domain."""
-    module = builder.module
-    domain = module.add_metadata([ir.MetaDataString(module, "porepipe.lbm")])
-    return [
-        module.add_metadata([ir.MetaDataString(module, f"porepipe.lbm.row{q}"), domain]) for q in range(19)
-    ]
-
-
-#: direct writes lowered so far per LLVM function: the k-th of a function writes population row k mod 19
-_ROW_WRITES: dict[str, int] = {}
-
-
-@intrinsic
-def _put_line(typingctx, arr, idx, val):
-    """``arr[idx] = val`` (no wrap-around test) as a non-temporal store that claims the alignment of a whole group of
-    8 elements: the collision loop over a line-aligned span vectorises into aligned non-temporal vector stores (the
-    vectoriser emits none whose alignment it cannot prove). Only for spans of whole groups that start a line of an
-    aligned population array (:func:`_direct_span`); it does not alias a scoped :func:`_read`.
-
-    A collision loop writes each of the 19 population rows once, in its own call: the k-th call lowered in a
-    function gets row scope k mod 19 and is declared not to alias the 18 other rows, so the vectoriser needs no
-    run-time overlap test between the rows (171 pairs: it would give up).
-    """
-    sig = types.void(arr, idx, val)
-
-    def codegen(context, builder, signature, args):
-        arrty = signature.args[0]
-        ptr = _item_pointer(context, builder, arrty, args[0], signature.args[1], args[1])
-        value = context.cast(builder, args[2], signature.args[2], arrty.dtype)
-        store = builder.store(value, ptr, align=8 * (arrty.dtype.bitwidth // 8))
-        store.set_metadata("nontemporal", builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)]))
-        name = builder.function.name
-        k = _ROW_WRITES.get(name, 0)
-        _ROW_WRITES[name] = k + 1
-        rows = _row_scopes(builder)
-        module = builder.module
-        population = _population_scope(builder).operands[0]
-        store.set_metadata("alias.scope", module.add_metadata([rows[k % 19]]))
-        store.set_metadata("noalias", module.add_metadata([population, *rows[: k % 19], *rows[k % 19 + 1 :]]))
-        set.add(builder.function.attributes, '"prefer-vector-width"="512"')
         return context.get_dummy_value()
 
     return sig, codegen
@@ -662,43 +603,16 @@ def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
                 _set(dst, base + i, _get(f, _ix(q, i)))
 
 
-@njit(**_NUMERIC)
-def _store_rest(dst, n0, cnt, n_nodes, f, done):
-    """Store a tile into a line-aligned float64 ``dst`` (STORE_STREAM) but for its groups of 8 lanes that the
-    collision wrote there already (``done``, reset here): one non-temporal vector store per remaining line.
-    """
-    whole = cnt // 8
-    for q in range(19):
-        base = q * n_nodes + n0
-        for g in range(whole):
-            if not done[g]:
-                _stream_line(dst, base + 8 * g, f, _ix(q, 8 * g))
-        for i in range(8 * whole, cnt):
-            _stream_store(dst, base + i, _get(f, _ix(q, i)))
-    for g in range(whole):
-        done[g] = 0
-
-
-@njit(**_NUMERIC)
-def _direct_writes(dst, n_nodes, streaming):
-    """Whether the fused tiles may write whole lines straight into ``dst`` (:func:`_pull_collide`): non-temporal
-    stores into a float64 array that starts a cache line and holds whole lines per population
-    (:func:`aligned_zeros` allocates such arrays).
-    """
-    return streaming == STORE_STREAM and _per_line(dst) == 8 and n_nodes % 8 == 0 and _misalign(dst, 0) == 0
-
-
-# -- a tile view v = (source, rows, scope, f, target): the collision reads population q of tile node i from
-#    ``source[rows[q] + i]`` and writes it to the scratch ``f`` (or, target (dst, n_nodes, n0), straight to dst with
-#    non-temporal stores: :func:`_put_target`). Either the scratch itself (:func:`_scratch_view`, after
+# -- a tile view v = (source, rows, scope, f): the collision reads population q of tile node i from
+#    ``source[rows[q] + i]`` and writes it to the scratch ``f``. Either the scratch itself (:func:`_scratch_view`, after
 #    the tile was pulled into it) or, for a whole tile inside one regular run, the population array at the run's
 #    stream offsets (:func:`_run_view`): the pull then happens in the collision loop, one pass over the tile less.
 @njit(inline="always", **_NUMERIC)
 def _scratch_view(f):
     """Source and rows None: the scratch at q * _TILE, one array at compile-time constant offsets, so the compiler
-    sees that the rows do not overlap. Writes go to the scratch (target None).
+    sees that the rows do not overlap.
     """
-    return (None, None, None, f, None)
+    return (None, None, None, f)
 
 
 def _source(source, f):
@@ -725,26 +639,8 @@ def _row_start_overload(rows, q):
     return lambda rows, q: rows[q]
 
 
-def _put_target(target, f, q, i, value):
-    """Write population q of tile lane i: to the scratch ``f`` (``target`` None) or, ``target`` = (dst, n_nodes, n0),
-    straight to ``dst[q * n_nodes + n0 + i]`` with a non-temporal store (:func:`_put_line`).
-    """
-    if target is None:
-        _put(f, q * _TILE + i, value)
-    else:
-        _put_line(target[0], q * target[1] + target[2] + i, value)
-
-
-@overload(_put_target, inline="always")
-def _put_target_overload(target, f, q, i, value):
-    if isinstance(target, types.NoneType):
-        return lambda target, f, q, i, value: _put(f, q * _TILE + i, value)
-    return lambda target, f, q, i, value: _put_line(target[0], q * target[1] + target[2] + i, value)
-
-
 @njit(inline="always", **_NUMERIC)
-def _run_view(src, run_offset, r, n0, f, target):
-    """The tile at n0 read straight from run r of ``src``, written to ``target`` (None: the scratch f)."""
+def _run_view(src, run_offset, r, n0, f):
     o = run_offset[r]
     rows = (
         n0,
@@ -752,7 +648,7 @@ def _run_view(src, run_offset, r, n0, f, target):
         *(o[9] + n0, o[10] + n0, o[11] + n0, o[12] + n0, o[13] + n0, o[14] + n0, o[15] + n0, o[16] + n0),
         o[17] + n0,
     )
-    return (src, rows, (), f, target)
+    return (src, rows, (), f)
 
 
 @njit(inline="always", **_NUMERIC)
@@ -763,8 +659,8 @@ def _pop(v, q, i):
 
 @njit(inline="always", **_NUMERIC)
 def _out(v, q, i, value):
-    """Write the post-collision population q of tile node i (to the scratch, or where the view's target says)."""
-    _put_target(v[4], v[3], q, i, value)
+    """Write the post-collision population q of tile node i to the scratch."""
+    _put(v[3], q * _TILE + i, value)
 
 
 @njit(inline="always", **_NUMERIC)
@@ -1119,49 +1015,26 @@ def _has_links(n0, tile_start, link_slot):
     return link_slot.size > 0 and tile_start[n0 // _TILE] < tile_start[n0 // _TILE + 1]
 
 
-@njit(inline="always", **_NUMERIC)
-def _direct_span(t, seg, done):
-    """Lanes [a, b) of the segment t … t+seg-1 that collide straight into the population array: its whole groups of
-    8 lanes (cache lines of a line-aligned float64 array), none where ``done`` is empty (direct writes off).
-    """
-    if done.size == 0:
-        return t, t
-    a, b = (t + 7) & -8, (t + seg) & -8
-    return (a, b) if a < b else (t, t)
-
-
 @njit(**_NUMERIC)
 def _pull_collide(
-    op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, keep, fz, force, fields, w, s, dst, done
+    op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, keep, fz, force, fields, w, s
 ):
     """Collide the tile at n0 (cnt nodes, no interpolated links) into the scratch ``f``, run by run: a regular run's
     nodes read their populations straight from ``src`` (:func:`_run_view`), an irregular run is pulled into the
     scratch first. ``fz`` = (force_lo, force_hi); the fields of the pulled populations if ``keep``. ``r`` is the run
     holding n0 or an earlier one; returns the run holding the tile's last node.
-
-    With a non-empty ``done`` (one flag per group of 8 lanes; ``dst`` a line-aligned float64 array of whole lines
-    per population), the whole groups of a regular run write straight into ``dst`` with non-temporal vector stores
-    (one scratch pass less) and are flagged in ``done``, so that :func:`_store_rest` skips them.
     """
     scratch = _scratch_view(f)
-    target = (dst, run_start[-1], n0)
     t = 0
     while t < cnt:
         while run_start[r + 1] <= n0 + t:
             r += 1
         seg = min(cnt - t, run_start[r + 1] - (n0 + t))
         if run_offset[r, 0] >= 0:
-            view = _run_view(src, run_offset, r, n0, f, None)
+            view = _run_view(src, run_offset, r, n0, f)
             if keep:
                 _fields_tile(view, t, t + seg, n0, fz[0], fz[1], force, fields)
-            a, b = _direct_span(t, seg, done)
-            _collide(literally(op), view, t, a, n0, fz[0], fz[1], force, w, s)
-            if a < b:
-                direct = _run_view(src, run_offset, r, n0, f, target)
-                _collide(literally(op), direct, a, b, n0, fz[0], fz[1], force, w, s)
-                for g in range(a // 8, b // 8):
-                    done[g] = 1
-            _collide(literally(op), view, b, t + seg, n0, fz[0], fz[1], force, w, s)
+            _collide(literally(op), view, t, t + seg, n0, fz[0], fz[1], force, w, s)
         else:
             for i in range(seg):
                 _set(f, t + i, _get(src, n0 + t + i))
@@ -1252,22 +1125,19 @@ def _step(
     for s in range(n_steps):
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
         keep = store and s == n_steps - 1
-        direct = fuse and _direct_writes(b, n_nodes, streaming)
         for c in prange(n_chunks):
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
-            done = np.zeros(_TILE // 8 if direct else 0, np.uint8)  # groups of 8 lanes written straight to b
             j = np.zeros(3 * _TILE if multi else 0)
             scratch = _scratch_view(f)
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
             r = np.searchsorted(run_start, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
-                fused = (
+                if (
                     fuse
                     and not _has_links(n0, tile_start, link_slot)
                     and _mostly_regular(run_start, run_offset, r, n0, cnt)
-                )
-                if fused:
+                ):
                     r = _pull_collide(
                         literally(op),
                         a,
@@ -1285,8 +1155,6 @@ def _step(
                         fields,
                         w2,
                         rates,
-                        b,
-                        done,
                     )
                 else:
                     r = _load_tile(a, gather, run_start, run_offset, run_base, r, n0, cnt, f)
@@ -1311,10 +1179,7 @@ def _step(
                     if keep:
                         _fields_tile(scratch, 0, cnt, n0, force_lo, force_hi, b3, fields)
                     _collide(literally(op), scratch, 0, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
-                if fused and direct:
-                    _store_rest(b, n0, cnt, n_nodes, f, done)
-                else:
-                    _store_tile(b, n0, cnt, n_nodes, f, streaming)
+                _store_tile(b, n0, cnt, n_nodes, f, streaming)
                 n0 += cnt
             if streaming != STORE_CACHED:
                 _store_fence()

@@ -354,8 +354,8 @@ def _solve(
     check_tau(settings)
     dtype = np.dtype(settings.precision.value)
     n = lat.n_nodes
-    src = K.aligned_zeros(19 * n, dtype)  # zero-centred: equilibrium at rest, ρ = 1
-    dst = K.aligned_zeros(19 * n, dtype)
+    src = np.zeros(19 * n, dtype=dtype)  # zero-centred: equilibrium at rest, ρ = 1
+    dst = np.zeros_like(src)
     fields = np.zeros((4, n))
     step = comm.wrap(make_stepper(settings, lat, links))
     owned = comm.owned(lat)

@@ -63,15 +63,11 @@ def test_runs_reproduce_the_gather_table():
 
 
 def _chunked_pore():
-    """More pore nodes than one parallel work chunk, mostly open: runs and tiles cross chunk boundaries. A multiple
-    of 8 pore nodes (the last two are made solid), so that line-aligned float64 populations hold whole cache lines
-    per population: the step kernel then writes regular runs straight from the collision loop."""
+    """More pore nodes than one parallel work chunk, mostly open: runs and tiles cross chunk boundaries."""
     pore = _random_pore((5, 40, 100), 0.995, seed=4)
     from porepipe.lbm import _kernels
 
-    flat = pore.reshape(-1)
-    flat[np.flatnonzero(flat)[-(np.count_nonzero(flat) % 8) :]] = False
-    assert np.count_nonzero(pore) > 1.1 * _kernels._CHUNK and np.count_nonzero(pore) % 8 == 0
+    assert np.count_nonzero(pore) > 1.1 * _kernels._CHUNK
     return pore
 
 
@@ -89,8 +85,7 @@ _GEOMETRIES = {
 def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, streaming, monkeypatch):
     """Five fused pull/collide steps on a random porous box (gather-table path), on a mostly open box (mostly
     offset-streaming runs) and on an open box of several parallel chunks equal the dense reference, with cached and
-    with non-temporal population stores (on the chunked box these collide straight into the line-aligned
-    destination: :func:`porepipe.lbm._kernels._direct_writes`).
+    with non-temporal population stores.
 
     Tolerance 1e-13 absolute on populations of size ~0.1: both are float64 with different summation order.
     """
@@ -107,10 +102,8 @@ def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, s
     u0 = 0.02 * rng.standard_normal((3,) + pore.shape)
     dense = np.where(pore, equilibrium(rho0, u0) + 1e-3 * rng.standard_normal((19,) + pore.shape), 0.0)
     n = lat.n_nodes
-    sparse = _kernels.aligned_zeros(19 * n)
-    sparse[:] = (dense[:, pore] - W[:, None]).reshape(-1)  # zero-centred
-    other = _kernels.aligned_zeros(19 * n)
-    assert _kernels._direct_writes(other, n, _kernels.STORE_STREAM) or geometry != "chunks"
+    sparse = (dense[:, pore] - W[:, None]).reshape(-1).copy()  # zero-centred
+    other = np.zeros_like(sparse)
     fields = np.zeros((4, n))
     mask = np.zeros(pore.shape)
     mask[force_layers[0] : force_layers[1]] = 1
@@ -124,45 +117,27 @@ def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, s
     np.testing.assert_allclose(fields[1:], u[:, pore], rtol=0, atol=1e-13)
 
 
-def _populations(size, precision, aligned):
-    """Zeroed populations that start a cache line (``aligned``) or one element past it."""
-    from porepipe.lbm import _kernels
-
-    if aligned:
-        return _kernels.aligned_zeros(size, precision)
-    return _kernels.aligned_zeros(size + 1, precision)[1:]
-
-
 @pytest.mark.parametrize("precision", ["float64", "float32"])
 @pytest.mark.parametrize("geometry", ["random", "chunks"])
 def test_store_modes_write_identical_populations(precision, geometry):
     """Cached stores, line-wide non-temporal vector stores (rows start anywhere within a cache line: element-wise
-    head and tail), non-temporal vector stores straight from the collision loop into line-aligned arrays (float64
-    on the chunked box, whose node count is a multiple of 8) and the old element-wise non-temporal loop write the
-    same bits: how a value is stored cannot change it. Three TRT steps with a body force from random populations,
-    populations and the last step's fields compared exactly."""
+    head and tail) and the old element-wise non-temporal loop write the same bits: how a value is stored cannot
+    change it. Three TRT steps with a body force from random populations, compared exactly."""
     from porepipe.lbm import _kernels
 
     pore = _GEOMETRIES[geometry]()
     lat = build_lattice(pore, (True, False, True), (0, 5), (0, 5))
-    n = lat.n_nodes
-    start = (1e-2 * np.random.default_rng(6).standard_normal(19 * n)).astype(precision)
+    start = (1e-2 * np.random.default_rng(6).standard_normal(19 * lat.n_nodes)).astype(precision)
     results = []
-    modes = (_kernels.STORE_CACHED, _kernels.STORE_STREAM, _kernels.STORE_STREAM, _kernels.LEGACY)
-    for mode, aligned in zip(modes, (False, False, True, False)):
-        src, dst = _populations(19 * n, precision, aligned), _populations(19 * n, precision, aligned)
-        src[:] = start
-        direct = _kernels._direct_writes(dst, n, mode)
-        assert direct == (aligned and precision == "float64" and geometry == "chunks")
-        fields = np.zeros((4, n))
+    for mode in (_kernels.STORE_CACHED, _kernels.STORE_STREAM, _kernels.LEGACY):
+        src, dst = start.copy(), np.zeros_like(start)
         make_stepper(Settings(body_force=1e-4, precision=precision), lat, stores=mode)(
-            src, dst, fields, True, 3
+            src, dst, np.zeros((4, 0)), False, 3
         )
-        results.append((dst, src, fields))
-    assert np.any(results[0][0] != 0)
+        results.append(dst)
+    assert np.any(results[0] != 0)
     for other in results[1:]:
-        for a, b in zip(other, results[0]):
-            np.testing.assert_array_equal(a, b)
+        np.testing.assert_array_equal(other, results[0])
 
 
 def test_mrt_rates_match_thesis_and_odd_rates_follow_magic():
@@ -253,10 +228,8 @@ def _spheres_in(shape, centres, radii):
 @pytest.mark.parametrize("walls", ["halfway", "cli"])
 def test_new_kernel_gives_the_old_kernels_kappa(sample, walls, monkeypatch):
     """κ of the default TRT (Λ = 3/16) after 1000 steps (4 checks) with the current kernel (tiles of regular runs
-    collide straight from the population array; non-temporal stores forced, so on the sphere array, 8 · 1302 nodes,
-    whole lines are written straight from the collision loop) and with the kernel before issue 22 (``LEGACY``: every
-    tile through the scratch, element-wise stores) on a sphere array and a porous sample, halfway and interpolated
-    (CLI) walls.
+    collide straight from the population array) and with the kernel before issue 22 (``LEGACY``: every tile through
+    the scratch, element-wise stores) on a sphere array and a porous sample, halfway and interpolated (CLI) walls.
     Tolerance: none — the two do the same arithmetic in the same order, so every κ̂ agrees to the last bit."""
     from porepipe.lbm import _kernels, permeability
 
@@ -265,7 +238,6 @@ def test_new_kernel_gives_the_old_kernels_kappa(sample, walls, monkeypatch):
     assert np.diff(lat.run_start)[lat.run_offset[:, 0] >= 0].sum() > 0.2 * lat.n_nodes  # the new path runs
     settings = Settings(walls=walls, max_steps=1000, window_steps=250, accept_unconverged=True)
     geometry = spheres if walls == "cli" else None
-    monkeypatch.setattr(_kernels, "STREAMING_BYTES", 0)
     new = permeability(pore, "x", settings, progress=False, geometry=geometry)
     monkeypatch.setattr(_kernels, "streams", lambda src: _kernels.LEGACY)
     old = permeability(pore, "x", settings, progress=False, geometry=geometry)
