@@ -21,20 +21,15 @@ def _make_module():
 
 
 def _inside(points, centres, radii, boxsize=None):
-    tree = cKDTree(centres, boxsize=boxsize)
-    hits = tree.query_ball_point(points, r=radii.max())
-    return np.array(
-        [
-            any(
-                np.linalg.norm(
-                    (p - centres[j]) - (0 if boxsize is None else boxsize * np.round((p - centres[j]) / boxsize))
-                )
-                <= radii[j]
-                for j in js
-            )
-            for p, js in zip(points, hits, strict=True)
-        ]
-    )
+    """Whether each point lies in a sphere (minimum-image distances when ``boxsize`` is given)."""
+    hits = cKDTree(centres, boxsize=boxsize).query_ball_point(points, r=radii.max())
+    out = np.zeros(len(points), bool)
+    for i, js in enumerate(hits):
+        d = points[i] - centres[js]
+        if boxsize is not None:
+            d -= boxsize * np.round(d / boxsize)
+        out[i] = (np.sqrt((d * d).sum(1)) <= radii[js]).any()
+    return out
 
 
 def test_the_corner_cube_holds_exactly_the_periodic_packings_content():
