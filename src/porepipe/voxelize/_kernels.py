@@ -222,28 +222,71 @@ def _or_voxel(mask, j, k, dxy, t, r2, bits):
     mask[j, k, 3] |= np.uint64(a3)
 
 
-#: ``owner`` of a voxel whose grey value is the popcount of its union mask (two or more balls put samples in it)
+#: ``owner`` of a voxel whose grey value is the popcount of its union mask (three or more balls put samples in it);
+#: two balls ``o`` and ``second[j, k]`` are ``owner = PAIR - o`` (<= PAIR), one ball is its index (>= 0)
 SHARED = -1
+PAIR = -2
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _ball_rows(i, j, b, images, h, dx2, dxy):
+    """Row distances of ball ``b`` in voxel row (i, j) into ``dxy`` (``dx2`` scratch); returns its r*r."""
+    _plane_distances(i, images[b, 0], h, dx2)
+    _row_distances(dx2, j, images[b, 1], h, dxy)
+    return images[b, 3] * images[b, 3]
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _union_count(da, ta, ra2, db, tb, rb2):
+    """Samples of a voxel inside ball a or ball b (row distances ``da``/``db``, squared z distances ``ta``/``tb``):
+    the 2 x 216 exact tests of :func:`_voxel_count`, ORed per sample and counted, vectorised over the rows.
+    """
+    a0, a1, a2, a3, a4, a5 = ta
+    b0, b1, b2, b3, b4, b5 = tb
+    total = 0
+    for q in range(N_ROWS):
+        d = da[q]
+        e = db[q]
+        total += (
+            np.int64((d + a0 <= ra2) | (e + b0 <= rb2))
+            + np.int64((d + a1 <= ra2) | (e + b1 <= rb2))
+            + np.int64((d + a2 <= ra2) | (e + b2 <= rb2))
+            + np.int64((d + a3 <= ra2) | (e + b3 <= rb2))
+            + np.int64((d + a4 <= ra2) | (e + b4 <= rb2))
+            + np.int64((d + a5 <= ra2) | (e + b5 <= rb2))
+        )
+    return total
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _share(i, j, k, images, h, owner, mask, dxy, tz, r2, dx2, odxy, bits, out):
-    """A ball (row distances ``dxy``, squared z distances ``tz``) adds samples to voxel (j, k), where another ball counted before.
+def _share(i, j, k, s, images, h, owner, second, mask, dxy, tz, r2, dx2, odxy, bits, out):
+    """Ball ``s`` (row distances ``dxy``, squared z distances ``tz``) adds samples to voxel (j, k), where another
+    ball counted before.
 
-    The first time, the mask starts as the samples of the owner ball (its row distances recomputed into ``dx2`` and
-    ``odxy``) and the voxel becomes SHARED; then this ball's samples are ORed in, and the grey value
-    is the mask's popcount.
+    With one ball before, the grey value becomes the count of the union of the two balls' samples
+    (:func:`_union_count`; the other ball's row distances recomputed into ``dx2``/``odxy``) and the voxel
+    remembers both (PAIR). With two before, its mask starts as their samples (:func:`_or_voxel`) and it becomes
+    SHARED; then, as for every SHARED voxel, this ball's samples are ORed in and the grey value is the mask's
+    popcount. (A third ball on one partly filled voxel is rare; masks cost ~3x a count.)
     """
+    m = SUB * k
+    t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
     o = owner[j, k]
+    if o >= 0:
+        ro2 = _ball_rows(i, j, o, images, h, dx2, odxy)
+        out[j, k] = _union_count(odxy, _z_distances(k, images[o, 2], h), ro2, dxy, t, r2)
+        owner[j, k] = PAIR - o
+        second[j, k] = s
+        return
     if o != SHARED:
         for w in range(WORDS):
             mask[j, k, w] = 0
-        _plane_distances(i, images[o, 0], h, dx2)
-        _row_distances(dx2, j, images[o, 1], h, odxy)
-        _or_voxel(mask, j, k, odxy, _z_distances(k, images[o, 2], h), images[o, 3] * images[o, 3], bits)
+        for n in range(2):
+            b = np.int64(PAIR - o) if n == 0 else np.int64(second[j, k])
+            rb2 = _ball_rows(i, j, b, images, h, dx2, odxy)
+            _or_voxel(mask, j, k, odxy, _z_distances(k, images[b, 2], h), rb2, bits)
         owner[j, k] = SHARED
-    m = SUB * k
-    _or_voxel(mask, j, k, dxy, (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5]), r2, bits)
+    _or_voxel(mask, j, k, dxy, t, r2, bits)
     count = 0
     for w in range(WORDS):
         count += popcount64(mask[j, k, w])
@@ -251,7 +294,7 @@ def _share(i, j, k, images, h, owner, mask, dxy, tz, r2, dx2, odxy, bits, out):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, mask, dx2, odxy, bits, out):
+def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, second, mask, dx2, odxy, bits, out):
     """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j`` (:func:`_voxel_count`).
 
     A voxel nothing counted in yet (0) takes the count and ``s`` as its owner; a full one (216) stays; any other
@@ -268,11 +311,11 @@ def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, mask, dx2, odxy, 
             out[j, k] = c
             owner[j, k] = s
         else:
-            _share(i, j, k, images, h, owner, mask, dxy, tz, r2, dx2, odxy, bits, out)
+            _share(i, j, k, s, images, h, owner, second, mask, dxy, tz, r2, dx2, odxy, bits, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out):
+def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, out):
     """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
 
     ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS) and ``tz`` (6 nz: the squared z distances of the samples in
@@ -297,15 +340,17 @@ def _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, 
             out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
         if lo < f_lo or f_hi < hi:
             _row_distances(dx2[0], j, cy, h, dxy)
-            _add_shell(i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, mask, dx2[1], odxy, bits, out)
-            _add_shell(i, j, f_hi, hi, s, images, h, dxy, tz, r2, owner, mask, dx2[1], odxy, bits, out)
+            _add_shell(i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out)
+            _add_shell(i, j, f_hi, hi, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out):
+def _shell_plane(
+    i, images, order, xmin_sorted, r_max, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, out
+):
     """Grey values of plane x = i, ball after ball in one pass (bit-identical to brute force).
 
-    ``owner`` (ny, nz) int64 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey
+    ``owner``/``second`` (ny, nz) int32 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey
     value a ball of this plane has already set to 1..215.
     """
     out[:, :] = 0
@@ -313,7 +358,7 @@ def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, owner, mask, d
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            _ball_plane(i, s, images, h, ny, nz, owner, mask, dx2, dxy, odxy, bits, tz, out)
+            _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, out)
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
@@ -327,7 +372,8 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
     per = (nplanes + nthreads - 1) // nthreads
     for t in prange(nthreads):
         status = np.empty((ny, nz), dtype=np.uint8)
-        owner = np.empty((ny, nz), dtype=np.int64)
+        owner = np.empty((ny, nz), dtype=np.int32)
+        second = np.empty((ny, nz), dtype=np.int32)
         mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
         dx2 = np.empty((2, SUB))
         dxy = np.empty(N_ROWS)
@@ -349,6 +395,7 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
                     ny,
                     nz,
                     owner,
+                    second,
                     mask,
                     dx2,
                     dxy,
