@@ -259,25 +259,15 @@ def _union_count(da, ta, ra2, db, tb, rb2):
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _share(i, j, k, s, images, h, owner, second, mask, dxy, tz, r2, dx2, odxy, bits, out):
-    """Ball ``s`` (row distances ``dxy``, squared z distances ``tz``) adds samples to voxel (j, k), where another
-    ball counted before.
+def _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits, out):
+    """A ball (row distances ``dxy``, squared z distances ``t`` of voxel k) adds samples to voxel (j, k), where two
+    or more balls counted before (PAIR or SHARED).
 
-    With one ball before, the grey value becomes the count of the union of the two balls' samples
-    (:func:`_union_count`; the other ball's row distances recomputed into ``dx2``/``odxy``) and the voxel
-    remembers both (PAIR). With two before, its mask starts as their samples (:func:`_or_voxel`) and it becomes
-    SHARED; then, as for every SHARED voxel, this ball's samples are ORed in and the grey value is the mask's
-    popcount. (A third ball on one partly filled voxel is rare; masks cost ~3x a count.)
+    From PAIR, the mask starts as the two balls' samples (:func:`_or_voxel`; their row distances recomputed into
+    ``dx2``/``odxy``) and the voxel becomes SHARED; then this ball's samples are ORed in, and the grey value is the
+    mask's popcount. (A third ball on one partly filled voxel is rare; masks cost ~3x a count.)
     """
-    m = SUB * k
-    t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
     o = owner[j, k]
-    if o >= 0:
-        ro2 = _ball_rows(i, j, o, images, h, dx2, odxy)
-        out[j, k] = _union_count(odxy, _z_distances(k, images[o, 2], h), ro2, dxy, t, r2)
-        owner[j, k] = PAIR - o
-        second[j, k] = s
-        return
     if o != SHARED:
         for w in range(WORDS):
             mask[j, k, w] = 0
@@ -295,23 +285,38 @@ def _share(i, j, k, s, images, h, owner, second, mask, dxy, tz, r2, dx2, odxy, b
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, second, mask, dx2, odxy, bits, out):
-    """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j`` (:func:`_voxel_count`).
+    """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j``.
 
-    A voxel nothing counted in yet (0) takes the count and ``s`` as its owner; a full one (216) stays; any other
-    voxel the ball adds samples to gets the union of the balls' masks (:func:`_share`).
+    A voxel nothing counted in yet (0) takes the ball's count (:func:`_voxel_count`) and ``s`` as its owner; a full
+    one (216) stays; one that a single ball counted in before gets the count of the union of the two balls' samples
+    (:func:`_union_count`, the other ball's row distances ``odxy`` kept for the next voxel of the row) and becomes
+    PAIR; one that two or more counted in gets the union of the balls' masks (:func:`_share`).
     """
+    cached = -1  # the ball whose row distances odxy holds
     for k in range(k0, k1):
         g = out[j, k]
         if g == N_SAMPLES:
             continue
-        c = _voxel_count(dxy, tz, k, r2)
-        if c == 0:
+        if g == 0:
+            c = _voxel_count(dxy, tz, k, r2)
+            if c:
+                out[j, k] = c
+                owner[j, k] = s
             continue
-        if g == 0 or c == N_SAMPLES:
-            out[j, k] = c
-            owner[j, k] = s
+        m = SUB * k
+        t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
+        o = np.int64(owner[j, k])
+        if o >= 0:
+            if o != cached:
+                _ball_rows(i, j, o, images, h, dx2, odxy)
+                cached = o
+            ro = images[o, 3]
+            out[j, k] = _union_count(odxy, _z_distances(k, images[o, 2], h), ro * ro, dxy, t, r2)
+            owner[j, k] = PAIR - o
+            second[j, k] = s
         else:
-            _share(i, j, k, s, images, h, owner, second, mask, dxy, tz, r2, dx2, odxy, bits, out)
+            _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits, out)
+            cached = -1
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
