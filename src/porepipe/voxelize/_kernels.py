@@ -12,8 +12,12 @@ it (:func:`_row_ranges`). Only shell voxels are tested, with the exact predicate
 loop that vectorises over the 36 sample rows (:func:`_voxel_count`; the squared z distances of a ball's samples are
 found once per plane). A voxel keeps the count of the first ball that
 puts samples in it and that ball as its ``owner``; when a second ball adds samples, the voxel's grey value becomes
-the popcount of the union of the balls' sample bit masks (:func:`_share`), so a sample counts once if it is in any
-ball.
+the count of the union of the two balls' samples (:func:`_union_count`), and from a third ball on the popcount of
+the union of the balls' sample bit masks (:func:`_share`), so a sample counts once if it is in any ball.
+
+Counting a voxel from the chords of its 36 sample rows (the samples inside along a row form one interval) instead of
+216 tests was measured 3x slower here (spheres 10-20 voxels wide): a chord needs a square root and exact fix-ups of
+both ends, ~36 per voxel row, while the 216 tests of the ~4 shell voxels of a row run at ~0.08 ns each, vectorised.
 """
 
 import numpy as np
@@ -345,8 +349,12 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
             out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
         if lo < f_lo or f_hi < hi:
             _row_distances(dx2[0], j, cy, h, dxy)
-            _add_shell(i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out)
-            _add_shell(i, j, f_hi, hi, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out)
+            _add_shell(
+                i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out
+            )
+            _add_shell(
+                i, j, f_hi, hi, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out
+            )
 
 
 @njit(cache=True, fastmath=FASTMATH)

@@ -184,5 +184,10 @@ def _partly_in(centre, radius, shape, a):
     """Voxels a sphere cuts (some corner inside, some outside): where its surface passes."""
     corners = np.stack(np.meshgrid(*[np.arange(n + 1) * a for n in shape], indexing="ij"), -1)
     inside = ((corners - centre) ** 2).sum(-1) <= radius * radius
-    windows = [inside[i : i + shape[0], j : j + shape[1], k : k + shape[2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+    windows = [
+        inside[i : i + shape[0], j : j + shape[1], k : k + shape[2]]
+        for i in (0, 1)
+        for j in (0, 1)
+        for k in (0, 1)
+    ]
     return np.any(windows, axis=0) & ~np.all(windows, axis=0)
