@@ -313,6 +313,10 @@ def _heap_part(h: dict, cost: str, out_dir: Path, dpi: int) -> list[str]:
             "repose angle, integral method (Eq. 2.42) [deg]",
             f"{math.degrees(h['repose_integral_rad']):.1f}",
         ],
+        [
+            "repose angle from height and area, tan = h²/a [deg]",
+            f"{math.degrees(h['repose_height_rad']):.1f}",
+        ],
         ["height / foot width [m]", f"{h['height_m']:.3f} / {h['foot_m'][1] - h['foot_m'][0]:.3f}"],
         [
             "floor-pressure dip 1 - p(apex)/p(flank maxima), window scatter",
