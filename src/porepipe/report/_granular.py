@@ -127,6 +127,11 @@ def _silo_rows(a: dict, th: dict) -> list[list[str]]:
             " / ".join(f"{v:.2f}" for v in a["k_thirds"]),
             "– (local k independent of position, §3.3)",
         ],
+        [
+            "mobilised wall friction in the same thirds",
+            " / ".join(f"{v:.2f}" for v in a["mu_wall_thirds"]),
+            "–",
+        ],
     ]
     if janssen_fit:
         rows += [
