@@ -40,10 +40,11 @@ def test_cohesive_heap_stands_steeper_than_the_friction_angle(heaps):
     plain = _deg(heaps["granular-heap-ci"][0])
     # without cohesion the slope stays below the friction angle (measured 26.4° for this seed)
     assert plain < FRICTION_ANGLE
-    # with k_coh = 8e4 N/m the mean of two seeds (measured 39.3°, 36.7°) stands 3° above it: a margin of one
-    # seed-to-seed standard deviation (3.8° over three seeds)
-    assert np.mean(cohesive) > FRICTION_ANGLE + 3
-    assert min(cohesive) > plain
+    # with k_coh = 8e4 N/m the mean of two seeds (measured 39.3°, 36.7°) stands above it, and 5° above the
+    # cohesionless heap: margins of 7° and 6.6°, 2.5 standard deviations of a two-seed mean (3.8° / sqrt 2 from the
+    # seed-to-seed spread over seeds 29-31), so a round-off change of the kernel that reshuffles the heaps keeps it
+    assert np.mean(cohesive) > FRICTION_ANGLE
+    assert np.mean(cohesive) > plain + 5
 
 
 def test_cohesive_heap_is_looser(heaps):
