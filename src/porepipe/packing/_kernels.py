@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH, by_threads
+from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT, by_threads
 
 #: one-thread calls on arrays up to this many elements (~1 300 spheres) run the serial kernels: they compile in half
 #: the time, but step 2.2x slower than the parallel code on one thread, so only short runs of small packings gain
@@ -595,24 +595,35 @@ def _scatter_pairs(
     return k
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _slab_pairs(
-    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair, hcoef, sigp, cut,
-    f_new, sig_max, conv, freeze,
-):  # fmt: skip
-    """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
-    pairs: gather, evaluate (vectorised), scatter.
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _slab_scratch(lo, hi, slab_items, half_start, kpair, hcoef, sigp):
+    """The pair scratch of :func:`_slab_pairs` for the spheres ``slab_items[lo:hi]``: :data:`_BATCH` columns plus
+    the longest list among them, the type-pair rows filled when there is one type only.
     """
     most = 0
     for m in range(lo, hi):
         i = slab_items[m]
         most = max(most, half_start[i + 1] - half_start[i])
     w = np.empty((_ROWS, _BATCH + most))
-    one_type = kpair.size == 1
-    if one_type:
+    if kpair.size == 1:
         w[_KP, :] = kpair[0, 0]
         w[_HC, :] = hcoef[0, 0]
         w[_SP, :] = sigp[0, 0]
+    return w
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", **NO_REFCOUNT)
+def _slab_pairs(
+    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair, hcoef, sigp, cut,
+    f_new, sig_max, conv, freeze, w,
+):  # fmt: skip
+    """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
+    pairs: gather, evaluate (vectorised), scatter, in the scratch w of :func:`_slab_scratch`.
+
+    Compiled without reference counting (a call per slab, no allocation inside): with it, each sphere's gather and
+    scatter paid atomic increments and decrements of the shared arrays' counts.
+    """
+    one_type = kpair.size == 1
     m = lo
     while m < hi:
         first = m
@@ -729,9 +740,11 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         for colour in range(min(nslab, 3)):
             for k in prange((nslab - colour + 2) // 3):
                 s = colour + 3 * k
+                lo, hi = slab_start[s], slab_start[s + 1]
+                w = _slab_scratch(lo, hi, slab_items, half_start, kpair, hcoef, sigp)
                 _slab_pairs(
-                    slab_start[s], slab_start[s + 1], slab_items, half_start, half_idx, xr, types, ids, frozen,
-                    box, half_box, kpair, hcoef, sigp, cut, f_new, sig_max, conv, FREEZE,
+                    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair,
+                    hcoef, sigp, cut, f_new, sig_max, conv, FREEZE, w,
                 )  # fmt: skip
         half_dt2_m = 0.5 * dt * dt / mass
         decay_t = np.empty(cm_t.size)  # velocity decay and force kick per type: no division per sphere
