@@ -118,9 +118,8 @@ class Bench:
             "sig": np.empty(n),
             "conv": np.empty(n, np.uint8),
             "aux": np.empty((n, 3)),
-            "work": (np.empty((n, 4)),)
-            if kind != "full" and "previous" not in name
-            else (),  # (N, 4) work array
+            # the current kernel's work array (the previous ones take none)
+            "work": (K.work_array(n),) if kind != "full" and "previous" not in name else (),
         }
         ids, types, per = np.arange(n, dtype=np.int64), np.zeros(n, np.int64), np.ones(3, bool)
         frozen, one_t = np.zeros(n, np.uint8), np.ones(1)
