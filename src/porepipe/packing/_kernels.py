@@ -623,8 +623,9 @@ def _slab_pairs(
     """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
     pairs: gather, evaluate (vectorised), scatter, in the scratch w of :func:`_slab_scratch`.
 
-    Compiled without reference counting (a call per slab, no allocation inside): with it, each sphere's gather and
-    scatter paid atomic increments and decrements of the shared arrays' counts.
+    Compiled without reference counting (a call per slab, no allocation inside): inlined into the reference-counted
+    step kernel, the compiled sphere loop incremented and decremented array counts (atomic, on cache lines that
+    the threads share) for every sphere.
     """
     one_type = kpair.size == 1
     m = lo

@@ -162,8 +162,10 @@ def _tile_order(cell_of, cls, ncell, cell_off, slab, nslab, axis):
     Plain row-major cell order puts a sphere's partners one cell further along the first axis a whole plane of cells
     away in memory (1.6 MB of positions for 10^6 spheres); with the slab axis innermost they sit one short column
     of cells away, and every slab's spheres of one class are one contiguous block, walked in memory order by the
-    step kernel's slab loop. Measured 5-6 % fewer CPU seconds per step than row-major order at 10^6 spheres
-    (Morton order: 20 % more, its slabs are not contiguous in memory).
+    step kernel's slab loop. Measured at 10^6 spheres, one thread, in one run (benchmarks/pack.py --full): 3-7 %
+    fewer CPU seconds per step than row-major order (Morton order: 20 % more, its slabs are not contiguous in
+    memory). The gain is small because the step is not bound by memory locality: with each partner replaced by a
+    neighbour in memory, the pair pass costs the same.
     """
     lin = cell_of - cell_off[cls]
     n = ncell[cls]
