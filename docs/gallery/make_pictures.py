@@ -317,6 +317,7 @@ MAKERS = {
     "granular-heap-layered-ci": granular,
     "granular-heap-13gons": granular,
     "granular-heap-unload-ci": granular,
+    "granular-heap-cohesive-ci": granular,
     "granular-silo-ci": granular,
     "granular-silo-mu05": granular,
     "granular-silo-mu07": granular,
