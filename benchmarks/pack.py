@@ -3,6 +3,7 @@ optional effect, engine overhead.
 
     python benchmarks/pack.py            # 2·10^5 spheres: kernels and engine (107 s, 110 CPU-s, quiet 2-core machine)
     python benchmarks/pack.py --full     # 10^6 spheres, the issue's size (not timed whole: each step 7x longer)
+    python benchmarks/pack.py --full --kernels-only   # 10^6 spheres, step kernels only (4 min on the 2-core machine)
     python benchmarks/pack.py --small    # 20 000 spheres
     python benchmarks/pack.py --smoke    # 2 000 spheres, 3 steps (CI smoke, no figures to quote)
 
@@ -10,7 +11,9 @@ Prints markdown tables and writes pack.json into --out (default results/benchmar
 timed in the same run as its two predecessors (benchmarks/_pack_previous.py: the full-list kernel before issue 22
 and the first half-list kernel), on the same spheres, and its forces and overlaps are checked against both first:
 bit for bit against the half-list kernel (same pairs, same order of sums), to 1e-12 of the largest force against
-the full-list one (each pair summed from both ends there, so the order of sums differs). Reference: LAMMPS's
+the full-list one (each pair summed from both ends there, so the order of sums differs). The current kernel is also
+timed on the spheres in the engine's earlier row-major cell order (forces checked to 1e-12 against the slab-tiled
+order it uses now: the same pairs, each sphere's sum in another order). Reference: LAMMPS's
 granular chute benchmark (frictional Hooke/history pair style, half neighbour lists with Newton's 3rd law,
 3 neighbours per atom) ran 1.67e7 atom-steps/s per core on the 2-core development machine, i.e. about 5e7 pair
 evaluations/s; porepipe's kernels evaluate each listed pair once too (listed pairs include the skin region), so
@@ -33,6 +36,7 @@ from _pack_previous import make_kernel as make_previous_kernel
 from porepipe.packing import Settings, build_neighbours, pack_spheres
 from porepipe.packing import _kernels as K
 from porepipe.packing._api import pair_tables
+from porepipe.packing._neighbours import _class_grids as class_grids
 
 #: LAMMPS chute benchmark on the development machine: atom-steps/s per core and neighbours (unique pairs) per atom
 LAMMPS_CHUTE_PER_CORE = 1.67e7
@@ -44,9 +48,11 @@ FULL_SPHERES = 1_000_000
 KERNELS = {
     "full list, before #22": ("full", lambda flags: make_previous_kernel("original", *flags)),
     "half list, Newton III (previous)": ("half", lambda flags: make_previous_kernel("previous", *flags)),
+    "current kernel, row-major cell order (before)": ("half_rows", lambda flags: K.make_step_kernel(*flags)),
     "half list, vectorised pair pass (current)": ("half", lambda flags: K.make_step_kernel(*flags)),
 }
 CURRENT = "half list, vectorised pair pass (current)"
+ROW_MAJOR = "current kernel, row-major cell order (before)"
 #: effects compiled into the current kernel, none of them active
 VARIANTS = {
     "freezing": (True, False, False),
@@ -65,6 +71,15 @@ def polydisperse(n: int, seed: int = 0):
     return rng.random((n, 3)) * box, r, box
 
 
+def row_major_order(x, r, box, cutoff, skin):
+    """The engine's sphere order before the slab tiling: by radius class, then cell of the class grid in row-major
+    (x, y, z) order, i.e. the permutation of a stable counting sort by global cell id.
+    """
+    cls, _, side, ncell, _ = class_grids(x, r, box, cutoff, skin)
+    q = np.minimum(np.floor(x / side[cls, :3]).astype(np.int64), ncell[cls] - 1)
+    return np.lexsort((q[:, 2], q[:, 1], q[:, 0], cls))
+
+
 class Bench:
     """One packing in cell order with both neighbour lists, and a driver that steps any of the kernels on it."""
 
@@ -74,9 +89,21 @@ class Bench:
         t0 = time.perf_counter()
         *half, order = build_neighbours(x, r, *args, reorder=True, half=True)
         self.build_s = time.perf_counter() - t0
-        # the engine keeps spheres in cell order (memory locality), and so does the benchmark
+        # the engine keeps spheres in slab-tiled cell order (memory locality), and so does the benchmark; the
+        # row-major cell order it used before is timed beside it
         self.x, self.r, self.box = x[order], r[order], box
-        self.lists = {"half": tuple(half), "full": build_neighbours(self.x, self.r, *args)}
+        rows = row_major_order(x, r, box, 1.3, 0.3)
+        self.spheres = {"half": (self.x, self.r), "full": (self.x, self.r), "half_rows": (x[rows], r[rows])}
+        self.perm = {
+            "half": order,
+            "full": order,
+            "half_rows": rows,
+        }  # sphere k of each set is sphere perm[k]
+        self.lists = {
+            "half": tuple(half),
+            "full": build_neighbours(self.x, self.r, *args),
+            "half_rows": build_neighbours(x[rows], r[rows], *args, half=True),
+        }
         self.pairs = (
             half[1].size / n
         )  # unique pairs per sphere: each kernel evaluates this many per sphere-step
@@ -86,14 +113,16 @@ class Bench:
         """A function s -> one step of kernel ``name`` compiled with ``flags``, on fresh state; and that state."""
         kind, make = KERNELS[name]
         kernel, nbr = make(flags), self.lists[kind]
+        x0, r0 = self.spheres[kind]
         n = self.r.size
         state = {
-            "bufs": [self.x.copy(), np.empty_like(self.x), np.zeros((n, 3)), np.zeros((n, 3))],
+            "bufs": [x0.copy(), np.empty_like(x0), np.zeros((n, 3)), np.zeros((n, 3))],
             "v": np.zeros((n, 3)),
             "sig": np.empty(n),
             "conv": np.empty(n, np.uint8),
             "aux": np.empty((n, 3)),
-            "work": (np.empty((n, 4)),) if name == CURRENT else (),  # the current kernel's (N, 4) work array
+            # the current kernel's work array (the previous ones take none)
+            "work": (K.work_array(n),) if kind != "full" and "previous" not in name else (),
         }
         ids, types, per = np.arange(n, dtype=np.int64), np.zeros(n, np.int64), np.ones(3, bool)
         frozen, one_t = np.zeros(n, np.uint8), np.ones(1)
@@ -102,19 +131,27 @@ class Bench:
             # like the engine: positions and forces alternate between two buffers (so does the memory traffic)
             x_old, x_new, f_old, f_new = state["bufs"]
             kernel(
-                x_old, x_new, state["v"], f_old, f_new, self.r, types, ids, frozen, *nbr, self.box, per,
+                x_old, x_new, state["v"], f_old, f_new, r0, types, ids, frozen, *nbr, self.box, per,
                 *self.tables, np.array([0.3]), 0.9 * one_t, 1.1 * one_t, np.zeros(1), 1.3, 0.01, 1.0, 7, s,
-                self.x, self.r, state["sig"], state["conv"], state["aux"], *state["work"],
+                x0, r0, state["sig"], state["conv"], state["aux"], *state["work"],
             )  # fmt: skip
             state["bufs"][:] = [x_new, x_old, f_new, f_old]
 
         return step, state
 
     def first_step(self, name: str):
-        """Forces and max overlaps after one step of kernel ``name`` from the benchmark packing at rest."""
+        """Forces and max overlaps after one step of kernel ``name`` from the benchmark packing at rest, in the
+        order of the tiled sphere set.
+        """
         step, state = self.stepper(name, (False, False, False))
         step(1)
-        return state["bufs"][2].copy(), state["sig"].copy()
+        f, sig = state["bufs"][2], state["sig"]
+        perm = self.perm[KERNELS[name][0]]
+        if perm is not self.perm["half"]:  # another sphere order: put its rows where the tiled set has them
+            back = np.empty_like(perm)
+            back[perm] = np.arange(perm.size)
+            f, sig = f[back[self.perm["half"]]], sig[back[self.perm["half"]]]
+        return f.copy(), sig.copy()
 
     def time(self, name: str, flags: tuple, steps: int, threads: int, repeats: int):
         """Best (wall, CPU) seconds per step of ``repeats`` runs of ``steps`` steps on ``threads`` threads."""
@@ -138,8 +175,18 @@ def check_kernels(bench: Bench, full_list: bool = True) -> list[str]:
         raise AssertionError(
             "current kernel's forces/overlaps differ from the previous half-list kernel's bits"
         )
+    f_rows, s_rows = bench.first_step(ROW_MAJOR)
+    scale = np.abs(f_rows).max()
+    rows_df = np.abs(f_cur - f_rows).max() / scale
+    if rows_df > 1e-12 or s_cur.tobytes() != s_rows.tobytes():
+        raise AssertionError("tiled and row-major sphere orders give different forces or overlaps")
+    checked = [
+        "forces and max overlaps bit-identical to the previous half-list kernel",
+        f"forces within {rows_df:.1e} of the largest force in row-major cell order (limit 1e-12: the order of "
+        "each sphere's sum changes with the sphere order), max overlaps bit-identical (a max has no order)",
+    ]
     if not full_list:
-        return ["forces and max overlaps bit-identical to the previous half-list kernel"]
+        return checked
     f_full, s_full = bench.first_step("full list, before #22")
     scale = np.abs(f_full).max()
     with np.errstate(invalid="ignore"):  # -inf on both sides (no partner) is equal
@@ -149,7 +196,7 @@ def check_kernels(bench: Bench, full_list: bool = True) -> list[str]:
             "current kernel's forces/overlaps differ from the full-list kernel's beyond round-off"
         )
     return [
-        "forces and max overlaps bit-identical to the previous half-list kernel",
+        *checked,
         f"forces within {np.abs(f_cur - f_full).max() / scale:.1e} of the largest force of the full-list kernel, "
         f"overlaps within {ds:.1e} (limits 1e-12, 1e-14: summation order only)",
     ]
@@ -202,8 +249,9 @@ def time_engine(xyzr, box, steps, threads, effect="none", repeats=4):
 
 
 def kernel_rows(bench: Bench, steps: int, repeats: int, smoke: bool = False) -> list[dict]:
-    """Per-step times of the three kernels (bare) and of the current one with each effect compiled in, 1 and 2
-    threads, interleaved so that each comparison sees the same machine load (smoke: the bare kernels, 1 thread).
+    """Per-step times of the kernels (bare) and of the current one with each effect compiled in, 1 and 2 threads
+    (smoke: the half-list kernels, 1 thread). The repeats go round-robin over the kernels, so that each comparison
+    sees the same drift of the machine's load; each kernel's best run counts.
     """
     n = bench.r.size
     runs = [(name, (False, False, False)) for name in KERNELS] + [(CURRENT, f) for f in VARIANTS.values()]
@@ -213,8 +261,11 @@ def kernel_rows(bench: Bench, steps: int, repeats: int, smoke: bool = False) -> 
     bench.time(CURRENT, (False, False, False), steps, 1, 1)  # warm-up: first touch of every page
     rows = []
     for threads in (1,) if smoke else (1, 2):
-        for label, (name, flags) in zip(labels, runs, strict=True):
-            wall, cpu = bench.time(name, flags, steps, threads, repeats)
+        best = dict.fromkeys(labels, (np.inf, np.inf))
+        for _ in range(repeats):
+            for label, (name, flags) in zip(labels, runs, strict=True):
+                best[label] = min(best[label], bench.time(name, flags, steps, threads, 1))
+        for label, (wall, cpu) in best.items():
             rows.append(
                 {
                     "threads": threads,
@@ -275,6 +326,11 @@ def main() -> None:
         "--full", action="store_true", help=f"{FULL_SPHERES} spheres (default: {DEFAULT_SPHERES})"
     )
     ap.add_argument("--steps", type=int, default=None, help="steps per timed run (default 10, smoke 3)")
+    ap.add_argument(
+        "--kernels-only",
+        action="store_true",
+        help="time the step kernels only, not the engine with each effect",
+    )
     add_out_argument(ap)
     args = ap.parse_args()
     n = 2_000 if args.smoke else 20_000 if args.small else FULL_SPHERES if args.full else DEFAULT_SPHERES
@@ -286,12 +342,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         xyzr = Path(tmp) / "bench.xyzr"
         np.savetxt(xyzr, np.column_stack([bench.x, bench.r]), fmt="%.17g")
-        effects = (
-            ["none"] if args.smoke else list(ENGINE_EFFECTS)
-        )  # smoke: compile nothing beyond the bare kernel
+        # smoke: compile nothing beyond the bare kernel
+        effects = [] if args.kernels_only else ["none"] if args.smoke else list(ENGINE_EFFECTS)
         eng = {
             threads: {e: time_engine(xyzr, bench.box, steps, threads, e, repeats) for e in effects}
-            for threads in ((1,) if args.smoke else (1, 2))
+            for threads in (() if args.kernels_only else (1,) if args.smoke else (1, 2))
         }
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     print_kernel_rows(rows, n, bench.pairs, bench.build_s, steps, repeats)

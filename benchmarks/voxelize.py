@@ -12,15 +12,13 @@ its shell-method kernel is timed in the same rounds, and its grey values are ass
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import os
-import sys
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
 from _common import add_out_argument, write_record
+from _reference import load_module
 
 from porepipe._shared.sample_points import SUB
 from porepipe.voxelize import VoxelizeMethod, grid_shape, voxelize
@@ -38,16 +36,6 @@ def kernel(prep, shape, a, boundary, slab=_voxelize_slab):
     out = np.zeros(shape, np.uint8)
     args = (prep.images, prep.order, prep.xmin_sorted, prep.r_max, a / SUB, shape[1], shape[2], boundary, out)
     return lambda: slab(0, shape[0], *args) or out
-
-
-def load_reference(path):
-    """The module of an earlier _kernels.py, imported under its file name (numba's cache refers to it by name)."""
-    name = Path(path).stem
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def best_interleaved(fns, rounds=3):
@@ -110,7 +98,7 @@ def main():
     ap.add_argument("--reference", help="earlier _kernels.py whose shell-method kernel is timed alongside")
     add_out_argument(ap)
     args = ap.parse_args()
-    reference = load_reference(args.reference) if args.reference else None
+    reference = load_module(args.reference) if args.reference else None
     r_min, r_max = 5.0, 10.0
     # same packing density (number of spheres per volume) at every resolution; ~8 Mvoxel per case
     cases = [(40.0, 12, 1.0)] if args.smoke else [(200.0, 1500, 1.0), (100.0, 188, 0.5), (50.0, 24, 0.25)]

@@ -274,14 +274,15 @@ def silo(name: str) -> str:
 
 
 def grains(name: str) -> str:
-    """Circles where the scene's spheres cut the mid-plane (before decoration with the quartz grain types)."""
+    """Circles where the scene's spheres (its ``spheres.xyzr`` file) cut the mid-plane (before any decoration)."""
     raw = _scene(name)
-    xyzr = np.loadtxt(ROOT / "config" / "scenes" / "data" / "fontainebleau-like.xyzr")
+    source = raw["spheres"]["xyzr"]
+    xyzr = np.loadtxt(SCENES / source)
     size = raw["domain"]["size_um"]
     z = size[2] / 2
     fig, ax = _figure()
-    shifts = [(dx, dy, dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)]  # periodic images
-    for dx, dy, dz in shifts:
+    images = (-1, 0, 1) if raw["domain"].get("periodic", True) else (0,)
+    for dx, dy, dz in [(dx, dy, dz) for dx in images for dy in images for dz in images]:
         d = xyzr[:, 2] + dz * size[2] - z
         cut = np.abs(d) < xyzr[:, 3]
         cut_r = np.sqrt(xyzr[cut, 3] ** 2 - d[cut] ** 2)
@@ -294,11 +295,13 @@ def grains(name: str) -> str:
     ax.set_ylabel("y (µm)")
     ax.set_title(f"{name}: {len(xyzr)} spheres cut at z = {z:g} µm", fontsize=9)
     _save(fig, name)
-    return (
-        f"Not run for this picture: where the scene's {len(xyzr)} spheres (`config/scenes/data/"
-        f"fontainebleau-like.xyzr`) cut the mid-plane z = {z:g} µm. The run replaces each sphere by a decorated "
-        "quartz grain of equal volume, so the real grains are faceted, not round."
+    caption = (
+        f"Not run for this picture: where the scene's {len(xyzr)} spheres (`config/scenes/{source}`) cut the "
+        f"mid-plane z = {z:g} µm."
     )
+    if "decoration" in raw:
+        caption += " The run replaces each sphere by a decorated quartz grain of equal volume, so the real grains are faceted, not round."
+    return caption
 
 
 #: how each shipped scene gets its picture
@@ -314,6 +317,7 @@ MAKERS = {
     "granular-heap-layered-ci": granular,
     "granular-heap-13gons": granular,
     "granular-heap-unload-ci": granular,
+    "granular-heap-cohesive-ci": granular,
     "granular-silo-ci": granular,
     "granular-silo-mu05": granular,
     "granular-silo-mu07": granular,
@@ -344,6 +348,8 @@ MAKERS = {
     "thesis-5.6.1-pp-ci": packed,
     "thesis-5.6.1": radii,
     "thesis-5.6.1-pp": radii,
+    "thesis-5.6.1-sub": grains,
+    "thesis-5.6.1-pp-sub": grains,
     "thesis-5.6.2": radii,
     "bentheimer-8.3-ci": packed,
     "bentheimer-8.3": radii,

@@ -300,18 +300,43 @@ def _cos_theta(law, state):
     return x, state  # isotropic: cos uniform in (0, 1]
 
 
+@njit(cache=True, inline="always")
+def _disk(state):
+    """A uniform point (a, b) of the open unit disk less its centre, and rho2 = a*a + b*b: rejection from the square
+    (acceptance pi/4, two uniforms a try), no trigonometry.
+    """
+    while True:
+        x, state = _uniform(state)
+        y, state = _uniform(state)
+        a = 2.0 * x - 1.0
+        b = 2.0 * y - 1.0
+        rho2 = a * a + b * b
+        if 0.0 < rho2 < 1.0:
+            return a, b, rho2, state
+
+
 @njit(cache=True, **NO_REFCOUNT)
 def _emit(law, axis, sign, u, state):
-    """Overwrite ``u`` with a diffuse direction about the normal ``sign * e_axis``."""
+    """Overwrite ``u`` with a diffuse direction about the normal ``sign * e_axis``.
+
+    Lambert: a uniform point of the unit disk (:func:`_disk`) lifted onto the hemisphere (Malley's method): sin^2 of
+    the angle to the normal is rho2, uniform on (0, 1), as for ``cos = sqrt(x)`` of :func:`_cos_theta`, and the
+    azimuth is uniform; the cosine is sqrt(1 - rho2) > 0 (no flight parallel to the wall). Other laws: the cosine from
+    :func:`_cos_theta`, the azimuth's (cos, sin) = ((a*a - b*b), 2*a*b) / rho2 of the disk point (the angle doubled).
+    """
+    a, b, rho2, state = _disk(state)
+    p = (axis + 1) % 3
+    q = (axis + 2) % 3
+    if law == LAMBERT:
+        u[axis] = sign * math.sqrt(1.0 - rho2)
+        u[p] = a
+        u[q] = b
+        return state
     c, state = _cos_theta(law, state)
-    x, state = _uniform(state)
-    s = math.sqrt(max(0.0, 1.0 - c * c))
-    phi = _TWO_PI * x
-    a = (axis + 1) % 3
-    b = (axis + 2) % 3
+    s = math.sqrt(max(0.0, 1.0 - c * c)) / rho2
     u[axis] = sign * c
-    u[a] = s * math.cos(phi)
-    u[b] = s * math.sin(phi)
+    u[p] = s * (a * a - b * b)
+    u[q] = s * (2.0 * a * b)
     return state
 
 

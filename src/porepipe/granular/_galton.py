@@ -18,7 +18,9 @@ p != 1/2: for round pins every row is moved sideways by ``row_shift_m`` against 
 not under the middle of two nails but offset"), for hexagons the tip is moved by ``tip_shift_m`` (its Fig. 2.39);
 negative: to the left, so more balls pass on the right (p > 1/2). p = 2/3 needs row_shift_m = -0.32 mm; that
 board's decisions are anti-persistent (lag-1 correlation -0.07), so chi² against Binomial(10, 2/3) passes at 300
-balls but rejects at 2300 (variance 1.93 against 2.22).
+balls but rejects at 2300 (variance 1.93 against 2.22, which that correlation alone predicts: 1.95). More damping
+(gamma 0.2) leaves it anti-persistent (r1 -0.06 at 2300 balls) and moves P(right) to 0.65
+(tests/validation/test_granular_galton.py, Part 3).
 
 A ball's path is read off where its centre passes half a pitch below each row: its bin there is the number of
 rights so far (nearest lattice position), a decision is the change of that bin (right = 1). Once below the last

@@ -30,7 +30,9 @@ def analyse_heap(
         ``floor_x_m`` / ``floor_pressure`` (sliding windows of ~15 contacts) and ``floor_running_mean``,
         ``floor_mean``, ``apex_x_m``, ``height_m``, ``base_m`` (x-extent of the grains), ``foot_m`` (x0, x1),
         ``repose_left_rad`` / ``repose_right_rad`` (highest-centroid fits on the flanks' middle halves),
-        ``repose_integral_rad`` (Eq. 2.42 on each half, averaged), ``rho_rel`` (hull-corrected, in the core),
+        ``repose_integral_rad`` (Eq. 2.42 on each half, averaged), ``repose_height_rad`` (tan phi = h^2 / a: Eq.
+        2.42's triangle with the base 2 h / tan phi eliminated, so grains or clusters thrown far along the floor do
+        not enter; a = solid area on the foot / packing fraction), ``rho_rel`` (hull-corrected, in the core),
         ``rho_g_h`` (bulk rho g h, the thesis's pressure scale), ``dip`` (:func:`pressure_dip` of the running mean:
         ``dip``, ``fluctuation``, ...), ``coordination``, ``directions`` (P(alpha)), ``magnitudes`` (P(F/<F>)),
         ``n_particles``, ``floor_y_m``, ``weight_N_m``, ``floor_load_N_m``.
@@ -86,6 +88,7 @@ def analyse_heap(
         "repose_left_rad": left["angle_rad"],
         "repose_right_rad": right["angle_rad"],
         "repose_integral_rad": integral,
+        "repose_height_rad": float(np.arctan(height**2 / area)),
         "rho_rel": pf["corrected"],
         "rho_g_h": pf["corrected"] * rho_p * g * height,
         "dip": M.pressure_dip(prof["centres"], prof["running_mean"], xc, noise=prof["pressure"]),

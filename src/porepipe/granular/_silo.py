@@ -216,7 +216,9 @@ def analyse_silo(
         ``k_local``, ``slab_sigma_xx``, ``slab_sigma_zz``, ``slab_psi_rad`` (major axis from the vertical);
         ``slab_width_grains``; ``k``, ``k_std`` (all slabs), ``k_wide``, ``k_wide_std``, ``k_wide_slabs`` (slabs
         at least ``min_width_grains`` wide; NaN if none), ``k_thirds`` (mean k of the slabs in the upper, middle
-        and lower third of the fill), ``fit`` (k and mu_j: Janssen with both free, or the shape's theory with k fixed),
+        and lower third of the fill), ``mu_wall_thirds`` (the side walls' mobilised friction, upward shear over
+        normal force, in the same thirds: where it is low the grains have not slid along the walls since they
+        landed), ``fit`` (k and mu_j: Janssen with both free, or the shape's theory with k fixed),
         ``fit_k_fixed``, ``theory`` (the fill-relative :class:`Silo`, or None for Janssen); ``segments`` (per wall:
         name, contacts, sums of F_n, F_t, F_x, F_y); ``floor_share``, ``wall_share``, ``ledge_share`` (of the
         weight), ``force_balance`` ((sum of all walls' F_y - weight)/weight), ``horizontal_balance`` (sum F_x /
@@ -311,6 +313,7 @@ def analyse_silo(
         "segments": _segments(wc, sides, names),
         **balance,
         "mu_wall_mobilised": float(wc["ft_up"][side].sum() / wc["fn"][side].sum()),
+        "mu_wall_thirds": _mu_by_third(wc, top, fill),
         "wall_at_coulomb_limit": _at_limit(contacts, np.isin(contacts["j"], [n + k for k, _ in sides]), mu),
         "bounds": T.lateral_pressure_bounds(mu) if mu is not None else None,
         "n_particles": int(act.sum()),
@@ -361,6 +364,17 @@ def _k_by_region(slabs: dict, fill: float, min_width_grains: float) -> dict:
             float(np.nanmean(k[third == t])) if (third == t).any() else float("nan") for t in range(3)
         ),
     }
+
+
+def _mu_by_third(wc, top: float, fill: float) -> tuple[float, float, float]:
+    """Side walls' sum of upward shear over sum of normal force in the upper, middle and lower third of the fill."""
+    side = wc["side"]
+    third = np.minimum((3 * (top - wc["point"][side, 1]) / fill).astype(int), 2)
+    ft, fn = wc["ft_up"][side], wc["fn"][side]
+    return tuple(
+        float(ft[third == t].sum() / fn[third == t].sum()) if (third == t).any() else float("nan")
+        for t in range(3)
+    )
 
 
 def _balance(wc, contacts, n, floor_k, weight) -> dict:

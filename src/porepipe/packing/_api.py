@@ -340,7 +340,7 @@ def _integrate(
     sig = np.full(n, -np.inf)
     conv = np.zeros(n, dtype=np.uint8)
     aux = np.zeros((n, 3))
-    work = np.empty((n, 4))  # the step kernel's work array (allocated once: see make_step_kernel)
+    work = K.work_array(n)  # the step kernel's work array (allocated once: see make_step_kernel)
     nbr = None
     prog = (
         Progress(f"pack {stage.name}", stage.steps, every_s=settings.progress_every_s, target=0.5)
@@ -565,7 +565,7 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
         sig,
         conv,
         np.empty((n, 3)),
-        np.empty((n, 4)),
+        K.work_array(n),
     )
     return sig, conv
 

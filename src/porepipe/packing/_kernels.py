@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH, by_threads
+from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT, by_threads
 
 #: one-thread calls on arrays up to this many elements (~1 300 spheres) run the serial kernels: they compile in half
 #: the time, but step 2.2x slower than the parallel code on one thread, so only short runs of small packings gain
@@ -458,6 +458,10 @@ def _step_reductions(sig, conv, aux):
 _D0, _RI, _RJ, _KP, _HC, _SP, _C0, _SIG, _DIST, _REACH, _ROWS = 0, 3, 4, 5, 6, 7, 8, 11, 12, 13, 14
 #: pairs evaluated per batch (the scratch holds at least one sphere's whole list besides)
 _BATCH = 512
+#: columns of the step kernel's (N, WORK_COLUMNS) work array: one 64-byte row per sphere holds what a pair reads of
+#: its partner (x, y, z, r) and what it adds to it (force x, y, z, max sigma), so gather and scatter touch one line
+WORK_COLUMNS = 8
+_WF, _WSIG = 4, 7
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -535,15 +539,14 @@ def _tie_force(i, j, xr, types, ids, hcoef, sigp, axis):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _scatter_pairs(
-    i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, sigp, f_new, sig_max, conv, freeze, w
-):
+def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, sigp, conv, freeze, w):
     """Apply the evaluated pairs of sphere i (scratch columns from k on) to both ends (Newton's third law); return
     the next column.
 
-    Adds the pair force to f_new[i] (summed over the list first) and its negative to f_new[j], raises sig_max of
-    both to sigma_ij and sets conv of both to 1 when the partner is within reach (the flag the
-    step's stochastic forces read). The caller runs spheres that share a partner in one thread, in a fixed order.
+    Adds the pair force to the force columns of xr's row i (summed over the list first) and its negative to row
+    j's, raises the max-sigma column of both to sigma_ij and sets conv of both to 1 when the partner is within
+    reach (the flag the step's stochastic forces read). The caller runs spheres that share a partner in one thread,
+    in a fixed order.
     """
     fro_i = False
     if freeze:
@@ -551,13 +554,13 @@ def _scatter_pairs(
     fx = 0.0
     fy = 0.0
     fz = 0.0
-    smax = sig_max[i]
+    smax = xr[i, _WSIG]
     reach_any = 0
     for p in range(half_start[i], half_start[i + 1]):
         j = half_idx[p]
         sig_ij = w[_SIG, k]
         smax = max(smax, sig_ij)
-        sig_max[j] = max(sig_max[j], sig_ij)
+        xr[j, _WSIG] = max(xr[j, _WSIG], sig_ij)
         col = k
         k += 1
         fro_j = False
@@ -583,36 +586,48 @@ def _scatter_pairs(
             fy += c1
             fz += c2
         if not fro_j:
-            f_new[j, 0] -= c0
-            f_new[j, 1] -= c1
-            f_new[j, 2] -= c2
-    f_new[i, 0] += fx
-    f_new[i, 1] += fy
-    f_new[i, 2] += fz
-    sig_max[i] = smax
+            xr[j, _WF] -= c0
+            xr[j, _WF + 1] -= c1
+            xr[j, _WF + 2] -= c2
+    xr[i, _WF] += fx
+    xr[i, _WF + 1] += fy
+    xr[i, _WF + 2] += fz
+    xr[i, _WSIG] = smax
     if reach_any:
         conv[i] = 1
     return k
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _slab_pairs(
-    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair, hcoef, sigp, cut,
-    f_new, sig_max, conv, freeze,
-):  # fmt: skip
-    """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
-    pairs: gather, evaluate (vectorised), scatter.
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _slab_scratch(lo, hi, slab_items, half_start, kpair, hcoef, sigp):
+    """The pair scratch of :func:`_slab_pairs` for the spheres ``slab_items[lo:hi]``: :data:`_BATCH` columns plus
+    the longest list among them, the type-pair rows filled when there is one type only.
     """
     most = 0
     for m in range(lo, hi):
         i = slab_items[m]
         most = max(most, half_start[i + 1] - half_start[i])
     w = np.empty((_ROWS, _BATCH + most))
-    one_type = kpair.size == 1
-    if one_type:
+    if kpair.size == 1:
         w[_KP, :] = kpair[0, 0]
         w[_HC, :] = hcoef[0, 0]
         w[_SP, :] = sigp[0, 0]
+    return w
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", **NO_REFCOUNT)
+def _slab_pairs(
+    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair, hcoef, sigp, cut,
+    conv, freeze, w,
+):  # fmt: skip
+    """Every pair owned by the spheres ``slab_items[lo:hi]``, in that order, in batches of about :data:`_BATCH`
+    pairs: gather, evaluate (vectorised), scatter, in the scratch w of :func:`_slab_scratch`.
+
+    Compiled without reference counting (a call per slab, no allocation inside): inlined into the reference-counted
+    step kernel, the compiled sphere loop incremented and decremented array counts (atomic, on cache lines that
+    the threads share) for every sphere.
+    """
+    one_type = kpair.size == 1
     m = lo
     while m < hi:
         first = m
@@ -636,8 +651,6 @@ def _slab_pairs(
                 frozen,
                 hcoef,
                 sigp,
-                f_new,
-                sig_max,
                 conv,
                 freeze,
                 w,
@@ -645,6 +658,16 @@ def _slab_pairs(
 
 
 _STEP_CACHE: dict = {}
+
+
+def work_array(n: int) -> np.ndarray:
+    """The step kernel's (n, :data:`WORK_COLUMNS`) float64 work array, each row on one 64-byte cache line (NumPy
+    aligns large arrays to 16 bytes only: a row would then straddle two lines).
+    """
+    row = WORK_COLUMNS * 8
+    raw = np.empty(n * WORK_COLUMNS + row // 8)
+    skip = (-raw.ctypes.data % row) // 8
+    return raw[skip : skip + n * WORK_COLUMNS].reshape(n, WORK_COLUMNS)
 
 
 def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
@@ -663,9 +686,11 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
     walls : bool
         Some axes are closed by reflecting walls (centres stay in [0, L]); otherwise every axis is periodic.
 
-    The kernel's last argument is a (N, 4) float64 work array (its contents on entry do not matter): the step
-    copies x, y, z, r of every sphere into one 32-byte row there, so the pair pass reads one cache line per
-    partner. The caller allocates it once per run: a fresh 32 MB array per step (10^6 spheres) costs page faults.
+    The kernel's last argument is a (N, :data:`WORK_COLUMNS`) float64 work array (its contents on entry do not
+    matter): the step copies x, y, z, r of every sphere into one 64-byte row there and sums the sphere's pair forces
+    and max sigma in the same row, so the pair pass reads and updates one cache line per partner (with separate
+    position, force and sigma arrays it touched three). The caller allocates it once per run: a fresh 64 MB array
+    per step (10^6 spheres) costs page faults.
     """
     key = (bool(freeze), bool(stochastic), bool(walls))
     if key in _STEP_CACHE:
@@ -712,9 +737,9 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         for i in prange(n):
             for a in range(3):
                 xr[i, a] = x_old[i, a]
-                f_new[i, a] = 0.0
+                xr[i, _WF + a] = 0.0
             xr[i, 3] = r[i]
-            sig_max[i] = _NEG_INF
+            xr[i, _WSIG] = _NEG_INF
             conv[i] = 0
         # forces: each pair once, from its owner's half list, applied to both ends. The spheres sit in slabs at
         # least one pair reach wide, so a pair spans two neighbouring slabs at most; slabs of one colour (slab
@@ -729,9 +754,11 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
         for colour in range(min(nslab, 3)):
             for k in prange((nslab - colour + 2) // 3):
                 s = colour + 3 * k
+                lo, hi = slab_start[s], slab_start[s + 1]
+                w = _slab_scratch(lo, hi, slab_items, half_start, kpair, hcoef, sigp)
                 _slab_pairs(
-                    slab_start[s], slab_start[s + 1], slab_items, half_start, half_idx, xr, types, ids, frozen,
-                    box, half_box, kpair, hcoef, sigp, cut, f_new, sig_max, conv, FREEZE,
+                    lo, hi, slab_items, half_start, half_idx, xr, types, ids, frozen, box, half_box, kpair,
+                    hcoef, sigp, cut, conv, FREEZE, w,
                 )  # fmt: skip
         half_dt2_m = 0.5 * dt * dt / mass
         decay_t = np.empty(cm_t.size)  # velocity decay and force kick per type: no division per sphere
@@ -745,11 +772,12 @@ def make_step_kernel(freeze: bool, stochastic: bool, walls: bool):
             is_frozen = False
             if FREEZE:
                 is_frozen = frozen[i] != 0
-            fx = f_new[i, 0]
-            fy = f_new[i, 1]
-            fz = f_new[i, 2]
+            fx = xr[i, _WF]
+            fy = xr[i, _WF + 1]
+            fz = xr[i, _WF + 2]
             nforce = conv[i]
-            smax = sig_max[i]
+            smax = xr[i, _WSIG]
+            sig_max[i] = smax
             ok = smax > 0.0 and smax <= sig_t[ti]
             conv[i] = 1 if ok else 0
             if FREEZE:

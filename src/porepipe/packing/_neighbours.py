@@ -87,7 +87,7 @@ def build_neighbours(
 
     Periodic coordinates must lie in [0, L) (the engine keeps them there); others raise a PorepipeError.
 
-    With ``reorder`` the spheres are first put in cell order (radius class, then cell; stable), so that partners
+    With ``reorder`` the spheres are first put in slab-tiled cell order (:func:`_tile_order`), so that partners
     sit close in memory; the list then refers to the reordered spheres ``x_um[order]``.
 
     Returns
@@ -116,9 +116,12 @@ def build_neighbours(
     K._counting_sort(cell_of, cell_off[-1], cell_start, cell_items)
     order = None
     if reorder:
-        order = cell_items
+        order = _tile_order(
+            cell_of, cls, ncell, cell_off, *_slab_ids(x_um, r_um, box_um, periodic, cutoff, skin_um)
+        )
         x_um, r_um, types, cls = x_um[order], r_um[order], types[order], cls[order]
-        cell_items = np.arange(n, dtype=np.int64)
+        cell_of = cell_of[order]
+        K._counting_sort(cell_of, cell_off[-1], cell_start, cell_items)
     per = np.array(periodic, dtype=np.bool_)  # a copy: a read-only array would compile the kernels once more
     args = (
         x_um,
@@ -152,13 +155,31 @@ def build_neighbours(
     return (start, idx, order) if reorder else (start, idx)
 
 
-def slabs(x_um, r_um, box_um, periodic, cutoff, skin_um):
-    """Spheres by slab along the axis that holds the most slabs at least one pair reach (cutoff 2 R_max + skin)
-    wide: slab s holds spheres ``items[start[s]:start[s + 1]]``, in increasing order.
+def _tile_order(cell_of, cls, ncell, cell_off, slab, nslab, axis):
+    """Permutation into slab-tiled cell order: by radius class, then slab of :func:`slabs`, then cell with the
+    slab axis varying fastest (stable, so spheres of one cell keep their order).
 
-    A listed pair then spans two neighbouring slabs at most, so slabs of one colour (s mod 3) share no sphere. With
-    periodic faces the slab count is 1, 2 or a multiple of 3 (the colouring must also hold across the wrap).
+    Plain row-major cell order puts a sphere's partners one cell further along the first axis a whole plane of cells
+    away in memory (1.6 MB of positions for 10^6 spheres); with the slab axis innermost they sit one short column
+    of cells away, and every slab's spheres of one class are one contiguous block, walked in memory order by the
+    step kernel's slab loop. Measured at 10^6 spheres, one thread, in one run (benchmarks/pack.py --full): 3-7 %
+    fewer CPU seconds per step than row-major order (Morton order: 20 % more, its slabs are not contiguous in
+    memory). The gain is small because the step is not bound by memory locality: with each partner replaced by a
+    neighbour in memory, the pair pass costs the same.
     """
+    lin = cell_of - cell_off[cls]
+    n = ncell[cls]
+    q = np.empty((3, lin.size), dtype=np.int64)
+    q[2] = lin % n[:, 2]
+    rest = lin // n[:, 2]
+    q[1] = rest % n[:, 1]
+    q[0] = rest // n[:, 1]
+    b, c = (a for a in range(3) if a != axis)
+    return np.lexsort((q[axis], q[c], q[b], slab, cls))
+
+
+def _slab_ids(x_um, r_um, box_um, periodic, cutoff, skin_um):
+    """Slab of every sphere for :func:`slabs`, the slab count and the slab axis."""
     reach = (cutoff * 2.0 * float(r_um.max()) + skin_um) * (
         1.0 + 1e-9
     )  # margin: slab ids come from rounded x m / L
@@ -169,6 +190,17 @@ def slabs(x_um, r_um, box_um, periodic, cutoff, skin_um):
     axis = int(np.argmax(counts))
     m = int(counts[axis])
     slab = np.clip(np.floor(x_um[:, axis] * (m / box_um[axis])).astype(np.int64), 0, m - 1)
+    return slab, m, axis
+
+
+def slabs(x_um, r_um, box_um, periodic, cutoff, skin_um):
+    """Spheres by slab along the axis that holds the most slabs at least one pair reach (cutoff 2 R_max + skin)
+    wide: slab s holds spheres ``items[start[s]:start[s + 1]]``, in increasing order.
+
+    A listed pair then spans two neighbouring slabs at most, so slabs of one colour (s mod 3) share no sphere. With
+    periodic faces the slab count is 1, 2 or a multiple of 3 (the colouring must also hold across the wrap).
+    """
+    slab, m, _ = _slab_ids(x_um, r_um, box_um, periodic, cutoff, skin_um)
     start = np.empty(m + 1, dtype=np.int64)
     items = np.empty(slab.size, dtype=np.int64)
     K._counting_sort(slab, m, start, items)

@@ -79,7 +79,8 @@ class State:
     frozen: np.ndarray
     x_build: np.ndarray
     r_build: np.ndarray
-    ids: np.ndarray  # insertion number of each sphere; the arrays are kept in cell order for memory locality
+    # insertion number of each sphere; the arrays are kept in slab-tiled cell order for memory locality
+    ids: np.ndarray
     next_id: int
     since_build: int
     stage: int  # index of the stage in progress

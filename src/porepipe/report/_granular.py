@@ -127,6 +127,11 @@ def _silo_rows(a: dict, th: dict) -> list[list[str]]:
             " / ".join(f"{v:.2f}" for v in a["k_thirds"]),
             "– (local k independent of position, §3.3)",
         ],
+        [
+            "mobilised wall friction in the same thirds",
+            " / ".join(f"{v:.2f}" for v in a["mu_wall_thirds"]),
+            "–",
+        ],
     ]
     if janssen_fit:
         rows += [
@@ -312,6 +317,10 @@ def _heap_part(h: dict, cost: str, out_dir: Path, dpi: int) -> list[str]:
         [
             "repose angle, integral method (Eq. 2.42) [deg]",
             f"{math.degrees(h['repose_integral_rad']):.1f}",
+        ],
+        [
+            "repose angle from height and area, tan = h²/a [deg]",
+            f"{math.degrees(h['repose_height_rad']):.1f}",
         ],
         ["height / foot width [m]", f"{h['height_m']:.3f} / {h['foot_m'][1] - h['foot_m'][0]:.3f}"],
         [

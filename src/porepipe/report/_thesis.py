@@ -158,8 +158,8 @@ def _value(ds: xr.Dataset, quantity: str, a_um: float) -> float:
 
 
 def _measured(ds: xr.Dataset, quantity: str, a_um: float, sub_ok: bool = False) -> tuple[float, str]:
-    """(value, where it came from) of ``quantity`` at resolution ``a_um``: the whole volume's run with its CPU cost;
-    with ``sub_ok`` and no whole-volume run, the mean over the largest sub-sample edge, with its REV spread.
+    """(value, where it came from) of ``quantity`` at resolution ``a_um``: the whole volume's run with its CPU cost
+    (and that of making its binary volume, where the sweep recorded it); with ``sub_ok`` and no whole-volume run, the mean over the largest sub-sample edge, with its REV spread.
     """
     i = np.flatnonzero(np.isclose(ds.a_um.values, a_um, rtol=1e-6))
     if quantity not in ds.quantity.values or not i.size:
@@ -175,6 +175,9 @@ def _measured(ds: xr.Dataset, quantity: str, a_um: float, sub_ok: bool = False) 
             continue
         cpu = float(run.cpu_s) if "cpu_s" in run else float("nan")
         cost = f"{cpu:.1f} CPU s" if np.isfinite(cpu) else "cost not recorded"
+        up = float(run.upstream_cpu_s) if "upstream_cpu_s" in run else float("nan")
+        if np.isfinite(cpu) and np.isfinite(up):
+            cost += f" (+ {up:.1f} CPU s to voxelise and segment)"
         if s == FULL:
             return value, f"whole volume, {cost}"
         count = int(run.rev_count) if "rev_count" in run else 1

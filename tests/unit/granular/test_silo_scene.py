@@ -69,6 +69,18 @@ def test_ci_silo_k_and_mu_j(silo):
     )  # between random loose packing and the hexagonal disk packing pi/sqrt(12)
 
 
+def test_ci_silo_wall_friction_by_depth(silo):
+    """Coulomb bounds the mobilised wall friction in every third; the upper third has hardly slid along the walls.
+
+    Measured (issue #17, seeds 17-19 and three fill protocols): upper third 0.13-0.20, middle and lower 0.27-0.34
+    (docs/results.md, "Silo k by depth": a correlate of the upper third's higher k, not its cause).
+    """
+    a, mu, _ = silo
+    upper, middle, lower = a["mu_wall_thirds"]
+    assert all(0 < m <= mu for m in (upper, middle, lower))
+    assert upper < 0.8 * min(middle, lower)
+
+
 def test_ci_silo_report_page(silo, tmp_path):
     """The granular report section: page, figures and their data; the network CSV has one row per contact."""
     from porepipe.granular import frame_contacts

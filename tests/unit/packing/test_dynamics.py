@@ -69,7 +69,7 @@ class Run:
             self.sigmax,
             self.conv,
             np.empty((len(self.r), 3)),
-            np.empty((len(self.r), 4)),
+            K.work_array(len(self.r)),
         )
         self.x, self.f = xn, fn
 

@@ -109,3 +109,15 @@ def test_missing_sweep_of_a_thesis_rows_scene_is_one_clear_error(tmp_path, monke
     (tmp_path / "results/thesis-pp/sweep").mkdir(parents=True)
     (tmp_path / "results/thesis-pp/sweep/sweep.h5").write_bytes(b"")
     assert thesis_row_sweeps(scene) == {"PP": Path("results/thesis-pp/sweep/sweep.h5")}
+
+
+def test_a_row_costs_its_run_and_the_making_of_its_binary_volume(sweeps):
+    _, fp = sweeps
+    fp = fp.assign(upstream_cpu_s=(("a_um", "sample_um"), [[np.nan, 7.0], [np.nan, 30.0]]))
+    (t51,) = thesis_tables(fp, [ThesisTable.t5_1], "FP")
+    assert _row(t51, "FP a = 1 um", "phi")["source and cost"] == (
+        "whole volume, 2.5 CPU s (+ 7.0 CPU s to voxelise and segment)"
+    )
+    assert _row(t51, "FP a = 0.5 um", "phi")["source and cost"].endswith(
+        "(+ 30.0 CPU s to voxelise and segment)"
+    )

@@ -167,3 +167,27 @@ def test_voxels_shared_by_three_or_more_spheres(periodic):
     singles = [grey_values_naive(c[n : n + 1], r[n : n + 1], box, a, periodic) for n in range(len(r))]
     partly = sum(((s > 0) & (s < 216)).astype(np.int64) for s in singles)
     assert ((partly >= 3) & (g < 216)).sum() >= 5  # voxels where three or more spheres each put some samples
+
+
+def test_voxels_partly_filled_by_two_and_by_three_spheres():
+    # A voxel the surfaces of two spheres cut counts the union of their samples without masks (the pair path); one
+    # cut by a third sphere as well builds the masks of all three (the shared path). Three spheres whose centres are
+    # 2 µm apart (r = 2.1 µm) meet near their common centroid: voxels there are partly filled by all three.
+    c = np.array([[4.0, 4.0, 4.0], [6.0, 4.0, 4.0], [5.0, 5.7320508, 4.0]]) + 0.013
+    r = np.array([2.1, 2.1, 2.1])
+    g = _both_equal_oracle(c, r, (10.0, 10.0, 8.0), 0.5, periodic=False)
+    partial = [((g > 0) & (g < 216) & _partly_in(c[s], r[s], g.shape, 0.5)) for s in range(3)]
+    assert (partial[0] & partial[1]).sum() > (partial[0] & partial[1] & partial[2]).sum() > 0
+
+
+def _partly_in(centre, radius, shape, a):
+    """Voxels a sphere cuts (some corner inside, some outside): where its surface passes."""
+    corners = np.stack(np.meshgrid(*[np.arange(n + 1) * a for n in shape], indexing="ij"), -1)
+    inside = ((corners - centre) ** 2).sum(-1) <= radius * radius
+    windows = [
+        inside[i : i + shape[0], j : j + shape[1], k : k + shape[2]]
+        for i in (0, 1)
+        for j in (0, 1)
+        for k in (0, 1)
+    ]
+    return np.any(windows, axis=0) & ~np.all(windows, axis=0)
