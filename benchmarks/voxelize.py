@@ -22,8 +22,7 @@ from _reference import load_module
 
 from porepipe._shared.sample_points import SUB
 from porepipe.voxelize import VoxelizeMethod, grid_shape, voxelize
-from porepipe.voxelize._api import _Prepared
-from porepipe.voxelize._kernels import _voxelize_slab
+from porepipe.voxelize._api import _Prepared, run_slab
 
 
 def packing(n, box, r_min, r_max, seed=0):
@@ -31,9 +30,13 @@ def packing(n, box, r_min, r_max, seed=0):
     return rng.uniform(0, box, (n, 3)), rng.uniform(r_min, r_max, n)
 
 
-def kernel(prep, shape, a, boundary, slab=_voxelize_slab):
-    """The slab kernel alone on the whole volume (no sphere images, no allocation of the result)."""
+def kernel(prep, shape, a, boundary, slab=None):
+    """The slab kernel alone on the whole volume (no sphere images, no allocation of the result); ``slab``: an
+    earlier module's ``_voxelize_slab``, called as it was (its default blocks of planes), else the current one.
+    """
     out = np.zeros(shape, np.uint8)
+    if slab is None:
+        return lambda: run_slab(0, shape[0], prep, a / SUB, shape, boundary, out) or out
     args = (prep.images, prep.order, prep.xmin_sorted, prep.r_max, a / SUB, shape[1], shape[2], boundary, out)
     return lambda: slab(0, shape[0], *args) or out
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 
+import numba
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
@@ -56,6 +57,36 @@ def sphere_images(centres_um, radii_um, box_um, periodic: bool) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(rows))
 
 
+#: blocks of planes per thread when several threads run: taken one at a time as threads finish, so a thread that the
+#: machine slows down holds up no other (each block allocates its scratch once)
+_TASKS_PER_THREAD = 4
+
+
+def slab_tasks() -> int:
+    """Blocks of planes for :func:`porepipe.voxelize._kernels._voxelize_slab`: one on one thread, else a few per thread."""
+    threads = numba.get_num_threads()
+    return 1 if threads == 1 else _TASKS_PER_THREAD * threads
+
+
+def run_slab(i0, i1, prep, h, shape, boundary_only, out):
+    """Grey values of planes ``i0 .. i1 - 1`` into ``out`` (the slab kernel; blocks of planes taken dynamically)."""
+    with numba.parallel_chunksize(1):
+        _voxelize_slab(
+            i0,
+            i1,
+            prep.images,
+            prep.order,
+            prep.xmin_sorted,
+            prep.r_max,
+            h,
+            shape[1],
+            shape[2],
+            boundary_only,
+            out,
+            slab_tasks(),
+        )
+
+
 class _Prepared:
     """Sphere images sorted by x-min, ready for slab kernels."""
 
@@ -92,19 +123,7 @@ def iter_grey_slabs(
         alloc = np.empty if len(prep.images) else np.zeros
         slab = alloc((i1 - i0, shape[1], shape[2]), dtype=np.uint8)
         if len(prep.images):
-            _voxelize_slab(
-                i0,
-                i1,
-                prep.images,
-                prep.order,
-                prep.xmin_sorted,
-                prep.r_max,
-                h,
-                shape[1],
-                shape[2],
-                boundary_only,
-                slab,
-            )
+            run_slab(i0, i1, prep, h, shape, boundary_only, slab)
         if bar is not None:
             bar.update(i1)
         yield i0, slab

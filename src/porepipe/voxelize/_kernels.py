@@ -374,27 +374,37 @@ def _shell_plane(
             _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, out)
 
 
-@njit(cache=True, fastmath=FASTMATH, parallel=True)
-def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, out):
-    """Grey values of planes i0..i1-1 into ``out`` (i1 - i0, ny, nz), parallel over planes.
+@njit(cache=True, fastmath=FASTMATH)
+def _plane_scratch(ny, nz):
+    """One thread's scratch for :func:`_shell_plane` and :func:`_voxelize_plane`, reused plane after plane."""
+    return (
+        np.empty((ny, nz), dtype=np.uint8),  # status
+        np.empty((ny, nz), dtype=np.int32),  # owner
+        np.empty((ny, nz), dtype=np.int32),  # second
+        np.empty((ny, nz, WORDS), dtype=np.uint64),  # mask
+        np.empty((2, SUB)),  # dx2
+        np.empty(N_ROWS),  # dxy
+        np.empty(N_ROWS),  # odxy
+        np.empty(N_ROWS, dtype=np.int64),  # bits
+        np.empty(SUB * nz),  # tz
+        np.empty((3, SUB)),  # brute-force scratch
+        np.empty(WORDS, dtype=np.uint64),  # brute-force words
+    )
 
-    ``boundary_only`` selects the shell method (:func:`_shell_plane`), else brute force (216 tests per voxel).
+
+@njit(cache=True, fastmath=FASTMATH, parallel=True)
+def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundary_only, out, tasks=64):
+    """Grey values of planes i0..i1-1 into ``out`` (i1 - i0, ny, nz), parallel over ``tasks`` blocks of planes.
+
+    ``boundary_only`` selects the shell method (:func:`_shell_plane`), else brute force (216 tests per voxel). Each
+    block allocates its scratch once (:func:`_plane_scratch`): the callers pass one block per thread, or a few per
+    thread taken dynamically (:func:`porepipe.voxelize._api.slab_tasks`).
     """
     nplanes = i1 - i0
-    nthreads = min(nplanes, 64)
-    per = (nplanes + nthreads - 1) // nthreads
-    for t in prange(nthreads):
-        status = np.empty((ny, nz), dtype=np.uint8)
-        owner = np.empty((ny, nz), dtype=np.int32)
-        second = np.empty((ny, nz), dtype=np.int32)
-        mask = np.empty((ny, nz, WORDS), dtype=np.uint64)
-        dx2 = np.empty((2, SUB))
-        dxy = np.empty(N_ROWS)
-        odxy = np.empty(N_ROWS)
-        bits = np.empty(N_ROWS, dtype=np.int64)
-        tz = np.empty(SUB * nz)
-        scratch = np.empty((3, SUB))
-        words = np.empty(WORDS, dtype=np.uint64)
+    ntasks = max(1, min(nplanes, tasks))
+    per = (nplanes + ntasks - 1) // ntasks
+    for t in prange(ntasks):
+        status, owner, second, mask, dx2, dxy, odxy, bits, tz, brute, words = _plane_scratch(ny, nz)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             i = i0 + p
             if boundary_only:
@@ -419,5 +429,5 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
                 )
             else:
                 _voxelize_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, scratch, words, out[p]
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, brute, words, out[p]
                 )
