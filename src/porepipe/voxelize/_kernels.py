@@ -397,8 +397,8 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
     """Grey values of planes i0..i1-1 into ``out`` (i1 - i0, ny, nz), parallel over ``tasks`` blocks of planes.
 
     ``boundary_only`` selects the shell method (:func:`_shell_plane`), else brute force (216 tests per voxel). Each
-    block allocates its scratch once (:func:`_plane_scratch`): the callers pass one block per thread, or a few per
-    thread taken dynamically (:func:`porepipe.voxelize._api.slab_tasks`).
+    block allocates its scratch once (:func:`_plane_scratch`); the callers pass one block per thread
+    (:func:`porepipe.voxelize._api.run_slab`).
     """
     nplanes = i1 - i0
     ntasks = max(1, min(nplanes, tasks))

@@ -197,8 +197,8 @@ def _partly_in(centre, radius, shape, a):
 @pytest.mark.parametrize("threads", [1, 2])
 def test_small_spheres_at_random_sub_voxel_positions(threads):
     # Spheres 10-20 voxels wide (the benchmark's small case) at random sub-voxel centres and radii, dense enough that
-    # many shell voxels are cut by two or three spheres; on one thread (one block of planes) and on two (blocks
-    # taken dynamically): the grey values equal the numpy oracle of the 6^3 sample definition bit for bit
+    # many shell voxels are cut by two or three spheres; on one thread (one block of planes) and on two (one block
+    # each, cut mid-volume): the grey values equal the numpy oracle of the 6^3 sample definition bit for bit
     rng = np.random.default_rng(22)
     box = (24.0, 20.0, 16.0)
     c = rng.uniform(0.0, 1.0, (7, 3)) * box
