@@ -60,9 +60,10 @@ def sphere_images(centres_um, radii_um, box_um, periodic: bool) -> np.ndarray:
 def run_slab(i0, i1, prep, h, shape, boundary_only, out):
     """Grey values of planes ``i0 .. i1 - 1`` into ``out``: the slab kernel, one block of planes per thread.
 
-    One block per thread allocates each thread's scratch once. Against the earlier 64 blocks, same runs (CPU time
-    per brute-force CPU time, spheres 20-40 voxels wide, 2 threads): 23.5x and 23.0x vs 20.2x and 19.3x; four
-    blocks per thread taken dynamically measured 19.2x and 20.0x; on one thread all three are equal within the noise.
+    One block per thread allocates each thread's scratch once. Against the earlier 64 static blocks, kernel alone,
+    CPU time per brute-force CPU time, spheres 20-40 voxels wide, 2 threads, four runs at load 3-6: 20.6-23.5x vs
+    18.8-20.2x; four blocks per thread taken dynamically measured 19.2x and 20.0x. On one thread, and on the other
+    sphere sizes, the three are equal within the noise (±5 %).
     """
     _voxelize_slab(
         i0,
