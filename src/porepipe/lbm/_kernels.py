@@ -525,6 +525,10 @@ def _ray_grain_fractions(
 #    ``f[q * _TILE + i]`` that stays in L1. Loading and storing a tile are contiguous per-population copies; BGK and
 #    TRT collide a tile in one loop over its nodes that vectorises across nodes (the row offsets are compile-time
 #    constants, so the compiler sees that the rows do not overlap and needs no run-time alias checks).
+#: an int64 zero, not a literal: a literal 0 handed to a jitted helper, as an argument or as the first value of a
+#: loop counter, makes numba compile the helper once more, for Literal[int](0) besides int64 (the TRT step compiled
+#: _collide_trt and _fields_tile four times each instead of twice)
+_NO_LITERAL = np.int64(0)
 _NUMERIC = {"cache": True, "fastmath": FASTMATH, "error_model": "numpy"}  # numpy: no division-by-zero branch
 
 
@@ -570,7 +574,7 @@ def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
     """
     for i in range(cnt):
         _set(f, i, _get(src, n0 + i))
-    t = 0
+    t = _NO_LITERAL
     while t < cnt:
         while run_start[r + 1] <= n0 + t:
             r += 1
@@ -1025,7 +1029,7 @@ def _pull_collide(
     holding n0 or an earlier one; returns the run holding the tile's last node.
     """
     scratch = _scratch_view(f)
-    t = 0
+    t = _NO_LITERAL
     while t < cnt:
         while run_start[r + 1] <= n0 + t:
             r += 1
@@ -1177,8 +1181,8 @@ def _step(
                     elif link_slot.size:
                         _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
                     if keep:
-                        _fields_tile(scratch, 0, cnt, n0, force_lo, force_hi, b3, fields)
-                    _collide(literally(op), scratch, 0, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
+                        _fields_tile(scratch, _NO_LITERAL, cnt, n0, force_lo, force_hi, b3, fields)
+                    _collide(literally(op), scratch, _NO_LITERAL, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
                 _store_tile(b, n0, cnt, n_nodes, f, streaming)
                 n0 += cnt
             if streaming != STORE_CACHED:
