@@ -511,7 +511,7 @@ def _ray_grain_fractions(
 #: an int64 zero, not a literal: a literal 0 handed to a jitted helper, as an argument or as the first value of a
 #: loop counter, makes numba compile the helper once more, for Literal[int](0) besides int64 (the TRT step compiled
 #: _collide_trt and _fields_tile four times each instead of twice)
-_NO_LITERAL = np.int64(0)
+_ZERO = np.int64(0)
 _NUMERIC = {"cache": True, "fastmath": FASTMATH, "error_model": "numpy"}  # numpy: no division-by-zero branch
 
 
@@ -557,7 +557,7 @@ def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
     """
     for i in range(cnt):
         _set(f, i, _get(src, n0 + i))
-    t = _NO_LITERAL
+    t = _ZERO
     while t < cnt:
         while run_start[r + 1] <= n0 + t:
             r += 1
@@ -637,7 +637,9 @@ def _pop(typingctx, v, q, i):
         else:
             arrty, arr = source, builder.extract_value(args[0], 0)
             slot = cgutils.alloca_once_value(builder, builder.extract_value(args[0], 1))
-            start = context.cast(builder, builder.load(cgutils.gep(builder, slot, 0, q)), rows.dtype, types.intp)
+            start = context.cast(
+                builder, builder.load(cgutils.gep(builder, slot, 0, q)), rows.dtype, types.intp
+            )
         value = builder.load(_item_pointer(context, builder, arrty, arr, types.intp, builder.add(start, i)))
         if not isinstance(scope, types.NoneType):
             value.set_metadata("alias.scope", _population_scope(builder))
@@ -1014,7 +1016,7 @@ def _pull_collide(
     holding n0 or an earlier one; returns the run holding the tile's last node.
     """
     scratch = _scratch_view(f)
-    t = _NO_LITERAL
+    t = _ZERO
     while t < cnt:
         while run_start[r + 1] <= n0 + t:
             r += 1
@@ -1166,8 +1168,10 @@ def _step(
                     elif link_slot.size:
                         _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
                     if keep:
-                        _fields_tile(scratch, _NO_LITERAL, cnt, n0, force_lo, force_hi, b3, fields)
-                    _collide(literally(op), scratch, _NO_LITERAL, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
+                        _fields_tile(scratch, _ZERO, cnt, n0, force_lo, force_hi, b3, fields)
+                    _collide(
+                        literally(op), scratch, _ZERO, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates
+                    )
                 _store_tile(b, n0, cnt, n_nodes, f, streaming)
                 n0 += cnt
             if streaming != STORE_CACHED:
