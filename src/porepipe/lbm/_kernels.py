@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 from llvmlite import ir
-from numba import literally, njit, prange, types
+from numba import literally, njit, prange, typeof, types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
@@ -110,25 +110,8 @@ def _population_scope(builder):
 
 
 @intrinsic
-def _read(typingctx, arr, idx, scoped):
-    """``arr[idx]`` as float64 (no wrap-around test); ``scoped`` (a type tag: ``()`` or None) puts the read in the
-    population scope: only for arrays the scratch ``f`` written by :func:`_put` is not (the population arrays).
-    """
-    sig = types.float64(arr, idx, scoped)
-
-    def codegen(context, builder, signature, args):
-        ptr = _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
-        value = builder.load(ptr)
-        if not isinstance(signature.args[2], types.NoneType):
-            value.set_metadata("alias.scope", _population_scope(builder))
-        return context.cast(builder, value, signature.args[0].dtype, types.float64)
-
-    return sig, codegen
-
-
-@intrinsic
 def _put(typingctx, arr, idx, val):
-    """``arr[idx] = val`` (no wrap-around test) for the tile scratch: it does not alias a scoped :func:`_read`."""
+    """``arr[idx] = val`` (no wrap-around test) for the tile scratch: it does not alias a scoped read (:func:`_pop`)."""
     sig = types.void(arr, idx, val)
 
     def codegen(context, builder, signature, args):
@@ -525,6 +508,10 @@ def _ray_grain_fractions(
 #    ``f[q * _TILE + i]`` that stays in L1. Loading and storing a tile are contiguous per-population copies; BGK and
 #    TRT collide a tile in one loop over its nodes that vectorises across nodes (the row offsets are compile-time
 #    constants, so the compiler sees that the rows do not overlap and needs no run-time alias checks).
+#: an int64 zero, not a literal: a literal 0 handed to a jitted helper, as an argument or as the first value of a
+#: loop counter, makes numba compile the helper once more, for Literal[int](0) besides int64 (the TRT step compiled
+#: _collide_trt and _fields_tile four times each instead of twice)
+_ZERO = np.int64(0)
 _NUMERIC = {"cache": True, "fastmath": FASTMATH, "error_model": "numpy"}  # numpy: no division-by-zero branch
 
 
@@ -570,7 +557,7 @@ def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
     """
     for i in range(cnt):
         _set(f, i, _get(src, n0 + i))
-    t = 0
+    t = _ZERO
     while t < cnt:
         while run_start[r + 1] <= n0 + t:
             r += 1
@@ -615,30 +602,6 @@ def _scratch_view(f):
     return (None, None, None, f)
 
 
-def _source(source, f):
-    """The array a tile view reads (``source`` None: the scratch ``f``)."""
-    return f if source is None else source
-
-
-@overload(_source, inline="always")
-def _source_overload(source, f):
-    if isinstance(source, types.NoneType):
-        return lambda source, f: f
-    return lambda source, f: source
-
-
-def _row_start(rows, q):
-    """Where population q's row of a tile view starts (``rows`` None: in the scratch)."""
-    return q * _TILE if rows is None else rows[q]
-
-
-@overload(_row_start, inline="always")
-def _row_start_overload(rows, q):
-    if isinstance(rows, types.NoneType):
-        return lambda rows, q: q * _TILE
-    return lambda rows, q: rows[q]
-
-
 @njit(inline="always", **_NUMERIC)
 def _run_view(src, run_offset, r, n0, f):
     o = run_offset[r]
@@ -651,10 +614,38 @@ def _run_view(src, run_offset, r, n0, f):
     return (src, rows, (), f)
 
 
-@njit(inline="always", **_NUMERIC)
-def _pop(v, q, i):
-    """Population q of tile node i (unchecked: the node loop vectorises)."""
-    return _read(_source(v[0], v[3]), _row_start(v[1], q) + i, v[2])
+@intrinsic
+def _pop(typingctx, v, q, i):
+    """Population q of tile node i of view ``v`` as float64, unchecked (the node loop vectorises):
+    ``source[rows[q] + i]``, in the population scope (:func:`_population_scope`) if the view's scope is ``()``, or the
+    scratch's ``f[q * _TILE + i]`` where ``source`` is None.
+
+    One intrinsic rather than jitted helpers that numba inlines (a read intrinsic behind two inlined overloads was
+    that): a collision loop reads ~70 populations per node, and inlining and retyping the helpers at each read took
+    two thirds of the step kernel's cold compile. LLVM gets the same loads and index arithmetic (same assembly).
+    """
+    sig = types.float64(v, q, i)
+
+    def codegen(context, builder, signature, args):
+        vty, qty, ity = signature.args
+        source, rows, scope, f = vty.types
+        q = context.cast(builder, args[1], qty, types.intp)
+        i = context.cast(builder, args[2], ity, types.intp)
+        if isinstance(source, types.NoneType):
+            arrty, arr = f, builder.extract_value(args[0], 3)
+            start = builder.mul(q, ir.Constant(q.type, _TILE))
+        else:
+            arrty, arr = source, builder.extract_value(args[0], 0)
+            slot = cgutils.alloca_once_value(builder, builder.extract_value(args[0], 1))
+            start = context.cast(
+                builder, builder.load(cgutils.gep(builder, slot, 0, q)), rows.dtype, types.intp
+            )
+        value = builder.load(_item_pointer(context, builder, arrty, arr, types.intp, builder.add(start, i)))
+        if not isinstance(scope, types.NoneType):
+            value.set_metadata("alias.scope", _population_scope(builder))
+        return context.cast(builder, value, arrty.dtype, types.float64)
+
+    return sig, codegen
 
 
 @njit(inline="always", **_NUMERIC)
@@ -1025,7 +1016,7 @@ def _pull_collide(
     holding n0 or an earlier one; returns the run holding the tile's last node.
     """
     scratch = _scratch_view(f)
-    t = 0
+    t = _ZERO
     while t < cnt:
         while run_start[r + 1] <= n0 + t:
             r += 1
@@ -1177,12 +1168,30 @@ def _step(
                     elif link_slot.size:
                         _apply_links(f, a, n0, n_nodes, tile_start, link_slot, link_b, link_c)
                     if keep:
-                        _fields_tile(scratch, 0, cnt, n0, force_lo, force_hi, b3, fields)
-                    _collide(literally(op), scratch, 0, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates)
+                        _fields_tile(scratch, _ZERO, cnt, n0, force_lo, force_hi, b3, fields)
+                    _collide(
+                        literally(op), scratch, _ZERO, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates
+                    )
                 _store_tile(b, n0, cnt, n_nodes, f, streaming)
                 n0 += cnt
             if streaming != STORE_CACHED:
                 _store_fence()
+
+
+def step(op, *args):
+    """Run :func:`_step` for operator ``op`` (BGK, TRT, MRT) on ``args`` (its other arguments, in order).
+
+    Calls the compiled kernel of the literal ``op`` directly: numba's dispatcher matches a plain int against no
+    compiled signature (they all hold ``Literal[int](op)``), so each call from Python retyped the whole step kernel
+    until ``literally`` asked for the literal, ~45 ms a call (an 8³ lattice steps in 0.02 ms). The first call of
+    each variant goes through the dispatcher, which compiles or loads it.
+    """
+    kernel = _step.pick(*args)
+    compiled = kernel.overloads.get((types.literal(op), *(typeof(a) for a in args)))
+    if compiled is None:
+        kernel(op, *args)
+    else:
+        compiled.entry_point(op, *args)
 
 
 # -- reductions ---------------------------------------------------------------------------------------------------------

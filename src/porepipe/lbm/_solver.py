@@ -110,7 +110,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
         )
 
     def step(src, dst, fields, store, n):
-        K._step(
+        K.step(
             op,
             src,
             dst,
