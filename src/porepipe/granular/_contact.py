@@ -8,8 +8,8 @@ contact line of Fig. 2.4.
 With ``trim``, only the chains of P and Q that face each other along the centre line take part: the
 facing corner of each polygon is found by climbing from the previous step's (a per-pair hint), P is cut to its
 corners beyond Q's lowest one and clipped by Q's edges below P's highest one. In a dense pile that is 3-5
-corners against 3-4 edges instead of 9 against 4-5. Without it (the default), all of P is clipped by Q's facing
-chain, bit-identical to earlier versions.
+corners against 3-4 edges instead of 9 against 4-5. This is the default; without it, all of P is clipped by Q's
+facing chain (the reference, equal to round-off: tests/unit/granular/test_narrow_phase.py).
 """
 
 from __future__ import annotations
