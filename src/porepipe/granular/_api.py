@@ -63,7 +63,7 @@ _WAVE = {Waveform.cosinus: 1, Waveform.sawtooth: 2, Waveform.tapping: 3, Wavefor
 _GKIND = {GravityKind.constant: 0, GravityKind.linear: 1, GravityKind.step: 2, GravityKind.smooth_step: 3}
 
 
-def polygon_overlap(p, q, trim: bool = False):
+def polygon_overlap(p, q, trim: bool = True):
     """Overlap of two convex polygons (world frame): area, contact line, application point and normal.
 
     Parameters
@@ -71,8 +71,8 @@ def polygon_overlap(p, q, trim: bool = False):
     p, q : (N, 2) and (M, 2) array_like
         Corners in m (either orientation).
     trim : bool
-        Cut p to its facing chain before clipping (``make_stepper(trim=True)``); False (default, as the
-        simulation) clips all of p. Both agree to round-off.
+        Cut p to its facing chain before clipping (the default, as the simulation); False clips all of p (the
+        reference, ``make_stepper(trim=False)``). Both agree to round-off.
 
     Returns
     -------

@@ -8,8 +8,8 @@ contact line of Fig. 2.4.
 With ``trim``, only the chains of P and Q that face each other along the centre line take part: the
 facing corner of each polygon is found by climbing from the previous step's (a per-pair hint), P is cut to its
 corners beyond Q's lowest one and clipped by Q's edges below P's highest one. In a dense pile that is 3-5
-corners against 3-4 edges instead of 9 against 4-5. Without it (the default), all of P is clipped by Q's facing
-chain, bit-identical to earlier versions.
+corners against 3-4 edges instead of 9 against 4-5. This is the default; without it, all of P is clipped by Q's
+facing chain (the reference, equal to round-off: tests/unit/granular/test_narrow_phase.py).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def _proj(ux, uy, V, k):
     return ux * V[k, 0] + uy * V[k, 1]
 
 
-@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+@njit(cache=True, fastmath=FASTMATH, inline="always", **NO_REFCOUNT)
 def _clip_by_edge(src, stag, m, qx, qy, ex, ey, k, dst, dtag, side):
     """One Sutherland-Hodgman pass: the m corners of src (edge tags stag) cut by the line through (qx, qy) along
     (ex, ey), keeping its left side; the result goes to dst / dtag (count returned), the new edge gets tag k. Returns
@@ -80,7 +80,7 @@ def _clip_by_edge(src, stag, m, qx, qy, ex, ey, k, dst, dtag, side):
     return out
 
 
-@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+@njit(cache=True, fastmath=FASTMATH, inline="always", **NO_REFCOUNT)
 def _climb(ux, uy, V, n, k, sign):
     """Corner of convex V with the largest sign * u.x, found by climbing from corner k.
 
@@ -122,7 +122,7 @@ def _climb(ux, uy, V, n, k, sign):
     return k
 
 
-@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+@njit(cache=True, fastmath=FASTMATH, inline="always", **NO_REFCOUNT)
 def _facing_run(ux, uy, V, n, start, level, sign):
     """The corners of convex V whose projection on u is on the far side of ``level`` (sign = +1: >= level, -1:
     <= level), grown from corner ``start`` (which is one of them), plus the one corner beyond each end: returns
@@ -144,7 +144,7 @@ def _facing_run(ux, uy, V, n, start, level, sign):
     return s, cnt
 
 
-@njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+@njit(cache=True, fastmath=FASTMATH, inline="always", **NO_REFCOUNT)
 def _clip_polygons(P, n_p, Q, n_q, cqx, cqy, cpx, cpy, buf_a, tag_a, buf_b, tag_b, side, trim, hint):
     """Clip convex P (CCW, n_p corners) by convex Q (CCW); the result (count returned) is in buf_a / tag_a.
 

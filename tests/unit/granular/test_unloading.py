@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from porepipe.granular import _measure as M
 from porepipe.granular import (
     elastic_constants,
     plane_strain_constants,
@@ -100,17 +101,31 @@ def test_unloading_frames_pick_the_last_frame_before_the_ramp_and_the_end():
     )  # run ends mid-ramp
 
 
+def _moves_over_d(tables, loaded, unloaded):
+    """Each grain's displacement over the unloading in mean grain diameters (as elastic_constants measures it)."""
+    before, after = M.frame_particles(tables, loaded), M.frame_particles(tables, unloaded)
+    act = before["active"] & after["active"]
+    d = 2 * np.sqrt(np.mean(before["area"][act]) / np.pi)
+    return np.linalg.norm(after["centroid"][act] - before["centroid"][act], axis=1) / d
+
+
 @pytest.mark.slow
 def test_unloaded_heap_against_the_thesis(tmp_path):
-    """Measured (9 grains per test area): nu 0.20 ± 0.16 in 16 of 39 areas, E 6.0e4 N/m = grains/50 (thesis:
-    0.446 ± 0.137, grains/68); median displacement 0.059 d, largest 0.14 d. Bounds: a small, smooth expansion
-    (no grain moves a fifth of its diameter), physical nu in a third of the areas and on average, and a packing one
-    to two orders of magnitude softer than its grains."""
+    """Bounds: a small, smooth expansion, physical nu in the bulk and on average, and a packing one to two orders of
+    magnitude softer than its grains. One realisation is one sample, so each bound is set by the seed scatter:
+    measured (9 grains per test area, 400 grains) over seeds 1-4 with the facing-chain narrow phase and 1-3 with
+    the whole-polygon clipping: median displacement 0.042-0.065 d; nu 0.14-0.35 on average, elastic in 30-41 % of
+    the areas (mean 36 %, SD 4 %; at least a fifth asserted); E = grains/50 to grains/77 (thesis: nu 0.446 ±
+    0.137, E = grains/68). The largest displacement is not a bound: in 3 of the 7 runs a few surface grains roll
+    off (0.86 d, 1.4 d, 10.8 d; 0.12-0.15 d otherwise); the grains moving more than 0.2 d are 0-4 of 400 (below
+    2 % asserted)."""
     scene = load_scene(SCENES / "granular-heap-unload-ci.yaml")
     tables = read_granular(run(scene.granular, tmp_path / "granular.h5", seed=scene.seed, progress=False))
-    out = elastic_constants(tables, *unloading_frames(tables, scene.granular.gravity), grains_per_cell=9)
-    assert out["u_median_over_d"] < 0.1 and out["u_max_over_d"] < 0.2
-    assert out["elastic"].sum() >= 0.3 * out["cells"]
+    frames = unloading_frames(tables, scene.granular.gravity)
+    out = elastic_constants(tables, *frames, grains_per_cell=9)
+    assert out["u_median_over_d"] < 0.1
+    assert np.mean(_moves_over_d(tables, *frames) > 0.2) < 0.02
+    assert out["elastic"].sum() >= 0.2 * out["cells"]
     assert 0 < out["nu_mean"] < 0.5
     assert 1 / 300 < out["E_median"] / scene.granular.material.young_N_m < 1 / 10
     from porepipe.report._granular import granular_report
