@@ -430,7 +430,7 @@ def dip_ensemble_figure(groups: list[dict], path: Path, dpi: int = 110) -> list[
     ax.axhline(1.0, color="0.6", lw=0.6)
     ax.set_xlabel("(x - axis) / (foot width / 2)")
     ax.set_ylabel("floor pressure / p_max (seed mean)")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=6, loc="lower center")  # the profiles are high in the middle, low at the sides
     fig.savefig(path, dpi=dpi)
     return rows
 
