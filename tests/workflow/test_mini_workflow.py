@@ -58,10 +58,10 @@ def test_dry_run_without_segmentation_has_no_segment_jobs(tmp_path):
     assert rules == {"all": 1, "pack": 1, "voxelize": len(scene["resolutions_um"]), "estimate": 1}, rules
 
 
-def test_mini_scene_runs_end_to_end(tmp_path):
-    out = _porepipe("run", str(MINI), "--cores", "2", cwd=tmp_path)
+def test_mini_scene_runs_end_to_end(mini_local_run):
+    cwd, out, _ = mini_local_run
     assert out.returncode == 0, out.stderr[-3000:]
-    res = tmp_path / "results" / "mini"
+    res = cwd / "results" / "mini"
     assert f"results of scene 'mini' are in {res}" in out.stdout
     scene = yaml.safe_load(MINI.read_text())
     for a in scene["resolutions_um"]:

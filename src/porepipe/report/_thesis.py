@@ -179,12 +179,29 @@ def _measured(ds: xr.Dataset, quantity: str, a_um: float, sub_ok: bool = False) 
         if np.isfinite(cpu) and np.isfinite(up):
             cost += f" (+ {up:.1f} CPU s to voxelise and segment)"
         if s == FULL:
-            return value, f"whole volume, {cost}"
+            return value, f"{_whole_volume(at, a_um)}, {cost}"
         count = int(run.rev_count) if "rev_count" in run else 1
         spread = float(run.rev_spread) if "rev_spread" in run else float("nan")
         rev = f" ± {spread:.4g} (REV spread of {count})" if count > 1 and np.isfinite(spread) else ""
         return value, f"sub-sample L = {s:g} um{rev}, {cost}"
     return float("nan"), ""
+
+
+#: edge of the periodic box the thesis measured in §5.6.1 (Tables 5.1 and 5.2), µm
+THESIS_BOX_UM = 300.0
+
+
+def _whole_volume(at: xr.Dataset, a_um: float) -> str:
+    """Label of a whole-volume row: the scene's measured volume as a cube edge where the sweep counted its voxels,
+    and, when it is smaller than the thesis's box, that it is a sub-volume (its φ differs by the REV spread).
+    """
+    voxels = float(at.voxels.sel(sample_um=FULL)) if "voxels" in at else float("nan")
+    if not (np.isfinite(voxels) and voxels > 0):
+        return "whole volume"
+    edge = np.cbrt(voxels) * a_um
+    if edge < 0.99 * THESIS_BOX_UM:
+        return f"whole scene volume, {edge:.4g}³ um: a sub-volume of the thesis's {THESIS_BOX_UM:g}³ um box"
+    return f"whole volume, {edge:.4g}³ um"
 
 
 def _scene_table(key: str, title: str, columns: list[str], rows: list[list], note: str) -> Table:

@@ -121,3 +121,21 @@ def test_a_row_costs_its_run_and_the_making_of_its_binary_volume(sweeps):
     assert _row(t51, "FP a = 0.5 um", "phi")["source and cost"].endswith(
         "(+ 30.0 CPU s to voxelise and segment)"
     )
+
+
+@pytest.mark.parametrize(
+    ("edge_voxels", "label"),
+    [
+        (100, "whole scene volume, 100³ um: a sub-volume of the thesis's 300³ um box, 2.5 CPU s"),
+        (300, "whole volume, 300³ um, 2.5 CPU s"),
+    ],
+)
+def test_a_whole_volume_row_names_its_edge_and_whether_it_is_the_thesis_box(sweeps, edge_voxels, label):
+    """thesis-5.6.1-sub measures the corner [0, 100]³ um of the thesis's 300³ um box: its rows must not read as the
+    whole box's. The sweep's ``voxels`` at a = 1 um give the edge."""
+    _, fp = sweeps
+    voxels = [[float(edge_voxels) ** 3] * 2, [float(2 * edge_voxels) ** 3] * 2]
+    fp = fp.assign(voxels=(("a_um", "sample_um"), voxels))
+    (t51,) = thesis_tables(fp, [ThesisTable.t5_1], "FP")
+    assert _row(t51, "FP a = 1 um", "phi")["source and cost"] == label
+    assert _row(t51, "FP a = 0.5 um", "phi")["source and cost"].startswith(label.split(",")[0])
