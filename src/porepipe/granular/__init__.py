@@ -31,6 +31,7 @@ _EXPORTS = {
     "frame_particles": "_measure",
     "galton_paths": "_galton",
     "fit_shaped_mu_j": "_silo_shape",
+    "floor_dip_ensemble": "_heap",
     "heap_ensemble": "_heap",
     "heap_stress_angles": "_heap",
     "inner_extent": "_silo",

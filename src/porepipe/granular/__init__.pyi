@@ -13,6 +13,7 @@ from porepipe.granular._galton import GaltonBoard as GaltonBoard
 from porepipe.granular._galton import chi2_binomial as chi2_binomial
 from porepipe.granular._galton import galton_paths as galton_paths
 from porepipe.granular._heap import analyse_heap as analyse_heap
+from porepipe.granular._heap import floor_dip_ensemble as floor_dip_ensemble
 from porepipe.granular._heap import heap_ensemble as heap_ensemble
 from porepipe.granular._heap import heap_stress_angles as heap_stress_angles
 from porepipe.granular._heap import wittmer_angles as wittmer_angles
@@ -97,6 +98,7 @@ __all__ = [
     "ellipse_polygon",
     "fit_janssen",
     "fit_shaped_mu_j",
+    "floor_dip_ensemble",
     "force_directions",
     "force_magnitudes",
     "frame_contacts",

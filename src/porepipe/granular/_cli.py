@@ -27,7 +27,7 @@ def main(args) -> int:
     run(
         settings,
         args.out,
-        seed=scene.seed,
+        seed=scene.seed if args.seed is None else args.seed,
         scene=scene.name,
         threads=threads,
         checkpoint=args.checkpoint,
@@ -51,5 +51,11 @@ def register(subparsers) -> None:
         help="continue from --checkpoint if it exists",
     )
     p.add_argument("--threads", type=int, default=None)
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="seed instead of the scene's (one realisation of an ensemble, e.g. a heap's floor-pressure dip)",
+    )
     p.add_argument("--quiet", action=argparse.BooleanOptionalAction, default=False, help="no progress lines")
     p.set_defaults(func=main)

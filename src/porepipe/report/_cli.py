@@ -22,6 +22,7 @@ def main(args) -> int:
         binary=args.binary,
         lpt=args.lpt,
         granular=args.granular,
+        compare=(args.compare_scene, args.compare_granular),
     )
     print(f"report: written {out}", file=sys.stderr)
     return 0
@@ -39,7 +40,13 @@ def register(subparsers) -> None:
     p.add_argument("--lpt", nargs="*", help="lpt_a{a}.h5 files for LPT curves (default: those present)")
     p.add_argument(
         "--granular",
-        help="granular.h5 of a 2-D granular scene: its silo or heap report (default when no sweep)",
+        nargs="+",
+        help="granular.h5 of a 2-D granular scene: its silo or heap report (default when no sweep); several "
+        "(one per seed) add the heap floor-pressure dip over seeds",
     )
+    p.add_argument(
+        "--compare-scene", help="scene YAML of a second heap ensemble (e.g. layered against poured)"
+    )
+    p.add_argument("--compare-granular", nargs="+", help="granular.h5 of --compare-scene, one per seed")
     p.add_argument("-o", "--out", help="output index.html (default results/<scene>/report/index.html)")
     p.set_defaults(func=main)

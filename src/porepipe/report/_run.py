@@ -16,7 +16,18 @@ def existing(scene, pattern: str) -> list[str]:
     return [str(p) for p in paths if p.is_file()]
 
 
-def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=None, granular=None) -> Path:
+def run(
+    scene,
+    scene_path,
+    *,
+    sweep=None,
+    out=None,
+    grey=None,
+    binary=None,
+    lpt=None,
+    granular=None,
+    compare=(None, None),
+) -> Path:
     """Write the accuracy-versus-cost report of ``scene``.
 
     Parameters
@@ -31,6 +42,10 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
         ``index.html`` (default ``results/<scene>/report/index.html``).
     grey, binary, lpt : sequence of path-like, optional
         Volumes for cross-sections and LPT results for curves (default: those of the scene that exist).
+    granular : path-like or sequence of path-like, optional
+        A granular scene's result; several (one per seed) add the heap floor-pressure dip over seeds.
+    compare : (path-like, sequence of path-like), optional
+        Scene file and per-seed results of a second heap ensemble shown beside the first.
 
     Returns
     -------
@@ -42,7 +57,7 @@ def run(scene, scene_path, *, sweep=None, out=None, grey=None, binary=None, lpt=
     if granular is None and not sweep.is_file() and getattr(scene, "granular", None) is not None:
         granular = Path("results", scene.name, "granular", "granular.h5")  # a 2-D granular scene has no sweep
     if granular is not None:
-        return _granular(scene, Path(granular), out)
+        return _granular(scene, granular, out, compare)
     if not sweep.is_file():
         raise PorepipeError(
             f"{sweep} does not exist: run the workflow first (`porepipe run {scene_path}` with "
@@ -77,23 +92,54 @@ def thesis_row_sweeps(scene) -> dict[str, Path]:
     return sweeps
 
 
-def _granular(scene, result: Path, out: Path) -> Path:
-    """The granular report page of ``result`` (matplotlib and the granular package only when one is built)."""
+def _granular(scene, results, out: Path, compare=(None, None)) -> Path:
+    """The granular report page of ``results`` (matplotlib and the granular package only when one is built)."""
+    results = [Path(r) for r in ([results] if isinstance(results, (str, Path)) else results)]
     if getattr(scene, "granular", None) is None:
-        raise PorepipeError(f"report --granular {result}: scene {scene.name!r} has no `granular:` section")
-    if not result.is_file():
         raise PorepipeError(
-            f"{result} does not exist: run the granular stage first (`porepipe run` the scene)"
+            f"report --granular {results[0]}: scene {scene.name!r} has no `granular:` section"
         )
-    from porepipe.report._granular import granular_report
+    from porepipe.report._granular import granular_report, read_heap_ensemble
 
+    _exist(results)
+    groups = []
+    if len(results) > 1:
+        groups.append(read_heap_ensemble(results, scene.granular, scene.name))
+    if compare[0] is not None or compare[1]:
+        groups.append(_compare_group(compare))
     g = scene.granular
     return granular_report(
-        result,
+        results[0],
         out,
         scene_name=scene.name,
         mu=g.material.friction,
         silo=g.silo,
         gravity=g.gravity,
         young=g.material.young_N_m,
+        ensembles=groups,
     )
+
+
+def _exist(results) -> None:
+    for r in results:
+        if not Path(r).is_file():
+            raise PorepipeError(
+                f"{r} does not exist: run the granular stage first (`porepipe run` the scene)"
+            )
+
+
+def _compare_group(compare) -> dict:
+    """The second heap ensemble of ``--compare-scene`` / ``--compare-granular``."""
+    from porepipe.report._granular import read_heap_ensemble
+    from porepipe.scene import load_scene
+
+    path, results = compare
+    if path is None or not results:
+        raise PorepipeError(
+            "report: --compare-scene and --compare-granular go together (scene YAML and its results)"
+        )
+    other = load_scene(path)
+    if getattr(other, "granular", None) is None:
+        raise PorepipeError(f"report --compare-scene {path}: scene {other.name!r} has no `granular:` section")
+    _exist(results)
+    return read_heap_ensemble([Path(r) for r in results], other.granular, other.name)
