@@ -214,3 +214,33 @@ def test_zero_gravity_rest_is_exact():
     x0 = sim.position.copy()
     sim.advance(500)
     np.testing.assert_array_equal(sim.position, x0)
+
+
+def test_cost_counts_only_active_particles(tmp_path):
+    """``particle_steps`` sums the particles that are in the run, step by step: a block of 20 grains from the start
+    gives exactly 20 x steps; a source that drops one grain every 2 ms from t = 0 into an empty box gives, with
+    grain k live from its insertion, sum_k (T - t_k) / dt within the granularity of the count (taken per chunk of
+    ``series_every`` steps: at most one grain's chunk per insertion), well below the final count x steps."""
+    block = run(Settings.model_validate(SMALL), tmp_path / "b.h5", seed=1, progress=False)
+    a = read_attrs(block)
+    assert a["particle_steps"] == 20 * a["steps"]
+    source = {
+        "x_m": 0.03,
+        "y_m": 0.08,
+        "width_m": 0.0,
+        "every_s": 0.002,
+        "from_s": 0.0,
+        "to_s": 0.02,
+        "velocity_m_s": (0.0, -2.0),  # 4 mm down before the next grain: no overlap at insertion
+        "shape": {"size_m": (0.002, 0.002), "corners": 6},
+    }
+    rain = {k: v for k, v in SMALL.items() if k != "blocks"} | {
+        "drop_sources": [source],
+        "output": {"frames": 2, "series_every": 10},
+    }
+    a = read_attrs(run(Settings.model_validate(rain), tmp_path / "r.h5", seed=1, progress=False))
+    dt, steps = 2e-5, a["steps"]
+    t_k = np.arange(0.0, 0.02 + 1e-12, 0.002)[: a["n_particles"]]
+    expected = np.sum(np.round((0.03 - t_k) / dt))
+    assert abs(a["particle_steps"] - expected) <= len(t_k) * 10
+    assert a["particle_steps"] < 0.7 * a["n_particles"] * steps
