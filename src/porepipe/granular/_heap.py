@@ -216,8 +216,7 @@ def floor_dip_ensemble(heaps: list[dict], *, bin_width: float = 0.2, reach: floa
     keep = ~np.eye(n, dtype=bool)
     q_loo = np.array([rows[keep[j]].mean(axis=0) / _cross_fitted_max(rows[keep[j]], k) for j in range(n)])
     q_se = np.sqrt((n - 1) / n * np.sum((q_loo - q_loo.mean(axis=0)) ** 2, axis=0))
-    folded = 0.5 * (rows[:, k:] + rows[:, k::-1])
-    seed = rows[:, k] / _positive(folded.max(axis=1))
+    seed = rows[:, k] / _positive(_folded(rows, k).max(axis=1))
     return {
         "s": s,
         "p_over_rho_g_h": rows.mean(axis=0),
@@ -259,9 +258,14 @@ def _binned_floor(h: dict, bin_width: float, k: int) -> tuple[np.ndarray, int]:
 def _cross_fitted_max(rows: np.ndarray, k: int) -> float:
     """Mean over heaps i of heap i's folded pressure in the bin where the other heaps' folded mean peaks."""
     n = len(rows)
-    folded = 0.5 * (rows[:, k:] + rows[:, k::-1])  # folded[:, j]: |s| = j bin widths
+    folded = _folded(rows, k)
     others = (folded.sum(axis=0)[None, :] - folded) / (n - 1)
     return float(_positive(np.mean(folded[np.arange(n), np.argmax(others, axis=1)])))
+
+
+def _folded(rows: np.ndarray, k: int) -> np.ndarray:
+    """Each heap's profile mirrored about the centre bin k and averaged: column j holds |s| = j bin widths."""
+    return 0.5 * (rows[:, k:] + rows[:, k::-1])
 
 
 def _positive(p):

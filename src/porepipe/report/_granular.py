@@ -479,7 +479,7 @@ def dip_ensemble_part(groups: list[dict], out_dir: Path, dpi: int = 110) -> list
         f"<p>Each heap's floor contacts binned on s = (x - axis) / (foot width / 2), bins {bw:g} wide centred on "
         "the axis (the load-weighted mean x of the floor contacts), averaged over the seeds; p_max cross-fitted "
         "(each seed read where the other seeds' mirror-folded mean peaks, so the noise of a maximum does not fake "
-        "a dip); errors: jackknife over seeds (conservative: 1.2-1.6x the scatter in constructed cases). A dip is "
+        "a dip); errors: jackknife over seeds (conservative: 1.3-1.5x the scatter in constructed cases). A dip is "
         "resolved when 1 - p(0)/p_max exceeds 2 standard errors. Thesis (§4.2): 9 poured heaps of ~2500 rough "
         "7-gons show a dip reaching half the heap's height; layered heaps show none.</p>",
         "<img src='granular_dip_ensemble.png' alt='floor pressure over seeds'>",

@@ -95,10 +95,7 @@ def thesis_row_sweeps(scene) -> dict[str, Path]:
 def _granular(scene, results, out: Path, compare=(None, None)) -> Path:
     """The granular report page of ``results`` (matplotlib and the granular package only when one is built)."""
     results = [Path(r) for r in ([results] if isinstance(results, (str, Path)) else results)]
-    if getattr(scene, "granular", None) is None:
-        raise PorepipeError(
-            f"report --granular {results[0]}: scene {scene.name!r} has no `granular:` section"
-        )
+    _require_granular(scene, f"report --granular {results[0]}")
     from porepipe.report._granular import granular_report, read_heap_ensemble
 
     _exist(results)
@@ -120,6 +117,11 @@ def _granular(scene, results, out: Path, compare=(None, None)) -> Path:
     )
 
 
+def _require_granular(scene, what: str) -> None:
+    if getattr(scene, "granular", None) is None:
+        raise PorepipeError(f"{what}: scene {scene.name!r} has no `granular:` section")
+
+
 def _exist(results) -> None:
     for r in results:
         if not Path(r).is_file():
@@ -139,7 +141,6 @@ def _compare_group(compare) -> dict:
             "report: --compare-scene and --compare-granular go together (scene YAML and its results)"
         )
     other = load_scene(path)
-    if getattr(other, "granular", None) is None:
-        raise PorepipeError(f"report --compare-scene {path}: scene {other.name!r} has no `granular:` section")
+    _require_granular(other, f"report --compare-scene {path}")
     _exist(results)
     return read_heap_ensemble([Path(r) for r in results], other.granular, other.name)
