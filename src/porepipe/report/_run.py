@@ -7,7 +7,7 @@ from pathlib import Path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.naming import res_tag
 from porepipe.report._api import build_report
-from porepipe.scene import grey_stage
+from porepipe.scene import Analysis, grey_stage
 
 
 def existing(scene, pattern: str) -> list[str]:
@@ -54,7 +54,7 @@ def run(
     """
     sweep = Path(sweep or Path("results", scene.name, "sweep", "sweep.h5"))
     out = Path(out or Path("results", scene.name, "report", "index.html"))
-    if granular is None and not sweep.is_file() and getattr(scene, "granular", None) is not None:
+    if granular is None and not sweep.is_file() and _is_granular(scene):
         granular = Path("results", scene.name, "granular", "granular.h5")  # a 2-D granular scene has no sweep
     if granular is not None:
         return _granular(scene, granular, out, compare)
@@ -117,9 +117,16 @@ def _granular(scene, results, out: Path, compare=(None, None)) -> Path:
     )
 
 
+def _is_granular(scene) -> bool:
+    """Whether ``scene`` runs the granular stage (every scene has default granular settings: ask its analyses)."""
+    return Analysis.granular in scene.analyses
+
+
 def _require_granular(scene, what: str) -> None:
-    if getattr(scene, "granular", None) is None:
-        raise PorepipeError(f"{what}: scene {scene.name!r} has no `granular:` section")
+    if not _is_granular(scene):
+        raise PorepipeError(
+            f"{what}: scene {scene.name!r} is not a granular scene (no `granular` in its analyses)"
+        )
 
 
 def _exist(results) -> None:

@@ -120,3 +120,13 @@ def test_ci_scene_ensemble_end_to_end(tmp_path):
     assert q.max() > 0.5 and np.all(q >= 0)
     with pytest.raises(PorepipeError, match="go together"):
         report(scene, SCENE, granular=results, out=tmp_path / "x" / "index.html", compare=(SCENE, None))
+    mini = Path(__file__).parents[3] / "config" / "scenes" / "mini.yaml"
+    with pytest.raises(
+        PorepipeError, match=r"--compare-scene .*mini.yaml: scene 'mini' is not a granular scene"
+    ):
+        report(scene, SCENE, granular=results, out=tmp_path / "y" / "index.html", compare=(mini, results))
+    with pytest.raises(PorepipeError, match=r"missing\.h5 does not exist"):
+        report(scene, SCENE, granular=[*results, tmp_path / "missing.h5"], out=tmp_path / "z" / "index.html")
+    assert not any(
+        (tmp_path / d / "index.html").exists() for d in ("x", "y", "z")
+    )  # no page from a refused call
