@@ -246,30 +246,46 @@ def radii(name: str) -> str:
     )
 
 
+#: silo scenes drawn without a run: (cost of the full run, where the fill ends)
+SILO_NOTES = {
+    "granular-silo": ("~40 min on one core", "the silo fills from the top to about 36 cm"),
+    "granular-silo-stepped": ("~35 min CPU", "the outer sources start when the fill reaches the step"),
+    "granular-silo-hopper": ("~10 min CPU", "a source starts when the fill has widened past it"),
+    "granular-silo-parabolic": ("~10 min CPU", "a source starts when the fill has widened past it"),
+}
+
+
 def silo(name: str) -> str:
     """The silo and where its drop sources insert the grains, as the simulation places them (no step)."""
-    from porepipe.granular import Settings, Simulation
+    from porepipe.granular import Settings, Simulation, silo_wall_slabs
 
     raw = _scene(name)
-    sim = Simulation(Settings.model_validate(raw["granular"]), seed=raw.get("seed", 0))
+    settings = Settings.model_validate(raw["granular"])
+    sim = Simulation(settings, seed=raw.get("seed", 0))
     pos = sim.position[: sim.n_mob]
     fig, ax = _figure()
-    box = raw["granular"]["box"]
-    x0, y0 = box["lower_m"]
-    x1, y1 = box["upper_m"]
-    ax.plot(
-        [x0 * 100, x0 * 100, x1 * 100, x1 * 100], [y1 * 100, y0 * 100, y0 * 100, y1 * 100], color="0.3", lw=2
-    )
+    if settings.silo is not None:
+        for _, v in silo_wall_slabs(settings.silo):
+            ax.fill(v[:, 0] * 100, v[:, 1] * 100, color="0.3", lw=0)
+    else:
+        (x0, y0), (x1, y1) = settings.box.lower_m, settings.box.upper_m
+        ax.plot(
+            [x0 * 100, x0 * 100, x1 * 100, x1 * 100],
+            [y1 * 100, y0 * 100, y0 * 100, y1 * 100],
+            color="0.3",
+            lw=2,
+        )
     ax.scatter(pos[:, 0] * 100, pos[:, 1] * 100, s=0.2, color="#8a6a3a", linewidths=0)
     ax.set_aspect("equal")
     ax.set_xlabel("x (cm)")
     ax.set_ylabel("y (cm)")
     ax.set_title(f"{name}: insertion points of {sim.n_mob:,} grains (not run)", fontsize=9)
     _save(fig, name)
+    cost, fill = SILO_NOTES[name]
     return (
-        f"Not run for this picture (~40 min on one core): the silo walls and where the scene's drop sources insert "
+        f"Not run for this picture ({cost}): the silo walls and where the scene's drop sources insert "
         f"its {sim.n_mob:,} polygons (one dot per grain, at its insertion height: the sources rise with the fill, "
-        "so the dots form 16 rising lines); the silo fills from the top to about 36 cm."
+        f"so the dots form {len(settings.drop_sources)} rising lines); {fill}."
     )
 
 
@@ -346,6 +362,9 @@ MAKERS = {
     "filled-packing": radii,
     "rough-walls": radii,
     "granular-silo": silo,
+    "granular-silo-stepped": silo,
+    "granular-silo-hopper": silo,
+    "granular-silo-parabolic": silo,
     "fontainebleau-like": grains,
     "thesis-5.6.1-ci": packed,
     "thesis-5.6.1-pp-ci": packed,

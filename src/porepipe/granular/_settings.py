@@ -11,7 +11,8 @@ from __future__ import annotations
 import enum
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from porepipe.granular._shapes import AngleMode, Dist
 
@@ -302,6 +303,30 @@ class Silo(_Strict):
             raise ValueError(f"depth_m = {d} must be above the vertex at b_m = {self.b_m}")
         return self
 
+    def half_width(self, z) -> np.ndarray:
+        """r(z) at depth z below the top (the step of a stepped silo belongs above)."""
+        z = np.asarray(z, dtype=np.float64)
+        if self.shape is SiloShape.straight:
+            return np.full_like(z, self.r_m)
+        if self.shape is SiloShape.stepped:
+            return np.where(z <= self.h0_m, self.r1_m, self.r2_m)
+        if self.shape is SiloShape.hopper:
+            return self.slope * z + self.b_m
+        return np.sqrt((self.b_m - z) / self.a_per_m)
+
+    def wall_corner_depths(self) -> np.ndarray:
+        """Depths of the side walls' corners on r(z): a parabola's ``segments`` chords, else top and floor."""
+        n = self.segments if self.shape is SiloShape.parabolic else 1
+        return np.linspace(0.0, self.depth_m, n + 1)
+
+    def inner_half_width(self, z) -> np.ndarray:
+        """Half-width between the walls as built at depth z (a parabola's chords lie inside its curve)."""
+        z = np.asarray(z, dtype=np.float64)
+        if self.shape is not SiloShape.parabolic:
+            return self.half_width(z)
+        zc = self.wall_corner_depths()
+        return np.interp(z, zc, self.half_width(zc))
+
 
 #: the size keys each silo shape needs (and the only ones it accepts)
 SILO_KEYS = {
@@ -379,3 +404,53 @@ class Settings(_Strict):
     guard: Guard = Guard()
     output: Output = Output()
     checkpoint_every_steps: int = Field(20000, ge=1, description="checkpoint interval of long runs")
+
+    @model_validator(mode="after")
+    def _sources_inside_silo(self):
+        if self.silo is None:
+            return self
+        for k, src in enumerate(self.drop_sources):
+            problem = _source_outside_silo(src, self.silo)
+            if problem:  # located at the source, not at the whole section
+                raise ValidationError.from_exception_data(
+                    "Settings",
+                    [
+                        {
+                            "type": "value_error",
+                            "loc": ("drop_sources", k),
+                            "input": src.model_dump(),
+                            "ctx": {"error": ValueError(problem)},
+                        }
+                    ],
+                )
+        return self
+
+
+def _grain_reach(shape: Shape) -> float:
+    """Largest centroid-to-corner distance a generated grain can have (corners lie on the ellipse or rectangle)."""
+    a, b = shape.size_m
+    reach = max(a, b) if shape.kind is ShapeKind.ellipse else 0.5 * float(np.hypot(a, b))
+    return reach * (1.0 + shape.size_spread)
+
+
+def _source_outside_silo(src: DropSource, silo: Silo) -> str:
+    """Why a grain of the source would start outside the silo's walls ('' if none would).
+
+    An ABS source must start every grain between the walls at its insertion height (above the top: within the
+    top's width) and above the floor; a REL source's window must lie within the top's width.
+    """
+    times = np.arange(src.from_s, src.to_s + 1e-12 * src.every_s, src.every_s)
+    reach = _grain_reach(src.shape)
+    top = silo.bottom_m + silo.depth_m
+    y = src.y_m + src.rise_m_s * (times - src.from_s) if src.mode is DropMode.abs else np.full(1, top)
+    need = abs(src.x_m - silo.axis_x_m) + 0.5 * src.width_m + reach
+    room = silo.inner_half_width(np.clip(top - y, 0.0, silo.depth_m))
+    bad = np.flatnonzero((need > room) | (y - reach <= silo.bottom_m))
+    if not len(bad):
+        return ""
+    i = int(bad[0])
+    return (
+        f"a grain would start outside the silo at t = {times[i]:.4g} s, y = {y[i]:.4g} m: |x_m - axis| + "
+        f"width_m/2 + grain reach = {need:.4g} m, the walls leave {room[i]:.4g} m (above the floor at "
+        f"{silo.bottom_m:g} m); start the source later or higher, or move it inwards"
+    )

@@ -18,14 +18,7 @@ from porepipe.granular._settings import Silo, SiloShape
 
 def silo_half_width(silo: Silo, z) -> np.ndarray:
     """r(z) of the silo's inner wall surface at depth z below its top (the step of a stepped silo belongs above)."""
-    z = np.asarray(z, dtype=np.float64)
-    if silo.shape is SiloShape.straight:
-        return np.full_like(z, silo.r_m)
-    if silo.shape is SiloShape.stepped:
-        return np.where(z <= silo.h0_m, silo.r1_m, silo.r2_m)
-    if silo.shape is SiloShape.hopper:
-        return silo.slope * z + silo.b_m
-    return np.sqrt((silo.b_m - z) / silo.a_per_m)
+    return silo.half_width(z)
 
 
 def _slab(x_inner_a, y_a, x_inner_b, y_b, t, side):
@@ -53,8 +46,8 @@ def silo_wall_slabs(silo: Silo) -> list[tuple[str, np.ndarray]]:
                 ),
             ]
             continue
-        n = silo.segments if silo.shape is SiloShape.parabolic else 1
-        z = np.linspace(0.0, d, n + 1)
+        z = silo.wall_corner_depths()
+        n = len(z) - 1
         x = xc + side * silo_half_width(silo, z)
         for k in range(n):
             name = f"silo {word}" if n == 1 else f"silo {word} {k}"

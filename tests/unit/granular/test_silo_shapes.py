@@ -166,3 +166,63 @@ def test_bad_silo_is_refused_in_one_line_naming_the_key(silo, words):
         parse_scene({"name": "s", "analyses": ["granular"], "granular": {"silo": silo}})
     msg = str(err.value)
     assert "granular.silo" in msg and words in msg
+
+
+def _source(x, y, **extra):
+    """A drop source of 1 mm grains (reach 1.15 mm with the 15 % spread), 1 mm wide, one grain every 10 ms."""
+    grain = {"size_m": [0.001, 0.001], "size_spread": 0.15, "size_dist": "EQUAL", "corners": 9}
+    return {"x_m": x, "y_m": y, "width_m": 0.001, "every_s": 0.01, "to_s": 0.5, "shape": grain, **extra}
+
+
+def _scene_with(silo, *sources):
+    return {"name": "s", "analyses": ["granular"], "granular": {"silo": silo, "drop_sources": list(sources)}}
+
+
+# stepped: r1 10 mm above the step at y = 0.04 m, r2 5 mm below, floor at y = 0; a grain needs |x| + 1.65 mm
+STEPPED = {**SHAPES["stepped"], "bottom_m": 0.0}
+HOPPER = {**SHAPES["hopper"], "bottom_m": 0.0}  # r = 15 mm at the top (y = 0.09 m), 5.2 mm at the floor
+
+
+@pytest.mark.parametrize(
+    ("source", "when"),
+    [
+        (_source(0.007, 0.01, rise_m_s=0.1), "t = 0 s, y = 0.01 m"),  # 8.65 mm needed, 5 mm below the step
+        (_source(0.002, 0.001), "t = 0 s, y = 0.001 m"),  # a grain would reach into the floor
+        (_source(0.007, 0.01, rise_m_s=0.1, mode="REL"), None),  # REL: x alone, within the top's width: accepted
+        (_source(0.009, 0.01, mode="REL"), "t = 0 s"),  # 10.65 mm needed, the top leaves 10 mm
+    ],
+)
+def test_a_drop_source_that_starts_grains_outside_a_stepped_silo_is_refused_naming_it(source, when):
+    ok = _source(0.0, 0.01, rise_m_s=0.1)
+    if when is None:
+        parse_scene(_scene_with(STEPPED, ok, source))
+        return
+    with pytest.raises(SceneError) as err:
+        parse_scene(_scene_with(STEPPED, ok, source))
+    msg = str(err.value)
+    assert msg.count("\n") == 1 and "granular.drop_sources[1]" in msg and when in msg, msg
+    assert "outside the silo" in msg
+
+
+def test_a_rising_source_is_checked_at_every_insertion_height():
+    """Started above the step (y 0.045 m, rising) the outer source of the stepped silo is accepted; the same
+    source started 10 mm lower is refused; in the hopper a source that sinks (rise < 0) leaves the walls later."""
+    parse_scene(_scene_with(STEPPED, _source(0.007, 0.045, rise_m_s=0.05)))
+    with pytest.raises(SceneError, match=r"drop_sources\[0\].*y = 0.035 m"):
+        parse_scene(_scene_with(STEPPED, _source(0.007, 0.035, rise_m_s=0.05)))
+    # hopper source at x = 10 mm needs r >= 11.65 mm: z <= 30.8 mm, y >= 0.0592 m; it sinks from 0.08 m at 0.1 m/s,
+    # the grain of t = 0.21 s starts at y = 0.059 m
+    parse_scene(_scene_with(HOPPER, _source(0.010, 0.08, to_s=0.2, rise_m_s=-0.1)))
+    with pytest.raises(SceneError, match=r"drop_sources\[0\].*t = 0.21 s, y = 0.059 m"):
+        parse_scene(_scene_with(HOPPER, _source(0.010, 0.08, to_s=0.3, rise_m_s=-0.1)))
+
+
+def test_inner_half_width_follows_the_parabola_chords():
+    """Between two corners the walls as built are the chord: the mean of r at the corners (by hand), inside r(z)."""
+    silo = Silo.model_validate(SHAPES["parabolic"])
+    zc = np.linspace(0.0, silo.depth_m, silo.segments + 1)
+    mid = 0.5 * (zc[3] + zc[4])
+    chord = 0.5 * (np.sqrt((silo.b_m - zc[3]) / silo.a_per_m) + np.sqrt((silo.b_m - zc[4]) / silo.a_per_m))
+    assert float(silo.inner_half_width(mid)) == pytest.approx(chord, rel=1e-12)
+    assert float(silo.inner_half_width(mid)) < float(silo_half_width(silo, mid))
+    np.testing.assert_allclose(silo.inner_half_width(zc), silo_half_width(silo, zc), rtol=1e-12)
