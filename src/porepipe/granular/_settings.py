@@ -9,6 +9,7 @@ block or key is present with a non-trivial value.
 from __future__ import annotations
 
 import enum
+import math
 from typing import Annotated
 
 import numpy as np
@@ -436,13 +437,26 @@ def _grain_reach(shape: Shape) -> float:
 def _source_outside_silo(src: DropSource, silo: Silo) -> str:
     """Why a grain of the source would start outside the silo's walls ('' if none would).
 
-    An ABS source must start every grain between the walls at its insertion height (above the top: within the
-    top's width) and above the floor; a REL source's window must lie within the top's width.
+    An ABS source's insertion point moves on a straight path (y_m rising at rise_m_s from from_s to its last grain);
+    along it every grain must fit between the walls (above the top: within the top's width) and above the floor.
+    The walls are straight between their corners (and a stepped silo's step), so the path is checked at its ends and
+    at those depths, not grain by grain. A REL source's window must lie within the top's width.
     """
-    times = np.arange(src.from_s, src.to_s + 1e-12 * src.every_s, src.every_s)
+    if src.to_s < src.from_s:
+        return ""  # inserts nothing
     reach = _grain_reach(src.shape)
     top = silo.bottom_m + silo.depth_m
-    y = src.y_m + src.rise_m_s * (times - src.from_s) if src.mode is DropMode.abs else np.full(1, top)
+    t = np.array([src.from_s])
+    if src.mode is DropMode.abs:
+        t_last = src.from_s + math.floor((src.to_s - src.from_s) / src.every_s + 1e-9) * src.every_s
+        t = np.array([src.from_s, t_last])
+        if src.rise_m_s != 0:
+            kinks = [*silo.wall_corner_depths(), *_step_depths(silo)]
+            t_kinks = src.from_s + (top - np.asarray(kinks) - src.y_m) / src.rise_m_s
+            t = np.sort(np.concatenate([t, t_kinks[(t_kinks > t[0]) & (t_kinks < t_last)]]))
+        y = src.y_m + src.rise_m_s * (t - src.from_s)
+    else:
+        y = np.full(1, top)
     need = abs(src.x_m - silo.axis_x_m) + 0.5 * src.width_m + reach
     room = silo.inner_half_width(np.clip(top - y, 0.0, silo.depth_m))
     bad = np.flatnonzero((need > room) | (y - reach <= silo.bottom_m))
@@ -450,7 +464,14 @@ def _source_outside_silo(src: DropSource, silo: Silo) -> str:
         return ""
     i = int(bad[0])
     return (
-        f"a grain would start outside the silo at t = {times[i]:.4g} s, y = {y[i]:.4g} m: |x_m - axis| + "
-        f"width_m/2 + grain reach = {need:.4g} m, the walls leave {room[i]:.4g} m (above the floor at "
-        f"{silo.bottom_m:g} m); start the source later or higher, or move it inwards"
+        f"grains would start outside the silo at t = {t[i]:.4g} s, y = {y[i]:.4g} m: |x_m - axis| + width_m/2 + "
+        f"grain reach = {need:.4g} m, the walls leave {room[i]:.4g} m (above the floor at {silo.bottom_m:g} m); "
+        "start the source later or higher, or move it inwards"
     )
+
+
+def _step_depths(silo: Silo) -> list[float]:
+    """A stepped silo's step: its depth (still the wide part) and the next depth below (the narrow part)."""
+    if silo.shape is not SiloShape.stepped:
+        return []
+    return [silo.h0_m, float(np.nextafter(silo.h0_m, np.inf))]

@@ -188,7 +188,10 @@ HOPPER = {**SHAPES["hopper"], "bottom_m": 0.0}  # r = 15 mm at the top (y = 0.09
     [
         (_source(0.007, 0.01, rise_m_s=0.1), "t = 0 s, y = 0.01 m"),  # 8.65 mm needed, 5 mm below the step
         (_source(0.002, 0.001), "t = 0 s, y = 0.001 m"),  # a grain would reach into the floor
-        (_source(0.007, 0.01, rise_m_s=0.1, mode="REL"), None),  # REL: x alone, within the top's width: accepted
+        (
+            _source(0.007, 0.01, rise_m_s=0.1, mode="REL"),
+            None,
+        ),  # REL: x alone, within the top's width: accepted
         (_source(0.009, 0.01, mode="REL"), "t = 0 s"),  # 10.65 mm needed, the top leaves 10 mm
     ],
 )
@@ -211,10 +214,13 @@ def test_a_rising_source_is_checked_at_every_insertion_height():
     with pytest.raises(SceneError, match=r"drop_sources\[0\].*y = 0.035 m"):
         parse_scene(_scene_with(STEPPED, _source(0.007, 0.035, rise_m_s=0.05)))
     # hopper source at x = 10 mm needs r >= 11.65 mm: z <= 30.8 mm, y >= 0.0592 m; it sinks from 0.08 m at 0.1 m/s,
-    # the grain of t = 0.21 s starts at y = 0.059 m
+    # its last grain (t = 0.3 s) starts at y = 0.05 m
     parse_scene(_scene_with(HOPPER, _source(0.010, 0.08, to_s=0.2, rise_m_s=-0.1)))
-    with pytest.raises(SceneError, match=r"drop_sources\[0\].*t = 0.21 s, y = 0.059 m"):
+    with pytest.raises(SceneError, match=r"drop_sources\[0\].*t = 0.3 s, y = 0.05 m"):
         parse_scene(_scene_with(HOPPER, _source(0.010, 0.08, to_s=0.3, rise_m_s=-0.1)))
+    # a source far outside the walls inserting 1e12 grains is refused as quickly (the path, not grain by grain)
+    with pytest.raises(SceneError, match=r"drop_sources\[0\].*outside the silo"):
+        parse_scene(_scene_with(HOPPER, _source(0.014, 0.08, every_s=1e-12, rise_m_s=-0.1)))
 
 
 def test_inner_half_width_follows_the_parabola_chords():
