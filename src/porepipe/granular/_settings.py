@@ -446,20 +446,11 @@ def _source_outside_silo(src: DropSource, silo: Silo) -> str:
         return ""  # inserts nothing
     reach = _grain_reach(src.shape)
     top = silo.bottom_m + silo.depth_m
-    t = np.array([src.from_s])
-    if src.mode is DropMode.abs:
-        t_last = src.from_s + math.floor((src.to_s - src.from_s) / src.every_s + 1e-9) * src.every_s
-        t = np.array([src.from_s, t_last])
-        if src.rise_m_s != 0:
-            kinks = [*silo.wall_corner_depths(), *_step_depths(silo)]
-            t_kinks = src.from_s + (top - np.asarray(kinks) - src.y_m) / src.rise_m_s
-            t = np.sort(np.concatenate([t, t_kinks[(t_kinks > t[0]) & (t_kinks < t_last)]]))
-        y = src.y_m + src.rise_m_s * (t - src.from_s)
-    else:
-        y = np.full(1, top)
-    need = abs(src.x_m - silo.axis_x_m) + 0.5 * src.width_m + reach
-    room = silo.inner_half_width(np.clip(top - y, 0.0, silo.depth_m))
-    bad = np.flatnonzero((need > room) | (y - reach <= silo.bottom_m))
+    with np.errstate(all="ignore"):  # extreme but finite settings overflow to inf, not to a crash
+        t, y = _insertion_path(src, silo)
+        need = abs(src.x_m - silo.axis_x_m) + 0.5 * src.width_m + reach
+        room = silo.inner_half_width(np.clip(top - y, 0.0, silo.depth_m))
+        bad = np.flatnonzero((need > room) | (y - reach <= silo.bottom_m))
     if not len(bad):
         return ""
     i = int(bad[0])
@@ -468,6 +459,23 @@ def _source_outside_silo(src: DropSource, silo: Silo) -> str:
         f"grain reach = {need:.4g} m, the walls leave {room[i]:.4g} m (above the floor at {silo.bottom_m:g} m); "
         "start the source later or higher, or move it inwards"
     )
+
+
+def _insertion_path(src: DropSource, silo: Silo) -> tuple[np.ndarray, np.ndarray]:
+    """Times and heights at which the source's path must be checked: its first and last grain and where it
+    crosses a wall corner or the step (the room between the walls is linear in between). A REL source: the top.
+    """
+    top = silo.bottom_m + silo.depth_m
+    if src.mode is DropMode.rel:
+        return np.array([src.from_s]), np.array([top])
+    n = (src.to_s - src.from_s) / src.every_s
+    t_last = src.from_s + math.floor(n + 1e-9) * src.every_s if n < 1e15 else src.to_s
+    t = np.array([src.from_s, t_last])
+    if src.rise_m_s != 0:
+        kinks = np.array([*silo.wall_corner_depths(), *_step_depths(silo)])
+        t_kinks = src.from_s + (top - kinks - src.y_m) / src.rise_m_s
+        t = np.sort(np.concatenate([t, t_kinks[(t_kinks > t[0]) & (t_kinks < t_last)]]))
+    return t, src.y_m + src.rise_m_s * (t - src.from_s)
 
 
 def _step_depths(silo: Silo) -> list[float]:
