@@ -249,7 +249,7 @@ def radii(name: str) -> str:
 #: silo scenes drawn without a run: (cost of the full run, where the fill ends)
 SILO_NOTES = {
     "granular-silo": ("~40 min on one core", "the silo fills from the top to about 36 cm"),
-    "granular-silo-stepped": ("~35 min CPU", "the outer sources start when the fill reaches the step"),
+    "granular-silo-stepped": ("~33 min CPU", "the outer sources start when the fill reaches the step"),
     "granular-silo-hopper": ("~10 min CPU", "a source starts when the fill has widened past it"),
     "granular-silo-parabolic": ("~10 min CPU", "a source starts when the fill has widened past it"),
 }

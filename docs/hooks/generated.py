@@ -38,6 +38,7 @@ MEASURED = {
     "granular-silo-parabolic-mu07": "granular stage alone: 114 s wall, 24 s CPU (one thread, shared 2-core machine at load ~7)",
     "granular-silo-hopper": "granular stage alone: 27.7 min wall, 627 s CPU, 0.43 GB (one thread, shared 2-core machine at load ~4.5)",
     "granular-silo-parabolic": "granular stage alone: 24.5 min wall, 576 s CPU, 0.30 GB (one thread, shared 2-core machine at load ~4.5)",
+    "granular-silo-stepped": "granular stage alone: 66 min wall, 1998 s CPU, 0.44 GB (one thread, shared 2-core machine at load ~4.5)",
     "granular-heap-unload-ci": "granular stage alone: 152 s wall, 25 s CPU (one thread, shared 2-core machine at load ~7)",
     "filled-packing": "3.1 min and 1.1 GB for `porepipe pack` (2 cores)",
     "rough-walls": "6.6 min and 1.3 GB for `porepipe pack` (2 cores)",

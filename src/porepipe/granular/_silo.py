@@ -90,6 +90,15 @@ def inner_extent(polygons, y: float, x_axis: float) -> tuple[float, float]:
     return left, right
 
 
+def _rim(polygons, x_axis: float) -> float:
+    """Height of the lower of the two sides' highest wall tops (the left and right walls by their mean x)."""
+    tops = {True: -np.inf, False: -np.inf}
+    for w in polygons:
+        left = bool(w[:, 0].mean() < x_axis)
+        tops[left] = max(tops[left], float(w[:, 1].max()))
+    return min(tops.values())
+
+
 def _surface_height(centroid, x0, x1, width):
     nb = max(int((x1 - x0) / width), 1)
     _, top = M.surface_profile(centroid, np.linspace(x0, x1, nb + 1))
@@ -239,7 +248,8 @@ def analyse_silo(
     x_axis = float(shape.axis_x_m) if shape is not None else float(np.median(cen[:, 0]))
     polys_w = [v for _, v in sides]
     d_grain = 2 * float(np.sqrt(np.mean(parts["area"][act]) / np.pi))
-    xl, xr = inner_extent(polys_w, float(cen[:, 1].max()) - d_grain, x_axis)
+    rim = _rim(polys_w, x_axis) - 0.5 * d_grain  # a fill heaped over the rim: probe the walls below it
+    xl, xr = inner_extent(polys_w, min(float(cen[:, 1].max()) - d_grain, rim), x_axis)
     if not (np.isfinite(xl) and np.isfinite(xr) and xr > xl):
         raise PorepipeError(f"analyse_silo: walls {side_names} do not enclose the fill on both sides")
     top = _surface_height(cen, xl, xr, d_grain)
@@ -260,11 +270,12 @@ def analyse_silo(
     prof = wall_profiles(wc, top - wc["point"][:, 1], centres, fill, contacts_per_window)
     slabs = _slab_stresses(contacts, parts["centroid"], act, slab_lo, slab, top)
     slabs["width"] = (
-        np.array([np.diff(inner_extent(polys_w, top - z, x_axis))[0] for z in slabs["depth"]]) / d_grain
+        np.array([np.diff(inner_extent(polys_w, min(top - z, rim), x_axis))[0] for z in slabs["depth"]])
+        / d_grain
     )
     k_mean = float(np.nanmean(slabs["k"])) if len(slabs["k"]) else float("nan")
 
-    xt0, xt1 = inner_extent(polys_w, top - 0.5 * d_grain, x_axis)
+    xt0, xt1 = inner_extent(polys_w, min(top - 0.5 * d_grain, rim), x_axis)
     r_top = 0.5 * (xt1 - xt0)
     zmax = fill - floor_zone * 2 * r_bottom
     use = centres <= zmax
