@@ -1,15 +1,16 @@
 """Galton board of thesis §2.5.4 with many balls in one board: bin counts against the binomial law (Eq. 2.58).
 
 One board, balls fed through a funnel (drop source above a V hopper). Defaults (GaltonBoard): round pins with gaps
-of 1.05 ball diameters, gamma 0.23, one ball every 0.5 s; p = 2/3 (--two-thirds, GaltonBoard.two_thirds()) by moving
-each row of pins 0.315 mm to the left of the row above. Printed: P(right) and the lag-1 correlation r1 of successive
+of 1.05 ball diameters, gamma 0.225, one ball every 0.5 s; p = 2/3 (--two-thirds, GaltonBoard.two_thirds()) by moving
+each row of pins 0.312 mm to the left of the row above, at gamma 0.235 (where its decisions are uncorrelated).
+Printed: P(right) and the lag-1 correlation r1 of successive
 decisions with their standard errors, the bins against the binomial and chi². The thesis-like board (hexagonal
 nails, gamma 1, 50 balls/s): --thesis (p = 2/3 by --tip-shift).
 Each ball's bin is recorded when it passes half a row pitch below the last row, and the ball then leaves the run.
 
     python benchmarks/granular_galton.py --balls 400 --p 0.5
-    python benchmarks/granular_galton.py --balls 2300 --seed 32               # p = 1/2, ~6 CPU-min
-    python benchmarks/granular_galton.py --balls 2300 --two-thirds --seed 33  # p = 2/3
+    python benchmarks/granular_galton.py --balls 2300 --seed 35               # p = 1/2, ~7 CPU-min
+    python benchmarks/granular_galton.py --balls 2300 --two-thirds --seed 34  # p = 2/3, ~7 CPU-min
     python benchmarks/granular_galton.py --thesis --balls 2300 --max-stuck 5     # the thesis-like board
     python benchmarks/granular_galton.py --smoke        # 30 balls, for CI (no figures to quote)
 """

@@ -4,24 +4,28 @@ Geometry (:class:`GaltonBoard`, lengths in m): nails on a triangular lattice of 
 ``ROWS`` rows filling the board between two side walls; row 0 has a nail at x = 0 right under the funnel's outlet.
 Balls are 16-gons of radius ``BALL_R``, dropped into a V hopper above the board at one every ``every_s`` seconds.
 
-The default board's decisions are independent: round pins (16-gons) with gaps of 1.05 ball diameters, fairly elastic
-balls (gamma = 0.235, restitution ~0.8) and a feed slow enough that balls seldom meet (a gap under two ball
-diameters can hold a two-ball arch). A ball rattles between the two pins of a gap, so it cannot carry its sideways
-momentum past the next pin, and each bounce on a convex pin spreads its state (chaotic scattering), so it arrives at
-the next pin's apex with a fresh random offset. What is left of a ball's memory is set by the damping: the lag-1
-correlation r1 of successive decisions grows with gamma, about 3 per unit gamma near 0.23 (anti-persistent below,
-persistent above), and crosses 0 near gamma = 0.23-0.24 at p = 1/2 and at p = 2/3 alike; at the former default
-gamma = 0.15 it was -0.040 +- 0.005 (p = 1/2) and -0.062 +- 0.007 (p = 2/3, where chi² rejected at 2300 balls in
-an earlier run). The thesis-like board (:meth:`GaltonBoard.thesis_like`: hexagons with a tip up, wider gaps,
-gamma = 1) is a persistent walk instead (successive decisions correlated 0.2-0.4).
+The default board (p = 1/2): round pins (16-gons) with gaps of 1.05 ball diameters, fairly elastic balls (gamma =
+0.225, restitution ~0.8) and a feed slow enough that balls seldom meet (a gap under two ball diameters can hold a
+two-ball arch). A ball rattles between the two pins of a gap, so it cannot carry its sideways momentum past the next
+pin, and each bounce on a convex pin spreads its state (chaotic scattering), so it arrives at the next pin's apex
+with a fresh random offset. What is left of a ball's memory is set by the damping: the lag-1 correlation r1 of
+successive decisions grows with gamma, about 3 per unit gamma near 0.23 (anti-persistent below, persistent above),
+and crosses 0 near gamma = 0.23 at p = 1/2 but near 0.24 at p = 2/3 (at the same gamma r1 is 0.02-0.04 lower on the
+biased board), so the p = 2/3 board (:meth:`GaltonBoard.two_thirds`) has its own damping, 0.235. The thesis-like
+board (:meth:`GaltonBoard.thesis_like`: hexagons with a tip up, wider gaps, gamma = 1) is a persistent walk instead
+(successive decisions correlated 0.2-0.4).
 
 p != 1/2: for round pins every row is moved sideways by ``row_shift_m`` against the row above (the thesis's "a nail
 not under the middle of two nails but offset"), for hexagons the tip is moved by ``tip_shift_m`` (its Fig. 2.39);
-negative: to the left, so more balls pass on the right (p > 1/2). :meth:`GaltonBoard.two_thirds`: p = 2/3 with
-``TWO_THIRDS_SHIFT_M`` = 0.312 mm (P(right) rises ~1.5 per mm of shift).
+negative: to the left, so more balls pass on the right (p > 1/2). p = 2/3: a 0.312 mm shift (P(right) rises ~1.5 per
+mm of shift).
 
-Measured (benchmarks/granular_galton.py; every run made, tests/validation/test_granular_galton.py Part 3 lists
-them with their seeds): CONFIRMATION_RESULTS
+Measured at 2300 balls (the thesis's count; benchmarks/granular_galton.py; SEs: P(right) sqrt(pq/23000), r1
+1/sqrt(9 x 2300) = 0.007; every run made is listed in tests/validation/test_granular_galton.py, Parts 3 and 3b):
+p = 2/3 board (gamma 0.235, 0.312 mm): P(right) 0.6660 +- 0.0031, r1 -0.016 +- 0.007, variance 2.20 (binomial
+2.22), chi² p = 0.72. p = 1/2 at gamma 0.235: r1 +0.020 +- 0.007, variance 2.77 (2.5), chi² p = 0.004 (fails, hence
+gamma 0.225 for p = 1/2): J_RESULT. At the former default gamma 0.15: p = 1/2 chi² p = 0.36 (r1 -0.040 +- 0.005),
+p = 2/3 (0.32 mm) r1 -0.062 to -0.074 and chi² p = 0.0002 and 0.15 in two runs.
 
 A ball's path is read off where its centre passes half a pitch below each row: its bin there is the number of
 rights so far (nearest lattice position), a decision is the change of that bin (right = 1). Once below the last
@@ -44,8 +48,9 @@ from porepipe.granular._shapes import regular_polygon
 ROWS = 10
 BALL_R, BALL_CORNERS = 0.002, 16
 HOPPER_W, HOPPER_H = 0.06, 0.05  # hopper top width and height
-#: row shift of the p = 2/3 board (GaltonBoard.two_thirds), m; calibrated at damping 0.235 (module docstring)
-TWO_THIRDS_SHIFT_M = 0.000312
+#: row shift (m) and damping of the p = 2/3 board (GaltonBoard.two_thirds): r1 crosses 0 at a higher damping than
+#: at p = 1/2 (module docstring)
+TWO_THIRDS_SHIFT_M, TWO_THIRDS_DAMPING = 0.000312, 0.235
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,7 +62,7 @@ class GaltonBoard:
     nail_corners: int = 16  # 16: round pins; 6: the thesis's hexagons with a tip up
     tip_shift_m: float = 0.0  # hexagons only: tips moved by this (negative: to the left, p > 1/2)
     row_shift_m: float = 0.0  # each row moved by this against the row above (negative: to the left, p > 1/2)
-    damping: float = 0.235  # where successive decisions are uncorrelated (module docstring)
+    damping: float = 0.225  # where successive decisions are uncorrelated at p = 1/2 (module docstring)
     friction: float = 0.3
     every_s: float = 0.5  # one ball dropped into the hopper every this many seconds
     # balls are released this high above the funnel outlet (the hopper's top: HOPPER_H + 2 BALL_R)
@@ -84,11 +89,12 @@ class GaltonBoard:
 
     @classmethod
     def two_thirds(cls, **changes) -> GaltonBoard:
-        """The default board with P(right) = 2/3: each row moved ``TWO_THIRDS_SHIFT_M`` to the left of the row above.
+        """The board with P(right) = 2/3: each row moved ``TWO_THIRDS_SHIFT_M`` to the left of the row above, and
+        damping ``TWO_THIRDS_DAMPING`` (where its successive decisions are uncorrelated).
 
         ``changes`` replace fields.
         """
-        return cls(**({"row_shift_m": -TWO_THIRDS_SHIFT_M} | changes))
+        return cls(**({"row_shift_m": -TWO_THIRDS_SHIFT_M, "damping": TWO_THIRDS_DAMPING} | changes))
 
     @classmethod
     def thesis_like(cls, **changes) -> GaltonBoard:
