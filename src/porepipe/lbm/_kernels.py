@@ -64,6 +64,15 @@ STREAMING_BYTES = max(16 * 2**20, _last_level_cache_bytes())
 #: x86 without SSE4a the scalar float64 stores lose the hint, so every line is read for ownership; kept so that
 #: benchmarks/lbm.py can time the old kernel beside the new one in the same run).
 STORE_CACHED, STORE_STREAM, LEGACY = 0, 1, 2
+#: in-place streaming, the AA pattern (Bailey et al. 2009): one population array. Steps go in pairs: the gather step
+#: pulls a node's populations as the two-array kernel does and writes each post-collision f*_q back into the slot
+#: population ō was pulled from; the local step reads f_q of the node itself from its row ō and writes f*_q to its
+#: row q. After the pair the array holds what two pull steps leave, bit for bit (the same collisions of the same
+#: values); an odd last step is a pull step into the second array. Every store lands in a cache line the step has
+#: just read, so plain cached stores need no read for ownership. Halfway bounce-back only (the gather table holds it);
+#: interpolated links read the previous step's populations where the AA array no longer holds them.
+IN_PLACE = 3
+_CACHED = np.int64(STORE_CACHED)  # an int64, not a literal (see _ZERO)
 
 
 def streams(src) -> int:
@@ -590,6 +599,33 @@ def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
                 _set(dst, base + i, _get(f, _ix(q, i)))
 
 
+@njit(**_NUMERIC)
+def _scatter_tile(dst, gather, run_start, run_offset, run_base, r, n0, cnt, f):
+    """AA gather step: write the post-collision population q of tile node i into the slot population ō of the node
+    was pulled from (run by run, as :func:`_load_tile` pulls). ``r`` is the run holding n0 or an earlier one.
+    """
+    for i in range(cnt):
+        _set(dst, n0 + i, _get(f, i))
+    t = _ZERO
+    while t < cnt:
+        while run_start[r + 1] <= n0 + t:
+            r += 1
+        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        regular = run_offset[r, 0] >= 0
+        for q in range(1, 19):
+            row = q * _TILE + t
+            back = _OPP[q] - 1
+            if regular:
+                off = run_offset[r, back] + n0 + t
+                for i in range(seg):
+                    _set(dst, off + i, _get(f, row + i))
+            else:
+                col = n0 + t + run_base[r]
+                for i in range(seg):
+                    _set(dst, _get(gather, (back, col + i)), _get(f, row + i))
+        t += seg
+
+
 # -- a tile view v = (source, rows, scope, f): the collision reads population q of tile node i from
 #    ``source[rows[q] + i]`` and writes it to the scratch ``f``. Either the scratch itself (:func:`_scratch_view`, after
 #    the tile was pulled into it) or, for a whole tile inside one regular run, the population array at the run's
@@ -610,6 +646,20 @@ def _run_view(src, run_offset, r, n0, f):
         *(o[0] + n0, o[1] + n0, o[2] + n0, o[3] + n0, o[4] + n0, o[5] + n0, o[6] + n0, o[7] + n0, o[8] + n0),
         *(o[9] + n0, o[10] + n0, o[11] + n0, o[12] + n0, o[13] + n0, o[14] + n0, o[15] + n0, o[16] + n0),
         o[17] + n0,
+    )
+    return (src, rows, (), f)
+
+
+@njit(inline="always", **_NUMERIC)
+def _local_view(src, n_nodes, n0, f):
+    """The AA local step's view: population q of node n0 + i sits in row ō of the node itself (pairs q, q + 1 are
+    opposite)."""
+    m = n_nodes
+    rows = (
+        n0,
+        *(2 * m + n0, m + n0, 4 * m + n0, 3 * m + n0, 6 * m + n0, 5 * m + n0, 8 * m + n0, 7 * m + n0),
+        *(10 * m + n0, 9 * m + n0, 12 * m + n0, 11 * m + n0, 14 * m + n0, 13 * m + n0, 16 * m + n0),
+        *(15 * m + n0, 18 * m + n0, 17 * m + n0),
     )
     return (src, rows, (), f)
 
@@ -1037,6 +1087,17 @@ def _pull_collide(
     return r
 
 
+@njit(**_NUMERIC)
+def _local_collide(op, src, n_nodes, n0, cnt, f, keep, fz, force, fields, w, s):
+    """AA local step of the tile at n0 (cnt nodes): collide the node's own populations (:func:`_local_view`) into the
+    scratch ``f``; the fields of the pre-collision populations if ``keep``.
+    """
+    view = _local_view(src, n_nodes, n0, f)
+    if keep:
+        _fields_tile(view, _ZERO, cnt, n0, fz[0], fz[1], force, fields)
+    _collide(literally(op), view, _ZERO, cnt, n0, fz[0], fz[1], force, w, s)
+
+
 def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
     """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only),
     ``rates`` (s_k/|M_k|²) for MRT.
@@ -1113,8 +1174,15 @@ def _step(
     b3 = (force[0], force[1], force[2])
     w2 = (omega[0], omega[1])
     n_chunks = (n_nodes + _CHUNK - 1) // _CHUNK
+    in_place = streaming == IN_PLACE
+    n_pairs = n_steps // 2 if in_place else 0  # AA step pairs; an odd last step pulls src -> dst
+    mode = _CACHED if in_place else streaming
     for s in range(n_steps):
+        aa = s < 2 * n_pairs
+        local = aa and s % 2 == 1
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
+        if aa:
+            a, b = src, src
         keep = store and s == n_steps - 1
         for c in prange(n_chunks):
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
@@ -1124,7 +1192,10 @@ def _step(
             r = np.searchsorted(run_start, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
-                if (
+                r0 = r
+                if local:
+                    _local_collide(literally(op), a, n_nodes, n0, cnt, f, keep, fz, b3, fields, w2, rates)
+                elif (
                     fuse
                     and not _has_links(n0, tile_start, link_slot)
                     and _mostly_regular(run_start, run_offset, r, n0, cnt)
@@ -1172,9 +1243,12 @@ def _step(
                     _collide(
                         literally(op), scratch, _ZERO, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates
                     )
-                _store_tile(b, n0, cnt, n_nodes, f, streaming)
+                if aa and not local:
+                    _scatter_tile(a, gather, run_start, run_offset, run_base, r0, n0, cnt, f)
+                else:
+                    _store_tile(b, n0, cnt, n_nodes, f, mode)
                 n0 += cnt
-            if streaming != STORE_CACHED:
+            if mode != STORE_CACHED:
                 _store_fence()
 
 
