@@ -230,7 +230,9 @@ def porepipe_engine(lat, collision: str, kernel: str):
     streaming, stores = KERNELS[kernel]
     src = np.zeros(19 * lat.n_nodes)
     dst = np.zeros_like(src)
-    step = make_stepper(Settings(collision=collision, streaming=streaming), lat, stores=stores)
+    step = make_stepper(
+        Settings(collision=collision, walls="halfway", streaming=streaming), lat, stores=stores
+    )
     none = np.zeros((4, 0))
 
     def run(steps: int) -> None:
