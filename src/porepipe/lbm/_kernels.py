@@ -614,7 +614,7 @@ def _scatter_tile(dst, gather, run_start, run_offset, run_base, r, n0, cnt, f):
         regular = run_offset[r, 0] >= 0
         for q in range(1, 19):
             row = q * _TILE + t
-            back = _OPP[q] - 1
+            back = q - 2 + 2 * (q & 1)  # gather row of ō: pairs (q, q + 1) are opposite
             if regular:
                 off = run_offset[r, back] + n0 + t
                 for i in range(seg):
@@ -646,20 +646,6 @@ def _run_view(src, run_offset, r, n0, f):
         *(o[0] + n0, o[1] + n0, o[2] + n0, o[3] + n0, o[4] + n0, o[5] + n0, o[6] + n0, o[7] + n0, o[8] + n0),
         *(o[9] + n0, o[10] + n0, o[11] + n0, o[12] + n0, o[13] + n0, o[14] + n0, o[15] + n0, o[16] + n0),
         o[17] + n0,
-    )
-    return (src, rows, (), f)
-
-
-@njit(inline="always", **_NUMERIC)
-def _local_view(src, n_nodes, n0, f):
-    """The AA local step's view: population q of node n0 + i sits in row ō of the node itself (pairs q, q + 1 are
-    opposite)."""
-    m = n_nodes
-    rows = (
-        n0,
-        *(2 * m + n0, m + n0, 4 * m + n0, 3 * m + n0, 6 * m + n0, 5 * m + n0, 8 * m + n0, 7 * m + n0),
-        *(10 * m + n0, 9 * m + n0, 12 * m + n0, 11 * m + n0, 14 * m + n0, 13 * m + n0, 16 * m + n0),
-        *(15 * m + n0, 18 * m + n0, 17 * m + n0),
     )
     return (src, rows, (), f)
 
@@ -1087,17 +1073,6 @@ def _pull_collide(
     return r
 
 
-@njit(**_NUMERIC)
-def _local_collide(op, src, n_nodes, n0, cnt, f, keep, fz, force, fields, w, s):
-    """AA local step of the tile at n0 (cnt nodes): collide the node's own populations (:func:`_local_view`) into the
-    scratch ``f``; the fields of the pre-collision populations if ``keep``.
-    """
-    view = _local_view(src, n_nodes, n0, f)
-    if keep:
-        _fields_tile(view, _ZERO, cnt, n0, fz[0], fz[1], force, fields)
-    _collide(literally(op), view, _ZERO, cnt, n0, fz[0], fz[1], force, w, s)
-
-
 def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
     """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only),
     ``rates`` (s_k/|M_k|²) for MRT.
@@ -1177,35 +1152,38 @@ def _step(
     in_place = streaming == IN_PLACE
     n_pairs = n_steps // 2 if in_place else 0  # AA step pairs; an odd last step pulls src -> dst
     mode = _CACHED if in_place else streaming
+    # the local step as one regular run whose population q comes from row ō of the node itself: it collides through
+    # the same compiled code as a pull step's regular runs
+    local_start = np.array([0, n_nodes])
+    local_offset = np.empty((1, 18), dtype=np.int64)
+    for q in range(1, 19):
+        local_offset[0, q - 1] = _OPP[q] * n_nodes
     for s in range(n_steps):
         aa = s < 2 * n_pairs
         local = aa and s % 2 == 1
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
         if aa:
             a, b = src, src
+        rs, ro = (local_start, local_offset) if local else (run_start, run_offset)
         keep = store and s == n_steps - 1
         for c in prange(n_chunks):
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
             j = np.zeros(3 * _TILE if multi else 0)
             scratch = _scratch_view(f)
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
-            r = np.searchsorted(run_start, n0, side="right") - 1
+            r = np.searchsorted(rs, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
                 r0 = r
-                if local:
-                    _local_collide(literally(op), a, n_nodes, n0, cnt, f, keep, fz, b3, fields, w2, rates)
-                elif (
-                    fuse
-                    and not _has_links(n0, tile_start, link_slot)
-                    and _mostly_regular(run_start, run_offset, r, n0, cnt)
+                if local or (
+                    fuse and not _has_links(n0, tile_start, link_slot) and _mostly_regular(rs, ro, r, n0, cnt)
                 ):
                     r = _pull_collide(
                         literally(op),
                         a,
                         gather,
-                        run_start,
-                        run_offset,
+                        rs,
+                        ro,
                         run_base,
                         r,
                         n0,

@@ -117,7 +117,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
             "bgk, trt and mrt)"
         )
 
-    def step(src, dst, fields, store, n):
+    def step(src, dst, fields, store, n):  # one step (MPI steps one at a time) pulls: nothing to pair it with
         K.step(
             op,
             src,
@@ -132,7 +132,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
             fields,
             store,
             n,
-            K.streams(src) if stores is None else stores,
+            K.streams(src) if stores is None or (stores == K.IN_PLACE and n < 2) else stores,
             omega,
             rates,
             links.tile_start,
