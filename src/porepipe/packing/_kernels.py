@@ -190,6 +190,12 @@ def _axis_range(xa, reach, side, n, periodic):
     return lo, hi
 
 
+# ``write`` flags of _scan_half as typed globals: a literal True / False would make numba compile _scan_half once
+# per value (Literal[bool]); np.bool_ globals type as plain booleans, so one compiled version serves both calls.
+_COUNT_ONLY = np.bool_(False)
+_WRITE = np.bool_(True)
+
+
 @njit(cache=True, fastmath=FASTMATH)
 def _scan_half(
     i,
@@ -291,7 +297,7 @@ def _half_counts(
             cut,
             skin,
             dummy,
-            False,
+            _COUNT_ONLY,
         )
 
 
@@ -334,7 +340,7 @@ def _half_fill(
             cut,
             skin,
             half_idx[half_start[i] : half_start[i + 1]],
-            True,
+            _WRITE,
         )
 
 

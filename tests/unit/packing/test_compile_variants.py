@@ -1,7 +1,9 @@
 """A packing run compiles each kernel once, in the variant it needs: a small pack on one thread compiles only the
 serial kernels (about half the compile time of the parallel ones), one signature each; a
-read-only ``periodic`` array passed by a caller compiles nothing more (it used to compile every kernel twice)."""
+read-only ``periodic`` array passed by a caller compiles nothing more (it used to compile every kernel twice); the
+half-list scan shared by counting and filling compiles once."""
 
+import os
 import subprocess
 import sys
 
@@ -38,6 +40,28 @@ def test_a_one_thread_pack_compiles_each_serial_kernel_once():
     assert any(name.startswith("step") for name in counts), counts
     assert all(serial <= 1 and parallel == 0 for serial, parallel in counts.values()), counts
     assert counts["_half_counts"] == (1, 0) and counts["_step_reductions"] == (1, 0), counts
+
+
+_SCAN_SCRIPT = """
+import numba, numpy as np
+from porepipe.packing import _kernels as K
+from porepipe.packing._neighbours import build_neighbours
+numba.set_num_threads(1)
+x = np.random.default_rng(0).random((40, 3)) * 30.0
+one = np.ones((1, 1), dtype=np.bool_)
+build_neighbours(x, np.full(40, 2.0), np.zeros(40, dtype=np.int64), np.full(3, 30.0), (True,) * 3, one, 1.0, 0.5)
+print(len(K._scan_half.signatures))
+"""
+
+
+def test_counting_and_filling_the_half_list_share_one_compiled_scan(tmp_path):
+    # a fresh numba cache, so the scan is compiled here rather than skipped behind its callers' cached code; a
+    # literal True/False ``write`` flag used to compile it once per value
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    out = subprocess.run(
+        [sys.executable, "-c", _SCAN_SCRIPT], capture_output=True, text=True, check=True, env=env
+    )
+    assert out.stdout.split() == ["1"], out.stdout
 
 
 @by_threads(cache=False)
