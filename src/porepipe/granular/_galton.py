@@ -5,7 +5,7 @@ Geometry (:class:`GaltonBoard`, lengths in m): nails on a triangular lattice of 
 Balls are 16-gons of radius ``BALL_R``, dropped into a V hopper above the board at one every ``every_s`` seconds.
 
 The default board (p = 1/2): round pins (16-gons) with gaps of 1.05 ball diameters, fairly elastic balls (gamma =
-0.225, restitution ~0.8) and a feed slow enough that balls seldom meet (a gap under two ball diameters can hold a
+0.225; gamma 0.15 gave restitution 0.83-0.87) and a feed slow enough that balls seldom meet (a gap under two ball diameters can hold a
 two-ball arch). A ball rattles between the two pins of a gap, so it cannot carry its sideways momentum past the next
 pin, and each bounce on a convex pin spreads its state (chaotic scattering), so it arrives at the next pin's apex
 with a fresh random offset. What is left of a ball's memory is set by the damping: the lag-1 correlation r1 of
@@ -24,7 +24,8 @@ Measured at 2300 balls (the thesis's count; benchmarks/granular_galton.py; SEs: 
 1/sqrt(9 x 2300) = 0.007; every run made is listed in tests/validation/test_granular_galton.py, Parts 3 and 3b):
 p = 2/3 board (gamma 0.235, 0.312 mm): P(right) 0.6660 +- 0.0031, r1 -0.016 +- 0.007, variance 2.20 (binomial
 2.22), chi² p = 0.72. p = 1/2 at gamma 0.235: r1 +0.020 +- 0.007, variance 2.77 (2.5), chi² p = 0.004 (fails, hence
-gamma 0.225 for p = 1/2): J_RESULT. At the former default gamma 0.15: p = 1/2 chi² p = 0.36 (r1 -0.040 +- 0.005),
+gamma 0.225 for p = 1/2): the default board P(right) 0.5036 +- 0.0033, r1 -0.018 +- 0.007, variance 2.46 (2.5), chi²
+p = 0.23. At the former default gamma 0.15: p = 1/2 chi² p = 0.36 (r1 -0.040 +- 0.005),
 p = 2/3 (0.32 mm) r1 -0.062 to -0.074 and chi² p = 0.0002 and 0.15 in two runs.
 
 A ball's path is read off where its centre passes half a pitch below each row: its bin there is the number of
