@@ -159,7 +159,8 @@ for p = 1/2, the default, see the last row):
           p = 2/3, gamma 0.235: [0 1 4 44 118 333 512 612 440 197 39]
           (binomial x 2300:     [0 1 7 37 131 314 523 598 449 199 40])
 
-Both boards pass chi² at 2300 balls (p = 0.23 and 0.72); what is left is a residual anti-persistence r1 -0.016 to
+(`python benchmarks/granular_galton.py --balls 2300 --two-thirds --seed 34` reproduces the p = 2/3 row bin for bin:
+414 s CPU, 417 s wall, idle-ish machine.) Both boards pass chi² at 2300 balls (p = 0.23 and 0.72); what is left is a residual anti-persistence r1 -0.016 to
 -0.018, 2.3-2.6 SE from 0 (r1 moves by 0.03 for 0.01 in gamma, so this is the resolution of the gamma choice with
 these runs), which a two-state chain turns into 3-4 % less variance (2.46 vs 2.5, 2.20 vs 2.22 measured: within 1 SE).
 
