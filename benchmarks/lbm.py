@@ -2,17 +2,18 @@
 
 Head to head (issue 22), in one run and interleaved round by round, so that the load of a shared machine hits every
 engine alike: the STREAM-like copy bandwidth (numba, same thread count) and the roofline it gives, 304 B per
-float64 update (19 populations read and written); porepipe's step kernel as it was before issue 22 (``LEGACY``:
-every tile pulled into an L1 scratch, collided, copied out with element-wise stores, which on x86 compile to
-cached scalar stores) and as it is now (regular runs collide straight from the population array, one cache line
-per non-temporal vector store); lbmpy's generated D3Q19 SRT stream-collide kernel alone (no periodic ghost-layer
+float64 update (19 populations read and written); porepipe's step kernel as it was before issue 22 (``old``,
+``LEGACY``: every tile pulled into an L1 scratch, collided, copied out with element-wise stores, which on x86
+compile to cached scalar stores), its two-array pull kernel now (``pull``: regular runs collide straight from the
+population array, one cache line per non-temporal vector store) and in place (``aa``, the default with halfway
+walls: AA-pattern step pairs in one array, every store into a line just read, cached); lbmpy's generated D3Q19 SRT stream-collide kernel alone (no periodic ghost-layer
 copy, no Python time loop; the ``bench`` extra) and its full step. Dense periodic 128³ box and a porous 128³ sample
 (overlapping spheres, porosity ≈ 0.2, only the percolating pore nodes stored; MLUPS per fluid node). Each figure is
 the best of the rounds (short bursts catch the quiet moments of a loaded machine), with the 1-minute load average
-beside it. Before timing it checks that the new kernel writes the same bits as the old one (dense and porous, every
-operator).
+beside it. Before timing it checks that the pull and in-place kernels write the same bits as the old one after
+four steps (dense and porous, every operator).
 
-Then, new kernel only: BGK / TRT / MRT in float64 and float32 at 1 and 2 threads on both geometries (float32
+Then, the default kernel only (in place: halfway walls): BGK / TRT / MRT in float64 and float32 at 1 and 2 threads on both geometries (float32
 stores 152 B per update: the bound doubles), and the cost of interpolated walls (TRT float64 on the porous sample,
 halfway bounce-back against CLI and MR1 walls at the exact sphere surfaces, at porosity 0.2 and 0.46). Regular runs (all 18 pull sources advance with
 the node) read no index; the others also read 18 uint32 neighbour indices (72 B), which the bound does not count.
@@ -41,7 +42,7 @@ from scipy import ndimage
 
 from porepipe.lbm import Settings, SphereWalls, Walls
 from porepipe.lbm._domain import build_lattice, periodic_setup
-from porepipe.lbm._kernels import LEGACY
+from porepipe.lbm._kernels import IN_PLACE, LEGACY
 from porepipe.lbm._solver import make_stepper
 from porepipe.lbm._walls import build_links
 
@@ -122,14 +123,14 @@ def _wall_steppers(lat, geometry) -> tuple[dict, dict]:
     wall_links = lat.wall_links
     links = {w: build_links(lat.pore, lat.periodic, *wall_links, geometry, Walls(w)) for w in ("cli", "mr1")}
     lat.wall_links = None
-    steppers = {"halfway": make_stepper(Settings(walls="halfway"), lat)}
+    steppers = {"halfway": make_stepper(Settings(walls="halfway", streaming="pull"), lat)}  # links need pull
     steppers.update({w: make_stepper(Settings(walls=w), lat, links[w]) for w in links})
     return steppers, links
 
 
 def wall_cost(size: int, thread_counts, steps: int, rounds: int = 5, porosities=(0.2, 0.46)) -> list[dict]:
     """Per-step CPU cost of CLI and MR1 interpolated walls against halfway bounce-back on porous samples (TRT, f64,
-    exact sphere walls), timed in interleaved rounds (best of each), and the extra CPU time per interpolated link.
+    exact sphere walls, all three with the two-array pull kernel), timed in interleaved rounds (best of each), and the extra CPU time per interpolated link.
     """
     out = []
     for porosity in porosities:
@@ -218,13 +219,20 @@ def lbmpy_engines(size: int, threads: int):
     return run_kernel, sc.run
 
 
-def porepipe_engine(lat, collision: str, stores: int | None):
-    """``run(steps)`` of porepipe's float64 step kernel on ``lat`` (``stores``: LEGACY for the kernel before issue 22,
-    None for the current one).
+#: the porepipe kernels of the head-to-head: (streaming setting, store mode)
+KERNELS = {"old": ("pull", LEGACY), "pull": ("pull", None), "aa": ("aa", None)}
+
+
+def porepipe_engine(lat, collision: str, kernel: str):
+    """``run(steps)`` of porepipe's float64 step kernel on ``lat``: ``kernel`` "old" (the kernel before issue 22),
+    "pull" (two arrays) or "aa" (in place; an even number of steps stays in place).
     """
+    streaming, stores = KERNELS[kernel]
     src = np.zeros(19 * lat.n_nodes)
     dst = np.zeros_like(src)
-    step = make_stepper(Settings(collision=collision), lat, stores=stores)
+    step = make_stepper(
+        Settings(collision=collision, walls="halfway", streaming=streaming), lat, stores=stores
+    )
     none = np.zeros((4, 0))
 
     def run(steps: int) -> None:
@@ -233,19 +241,20 @@ def porepipe_engine(lat, collision: str, stores: int | None):
     return run
 
 
-def same_bits(lat, collision: str, steps: int = 3) -> bool:
-    """Whether the current and the LEGACY kernel give identical populations after ``steps`` steps from random
-    populations with a body force (the new kernel must be at least as accurate: here it is the same arithmetic).
+def same_bits(lat, collision: str, steps: int = 4) -> bool:
+    """Whether the pull, in-place and LEGACY kernels give identical populations after an even number of ``steps``
+    from random populations with a body force (the new kernels must be at least as accurate: here they do the same
+    arithmetic; in place, the array holds the pull layout after each step pair).
     """
     start = 1e-3 * np.random.default_rng(1).standard_normal(19 * lat.n_nodes)
     out = []
-    for stores in (None, LEGACY):
+    for stores in (None, IN_PLACE, LEGACY):
         src, dst = start.copy(), np.zeros_like(start)
-        make_stepper(Settings(collision=collision, body_force=1e-5), lat, stores=stores)(
+        make_stepper(Settings(collision=collision, body_force=1e-5, streaming="pull"), lat, stores=stores)(
             src, dst, np.zeros((4, 0)), False, steps
         )
-        out.append(dst)
-    return bool(np.array_equal(out[0], out[1]))
+        out.append(src)
+    return all(bool(np.array_equal(out[0], o)) for o in out[1:])
 
 
 def head_to_head(engines: dict, threads: int, rounds: int, steps: int) -> dict:
@@ -274,16 +283,18 @@ def head_to_head(engines: dict, threads: int, rounds: int, steps: int) -> dict:
 
 
 def compare(size: int, dense, porous, thread_counts, rounds: int, steps: int, use_lbmpy: bool) -> list[dict]:
-    """Head-to-head rows per thread count: roofline, old and new porepipe kernels, lbmpy's kernel and full step."""
+    """Head-to-head rows per thread count: roofline, old, pull and in-place porepipe kernels, lbmpy's kernel and
+    full step.
+    """
     rows = []
     for threads in thread_counts:
         engines = {}
         for geometry, lat in (("dense", dense), ("porous", porous)):
             for collision in ("bgk", "trt"):
-                for kernel, stores in (("old", LEGACY), ("new", None)):
+                for kernel in KERNELS:
                     engines[f"{kernel} {collision} {geometry}"] = (
                         lat.n_nodes,
-                        porepipe_engine(lat, collision, stores),
+                        porepipe_engine(lat, collision, kernel),
                     )
         peer = lbmpy_engines(size, threads) if use_lbmpy else None
         if peer is not None:
@@ -337,7 +348,7 @@ def _table(rows, wall_rows, peer_rows, bw) -> list[str]:
         )
     md += [
         "",
-        "## New kernel, every operator and precision",
+        "## Default kernel (in place), every operator and precision",
         "",
         "copy bandwidth: " + ", ".join(f"{t} thread(s) {v:.1f} GB/s" for t, v in bw.items()),
         "",
@@ -370,7 +381,9 @@ def _table(rows, wall_rows, peer_rows, bw) -> list[str]:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--size", type=int, default=128)
-    p.add_argument("--steps", type=int, default=4, help="steps per timed burst")
+    p.add_argument(
+        "--steps", type=int, default=4, help="steps per timed burst (even: in place, an odd last step pulls)"
+    )
     p.add_argument("--rounds", type=int, default=5, help="interleaved head-to-head rounds")
     add_out_argument(p)
     p.add_argument("--no-lbmpy", action="store_true")
@@ -380,6 +393,8 @@ def main(argv=None) -> int:
         help="24^3, 2 steps, 1 round, no lbmpy (CI smoke; no figures to quote)",
     )
     args = p.parse_args(argv)
+    if args.steps < 2 or args.steps % 2:
+        p.error(f"--steps {args.steps}: give an even number ≥ 2 (the in-place kernel steps in pairs)")
     if args.smoke:
         args.size, args.steps, args.rounds, args.no_lbmpy = 24, 2, 1, True
     max_threads = min(2, numba.config.NUMBA_NUM_THREADS)
@@ -401,12 +416,12 @@ def main(argv=None) -> int:
         for collision in ("bgk", "trt", "mrt")
     }
     print(
-        "new kernel = old kernel bit for bit (3 steps, body force): "
+        "pull and in-place kernels = old kernel bit for bit (4 steps, body force): "
         + ", ".join(f"{k} {'yes' if v else 'NO'}" for k, v in checks.items()),
         flush=True,
     )
     if not all(checks.values()):
-        raise SystemExit("the new kernel differs from the old one: its figures would not be comparable")
+        raise SystemExit("a new kernel differs from the old one: its figures would not be comparable")
     peer = compare(size, dense, porous, thread_counts, args.rounds, args.steps, not args.no_lbmpy)
     bw = {t: bandwidth_gbs(t) for t in thread_counts}
     rows = []

@@ -20,6 +20,7 @@ _EXPORTS = {
     "closure_linear": "_theory",
     "contact_persistence": "_measure",
     "coordination": "_measure",
+    "decision_stats": "_galton",
     "diagonal_strain": "_measure",
     "displacement_grid": "_measure",
     "elastic_constants": "_elastic",

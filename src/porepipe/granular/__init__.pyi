@@ -11,6 +11,7 @@ from porepipe.granular._elastic import elastic_constants as elastic_constants
 from porepipe.granular._elastic import unloading_frames as unloading_frames
 from porepipe.granular._galton import GaltonBoard as GaltonBoard
 from porepipe.granular._galton import chi2_binomial as chi2_binomial
+from porepipe.granular._galton import decision_stats as decision_stats
 from porepipe.granular._galton import galton_paths as galton_paths
 from porepipe.granular._heap import analyse_heap as analyse_heap
 from porepipe.granular._heap import floor_dip_ensemble as floor_dip_ensemble
@@ -92,6 +93,7 @@ __all__ = [
     "closure_linear",
     "contact_persistence",
     "coordination",
+    "decision_stats",
     "diagonal_strain",
     "displacement_grid",
     "elastic_constants",

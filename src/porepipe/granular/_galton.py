@@ -4,23 +4,29 @@ Geometry (:class:`GaltonBoard`, lengths in m): nails on a triangular lattice of 
 ``ROWS`` rows filling the board between two side walls; row 0 has a nail at x = 0 right under the funnel's outlet.
 Balls are 16-gons of radius ``BALL_R``, dropped into a V hopper above the board at one every ``every_s`` seconds.
 
-The default board's decisions are independent but for a weak anti-persistence (measured: bins pass chi² against
-Binomial(10, 1/2) for every seed and ball count tried, up to 2300; lag-1 correlation of successive decisions
--0.040 +- 0.005): round pins (16-gons) with gaps of 1.05 ball diameters, fairly elastic balls (gamma = 0.15,
-restitution ~0.85) and a feed slow enough that balls seldom meet (a gap under two ball diameters can hold a
-two-ball arch). A ball
-rattles between the two pins of a gap, so it cannot carry its sideways momentum past the next pin, and each bounce
-on a convex pin spreads its state (chaotic scattering), so it arrives at the next pin's apex with a fresh random
-offset. The thesis-like board (:meth:`GaltonBoard.thesis_like`: hexagons with a tip up, wider gaps, gamma = 1)
-is a persistent walk instead (successive decisions correlated 0.2-0.4; tests/validation/test_granular_galton.py).
+The default board (p = 1/2): round pins (16-gons) with gaps of 1.05 ball diameters, fairly elastic balls (gamma =
+0.225; gamma 0.15 gave restitution 0.83-0.87) and a feed slow enough that balls seldom meet (a gap under two ball diameters can hold a
+two-ball arch). A ball rattles between the two pins of a gap, so it cannot carry its sideways momentum past the next
+pin, and each bounce on a convex pin spreads its state (chaotic scattering), so it arrives at the next pin's apex
+with a fresh random offset. What is left of a ball's memory is set by the damping: the lag-1 correlation r1 of
+successive decisions grows with gamma, about 3 per unit gamma near 0.23 (anti-persistent below, persistent above),
+and crosses 0 near gamma = 0.23 at p = 1/2 but near 0.24 at p = 2/3 (at the same gamma r1 is 0.02-0.04 lower on the
+biased board), so the p = 2/3 board (:meth:`GaltonBoard.two_thirds`) has its own damping, 0.235. The thesis-like
+board (:meth:`GaltonBoard.thesis_like`: hexagons with a tip up, wider gaps, gamma = 1) is a persistent walk instead
+(successive decisions correlated 0.2-0.4).
 
 p != 1/2: for round pins every row is moved sideways by ``row_shift_m`` against the row above (the thesis's "a nail
 not under the middle of two nails but offset"), for hexagons the tip is moved by ``tip_shift_m`` (its Fig. 2.39);
-negative: to the left, so more balls pass on the right (p > 1/2). p = 2/3 needs row_shift_m = -0.32 mm; that
-board's decisions are anti-persistent (lag-1 correlation -0.07), so chi² against Binomial(10, 2/3) passes at 300
-balls but rejects at 2300 (variance 1.93 against 2.22, which that correlation alone predicts: 1.95). More damping
-(gamma 0.2) leaves it anti-persistent (r1 -0.06 at 2300 balls) and moves P(right) to 0.65
-(tests/validation/test_granular_galton.py, Part 3).
+negative: to the left, so more balls pass on the right (p > 1/2). p = 2/3: a 0.312 mm shift (P(right) rises ~1.5 per
+mm of shift).
+
+Measured at 2300 balls (the thesis's count; benchmarks/granular_galton.py; SEs: P(right) sqrt(pq/23000), r1
+1/sqrt(9 x 2300) = 0.007; every run made is listed in tests/validation/test_granular_galton.py, Parts 3 and 3b):
+p = 2/3 board (gamma 0.235, 0.312 mm): P(right) 0.6660 +- 0.0031, r1 -0.016 +- 0.007, variance 2.20 (binomial
+2.22), chi² p = 0.72. p = 1/2 at gamma 0.235: r1 +0.020 +- 0.007, variance 2.77 (2.5), chi² p = 0.004 (fails, hence
+gamma 0.225 for p = 1/2): the default board P(right) 0.5036 +- 0.0033, r1 -0.018 +- 0.007, variance 2.46 (2.5), chi²
+p = 0.23. At the former default gamma 0.15: p = 1/2 chi² p = 0.36 (r1 -0.040 +- 0.005),
+p = 2/3 (0.32 mm) r1 -0.062 to -0.074 and chi² p = 0.0002 and 0.15 in two runs.
 
 A ball's path is read off where its centre passes half a pitch below each row: its bin there is the number of
 rights so far (nearest lattice position), a decision is the change of that bin (right = 1). Once below the last
@@ -43,6 +49,9 @@ from porepipe.granular._shapes import regular_polygon
 ROWS = 10
 BALL_R, BALL_CORNERS = 0.002, 16
 HOPPER_W, HOPPER_H = 0.06, 0.05  # hopper top width and height
+#: row shift (m) and damping of the p = 2/3 board (GaltonBoard.two_thirds): r1 crosses 0 at a higher damping than
+#: at p = 1/2 (module docstring)
+TWO_THIRDS_SHIFT_M, TWO_THIRDS_DAMPING = 0.000312, 0.235
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,7 +63,7 @@ class GaltonBoard:
     nail_corners: int = 16  # 16: round pins; 6: the thesis's hexagons with a tip up
     tip_shift_m: float = 0.0  # hexagons only: tips moved by this (negative: to the left, p > 1/2)
     row_shift_m: float = 0.0  # each row moved by this against the row above (negative: to the left, p > 1/2)
-    damping: float = 0.15
+    damping: float = 0.225  # where successive decisions are uncorrelated at p = 1/2 (module docstring)
     friction: float = 0.3
     every_s: float = 0.5  # one ball dropped into the hopper every this many seconds
     # balls are released this high above the funnel outlet (the hopper's top: HOPPER_H + 2 BALL_R)
@@ -78,6 +87,15 @@ class GaltonBoard:
                 f"GaltonBoard: spacing_m {self.spacing_m:g} leaves no gap wider than a ball ({2 * BALL_R:g} m) "
                 f"between nails of radius {self.nail_r_m:g}"
             )
+
+    @classmethod
+    def two_thirds(cls, **changes) -> GaltonBoard:
+        """The board with P(right) = 2/3: each row moved ``TWO_THIRDS_SHIFT_M`` to the left of the row above, and
+        damping ``TWO_THIRDS_DAMPING`` (where its successive decisions are uncorrelated).
+
+        ``changes`` replace fields.
+        """
+        return cls(**({"row_shift_m": -TWO_THIRDS_SHIFT_M, "damping": TWO_THIRDS_DAMPING} | changes))
 
     @classmethod
     def thesis_like(cls, **changes) -> GaltonBoard:
@@ -278,6 +296,32 @@ def _advance(sim: Simulation, board: GaltonBoard, steps: int) -> None:
             f"galton: the funnel clogged at t = {sim.time_s:.3g} s ({queued} balls queued above its outlet, the "
             f"next one released onto them); feed slower than every_s = {board.every_s:g} s"
         ) from err
+
+
+def decision_stats(decisions) -> dict:
+    """P(right) and the pooled lag-1 correlation of successive decisions, each with its standard error.
+
+    Parameters
+    ----------
+    decisions : (N, ROWS) int array
+        From :func:`galton_paths` (a skipped nail counts by its sign: 1 if > 0, else 0).
+
+    Returns
+    -------
+    dict
+        ``p``, ``se_p`` (sqrt(p q / (N ROWS))), ``r1``, ``se_r1`` (1/sqrt(N (ROWS - 1)): the SE of a correlation of
+        independent decisions) and ``skipped`` (the fraction of decisions that skipped a nail).
+    """
+    d = np.clip(decisions, 0, 1)
+    n, rows = d.shape
+    p = float(d.mean())
+    return {
+        "p": p,
+        "se_p": math.sqrt(p * (1 - p) / d.size),
+        "r1": float(np.corrcoef(d[:, :-1].ravel(), d[:, 1:].ravel())[0, 1]),
+        "se_r1": 1 / math.sqrt(n * (rows - 1)),
+        "skipped": float(np.mean((decisions != 0) & (decisions != 1))),
+    }
 
 
 def chi2_binomial(bins, p: float, n: int = ROWS, min_expected: float = 5.0):

@@ -17,6 +17,7 @@ _EXPORTS = {
     "SphereWalls": "_walls",
     "StabilityError": "_solver",
     "StopRule": "_settings",
+    "Streaming": "_settings",
     "Velocity": "_settings",
     "Walls": "_settings",
     "kappa_units": "_api",

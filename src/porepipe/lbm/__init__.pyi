@@ -15,6 +15,7 @@ from porepipe.lbm._settings import Precision as Precision
 from porepipe.lbm._settings import Settings as Settings
 from porepipe.lbm._settings import Setup as Setup
 from porepipe.lbm._settings import StopRule as StopRule
+from porepipe.lbm._settings import Streaming as Streaming
 from porepipe.lbm._settings import Velocity as Velocity
 from porepipe.lbm._settings import Walls as Walls
 from porepipe.lbm._solver import StabilityError as StabilityError
@@ -37,6 +38,7 @@ __all__ = [
     "SphereWalls",
     "StabilityError",
     "StopRule",
+    "Streaming",
     "Velocity",
     "Walls",
     "kappa_units",

@@ -12,7 +12,9 @@ vectorised loop per run; the reads carry alias-scope metadata so the loop needs 
 (mostly irregular, or with interpolated wall links) is first pulled into the scratch, so its collision loop has
 full length however short its runs are. The scratch is then stored, with one non-temporal vector store per cache
 line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
-element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits.
+element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits. With halfway
+walls the same kernel also streams in place (``IN_PLACE``, the AA pattern): step pairs in one array, each store into
+a line the step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits.
 """
 
 from __future__ import annotations
@@ -64,6 +66,15 @@ STREAMING_BYTES = max(16 * 2**20, _last_level_cache_bytes())
 #: x86 without SSE4a the scalar float64 stores lose the hint, so every line is read for ownership; kept so that
 #: benchmarks/lbm.py can time the old kernel beside the new one in the same run).
 STORE_CACHED, STORE_STREAM, LEGACY = 0, 1, 2
+#: in-place streaming, the AA pattern (Bailey et al. 2009): one population array. Steps go in pairs: the gather step
+#: pulls a node's populations as the two-array kernel does and writes each post-collision f*_q back into the slot
+#: population ō was pulled from; the local step reads f_q of the node itself from its row ō and writes f*_q to its
+#: row q. After the pair the array holds what two pull steps leave, bit for bit (the same collisions of the same
+#: values); an odd last step is a pull step into the second array. Every store lands in a cache line the step has
+#: just read, so plain cached stores need no read for ownership. Halfway bounce-back only (the gather table holds it);
+#: interpolated links read the previous step's populations where the AA array no longer holds them.
+IN_PLACE = 3
+_CACHED = np.int64(STORE_CACHED)  # an int64, not a literal (see _ZERO)
 
 
 def streams(src) -> int:
@@ -590,6 +601,33 @@ def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
                 _set(dst, base + i, _get(f, _ix(q, i)))
 
 
+@njit(**_NUMERIC)
+def _scatter_tile(dst, gather, run_start, run_offset, run_base, r, n0, cnt, f):
+    """AA gather step: write the post-collision population q of tile node i into the slot population ō of the node
+    was pulled from (run by run, as :func:`_load_tile` pulls). ``r`` is the run holding n0 or an earlier one.
+    """
+    for i in range(cnt):
+        _set(dst, n0 + i, _get(f, i))
+    t = _ZERO
+    while t < cnt:
+        while run_start[r + 1] <= n0 + t:
+            r += 1
+        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        regular = run_offset[r, 0] >= 0
+        for q in range(1, 19):
+            row = q * _TILE + t
+            back = q - 2 + 2 * (q & 1)  # gather row of ō: pairs (q, q + 1) are opposite
+            if regular:
+                off = run_offset[r, back] + n0 + t
+                for i in range(seg):
+                    _set(dst, off + i, _get(f, row + i))
+            else:
+                col = n0 + t + run_base[r]
+                for i in range(seg):
+                    _set(dst, _get(gather, (back, col + i)), _get(f, row + i))
+        t += seg
+
+
 # -- a tile view v = (source, rows, scope, f): the collision reads population q of tile node i from
 #    ``source[rows[q] + i]`` and writes it to the scratch ``f``. Either the scratch itself (:func:`_scratch_view`, after
 #    the tile was pulled into it) or, for a whole tile inside one regular run, the population array at the run's
@@ -1113,28 +1151,41 @@ def _step(
     b3 = (force[0], force[1], force[2])
     w2 = (omega[0], omega[1])
     n_chunks = (n_nodes + _CHUNK - 1) // _CHUNK
+    in_place = streaming == IN_PLACE
+    n_pairs = n_steps // 2 if in_place else 0  # AA step pairs; an odd last step pulls src -> dst
+    mode = _CACHED if in_place else streaming
+    # the local step as one regular run whose population q comes from row ō of the node itself: it collides through
+    # the same compiled code as a pull step's regular runs
+    local_start = np.array([0, n_nodes])
+    local_offset = np.empty((1, 18), dtype=np.int64)
+    for q in range(1, 19):
+        local_offset[0, q - 1] = _OPP[q] * n_nodes
     for s in range(n_steps):
+        aa = s < 2 * n_pairs
+        local = aa and s % 2 == 1
         a, b = (src, dst) if s % 2 == 0 else (dst, src)
+        if aa:
+            a, b = src, src
+        rs, ro = (local_start, local_offset) if local else (run_start, run_offset)
         keep = store and s == n_steps - 1
         for c in prange(n_chunks):
             f = np.zeros(19 * _TILE)  # zeros: the padding lanes of a short tile stay finite
             j = np.zeros(3 * _TILE if multi else 0)
             scratch = _scratch_view(f)
             n0, hi = c * _CHUNK, min(n_nodes, (c + 1) * _CHUNK)
-            r = np.searchsorted(run_start, n0, side="right") - 1
+            r = np.searchsorted(rs, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
-                if (
-                    fuse
-                    and not _has_links(n0, tile_start, link_slot)
-                    and _mostly_regular(run_start, run_offset, r, n0, cnt)
+                r0 = r
+                if local or (
+                    fuse and not _has_links(n0, tile_start, link_slot) and _mostly_regular(rs, ro, r, n0, cnt)
                 ):
                     r = _pull_collide(
                         literally(op),
                         a,
                         gather,
-                        run_start,
-                        run_offset,
+                        rs,
+                        ro,
                         run_base,
                         r,
                         n0,
@@ -1172,9 +1223,12 @@ def _step(
                     _collide(
                         literally(op), scratch, _ZERO, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates
                     )
-                _store_tile(b, n0, cnt, n_nodes, f, streaming)
+                if aa and not local:
+                    _scatter_tile(a, gather, run_start, run_offset, run_base, r0, n0, cnt, f)
+                else:
+                    _store_tile(b, n0, cnt, n_nodes, f, mode)
                 n0 += cnt
-            if streaming != STORE_CACHED:
+            if mode != STORE_CACHED:
                 _store_fence()
 
 

@@ -24,6 +24,14 @@ class Walls(str, enum.Enum):
     mr1 = "mr1"  # Ginzburg's multi-reflection MR1: exact for parabolic profiles, Λ-parametrised (TRT, BGK)
 
 
+class Streaming(str, enum.Enum):
+    """How the step kernel streams the populations (the results are the same bits either way)."""
+
+    auto = "auto"  # aa wherever no interpolated wall link exists, else pull
+    aa = "aa"  # in place, one population array (AA pattern): 1.3-2x faster here; halfway walls only
+    pull = "pull"  # two arrays, pull from the neighbours
+
+
 class StopRule(str, enum.Enum):
     """Which convergence rule ends the run."""
 
@@ -139,6 +147,11 @@ class Settings(BaseModel):
         "sub-voxel distance q (needs a geometry: spheres or grey values; else halfway); mr1: second-order "
         "multi-reflection (trt or bgk)",
     )
+    streaming: Streaming = Field(
+        Streaming.auto,
+        description="auto (in place wherever the walls allow), aa (in-place AA pattern; needs walls: halfway) or "
+        "pull (two arrays); the populations are the same bits either way",
+    )
     setup: Setup = Field(Setup.periodic, description="periodic (body force everywhere) or chambers (thesis)")
     mirror: bool = Field(False, description="periodic set-up: append the sample mirrored along the flow axis")
     lateral: Lateral = Field(Lateral.periodic, description="boundary across the flow: periodic or walls")
@@ -225,6 +238,16 @@ class Settings(BaseModel):
             raise ValueError(
                 f"walls=mr1 needs tau ≥ {MR1_TAU_MIN} (got {self.tau}): below it its correction diverged on a "
                 "one-voxel throat and a perforated plate; raise `tau` or use walls=cli"
+            )
+        return self
+
+    @model_validator(mode="after")
+    def _aa_needs_halfway_walls(self):
+        if self.streaming is Streaming.aa and self.walls is not Walls.halfway:
+            raise ValueError(
+                f"streaming=aa needs walls=halfway (got walls={self.walls.value}): an interpolated wall link reads "
+                "the previous step's populations where the in-place array no longer holds them; use streaming=auto "
+                "(in place where no interpolated link exists) or pull"
             )
         return self
 

@@ -22,7 +22,7 @@ from porepipe.lbm._darcy import estimate_key, estimates, sample_mean_rho
 from porepipe.lbm._domain import Lattice
 from porepipe.lbm._lattice import CS2, dhumieres_matrix, mrt_rates, trt_minus_tau, viscosity
 from porepipe.lbm._mpi import ONE_PROCESS, Serial, SharedError
-from porepipe.lbm._settings import Collision, Settings, StopRule
+from porepipe.lbm._settings import Collision, Settings, StopRule, Streaming
 from porepipe.lbm._walls import Links
 
 #: τ̂ − ½ below this is refused (ν̂ → 0: the scheme loses stability and the wall position runs away).
@@ -84,9 +84,17 @@ def check_tau(settings: Settings) -> None:
 def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, stores: int | None = None):
     """``step(src, dst, fields, store, n_steps)`` for the chosen operator (its parameters are fixed once, here);
     ``links``: interpolated boundary links (None: halfway bounce-back everywhere); ``stores``: how the kernel writes
-    the populations (``_kernels.STORE_*``; None: :func:`porepipe.lbm._kernels.streams` chooses by array size).
+    the populations (``_kernels.STORE_*`` or ``IN_PLACE``; None: ``settings.streaming`` decides, and for pull
+    :func:`porepipe.lbm._kernels.streams` chooses by array size).
     """
     links = links if links is not None else Links.none()
+    if stores is None and settings.streaming is not Streaming.pull and links.size == 0:
+        stores = K.IN_PLACE
+    if stores == K.IN_PLACE and links.size:
+        raise PorepipeError(
+            "permeability.streaming = aa cannot run interpolated wall links (walls: "
+            f"{settings.walls.value}): use streaming: auto or pull"
+        )
     lo, hi = lat.force_nodes
     force = np.array([settings.body_force, 0.0, 0.0])
     tau = settings.tau
@@ -109,7 +117,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
             "bgk, trt and mrt)"
         )
 
-    def step(src, dst, fields, store, n):
+    def step(src, dst, fields, store, n):  # one step (MPI steps one at a time) pulls: nothing to pair it with
         K.step(
             op,
             src,
@@ -124,7 +132,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
             fields,
             store,
             n,
-            K.streams(src) if stores is None else stores,
+            K.streams(src) if stores is None or (stores == K.IN_PLACE and n < 2) else stores,
             omega,
             rates,
             links.tile_start,

@@ -31,6 +31,9 @@ def test_settings_reject_unknown_keys_and_bad_force_zone():
         Settings(inlet_layers=3, force_layers=3)
     with pytest.raises(ValueError):
         Settings(tau=0.5)
+    with pytest.raises(ValueError, match="streaming=aa needs walls=halfway"):
+        Settings(streaming="aa", walls="cli")
+    assert Settings(streaming="aa", walls="halfway").streaming.value == "aa"
 
 
 def _slit(h=6, length=3):

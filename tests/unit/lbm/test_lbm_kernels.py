@@ -81,17 +81,16 @@ _GEOMETRIES = {
 @pytest.mark.parametrize("collision", ["bgk", "trt", "mrt"])
 @pytest.mark.parametrize("force_layers", [(0, 5), (1, 3)])
 @pytest.mark.parametrize("geometry", list(_GEOMETRIES))
-@pytest.mark.parametrize("streaming", [False, True])
-def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, streaming, monkeypatch):
+@pytest.mark.parametrize("stores", ["STORE_CACHED", "STORE_STREAM", "IN_PLACE"])
+def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, stores):
     """Five fused pull/collide steps on a random porous box (gather-table path), on a mostly open box (mostly
     offset-streaming runs) and on an open box of several parallel chunks equal the dense reference, with cached and
-    with non-temporal population stores.
+    with non-temporal population stores, and in place (two AA step pairs, then one pull step).
 
     Tolerance 1e-13 absolute on populations of size ~0.1: both are float64 with different summation order.
     """
     from porepipe.lbm import _kernels
 
-    monkeypatch.setattr(_kernels, "STREAMING_BYTES", 0 if streaming else 2**62)
     pore = _GEOMETRIES[geometry]()
     periodic = (True, False, True)
     lat = build_lattice(pore, periodic, force_layers, (0, 5))
@@ -110,7 +109,7 @@ def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, s
     a_matrix = collision_matrix(collision, tau)
     for _ in range(5):
         dense, rho, u = step(dense, pore, periodic, a_matrix, (1e-3, 0, 0), mask)
-    make_stepper(settings, lat)(sparse, other, fields, True, 5)
+    make_stepper(settings, lat, stores=getattr(_kernels, stores))(sparse, other, fields, True, 5)
     result = other  # odd number of steps ends in the second buffer
     np.testing.assert_allclose(result.reshape(19, n) + W[:, None], dense[:, pore], rtol=0, atol=1e-13)
     np.testing.assert_allclose(1 + fields[0], rho[pore], rtol=0, atol=1e-13)
@@ -119,25 +118,29 @@ def test_sparse_steps_match_dense_reference(collision, force_layers, geometry, s
 
 @pytest.mark.parametrize("precision", ["float64", "float32"])
 @pytest.mark.parametrize("geometry", ["random", "chunks"])
-def test_store_modes_write_identical_populations(precision, geometry):
+@pytest.mark.parametrize("steps", [3, 4])
+def test_store_modes_write_identical_populations(precision, geometry, steps):
     """Cached stores, line-wide non-temporal vector stores (rows start anywhere within a cache line: element-wise
-    head and tail) and the old element-wise non-temporal loop write the same bits: how a value is stored cannot
-    change it. Three TRT steps with a body force from random populations, compared exactly."""
+    head and tail), the old element-wise non-temporal loop and in-place AA streaming (step pairs in one array, an
+    odd last step pulled into the other) write the same bits, and the same fields of the last step: how a value
+    is streamed and stored cannot change it. TRT steps with a body force from random populations, compared exactly."""
     from porepipe.lbm import _kernels
 
     pore = _GEOMETRIES[geometry]()
     lat = build_lattice(pore, (True, False, True), (0, 5), (0, 5))
     start = (1e-2 * np.random.default_rng(6).standard_normal(19 * lat.n_nodes)).astype(precision)
     results = []
-    for mode in (_kernels.STORE_CACHED, _kernels.STORE_STREAM, _kernels.LEGACY):
+    for mode in (_kernels.STORE_CACHED, _kernels.STORE_STREAM, _kernels.LEGACY, _kernels.IN_PLACE):
         src, dst = start.copy(), np.zeros_like(start)
+        fields = np.zeros((4, lat.n_nodes))
         make_stepper(Settings(body_force=1e-4, precision=precision), lat, stores=mode)(
-            src, dst, np.zeros((4, 0)), False, 3
+            src, dst, fields, True, steps
         )
-        results.append(dst)
-    assert np.any(results[0] != 0)
-    for other in results[1:]:
-        np.testing.assert_array_equal(other, results[0])
+        results.append((dst if steps % 2 else src, fields))
+    assert np.any(results[0][0] != 0) and np.any(results[0][1] != 0)
+    for pops, fields in results[1:]:
+        np.testing.assert_array_equal(pops, results[0][0])
+        np.testing.assert_array_equal(fields, results[0][1])
 
 
 def test_mrt_rates_match_thesis_and_odd_rates_follow_magic():
@@ -227,9 +230,10 @@ def _spheres_in(shape, centres, radii):
 @pytest.mark.parametrize("sample", [_sphere_array, _overlapping_spheres], ids=["sphere_array", "porous"])
 @pytest.mark.parametrize("walls", ["halfway", "cli"])
 def test_new_kernel_gives_the_old_kernels_kappa(sample, walls, monkeypatch):
-    """κ of the default TRT (Λ = 3/16) after 1000 steps (4 checks) with the current kernel (tiles of regular runs
-    collide straight from the population array) and with the kernel before issue 22 (``LEGACY``: every tile through
-    the scratch, element-wise stores) on a sphere array and a porous sample, halfway and interpolated (CLI) walls.
+    """κ of the default TRT (Λ = 3/16) after 1000 steps (4 checks) with the current kernel (in place with halfway
+    walls, odd step counts between checks included; tiles of regular runs collide straight from the population
+    array) and with the two-array kernel before issue 22 (``LEGACY``: every tile through the scratch, element-wise
+    stores) on a sphere array and a porous sample, halfway and interpolated (CLI) walls.
     Tolerance: none — the two do the same arithmetic in the same order, so every κ̂ agrees to the last bit."""
     from porepipe.lbm import _kernels, permeability
 
@@ -240,6 +244,7 @@ def test_new_kernel_gives_the_old_kernels_kappa(sample, walls, monkeypatch):
     geometry = spheres if walls == "cli" else None
     new = permeability(pore, "x", settings, progress=False, geometry=geometry)
     monkeypatch.setattr(_kernels, "streams", lambda src: _kernels.LEGACY)
-    old = permeability(pore, "x", settings, progress=False, geometry=geometry)
+    pull = Settings(**{**settings.model_dump(), "streaming": "pull"})
+    old = permeability(pore, "x", pull, progress=False, geometry=geometry)
     assert new.steps == old.steps == 1000 and new.kappa_lu > 0
     np.testing.assert_array_equal(new.history["kappa"], old.history["kappa"])
