@@ -252,6 +252,9 @@ SILO_NOTES = {
     "granular-silo-stepped": ("~33 min CPU", "the outer sources start when the fill reaches the step"),
     "granular-silo-hopper": ("~10 min CPU", "a source starts when the fill has widened past it"),
     "granular-silo-parabolic": ("~10 min CPU", "a source starts when the fill has widened past it"),
+    "granular-silo-hopper-mu07-full": ("~10 min CPU", "as granular-silo-hopper, with grain friction 0.7"),
+    "granular-silo-parabolic-mu07-full": ("~10 min CPU", "as granular-silo-parabolic, with grain friction 0.7"),
+    "granular-heap-poured-thesis": ("~7 min CPU a seed", "one point source pours the heap from 18 cm"),
 }
 
 
@@ -282,10 +285,16 @@ def silo(name: str) -> str:
     ax.set_title(f"{name}: insertion points of {sim.n_mob:,} grains (not run)", fontsize=9)
     _save(fig, name)
     cost, fill = SILO_NOTES[name]
+    n_src = len(settings.drop_sources)
+    rising = any(src.rise_m_s for src in settings.drop_sources)
+    where = (
+        f"the sources rise with the fill, so the dots form {n_src} rising lines"
+        if rising
+        else f"the {n_src} source(s) stay put, so the dots stack at one height each"
+    )
     return (
-        f"Not run for this picture ({cost}): the silo walls and where the scene's drop sources insert "
-        f"its {sim.n_mob:,} polygons (one dot per grain, at its insertion height: the sources rise with the fill, "
-        f"so the dots form {len(settings.drop_sources)} rising lines); {fill}."
+        f"Not run for this picture ({cost}): the walls and where the scene's drop sources insert "
+        f"its {sim.n_mob:,} polygons (one dot per grain, at its insertion height: {where}); {fill}."
     )
 
 
@@ -364,6 +373,9 @@ MAKERS = {
     "granular-silo": silo,
     "granular-silo-stepped": silo,
     "granular-silo-hopper": silo,
+    "granular-silo-hopper-mu07-full": silo,
+    "granular-silo-parabolic-mu07-full": silo,
+    "granular-heap-poured-thesis": silo,
     "granular-silo-parabolic": silo,
     "fontainebleau-like": grains,
     "thesis-5.6.1-ci": packed,

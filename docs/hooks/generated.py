@@ -23,7 +23,7 @@ GALLERY = ROOT / "docs" / "gallery"
 
 #: wall time of a whole `porepipe run SCENE --cores N`, measured (see the README's table for the conditions)
 MEASURED = {
-    "mini": "223 s the first time (numba compiles every kernel), 66 s with a warm cache; 2 cores, quiet machine",
+    "mini": "53 s the first time on a fresh clone (numba compiles every kernel), 23 s with a warm cache; 2 cores, quiet machine",
     "filled-packing-ci": "41 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
     "rough-walls-ci": "35 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
     "granular-box": "26 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
@@ -39,6 +39,9 @@ MEASURED = {
     "granular-silo-hopper": "granular stage alone: 27.7 min wall, 627 s CPU, 0.43 GB (one thread, shared 2-core machine at load ~4.5)",
     "granular-silo-parabolic": "granular stage alone: 24.5 min wall, 576 s CPU, 0.30 GB (one thread, shared 2-core machine at load ~4.5)",
     "granular-silo-stepped": "granular stage alone: 66 min wall, 1998 s CPU, 0.44 GB (one thread, shared 2-core machine at load ~4.5)",
+    "granular-silo-hopper-mu07-full": "granular stage alone: 18.4 min wall, 570 s CPU, 0.30 GB (one thread, shared 2-core machine at load ~3)",
+    "granular-silo-parabolic-mu07-full": "granular stage alone: 18.2 min wall, 556 s CPU, 0.30 GB (one thread, shared 2-core machine at load ~3)",
+    "granular-heap-poured-thesis": "granular stage alone, per seed: 7-8 min wall, ~420 s CPU, 0.29 GB (one thread, shared 2-core machine at load ~2-4)",
     "granular-heap-unload-ci": "granular stage alone: 152 s wall, 25 s CPU (one thread, shared 2-core machine at load ~7)",
     "filled-packing": "3.1 min and 1.1 GB for `porepipe pack` (2 cores)",
     "rough-walls": "6.6 min and 1.3 GB for `porepipe pack` (2 cores)",
