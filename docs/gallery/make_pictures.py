@@ -253,7 +253,10 @@ SILO_NOTES = {
     "granular-silo-hopper": ("~10 min CPU", "a source starts when the fill has widened past it"),
     "granular-silo-parabolic": ("~10 min CPU", "a source starts when the fill has widened past it"),
     "granular-silo-hopper-mu07-full": ("~10 min CPU", "as granular-silo-hopper, with grain friction 0.7"),
-    "granular-silo-parabolic-mu07-full": ("~10 min CPU", "as granular-silo-parabolic, with grain friction 0.7"),
+    "granular-silo-parabolic-mu07-full": (
+        "~10 min CPU",
+        "as granular-silo-parabolic, with grain friction 0.7",
+    ),
     "granular-heap-poured-thesis": ("~7 min CPU a seed", "one point source pours the heap from 18 cm"),
 }
 
