@@ -83,7 +83,7 @@ def main() -> None:
     st = decision_stats(dec)
     print(
         f"P(right) {st['p']:.4f} +- {st['se_p']:.4f} (p = {args.p:.4f}), pooled lag-1 correlation "
-        f"{st['r1']:+.4f} +- {st['se_r1']:.4f}; {int(((dec != 0) & (dec != 1)).sum())} skipped nails"
+        f"{st['r1']:+.4f} +- {st['se_r1']:.4f}; {round(st['skipped'] * dec.size)} skipped nails"
     )
     print(f"{len(bins)} balls, {wall:.0f} s wall, {cpu:.0f} s CPU, {sim.step} steps, t = {sim.time_s:.2f} s")
     print("counts  ", counts.tolist(), f"({int(np.sum((bins < 0) | (bins > 10)))} beyond 0..10)")

@@ -387,11 +387,7 @@ def test_two_thirds_board_has_p_two_thirds_and_uncorrelated_decisions():
     # 2300-ball confirmation (chi² p 0.72, r1 -0.016 +- 0.007) is benchmarks/granular_galton.py --two-thirds.
     board = GaltonBoard.two_thirds()
     decisions, bins = galton_paths(board.simulation(TWO_THIRDS_BALLS, seed=7), board)
-    st = decision_stats(decisions)
-    assert abs(st["p"] - 2 / 3) < 3 * st["se_p"], st
-    assert abs(st["r1"]) < 3 * st["se_r1"], st
-    assert st["skipped"] < 0.01, st
-    assert chi2_binomial_pvalue(bins, 2 / 3) > 0.01, np.bincount(np.clip(bins, 0, 10), minlength=11)
+    _assert_binomial(decisions, bins, 2 / 3, r_bound=3 * decision_stats(decisions)["se_r1"])
 
 
 def test_two_ball_arch_across_a_gap_is_held_by_friction():
@@ -434,9 +430,10 @@ def test_two_ball_arch_across_a_gap_is_held_by_friction():
 
 
 def test_clogged_funnel_is_one_clear_error():
-    # 10 balls/s is too fast for the board at gamma = 0.15 (at the default 0.225 these 60 balls happen to pass): two balls arch across the entry gap, the queue reaches the
-    # release point (measured: by t = 2.3 s) and the next ball is released onto it -- an error naming the clog and
-    # the feed, not the overlap guard's advice to shrink dt.
+    # 10 balls/s is too fast for the board at gamma = 0.15 (at the default 0.225 these 60 balls happen to pass):
+    # two balls arch across the entry gap, the queue reaches the release point (measured: by t = 2.3 s) and the
+    # next ball is released onto it -- an error naming the clog and the feed, not the overlap guard's advice to
+    # shrink dt.
     board = GaltonBoard(every_s=0.1, damping=0.15)
     with pytest.raises(PorepipeError, match="funnel clogged .* every_s = 0.1 s"):
         galton_paths(board.simulation(60), board)

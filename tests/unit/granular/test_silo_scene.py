@@ -113,9 +113,8 @@ def test_a_fill_heaped_over_the_rim_reads_out_as_the_same_fill(silo):
     names = [str(v) for v in frames["wall_name"].values]
     d = a["grain_diameter_m"]
     verts = frames["wall_vertices_m"].values.copy()
-    top_grain = float(
-        a["fill_height_m"]
-    )  # relative to the floor; the floor top is the origin of the heights below
+    # the fill height is relative to the floor's top, the origin of the heights below
+    top_grain = float(a["fill_height_m"])
     floor_top = float(np.nanmax(verts[names.index("box floor")][:, 1]))
     cut = floor_top + top_grain - 0.5 * d
     for k, name in enumerate(names):
