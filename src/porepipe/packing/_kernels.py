@@ -459,16 +459,11 @@ def _step_reductions(sig, conv, aux):
 
 # ---------------------------------------------------------------------------------------------------------------------
 # the step: forces at x^{s-1}, damped velocity-Störmer-Verlet update (§5.3), per-sphere overlap and convergence
-#: rows of the pair scratch: what :func:`_gather_pairs` copies in (differences of centres x, y, z, r_i, r_j and, with
-#: several types, the type-pair k, hcoef, sigma*); :func:`_pair_terms` overwrites the first five with what the
-#: scatter reads (force x, y, z, sigma_ij, flag), so a batch's scratch stays small enough for the L1 cache
-_D0, _RI, _RJ, _KP, _HC, _SP, _ROWS = 0, 3, 4, 5, 6, 7, 8
-_C0, _SIG, _FLAG = 0, 3, 4
-#: the flag of a pair: partner within reach; coincident centres (distance 0, or not a number: no force of its own)
-_IN_REACH, _TIE = 1.0, 2.0
-#: pairs evaluated per batch (the scratch holds at least one sphere's whole list besides): 128 pairs keep the
-#: scratch (5 KB) and the partners' rows (8 KB) in the L1 cache from gather to scatter; 512 did not (61 + 32 KB)
-_BATCH = 128
+#: rows of the pair scratch: what :func:`_gather_pairs` copies in (differences of centres x, y, z, r_i, r_j and the
+#: type-pair k, hcoef, sigma*) and what :func:`_pair_terms` writes (force x, y, z, sigma_ij, distance, reach flag)
+_D0, _RI, _RJ, _KP, _HC, _SP, _C0, _SIG, _DIST, _REACH, _ROWS = 0, 3, 4, 5, 6, 7, 8, 11, 12, 13, 14
+#: pairs evaluated per batch (the scratch holds at least one sphere's whole list besides)
+_BATCH = 512
 #: columns of the step kernel's (N, WORK_COLUMNS) work array: one 64-byte row per sphere holds what a pair reads of
 #: its partner (x, y, z, r) and what it adds to it (force x, y, z, max sigma), so gather and scatter touch one line
 WORK_COLUMNS = 8
@@ -480,16 +475,15 @@ def _gather_pairs(i, half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k, 
     """Copy what the pairs of sphere i need into columns k, k+1, ... of the scratch w; return the next column.
 
     The scattered reads (x_j, r_j, the type tables) happen here, in a plain loop, so that :func:`_pair_terms` reads
-    contiguous rows only and vectorises. With ``one_type`` the type-pair rows are not used.
+    contiguous rows only and vectorises. With ``one_type`` the type-pair rows hold their one value already.
     """
     ti = types[i]
-    xi0, xi1, xi2, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
     for p in range(half_start[i], half_start[i + 1]):
-        j = np.uint64(half_idx[p])  # unsigned: no negative-index wraparound code per access
-        w[_D0, k] = xi0 - xr[j, 0]
-        w[_D0 + 1, k] = xi1 - xr[j, 1]
-        w[_D0 + 2, k] = xi2 - xr[j, 2]
-        w[_RI, k] = ri
+        j = half_idx[p]
+        w[_D0, k] = xr[i, 0] - xr[j, 0]
+        w[_D0 + 1, k] = xr[i, 1] - xr[j, 1]
+        w[_D0 + 2, k] = xr[i, 2] - xr[j, 2]
+        w[_RI, k] = xr[i, 3]
         w[_RJ, k] = xr[j, 3]
         if not one_type:
             tj = types[j]
@@ -508,46 +502,35 @@ def _min_image_select(d, length, half):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _pair_term(w, k, kp, hc, sp, b0, b1, b2, h0, h1, h2, cut):
-    """Force, sigma_ij and flag of the gathered pair in column k of the scratch w, written over its inputs."""
-    d0 = _min_image_select(w[_D0, k], b0, h0)
-    d1 = _min_image_select(w[_D0 + 1, k], b1, h1)
-    d2 = _min_image_select(w[_D0 + 2, k], b2, h2)
-    dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    ri = w[_RI, k]
-    rj = w[_RJ, k]
-    rsum = ri + rj
-    rmin2 = rsum - abs(ri - rj)
-    dxeq = rsum - 0.5 * sp * rmin2
-    in_reach = dist <= cut * dxeq
-    g = _pair_force_over_dist(dist, dxeq, kp, hc)
-    g = g if in_reach else 0.0
-    w[_C0, k] = g * d0
-    w[_C0 + 1, k] = g * d1
-    w[_C0 + 2, k] = g * d2
-    w[_SIG, k] = (rsum - dist) / rmin2
-    w[_FLAG, k] = (_IN_REACH if in_reach else 0.0) + (0.0 if dist > 0.0 else _TIE)
-
-
-@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _pair_terms(w, npairs, box, half_box, cut, kpair, hcoef, sigp, one_type):
-    """Force, sigma_ij and flag of the first ``npairs`` gathered pairs of the scratch w (over their inputs).
+def _pair_terms(w, npairs, box, half_box, cut):
+    """Force, sigma_ij, distance and reach flag of the first ``npairs`` gathered pairs of the scratch w.
 
     Contiguous rows in and out, no branch (selects for the minimum image and the force law's two branches), no
     division check (numpy's error model): the loop vectorises. Each value comes from the same operations in the
     same order as one pair at a time, so the results are bit for bit those of a scalar loop. The force of
-    coincident centres (distance 0) is not finite here; :func:`_scatter_pairs` replaces it (flag :data:`_TIE`).
-    With one type the type-pair values are loop constants.
+    coincident centres (distance 0) is not finite here; :func:`_scatter_pairs` replaces it.
     """
     b0, b1, b2 = box[0], box[1], box[2]
     h0, h1, h2 = half_box[0], half_box[1], half_box[2]
-    if one_type:
-        kp, hc, sp = kpair[0, 0], hcoef[0, 0], sigp[0, 0]
-        for k in range(npairs):
-            _pair_term(w, k, kp, hc, sp, b0, b1, b2, h0, h1, h2, cut)
-    else:
-        for k in range(npairs):
-            _pair_term(w, k, w[_KP, k], w[_HC, k], w[_SP, k], b0, b1, b2, h0, h1, h2, cut)
+    for k in range(npairs):
+        d0 = _min_image_select(w[_D0, k], b0, h0)
+        d1 = _min_image_select(w[_D0 + 1, k], b1, h1)
+        d2 = _min_image_select(w[_D0 + 2, k], b2, h2)
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        ri = w[_RI, k]
+        rj = w[_RJ, k]
+        rsum = ri + rj
+        rmin2 = rsum - abs(ri - rj)
+        dxeq = rsum - 0.5 * w[_SP, k] * rmin2
+        in_reach = dist <= cut * dxeq
+        g = _pair_force_over_dist(dist, dxeq, w[_KP, k], w[_HC, k])
+        g = g if in_reach else 0.0
+        w[_C0, k] = g * d0
+        w[_C0 + 1, k] = g * d1
+        w[_C0 + 2, k] = g * d2
+        w[_SIG, k] = (rsum - dist) / rmin2
+        w[_DIST, k] = dist
+        w[_REACH, k] = 1.0 if in_reach else 0.0
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
@@ -561,35 +544,15 @@ def _tie_force(i, j, xr, types, ids, hcoef, sigp, axis):
     return hcoef[types[i], types[j]] / dxeq * _tie_axis(ids[i], ids[j], axis)
 
 
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy", **NO_REFCOUNT)
-def _fix_ties(first, last, slab_items, half_start, half_idx, xr, types, ids, hcoef, sigp, w):
-    """Give the pairs with coincident centres among those of spheres ``slab_items[first:last]`` (scratch columns
-    from 0 on) their force, :func:`_tie_force` within reach and none beyond, and the flag of an ordinary pair.
-
-    Rare (a batch calls it only when it holds such a pair), so out of the scatter loop, which then has no branch.
-    """
-    k = 0
-    for m in range(first, last):
-        i = slab_items[m]
-        for p in range(half_start[i], half_start[i + 1]):
-            if w[_FLAG, k] >= _TIE:
-                in_reach = w[_FLAG, k] > _TIE
-                j = half_idx[p]
-                for a in range(3):
-                    w[_C0 + a, k] = _tie_force(i, j, xr, types, ids, hcoef, sigp, a) if in_reach else 0.0
-                w[_FLAG, k] = _IN_REACH if in_reach else 0.0
-            k += 1
-
-
 @njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _scatter_pairs(i, k, half_start, half_idx, xr, frozen, conv, freeze, w):
+def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, sigp, conv, freeze, w):
     """Apply the evaluated pairs of sphere i (scratch columns from k on) to both ends (Newton's third law); return
     the next column.
 
     Adds the pair force to the force columns of xr's row i (summed over the list first) and its negative to row
     j's, raises the max-sigma column of both to sigma_ij and sets conv of both to 1 when the partner is within
-    reach (the flag the step's stochastic forces read). Pairs out of reach carry a zero force: adding it changes
-    no bit (the sums start at +0). The caller runs spheres that share a partner in one thread, in a fixed order.
+    reach (the flag the step's stochastic forces read). The caller runs spheres that share a partner in one thread,
+    in a fixed order.
     """
     fro_i = False
     if freeze:
@@ -598,9 +561,9 @@ def _scatter_pairs(i, k, half_start, half_idx, xr, frozen, conv, freeze, w):
     fy = 0.0
     fz = 0.0
     smax = xr[i, _WSIG]
-    reach_any = False
+    reach_any = 0
     for p in range(half_start[i], half_start[i + 1]):
-        j = np.uint64(half_idx[p])  # unsigned: no negative-index wraparound code per access
+        j = half_idx[p]
         sig_ij = w[_SIG, k]
         smax = max(smax, sig_ij)
         xr[j, _WSIG] = max(xr[j, _WSIG], sig_ij)
@@ -611,12 +574,19 @@ def _scatter_pairs(i, k, half_start, half_idx, xr, frozen, conv, freeze, w):
             fro_j = frozen[j] != 0
             if fro_i and fro_j:
                 continue
-        in_reach = w[_FLAG, col] != 0.0
+        in_reach = w[_REACH, col] != 0.0
+        if w[_DIST, col] > 0.0:
+            c0 = w[_C0, col]
+            c1 = w[_C0 + 1, col]
+            c2 = w[_C0 + 2, col]
+        elif in_reach:
+            c0 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 0)
+            c1 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 1)
+            c2 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 2)
+        else:
+            continue  # coincident centres out of reach: no force
         reach_any |= in_reach
         conv[j] |= in_reach
-        c0 = w[_C0, col]
-        c1 = w[_C0 + 1, col]
-        c2 = w[_C0 + 2, col]
         if not fro_i:
             fx += c0
             fy += c1
@@ -637,13 +607,18 @@ def _scatter_pairs(i, k, half_start, half_idx, xr, frozen, conv, freeze, w):
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _slab_scratch(lo, hi, slab_items, half_start, kpair, hcoef, sigp):
     """The pair scratch of :func:`_slab_pairs` for the spheres ``slab_items[lo:hi]``: :data:`_BATCH` columns plus
-    the longest list among them; without the type-pair rows when there is one type only.
+    the longest list among them, the type-pair rows filled when there is one type only.
     """
     most = 0
     for m in range(lo, hi):
         i = slab_items[m]
         most = max(most, half_start[i + 1] - half_start[i])
-    return np.empty((_ROWS if kpair.size > 1 else _KP, _BATCH + most))
+    w = np.empty((_ROWS, _BATCH + most))
+    if kpair.size == 1:
+        w[_KP, :] = kpair[0, 0]
+        w[_HC, :] = hcoef[0, 0]
+        w[_SP, :] = sigp[0, 0]
+    return w
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy", **NO_REFCOUNT)
@@ -668,15 +643,24 @@ def _slab_pairs(
                 slab_items[m], half_start, half_idx, xr, types, kpair, hcoef, sigp, w, k, one_type
             )
             m += 1
-        _pair_terms(w, k, box, half_box, cut, kpair, hcoef, sigp, one_type)
-        ties = 0.0
-        for kk in range(k):
-            ties = max(ties, w[_FLAG, kk])
-        if ties >= _TIE:
-            _fix_ties(first, m, slab_items, half_start, half_idx, xr, types, ids, hcoef, sigp, w)
+        _pair_terms(w, k, box, half_box, cut)
         k = 0
         for mm in range(first, m):
-            k = _scatter_pairs(slab_items[mm], k, half_start, half_idx, xr, frozen, conv, freeze, w)
+            k = _scatter_pairs(
+                slab_items[mm],
+                k,
+                half_start,
+                half_idx,
+                xr,
+                types,
+                ids,
+                frozen,
+                hcoef,
+                sigp,
+                conv,
+                freeze,
+                w,
+            )
 
 
 _STEP_CACHE: dict = {}
