@@ -1,7 +1,7 @@
 """Benchmark of the DEM packing step: pair evaluations per second against the earlier kernels and LAMMPS, cost of each
 optional effect, engine overhead.
 
-    python benchmarks/pack.py            # 2·10^5 spheres: kernels and engine (107 s, 110 CPU-s, quiet 2-core machine)
+    python benchmarks/pack.py            # 2·10^5 spheres: kernels, LAMMPS, engine (107 s quiet; 245 s wall at load 9)
     python benchmarks/pack.py --full     # 10^6 spheres, the issue's size (not timed whole: each step 7x longer)
     python benchmarks/pack.py --full --kernels-only   # 10^6 spheres, step kernels only (4 min on the 2-core machine)
     python benchmarks/pack.py --small    # 20 000 spheres
