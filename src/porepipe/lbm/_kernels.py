@@ -14,7 +14,9 @@ full length however short its runs are. The scratch is then stored, with one non
 line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
 element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits. With halfway
 walls the same kernel also streams in place (``IN_PLACE``, the AA pattern): step pairs in one array, each store into
-a line the step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits.
+a line the step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits. In its
+gather step the irregular nodes collide in place through the gather table (:func:`_indexed_view`), in one pass
+instead of three (pull into the scratch, collide, scatter back).
 """
 
 from __future__ import annotations
