@@ -14,7 +14,9 @@ full length however short its runs are. The scratch is then stored, with one non
 line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
 element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits. With halfway
 walls the same kernel also streams in place (``IN_PLACE``, the AA pattern): step pairs in one array, each store into
-a line the step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits.
+a line the step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits. In its
+gather step the irregular nodes collide in place through the gather table (:func:`_indexed_view`), in one pass
+instead of three (pull into the scratch, collide, scatter back).
 """
 
 from __future__ import annotations
@@ -111,30 +113,13 @@ def _get(typingctx, arr, idx):
 
 def _population_scope(builder):
     """Alias-scope list of the reads of a population array inside a collision loop: the scratch writes of the loop
-    carry it as ``!noalias``, so the vectoriser needs no run-time overlap test between 19 source rows and 19 scratch
+    (:func:`_out`) carry it as ``!noalias``, so the vectoriser needs no run-time overlap test between 19 source rows and 19 scratch
     rows (it would give up: too many tests).
     """
     module = builder.module
     domain = module.add_metadata([ir.MetaDataString(module, "porepipe.lbm")])
     scope = module.add_metadata([ir.MetaDataString(module, "porepipe.lbm.populations"), domain])
     return module.add_metadata([scope])
-
-
-@intrinsic
-def _put(typingctx, arr, idx, val):
-    """``arr[idx] = val`` (no wrap-around test) for the tile scratch: it does not alias a scoped read (:func:`_pop`)."""
-    sig = types.void(arr, idx, val)
-
-    def codegen(context, builder, signature, args):
-        ptr = _item_pointer(context, builder, signature.args[0], args[0], signature.args[1], args[1])
-        value = context.cast(builder, args[2], signature.args[2], signature.args[0].dtype)
-        builder.store(value, ptr).set_metadata("noalias", _population_scope(builder))
-        # the collision loops are compute-bound in the cache: whole AVX-512 vectors where the CPU has them (LLVM's
-        # default for recent Intel cores is 256 bits; llvmlite's attribute set knows no string attributes)
-        set.add(builder.function.attributes, '"prefer-vector-width"="512"')
-        return context.get_dummy_value()
-
-    return sig, codegen
 
 
 def _store_codegen(nontemporal: bool):
@@ -602,30 +587,18 @@ def _store_tile(dst, n0, cnt, n_nodes, f, streaming):
 
 
 @njit(**_NUMERIC)
-def _scatter_tile(dst, gather, run_start, run_offset, run_base, r, n0, cnt, f):
-    """AA gather step: write the post-collision population q of tile node i into the slot population ō of the node
-    was pulled from (run by run, as :func:`_load_tile` pulls). ``r`` is the run holding n0 or an earlier one.
+def _scatter_run(dst, run_offset, r, n0, t, seg, f):
+    """AA gather step, regular run r: write the post-collision population q of tile lanes t … t+seg-1 (nodes
+    n0 + t …) into the slots population ō was pulled from (the run's stream offsets).
     """
-    for i in range(cnt):
-        _set(dst, n0 + i, _get(f, i))
-    t = _ZERO
-    while t < cnt:
-        while run_start[r + 1] <= n0 + t:
-            r += 1
-        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
-        regular = run_offset[r, 0] >= 0
-        for q in range(1, 19):
-            row = q * _TILE + t
-            back = q - 2 + 2 * (q & 1)  # gather row of ō: pairs (q, q + 1) are opposite
-            if regular:
-                off = run_offset[r, back] + n0 + t
-                for i in range(seg):
-                    _set(dst, off + i, _get(f, row + i))
-            else:
-                col = n0 + t + run_base[r]
-                for i in range(seg):
-                    _set(dst, _get(gather, (back, col + i)), _get(f, row + i))
-        t += seg
+    for i in range(seg):
+        _set(dst, n0 + t + i, _get(f, t + i))
+    for q in range(1, 19):
+        row = q * _TILE + t
+        back = q - 2 + 2 * (q & 1)  # gather row of ō: pairs (q, q + 1) are opposite
+        off = run_offset[r, back] + n0 + t
+        for i in range(seg):
+            _set(dst, off + i, _get(f, row + i))
 
 
 # -- a tile view v = (source, rows, scope, f): the collision reads population q of tile node i from
@@ -652,11 +625,59 @@ def _run_view(src, run_offset, r, n0, f):
     return (src, rows, (), f)
 
 
+@njit(inline="always", **_NUMERIC)
+def _indexed_view(src, gather, col, n0):
+    """In-place view of the irregular nodes n0 + i (gather column col + i) for the AA gather step: population q of
+    lane i is read from ``src[gather[q - 1, col + i]]`` (``src[n0 + i]`` for q = 0) and its post-collision value is
+    written straight back to ``src[gather[row(ō), col + i]]``, the slot the opposite population came from. No
+    scratch, no scatter pass: the gather, the collision and the scatter of a node happen in one loop iteration (the
+    loads and stores of one node touch slots no other node touches in this step).
+    """
+    return (src, (gather, col, n0), (), src)
+
+
+def _indexed(rows) -> bool:
+    return isinstance(rows, types.BaseTuple) and len(rows) == 3 and isinstance(rows.types[0], types.Array)
+
+
+def _indexed_slot(context, builder, vty, view, q, i, back: bool):
+    """Flat index of population q (with ``back``: the AA store slot of q, where ō was read) of lane i of an indexed
+    view (:func:`_indexed_view`), as intp.
+    """
+    tabty = vty.types[1].types[0]
+    rows = builder.extract_value(view, 1)
+    table, col, n0 = (builder.extract_value(rows, k) for k in range(3))
+    col = context.cast(builder, col, vty.types[1].types[1], types.intp)
+    n0 = context.cast(builder, n0, vty.types[1].types[2], types.intp)
+    one = ir.Constant(q.type, 1)
+    # gather row of q is q - 1; of ō: q for odd q, q - 2 for even q (pairs (q, q + 1) are opposite)
+    row = (
+        builder.add(builder.sub(q, ir.Constant(q.type, 2)), builder.shl(builder.and_(q, one), one))
+        if back
+        else (builder.sub(q, one))
+    )
+    is_rest = builder.icmp_signed("==", q, ir.Constant(q.type, 0))
+    out = cgutils.alloca_once(builder, ir.IntType(64))
+    with builder.if_else(is_rest) as (rest, moving):
+        with rest:
+            builder.store(builder.add(n0, i), out)
+        with moving:
+            ary = context.make_array(tabty)(context, builder, table)
+            ptr = cgutils.get_item_pointer(
+                context, builder, tabty, ary, [row, builder.add(col, i)], wraparound=False
+            )
+            index = builder.load(ptr)
+            index.set_metadata("alias.scope", _population_scope(builder))
+            builder.store(context.cast(builder, index, tabty.dtype, types.intp), out)
+    return builder.load(out)
+
+
 @intrinsic
 def _pop(typingctx, v, q, i):
     """Population q of tile node i of view ``v`` as float64, unchecked (the node loop vectorises):
     ``source[rows[q] + i]``, in the population scope (:func:`_population_scope`) if the view's scope is ``()``, or the
-    scratch's ``f[q * _TILE + i]`` where ``source`` is None.
+    scratch's ``f[q * _TILE + i]`` where ``source`` is None; through the gather table for an indexed view
+    (:func:`_indexed_view`).
 
     One intrinsic rather than jitted helpers that numba inlines (a read intrinsic behind two inlined overloads was
     that): a collision loop reads ~70 populations per node, and inlining and retyping the helpers at each read took
@@ -671,14 +692,18 @@ def _pop(typingctx, v, q, i):
         i = context.cast(builder, args[2], ity, types.intp)
         if isinstance(source, types.NoneType):
             arrty, arr = f, builder.extract_value(args[0], 3)
-            start = builder.mul(q, ir.Constant(q.type, _TILE))
+            index = builder.add(builder.mul(q, ir.Constant(q.type, _TILE)), i)
+        elif _indexed(rows):
+            arrty, arr = source, builder.extract_value(args[0], 0)
+            index = _indexed_slot(context, builder, vty, args[0], q, i, back=False)
         else:
             arrty, arr = source, builder.extract_value(args[0], 0)
             slot = cgutils.alloca_once_value(builder, builder.extract_value(args[0], 1))
             start = context.cast(
                 builder, builder.load(cgutils.gep(builder, slot, 0, q)), rows.dtype, types.intp
             )
-        value = builder.load(_item_pointer(context, builder, arrty, arr, types.intp, builder.add(start, i)))
+            index = builder.add(start, i)
+        value = builder.load(_item_pointer(context, builder, arrty, arr, types.intp, index))
         if not isinstance(scope, types.NoneType):
             value.set_metadata("alias.scope", _population_scope(builder))
         return context.cast(builder, value, arrty.dtype, types.float64)
@@ -686,10 +711,33 @@ def _pop(typingctx, v, q, i):
     return sig, codegen
 
 
-@njit(inline="always", **_NUMERIC)
-def _out(v, q, i, value):
-    """Write the post-collision population q of tile node i to the scratch."""
-    _put(v[3], q * _TILE + i, value)
+@intrinsic
+def _out(typingctx, v, q, i, value):
+    """Write the post-collision population q of tile node i: to the scratch ``f[q * _TILE + i]``, or for an indexed
+    view (:func:`_indexed_view`) in place to the slot population ō of the node was read from. The store does not
+    alias a scoped read (:func:`_population_scope`): a scratch write never does, and an in-place store only hits a
+    slot its own node has already read (every store depends on all of the node's reads through ρ and j).
+    """
+    sig = types.void(v, q, i, value)
+
+    def codegen(context, builder, signature, args):
+        vty, qty, ity, valty = signature.args
+        rows, f = vty.types[1], vty.types[3]
+        q = context.cast(builder, args[1], qty, types.intp)
+        i = context.cast(builder, args[2], ity, types.intp)
+        if _indexed(rows):
+            index = _indexed_slot(context, builder, vty, args[0], q, i, back=True)
+        else:
+            index = builder.add(builder.mul(q, ir.Constant(q.type, _TILE)), i)
+        arr = builder.extract_value(args[0], 3)
+        ptr = _item_pointer(context, builder, f, arr, types.intp, index)
+        builder.store(context.cast(builder, args[3], valty, f.dtype), ptr).set_metadata(
+            "noalias", _population_scope(builder)
+        )
+        set.add(builder.function.attributes, '"prefer-vector-width"="512"')
+        return context.get_dummy_value()
+
+    return sig, codegen
 
 
 @njit(inline="always", **_NUMERIC)
@@ -1075,6 +1123,31 @@ def _pull_collide(
     return r
 
 
+@njit(**_NUMERIC)
+def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s):
+    """AA gather step of the tile at n0 (cnt nodes, halfway walls) in place, run by run: a regular run collides
+    straight from ``src`` into the scratch ``f`` and writes back by its stream offsets (:func:`_scatter_run`); an
+    irregular run collides in place through the gather table (:func:`_indexed_view`: one pass, no scratch; on a
+    porous sample, where nearly every node is irregular, the gather step had three: pull into the scratch, collide,
+    scatter). Arguments as :func:`_pull_collide` (no fields: a gather step is never a run's last step, which is a
+    local or a pull step); returns the run holding the tile's last node.
+    """
+    t = _ZERO
+    while t < cnt:
+        while run_start[r + 1] <= n0 + t:
+            r += 1
+        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        if run_offset[r, 0] >= 0:
+            view = _run_view(src, run_offset, r, n0, f)
+            _collide(literally(op), view, t, t + seg, n0, fz[0], fz[1], force, w, s)
+            _scatter_run(src, run_offset, r, n0, t, seg, f)
+        else:
+            view = _indexed_view(src, gather, n0 + run_base[r], n0)
+            _collide(literally(op), view, t, t + seg, n0, fz[0], fz[1], force, w, s)
+        t += seg
+    return r
+
+
 def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
     """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only),
     ``rates`` (s_k/|M_k|²) for MRT.
@@ -1176,7 +1249,12 @@ def _step(
             r = np.searchsorted(rs, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
-                r0 = r
+                if aa and not local:
+                    r = _aa_gather_tile(
+                        literally(op), a, gather, rs, ro, run_base, r, n0, cnt, f, fz, b3, w2, rates
+                    )
+                    n0 += cnt
+                    continue
                 if local or (
                     fuse and not _has_links(n0, tile_start, link_slot) and _mostly_regular(rs, ro, r, n0, cnt)
                 ):
@@ -1223,10 +1301,7 @@ def _step(
                     _collide(
                         literally(op), scratch, _ZERO, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates
                     )
-                if aa and not local:
-                    _scatter_tile(a, gather, run_start, run_offset, run_base, r0, n0, cnt, f)
-                else:
-                    _store_tile(b, n0, cnt, n_nodes, f, mode)
+                _store_tile(b, n0, cnt, n_nodes, f, mode)
                 n0 += cnt
             if mode != STORE_CACHED:
                 _store_fence()
