@@ -6,8 +6,10 @@ inside a box, under gravity, with friction and damping; it is stepped a little t
 then timed (best of 3). Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
 list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
 distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
-optional effect compiled in (with neutral values), i.e. what the compile-time switches save, and the narrow
-phase against the whole-polygon clipping it replaced (same pile, interleaved).
+optional effect compiled in (with neutral values), i.e. what the compile-time switches save, the narrow
+phase against the whole-polygon clipping it replaced, and the step kernel and default skin against those before issue
+15's speed work
+(benchmarks/_granular_previous.py; same pile, interleaved, trajectories checked bit for bit).
 
     python benchmarks/granular.py            # N = 10 000
     python benchmarks/granular.py --smoke    # N = 300, 1 thread, no effect row: seconds once compiled
@@ -28,6 +30,7 @@ import time
 import numba
 import numpy as np
 from _common import add_out_argument, write_record
+from _granular_previous import make_stepper as make_previous_stepper
 
 from porepipe.granular import Settings, Simulation, polygon_properties
 from porepipe.granular import _kernels as K
@@ -176,6 +179,40 @@ def narrow_phase(n: int, warm: int, steps: int, repeats: int, threads: int) -> d
     return out
 
 
+def previous_kernel(n: int, spread: float, warm: int, steps: int, repeats: int, threads: int) -> dict:
+    """The kernel and default skin before issue 15's speed work (benchmarks/_granular_previous.py, 0.3 R_min) vs the
+    current ones on the same pile (sweep), interleaved rounds, best of each per wall and per CPU second; both runs
+    must end bit-identical.
+    """
+    numba.set_num_threads(threads)
+    sims = {}
+    for label in ("previous", "current"):
+        sim = Simulation(pile(n, spread, "sweep"), seed=1)
+        if label == "previous":
+            sim._stepper = make_previous_stepper(*sim.effects.values())
+            sim.skin = 0.3 * float(sim.r_circ.min())
+            sim.rebuild()
+        sim.advance(warm)
+        sims[label] = sim
+    out = {label: [0.0, 0.0] for label in sims}
+    for _ in range(repeats + 1):
+        for label, sim in sims.items():
+            rate, rate_cpu = _time(sim, steps, 1)
+            out[label] = [max(out[label][0], rate), max(out[label][1], rate_cpu)]
+    a, b = sims.values()
+    ca, cb = a.contacts(), b.contacts()  # live contacts, ordered by (i, j): the lists differ by their skins
+    if not (
+        np.array_equal(a.G, b.G) and ca.keys() == cb.keys() and all(np.array_equal(ca[k], cb[k]) for k in ca)
+    ):
+        raise SystemExit(
+            "granular benchmark: the current kernel's trajectory differs from the previous kernel's bits"
+        )
+    out["threads"] = threads
+    out["spread"] = spread
+    out["steps"] = a.step
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke", action="store_true", help="300 particles, a few steps, 1 thread")
@@ -215,6 +252,20 @@ def main() -> None:
             f"positions agree to {r['max_position_difference_m']:.1e} m after {r['steps']} steps",
             flush=True,
         )
+    previous = [
+        previous_kernel(n, spread, warm, steps, repeats, t)
+        for spread in ((0.1,) if args.smoke else (0.1, 0.5))
+        for t in ((1,) if args.smoke else (1, 2))
+    ]
+    for r in previous:
+        old, new = r["previous"], r["current"]
+        print(
+            f"I={r['spread']:.1f} {r['threads']} thr: previous kernel and skin (8390a4f) {old[0]:.3g} polygon-steps/s "
+            f"({old[1]:.3g} per CPU-s), "
+            f"current {new[0]:.3g} ({new[1]:.3g} per CPU-s): {new[0] / old[0]:.2f}x wall, {new[1] / old[1]:.2f}x per "
+            f"CPU-s; trajectories bit-identical after {r['steps']} steps",
+            flush=True,
+        )
     cost = effect_cost(n, warm, steps, repeats)
     print(
         f"effects: bare {cost['bare']:.3g}, all compiled in {cost['all effects compiled in']:.3g} "
@@ -239,7 +290,15 @@ def main() -> None:
     write_record(
         args.out,
         "granular_smoke.json" if args.smoke else "granular.json",
-        {"rows": rows, "builds": builds_out, "effects": cost, "narrow_phase": narrow, "peers": PEERS},
+        {
+            "rows": rows,
+            "builds": builds_out,
+            "effects": cost,
+            "narrow_phase": narrow,
+            "previous_kernel": previous,
+            "peers": PEERS,
+            "target": TARGET,
+        },
     )
 
 

@@ -194,7 +194,9 @@ class Simulation:
         rate = damping_rate(self.mass, 1.0 / self.inv_r[:n], edge, E, s.material.damping, n > 1)
         self.dt_damping = DAMPING_DT[s.integrator] / rate if rate > 0 else math.inf
         self.dt = s.dt_s if s.dt_s is not None else min(0.5 * self.dt_rule, self.dt_damping)
-        self.skin = s.skin_m if s.skin_m is not None else 0.3 * float(self.r_circ.min())
+        # 0.6 R_min: vs 0.3, half the list builds for ~1.1x the candidates; the run is the same to the bit (a
+        # candidate that does not touch adds zero), 1.09x per CPU-s on benchmarks/granular.py's wide pile
+        self.skin = s.skin_m if s.skin_m is not None else 0.6 * float(self.r_circ.min())
         self.insert_s = bodies.insert_s
         self.drop = bodies.drop
         self.drop_modes = [src.mode for src in s.drop_sources]

@@ -56,6 +56,21 @@ def _place(body, nc, x, y, phi, wv, aabb, i, scale=1.0):
     aabb[i, 3] = hiy
 
 
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _part(p, ft, aold, pout):
+    """Pair p does not touch: clear its spring, previous overlap and output row, unless they are clear already.
+
+    A touching pair writes its whole row and an aold > 0, so aold = 0 means a zero row and spring (also after a
+    list build or a restore: the row travels with aold). Touching pairs thus skip the clearing, and a pair that
+    stays apart clears once.
+    """
+    if aold[p] != 0.0:
+        ft[p] = 0.0
+        aold[p] = 0.0
+        for c in range(10):
+            pout[p, c] = 0.0
+
+
 @njit(cache=True, fastmath=FASTMATH)
 def _vibration(kind, amp, freq, t):
     """Wall offset A(t) and its rate dA/dt (App. B.1.5.2): 1 COSINUS, 2 SAWTOOTH, 3 TAPPING, 4 TRIANGLE."""
@@ -307,8 +322,6 @@ def make_stepper(
                 for i in range(blk * BLOCK, min((blk + 1) * BLOCK, n_mob)):
                     for p in range(nb_start[i], nb_start[i + 1]):
                         j = nb_j[p]
-                        for c in range(10):
-                            pout[p, c] = 0.0
                         if (
                             active[i] == 0
                             or active[j] == 0
@@ -317,8 +330,7 @@ def make_stepper(
                             or aabb[i, 3] < aabb[j, 2]
                             or aabb[j, 3] < aabb[i, 2]
                         ):
-                            ft[p] = 0.0
-                            aold[p] = 0.0
+                            _part(p, ft, aold, pout)
                             continue
                         xi = G[0, i, 0]
                         yi = G[0, i, 1]
@@ -346,8 +358,7 @@ def make_stepper(
                         )
                         A = geo[0]
                         if A <= 0.0:
-                            ft[p] = 0.0
-                            aold[p] = 0.0
+                            _part(p, ft, aold, pout)
                             continue
                         wall = j >= n_mob
                         nx, ny, L = _contact_frame(geo, xi, yi, xj, yj, wall, buf_a)

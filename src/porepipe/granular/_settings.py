@@ -389,7 +389,7 @@ class Settings(_Strict):
         description="broad phase; swap (default) builds the list 2-20x faster than sweep or cells at N = 10^4",
     )
     skin_m: PosFloat | None = Field(
-        None, description="Verlet skin (default: 0.3 x the smallest circumradius)"
+        None, description="Verlet skin (default: 0.6 x the smallest circumradius)"
     )
     gravity_m_s2: Vec2 = Field((0.0, -9.81), description="g vector (Eq. 2.13)")
     gravity: Gravity | None = Field(None, description="time-dependent g (effect variable_gravity)")
