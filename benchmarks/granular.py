@@ -7,12 +7,13 @@ then timed (best of 3). Reported for 1 and 2 threads, the three neighbour search
 list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
 distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
 optional effect compiled in (with neutral values), i.e. what the compile-time switches save, the narrow
-phase against the whole-polygon clipping it replaced, and the step kernel and default skin against those before issue
-15's speed work
-(benchmarks/_granular_previous.py; same pile, interleaved, trajectories checked bit for bit).
+phase against the whole-polygon clipping it replaced, and, with ``--reference``, an earlier step kernel file with the
+default skin of before issue 15's speed work (0.3 R_min; same pile, interleaved, trajectories checked bit for bit).
 
     python benchmarks/granular.py            # N = 10 000
     python benchmarks/granular.py --smoke    # N = 300, 1 thread, no effect row: seconds once compiled
+    git show 8390a4f:src/porepipe/granular/_kernels.py > old_granular_kernels.py
+    python benchmarks/granular.py --reference old_granular_kernels.py   # also time that kernel beside this one
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ import time
 import numba
 import numpy as np
 from _common import add_out_argument, write_record
-from _granular_previous import make_stepper as make_previous_stepper
+from _reference import load_module
 
 from porepipe.granular import Settings, Simulation, polygon_properties
 from porepipe.granular import _kernels as K
@@ -155,6 +156,16 @@ def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
     return out
 
 
+def interleaved(sims: dict, steps: int, repeats: int) -> dict:
+    """Best polygon-steps/s and best per CPU-s of each of ``sims`` (label -> sim), timed in turn, ``repeats`` + 1 rounds."""
+    out = {label: [0.0, 0.0] for label in sims}
+    for _ in range(repeats + 1):
+        for label, sim in sims.items():
+            rate, rate_cpu = _time(sim, steps, 1)
+            out[label] = [max(out[label][0], rate), max(out[label][1], rate_cpu)]
+    return out
+
+
 def narrow_phase(n: int, warm: int, steps: int, repeats: int, threads: int) -> dict:
     """Whole-polygon clipping (``trim=False``) vs the facing-chain narrow phase (``trim=True``, the default) on
     the same pile, interleaved rounds, best of each; both per wall and per CPU second. Also what was checked:
@@ -167,11 +178,7 @@ def narrow_phase(n: int, warm: int, steps: int, repeats: int, threads: int) -> d
         sim._stepper = K.make_stepper(*sim.effects.values(), trim=trim)
         sim.advance(warm)
         sims[label] = sim
-    out = {label: [0.0, 0.0] for label in sims}
-    for _ in range(repeats + 1):
-        for label, sim in sims.items():
-            rate, rate_cpu = _time(sim, steps, 1)
-            out[label] = [max(out[label][0], rate), max(out[label][1], rate_cpu)]
+    out = interleaved(sims, steps, repeats)
     a, b = sims.values()
     out["max_position_difference_m"] = float(np.abs(a.G[0, : a.n_mob, :2] - b.G[0, : b.n_mob, :2]).max())
     out["steps"] = a.step
@@ -179,8 +186,14 @@ def narrow_phase(n: int, warm: int, steps: int, repeats: int, threads: int) -> d
     return out
 
 
-def previous_kernel(n: int, spread: float, warm: int, steps: int, repeats: int, threads: int) -> dict:
-    """The kernel and default skin before issue 15's speed work (benchmarks/_granular_previous.py, 0.3 R_min) vs the
+#: default Verlet skin before issue 15's speed work, in units of the smallest circumradius (now 0.6)
+PREVIOUS_SKIN = 0.3
+
+
+def previous_kernel(
+    make_previous_stepper, n: int, spread: float, warm: int, steps: int, repeats: int, threads: int
+) -> dict:
+    """An earlier kernel (``make_previous_stepper``, its factory) with the skin before issue 15's speed work vs the
     current ones on the same pile (sweep), interleaved rounds, best of each per wall and per CPU second; both runs
     must end bit-identical.
     """
@@ -190,15 +203,11 @@ def previous_kernel(n: int, spread: float, warm: int, steps: int, repeats: int, 
         sim = Simulation(pile(n, spread, "sweep"), seed=1)
         if label == "previous":
             sim._stepper = make_previous_stepper(*sim.effects.values())
-            sim.skin = 0.3 * float(sim.r_circ.min())
+            sim.skin = PREVIOUS_SKIN * float(sim.r_circ.min())
             sim.rebuild()
         sim.advance(warm)
         sims[label] = sim
-    out = {label: [0.0, 0.0] for label in sims}
-    for _ in range(repeats + 1):
-        for label, sim in sims.items():
-            rate, rate_cpu = _time(sim, steps, 1)
-            out[label] = [max(out[label][0], rate), max(out[label][1], rate_cpu)]
+    out = interleaved(sims, steps, repeats)
     a, b = sims.values()
     ca, cb = a.contacts(), b.contacts()  # live contacts, ordered by (i, j): the lists differ by their skins
     if not (
@@ -220,6 +229,11 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=None, help="particles (default 10 000, smoke 300)")
     ap.add_argument("--methods", default="sweep,swap,cells", help="broad phases to time (comma-separated)")
     ap.add_argument("--max-threads", type=int, default=2, help="time 1 .. this many threads")
+    ap.add_argument(
+        "--reference",
+        default=None,
+        help="an earlier src/porepipe/granular/_kernels.py (git show REV:...) to time beside the current kernel",
+    )
     args = ap.parse_args()
     methods = tuple(args.methods.split(","))
     n, warm, steps, repeats = (300, 10, 10, 1) if args.smoke else (10_000, 300, 200, 3)
@@ -252,15 +266,17 @@ def main() -> None:
             f"positions agree to {r['max_position_difference_m']:.1e} m after {r['steps']} steps",
             flush=True,
         )
+    make_previous = load_module(args.reference).make_stepper if args.reference else None
     previous = [
-        previous_kernel(n, spread, warm, steps, repeats, t)
+        previous_kernel(make_previous, n, spread, warm, steps, repeats, t)
         for spread in ((0.1,) if args.smoke else (0.1, 0.5))
         for t in ((1,) if args.smoke else (1, 2))
+        if make_previous is not None
     ]
     for r in previous:
         old, new = r["previous"], r["current"]
         print(
-            f"I={r['spread']:.1f} {r['threads']} thr: previous kernel and skin (8390a4f) {old[0]:.3g} polygon-steps/s "
+            f"I={r['spread']:.1f} {r['threads']} thr: --reference kernel, skin {PREVIOUS_SKIN} R_min {old[0]:.3g} polygon-steps/s "
             f"({old[1]:.3g} per CPU-s), "
             f"current {new[0]:.3g} ({new[1]:.3g} per CPU-s): {new[0] / old[0]:.2f}x wall, {new[1] / old[1]:.2f}x per "
             f"CPU-s; trajectories bit-identical after {r['steps']} steps",
