@@ -28,6 +28,7 @@ import dataclasses
 import datetime as _dt
 import hashlib
 import json
+import math
 import resource
 import time
 from collections.abc import Iterator, Sequence
@@ -146,6 +147,9 @@ class ResultWriter:
         }
         self._tables: list[tuple[xr.Dataset, str | None]] = []
         self._h5: h5py.File | None = None
+        #: (wall s, CPU s) that earlier processes of a resumed run spent up to the checkpoint it resumed from: added
+        #: to ``wall_s``/``cpu_s`` and kept as ``resumed_wall_s``/``resumed_cpu_s`` (NaN: not recorded there)
+        self.carried: tuple[float, float] = (0.0, 0.0)
 
     # -- context -------------------------------------------------------------------------------------------------
     def __enter__(self) -> ResultWriter:
@@ -182,6 +186,8 @@ class ResultWriter:
             t1, c1 = time.perf_counter(), time.process_time()
             self.attrs["wall_s"] = t1 - self._t0
             self.attrs["cpu_s"] = c1 - self._c0
+            if self.carried != (0.0, 0.0):
+                self._add_carried()
             self.attrs["startup_s"] = self._startup
             self.attrs["peak_mb"] = _peak_mb()
             if (
@@ -191,6 +197,13 @@ class ResultWriter:
             for key, value in self.attrs.items():
                 f.attrs[key] = value
         commit(self.tmp_path, self.path, self._identity)
+
+    def _add_carried(self) -> None:
+        wall, cpu = self.carried
+        self.attrs["resumed_wall_s"], self.attrs["resumed_cpu_s"] = wall, cpu
+        if math.isfinite(wall) and math.isfinite(cpu):
+            self.attrs["wall_s"] += wall
+            self.attrs["cpu_s"] += cpu
 
     # -- writers ---------------------------------------------------------------------------------------------------
     @property

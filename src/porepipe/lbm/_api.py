@@ -71,6 +71,11 @@ class PermeabilityResult:
     ranks: int = 1  # MPI ranks of the run (1: one process)
     mean_velocity_um_s: float = float("nan")  # flow component over the sample's pore voxels (Table 8.5)
     velocity_variance_um2_s2: float = float("nan")
+    resumed_step: int = 0  # the checkpoint's step the run resumed from (0: started afresh)
+    carried: tuple[float, float] = (
+        0.0,
+        0.0,
+    )  # (wall s, CPU s) of the earlier processes up to that checkpoint
 
     def to_dataset(self) -> xr.Dataset:
         """Tables of the result (κ in all units, estimates, convergence history) as an xarray Dataset."""
@@ -128,6 +133,7 @@ class PermeabilityResult:
             "kappa_error": self.kappa_error,
             "walls": self.walls,
             "n_interpolated_links": self.n_links,
+            "resumed_step": self.resumed_step,
             "throat_voxels": self.throat_voxels,
             "warning": self.warning,
             "mpi_ranks": self.ranks,
@@ -416,5 +422,7 @@ def permeability(
         n_links=comm.owned_links(links, prep.lattice) if links is not None else 0,
         mean_velocity_um_s=stats[0],
         velocity_variance_um2_s2=stats[1],
+        resumed_step=run.resumed_step,
+        carried=run.carried,
         **base,
     )

@@ -24,6 +24,7 @@ def write_result(
     with ResultWriter(path, stage="permeability", scene=scene, scene_hash=scene_hash, threads=threads) as w:
         w.write_table(result.to_dataset())
         w.attrs.update(result.attrs())
+        w.carried = result.carried  # a resumed run's cost includes the processes before it
         w.attrs.update(
             kappa_lu=result.kappa_lu,
             kappa_m2=result.kappa_m2,

@@ -62,6 +62,9 @@ class Run:
     total_mass: float
     stopped_by: str = "step_limit"  # "kappa", "density" or "step_limit"
     kappa_error: float = float("inf")  # estimated relative distance of κ̂ to its converged value
+    resumed_step: int = 0  # the checkpoint's step this run resumed from (0: started afresh)
+    #: (wall s, CPU s) the earlier processes spent in the solver up to that checkpoint (NaN: not recorded there)
+    carried: tuple[float, float] = (0.0, 0.0)
 
     @property
     def kappa(self) -> float:
@@ -178,12 +181,22 @@ def kappa_error(kappas, noise: float = ROUND_OFF) -> float:
 
 
 def _save_checkpoint(
-    path: Path, key: str, step: int, pops: np.ndarray, fields: np.ndarray, history: dict, state=None
+    path: Path,
+    key: str,
+    step: int,
+    pops: np.ndarray,
+    fields: np.ndarray,
+    history: dict,
+    state=None,
+    spent: tuple[float, float] = (float("nan"), float("nan")),
 ) -> None:
-    """``state``: the multi-reflection links' carried n⁻ (:attr:`Links.state`), if any."""
+    """``state``: the multi-reflection links' carried n⁻ (:attr:`Links.state`), if any; ``spent``: (wall s, CPU s)
+    in the solver up to now, earlier processes of a resumed run included.
+    """
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["key"] = key
         f.attrs["step"] = step
+        f.attrs["spent_wall_s"], f.attrs["spent_cpu_s"] = spent
         f.create_dataset("populations", data=pops)
         if state is not None and state.size:
             f.create_dataset("link_state", data=state)
@@ -193,8 +206,9 @@ def _save_checkpoint(
 
 
 def _load_checkpoint(path: Path, key: str, pops: np.ndarray, state=None):
-    """(step, fields, history) from a matching checkpoint, or None; fills ``pops`` (and ``state``, the
-    multi-reflection links' n⁻, if given and non-empty).
+    """(step, fields, history, spent) from a matching checkpoint, or None; fills ``pops`` (and ``state``, the
+    multi-reflection links' n⁻, if given and non-empty). ``spent``: the (wall s, CPU s) it records, NaN in a
+    checkpoint written before it recorded them.
     """
     if path is None or not path.is_file():
         return None
@@ -208,7 +222,8 @@ def _load_checkpoint(path: Path, key: str, pops: np.ndarray, state=None):
             history = (
                 {name: list(f[f"history/{name}"][...]) for name in f["history"]} if "history" in f else {}
             )
-            return int(f.attrs["step"]), f["fields"][...], history
+            spent = tuple(float(f.attrs.get(f"spent_{k}_s", float("nan"))) for k in ("wall", "cpu"))
+            return int(f.attrs["step"]), f["fields"][...], history, spent
     except (PorepipeError, KeyError, ValueError, TypeError) as err:
         raise PorepipeError(
             f"LBM checkpoint {path} is damaged ({err}); delete it to start afresh, or rerun with --no-resume"
@@ -332,7 +347,7 @@ def _mass(src: np.ndarray, n: int, owned: slice, comm) -> float:
 
 
 def _resume(checkpoint, ckey, src, comm, state=None):
-    """(step, fields, history) of this process's matching checkpoint, or None; every process must agree."""
+    """(step, fields, history, spent) of this process's matching checkpoint, or None; every process must agree."""
     resumed = _load_checkpoint(checkpoint, ckey, src, state)
     comm.agree(resumed[0] if resumed is not None else -1, checkpoint)
     return resumed
@@ -376,11 +391,17 @@ def _solve(
     history: dict[str, list] = {k: [] for k in names}
     done = 0
     state = links.state if links is not None else None
+    t_start, c_start = time.perf_counter(), time.process_time()
+    carried = (0.0, 0.0)
     resumed = _resume(checkpoint, ckey, src, comm, state)
     if resumed is not None:
-        done, fields, old_history = resumed
+        done, fields, old_history, carried = resumed
         history.update({k: list(v) for k, v in old_history.items() if k in history})
     start = done
+
+    def spent() -> tuple[float, float]:
+        return carried[0] + time.perf_counter() - t_start, carried[1] + time.process_time() - c_start
+
     kappa_stop = settings.stop is StopRule.kappa
     tolerance = settings.tolerance_kappa if kappa_stop else settings.tolerance_density
     reporter = Progress(label, settings.max_steps, target=tolerance) if progress and comm.root else None
@@ -442,7 +463,7 @@ def _solve(
             converged, stopped_by = True, rule
             break
         if checkpoint is not None and comm.max(time.perf_counter() - last_ckpt) > settings.checkpoint_every_s:
-            _save_checkpoint(checkpoint, ckey, done, src, fields, history, state)
+            _save_checkpoint(checkpoint, ckey, done, src, fields, history, state, spent())
             last_ckpt = time.perf_counter()
     if converged and not math.isfinite(est[key_name]):
         raise StabilityError(
@@ -451,7 +472,7 @@ def _solve(
         )
     if not converged and checkpoint is not None:
         _save_checkpoint(
-            checkpoint, ckey, done, src, fields, history, state
+            checkpoint, ckey, done, src, fields, history, state, spent()
         )  # a rerun with more steps resumes here
     n_owned = comm.sum(owned.stop - owned.start)
     step_wall = comm.max(step_wall)
@@ -473,4 +494,6 @@ def _solve(
         _mass(src, n, owned, comm),
         stopped_by,
         err,
+        start,
+        carried,
     )

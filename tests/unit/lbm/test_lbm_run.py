@@ -42,11 +42,39 @@ def test_checkpoint_flag_is_written_on_the_step_limit_and_resumed(tmp_path):
     assert not out.exists() and ckpt.is_file()  # ... but the checkpoint is kept
     with h5py.File(ckpt, "r") as f:
         first = int(f.attrs["step"])
+        spent_wall, spent_cpu = float(f.attrs["spent_wall_s"]), float(f.attrs["spent_cpu_s"])
     assert first >= 20
+    assert spent_wall > 0 and spent_cpu > 0  # what the interrupted process spent stepping to its checkpoint
     assert main(["permeability", *common, "--resume"]) == 0
     assert out.is_file() and not ckpt.exists()  # converged: checkpoint deleted
     history = read_attrs(out)
     assert history["steps"] > first
+    # the result's cost counts the interrupted process too: its solver time is carried over and recorded
+    assert history["resumed_step"] == first
+    assert (history["resumed_wall_s"], history["resumed_cpu_s"]) == (spent_wall, spent_cpu)
+    assert history["cpu_s"] > spent_cpu and history["wall_s"] > spent_wall
+
+
+def test_a_checkpoint_without_its_cost_resumes_with_the_earlier_cost_marked_unknown(tmp_path):
+    """A checkpoint written before checkpoints recorded their cost: the run resumes, its result says the earlier
+    cost is not known (NaN) and counts its own."""
+    binary, ckpt, out = _binary(tmp_path), tmp_path / "perm.ckpt.h5", tmp_path / "perm_a2_x.h5"
+    common = [str(binary), "--axis", "x", "--window-steps", "10", "-o", str(out), "--checkpoint", str(ckpt)]
+    assert main(["permeability", *common, "--max-steps", "20"]) == 2
+    with h5py.File(ckpt, "a") as f:
+        del f.attrs["spent_wall_s"], f.attrs["spent_cpu_s"]
+    assert main(["permeability", *common, "--resume"]) == 0
+    attrs = read_attrs(out)
+    assert attrs["resumed_step"] >= 20
+    assert np.isnan(attrs["resumed_cpu_s"]) and np.isnan(attrs["resumed_wall_s"])
+    assert np.isfinite(attrs["cpu_s"]) and attrs["cpu_s"] > 0
+
+
+def test_a_fresh_run_records_no_earlier_cost(tmp_path):
+    binary, out = _binary(tmp_path), tmp_path / "perm_a2_x.h5"
+    assert main(["permeability", str(binary), "--axis", "x", "-o", str(out), "--no-resume"]) == 0
+    attrs = read_attrs(out)
+    assert attrs["resumed_step"] == 0 and "resumed_cpu_s" not in attrs
 
 
 def test_no_resume_discards_the_checkpoint(tmp_path):
