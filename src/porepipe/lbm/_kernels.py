@@ -545,6 +545,16 @@ def _load_segment(src, gather, run_offset, run_base, r, n0, cnt, t, f):
                 _set(f, row + i, _get(src, _get(gather, (q - 1, col + i))))
 
 
+@njit(inline="always", **_NUMERIC)
+def _run_segment(run_start, r, pos, rest):
+    """The run holding node ``pos`` (``r``: that run or an earlier one) and how many nodes from ``pos`` on lie in it,
+    at most ``rest``: the step of a loop that walks a tile run by run.
+    """
+    while run_start[r + 1] <= pos:
+        r += 1
+    return r, min(rest, run_start[r + 1] - pos)
+
+
 @njit(**_NUMERIC)
 def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
     """Pull the populations arriving at nodes n0 … n0+cnt-1 into ``f``, run by run (a tile may span several runs,
@@ -555,9 +565,7 @@ def _load_tile(src, gather, run_start, run_offset, run_base, r, n0, cnt, f):
         _set(f, i, _get(src, n0 + i))
     t = _ZERO
     while t < cnt:
-        while run_start[r + 1] <= n0 + t:
-            r += 1
-        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        r, seg = _run_segment(run_start, r, n0 + t, cnt - t)
         _load_segment(src, gather, run_offset, run_base, r, n0 + t, seg, t, f)
         t += seg
     return r
@@ -1104,9 +1112,7 @@ def _pull_collide(
     scratch = _scratch_view(f)
     t = _ZERO
     while t < cnt:
-        while run_start[r + 1] <= n0 + t:
-            r += 1
-        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        r, seg = _run_segment(run_start, r, n0 + t, cnt - t)
         if run_offset[r, 0] >= 0:
             view = _run_view(src, run_offset, r, n0, f)
             if keep:
@@ -1134,9 +1140,7 @@ def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt
     """
     t = _ZERO
     while t < cnt:
-        while run_start[r + 1] <= n0 + t:
-            r += 1
-        seg = min(cnt - t, run_start[r + 1] - (n0 + t))
+        r, seg = _run_segment(run_start, r, n0 + t, cnt - t)
         if run_offset[r, 0] >= 0:
             view = _run_view(src, run_offset, r, n0, f)
             _collide(literally(op), view, t, t + seg, n0, fz[0], fz[1], force, w, s)
