@@ -23,7 +23,7 @@ GALLERY = ROOT / "docs" / "gallery"
 
 #: wall time of a whole `porepipe run SCENE --cores N`, measured (see the README's table for the conditions)
 MEASURED = {
-    "mini": "53 s the first time on a fresh clone (numba compiles every kernel), 23 s with a warm cache; 2 cores, quiet machine",
+    "mini": "58–69 s the first time on a fresh clone (numba compiles every kernel), 23 s with a warm cache; 2 cores, load ~1.7",
     "filled-packing-ci": "41 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
     "rough-walls-ci": "35 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
     "granular-box": "26 s (`--cores 1`, shared loaded 2-core machine, numba cache warm)",
