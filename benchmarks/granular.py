@@ -157,7 +157,9 @@ def effect_cost(n: int, warm: int, steps: int, repeats: int) -> dict:
 
 
 def interleaved(sims: dict, steps: int, repeats: int) -> dict:
-    """Best polygon-steps/s and best per CPU-s of each of ``sims`` (label -> sim), timed in turn, ``repeats`` + 1 rounds."""
+    """Best polygon-steps/s and best per CPU-s of each of ``sims`` (label -> sim), timed in turn over ``repeats``
+    + 1 rounds.
+    """
     out = {label: [0.0, 0.0] for label in sims}
     for _ in range(repeats + 1):
         for label, sim in sims.items():
@@ -266,18 +268,19 @@ def main() -> None:
             f"positions agree to {r['max_position_difference_m']:.1e} m after {r['steps']} steps",
             flush=True,
         )
-    make_previous = load_module(args.reference).make_stepper if args.reference else None
-    previous = [
-        previous_kernel(make_previous, n, spread, warm, steps, repeats, t)
-        for spread in ((0.1,) if args.smoke else (0.1, 0.5))
-        for t in ((1,) if args.smoke else (1, 2))
-        if make_previous is not None
-    ]
+    previous = []
+    if args.reference:
+        make_previous = load_module(args.reference).make_stepper
+        previous = [
+            previous_kernel(make_previous, n, spread, warm, steps, repeats, t)
+            for spread in ((0.1,) if args.smoke else (0.1, 0.5))
+            for t in ((1,) if args.smoke else (1, 2))
+        ]
     for r in previous:
         old, new = r["previous"], r["current"]
         print(
-            f"I={r['spread']:.1f} {r['threads']} thr: --reference kernel, skin {PREVIOUS_SKIN} R_min {old[0]:.3g} polygon-steps/s "
-            f"({old[1]:.3g} per CPU-s), "
+            f"I={r['spread']:.1f} {r['threads']} thr: --reference kernel, skin {PREVIOUS_SKIN} R_min "
+            f"{old[0]:.3g} polygon-steps/s ({old[1]:.3g} per CPU-s), "
             f"current {new[0]:.3g} ({new[1]:.3g} per CPU-s): {new[0] / old[0]:.2f}x wall, {new[1] / old[1]:.2f}x per "
             f"CPU-s; trajectories bit-identical after {r['steps']} steps",
             flush=True,

@@ -286,8 +286,9 @@ def kernel_rows(
 ) -> tuple[list[dict], dict | None]:
     """Per-step times of the kernels (bare) and of the current one with each effect compiled in, 1 and 2 threads
     (smoke: the half-list kernels, 1 thread), and LAMMPS's chute (32 000 atoms, and replicated to about n atoms)
-    run once per one-thread round (empty if LAMMPS is not installed, or in the smoke run). The repeats go round-robin over the kernels and LAMMPS, so that each
-    comparison sees the same drift of the machine's load; each kernel's best run counts, and LAMMPS's.
+    run once per one-thread round (empty if LAMMPS is not installed, or in the smoke run). The repeats go
+    round-robin over the kernels and LAMMPS, so that each comparison sees the same drift of the machine's load; each
+    kernel's best run counts, and LAMMPS's.
     """
     n = bench.r.size
     runs = [(name, (False, False, False)) for name in KERNELS] + [(CURRENT, f) for f in VARIANTS.values()]
@@ -298,8 +299,9 @@ def kernel_rows(
     rows = []
     lammps = {}
     sizes = {"chute": ((1, 1), 300)}
-    if scale_for(n) != (1, 1):  # the chute replicated to about n atoms, ~300 chute-atom-steps' worth of steps
-        sizes["chute scaled to N"] = (scale_for(n), max(20, 300 // (scale_for(n)[0] * scale_for(n)[1])))
+    scale = scale_for(n)
+    if scale != (1, 1):  # the chute replicated to about n atoms, ~300 chute-atom-steps' worth of steps
+        sizes["chute scaled to N"] = (scale, max(20, 300 // (scale[0] * scale[1])))
     for threads in (1,) if smoke else (1, 2):
         best = dict.fromkeys(labels, (np.inf, np.inf))
         for _ in range(repeats):

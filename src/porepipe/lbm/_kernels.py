@@ -113,8 +113,8 @@ def _get(typingctx, arr, idx):
 
 def _population_scope(builder):
     """Alias-scope list of the reads of a population array inside a collision loop: the scratch writes of the loop
-    (:func:`_out`) carry it as ``!noalias``, so the vectoriser needs no run-time overlap test between 19 source rows and 19 scratch
-    rows (it would give up: too many tests).
+    (:func:`_out`) carry it as ``!noalias``, so the vectoriser needs no run-time overlap test between 19 source rows
+    and 19 scratch rows (it would give up: too many tests).
     """
     module = builder.module
     domain = module.add_metadata([ir.MetaDataString(module, "porepipe.lbm")])

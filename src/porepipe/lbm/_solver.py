@@ -187,8 +187,8 @@ def _save_checkpoint(
     pops: np.ndarray,
     fields: np.ndarray,
     history: dict,
-    state=None,
-    spent: tuple[float, float] = (float("nan"), float("nan")),
+    state,
+    spent: tuple[float, float],
 ) -> None:
     """``state``: the multi-reflection links' carried n⁻ (:attr:`Links.state`), if any; ``spent``: (wall s, CPU s)
     in the solver up to now, earlier processes of a resumed run included.
