@@ -21,6 +21,7 @@ instead of three (pull into the scratch, collide, scatter back).
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 
 import numpy as np
@@ -1152,6 +1153,41 @@ def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt
     return r
 
 
+def _gather_step(with_aa, op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s):
+    """The AA gather step of a tile (:func:`_aa_gather_tile`, same arguments after ``with_aa``) in a step kernel
+    compiled for in-place streaming (the literal ``with_aa`` True); in one compiled for the two-array kernel alone
+    (False: interpolated walls, ``streaming: pull``) nothing, so the in-place code is not compiled there (~5 of the
+    step kernel's ~15 CPU-s of cold compilation, measured on the mini scene's CLI-wall job). Returns the run holding
+    the tile's last node.
+    """
+
+
+@overload(_gather_step, prefer_literal=True, jit_options=_NUMERIC)
+def _gather_step_if_compiled(
+    with_aa, op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s
+):
+    """The jitted :func:`_gather_step` of the literal ``with_aa``."""
+    if not isinstance(with_aa, types.BooleanLiteral):
+        raise TypeError("_gather_step: with_aa must be a literal (call it with literally(with_aa))")
+    if with_aa.literal_value:
+
+        def gather_in_place(
+            with_aa, op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s
+        ):
+            return _aa_gather_tile(
+                literally(op), src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s
+            )
+
+        return gather_in_place
+
+    def not_compiled(
+        with_aa, op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s
+    ):
+        return r
+
+    return not_compiled
+
+
 def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
     """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only),
     ``rates`` (s_k/|M_k|²) for MRT.
@@ -1190,6 +1226,7 @@ def _collide_one_operator(op, v, lo, hi, n0, force_lo, force_hi, force, omega, r
 @by_threads(_SERIAL_MAX, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _step(
     op,
+    with_aa,
     src,
     dst,
     gather,
@@ -1213,7 +1250,8 @@ def _step(
     link_state,
 ):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
-    step if ``store``. ``streaming``: how to write the populations (STORE_CACHED, STORE_STREAM, … :func:`streams`).
+    step if ``store``. ``streaming``: how to write the populations (STORE_CACHED, STORE_STREAM, … :func:`streams`);
+    IN_PLACE only in the variant compiled ``with_aa`` (a literal, as ``op``: :func:`_gather_step`).
 
     Each parallel chunk of _CHUNK nodes runs tile by tile: pull into the L1 scratch, interpolate its boundary links
     (links of tile t: ``tile_start[t]:tile_start[t + 1]``; an empty ``link_slot`` for halfway bounce-back), collide,
@@ -1254,8 +1292,22 @@ def _step(
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
                 if aa and not local:
-                    r = _aa_gather_tile(
-                        literally(op), a, gather, rs, ro, run_base, r, n0, cnt, f, fz, b3, w2, rates
+                    r = _gather_step(
+                        literally(with_aa),
+                        literally(op),
+                        a,
+                        gather,
+                        rs,
+                        ro,
+                        run_base,
+                        r,
+                        n0,
+                        cnt,
+                        f,
+                        fz,
+                        b3,
+                        w2,
+                        rates,
                     )
                     n0 += cnt
                     continue
@@ -1311,20 +1363,29 @@ def _step(
                 _store_fence()
 
 
-def step(op, *args):
-    """Run :func:`_step` for operator ``op`` (BGK, TRT, MRT) on ``args`` (its other arguments, in order).
+#: where ``streaming`` sits among :func:`step`'s ``args`` (the step kernel's arguments after ``op`` and ``with_aa``)
+_STREAMING_ARG = tuple(inspect.signature(_step.py_func).parameters).index("streaming") - 2
+
+
+def step(op, with_aa, *args):
+    """Run :func:`_step` for operator ``op`` (BGK, TRT, MRT) on ``args`` (its other arguments, in order), in the
+    variant that can stream in place if ``with_aa`` (bool; the variant without it does not compile the in-place code
+    and refuses ``IN_PLACE``).
 
     Calls the compiled kernel of the literal ``op`` directly: numba's dispatcher matches a plain int against no
     compiled signature (they all hold ``Literal[int](op)``), so each call from Python retyped the whole step kernel
     until ``literally`` asked for the literal, ~45 ms a call (an 8³ lattice steps in 0.02 ms). The first call of
     each variant goes through the dispatcher, which compiles or loads it.
     """
+    with_aa = bool(with_aa)
+    if args[_STREAMING_ARG] == IN_PLACE and not with_aa:
+        raise ValueError("step: streaming IN_PLACE needs the kernel variant compiled with_aa")
     kernel = _step.pick(*args)
-    compiled = kernel.overloads.get((types.literal(op), *(typeof(a) for a in args)))
+    compiled = kernel.overloads.get((types.literal(op), types.literal(with_aa), *(typeof(a) for a in args)))
     if compiled is None:
-        kernel(op, *args)
+        kernel(op, with_aa, *args)
     else:
-        compiled.entry_point(op, *args)
+        compiled.entry_point(op, with_aa, *args)
 
 
 # -- reductions ---------------------------------------------------------------------------------------------------------

@@ -123,6 +123,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
     def step(src, dst, fields, store, n):  # one step (MPI steps one at a time) pulls: nothing to pair it with
         K.step(
             op,
+            stores == K.IN_PLACE,
             src,
             dst,
             lat.gather,

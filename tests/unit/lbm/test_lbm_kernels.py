@@ -149,6 +149,19 @@ def test_store_modes_write_identical_populations(precision, geometry, steps):
         np.testing.assert_array_equal(fields, results[0][1])
 
 
+def test_kernel_without_in_place_code_refuses_in_place_streaming():
+    """The step kernel compiled without the AA gather step (``with_aa`` False: interpolated walls, ``streaming:
+    pull``) would skip every gather step of an in-place run: the call is refused before anything runs."""
+    from porepipe.lbm import _kernels
+
+    lat = build_lattice(_random_pore((4, 4, 4), 0.7, 3), (True, True, True), (0, 4), (0, 4))
+    src = np.zeros(19 * lat.n_nodes)
+    none = np.zeros(0)
+    args = (src, src, lat.gather, lat.run_start, lat.run_offset, lat.run_base, 0, 4, np.zeros(3))
+    with pytest.raises(ValueError, match="IN_PLACE needs the kernel variant compiled with_aa"):
+        _kernels.step(_kernels.TRT, False, *args, np.zeros((4, 0)), False, 2, _kernels.IN_PLACE, none, none)
+
+
 def test_mrt_rates_match_thesis_and_odd_rates_follow_magic():
     """Thesis Eq. 6.1.14 diagonal; with Λ the q and m moments relax with 1/τ⁻ = 1/(½ + Λ/(τ − ½))."""
     s = mrt_rates(0.857, 1.0)
