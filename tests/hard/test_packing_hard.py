@@ -4,6 +4,7 @@ import sys
 import time
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 from pydantic import ValidationError
@@ -202,6 +203,27 @@ def test_changed_settings_discard_the_old_checkpoint_and_success_deletes_it(tmp_
     )  # the new scene's spheres, not the old ones
     assert len(resumed.radii_um) == 20
     assert not ckpt.exists()
+
+
+def test_a_resumed_packing_carries_the_cost_its_checkpoint_records(tmp_path):
+    """A resumed run's cost includes what the earlier processes spent up to the checkpoint (written with it); a
+    checkpoint written before that record resumes with the earlier cost unknown (NaN), a fresh run carries none."""
+    from porepipe._shared.cost import SpentClock
+    from porepipe.packing._api import checkpoint_key
+    from porepipe.packing._io import save_checkpoint
+    from porepipe.packing._types import State
+
+    box, settings = np.array([400.0] * 3), _one_type(count=12)
+    key = checkpoint_key(settings, box, np.array([True] * 3), 1, Path("."))
+    ckpt = tmp_path / "ckpt.h5"
+    save_checkpoint(ckpt, State.empty(), key=key, clock=SpentClock((40.0, 30.0)))
+    with h5py.File(ckpt, "r") as f:
+        spent = float(f.attrs["spent_wall_s"]), float(f.attrs["spent_cpu_s"])
+    assert 40.0 <= spent[0] < 41.0 and 30.0 <= spent[1] < 31.0
+    assert pack_spheres(settings, box, seed=1, checkpoint_path=ckpt, resume=True).carried == spent
+    save_checkpoint(ckpt, State.empty(), key=key)  # no cost recorded
+    assert np.isnan(pack_spheres(settings, box, seed=1, checkpoint_path=ckpt, resume=True).carried).all()
+    assert pack_spheres(settings, box, seed=1).carried == (0.0, 0.0)
 
 
 def test_matching_checkpoint_still_resumes(tmp_path):

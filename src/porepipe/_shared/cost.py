@@ -45,3 +45,36 @@ def mark_compute_start(command=None) -> float:
         startup = float("nan")
     COMPUTE_MARK[:] = [(time.perf_counter(), time.process_time(), startup)]
     return startup
+
+
+#: the checkpoint attributes that record what a resumable computation has spent up to it (:class:`SpentClock`)
+SPENT_ATTRS = ("spent_wall_s", "spent_cpu_s")
+
+
+class SpentClock:
+    """What a resumable computation has spent, its earlier processes included: ``carried`` (wall s, CPU s), what the
+    checkpoint it resumed from recorded (:func:`carried_by`; NaN where that checkpoint predates the record), plus
+    this process's time since the clock was made. A checkpoint stores :meth:`spent` (:meth:`record`); the result's
+    writer adds ``carried`` to its ``wall_s``/``cpu_s`` (:attr:`porepipe._shared.store.ResultWriter.carried`).
+    """
+
+    def __init__(self, carried: tuple[float, float] = (0.0, 0.0)):
+        self.carried = (float(carried[0]), float(carried[1]))
+        self._t0, self._c0 = time.perf_counter(), time.process_time()
+
+    def spent(self) -> tuple[float, float]:
+        """(wall s, CPU s) spent so far, earlier processes included."""
+        return self.carried[0] + time.perf_counter() - self._t0, self.carried[
+            1
+        ] + time.process_time() - self._c0
+
+    def record(self, attrs) -> None:
+        """Write :meth:`spent` into a checkpoint's ``attrs`` (HDF5 attributes, or a dict of ``np.savez`` arrays)."""
+        attrs[SPENT_ATTRS[0]], attrs[SPENT_ATTRS[1]] = self.spent()
+
+
+def carried_by(attrs) -> tuple[float, float]:
+    """(wall s, CPU s) that a checkpoint's ``attrs`` (HDF5 attributes or an ``np.load`` archive) record as spent up
+    to it; NaN for a checkpoint written before they were recorded.
+    """
+    return tuple(float(attrs[k]) if k in attrs else float("nan") for k in SPENT_ATTRS)

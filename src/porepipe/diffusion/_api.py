@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from porepipe._shared.atomic import atomic_path
+from porepipe._shared.cost import SpentClock, carried_by
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.rng import kernel_seed
@@ -143,6 +144,8 @@ class Tallies:
     msd: np.ndarray
     rounds: int = 0
     round_cpu_s: dict = field(default_factory=dict)  # round -> CPU s of its kernel call (not checkpointed)
+    #: (wall s, CPU s) that earlier processes of a resumed run spent up to its checkpoint (NaN: not recorded there)
+    carried: tuple[float, float] = (0.0, 0.0)
 
     def add(self, rows, profile, hitmap, orientation, msd):
         self.rows = np.concatenate([self.rows, rows])
@@ -153,13 +156,17 @@ class Tallies:
         self.rounds += 1
 
 
-def _save_checkpoint(path: Path, key: str, tallies: Tallies) -> None:
+def _save_checkpoint(path: Path, key: str, tallies: Tallies, clock: SpentClock) -> None:
+    """The tallies so far, and what the run has spent up to now (``clock``)."""
+    spent: dict = {}
+    clock.record(spent)
     with (
         atomic_path(path) as tmp,
         open(tmp, "wb") as f,
     ):  # fsync, then rename: a kill leaves the old checkpoint
         np.savez(
             f,
+            **spent,
             key=np.array(key),
             rows=tallies.rows,
             profile=tallies.profile,
@@ -179,7 +186,11 @@ def _load_checkpoint(path: Path, key: str) -> Tallies | None:
             if str(z["key"]) != key:
                 print(f"[diffusion] checkpoint {path} is for another input; discarded", flush=True)
                 return None
-            return Tallies(z["rows"], z["profile"], z["hitmap"], z["orientation"], z["msd"], int(z["rounds"]))
+            tallies = Tallies(
+                z["rows"], z["profile"], z["hitmap"], z["orientation"], z["msd"], int(z["rounds"])
+            )
+            tallies.carried = carried_by(z)
+            return tallies
     except (OSError, ValueError, KeyError, EOFError):
         print(f"[diffusion] checkpoint {path} is unreadable; discarded", flush=True)
         return None
@@ -240,6 +251,7 @@ def _run_rounds(settings, key, checkpoint, label, run_round, rel_error, shapes) 
             np.zeros((0, K.N_TALLY)), *(np.zeros(s) for s in shapes[:3]), np.zeros((0, *shapes[3])), 0
         )
     progress = Progress(label, 0, target=settings.target_rel_error, convergence="statistical")
+    clock = SpentClock(tallies.carried)
     while tallies.rounds < settings.max_rounds:
         if tallies.rounds >= 2 and rel_error(tallies) <= settings.target_rel_error:
             break
@@ -249,7 +261,7 @@ def _run_rounds(settings, key, checkpoint, label, run_round, rel_error, shapes) 
         run_round(tallies)
         tallies.round_cpu_s[tallies.rounds - 1] = time.process_time() - cpu0
         if checkpoint:
-            _save_checkpoint(checkpoint, key, tallies)
+            _save_checkpoint(checkpoint, key, tallies, clock)
         rel = rel_error(tallies) if tallies.rounds >= 2 else None
         progress.update(
             tallies.rounds,

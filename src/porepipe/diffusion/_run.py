@@ -175,6 +175,8 @@ def run(
             result = _api.transport(
                 pore, axis.index, settings, voxel_um, periodic, seed=seed, checkpoint=checkpoint
             )
+        if result.tallies is not None:
+            w.carried = result.tallies.carried  # a resumed run's cost includes the processes before it
         w.write_table(_dataset(result, settings))
         w.attrs.update(
             setup=settings.setup.value,

@@ -25,6 +25,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.atomic import atomic_path
+from porepipe._shared.cost import SpentClock, carried_by
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import ResultWriter, result_hash
@@ -43,8 +44,12 @@ _UNITS = {
 }
 
 
-def _save_checkpoint(path: Path, key: str, sim: Simulation, frames: list, series: list) -> None:
+def _save_checkpoint(
+    path: Path, key: str, sim: Simulation, frames: list, series: list, clock: SpentClock
+) -> None:
+    """Everything a bit-identical resume needs, and what the run has spent so far (``clock``)."""
     state = sim.state()
+    clock.record(state)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:  # fsync, then rename
         np.savez(
             fh,
@@ -60,7 +65,9 @@ def _pack_frames(frames: list) -> list:
 
 
 def _load_checkpoint(path: Path, key: str):
-    """(state, frames, series) of a checkpoint with the same key, else None (a stale one is discarded)."""
+    """(state, frames, series, carried) of a checkpoint with the same key, else None (a stale one is discarded);
+    ``carried``: the (wall s, CPU s) it records as spent (NaN where it predates the record).
+    """
     if not path.is_file():
         return None
     try:
@@ -74,6 +81,7 @@ def _load_checkpoint(path: Path, key: str):
             state = {k: z[k] for k in (*Simulation.STATE, "scalars", "max_overlap_seen")}
             frames = [Frame(*f) for f in z["frames"]]
             series = [tuple(r) for r in z["series"]]
+            carried = carried_by(z)
     except (
         OSError,
         ValueError,
@@ -86,7 +94,7 @@ def _load_checkpoint(path: Path, key: str):
         raise PorepipeError(
             f"granular checkpoint {path} is damaged ({type(err).__name__}: {err}); delete it to start afresh"
         ) from None
-    return state, frames, series
+    return state, frames, series, carried
 
 
 def _sample(sim: Simulation) -> tuple:
@@ -136,7 +144,7 @@ def run(
     out = Path(out)
     key = result_hash(STAGE, settings=settings, seed=int(seed))
     with ResultWriter(out, stage=STAGE, scene=scene, scene_hash=key, threads=threads) as w:
-        sim, frames, series, particle_steps, rate = _simulate(
+        sim, frames, series, particle_steps, rate, w.carried = _simulate(
             settings, seed, checkpoint, resume, progress, key
         )
         _write(w, sim, frames, series)
@@ -170,11 +178,13 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
     frames: list[Frame] = []
     series: list[tuple] = []
     ck = Path(checkpoint) if checkpoint else None
+    carried = (0.0, 0.0)
     if ck is not None and resume:
         loaded = _load_checkpoint(ck, key)
         if loaded is not None:
-            state, frames, series = loaded
+            state, frames, series, carried = loaded
             sim.restore(state)
+    clock = SpentClock(carried)
     prog = Progress("granular", total) if progress else None
     t0 = time.perf_counter()
     particle_steps = 0  # active particles x steps: slots not yet inserted, or gone, cost nothing
@@ -191,14 +201,14 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
         particle_steps += int(np.count_nonzero(sim.active[: sim.n_mob] == 1)) * (nxt - sim.step)
         sim.advance(nxt - sim.step)
         if ck is not None and sim.step % settings.checkpoint_every_steps == 0 and sim.step < total:
-            _save_checkpoint(ck, key, sim, frames, series)
+            _save_checkpoint(ck, key, sim, frames, series, clock)
         if prog is not None:
             prog.update(sim.step, f"t = {sim.time_s:.4g} s, {len(sim.contacts()['i'])} contacts")
     wall = time.perf_counter() - t0
     rate = (
         particle_steps / wall if wall > 0 else 0.0
     )  # active count taken at the start of each chunk of steps
-    return sim, frames, series, particle_steps, rate
+    return sim, frames, series, particle_steps, rate, carried
 
 
 def _write(w: ResultWriter, sim: Simulation, frames: list[Frame], series: list[tuple]) -> None:

@@ -14,6 +14,7 @@ import numba
 import numpy as np
 
 from porepipe._shared.atomic import atomic_path
+from porepipe._shared.cost import SPENT_ATTRS, SpentClock, carried_by
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import hash_of, open_h5
@@ -197,7 +198,7 @@ def _save_checkpoint(
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["key"] = key
         f.attrs["step"] = step
-        f.attrs["spent_wall_s"], f.attrs["spent_cpu_s"] = spent
+        f.attrs[SPENT_ATTRS[0]], f.attrs[SPENT_ATTRS[1]] = spent
         f.create_dataset("populations", data=pops)
         if state is not None and state.size:
             f.create_dataset("link_state", data=state)
@@ -223,8 +224,7 @@ def _load_checkpoint(path: Path, key: str, pops: np.ndarray, state=None):
             history = (
                 {name: list(f[f"history/{name}"][...]) for name in f["history"]} if "history" in f else {}
             )
-            spent = tuple(float(f.attrs.get(f"spent_{k}_s", float("nan"))) for k in ("wall", "cpu"))
-            return int(f.attrs["step"]), f["fields"][...], history, spent
+            return int(f.attrs["step"]), f["fields"][...], history, carried_by(f.attrs)
     except (PorepipeError, KeyError, ValueError, TypeError) as err:
         raise PorepipeError(
             f"LBM checkpoint {path} is damaged ({err}); delete it to start afresh, or rerun with --no-resume"
@@ -392,16 +392,13 @@ def _solve(
     history: dict[str, list] = {k: [] for k in names}
     done = 0
     state = links.state if links is not None else None
-    t_start, c_start = time.perf_counter(), time.process_time()
     carried = (0.0, 0.0)
     resumed = _resume(checkpoint, ckey, src, comm, state)
     if resumed is not None:
         done, fields, old_history, carried = resumed
         history.update({k: list(v) for k, v in old_history.items() if k in history})
     start = done
-
-    def spent() -> tuple[float, float]:
-        return carried[0] + time.perf_counter() - t_start, carried[1] + time.process_time() - c_start
+    spent = SpentClock(carried).spent
 
     kappa_stop = settings.stop is StopRule.kappa
     tolerance = settings.tolerance_kappa if kappa_stop else settings.tolerance_density

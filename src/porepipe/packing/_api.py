@@ -37,6 +37,7 @@ import numba
 import numpy as np
 
 from porepipe._shared import rng
+from porepipe._shared.cost import SpentClock
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe._shared.store import hash_of
@@ -664,7 +665,10 @@ def pack_spheres(
     base_dir = Path(base_dir)
     key = checkpoint_key(settings, box, per, seed, base_dir)
     state = _resumed_state(checkpoint_path, key) if resume and checkpoint_path is not None else State.empty()
-    saver = (lambda st: save_checkpoint(checkpoint_path, st, key)) if checkpoint_path is not None else None
+    clock = SpentClock(state.carried)
+    saver = (
+        (lambda st: save_checkpoint(checkpoint_path, st, key, clock)) if checkpoint_path is not None else None
+    )
     while state.stage < len(settings.stages):
         _run_stage(state, settings, settings.stages[state.stage], box, per, seed, base_dir, saver, progress)
     if checkpoint_path is not None:
@@ -687,4 +691,5 @@ def pack_spheres(
         stage_converged=list(state.stage_converged),
         stage_steps=list(state.stage_steps),
         snapshots=state.snapshots,
+        carried=state.carried,
     )

@@ -19,6 +19,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.atomic import atomic_path
+from porepipe._shared.cost import SpentClock, carried_by
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.spheres import write_xyzr
 from porepipe._shared.store import label_dims
@@ -110,14 +111,17 @@ def write_xyzr_file(path, packing: Packing) -> None:
     write_xyzr(path, packing.centres_um, packing.radii_um)
 
 
-def save_checkpoint(path, state: State, key: str = "") -> None:
+def save_checkpoint(path, state: State, key: str = "", clock: SpentClock | None = None) -> None:
     """Write the full engine state atomically (temporary name, then rename), tagged with ``key``.
 
     ``key`` is the hash of everything that determines the packing (:func:`porepipe.packing._api.checkpoint_key`);
-    a resume refuses a checkpoint whose key differs.
+    a resume refuses a checkpoint whose key differs. ``clock``: what the run has spent so far, recorded so that a
+    resumed run's cost includes it.
     """
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["key"] = key
+        if clock is not None:
+            clock.record(f.attrs)
         for key in _STATE_ARRAYS:
             f.create_dataset(key, data=getattr(state, key))
         for key in _STATE_INTS:
@@ -171,4 +175,5 @@ def load_checkpoint(path) -> State:
             stage_converged=[bool(b) for b in f.attrs["stage_converged"]],
             stage_steps=[int(s) for s in f.attrs["stage_steps"]],
             snapshots=snaps,
+            carried=carried_by(f.attrs),
         )

@@ -63,6 +63,7 @@ def run(
             resume=resume,
             progress=progress,
         )
+        w.carried = packing.carried  # a resumed run's cost includes the processes before it
         write_packing(w, packing)
     if xyzr:
         write_xyzr_file(xyzr, packing)

@@ -61,6 +61,8 @@ class Packing:
     stage_converged: list[bool]
     stage_steps: list[int]
     snapshots: list[dict]
+    #: (wall s, CPU s) that earlier processes of a resumed run spent up to its checkpoint (NaN: not recorded there)
+    carried: tuple[float, float] = (0.0, 0.0)
 
     @property
     def all_converged(self) -> bool:
@@ -91,6 +93,8 @@ class State:
     stage_converged: list[bool]
     stage_steps: list[int]
     snapshots: list[dict]
+    #: (wall s, CPU s) spent up to the checkpoint this state was read from, earlier processes included
+    carried: tuple[float, float] = (0.0, 0.0)
 
     @classmethod
     def empty(cls) -> State:

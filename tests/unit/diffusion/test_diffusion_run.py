@@ -69,12 +69,16 @@ def test_checkpoint_resume_gives_the_same_numbers(tmp_path):
     )  # writes ck per round
     # pretend the run was killed after round 1: keep only that much, then resume to 3 rounds
     z = dict(np.load(ck))
+    assert float(z["spent_cpu_s"]) > 0 and float(z["spent_wall_s"]) > 0  # what the run spent up to it
     z["rows"], z["rounds"] = z["rows"][:8], np.array(1)
+    z["spent_wall_s"], z["spent_cpu_s"] = (
+        np.array(7.5),
+        np.array(3.25),
+    )  # the killed process's cost to round 1
     np.savez(ck, **z)
-    resumed = transport(
-        pore, 2, SMALL.model_copy(update={"max_rounds": 3}), seed=4, checkpoint=ck
-    ).tallies.rows
-    np.testing.assert_array_equal(full, resumed)
+    tallies = transport(pore, 2, SMALL.model_copy(update={"max_rounds": 3}), seed=4, checkpoint=ck).tallies
+    np.testing.assert_array_equal(full, tallies.rows)
+    assert tallies.carried == (7.5, 3.25)  # the result's writer adds it to wall_s / cpu_s
     # a checkpoint of another input (other seed) is discarded, not mixed in
     other = transport(pore, 2, SMALL.model_copy(update={"max_rounds": 3}), seed=5, checkpoint=ck).tallies
     assert other.rounds == 3 and not np.array_equal(other.rows, full)

@@ -133,6 +133,9 @@ def test_interrupted_run_resumes_identically(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         run(settings, tmp_path / "out.h5", seed=2, checkpoint=ck, progress=False)
     assert ck.is_file() and not (tmp_path / "out.h5").exists()
+    with np.load(ck) as z:
+        spent = float(z["spent_wall_s"]), float(z["spent_cpu_s"])  # what the killed process spent to it
+    assert spent[0] > 0 and spent[1] > 0
     monkeypatch.undo()
     calls = []
     original = granular_run.Simulation.restore
@@ -144,6 +147,10 @@ def test_interrupted_run_resumes_identically(tmp_path, monkeypatch):
     a, b = read_granular(ref), read_granular(out)
     for key in ("frames", "contacts", "series"):
         xr.testing.assert_equal(a[key], b[key])  # values and coords exactly (the attrs carry wall times)
+    # the result's cost counts the killed process up to its checkpoint, and says so
+    attrs = read_attrs(out)
+    assert (attrs["resumed_wall_s"], attrs["resumed_cpu_s"]) == spent
+    assert attrs["wall_s"] > spent[0] and attrs["cpu_s"] > spent[1]
 
 
 def test_stale_checkpoint_is_discarded(tmp_path):
