@@ -266,6 +266,9 @@ def _row_chords(dxy, r2, e_frac, inv_h, margin, chords):
     return ambiguous
 
 
+#: a voxel row's chords: not found yet, found exact, ambiguous (its voxels get the 216 tests)
+CHORDS_UNKNOWN, CHORDS_EXACT, CHORDS_AMBIGUOUS = -1, 0, 1
+
 #: float32 lanes of a 256-bit vector; the chord arrays hold N_ROWS rounded up to LANES (extra rows: empty chords)
 LANES = 8
 CHORD_ROWS = LANES * ((N_ROWS + LANES - 1) // LANES)
@@ -381,15 +384,20 @@ def _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits,
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _add_shell(
-    i, j, k0, k1, s, images, h, dxy, tz, r2, chords, e_int, exact, owner, second, mask, dx2, odxy, bits, out
+    i, j, k0, k1, s, images, h, dxy, tz, r2, chords, frame, state, owner, second, mask, dx2, odxy, bits, out
 ):
     """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j``.
 
     A voxel nothing counted in yet (0) takes the ball's count (from the row chords ``chords``, :func:`_chord_count`,
-    or where ``exact`` the 216 tests of :func:`_voxel_count`) and ``s`` as its owner; a full
+    or where they are ambiguous the 216 tests of :func:`_voxel_count`) and ``s`` as its owner; a full
     one (216) stays; one that a single ball counted in before gets the count of the union of the two balls' samples
     (:func:`_union_count`, the other ball's row distances ``odxy`` kept for the next voxel of the row) and becomes
     PAIR; one that two or more counted in gets the union of the balls' masks (:func:`_share`).
+
+    The chords are found at the row's first voxel that needs them (``state`` CHORDS_UNKNOWN until then; ``frame``
+    from :func:`_ball_plane`): a row whose shell voxels earlier balls have all filled or counted needs none (against
+    finding them for every row, same run, 1 thread: 2.5 % / 4 % / 7 % less time on spheres 10-20 / 20-40 / 40-80
+    voxels wide). Returns the state for the row's other shell.
     """
     cached = -1  # the ball whose row distances odxy holds
     for k in range(k0, k1):
@@ -397,7 +405,17 @@ def _add_shell(
         if g == N_SAMPLES:
             continue
         if g == 0:
-            c = _voxel_count(dxy, tz, k, r2) if exact else _chord_count(chords, np.float32(SUB * k - e_int))
+            if state == CHORDS_UNKNOWN:
+                e_int, e_frac, margin = frame
+                state = (
+                    CHORDS_AMBIGUOUS
+                    if _row_chords(dxy, r2, e_frac, np.float32(1.0 / h), margin, chords)
+                    else CHORDS_EXACT
+                )
+            if state == CHORDS_AMBIGUOUS:
+                c = _voxel_count(dxy, tz, k, r2)
+            else:
+                c = _chord_count(chords, np.float32(SUB * k - frame[0]))
             if c:
                 out[j, k] = c
                 owner[j, k] = s
@@ -416,6 +434,7 @@ def _add_shell(
         else:
             _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits, out)
             cached = -1
+    return state
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
@@ -434,8 +453,7 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
     _plane_distances(i, cx, h, dx2[0])
     e = cz / h - 0.5  # the centre in samples along z
     e_int = np.int64(np.floor(e))
-    e_frac = np.float32(e - e_int)
-    margin = np.float32(_chord_margin(cz, r, h))
+    frame = (e_int, np.float32(e - e_int), np.float32(_chord_margin(cz, r, h)))
     for m in range(SUB * k0, SUB * k1):  # squared z distances of the samples in reach, as in _z_distances
         dz = (m + 0.5) * h - cz
         tz[m] = dz * dz
@@ -448,9 +466,9 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
             out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
         if lo < f_lo or f_hi < hi:
             _row_distances(dx2[0], j, cy, h, dxy)
-            exact = _row_chords(dxy, r2, e_frac, np.float32(1.0 / h), margin, chords)
+            state = CHORDS_UNKNOWN
             for k_a, k_b in ((lo, f_lo), (f_hi, hi)):
-                _add_shell(
+                state = _add_shell(
                     i,
                     j,
                     k_a,
@@ -462,8 +480,8 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
                     tz,
                     r2,
                     chords,
-                    e_int,
-                    exact,
+                    frame,
+                    state,
                     owner,
                     second,
                     mask,
