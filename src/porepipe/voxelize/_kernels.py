@@ -8,27 +8,29 @@ shell method bit-identical to brute force.
 Brute force (:func:`_voxelize_plane`) tests all 216 points of every voxel near a sphere. The shell method
 (:func:`_shell_plane`) adds the balls one after the other in one pass per plane (:func:`_ball_plane`): per voxel row
 (fixed x, y), square roots give the run of voxels wholly inside (written as 216 without a test) and the shell around
-it (:func:`_row_ranges`). Only shell voxels are tested, with the exact predicate, all 216 tests in one branch-free
-loop that vectorises over the 36 sample rows (:func:`_voxel_count`; the squared z distances of a ball's samples are
-found once per plane). A voxel keeps the count of the first ball that
-puts samples in it and that ball as its ``owner``; when a second ball adds samples, the voxel's grey value becomes
+it (:func:`_row_ranges`). A shell voxel's first count comes from the chords of its 36 sample rows (the samples
+inside along a row form one interval): per voxel row, 36 float32 square roots, vectorised, give every chord once
+for all its voxels (:func:`_row_chords`), and a voxel's count is the sum of 36 overlaps (:func:`_chord_count`).
+float32 ends are exact unless an end lies within a bounded margin of a sample (:func:`_chord_margin`, 1e-5 to
+1e-4 samples on the benchmark's spheres; 0.3 % of first counts); such a voxel row's voxels get the 216 exact
+tests instead, in one branch-free loop that vectorises over the 36 sample rows (:func:`_voxel_count`; the squared
+z distances of a ball's samples are found once per plane). A voxel keeps the count of the first ball that puts
+samples in it and that ball as its ``owner``; when a second ball adds samples, the voxel's grey value becomes
 the count of the union of the two balls' samples (:func:`_union_count`), and from a third ball on the popcount of
 the union of the balls' sample bit masks (:func:`_share`), so a sample counts once if it is in any ball.
 
-Counting a voxel from the chords of its 36 sample rows (the samples inside along a row form one interval) instead of
-216 tests was measured 3x slower here (spheres 10-20 voxels wide): a chord needs a square root and exact fix-ups of
-both ends, ~36 per voxel row, while the 216 tests of the ~4 shell voxels of a row run at ~0.08 ns each, vectorised.
-Measured again (same run, 1 thread, 47 ms for the shell method): chords from square roots vectorised 4-wide, ends
-fixed by 4 exact tests, counts clamped per voxel in int64: 54 ms; with float32 square roots: 64 ms.
+Chords in float64 with every end fixed by exact tests measured slower than the 216 tests (~54 vs 47 ms on spheres
+10-20 voxels wide): the square roots and fix-ups of ~36 chords per voxel row cost more than the tests of its ~3
+shell voxels. In float32 (8-wide) with the fix-ups replaced by the margin test, the chords of a voxel row take
+~31 ns and a voxel's count ~6 ns against ~20 ns for its 216 tests (1 thread, load ~4).
 
-Where the time goes on spheres 10-20 voxels wide (the benchmark's small case: 1500 balls, 8 Mvoxel, 1 thread, ~46 ms;
-each part timed by leaving it out): row ranges, runs inside and plane clearing ~8 ms; the first counts of 1.10 M
-shell voxels (216 tests, ~21 ns each) ~23 ms; 88.6 k unions (84.6 k of two balls, 4.0 k masks) ~10 ms; row
-distances and the loop over the shell voxels of 329 k voxel rows ~11 ms. The 216 tests are near the vector
-units' rate (3 instructions per 4 tests at numba's 256-bit width), so the first counts alone bound the method at
-~26x brute force on these spheres. Almost every first count is partial (3 of 1.10 M are 216, 26 are 0), so no
-cheap pre-test skips any; filling every ball's runs inside before counting any shell (two passes per plane, to skip
-counts that a later ball's run overwrites) measured equal.
+Where the time went before the chords, on spheres 10-20 voxels wide (the benchmark's small case: 1500 balls,
+8 Mvoxel, 1 thread, ~46 ms; each part timed by leaving it out): row ranges, runs inside and plane clearing ~8 ms;
+the first counts of 1.10 M shell voxels (216 tests, ~21 ns each) ~23 ms; 88.6 k unions (84.6 k of two balls,
+4.0 k masks) ~10 ms; row distances and the loop over the shell voxels of 329 k voxel rows ~11 ms. Almost every
+first count is partial (3 of 1.10 M are 216, 26 are 0), so no cheap pre-test skips any; filling every ball's runs
+inside before counting any shell (two passes per plane, to skip counts that a later ball's run overwrites)
+measured equal.
 """
 
 import numpy as np
@@ -206,6 +208,88 @@ def _voxel_count(dxy, tz, k, r2):
     return total
 
 
+#: unit roundoff of float64 and float32
+U64 = 2.0**-53
+U32 = 2.0**-24
+#: a row whose chord half-width (samples) is below this is grazed by the surface: its voxels get the 216 tests
+W_LOW = 0.02
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _chord_margin(cz, r, h):
+    """Distance (samples) from the nearest integer that a float32 chord end of :func:`_row_chords` must keep for
+    the chord to hold exactly the samples that pass ``dxy + dz*dz <= r*r`` (float64): its own error (float32,
+    ~4 roundings of W, W <= r/h), plus how far a sample may sit from the real chord end and still round the other
+    way. The latter: the float64 test errs by at most E = 7u(r + a + |cz|)^2 in squared distance (roundings of the
+    sample coordinate, dz, dz*dz and the sum), a sample |m - end| samples from the end differs from r*r - dxy by at
+    least h^2 |m - end| W, and W > W_LOW / 2 where the chord is used. Bounds taken 2x generous or more.
+    """
+    e = cz / h - 0.5
+    width = r / h
+    own = 8.0 * U32 * (width + 2.0) + 4.0 * U64 * (abs(e) + 1.0)
+    rounding = 16.0 * U64 * (r + SUB * h + abs(cz)) ** 2 / (h * h)
+    return own + rounding / (0.5 * W_LOW)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _row_chords(dxy, r2, e_frac, inv_h, margin, chords):
+    """Chords of the 36 sample rows of a voxel row (``dxy`` from :func:`_row_distances`) through the ball:
+    samples ``chords[0, q] .. chords[1, q] - 1`` (float32 integers) of row q are inside, as sample index minus
+    ``floor(e)``, with ``e = cz/h - 0.5`` the ball centre in samples and ``e_frac = e - floor(e)``; empty where
+    ``dxy > r*r``. ``chords[2]`` is scratch.
+
+    ``r*r - dxy`` in float64 (its sign is exact), the rest in float32, vectorised 8-wide; returns True where any end
+    is within ``margin`` (:func:`_chord_margin`) of a sample or a row is grazed (half-width below W_LOW): then the
+    chords may miss or add a sample and the caller tests the 216 samples instead (exact).
+    """
+    room = chords[2]
+    for q in range(N_ROWS):  # < 0: no sample of the row is inside (fl(dxy + dz*dz) >= dxy > r*r)
+        room[q] = np.float32(r2 - dxy[q])
+    zero = np.float32(0.0)
+    half = np.float32(0.5)
+    one = np.float32(1.0)
+    low = np.float32(W_LOW)
+    ambiguous = False
+    for q in range(N_ROWS):  # branch-free: float32 only, vectorises 8-wide
+        t = room[q]
+        w = np.sqrt(max(t, zero)) * inv_h
+        hi = e_frac + w
+        lo = e_frac - w
+        f_hi = np.floor(hi)
+        f_lo = np.floor(lo)
+        near = half - max(
+            abs(hi - f_hi - half), abs(lo - f_lo - half)
+        )  # distance of the nearer end to a sample
+        ambiguous |= (t >= zero) & ((w < low) | (near <= margin))
+        chords[0, q] = f_lo + one
+        chords[1, q] = f_hi + one
+    return ambiguous
+
+
+#: a voxel row's chords: not found yet, found exact, ambiguous (its voxels get the 216 tests)
+CHORDS_UNKNOWN, CHORDS_EXACT, CHORDS_AMBIGUOUS = -1, 0, 1
+
+#: float32 lanes of a 256-bit vector; the chord arrays hold N_ROWS rounded up to LANES (extra rows: empty chords)
+LANES = 8
+CHORD_ROWS = LANES * ((N_ROWS + LANES - 1) // LANES)
+
+
+@njit(cache=True, fastmath={"reassoc"})
+def _chord_count(chords, base):
+    """Samples of a voxel inside the ball from its 36 row chords (:func:`_row_chords`): the overlaps of each chord
+    with the voxel's samples ``base .. base + 5`` (float32, relative as the chords), summed; vectorised 8-wide.
+
+    The sum may be reordered (``reassoc``, so that it vectorises): its terms are small integers, exact in float32
+    in any order.
+    """
+    end = base + np.float32(SUB)
+    zero = np.float32(0.0)
+    total = zero
+    for q in range(CHORD_ROWS):
+        total += max(min(chords[1, q], end) - max(chords[0, q], base), zero)
+    return np.int64(total)
+
+
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _or_voxel(mask, j, k, dxy, t, r2, bits):
     """OR the samples of voxel ``k`` inside the ball into its union mask (the 216 tests of :func:`_voxel_count`).
@@ -299,13 +383,21 @@ def _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits,
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, second, mask, dx2, odxy, bits, out):
+def _add_shell(
+    i, j, k0, k1, s, images, h, dxy, tz, r2, chords, frame, state, owner, second, mask, dx2, odxy, bits, out
+):
     """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j``.
 
-    A voxel nothing counted in yet (0) takes the ball's count (:func:`_voxel_count`) and ``s`` as its owner; a full
+    A voxel nothing counted in yet (0) takes the ball's count (from the row chords ``chords``, :func:`_chord_count`,
+    or where they are ambiguous the 216 tests of :func:`_voxel_count`) and ``s`` as its owner; a full
     one (216) stays; one that a single ball counted in before gets the count of the union of the two balls' samples
     (:func:`_union_count`, the other ball's row distances ``odxy`` kept for the next voxel of the row) and becomes
     PAIR; one that two or more counted in gets the union of the balls' masks (:func:`_share`).
+
+    The chords are found at the row's first voxel that needs them (``state`` CHORDS_UNKNOWN until then; ``frame``
+    from :func:`_ball_plane`): a row whose shell voxels earlier balls have all filled or counted needs none (against
+    finding them for every row, same run, 1 thread: 2.5 % / 4 % / 7 % less time on spheres 10-20 / 20-40 / 40-80
+    voxels wide). Returns the state for the row's other shell.
     """
     cached = -1  # the ball whose row distances odxy holds
     for k in range(k0, k1):
@@ -313,7 +405,17 @@ def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, second, mask, dx2
         if g == N_SAMPLES:
             continue
         if g == 0:
-            c = _voxel_count(dxy, tz, k, r2)
+            if state == CHORDS_UNKNOWN:
+                e_int, e_frac, margin = frame
+                state = (
+                    CHORDS_AMBIGUOUS
+                    if _row_chords(dxy, r2, e_frac, np.float32(1.0 / h), margin, chords)
+                    else CHORDS_EXACT
+                )
+            if state == CHORDS_AMBIGUOUS:
+                c = _voxel_count(dxy, tz, k, r2)
+            else:
+                c = _chord_count(chords, np.float32(SUB * k - frame[0]))
             if c:
                 out[j, k] = c
                 owner[j, k] = s
@@ -332,14 +434,15 @@ def _add_shell(i, j, k0, k1, s, images, h, dxy, tz, r2, owner, second, mask, dx2
         else:
             _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits, out)
             cached = -1
+    return state
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, out):
+def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, chords, out):
     """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
 
-    ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS) and ``tz`` (6 nz: the squared z distances of the samples in
-    the ball's reach, found once per plane) are scratch.
+    ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS), ``tz`` (6 nz: the squared z distances of the samples in
+    the ball's reach, found once per plane) and ``chords`` (3, CHORD_ROWS) float32, zero from row N_ROWS on, are scratch.
     """
     cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
     r2 = r * r
@@ -348,6 +451,9 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
     j0, j1 = axis_range(cy, r, h, ny)
     k0, k1 = axis_range(cz, r, h, nz)
     _plane_distances(i, cx, h, dx2[0])
+    e = cz / h - 0.5  # the centre in samples along z
+    e_int = np.int64(np.floor(e))
+    frame = (e_int, np.float32(e - e_int), np.float32(_chord_margin(cz, r, h)))
     for m in range(SUB * k0, SUB * k1):  # squared z distances of the samples in reach, as in _z_distances
         dz = (m + 0.5) * h - cz
         tz[m] = dz * dz
@@ -360,17 +466,52 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
             out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
         if lo < f_lo or f_hi < hi:
             _row_distances(dx2[0], j, cy, h, dxy)
-            _add_shell(
-                i, j, lo, f_lo, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out
-            )
-            _add_shell(
-                i, j, f_hi, hi, s, images, h, dxy, tz, r2, owner, second, mask, dx2[1], odxy, bits, out
-            )
+            state = CHORDS_UNKNOWN
+            for k_a, k_b in ((lo, f_lo), (f_hi, hi)):
+                state = _add_shell(
+                    i,
+                    j,
+                    k_a,
+                    k_b,
+                    s,
+                    images,
+                    h,
+                    dxy,
+                    tz,
+                    r2,
+                    chords,
+                    frame,
+                    state,
+                    owner,
+                    second,
+                    mask,
+                    dx2[1],
+                    odxy,
+                    bits,
+                    out,
+                )
 
 
 @njit(cache=True, fastmath=FASTMATH)
 def _shell_plane(
-    i, images, order, xmin_sorted, r_max, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, out
+    i,
+    images,
+    order,
+    xmin_sorted,
+    r_max,
+    h,
+    ny,
+    nz,
+    owner,
+    second,
+    mask,
+    dx2,
+    dxy,
+    odxy,
+    bits,
+    tz,
+    chords,
+    out,
 ):
     """Grey values of plane x = i, ball after ball in one pass (bit-identical to brute force).
 
@@ -382,7 +523,7 @@ def _shell_plane(
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, out)
+            _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, chords, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -398,6 +539,7 @@ def _plane_scratch(ny, nz):
         np.empty(N_ROWS),  # odxy
         np.empty(N_ROWS, dtype=np.int64),  # bits
         np.empty(SUB * nz),  # tz
+        np.zeros((3, CHORD_ROWS), dtype=np.float32),  # chords
         np.empty((3, SUB)),  # brute-force scratch
         np.empty(WORDS, dtype=np.uint64),  # brute-force words
     )
@@ -415,7 +557,7 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
     ntasks = max(1, min(nplanes, tasks))
     per = (nplanes + ntasks - 1) // ntasks
     for t in prange(ntasks):
-        status, owner, second, mask, dx2, dxy, odxy, bits, tz, brute, words = _plane_scratch(ny, nz)
+        status, owner, second, mask, dx2, dxy, odxy, bits, tz, chords, brute, words = _plane_scratch(ny, nz)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             i = i0 + p
             if boundary_only:
@@ -436,6 +578,7 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
                     odxy,
                     bits,
                     tz,
+                    chords,
                     out[p],
                 )
             else:
