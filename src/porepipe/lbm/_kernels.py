@@ -1292,22 +1292,8 @@ def _step(
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
                 if aa and not local:
-                    r = _gather_step(
-                        literally(with_aa),
-                        literally(op),
-                        a,
-                        gather,
-                        rs,
-                        ro,
-                        run_base,
-                        r,
-                        n0,
-                        cnt,
-                        f,
-                        fz,
-                        b3,
-                        w2,
-                        rates,
+                    r = _gather_step(  # op is a literal here already (literally(op) below)
+                        literally(with_aa), op, a, gather, rs, ro, run_base, r, n0, cnt, f, fz, b3, w2, rates
                     )
                     n0 += cnt
                     continue

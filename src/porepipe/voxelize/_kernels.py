@@ -493,31 +493,14 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _shell_plane(
-    i,
-    images,
-    order,
-    xmin_sorted,
-    r_max,
-    h,
-    ny,
-    nz,
-    owner,
-    second,
-    mask,
-    dx2,
-    dxy,
-    odxy,
-    bits,
-    tz,
-    chords,
-    out,
-):
+def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, shell, out):
     """Grey values of plane x = i, ball after ball in one pass (bit-identical to brute force).
 
-    ``owner``/``second`` (ny, nz) int32 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey
-    value a ball of this plane has already set to 1..215.
+    ``shell``: the scratch of :func:`_plane_scratch` that :func:`_ball_plane` takes; its ``owner``/``second`` (ny, nz)
+    int32 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey value a ball of
+    this plane has already set to 1..215.
     """
+    owner, second, mask, dx2, dxy, odxy, bits, tz, chords = shell
     out[:, :] = 0
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
     for q in range(first, last):
@@ -528,9 +511,10 @@ def _shell_plane(
 
 @njit(cache=True, fastmath=FASTMATH)
 def _plane_scratch(ny, nz):
-    """One thread's scratch for :func:`_shell_plane` and :func:`_voxelize_plane`, reused plane after plane."""
-    return (
-        np.empty((ny, nz), dtype=np.uint8),  # status
+    """One thread's scratch, reused plane after plane: (status, the shell method's (:func:`_shell_plane`), and brute
+    force's two arrays besides status and mask (:func:`_voxelize_plane`)).
+    """
+    shell = (
         np.empty((ny, nz), dtype=np.int32),  # owner
         np.empty((ny, nz), dtype=np.int32),  # second
         np.empty((ny, nz, WORDS), dtype=np.uint64),  # mask
@@ -540,9 +524,9 @@ def _plane_scratch(ny, nz):
         np.empty(N_ROWS, dtype=np.int64),  # bits
         np.empty(SUB * nz),  # tz
         np.zeros((3, CHORD_ROWS), dtype=np.float32),  # chords
-        np.empty((3, SUB)),  # brute-force scratch
-        np.empty(WORDS, dtype=np.uint64),  # brute-force words
     )
+    status = np.empty((ny, nz), dtype=np.uint8)
+    return status, shell, np.empty((3, SUB)), np.empty(WORDS, dtype=np.uint64)  # brute force: scratch, words
 
 
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
@@ -557,31 +541,12 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
     ntasks = max(1, min(nplanes, tasks))
     per = (nplanes + ntasks - 1) // ntasks
     for t in prange(ntasks):
-        status, owner, second, mask, dx2, dxy, odxy, bits, tz, chords, brute, words = _plane_scratch(ny, nz)
+        status, shell, brute, words = _plane_scratch(ny, nz)
         for p in range(t * per, min((t + 1) * per, nplanes)):
             i = i0 + p
             if boundary_only:
-                _shell_plane(
-                    i,
-                    images,
-                    order,
-                    xmin_sorted,
-                    r_max,
-                    h,
-                    ny,
-                    nz,
-                    owner,
-                    second,
-                    mask,
-                    dx2,
-                    dxy,
-                    odxy,
-                    bits,
-                    tz,
-                    chords,
-                    out[p],
-                )
+                _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, shell, out[p])
             else:
                 _voxelize_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, mask, brute, words, out[p]
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, shell[2], brute, words, out[p]
                 )
