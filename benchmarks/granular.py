@@ -8,7 +8,8 @@ list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3
 distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
 optional effect compiled in (with neutral values), i.e. what the compile-time switches save, the narrow
 phase against the whole-polygon clipping it replaced, and, with ``--reference``, an earlier step kernel file with the
-default skin of before issue 15's speed work (0.3 R_min; same pile, interleaved, trajectories checked bit for bit).
+default skin of before issue 15's speed work (0.3 R_min; same pile, interleaved, trajectories checked bit for bit);
+``--reference-skin 0.6`` gives it today's skin, so that the row times the kernels alone.
 
     python benchmarks/granular.py            # N = 10 000
     python benchmarks/granular.py --smoke    # N = 300, 1 thread, no effect row: seconds once compiled
@@ -193,11 +194,18 @@ PREVIOUS_SKIN = 0.3
 
 
 def previous_kernel(
-    make_previous_stepper, n: int, spread: float, warm: int, steps: int, repeats: int, threads: int
+    make_previous_stepper,
+    n: int,
+    spread: float,
+    warm: int,
+    steps: int,
+    repeats: int,
+    threads: int,
+    skin: float = PREVIOUS_SKIN,
 ) -> dict:
-    """An earlier kernel (``make_previous_stepper``, its factory) with the skin before issue 15's speed work vs the
-    current ones on the same pile (sweep), interleaved rounds, best of each per wall and per CPU second; both runs
-    must end bit-identical.
+    """An earlier kernel (``make_previous_stepper``, its factory) with the Verlet skin ``skin`` (units of the
+    smallest circumradius; by default the one before issue 15's speed work) vs the current ones on the same pile
+    (sweep), interleaved rounds, best of each per wall and per CPU second; both runs must end bit-identical.
     """
     numba.set_num_threads(threads)
     sims = {}
@@ -205,7 +213,7 @@ def previous_kernel(
         sim = Simulation(pile(n, spread, "sweep"), seed=1)
         if label == "previous":
             sim._stepper = make_previous_stepper(*sim.effects.values())
-            sim.skin = PREVIOUS_SKIN * float(sim.r_circ.min())
+            sim.skin = skin * float(sim.r_circ.min())
             sim.rebuild()
         sim.advance(warm)
         sims[label] = sim
@@ -221,6 +229,7 @@ def previous_kernel(
     out["threads"] = threads
     out["spread"] = spread
     out["steps"] = a.step
+    out["skin"] = skin
     return out
 
 
@@ -235,6 +244,13 @@ def main() -> None:
         "--reference",
         default=None,
         help="an earlier src/porepipe/granular/_kernels.py (git show REV:...) to time beside the current kernel",
+    )
+    ap.add_argument(
+        "--reference-skin",
+        type=float,
+        default=PREVIOUS_SKIN,
+        help=f"Verlet skin of the --reference run in units of R_min (default {PREVIOUS_SKIN}, the skin before issue "
+        "15's speed work; 0.6, today's default, times the kernels alone)",
     )
     args = ap.parse_args()
     methods = tuple(args.methods.split(","))
@@ -272,14 +288,14 @@ def main() -> None:
     if args.reference:
         make_previous = load_module(args.reference).make_stepper
         previous = [
-            previous_kernel(make_previous, n, spread, warm, steps, repeats, t)
+            previous_kernel(make_previous, n, spread, warm, steps, repeats, t, args.reference_skin)
             for spread in ((0.1,) if args.smoke else (0.1, 0.5))
             for t in ((1,) if args.smoke else (1, 2))
         ]
     for r in previous:
         old, new = r["previous"], r["current"]
         print(
-            f"I={r['spread']:.1f} {r['threads']} thr: --reference kernel, skin {PREVIOUS_SKIN} R_min "
+            f"I={r['spread']:.1f} {r['threads']} thr: --reference kernel, skin {r['skin']} R_min "
             f"{old[0]:.3g} polygon-steps/s ({old[1]:.3g} per CPU-s), "
             f"current {new[0]:.3g} ({new[1]:.3g} per CPU-s): {new[0] / old[0]:.2f}x wall, {new[1] / old[1]:.2f}x per "
             f"CPU-s; trajectories bit-identical after {r['steps']} steps",
