@@ -118,8 +118,8 @@ def test_checkpoint_resume_is_bit_identical(tmp_path, monkeypatch):
     ck = tmp_path / "ck.h5"
     real_save = engine.save_checkpoint
 
-    def save_then_die(path, state, key):
-        real_save(path, state, key)
+    def save_then_die(path, state, key, clock):
+        real_save(path, state, key, clock)
         if state.step >= 28:
             raise KeyboardInterrupt("simulated kill after the checkpoint of step 28")
 
@@ -129,7 +129,9 @@ def test_checkpoint_resume_is_bit_identical(tmp_path, monkeypatch):
     monkeypatch.setattr(engine, "save_checkpoint", real_save)
     with h5py.File(ck) as f:
         assert f.attrs["step"] == 28
+        spent = float(f.attrs["spent_wall_s"]), float(f.attrs["spent_cpu_s"])  # the killed run's cost to it
     resumed = pack_spheres(settings, BOX, True, seed=3, checkpoint_path=ck, resume=True)
+    assert resumed.carried == spent and spent[1] > 0  # the result's writer adds it to wall_s / cpu_s
     assert not ck.exists()  # a finished run deletes its checkpoint
     np.testing.assert_array_equal(resumed.centres_um, ref.centres_um)
     np.testing.assert_array_equal(resumed.radii_um, ref.radii_um)
