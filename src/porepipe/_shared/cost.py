@@ -64,9 +64,8 @@ class SpentClock:
 
     def spent(self) -> tuple[float, float]:
         """(wall s, CPU s) spent so far, earlier processes included."""
-        return self.carried[0] + time.perf_counter() - self._t0, self.carried[
-            1
-        ] + time.process_time() - self._c0
+        wall, cpu = time.perf_counter() - self._t0, time.process_time() - self._c0
+        return self.carried[0] + wall, self.carried[1] + cpu
 
     def record(self, attrs) -> None:
         """Write :meth:`spent` into a checkpoint's ``attrs`` (HDF5 attributes, or a dict of ``np.savez`` arrays)."""
