@@ -5,8 +5,8 @@ engine alike: the STREAM-like copy bandwidth (numba, same thread count) and the 
 float64 update (19 populations read and written); porepipe's step kernel as it was before issue 22 (``old``,
 ``LEGACY``: every tile pulled into an L1 scratch, collided, copied out with element-wise stores, which on x86
 compile to cached scalar stores), its two-array pull kernel now (``pull``: regular runs collide straight from the
-population array, one cache line per non-temporal vector store) and in place (``aa``, the default with halfway
-walls: AA-pattern step pairs in one array, every store into a line just read, cached); lbmpy's generated D3Q19 SRT stream-collide kernel alone (no periodic ghost-layer
+population array, one cache line per non-temporal vector store) and in place (``aa``, the default for halfway and
+float64 CLI/BFL walls: AA-pattern step pairs in one array, every store into a line just read, cached); lbmpy's generated D3Q19 SRT stream-collide kernel alone (no periodic ghost-layer
 copy, no Python time loop; the ``bench`` extra) and its full step. Dense periodic 128³ box and a porous 128³ sample
 (overlapping spheres, porosity ≈ 0.2, only the percolating pore nodes stored; MLUPS per fluid node). Each figure is
 the best of the rounds (short bursts catch the quiet moments of a loaded machine), with the 1-minute load average
@@ -15,7 +15,8 @@ four steps (dense and porous, every operator).
 
 Then, the default kernel only (in place: halfway walls): BGK / TRT / MRT in float64 and float32 at 1 and 2 threads on both geometries (float32
 stores 152 B per update: the bound doubles), and the cost of interpolated walls (TRT float64 on the porous sample,
-halfway bounce-back against CLI and MR1 walls at the exact sphere surfaces, at porosity 0.2 and 0.46). Regular runs (all 18 pull sources advance with
+halfway bounce-back against CLI and MR1 walls at the exact sphere surfaces, at porosity 0.2 and 0.46; pulled with
+two arrays, and halfway and CLI in place). Regular runs (all 18 pull sources advance with
 the node) read no index; the others also read 18 uint32 neighbour indices (72 B), which the bound does not count.
 
 Timings come from a shared, loaded 2-core machine: treat them as lower bounds of what the code can do, and compare
@@ -119,12 +120,16 @@ def time_lattice(
 
 
 def _wall_steppers(lat, geometry) -> tuple[dict, dict]:
-    """(steppers, links): TRT float64 steps of ``lat`` with halfway, CLI and MR1 walls (τ̂ = 0.857)."""
+    """(steppers, links): TRT float64 steps of ``lat`` with halfway, CLI and MR1 walls (τ̂ = 0.857), all three with
+    the two-array pull kernel, and halfway and CLI walls in place (AA; MR1 cannot run in place).
+    """
     wall_links = lat.wall_links
     links = {w: build_links(lat.pore, lat.periodic, *wall_links, geometry, Walls(w)) for w in ("cli", "mr1")}
     lat.wall_links = None
-    steppers = {"halfway": make_stepper(Settings(walls="halfway", streaming="pull"), lat)}  # links need pull
-    steppers.update({w: make_stepper(Settings(walls=w), lat, links[w]) for w in links})
+    steppers = {"halfway": make_stepper(Settings(walls="halfway", streaming="pull"), lat)}
+    steppers.update({w: make_stepper(Settings(walls=w, streaming="pull"), lat, links[w]) for w in links})
+    steppers["halfway in place"] = make_stepper(Settings(walls="halfway", streaming="aa"), lat)
+    steppers["cli in place"] = make_stepper(Settings(walls="cli", streaming="aa"), lat, links["cli"])
     return steppers, links
 
 
@@ -158,6 +163,12 @@ def wall_cost(size: int, thread_counts, steps: int, rounds: int = 5, porosities=
                 "nodes": n,
                 "halfway_ms": half,
                 "load": os.getloadavg()[0],
+                "in_place": {
+                    "halfway_ms": best["halfway in place"],
+                    "cli_ms": best["cli in place"],
+                    "cli_extra": best["cli in place"] / best["halfway in place"] - 1,
+                    "cli_vs_pull": best["cli"] / best["cli in place"],
+                },
             }
             for w, lk in links.items():
                 row[w] = {
@@ -174,7 +185,9 @@ def wall_cost(size: int, thread_counts, steps: int, rounds: int = 5, porosities=
                     f"{w} {row[w]['ms']:.2f} ({row[w]['extra']:+.1%}, {row[w]['ns_per_link']:.1f} ns per link, "
                     f"{row[w]['links_per_node']:.2f} links per node)"
                     for w in links
-                ),
+                )
+                + f"; in place: halfway {best['halfway in place']:.2f}, cli {best['cli in place']:.2f} ms/step "
+                f"({row['in_place']['cli_extra']:+.1%}; {row['in_place']['cli_vs_pull']:.2f}x cli pulled)",
                 flush=True,
             )
     return out
@@ -363,16 +376,20 @@ def _table(rows, wall_rows, peer_rows, bw) -> list[str]:
     md += [
         "",
         "Interpolated walls (porous samples, exact sphere walls, TRT float64, CPU time per step; best of interleaved "
-        "rounds; ns per link = extra CPU time over halfway per interpolated link):",
+        "rounds; ns per link = extra CPU time over halfway per interpolated link; the first columns pull with two "
+        "arrays, the in-place columns stream in place (AA), where CLI links are kept per link between the steps of a pair):",
         "",
         "| porosity | threads | halfway ms/step | cli ms/step | cli extra | cli ns/link | mr1 ms/step | mr1 extra | "
-        "mr1 ns/link | cli links/node | load |",
-        "|---" * 11 + "|",
+        "mr1 ns/link | cli links/node | in place: halfway ms/step | cli ms/step | cli extra | cli in place vs pulled "
+        "| load |",
+        "|---" * 15 + "|",
     ]
     md += [
         f"| {w['porosity']:.2f} | {w['threads']} | {w['halfway_ms']:.2f} | {w['cli']['ms']:.2f} | "
         f"{w['cli']['extra']:+.1%} | {w['cli']['ns_per_link']:.2f} | {w['mr1']['ms']:.2f} | {w['mr1']['extra']:+.1%} | "
-        f"{w['mr1']['ns_per_link']:.2f} | {w['cli']['links_per_node']:.2f} | {w['load']:.1f} |"
+        f"{w['mr1']['ns_per_link']:.2f} | {w['cli']['links_per_node']:.2f} | {w['in_place']['halfway_ms']:.2f} | "
+        f"{w['in_place']['cli_ms']:.2f} | {w['in_place']['cli_extra']:+.1%} | {w['in_place']['cli_vs_pull']:.2f}x | "
+        f"{w['load']:.1f} |"
         for w in wall_rows
     ]
     return md

@@ -12,9 +12,11 @@ vectorised loop per run; the reads carry alias-scope metadata so the loop needs 
 (mostly irregular, or with interpolated wall links) is first pulled into the scratch, so its collision loop has
 full length however short its runs are. The scratch is then stored, with one non-temporal vector store per cache
 line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
-element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits. With halfway
-walls the same kernel also streams in place (``IN_PLACE``, the AA pattern): step pairs in one array, each store into
-a line the step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits. In its
+element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits. The same
+kernel also streams in place (``IN_PLACE``, the AA pattern): step pairs in one array, each store into a line the step
+has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits; with halfway walls, and
+with linear interpolated links (each link's value goes into its halfway slot before the tile collides; the node's
+outgoing population it needs from the step before is kept per link). In its
 gather step the irregular nodes collide in place through the gather table (:func:`_indexed_view`), in one pass
 instead of three (pull into the scratch, collide, scatter back).
 """
@@ -1013,14 +1015,19 @@ def _collide_mrt(f, lo, hi, n0, force_lo, force_hi, force, s):
 #    f_p = h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h) (porepipe.lbm._walls). Per link only its slot in the tile
 #    (uint16: p · _TILE + i) and b, c (float32) are stored, grouped by tile; the one extra read is f*_p(x).
 @njit(inline="always", **_NUMERIC)
+def _link_value(h, behind, own, b, c):
+    """A linear link, h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h), from its halfway value h, the population behind
+    the node and the node's own outgoing one (one expression for the pull and the in-place kernels: same bits).
+    """
+    return h + np.float64(b) * (behind - h) + np.float64(c) * (own - h)
+
+
+@njit(inline="always", **_NUMERIC)
 def _linear_link(f, src, s, n0, n_nodes, b, c):
-    """Linear link value h + b (f*_ō(x + c_p) − h) + c (f*_p(x) − h) of the link in scratch slot ``s`` (p · _TILE + i)."""
+    """Linear link value of the link in scratch slot ``s`` (p · _TILE + i), :func:`_link_value`."""
     p = s // _TILE
     i = s - p * _TILE
-    h = _get(f, s)
-    behind = _get(f, _OPP[p] * _TILE + i)
-    own = _get(src, p * n_nodes + n0 + i)
-    return h + np.float64(b) * (behind - h) + np.float64(c) * (own - h)
+    return _link_value(_get(f, s), _get(f, _OPP[p] * _TILE + i), _get(src, p * n_nodes + n0 + i), b, c)
 
 
 @njit(**_NUMERIC)
@@ -1030,6 +1037,71 @@ def _apply_links(f, src, n0, n_nodes, tile_start, slot, coef_b, coef_c):
     for k in range(tile_start[tile], tile_start[tile + 1]):
         s = np.int64(slot[k])
         _set(f, s, _linear_link(f, src, s, n0, n_nodes, coef_b[k], coef_c[k]))
+
+
+# -- linear links in place (AA): a link's halfway value h sits in the slot its population is read from, the same
+#    slot in both steps of a pair (row ō of the node); the population behind it sits in the slot the node reads ō
+#    from (gather step: the upstream neighbour's, local step: row p of the node), which is also where the node
+#    stores its own outgoing p; that outgoing value is needed again one step later, when the neighbour may already
+#    have overwritten its slot, so it is kept per link (``own``). Every slot touched belongs to the link's node alone
+#    in that step, so tiles and chunks stay independent.
+@njit(cache=True)
+def _source_slot(gather, run_offset, run_base, r, x, q):
+    """Flat index population q (1..18) of node x (in run r) is pulled from."""
+    if run_offset[r, 0] >= 0:
+        return run_offset[r, q - 1] + x
+    return np.int64(gather[q - 1, x + run_base[r]])
+
+
+@njit(cache=True)
+def aa_link_slots(gather, run_start, run_offset, run_base, tile_start, link_slot, out):
+    """Fill ``out`` (K,) uint32 with the slot of the population behind every linear link in a gather step (in a
+    local step it is row p of the node itself). Returns -1, or the first link whose population is not pulled by
+    bounce-back (not a wall link: the links do not belong to this lattice).
+    """
+    n_nodes = run_start[-1]
+    for t in range(tile_start.size - 1):
+        for k in range(tile_start[t], tile_start[t + 1]):
+            s = np.int64(link_slot[k])
+            p = s // _TILE
+            x = t * _TILE + s - p * _TILE
+            r = np.searchsorted(run_start, x, side="right") - 1
+            if _source_slot(gather, run_offset, run_base, r, x, p) != _OPP[p] * n_nodes + x:
+                return k
+            out[k] = _source_slot(gather, run_offset, run_base, r, x, _OPP[p])
+    return -1
+
+
+@njit(inline="always", **_NUMERIC)
+def _aa_link_at(n0, n_nodes, link_slot, behind_gather, local, k):
+    """(halfway slot, behind slot) of link k of the tile at n0, in a local or a gather step."""
+    s = np.int64(link_slot[k])
+    p = s // _TILE
+    x = n0 + s - p * _TILE
+    behind = p * n_nodes + x if local else np.int64(behind_gather[k])
+    return _OPP[p] * n_nodes + x, behind
+
+
+@njit(**_NUMERIC)
+def _aa_links_in(a, n0, n_nodes, tile_start, link_slot, link_b, link_c, behind_gather, local, own):
+    """Before the tile at n0 collides in place: each linear link's value into its halfway slot (in link order, as
+    :func:`_apply_links`).
+    """
+    tile = n0 // _TILE
+    for k in range(tile_start[tile], tile_start[tile + 1]):
+        halfway, behind = _aa_link_at(n0, n_nodes, link_slot, behind_gather, local, k)
+        h = np.float64(a[halfway])
+        a[halfway] = _link_value(h, np.float64(a[behind]), own[k], link_b[k], link_c[k])
+
+
+@njit(**_NUMERIC)
+def _aa_links_own(a, n0, n_nodes, tile_start, link_slot, behind_gather, local, own):
+    """Keep each link node's outgoing population p of the tile at n0: after the tile stored, it sits where the
+    population behind the link came from; before a run's first step, row p of the node (``local``).
+    """
+    tile = n0 // _TILE
+    for k in range(tile_start[tile], tile_start[tile + 1]):
+        own[k] = a[_aa_link_at(n0, n_nodes, link_slot, behind_gather, local, k)[1]]
 
 
 # -- multi-reflection (MR1) links add, per link, d (f*_ō(x + 2c_p) − f*_p(x + c_p)) (two flat indices into the source
@@ -1132,7 +1204,7 @@ def _pull_collide(
 
 @njit(**_NUMERIC)
 def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s):
-    """AA gather step of the tile at n0 (cnt nodes, halfway walls) in place, run by run: a regular run collides
+    """AA gather step of the tile at n0 (cnt nodes; linear links already in their halfway slots) in place, run by run: a regular run collides
     straight from ``src`` into the scratch ``f`` and writes back by its stream offsets (:func:`_scatter_run`); an
     irregular run collides in place through the gather table (:func:`_indexed_view`: one pass, no scratch; on a
     porous sample, where nearly every node is irregular, the gather step had three: pull into the scratch, collide,
@@ -1248,6 +1320,7 @@ def _step(
     link_c,
     link_mr,
     link_state,
+    link_aa,
 ):
     """``n_steps`` steps of operator ``op`` (BGK, TRT, MRT), alternating src -> dst -> src; the fields of the last
     step if ``store``. ``streaming``: how to write the populations (STORE_CACHED, STORE_STREAM, … :func:`streams`);
@@ -1257,6 +1330,8 @@ def _step(
     (links of tile t: ``tile_start[t]:tile_start[t + 1]``; an empty ``link_slot`` for halfway bounce-back), collide,
     store. ``link_mr`` (flat indices and weights of the multi-reflection terms, :func:`_apply_mr_links`) is empty
     for the linear schemes; ``link_state`` carries n⁻ of every multi-reflection link from step to step.
+    ``link_aa``: the slot behind each linear link in a gather step (:func:`aa_link_slots`; empty without links):
+    with IN_PLACE each link's value goes into its halfway slot before its tile collides (:func:`_aa_links_in`).
     """
     n_nodes = run_start[-1]
     g = 1.0 - 0.5 * omega[1]
@@ -1275,6 +1350,11 @@ def _step(
     local_offset = np.empty((1, 18), dtype=np.int64)
     for q in range(1, 19):
         local_offset[0, q - 1] = _OPP[q] * n_nodes
+    aa_links = in_place and link_aa.size > 0
+    own = np.empty(link_aa.size if aa_links else 0)  # each link node's outgoing p of the step before
+    if aa_links:
+        for t in range(tile_start.size - 1):
+            _aa_links_own(src, t * _TILE, n_nodes, tile_start, link_slot, link_aa, True, own)
     for s in range(n_steps):
         aa = s < 2 * n_pairs
         local = aa and s % 2 == 1
@@ -1291,10 +1371,14 @@ def _step(
             r = np.searchsorted(rs, n0, side="right") - 1
             while n0 < hi:
                 cnt = min(_TILE, hi - n0)
+                if aa and aa_links:
+                    _aa_links_in(a, n0, n_nodes, tile_start, link_slot, link_b, link_c, link_aa, local, own)
                 if aa and not local:
                     r = _gather_step(  # op is a literal here already (literally(op) below)
                         literally(with_aa), op, a, gather, rs, ro, run_base, r, n0, cnt, f, fz, b3, w2, rates
                     )
+                    if aa_links:
+                        _aa_links_own(a, n0, n_nodes, tile_start, link_slot, link_aa, False, own)
                     n0 += cnt
                     continue
                 if local or (
@@ -1344,6 +1428,8 @@ def _step(
                         literally(op), scratch, _ZERO, _lanes(cnt), n0, force_lo, force_hi, b3, w2, rates
                     )
                 _store_tile(b, n0, cnt, n_nodes, f, mode)
+                if aa and aa_links:
+                    _aa_links_own(a, n0, n_nodes, tile_start, link_slot, link_aa, True, own)
                 n0 += cnt
             if mode != STORE_CACHED:
                 _store_fence()

@@ -27,8 +27,10 @@ class Walls(str, enum.Enum):
 class Streaming(str, enum.Enum):
     """How the step kernel streams the populations (the results are the same bits either way)."""
 
-    auto = "auto"  # aa wherever no interpolated wall link exists, else pull
-    aa = "aa"  # in place, one population array (AA pattern): 1.3-2x faster here; halfway walls only
+    auto = "auto"  # aa wherever the walls allow it (halfway, or cli/bfl in float64), else pull
+    aa = (
+        "aa"  # in place, one population array (AA pattern): 1.3-2x faster here; not with mr1 or float32 links
+    )
     pull = "pull"  # two arrays, pull from the neighbours
 
 
@@ -149,7 +151,7 @@ class Settings(BaseModel):
     )
     streaming: Streaming = Field(
         Streaming.auto,
-        description="auto (in place wherever the walls allow), aa (in-place AA pattern; needs walls: halfway) or "
+        description="auto (in place wherever the walls allow), aa (in-place AA pattern; not with walls: mr1 or float32 links) or "
         "pull (two arrays); the populations are the same bits either way",
     )
     setup: Setup = Field(Setup.periodic, description="periodic (body force everywhere) or chambers (thesis)")
@@ -242,12 +244,18 @@ class Settings(BaseModel):
         return self
 
     @model_validator(mode="after")
-    def _aa_needs_halfway_walls(self):
-        if self.streaming is Streaming.aa and self.walls is not Walls.halfway:
+    def _aa_needs_linear_float64_walls(self):
+        if self.streaming is not Streaming.aa or self.walls is Walls.halfway:
+            return self
+        if self.walls is Walls.mr1:
             raise ValueError(
-                f"streaming=aa needs walls=halfway (got walls={self.walls.value}): an interpolated wall link reads "
-                "the previous step's populations where the in-place array no longer holds them; use streaming=auto "
-                "(in place where no interpolated link exists) or pull"
+                "streaming=aa cannot run walls=mr1: a multi-reflection link reads populations two nodes away from "
+                "the previous step, which the in-place array no longer holds; use streaming=auto or pull"
+            )
+        if self.precision is Precision.float32:
+            raise ValueError(
+                f"streaming=aa with walls={self.walls.value} needs precision=float64: an interpolated link's value "
+                "would be rounded to float32 in place (the pull kernel keeps it in float64); use streaming=auto"
             )
         return self
 

@@ -23,7 +23,7 @@ from porepipe.lbm._darcy import estimate_key, estimates, sample_mean_rho
 from porepipe.lbm._domain import Lattice
 from porepipe.lbm._lattice import CS2, dhumieres_matrix, mrt_rates, trt_minus_tau, viscosity
 from porepipe.lbm._mpi import ONE_PROCESS, Serial, SharedError
-from porepipe.lbm._settings import Collision, Settings, StopRule, Streaming
+from porepipe.lbm._settings import Collision, Precision, Settings, StopRule, Streaming
 from porepipe.lbm._walls import Links
 
 #: τ̂ − ½ below this is refused (ν̂ → 0: the scheme loses stability and the wall position runs away).
@@ -85,6 +85,34 @@ def check_tau(settings: Settings) -> None:
         )
 
 
+def in_place_links(settings: Settings, links: Links) -> bool:
+    """Whether the in-place (AA) kernel can run these wall links: none, or linear ones (cli, bfl) in float64 (a
+    link value in place is stored in the population array; in float32 that rounding would change the bits).
+    """
+    if links.size == 0:
+        return True
+    return not links.multi_reflection and settings.precision is Precision.float64
+
+
+#: the in-place link table of a run without links, or of a pull run
+_NO_LINKS_IN_PLACE = np.zeros(0, dtype=np.uint32)
+
+
+def _in_place_link_table(lat: Lattice, links: Links) -> np.ndarray:
+    """(K,) uint32: the slot behind each linear link in an in-place gather step (:func:`K.aa_link_slots`)."""
+    if links.size == 0:
+        return _NO_LINKS_IN_PLACE
+    table = np.empty(links.size, dtype=np.uint32)
+    bad = K.aa_link_slots(
+        lat.gather, lat.run_start, lat.run_offset, lat.run_base, links.tile_start, links.slot, table
+    )
+    if bad >= 0:
+        raise PorepipeError(
+            f"wall link {bad} is not a bounce-back link of this lattice (links of another lattice?)"
+        )
+    return table
+
+
 def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, stores: int | None = None):
     """``step(src, dst, fields, store, n_steps)`` for the chosen operator (its parameters are fixed once, here);
     ``links``: interpolated boundary links (None: halfway bounce-back everywhere); ``stores``: how the kernel writes
@@ -92,13 +120,14 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
     :func:`porepipe.lbm._kernels.streams` chooses by array size).
     """
     links = links if links is not None else Links.none()
-    if stores is None and settings.streaming is not Streaming.pull and links.size == 0:
+    if stores is None and settings.streaming is not Streaming.pull and in_place_links(settings, links):
         stores = K.IN_PLACE
-    if stores == K.IN_PLACE and links.size:
+    if stores == K.IN_PLACE and not in_place_links(settings, links):
         raise PorepipeError(
-            "permeability.streaming = aa cannot run interpolated wall links (walls: "
-            f"{settings.walls.value}): use streaming: auto or pull"
+            f"permeability.streaming = aa cannot run these wall links (walls: {settings.walls.value}, precision: "
+            f"{settings.precision.value}): in place needs linear links in float64; use streaming: auto or pull"
         )
+    link_aa = _in_place_link_table(lat, links) if stores == K.IN_PLACE else _NO_LINKS_IN_PLACE
     lo, hi = lat.force_nodes
     force = np.array([settings.body_force, 0.0, 0.0])
     tau = settings.tau
@@ -146,6 +175,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
             links.c,
             links.mr,
             links.state,
+            link_aa,
         )
 
     return step

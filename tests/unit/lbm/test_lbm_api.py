@@ -31,9 +31,12 @@ def test_settings_reject_unknown_keys_and_bad_force_zone():
         Settings(inlet_layers=3, force_layers=3)
     with pytest.raises(ValueError):
         Settings(tau=0.5)
-    with pytest.raises(ValueError, match="streaming=aa needs walls=halfway"):
-        Settings(streaming="aa", walls="cli")
+    with pytest.raises(ValueError, match="streaming=aa cannot run walls=mr1"):
+        Settings(streaming="aa", walls="mr1")
+    with pytest.raises(ValueError, match="streaming=aa with walls=cli needs precision=float64"):
+        Settings(streaming="aa", walls="cli", precision="float32")
     assert Settings(streaming="aa", walls="halfway").streaming.value == "aa"
+    assert Settings(streaming="aa", walls="cli").streaming.value == "aa"
 
 
 def _slit(h=6, length=3):
