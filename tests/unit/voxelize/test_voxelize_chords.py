@@ -2,17 +2,19 @@
 
 import numpy as np
 
-from porepipe.voxelize._kernels import CHORD_ROWS, N_ROWS, _chord_count, _chord_margin, _row_chords
+from porepipe.voxelize._kernels import CHORD_ROWS, N_ROWS, _chord_count, _chord_margin, _row_chords, _row_room
 
 
 def _chords(dxy, cz, r, h):
     """The kernel's chords of rows ``dxy`` (36) through the ball (cz, r): (lo, hi) int arrays, floor(e), ambiguous."""
     e = cz / h - 0.5
     e_int = int(np.floor(e))
-    chords = np.zeros((3, CHORD_ROWS), np.float32)
+    room = np.zeros(CHORD_ROWS, np.float32)
+    ends = np.zeros((2, CHORD_ROWS), np.int32)
     margin = np.float32(_chord_margin(cz, r, h))
-    ambiguous = _row_chords(dxy, r * r, np.float32(e - e_int), np.float32(1.0 / h), margin, chords)
-    return chords[0, :N_ROWS].astype(int), chords[1, :N_ROWS].astype(int), e_int, ambiguous
+    _row_room(dxy, r * r, room)
+    ambiguous = _row_chords(room, np.float32(e - e_int), np.float32(1.0 / h), margin, ends)
+    return ends[0, :N_ROWS].astype(int), ends[1, :N_ROWS].astype(int), e_int, ambiguous
 
 
 def _inside(dxy, cz, r, h, m):
@@ -39,9 +41,9 @@ def test_unambiguous_chords_equal_the_exact_test():
         np.testing.assert_array_equal((rel[None, :] >= lo[:, None]) & (rel[None, :] < hi[:, None]), inside)
         for k in range(m[0] // 6 + 1, m[-1] // 6):  # whole voxels inside the tested range
             sel = (m >= 6 * k) & (m < 6 * k + 6)
-            chords = np.zeros((3, CHORD_ROWS), np.float32)
-            chords[0, :N_ROWS], chords[1, :N_ROWS] = lo, hi
-            assert _chord_count(chords, np.float32(6 * k - e_int)) == inside[:, sel].sum()
+            ends = np.zeros((2, CHORD_ROWS), np.int32)
+            ends[0, :N_ROWS], ends[1, :N_ROWS] = lo, hi
+            assert _chord_count(ends, np.int32(6 * k - e_int)) == inside[:, sel].sum()
     assert checked > 300  # the float32 path is the common one
 
 
