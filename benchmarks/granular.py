@@ -9,12 +9,16 @@ distribution, next to two peers' published figures. A last row compares the bare
 optional effect compiled in (with neutral values), i.e. what the compile-time switches save, the narrow
 phase against the whole-polygon clipping it replaced, and, with ``--reference``, an earlier step kernel file with the
 default skin of before issue 15's speed work (0.3 R_min; same pile, interleaved, trajectories checked bit for bit);
-``--reference-skin 0.6`` gives it today's skin, so that the row times the kernels alone.
+``--reference-skin 0.6`` gives it today's skin, so that the row times the kernels alone. ``--contact-reference``
+times the narrow phase alone (one call per candidate pair whose boxes overlap, on the settled pile, 1 thread) of an
+earlier ``_contact.py`` beside the current one: a few ns per pair, far less noisy than whole steps on a shared machine.
 
     python benchmarks/granular.py            # N = 10 000
     python benchmarks/granular.py --smoke    # N = 300, 1 thread, no effect row: seconds once compiled
     git show 8390a4f:src/porepipe/granular/_kernels.py > old_granular_kernels.py
     python benchmarks/granular.py --reference old_granular_kernels.py   # also time that kernel beside this one
+    git show main:src/porepipe/granular/_contact.py > old_granular_contact.py
+    python benchmarks/granular.py --contact-reference old_granular_contact.py --methods swap   # narrow phase alone
 """
 
 from __future__ import annotations
@@ -33,8 +37,10 @@ import numba
 import numpy as np
 from _common import add_out_argument, write_record
 from _reference import load_module
+from numba import njit
 
 from porepipe.granular import Settings, Simulation, polygon_properties
+from porepipe.granular import _contact as C
 from porepipe.granular import _kernels as K
 from porepipe.granular._settings import Shape
 from porepipe.granular._system import generate_shapes
@@ -233,6 +239,84 @@ def previous_kernel(
     return out
 
 
+def _narrow_phase_loop(overlap_geometry):
+    """A jitted loop calling ``overlap_geometry`` (a ``_contact._overlap_geometry``) on pairs (pi, pj) ``reps``
+    times with the per-pair hints, the last round's 11 outputs per pair in ``out``.
+    """
+
+    @njit
+    def run(W, nc, G, pi, pj, hints, reps, out):
+        rows = 2 * W.shape[1] + 4
+        buf_a, buf_b = np.empty((rows, 2)), np.empty((rows, 2))
+        tag_a, tag_b = np.empty(rows, np.int64), np.empty(rows, np.int64)
+        side, geo = np.empty(rows), np.empty(11)
+        for _ in range(reps):
+            for q in range(pi.shape[0]):
+                i, j = pi[q], pj[q]
+                xi, yi, xj, yj = G[0, i, 0], G[0, i, 1], G[0, j, 0], G[0, j, 1]
+                overlap_geometry(
+                    W,
+                    i,
+                    nc[i],
+                    j,
+                    nc[j],
+                    xi,
+                    yi,
+                    xj,
+                    yj,
+                    buf_a,
+                    tag_a,
+                    buf_b,
+                    tag_b,
+                    side,
+                    geo,
+                    True,
+                    hints,
+                    q,
+                )
+                out[q] = geo
+
+    return run
+
+
+def contact_kernels(previous_contact, n: int, warm: int, repeats: int, reps: int = 20) -> dict:
+    """The narrow phase alone: ``previous_contact`` (an earlier ``_contact`` module) and the current one on every
+    candidate pair with overlapping boxes of the settled pile (I = 0.1, 1 thread), interleaved rounds, best CPU
+    ns per pair of each; and the largest output difference between them (0: bit-identical).
+    """
+    numba.set_num_threads(1)
+    sim = Simulation(pile(n, 0.1, "swap"), seed=1)
+    sim.advance(warm)
+    pi = np.repeat(np.arange(sim.n_mob), np.diff(sim.nb_start))
+    pj, box = sim.nb_j, sim.aabb
+    meet = (box[pi, 1] >= box[pj, 0]) & (box[pj, 1] >= box[pi, 0])
+    meet &= (box[pi, 3] >= box[pj, 2]) & (box[pj, 3] >= box[pi, 2])
+    pi, pj = pi[meet], pj[meet]
+    loops = {"previous": _narrow_phase_loop(previous_contact._overlap_geometry)}
+    loops["current"] = _narrow_phase_loop(C._overlap_geometry)
+    best = dict.fromkeys(loops, math.inf)
+    outs = {}
+    for _ in range(repeats + 1):
+        for label, run in loops.items():
+            hints, out = np.zeros((len(pi), 2), np.int64), np.empty((len(pi), 11))
+            run(sim.wv, sim.nc, sim.G, pi, pj, hints, 1, out)  # compiles, warms the hints
+            c0 = time.process_time()
+            run(sim.wv, sim.nc, sim.G, pi, pj, hints, reps, out)
+            best[label] = min(best[label], (time.process_time() - c0) / (reps * len(pi)) * 1e9)
+            outs[label] = out
+    a, b = outs["previous"], outs["current"]
+    same_line = np.minimum(  # the crossings c1, c2 as an unordered pair
+        np.abs(a[:, 1:5] - b[:, 1:5]).max(axis=1), np.abs(a[:, 1:5] - b[:, [3, 4, 1, 2]]).max(axis=1)
+    )
+    return {
+        "pairs": len(pi),
+        "ns_per_pair": best,
+        "bit_identical": bool(np.array_equal(a, b)),
+        "max_area_difference_rel": float(np.abs(a[:, 0] - b[:, 0]).max() / np.abs(a[:, 0]).max()),
+        "max_point_difference_m": float(max(np.abs(a[:, 5:9] - b[:, 5:9]).max(), same_line.max())),
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke", action="store_true", help="300 particles, a few steps, 1 thread")
@@ -251,6 +335,11 @@ def main() -> None:
         default=PREVIOUS_SKIN,
         help=f"Verlet skin of the --reference run in units of R_min (default {PREVIOUS_SKIN}, the skin before issue "
         "15's speed work; 0.6, today's default, times the kernels alone)",
+    )
+    ap.add_argument(
+        "--contact-reference",
+        default=None,
+        help="an earlier src/porepipe/granular/_contact.py to time the narrow phase alone beside the current one",
     )
     args = ap.parse_args()
     methods = tuple(args.methods.split(","))
@@ -301,6 +390,17 @@ def main() -> None:
             f"CPU-s; trajectories bit-identical after {r['steps']} steps",
             flush=True,
         )
+    contact = None
+    if args.contact_reference:
+        contact = contact_kernels(load_module(args.contact_reference), n, warm, repeats)
+        old, new = contact["ns_per_pair"]["previous"], contact["ns_per_pair"]["current"]
+        print(
+            f"narrow phase alone, {contact['pairs']} pairs, 1 thr: --contact-reference {old:.1f} ns per pair (CPU), "
+            f"current {new:.1f}: {old / new:.3f}x; bit-identical {contact['bit_identical']} (largest differences: "
+            f"area {contact['max_area_difference_rel']:.1e} of the largest, points {contact['max_point_difference_m']:.1e} "
+            f"m; load {os.getloadavg()[0]:.1f})",
+            flush=True,
+        )
     cost = effect_cost(n, warm, steps, repeats)
     print(
         f"effects: bare {cost['bare']:.3g}, all compiled in {cost['all effects compiled in']:.3g} "
@@ -331,6 +431,7 @@ def main() -> None:
             "effects": cost,
             "narrow_phase": narrow,
             "previous_kernel": previous,
+            "contact_kernels": contact,
             "peers": PEERS,
             "target": TARGET,
         },
