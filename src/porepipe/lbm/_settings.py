@@ -27,10 +27,10 @@ class Walls(str, enum.Enum):
 class Streaming(str, enum.Enum):
     """How the step kernel streams the populations (the results are the same bits either way)."""
 
-    auto = "auto"  # aa wherever the walls allow it (halfway, or cli/bfl in float64), else pull
-    aa = (
-        "aa"  # in place, one population array (AA pattern): 1.3-2x faster here; not with mr1 or float32 links
-    )
+    #: aa with halfway walls, and with cli/bfl (float64) where the arrays exceed the cache; else pull
+    auto = "auto"
+    #: in place, one population array (AA pattern): 1.3-2x faster here; not with mr1 or float32 links
+    aa = "aa"
     pull = "pull"  # two arrays, pull from the neighbours
 
 
@@ -151,8 +151,9 @@ class Settings(BaseModel):
     )
     streaming: Streaming = Field(
         Streaming.auto,
-        description="auto (in place wherever the walls allow), aa (in-place AA pattern; not with walls: mr1 or float32 links) or "
-        "pull (two arrays); the populations are the same bits either way",
+        description="auto (in place with halfway walls, and with cli/bfl in float64 where the arrays exceed the "
+        "cache), aa (in-place AA pattern; not with walls: mr1 or float32 links) or pull (two arrays); the "
+        "populations are the same bits either way",
     )
     setup: Setup = Field(Setup.periodic, description="periodic (body force everywhere) or chambers (thesis)")
     mirror: bool = Field(False, description="periodic set-up: append the sample mirrored along the flow axis")

@@ -94,6 +94,24 @@ def in_place_links(settings: Settings, links: Links) -> bool:
     return not links.multi_reflection and settings.precision is Precision.float64
 
 
+def _beyond_cache(settings: Settings, lat: Lattice) -> bool:
+    """Whether the two population arrays exceed the last-level cache (:data:`K.STREAMING_BYTES`): only there does
+    streaming in place with wall links pay; below it a run takes seconds and the in-place variant's compilation
+    (~3 CPU-s) would cost more (the mini scene's 25³ lattice).
+    """
+    itemsize = 4 if settings.precision is Precision.float32 else 8
+    return 2 * 19 * lat.n_nodes * itemsize > K.STREAMING_BYTES
+
+
+def _streams_in_place(settings: Settings, lat: Lattice, links: Links) -> bool:
+    """What ``streaming`` chooses: aa (refused later where the links cannot), pull, or for auto in place with
+    halfway walls, and with linear links where the arrays exceed the cache.
+    """
+    if settings.streaming is not Streaming.auto:
+        return settings.streaming is Streaming.aa
+    return links.size == 0 or (in_place_links(settings, links) and _beyond_cache(settings, lat))
+
+
 #: the in-place link table of a run without links, or of a pull run
 _NO_LINKS_IN_PLACE = np.zeros(0, dtype=np.uint32)
 
@@ -120,7 +138,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
     :func:`porepipe.lbm._kernels.streams` chooses by array size).
     """
     links = links if links is not None else Links.none()
-    if stores is None and settings.streaming is not Streaming.pull and in_place_links(settings, links):
+    if stores is None and _streams_in_place(settings, lat, links):
         stores = K.IN_PLACE
     if stores == K.IN_PLACE and not in_place_links(settings, links):
         raise PorepipeError(

@@ -11,7 +11,7 @@ from porepipe.lbm._domain import build_lattice
 from porepipe.lbm._lattice import OPPOSITE, C, Q, W
 from porepipe.lbm._solver import kappa_error, make_stepper
 from porepipe.lbm._throats import critical_throat
-from porepipe.lbm._walls import build_links, coefficients
+from porepipe.lbm._walls import Links, build_links, coefficients
 
 
 def _random_pore(shape=(6, 7, 8), seed=1):
@@ -120,6 +120,28 @@ def test_in_place_interpolated_walls_give_the_pull_kernels_bits(scheme, collisio
             runs.append((dst if steps % 2 else src, fields))
         np.testing.assert_array_equal(runs[1][0], runs[0][0])
         np.testing.assert_array_equal(runs[1][1], runs[0][1])
+
+
+def test_auto_streams_in_place_with_links_only_beyond_the_cache(monkeypatch):
+    """``streaming: auto`` takes the in-place kernel with halfway walls always, with linear links only where the
+    two population arrays exceed the last-level cache (below it the in-place variant's compilation costs more than
+    it saves), never with MR1 links; ``aa`` and ``pull`` choose themselves."""
+    from porepipe.lbm import _kernels as K
+    from porepipe.lbm._solver import _streams_in_place
+
+    pore = _random_pore()
+    lat = build_lattice(pore, (True,) * 3, (0, 0), (0, pore.shape[0]), keep_wall_links=True)
+    cli = build_links(lat.pore, lat.periodic, *lat.wall_links, _RandomQ(7), Walls.cli)
+    mr1 = build_links(lat.pore, lat.periodic, *lat.wall_links, _RandomQ(7), Walls.mr1)
+    auto = Settings()
+    assert _streams_in_place(auto, lat, Links.none())
+    assert not _streams_in_place(auto, lat, cli)
+    assert _streams_in_place(Settings(streaming="aa"), lat, cli)
+    assert not _streams_in_place(Settings(streaming="pull"), lat, Links.none())
+    monkeypatch.setattr(K, "STREAMING_BYTES", 0)
+    assert _streams_in_place(auto, lat, cli)
+    assert not _streams_in_place(Settings(walls="mr1"), lat, mr1)
+    assert not _streams_in_place(Settings(precision="float32"), lat, cli)
 
 
 def test_in_place_refuses_multi_reflection_links():
