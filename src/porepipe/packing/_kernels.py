@@ -475,7 +475,8 @@ def _prefetch_row(typingctx, rows, i):
         ptr = cgutils.get_item_pointer(context, builder, arrty, arr, [args[1], zero], wraparound=False)
         i32 = ir.IntType(32)
         fnty = ir.FunctionType(ir.VoidType(), [cgutils.voidptr_t, i32, i32, i32])
-        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.prefetch.p0")
+        # named as this llvmlite spells pointers: .p0i8 here (typed), which LLVM 22 upgrades to the opaque .p0
+        fn = builder.module.declare_intrinsic("llvm.prefetch", [cgutils.voidptr_t], fnty)
         read, keep_everywhere, data = ir.Constant(i32, 0), ir.Constant(i32, 3), ir.Constant(i32, 1)
         builder.call(fn, [builder.bitcast(ptr, cgutils.voidptr_t), read, keep_everywhere, data])
         return context.get_dummy_value()
