@@ -4,6 +4,7 @@
     python benchmarks/diffusion.py --smoke   # seconds (CI)
     python benchmarks/diffusion.py --edmd-only --edmd-reference old_edmd_kernels.py   # EDMD only, before/after
     python benchmarks/diffusion.py --reference old_kernels.py   # Knudsen flights, before/after in one run
+    python benchmarks/diffusion.py --knudsen-only --reference old_kernels.py   # the same, without the EDMD sections
 
 ``--reference`` names a copy of an earlier ``porepipe/diffusion/_kernels.py`` (``git show
 main:src/porepipe/diffusion/_kernels.py > old_kernels.py``): its kernels run the same cases, interleaved with the
@@ -109,6 +110,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--smoke", action="store_true", help="small sizes, one repeat")
     parser.add_argument("--edmd-only", action="store_true", help="only the event-driven gas section")
+    parser.add_argument(
+        "--knudsen-only", action="store_true", help="only the Knudsen flight section (no event-driven gas)"
+    )
     parser.add_argument("--edmd-reference", help="earlier _edmd_kernels.py to time alongside the current one")
     parser.add_argument(
         "--reference", help="earlier _kernels.py (Knudsen flights) to time alongside the current one"
@@ -188,7 +192,8 @@ def main() -> None:
         f"{os.cpu_count()} CPUs"
     )
     write_record(args.out, "diffusion.json", rows)
-    edmd_section(args.smoke, args.out, args.edmd_reference)
+    if not args.knudsen_only:
+        edmd_section(args.smoke, args.out, args.edmd_reference)
 
 
 def edmd_section(smoke: bool, out: str, reference: str | None = None, surface: bool = True) -> None:

@@ -15,11 +15,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.extending import intrinsic
 
 from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
 
-_INF = np.inf
+_NEVER = 1e300  # crossing time of an axis a flight does not move along (r * _NEVER stays finite)
 _GAMMA = np.uint64(0x9E3779B97F4A7C15)
 _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
@@ -118,14 +119,169 @@ def _chessboard_codes(pore, out):
 
 # ---------------------------------------------------------------------------------------------------------------------
 # the flight
+@intrinsic
+def _select(typingctx, cond, a, b):
+    """``a if cond else b`` as one LLVM select (a conditional move, no branch), for the walk's unpredictable choice
+    of axis; ``a`` and ``b`` of one type.
+    """
+    if not isinstance(cond, types.Boolean) or a != b:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.select(args[0], args[1], args[2])
+
+    return a(cond, a, b), codegen
+
+
+@njit(cache=True, inline="always")
+def _axis_start(u, p, i, h):
+    """(step sign, time to the first face crossing, time between crossings, crossings per unit time) of one axis for
+    a flight from ``p`` in voxel ``i`` with direction component ``u``. An axis the flight does not move along never
+    crosses: its times are the finite _NEVER, so that a jump's ``0 * dt`` stays 0 (not ``0 * inf = nan``).
+    """
+    if u > 0.0:
+        iu = 1.0 / u
+        return 1, min(max(((i + 1) * h - p) * iu, 0.0), _NEVER), min(h * iu, _NEVER), u / h
+    if u < 0.0:
+        iu = 1.0 / u
+        return -1, min(max((i * h - p) * iu, 0.0), _NEVER), min(-h * iu, _NEVER), -u / h
+    return 0, _NEVER, _NEVER, 0.0
+
+
+@njit(cache=True, inline="always")
+def _crossed(t_leave, t, rate, s, r):
+    """How many faces of one axis (next crossing at ``t``, then ``rate`` per unit time) a flight crosses up to
+    ``t_leave``, at most ``r``: the index advance along that axis of a jump through a pore cube of half-width ``r``.
+    A face crossed exactly at ``t_leave`` counts (either order of a tie is exact); truncation is floor here, as the
+    argument is at least 0.
+    """
+    if s == 0:
+        return 0
+    return min(np.int64(max((t_leave - t) * rate, -1.0) + 1.0), r)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
+    """:func:`_fly` on the flat (C order) view ``flat`` of the codes of shape (n0, n1, n2); inlined into the
+    kernels, which take the view once per batch.
+
+    Every face crossing is a time from the flight's start: per axis the next one, ``t0, t1, t2``, advanced by the
+    fixed ``dt0, dt1, dt2`` (no position update, no division in the walk). A walk step picks the earliest axis
+    (ties: lowest axis first) by selects, moves the flat index by that axis's stride and loads one byte. A jump
+    through the pore cube of half-width r = code - 1 around the voxel leaves it at T = min_d(t_d + r dt_d) and
+    advances every axis by the faces it crosses before T (at most r: the index stays in the cube).
+    """
+    st0 = n1 * n2
+    u0, u1, u2 = u[0], u[1], u[2]
+    h0, h1, h2 = h[0], h[1], h[2]
+    i0, i1, i2 = idx[0], idx[1], idx[2]
+    s0, t0, dt0, q0 = _axis_start(u0, pos[0], i0, h0)
+    s1, t1, dt1, q1 = _axis_start(u1, pos[1], i1, h1)
+    s2, t2, dt2, q2 = _axis_start(u2, pos[2], i2, h2)
+    f0, f1, f2 = s0 * st0, s1 * n2, s2  # flat index steps
+    w0 = w1 = w2 = 0  # periodic wraps
+    lin = (i0 * n1 + i1) * n2 + i2
+    c = flat[lin]
+    crossings = 0
+    event = -1
+    t = 0.0
+    while True:
+        if c >= 3:
+            r = np.int64(c) - 1
+            t_leave = min(t0 + r * dt0, min(t1 + r * dt1, t2 + r * dt2))
+            k0 = _crossed(t_leave, t0, q0, s0, r)
+            k1 = _crossed(t_leave, t1, q1, s1, r)
+            k2 = _crossed(t_leave, t2, q2, s2, r)
+            i0 += k0 * s0
+            i1 += k1 * s1
+            i2 += k2 * s2
+            t0 += k0 * dt0
+            t1 += k1 * dt1
+            t2 += k2 * dt2
+            lin += k0 * f0 + k1 * f1 + k2 * f2
+        while True:  # walk face by face until solid, the box's outside, or a voxel worth a jump
+            x0 = (t0 <= t1) & (t0 <= t2)
+            x1 = (not x0) & (t1 <= t2)
+            x01 = x0 | x1
+            t = _select(x0, t0, _select(x1, t1, t2))
+            i0 = _select(x0, i0 + s0, i0)
+            i1 = _select(x1, i1 + s1, i1)
+            i2 = _select(x01, i2, i2 + s2)
+            t0 = _select(x0, t0 + dt0, t0)
+            t1 = _select(x1, t1 + dt1, t1)
+            t2 = _select(x01, t2, t2 + dt2)
+            lin += _select(x0, f0, _select(x1, f1, f2))
+            out = (i0 < 0) | (i0 >= n0) | (i1 < 0) | (i1 >= n1) | (i2 < 0) | (i2 >= n2)
+            if out:
+                break
+            c = flat[np.uint64(lin)]  # unsigned: no wraparound check
+            if (c == 0) | (c >= 3):
+                break
+            crossings += 1
+        d = 0 if x0 else (1 if x1 else 2)
+        if out:
+            if d == exit_axis:
+                event = EXIT_LOW + ((s0 if x0 else (s1 if x1 else s2)) > 0)
+            elif periodic[d]:  # wrap, unless the voxel across the periodic face is solid
+                if d == 0:
+                    back, db = s0 * n0, s0 * n0 * st0
+                elif d == 1:
+                    back, db = s1 * n1, s1 * n1 * n2
+                else:
+                    back, db = s2 * n2, s2 * n2
+                c = flat[lin - db]
+                if c != 0:
+                    lin -= db
+                    if d == 0:
+                        i0 -= back
+                        w0 += s0
+                    elif d == 1:
+                        i1 -= back
+                        w1 += s1
+                    else:
+                        i2 -= back
+                        w2 += s2
+                    crossings += 1
+                    continue
+        if c != 0 and not out:
+            crossings += 1
+            continue  # c >= 3: jump
+        if event < 0:
+            event = 2 * d + ((s0 if x0 else (s1 if x1 else s2)) > 0)
+        break
+    # the event: step back into the last pore voxel, put the particle on the face it meets
+    if d == 0:
+        i0 -= s0
+    elif d == 1:
+        i1 -= s1
+    else:
+        i2 -= s2
+    p0 = min(max(pos[0] + t * u0 - w0 * (n0 * h0), i0 * h0), (i0 + 1) * h0)
+    p1 = min(max(pos[1] + t * u1 - w1 * (n1 * h1), i1 * h1), (i1 + 1) * h1)
+    p2 = min(max(pos[2] + t * u2 - w2 * (n2 * h2), i2 * h2), (i2 + 1) * h2)
+    if d == 0:
+        p0 = (i0 + (s0 > 0)) * h0
+    elif d == 1:
+        p1 = (i1 + (s1 > 0)) * h1
+    else:
+        p2 = (i2 + (s2 > 0)) * h2
+    pos[0], pos[1], pos[2] = p0, p1, p2
+    idx[0], idx[1], idx[2] = i0, i1, i2
+    img[0] += w0
+    img[1] += w1
+    img[2] += w2
+    return event, t, crossings
+
+
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
 def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     """Fly from ``pos`` (inside pore voxel ``idx``) along the unit vector ``u`` to the next event.
 
-    Exact voxel traversal (Amanatides-Woo) with jumps through pore cubes of the distance code. Ties between axes
-    (a flight exactly through an edge or corner) are resolved deterministically, lowest axis first. On return
-    ``pos``/``idx`` hold the event point and the (pore) voxel it belongs to; at a wall the coordinate of the hit
-    axis is exactly the face plane. ``img`` counts periodic wraps per axis (unwrapped = pos + img * n * h).
+    Exact voxel traversal (Amanatides-Woo) with jumps through pore cubes of the distance code (see
+    :func:`_flight`). Ties between axes (a flight exactly through an edge or corner) are resolved
+    deterministically, lowest axis first. On return ``pos``/``idx`` hold the event point and the (pore) voxel it
+    belongs to; at a wall the coordinate of the hit axis is exactly the face plane. ``img`` counts periodic wraps
+    per axis (unwrapped = pos + img * n * h); a wall met across a periodic face leaves it unchanged.
 
     Returns
     -------
@@ -134,155 +290,10 @@ def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     length : float
         Path length flown.
     crossings : int
-        Voxel faces crossed.
+        Voxel faces crossed face by face (the jumps' are not counted).
     """
     n0, n1, n2 = geom.shape
-    flat = geom.reshape(n0 * n1 * n2)
-    length = 0.0
-    crossings = 0
-    u0, u1, u2 = u[0], u[1], u[2]
-    h0, h1, h2 = h[0], h[1], h[2]
-    ih0, ih1, ih2 = 1.0 / h0, 1.0 / h1, 1.0 / h2  # floor(p * ih) in the jump: no division per jump
-    s0 = 1 if u0 > 0.0 else (-1 if u0 < 0.0 else 0)
-    s1 = 1 if u1 > 0.0 else (-1 if u1 < 0.0 else 0)
-    s2 = 1 if u2 > 0.0 else (-1 if u2 < 0.0 else 0)
-    iu0 = 1.0 / u0 if s0 != 0 else 0.0  # multiplications instead of divisions in the walk
-    iu1 = 1.0 / u1 if s1 != 0 else 0.0
-    iu2 = 1.0 / u2 if s2 != 0 else 0.0
-    dt0 = h0 * abs(iu0) if s0 != 0 else _INF
-    dt1 = h1 * abs(iu1) if s1 != 0 else _INF
-    dt2 = h2 * abs(iu2) if s2 != 0 else _INF
-    i0, i1, i2 = idx[0], idx[1], idx[2]
-    p0, p1, p2 = pos[0], pos[1], pos[2]
-    while True:
-        r = np.int64(flat[(i0 * n1 + i1) * n2 + i2]) - 1  # flat load: no negative-index wraparound checks
-        if r >= 2:
-            # jump to the surface of the all-pore cube [i - r, i + r] (index space)
-            t = _INF
-            if s0 > 0:
-                t = min(t, ((i0 + r + 1) * h0 - p0) * iu0)
-            elif s0 < 0:
-                t = min(t, ((i0 - r) * h0 - p0) * iu0)
-            if s1 > 0:
-                t = min(t, ((i1 + r + 1) * h1 - p1) * iu1)
-            elif s1 < 0:
-                t = min(t, ((i1 - r) * h1 - p1) * iu1)
-            if s2 > 0:
-                t = min(t, ((i2 + r + 1) * h2 - p2) * iu2)
-            elif s2 < 0:
-                t = min(t, ((i2 - r) * h2 - p2) * iu2)
-            t = max(t, 0.0)
-            p0 += t * u0
-            p1 += t * u1
-            p2 += t * u2
-            length += t
-            i0 = min(max(np.int64(math.floor(p0 * ih0)), i0 - r), i0 + r)
-            i1 = min(max(np.int64(math.floor(p1 * ih1)), i1 - r), i1 + r)
-            i2 = min(max(np.int64(math.floor(p2 * ih2)), i2 - r), i2 + r)
-        # voxel walk from the segment start (p0, p1, p2) in voxel (i0, i1, i2)
-        t0 = (((i0 + 1) * h0 - p0) * iu0 if s0 > 0 else (i0 * h0 - p0) * iu0) if s0 != 0 else _INF
-        t1 = (((i1 + 1) * h1 - p1) * iu1 if s1 > 0 else (i1 * h1 - p1) * iu1) if s1 != 0 else _INF
-        t2 = (((i2 + 1) * h2 - p2) * iu2 if s2 > 0 else (i2 * h2 - p2) * iu2) if s2 != 0 else _INF
-        t0 = max(t0, 0.0)
-        t1 = max(t1, 0.0)
-        t2 = max(t2, 0.0)
-        event = -1
-        d = 0
-        t = 0.0
-        lin = (i0 * n1 + i1) * n2 + i2  # flat index of (i0, i1, i2); one load per crossing
-        while True:
-            if t0 <= t1 and t0 <= t2:
-                d = 0
-                t = t0
-                j = i0 + s0
-                step = s0 * n1 * n2
-                if j < 0 or j >= n0:
-                    if exit_axis == 0:
-                        event = EXIT_HIGH if s0 > 0 else EXIT_LOW
-                        break
-                    if periodic[0]:
-                        j = j - s0 * n0
-                        step = (j - i0) * n1 * n2
-                        p0 -= s0 * n0 * h0
-                        img[0] += s0
-                    else:
-                        event = 1 if s0 > 0 else 0
-                        break
-                c = flat[lin + step]
-                if c == 0:
-                    event = 1 if s0 > 0 else 0
-                    break
-                i0 = j
-                t0 += dt0
-            elif t1 <= t2:
-                d = 1
-                t = t1
-                j = i1 + s1
-                step = s1 * n2
-                if j < 0 or j >= n1:
-                    if exit_axis == 1:
-                        event = EXIT_HIGH if s1 > 0 else EXIT_LOW
-                        break
-                    if periodic[1]:
-                        j = j - s1 * n1
-                        step = (j - i1) * n2
-                        p1 -= s1 * n1 * h1
-                        img[1] += s1
-                    else:
-                        event = 3 if s1 > 0 else 2
-                        break
-                c = flat[lin + step]
-                if c == 0:
-                    event = 3 if s1 > 0 else 2
-                    break
-                i1 = j
-                t1 += dt1
-            else:
-                d = 2
-                t = t2
-                j = i2 + s2
-                step = s2
-                if j < 0 or j >= n2:
-                    if exit_axis == 2:
-                        event = EXIT_HIGH if s2 > 0 else EXIT_LOW
-                        break
-                    if periodic[2]:
-                        j = j - s2 * n2
-                        step = j - i2
-                        p2 -= s2 * n2 * h2
-                        img[2] += s2
-                    else:
-                        event = 5 if s2 > 0 else 4
-                        break
-                c = flat[lin + step]
-                if c == 0:
-                    event = 5 if s2 > 0 else 4
-                    break
-                i2 = j
-                t2 += dt2
-            lin += step
-            crossings += 1
-            if c >= 3:
-                break  # a jump pays: restart from the crossing point
-        # move the segment start to time t, snap the event axis onto its face, keep the rest inside the voxel
-        p0 += t * u0
-        p1 += t * u1
-        p2 += t * u2
-        length += t
-        if event >= 0:
-            if d == 0:
-                p0 = (i0 + (s0 > 0)) * h0
-            elif d == 1:
-                p1 = (i1 + (s1 > 0)) * h1
-            else:
-                p2 = (i2 + (s2 > 0)) * h2
-        p0 = min(max(p0, i0 * h0), (i0 + 1) * h0)
-        p1 = min(max(p1, i1 * h1), (i1 + 1) * h1)
-        p2 = min(max(p2, i2 * h2), (i2 + 1) * h2)
-        if event >= 0:
-            pos[0], pos[1], pos[2] = p0, p1, p2
-            idx[0], idx[1], idx[2] = i0, i1, i2
-            return event, length, crossings
+    return _flight(geom.reshape(n0 * n1 * n2), n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img)
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -519,7 +530,9 @@ def make_transport_kernel(
         n_ax = geom.shape[axis]
         length_ax = n_ax * h[axis]
         bin_w = length_ax / prof.shape[1]
+        n0, n1, n2 = geom.shape
         for b in prange(n_batches):
+            flat = geom.reshape(n0 * n1 * n2)
             pos = np.empty(3)
             u = np.empty(3)
             idx = np.empty(3, dtype=np.int64)
@@ -554,7 +567,7 @@ def make_transport_kernel(
                                 int((ph + math.pi) / _TWO_PI * orient_hist.shape[2]), orient_hist.shape[2] - 1
                             )
                             orient_hist[b, ob, pb] += 1
-                        ev, ln, cr = _fly(geom, h, periodic, axis, pos, idx, u, img)
+                        ev, ln, cr = _flight(flat, n0, n1, n2, h, periodic, axis, pos, idx, u, img)
                         acc[T_CROSS] += cr
                         acc[T_PATH] += ln
                         acc[T_FLIGHTS] += 1
@@ -647,7 +660,9 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
         ext = np.empty(3)
         for d in range(3):
             ext[d] = geom.shape[d] * h[d]
+        n0, n1, n2 = geom.shape
         for b in prange(n_batches):
+            flat = geom.reshape(n0 * n1 * n2)
             pos = np.empty(3)
             start = np.empty(3)
             u = np.empty(3)
@@ -670,7 +685,7 @@ def make_equilibrium_kernel(wall: tuple, speed_dist: int, msd: bool):
                 k = 0
                 hits = 0
                 while True:
-                    ev, ln, cr = _fly(geom, h, periodic, -1, pos, idx, u, img)
+                    ev, ln, cr = _flight(flat, n0, n1, n2, h, periodic, -1, pos, idx, u, img)
                     dt = ln / speed
                     stop = t_now + dt >= t_end or hits + 1 >= max_hits
                     if MSD:
