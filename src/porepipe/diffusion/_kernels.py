@@ -160,6 +160,28 @@ def _crossed(t_leave, t, rate, s, r):
     return min(np.int64(max((t_leave - t) * rate, -1.0) + 1.0), r)
 
 
+_AHEAD = 6  # voxels between a low-code voxel and the centre of the cube tried ahead of it (see _ahead_cube)
+
+
+@njit(cache=True, inline="always")
+def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c):
+    """(code, centre offsets) of a pore cube that holds voxel (i0, i1, i2) and reaches far ahead of it, for a flight
+    that starts in a voxel of code ``c`` < 3 (next to a wall, where the cube centred on it is too small to jump).
+
+    The candidate centre is ``_AHEAD`` voxels further along every axis the flight moves along. Its code ca >= _AHEAD
+    + 1 means the cube of half-width ca - 1 around it is all pore and still holds the particle's voxel (each offset
+    is at most _AHEAD <= ca - 1), so the flight may jump to that cube's surface. Otherwise (or outside the box):
+    (c, 0, 0, 0), the plain cube.
+    """
+    a0, a1, a2 = i0 + _AHEAD * s0, i1 + _AHEAD * s1, i2 + _AHEAD * s2
+    if (a0 < 0) | (a0 >= n0) | (a1 < 0) | (a1 >= n1) | (a2 < 0) | (a2 >= n2):
+        return c, 0, 0, 0
+    ca = flat[(a0 * n1 + a1) * n2 + a2]
+    if ca <= _AHEAD:
+        return c, 0, 0, 0
+    return ca, _AHEAD * s0, _AHEAD * s1, _AHEAD * s2
+
+
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     """:func:`_fly` on the flat (C order) view ``flat`` of the codes of shape (n0, n1, n2); inlined into the
@@ -169,7 +191,9 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     fixed ``dt0, dt1, dt2`` (no position update, no division in the walk). A walk step picks the earliest axis
     (ties: lowest axis first) by selects, moves the flat index by that axis's stride and loads one byte. A jump
     through the pore cube of half-width r = code - 1 around the voxel leaves it at T = min_d(t_d + r dt_d) and
-    advances every axis by the faces it crosses before T (at most r: the index stays in the cube).
+    advances every axis by the faces it crosses before T (at most r: the index stays in the cube). A flight that
+    starts in a voxel of code < 3 (after a wall hit) first tries a cube centred ahead of it (:func:`_ahead_cube`):
+    per axis it may then cross r + s_d o_d faces, up to the far face of that cube.
     """
     st0 = n1 * n2
     u0, u1, u2 = u[0], u[1], u[2]
@@ -182,16 +206,21 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     w0 = w1 = w2 = 0  # periodic wraps
     lin = (i0 * n1 + i1) * n2 + i2
     c = flat[lin]
+    o0 = o1 = o2 = 0  # offset of the jump cube's centre from the particle's voxel (0 but for the first jump)
+    if c < 3:
+        c, o0, o1, o2 = _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c)
     crossings = 0
     event = -1
     t = 0.0
     while True:
         if c >= 3:
             r = np.int64(c) - 1
-            t_leave = min(t0 + r * dt0, min(t1 + r * dt1, t2 + r * dt2))
-            k0 = _crossed(t_leave, t0, q0, s0, r)
-            k1 = _crossed(t_leave, t1, q1, s1, r)
-            k2 = _crossed(t_leave, t2, q2, s2, r)
+            m0, m1, m2 = r + s0 * o0, r + s1 * o1, r + s2 * o2  # faces ahead to the cube's far face, per axis
+            o0 = o1 = o2 = 0
+            t_leave = min(t0 + m0 * dt0, min(t1 + m1 * dt1, t2 + m2 * dt2))
+            k0 = _crossed(t_leave, t0, q0, s0, m0)
+            k1 = _crossed(t_leave, t1, q1, s1, m1)
+            k2 = _crossed(t_leave, t2, q2, s2, m2)
             i0 += k0 * s0
             i1 += k1 * s1
             i2 += k2 * s2

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from naive_diffusion import flight_naive
 
-from porepipe.diffusion._kernels import _chessboard_codes, _fly
+from porepipe.diffusion._kernels import _ahead_cube, _chessboard_codes, _fly
 
 
 def _codes(pore):
@@ -199,3 +199,44 @@ def test_wall_across_a_periodic_face_keeps_the_image_count():
     event, length, _ = _fly(codes, np.ones(3), per, -1, pos, idx, np.array([1.0, 0.0, 0.0]), img)
     assert (event, length) == (1, 2.5) and img.tolist() == [1, 0, 0]
     assert pos.tolist() == [2.0, 0.5, 1.5] and idx.tolist() == [1, 0, 1]
+
+
+@pytest.mark.parametrize("h", [(1.0, 1.0, 1.0), (0.6, 1.0, 1.7)])
+def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
+    """Flights that start next to a wall (codes 1 and 2), where the cube centred on the voxel is too small to jump:
+    the cube tried ahead of the voxel (`_ahead_cube`) must hold the voxel and be all pore. A channel with a few
+    solid pillars, so that some tried cubes are refused; against the sort-all-crossings reference."""
+    rng = np.random.default_rng(11)
+    pore = np.ones((26, 22, 40), np.uint8)
+    for _ in range(6):
+        a, b, c = rng.integers(0, 26), rng.integers(0, 22), rng.integers(0, 40)
+        pore[a, b : b + 3, c : c + 2] = 0
+    codes = _codes(pore)
+    h = np.array(h)
+    cells = np.argwhere((codes >= 1) & (codes <= 2))
+    periodic = np.zeros(3, dtype=np.bool_)
+    img = np.zeros(3, dtype=np.int64)
+    n, used = codes.shape, 0
+    for _ in range(600):
+        idx = cells[rng.integers(len(cells))].astype(np.int64)
+        pos = (idx + rng.random(3)) * h
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        s = np.sign(u).astype(np.int64)
+        c = codes[tuple(idx)]
+        ahead = _ahead_cube(codes.reshape(-1), *n, *idx, *s, c)
+        if ahead[0] >= 3:
+            used += 1
+            r, centre = int(ahead[0]) - 1, idx + np.array(ahead[1:])
+            assert np.all(np.abs(centre - idx) <= r)  # the cube holds the particle's voxel ...
+            lo, hi = centre - r, centre + r + 1
+            assert np.all(lo >= 0) and np.all(hi <= n)
+            assert codes[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]].all()  # ... and is all pore
+        t_ref, ev_ref = flight_naive(codes, h, pos.copy(), u)
+        p, i = pos.copy(), idx.copy()
+        event, length, _ = _fly(codes, h, periodic, -1, p, i, u, img)
+        assert event == ev_ref
+        assert length == pytest.approx(t_ref, rel=1e-9, abs=1e-9)
+        np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
+        _check_end(codes, h, p, i, event)
+    assert 30 < used < 600  # the path is taken, and refused too
