@@ -377,7 +377,8 @@ def _table(rows, wall_rows, peer_rows, bw) -> list[str]:
         "",
         "Interpolated walls (porous samples, exact sphere walls, TRT float64, CPU time per step; best of interleaved "
         "rounds; ns per link = extra CPU time over halfway per interpolated link; the first columns pull with two "
-        "arrays, the in-place columns stream in place (AA), where CLI links are kept per link between the steps of a pair):",
+        "arrays, the in-place columns stream in place (AA), where CLI links are kept per link between the steps "
+        "of a pair):",
         "",
         "| porosity | threads | halfway ms/step | cli ms/step | cli extra | cli ns/link | mr1 ms/step | mr1 extra | "
         "mr1 ns/link | cli links/node | in place: halfway ms/step | cli ms/step | cli extra | cli in place vs pulled "

@@ -13,12 +13,12 @@ vectorised loop per run; the reads carry alias-scope metadata so the loop needs 
 full length however short its runs are. The scratch is then stored, with one non-temporal vector store per cache
 line where the arrays exceed the last-level cache. Issue 22: the kernel before (every tile through the scratch,
 element-wise stores) stays selectable as ``LEGACY`` for benchmarks/lbm.py; both give the same bits. The same
-kernel also streams in place (``IN_PLACE``, the AA pattern): step pairs in one array, each store into a line the step
-has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits; with halfway walls, and
-with linear interpolated links (each link's value goes into its halfway slot before the tile collides; the node's
-outgoing population it needs from the step before is kept per link). In its
-gather step the irregular nodes collide in place through the gather table (:func:`_indexed_view`), in one pass
-instead of three (pull into the scratch, collide, scatter back).
+kernel also streams in place (``IN_PLACE``, the AA pattern): step pairs in one array, each store into a line the
+step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/lbm.py), same bits; with halfway
+walls, and with linear interpolated links (each link's value goes into its halfway slot before the tile collides;
+the node's outgoing population it needs from the step before is kept per link). In its gather step the irregular
+nodes collide in place through the gather table (:func:`_indexed_view`), in one pass instead of three (pull into
+the scratch, collide, scatter back).
 """
 
 from __future__ import annotations
@@ -82,11 +82,16 @@ IN_PLACE = 3
 _CACHED = np.int64(STORE_CACHED)  # an int64, not a literal (see _ZERO)
 
 
+def beyond_cache(nbytes: int) -> bool:
+    """Whether population arrays of ``nbytes`` together exceed the last-level cache (:data:`STREAMING_BYTES`)."""
+    return nbytes > STREAMING_BYTES
+
+
 def streams(src) -> int:
     """How the step kernels should write ``src``'s populations (and its twin's): STORE_STREAM for arrays larger
     than the cache can hold (:data:`STREAMING_BYTES`), else STORE_CACHED.
     """
-    return STORE_STREAM if 2 * src.nbytes > STREAMING_BYTES else STORE_CACHED
+    return STORE_STREAM if beyond_cache(2 * src.nbytes) else STORE_CACHED
 
 
 # -- unchecked element access (no negative-index wrap test: indices must be in range) ---------------------------------
@@ -1204,8 +1209,9 @@ def _pull_collide(
 
 @njit(**_NUMERIC)
 def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt, f, fz, force, w, s):
-    """AA gather step of the tile at n0 (cnt nodes; linear links already in their halfway slots) in place, run by run: a regular run collides
-    straight from ``src`` into the scratch ``f`` and writes back by its stream offsets (:func:`_scatter_run`); an
+    """AA gather step of the tile at n0 (cnt nodes; linear links already in their halfway slots) in place, run by
+    run: a regular run collides straight from ``src`` into the scratch ``f`` and writes back by its stream offsets
+    (:func:`_scatter_run`); an
     irregular run collides in place through the gather table (:func:`_indexed_view`: one pass, no scratch; on a
     porous sample, where nearly every node is irregular, the gather step had three: pull into the scratch, collide,
     scatter). Arguments as :func:`_pull_collide` (no fields: a gather step is never a run's last step, which is a

@@ -85,7 +85,7 @@ def check_tau(settings: Settings) -> None:
         )
 
 
-def in_place_links(settings: Settings, links: Links) -> bool:
+def _in_place_links(settings: Settings, links: Links) -> bool:
     """Whether the in-place (AA) kernel can run these wall links: none, or linear ones (cli, bfl) in float64 (a
     link value in place is stored in the population array; in float32 that rounding would change the bits).
     """
@@ -94,22 +94,18 @@ def in_place_links(settings: Settings, links: Links) -> bool:
     return not links.multi_reflection and settings.precision is Precision.float64
 
 
-def _beyond_cache(settings: Settings, lat: Lattice) -> bool:
-    """Whether the two population arrays exceed the last-level cache (:data:`K.STREAMING_BYTES`): only there does
-    streaming in place with wall links pay; below it a run takes seconds and the in-place variant's compilation
-    (~3 CPU-s) would cost more (the mini scene's 25³ lattice).
-    """
-    itemsize = 4 if settings.precision is Precision.float32 else 8
-    return 2 * 19 * lat.n_nodes * itemsize > K.STREAMING_BYTES
-
-
 def _streams_in_place(settings: Settings, lat: Lattice, links: Links) -> bool:
     """What ``streaming`` chooses: aa (refused later where the links cannot), pull, or for auto in place with
     halfway walls, and with linear links where the arrays exceed the cache.
     """
     if settings.streaming is not Streaming.auto:
         return settings.streaming is Streaming.aa
-    return links.size == 0 or (in_place_links(settings, links) and _beyond_cache(settings, lat))
+    # below the cache a run takes seconds, and the in-place variant's ~3 CPU-s of compilation would cost more (the
+    # mini scene's 25³ lattice): only beyond it does streaming in place with wall links pay
+    if links.size == 0:
+        return True
+    nbytes = 2 * 19 * lat.n_nodes * np.dtype(settings.precision.value).itemsize
+    return _in_place_links(settings, links) and K.beyond_cache(nbytes)
 
 
 #: the in-place link table of a run without links, or of a pull run
@@ -140,7 +136,7 @@ def make_stepper(settings: Settings, lat: Lattice, links: Links | None = None, s
     links = links if links is not None else Links.none()
     if stores is None and _streams_in_place(settings, lat, links):
         stores = K.IN_PLACE
-    if stores == K.IN_PLACE and not in_place_links(settings, links):
+    if stores == K.IN_PLACE and not _in_place_links(settings, links):
         raise PorepipeError(
             f"permeability.streaming = aa cannot run these wall links (walls: {settings.walls.value}, precision: "
             f"{settings.precision.value}): in place needs linear links in float64; use streaming: auto or pull"

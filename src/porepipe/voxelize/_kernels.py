@@ -126,6 +126,14 @@ SLACK = 1e-7
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
+def _row_reach(r2, near_xy):
+    """r*r*(1 + MARGIN) minus a voxel row's squared near hull distance in x and y: < 0 where the brute-force reach
+    test accepts no voxel of the row.
+    """
+    return r2 * (1.0 + MARGIN) - near_xy
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
 def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
     """Voxel ranges of one voxel row (fixed x, y) for one ball: ``lo, hi, f_lo, f_hi``.
 
@@ -135,7 +143,7 @@ def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
     voxels whose whole sample hull is within ``r*r*(1 - MARGIN)``, narrowed by ``eps`` (empty as ``f_lo == f_hi ==
     lo``). ``near_xy``/``far_xy``: the squared near/far hull distances in x and y.
     """
-    reach = r2 * (1.0 + MARGIN) - near_xy
+    reach = _row_reach(r2, near_xy)
     if reach < 0.0:
         return k0, k0, k0, k0
     w = np.sqrt(reach) + eps
@@ -407,8 +415,8 @@ def _add_shell(
 
     A voxel nothing counted in yet (0) takes the ball's count (from the row chords, ``chords = (room, ends)``,
     :func:`_chord_count`, or where they are ambiguous the 216 tests of :func:`_voxel_count`) and ``s`` as its
-    owner; a full one (216) stays; one that a single ball counted in before gets the count of the union of the two balls' samples
-    (:func:`_union_count`, the other ball's row distances ``odxy`` kept for the next voxel of the row) and becomes
+    owner; a full one (216) stays; one that a single ball counted in before gets the count of the union of the two
+    balls' samples (:func:`_union_count`, the other ball's row distances ``odxy`` kept for the next voxel of the row) and becomes
     PAIR; one that two or more counted in gets the union of the balls' masks (:func:`_share`).
 
     The chords are found at the row's first voxel that needs them (``state`` CHORDS_UNKNOWN until then; ``frame``
@@ -482,7 +490,7 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
     for j in range(j0, j1):
         ny_, fy_ = hull_gap(cy, j, h)
         near_xy = nx_ * nx_ + ny_ * ny_
-        if r2 * (1.0 + MARGIN) - near_xy < 0.0:
+        if _row_reach(r2, near_xy) < 0.0:  # before the row's distances and room, which its ranges then follow
             continue
         _row_distances(dx2[0], j, cy, h, dxy)
         _row_room(dxy, r2, room)
