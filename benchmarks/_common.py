@@ -13,8 +13,7 @@ RESULTS = Path(__file__).resolve().parents[1] / "results" / "benchmarks"
 def add_out_argument(parser: argparse.ArgumentParser) -> None:
     """Add ``-o/--out DIR`` (default ``results/benchmarks/`` of the checkout) to ``parser``."""
     parser.add_argument(
-        "-o",
-        "--out", default=str(RESULTS), help=f"folder for the JSON/markdown records (default: {RESULTS})"
+        "-o", "--out", default=str(RESULTS), help=f"folder for the JSON/markdown records (default: {RESULTS})"
     )
 
 

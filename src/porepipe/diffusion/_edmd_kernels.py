@@ -77,10 +77,14 @@ def _heap_push(ht, hi, hj, hci, hcj, n, t, i, j, ci, cj):
 def _heap_pop(ht, hi, hj, hci, hcj, n):
     """Remove the root (the earliest event); returns the new size."""
     n -= 1
-    if n == 0:
-        return 0
-    t, i, j, ci, cj = ht[n], hi[n], hj[n], hci[n], hcj[n]
-    k = 0
+    if n > 0:
+        _sift_down(ht, hi, hj, hci, hcj, 0, n, ht[n], hi[n], hj[n], hci[n], hcj[n])
+    return n
+
+
+@njit(inline="always", **_BORROW)
+def _sift_down(ht, hi, hj, hci, hcj, k, n, t, i, j, ci, cj):
+    """Put the event (t, i, j, ci, cj) into the hole at ``k`` of a heap of size ``n``, below its earlier children."""
     while True:
         c = 2 * k + 1
         if c >= n:
@@ -92,7 +96,6 @@ def _heap_pop(ht, hi, hj, hci, hcj, n):
         ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[c], hi[c], hj[c], hci[c], hcj[c]
         k = c
     ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
-    return n
 
 
 @njit(cache=True)
@@ -114,20 +117,8 @@ def _heap_room(ht, hi, hj, hci, hcj, n, need, cnt):
         ht2[:m], hi2[:m], hj2[:m], hci2[:m], hcj2[:m] = ht[:m], hi[:m], hj[:m], hci[:m], hcj[:m]
         ht, hi, hj, hci, hcj = ht2, hi2, hj2, hci2, hcj2
     # re-heapify the kept events (Floyd)
-    for start in range((m - 2) // 2, -1, -1):
-        k = start
-        t, i, j, ci, cj = ht[k], hi[k], hj[k], hci[k], hcj[k]
-        while True:
-            c = 2 * k + 1
-            if c >= m:
-                break
-            if c + 1 < m and ht[c + 1] < ht[c]:
-                c += 1
-            if ht[c] >= t:
-                break
-            ht[k], hi[k], hj[k], hci[k], hcj[k] = ht[c], hi[c], hj[c], hci[c], hcj[c]
-            k = c
-        ht[k], hi[k], hj[k], hci[k], hcj[k] = t, i, j, ci, cj
+    for k in range((m - 2) // 2, -1, -1):
+        _sift_down(ht, hi, hj, hci, hcj, k, m, ht[k], hi[k], hj[k], hci[k], hcj[k])
     return ht, hi, hj, hci, hcj, m
 
 
