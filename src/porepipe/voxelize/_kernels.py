@@ -42,19 +42,20 @@ computed in the chord loop from float64 (numba then vectorises it 4-wide) 15 % s
 whole 8-wide vectors 0-2 %; the two shells of a row by two calls instead of a loop over both equal.
 
 Session 12 (same run against the kernel before, kernel alone, CPU time, 1 thread, load 1.2-2): the room's
-float64-to-float32 loop given a run-time trip count, so that numba vectorises it (a constant one it unrolls into 36
-scalar conversions), ~3 % less time on spheres 10-20 voxels wide; unions of two balls from their chords
-(:func:`_chord_union_count`) instead of the 2 x 216 tests, ~6 % more (their cost was ~5 ms of ~32; 84.0 k of the
-84.6 k unions take the chords, from 54 k recomputed owner rows). Both together: 1.09x / 1.07x / 1.07x on spheres
-10-20 / 20-40 / 40-80 voxels wide. Tried and not kept (spheres 10-20 voxels wide): the 36 row distances in one
-vectorised loop (run-time trip count) 5 % slower, with the room in it 3 %; the room after the ranges 4 % slower;
-every row's chords found first, then the shells, ~20 % slower; each row's ranges found one row ahead 7 % slower;
-shell voxels already full counted branch-free like empty ones 3 % slower; the run inside written in 32-byte blocks
-(numba makes conditional scalar stores of them) 6 % slower; the balls' frames found once per call instead of once
-per plane, the chord loop over whole vectors and the count loop over N_ROWS equal; both shells of a row in one
-loop equal; the chords of every row kept in a per-plane pool, so that unions need not recompute the owner's,
-+1.4 % / +1 % / -3 % on the three sizes. Profiled (perf on the JIT code, 1 thread): chords ~23 %, row ranges
-~10 %, chord counts ~15 %, row distances and room ~15 %; left out, unions and shares take ~13 % (shares 3 %).
+float64-to-float32 loop given a run-time trip count, so that numba vectorises it (a constant one it unrolls
+into 36 scalar conversions), ~3 % less time on spheres 10-20 voxels wide; unions of two balls from their
+chords (:func:`_chord_union_count`) instead of the 2 x 216 tests, ~6 % more (their cost was ~5 ms of ~32; all
+but 0.6 k of the 84.6 k unions take the chords; the owner's are found for 54 k rows). Both together, three
+runs: 1.09-1.10x / 1.05-1.07x / 1.06-1.07x on spheres 10-20 / 20-40 / 40-80 voxels wide. Tried and not kept
+(spheres 10-20 voxels wide): the 36 row distances in one vectorised loop (run-time trip count) 5 % slower,
+with the room in it 3 %; the room after the ranges 4 % slower; every row's chords found first, then the
+shells, ~20 % slower; each row's ranges found one row ahead 7 % slower; shell voxels already full counted
+branch-free like empty ones 3 % slower; the run inside written in 32-byte blocks (numba makes conditional
+scalar stores of them) 6 % slower; the balls' frames found once per call instead of once per plane, the chord
+loop over whole vectors and the count loop over N_ROWS equal; both shells of a row in one loop equal; the
+chords of every row kept in a per-plane pool, so that unions need not recompute the owner's, +1.4 % / 0-1 % /
+-3-0 % on the three sizes. Profiled (perf on the JIT code, 1 thread): chords ~23 %, row ranges ~10 %, chord
+counts ~15 %, row distances and room ~15 %; left out, unions and shares take ~13 % (shares 3 %).
 """
 
 import numpy as np
