@@ -16,7 +16,8 @@ float32 ends are exact unless an end lies within a bounded margin of a sample (:
 tests instead, in one branch-free loop that vectorises over the 36 sample rows (:func:`_voxel_count`; the squared
 z distances of a ball's samples are found once per plane). A voxel keeps the count of the first ball that puts
 samples in it and that ball as its ``owner``; when a second ball adds samples, the voxel's grey value becomes
-the count of the union of the two balls' samples (:func:`_union_count`), and from a third ball on the popcount of
+the count of the union of the two balls' samples (from both balls' chords, :func:`_chord_union_count`, or where
+either is ambiguous the 2 x 216 tests of :func:`_union_count`), and from a third ball on the popcount of
 the union of the balls' sample bit masks (:func:`_share`), so a sample counts once if it is in any ball.
 
 Chords in float64 with every end fixed by exact tests measured slower than the 216 tests (~54 vs 47 ms on spheres
@@ -39,6 +40,22 @@ and not kept, same run, 1 thread, spheres 10-20 voxels wide: the row ranges take
 equal); row distances in one vectorised 36-row loop equal with the float32 room in it, 6 % slower without; room
 computed in the chord loop from float64 (numba then vectorises it 4-wide) 15 % slower; padding the chord loop to
 whole 8-wide vectors 0-2 %; the two shells of a row by two calls instead of a loop over both equal.
+
+Session 12 (same run against the kernel before, kernel alone, CPU time, 1 thread, load 1.2-2): the room's
+float64-to-float32 loop given a run-time trip count, so that numba vectorises it (a constant one it unrolls
+into 36 scalar conversions), ~3 % less time on spheres 10-20 voxels wide; unions of two balls from their
+chords (:func:`_chord_union_count`) instead of the 2 x 216 tests, ~6 % more (their cost was ~5 ms of ~32; all
+but 0.6 k of the 84.6 k unions take the chords; the owner's are found for 54 k rows). Both together, three
+runs: 1.09-1.10x / 1.05-1.07x / 1.06-1.07x on spheres 10-20 / 20-40 / 40-80 voxels wide. Tried and not kept
+(spheres 10-20 voxels wide): the 36 row distances in one vectorised loop (run-time trip count) 5 % slower,
+with the room in it 3 %; the room after the ranges 4 % slower; every row's chords found first, then the
+shells, ~20 % slower; each row's ranges found one row ahead 7 % slower; shell voxels already full counted
+branch-free like empty ones 3 % slower; the run inside written in 32-byte blocks (numba makes conditional
+scalar stores of them) 6 % slower; the balls' frames found once per call instead of once per plane, the chord
+loop over whole vectors and the count loop over N_ROWS equal; both shells of a row in one loop equal; the
+chords of every row kept in a per-plane pool, so that unions need not recompute the owner's, +1.4 % / 0-1 % /
+-3-0 % on the three sizes. Profiled (perf on the JIT code, 1 thread): chords ~23 %, row ranges ~10 %, chord
+counts ~15 %, row distances and room ~15 %; left out, unions and shares take ~13 % (shares 3 %).
 """
 
 import numpy as np
@@ -252,11 +269,13 @@ def _row_room(dxy, r2, room):
     """``r*r - dxy`` of the 36 sample rows of a voxel row (``dxy`` from :func:`_row_distances`) into ``room``:
     subtracted in float64 (its sign is exact), stored in float32 for :func:`_row_chords`.
 
-    The stores are scalar (numba does not vectorise this float64-to-float32 loop); done as soon as the row is known
-    to meet the ball, before its ranges (:func:`_row_ranges`), so that the chords' vector loads do not wait on them
-    (against finding it with the chords, same run, 1 thread: ~3 % less time on spheres 10-20 voxels wide).
+    The trip count is ``dxy.size`` (N_ROWS), known only at run time: numba then vectorises the loop, where over the
+    constant N_ROWS it unrolls it into scalar conversions (~3 % of the time on spheres 10-20 voxels wide, same run,
+    1 thread). Done as soon as the row is known to meet the ball, before its ranges (:func:`_row_ranges`), so that
+    the chords' vector loads do not wait on them (against finding it with the chords, same run, 1 thread: ~3 % less
+    time on spheres 10-20 voxels wide).
     """
-    for q in range(N_ROWS):  # < 0: no sample of the row is inside (fl(dxy + dz*dz) >= dxy > r*r)
+    for q in range(dxy.size):  # < 0: no sample of the row is inside (fl(dxy + dz*dz) >= dxy > r*r)
         room[q] = np.float32(r2 - dxy[q])
 
 
@@ -408,56 +427,105 @@ def _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits,
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
+def _ball_frame(cz, r, h):
+    """A ball's frame for its chords (:func:`_row_chords`): ``floor(e)``, ``e - floor(e)`` (float32) and the margin
+    (:func:`_chord_margin`), with ``e = cz/h - 0.5`` its centre in samples along z.
+    """
+    e = cz / h - 0.5
+    e_int = np.int64(np.floor(e))
+    return e_int, np.float32(e - e_int), np.float32(_chord_margin(cz, r, h))
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _chords_state(room, ends, frame, h):
+    """Find a voxel row's chords (:func:`_row_chords`) in the ball's ``frame``: CHORDS_EXACT or CHORDS_AMBIGUOUS."""
+    ambiguous = _row_chords(room, frame[1], np.float32(1.0 / h), frame[2], ends)
+    return CHORDS_AMBIGUOUS if ambiguous else CHORDS_EXACT
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _chord_union_count(count_a, ends_a, base_a, ends_b, base_b):
+    """Samples of a voxel inside ball a or ball b from both balls' exact row chords (:func:`_row_chords`):
+    ``count_a`` (ball a's own count) plus, per row, b's overlap with the voxel less that of the intersection of the
+    two chords. ``base_a``/``base_b``: the voxel's first sample in each ball's frame (as for :func:`_chord_count`);
+    int32, vectorised 8-wide.
+    """
+    zero = np.int32(0)
+    six = np.int32(SUB)
+    extra = np.int32(0)
+    for q in range(CHORD_ROWS):
+        lo_a = max(np.int32(ends_a[0, q] - base_a), zero)
+        hi_a = min(np.int32(ends_a[1, q] - base_a), six)
+        lo_b = max(np.int32(ends_b[0, q] - base_b), zero)
+        hi_b = min(np.int32(ends_b[1, q] - base_b), six)
+        both = max(np.int32(min(hi_a, hi_b) - max(lo_a, lo_b)), zero)
+        extra = np.int32(extra + max(np.int32(hi_b - lo_b), zero) - both)
+    return count_a + np.int64(extra)
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
 def _add_shell(
     i, j, k0, k1, s, images, h, dxy, tz, r2, chords, frame, state, owner, second, mask, dx2, odxy, bits, out
 ):
     """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j``.
 
-    A voxel nothing counted in yet (0) takes the ball's count (from the row chords, ``chords = (room, ends)``,
-    :func:`_chord_count`, or where they are ambiguous the 216 tests of :func:`_voxel_count`) and ``s`` as its
-    owner; a full one (216) stays; one that a single ball counted in before gets the count of the union of the two
-    balls' samples (:func:`_union_count`, the other ball's row distances ``odxy`` kept for the next voxel of the row) and becomes
-    PAIR; one that two or more counted in gets the union of the balls' masks (:func:`_share`).
+    A voxel nothing counted in yet (0) takes the ball's count (from the row chords, ``chords = (room, ends)``, row 0
+    of each, :func:`_chord_count`, or where they are ambiguous the 216 tests of :func:`_voxel_count`) and ``s`` as
+    its owner; a full one (216) stays; one that a single ball counted in before gets the count of the union of the
+    two balls' samples and becomes PAIR: from both balls' chords (:func:`_chord_union_count`; the owner's in row 1
+    of ``chords``, its row distances in ``odxy``, both kept for the next voxel of the row), or where either is
+    ambiguous the 2 x 216 tests of :func:`_union_count`; one that two or more counted in gets the union of the
+    balls' masks (:func:`_share`).
 
     The chords are found at the row's first voxel that needs them (``state`` CHORDS_UNKNOWN until then; ``frame``
-    from :func:`_ball_plane`): a row whose shell voxels earlier balls have all filled or counted needs none (against
+    from :func:`_ball_frame`): a row whose shell voxels earlier balls have all filled needs none (against
     finding them for every row, same run, 1 thread: 2.5 % / 4 % / 7 % less time on spheres 10-20 / 20-40 / 40-80
     voxels wide). Returns the state for the row's other shell.
     """
-    cached = -1  # the ball whose row distances odxy holds
+    room, ends = chords
+    cached = -1  # the ball whose row distances odxy and chords (row 1) hold
+    owner_state = CHORDS_UNKNOWN
     for k in range(k0, k1):
         g = out[j, k]
         if g == N_SAMPLES:
             continue
+        if state == CHORDS_UNKNOWN:
+            state = _chords_state(room[0], ends[0], frame, h)
         if g == 0:
-            if state == CHORDS_UNKNOWN:
-                e_int, e_frac, margin = frame
-                room, ends = chords
-                state = (
-                    CHORDS_AMBIGUOUS
-                    if _row_chords(room, e_frac, np.float32(1.0 / h), margin, ends)
-                    else CHORDS_EXACT
-                )
             if state == CHORDS_AMBIGUOUS:
                 c = _voxel_count(dxy, tz, k, r2)
             else:
-                c = _chord_count(chords[1], np.int32(SUB * k - frame[0]))
+                c = _chord_count(ends[0], np.int32(SUB * k - frame[0]))
             if c:
                 out[j, k] = c
                 owner[j, k] = s
             continue
-        m = SUB * k
-        t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
         o = np.int64(owner[j, k])
         if o >= 0:
+            ro = images[o, 3]
             if o != cached:
                 _ball_rows(i, j, o, images, h, dx2, odxy)
                 cached = o
-            ro = images[o, 3]
-            out[j, k] = _union_count(odxy, _z_distances(k, images[o, 2], h), ro * ro, dxy, t, r2)
+                owner_state = CHORDS_UNKNOWN
+            ocz = images[o, 2]
+            o_frame = _ball_frame(ocz, ro, h)
+            if owner_state == CHORDS_UNKNOWN and state == CHORDS_EXACT:
+                _row_room(odxy, ro * ro, room[1])
+                owner_state = _chords_state(room[1], ends[1], o_frame, h)
+            if state == CHORDS_EXACT and owner_state == CHORDS_EXACT:
+                base = SUB * k
+                out[j, k] = _chord_union_count(
+                    np.int64(g), ends[1], np.int32(base - o_frame[0]), ends[0], np.int32(base - frame[0])
+                )
+            else:
+                m = SUB * k
+                t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
+                out[j, k] = _union_count(odxy, _z_distances(k, ocz, h), ro * ro, dxy, t, r2)
             owner[j, k] = PAIR - o
             second[j, k] = s
         else:
+            m = SUB * k
+            t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
             _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits, out)
             cached = -1
     return state
@@ -468,8 +536,8 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
     """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
 
     ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS), ``tz`` (6 nz: the squared z distances of the samples in
-    the ball's reach, found once per plane), ``room`` (CHORD_ROWS float32) and ``ends`` (2, CHORD_ROWS) int32, zero
-    from row N_ROWS on, are scratch.
+    the ball's reach, found once per plane), ``room`` (2, CHORD_ROWS) float32 and ``ends`` (2, 2, CHORD_ROWS) int32
+    (row 0: this ball's, row 1: an earlier ball's), zero from column N_ROWS on, are scratch.
     """
     cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
     r2 = r * r
@@ -478,9 +546,7 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
     j0, j1 = axis_range(cy, r, h, ny)
     k0, k1 = axis_range(cz, r, h, nz)
     _plane_distances(i, cx, h, dx2[0])
-    e = cz / h - 0.5  # the centre in samples along z
-    e_int = np.int64(np.floor(e))
-    frame = (e_int, np.float32(e - e_int), np.float32(_chord_margin(cz, r, h)))
+    frame = _ball_frame(cz, r, h)
     m0 = SUB * k0
     # a view from 0: no negative-index wrap, so the loop vectorises without scatters (3 % of the time before)
     tz_reach = tz[m0 : SUB * k1]
@@ -493,7 +559,7 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
         if _row_reach(r2, near_xy) < 0.0:  # before the row's distances and room, which its ranges then follow
             continue
         _row_distances(dx2[0], j, cy, h, dxy)
-        _row_room(dxy, r2, room)
+        _row_room(dxy, r2, room[0])
         lo, hi, f_lo, f_hi = _row_ranges(cz, r2, eps, near_xy, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1)
         if f_hi > f_lo:  # a slice fill: ~2x faster than a loop over these short runs (measured)
             out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
@@ -557,8 +623,8 @@ def _plane_scratch(ny, nz):
         np.empty(N_ROWS),  # odxy
         np.empty(N_ROWS, dtype=np.int64),  # bits
         np.empty(SUB * nz),  # tz
-        np.zeros(CHORD_ROWS, dtype=np.float32),  # room
-        np.zeros((2, CHORD_ROWS), dtype=np.int32),  # ends: zero (empty chords) from row N_ROWS on
+        np.zeros((2, CHORD_ROWS), dtype=np.float32),  # room (this ball's, an earlier one's)
+        np.zeros((2, 2, CHORD_ROWS), dtype=np.int32),  # ends: zero (empty chords) from row N_ROWS on
     )
     status = np.empty((ny, nz), dtype=np.uint8)
     return status, shell, np.empty((3, SUB)), np.empty(WORDS, dtype=np.uint64)  # brute force: scratch, words
