@@ -160,26 +160,33 @@ def _crossed(t_leave, t, rate, s, r):
     return min(np.int64(max((t_leave - t) * rate, -1.0) + 1.0), r)
 
 
-_AHEAD = 6  # voxels between a low-code voxel and the centre of the cube tried ahead of it (see _ahead_cube)
+#: smallest code of a voxel whose cube is jumped through: a jump costs several walk steps, and the cube of code 3
+#: (half-width 2) saves fewer
+_JUMP_CODE = 4
+#: offsets of the cube centres tried ahead of a voxel next to a wall, largest first (see _ahead_cube)
+_AHEAD = (8, 5, 3)
 
 
 @njit(cache=True, inline="always")
 def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c):
     """(code, centre offsets) of a pore cube that holds voxel (i0, i1, i2) and reaches far ahead of it, for a flight
-    that starts in a voxel of code ``c`` < 3 (next to a wall, where the cube centred on it is too small to jump).
+    that starts in a voxel of code ``c`` < _JUMP_CODE (next to a wall, where the cube centred on it is too small to
+    jump).
 
-    The candidate centre is ``_AHEAD`` voxels further along every axis the flight moves along. Its code ca >= _AHEAD
-    + 1 means the cube of half-width ca - 1 around it is all pore and still holds the particle's voxel (each offset
-    is at most _AHEAD <= ca - 1), so the flight may jump to that cube's surface. Otherwise (or outside the box):
-    (c, 0, 0, 0), the plain cube.
+    The candidate centres are ``a`` voxels further along every axis the flight moves along, for ``a`` in _AHEAD in
+    turn. A centre's code ca >= a + 1 means the cube of half-width ca - 1 around it is all pore and still holds the
+    particle's voxel (each offset is at most a <= ca - 1), so the flight may jump to that cube's surface. The first
+    such centre with ca >= _JUMP_CODE wins; the largest offsets come first because they give the largest cubes (the
+    code is 1-Lipschitz: ca <= c + a). None (or outside the box): (c, 0, 0, 0), the plain cube.
     """
-    a0, a1, a2 = i0 + _AHEAD * s0, i1 + _AHEAD * s1, i2 + _AHEAD * s2
-    if (a0 < 0) | (a0 >= n0) | (a1 < 0) | (a1 >= n1) | (a2 < 0) | (a2 >= n2):
-        return c, 0, 0, 0
-    ca = flat[(a0 * n1 + a1) * n2 + a2]
-    if ca <= _AHEAD:
-        return c, 0, 0, 0
-    return ca, _AHEAD * s0, _AHEAD * s1, _AHEAD * s2
+    for a in _AHEAD:
+        a0, a1, a2 = i0 + a * s0, i1 + a * s1, i2 + a * s2
+        if (a0 < 0) | (a0 >= n0) | (a1 < 0) | (a1 >= n1) | (a2 < 0) | (a2 >= n2):
+            continue
+        ca = flat[(a0 * n1 + a1) * n2 + a2]
+        if (ca > a) & (ca >= _JUMP_CODE):
+            return ca, a * s0, a * s1, a * s2
+    return c, 0, 0, 0
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -189,11 +196,11 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
 
     Every face crossing is a time from the flight's start: per axis the next one, ``t0, t1, t2``, advanced by the
     fixed ``dt0, dt1, dt2`` (no position update, no division in the walk). A walk step picks the earliest axis
-    (ties: lowest axis first) by selects, moves the flat index by that axis's stride and loads one byte. A jump
-    through the pore cube of half-width r = code - 1 around the voxel leaves it at T = min_d(t_d + r dt_d) and
-    advances every axis by the faces it crosses before T (at most r: the index stays in the cube). A flight that
-    starts in a voxel of code < 3 (after a wall hit) first tries a cube centred ahead of it (:func:`_ahead_cube`):
-    per axis it may then cross r + s_d o_d faces, up to the far face of that cube.
+    (ties: lowest axis first) by selects, moves the flat index by that axis's stride and loads one byte. From a
+    voxel of code >= _JUMP_CODE, a jump through the pore cube of half-width r = code - 1 around it leaves the cube
+    at T = min_d(t_d + r dt_d) and advances every axis by the faces it crosses before T (at most r: the index stays
+    in the cube). A flight that starts in a voxel of lower code (after a wall hit) first tries cubes centred ahead
+    of it (:func:`_ahead_cube`): per axis it may then cross r + s_d o_d faces, up to the far face of that cube.
     """
     st0 = n1 * n2
     u0, u1, u2 = u[0], u[1], u[2]
@@ -207,13 +214,13 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     lin = (i0 * n1 + i1) * n2 + i2
     c = flat[lin]
     o0 = o1 = o2 = 0  # offset of the jump cube's centre from the particle's voxel (0 but for the first jump)
-    if c < 3:
+    if c < _JUMP_CODE:
         c, o0, o1, o2 = _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c)
     crossings = 0
     event = -1
     t = 0.0
     while True:
-        if c >= 3:
+        if c >= _JUMP_CODE:
             r = np.int64(c) - 1
             m0, m1, m2 = r + s0 * o0, r + s1 * o1, r + s2 * o2  # faces ahead to the cube's far face, per axis
             o0 = o1 = o2 = 0
@@ -244,7 +251,7 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
             if out:
                 break
             c = flat[np.uint64(lin)]  # unsigned: no wraparound check
-            if (c == 0) | (c >= 3):
+            if (c == 0) | (c >= _JUMP_CODE):
                 break
             crossings += 1
         d = 0 if x0 else (1 if x1 else 2)
@@ -274,7 +281,7 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
                     continue
         if c != 0 and not out:
             crossings += 1
-            continue  # c >= 3: jump
+            continue  # c >= _JUMP_CODE: jump
         if event < 0:
             event = 2 * d + ((s0 if x0 else (s1 if x1 else s2)) > 0)
         break

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from naive_diffusion import flight_naive
 
-from porepipe.diffusion._kernels import _ahead_cube, _chessboard_codes, _fly
+from porepipe.diffusion._kernels import _AHEAD, _JUMP_CODE, _ahead_cube, _chessboard_codes, _fly
 
 
 def _codes(pore):
@@ -203,9 +203,10 @@ def test_wall_across_a_periodic_face_keeps_the_image_count():
 
 @pytest.mark.parametrize("h", [(1.0, 1.0, 1.0), (0.6, 1.0, 1.7)])
 def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
-    """Flights that start next to a wall (codes 1 and 2), where the cube centred on the voxel is too small to jump:
-    the cube tried ahead of the voxel (`_ahead_cube`) must hold the voxel and be all pore. A channel with a few
-    solid pillars, so that some tried cubes are refused; against the sort-all-crossings reference."""
+    """Flights that start next to a wall (codes below _JUMP_CODE), where the cube centred on the voxel is too small to
+    jump: each cube tried ahead of the voxel (`_ahead_cube`, every offset of _AHEAD) must hold the voxel and be all
+    pore. A channel with a few solid pillars, so that some tried cubes are refused; against the sort-all-crossings
+    reference."""
     rng = np.random.default_rng(11)
     pore = np.ones((26, 22, 40), np.uint8)
     for _ in range(6):
@@ -213,11 +214,11 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
         pore[a, b : b + 3, c : c + 2] = 0
     codes = _codes(pore)
     h = np.array(h)
-    cells = np.argwhere((codes >= 1) & (codes <= 2))
+    cells = np.argwhere((codes >= 1) & (codes < _JUMP_CODE))
     periodic = np.zeros(3, dtype=np.bool_)
     img = np.zeros(3, dtype=np.int64)
-    n, used = codes.shape, 0
-    for _ in range(600):
+    n, used = codes.shape, {}
+    for _ in range(1200):
         idx = cells[rng.integers(len(cells))].astype(np.int64)
         pos = (idx + rng.random(3)) * h
         u = rng.normal(size=3)
@@ -225,8 +226,9 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
         s = np.sign(u).astype(np.int64)
         c = codes[tuple(idx)]
         ahead = _ahead_cube(codes.reshape(-1), *n, *idx, *s, c)
-        if ahead[0] >= 3:
-            used += 1
+        if ahead[0] >= _JUMP_CODE:
+            offset = int(np.abs(ahead[1:]).max())
+            used[offset] = used.get(offset, 0) + 1
             r, centre = int(ahead[0]) - 1, idx + np.array(ahead[1:])
             assert np.all(np.abs(centre - idx) <= r)  # the cube holds the particle's voxel ...
             lo, hi = centre - r, centre + r + 1
@@ -239,4 +241,5 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
         assert length == pytest.approx(t_ref, rel=1e-9, abs=1e-9)
         np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
         _check_end(codes, h, p, i, event)
-    assert 30 < used < 600  # the path is taken, and refused too
+    assert sorted(used) == sorted(_AHEAD)  # every offset is taken ...
+    assert sum(used.values()) < 1200  # ... and all are refused too
