@@ -339,3 +339,13 @@ def _contact_frame(geo, xi, yi, xj, yj, j_is_wall, buf):
         lo = min(lo, p)
         hi = max(hi, p)
     return nx, ny, max(hi - lo, 0.0)
+
+
+def _inlined(kernel):
+    """``kernel`` compiled once more, to be inlined into its caller at numba IR level: for the step kernel's
+    contact helper, which has no reference counting either, so that nothing is passed per pair.
+    """
+    return njit(cache=True, fastmath=FASTMATH, inline="always", **NO_REFCOUNT)(kernel.py_func)
+
+
+_overlap_geometry_inlined = _inlined(_overlap_geometry)

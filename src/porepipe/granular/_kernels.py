@@ -15,8 +15,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from porepipe._shared.numba_config import FASTMATH
-from porepipe.granular._contact import _contact_frame, _overlap_geometry
+from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
+from porepipe.granular._contact import _contact_frame, _overlap_geometry_inlined
 
 #: Tab. F.1, p = 2 (second-order ODE), six values: corrector coefficients c_0..c_5
 GEAR_C = (3.0 / 20.0, 251.0 / 360.0, 1.0, 11.0 / 18.0, 1.0 / 6.0, 1.0 / 60.0)
@@ -193,6 +193,164 @@ def make_stepper(
         return _STEPPERS[key]
     COH, WEAK, VIB, VARG, DRAG, SURF, PIST, SIZE, TRIM = key
 
+    @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
+    def _block_contacts(
+        blk,
+        G,
+        nc,
+        wv,
+        aabb,
+        inv_m,
+        inv_I,
+        inv_r,
+        active,
+        n_mob,
+        surf,
+        nb_start,
+        nb_j,
+        ft,
+        aold,
+        hint,
+        pout,
+        scratch,
+        bufs_a,
+        bufs_b,
+        tags_a,
+        tags_b,
+        sides,
+        geos,
+        wall_vel,
+        mat,
+        dt,
+        sc,
+        isc2,
+    ):
+        """The contacts of the pairs owned by block blk's particles (section 2 of the step): a helper without
+        reference counting, so that its views and the narrow phase inlined into it cost no atomic operations.
+        """
+        E = mat[0]
+        gam = mat[1]
+        mu = mat[2]
+        gam_t = mat[3]
+        kcoh = mat[4]
+        vmin = mat[5]
+        centroid = mat[8] != 0.0  # force at the overlap centroid instead of the midpoint of c1c2
+        kt = 2.0 / 7.0 * E
+        sqE = math.sqrt(E)
+        buf_a = bufs_a[blk]
+        buf_b = bufs_b[blk]
+        tag_a = tags_a[blk]
+        tag_b = tags_b[blk]
+        side = sides[blk]
+        geo = geos[blk]
+        for i in range(blk * BLOCK, min((blk + 1) * BLOCK, n_mob)):
+            for p in range(nb_start[i], nb_start[i + 1]):
+                j = nb_j[p]
+                if (
+                    active[i] == 0
+                    or active[j] == 0
+                    or aabb[i, 1] < aabb[j, 0]
+                    or aabb[j, 1] < aabb[i, 0]
+                    or aabb[i, 3] < aabb[j, 2]
+                    or aabb[j, 3] < aabb[i, 2]
+                ):
+                    _part(p, ft, aold, pout)
+                    continue
+                xi = G[0, i, 0]
+                yi = G[0, i, 1]
+                xj = G[0, j, 0]
+                yj = G[0, j, 1]
+                _overlap_geometry_inlined(
+                    wv,
+                    i,
+                    nc[i],
+                    j,
+                    nc[j],
+                    xi,
+                    yi,
+                    xj,
+                    yj,
+                    buf_a,
+                    tag_a,
+                    buf_b,
+                    tag_b,
+                    side,
+                    geo,
+                    TRIM,
+                    hint,
+                    p,
+                )
+                A = geo[0]
+                if A <= 0.0:
+                    _part(p, ft, aold, pout)
+                    continue
+                wall = j >= n_mob
+                nx, ny, L = _contact_frame(geo, xi, yi, xj, yj, wall, buf_a)
+                tx = -ny
+                ty = nx
+                if centroid:
+                    sx = geo[7]
+                    sy = geo[8]
+                else:
+                    sx = geo[5]
+                    sy = geo[6]
+                rix = sx - xi
+                riy = sy - yi
+                rjx = sx - xj
+                rjy = sy - yj
+                wi = G[1, i, 2] / dt
+                vix = G[1, i, 0] / dt - wi * riy
+                viy = G[1, i, 1] / dt + wi * rix
+                if wall:
+                    vjx = wall_vel[j, 0]
+                    vjy = wall_vel[j, 1]
+                    if SURF:
+                        vjx -= surf[j] * tx
+                        vjy -= surf[j] * ty
+                else:
+                    wj = G[1, j, 2] / dt
+                    vjx = G[1, j, 0] / dt - wj * rjy
+                    vjy = G[1, j, 1] / dt + wj * rjx
+                vt = (vix - vjx) * tx + (viy - vjy) * ty
+                ell = 1.0 / (inv_r[i] + inv_r[j])
+                if SIZE:
+                    ell *= sc
+                fel = E * A / ell
+                m_n = 1.0 / (inv_m[i] + inv_m[j])
+                damp = gam * sqE * math.sqrt(m_n) * (A - aold[p]) / (ell * dt)
+                fn = fel + max(damp, -fel)
+                if COH:
+                    fn -= kcoh * L
+                # tangential: Cundall-Strack spring 2/7 E, damping sqrt(2/7 E m_t), Coulomb cap
+                ai = rix * nx + riy * ny  # lever arm of a tangential force: r x t = r . n
+                aj = rjx * nx + rjy * ny
+                m_t = 1.0 / (inv_m[i] + inv_m[j] + (ai * ai * inv_I[i] + aj * aj * inv_I[j]) * isc2)
+                cap = mu * fel
+                if WEAK:
+                    cap *= max(abs(vt), vmin) ** -0.1
+                spring = ft[p] + kt * vt * dt
+                dtan = gam_t * math.sqrt(kt * m_t) * vt
+                f_t = spring + dtan
+                if abs(f_t) > cap:
+                    f_t = math.copysign(cap, f_t)
+                    spring = f_t
+                ft[p] = spring
+                aold[p] = A
+                fx = -fn * nx - f_t * tx
+                fy = -fn * ny - f_t * ty
+                pout[p, 0] = fx
+                pout[p, 1] = fy
+                pout[p, 2] = rix * fy - riy * fx
+                pout[p, 3] = -(rjx * fy - rjy * fx)
+                pout[p, 4] = sx
+                pout[p, 5] = sy
+                pout[p, 6] = fn
+                pout[p, 7] = f_t
+                pout[p, 8] = A
+                pout[p, 9] = L
+                ov = A * max(inv_r[i], inv_r[j]) ** 2 * isc2  # overlap relative to the smaller one
+                scratch[i, 4] = max(scratch[i, 4], ov)
+
     @njit(cache=True, fastmath=FASTMATH, parallel=True)
     def _steps(
         G,
@@ -233,17 +391,8 @@ def make_stepper(
         heat,
     ):
         n_body = nc.shape[0]
-        E = mat[0]
-        gam = mat[1]
-        mu = mat[2]
-        gam_t = mat[3]
-        kcoh = mat[4]
-        vmin = mat[5]
         guard_ov = mat[6]
         guard_move = mat[7]
-        centroid = mat[8] != 0.0  # force at the overlap centroid instead of the midpoint of c1c2
-        kt = 2.0 / 7.0 * E
-        sqE = math.sqrt(E)
         n_blocks = (n_mob + BLOCK - 1) // BLOCK
         kmax = body.shape[1]
         half_dt2 = 0.5 * dt * dt
@@ -313,119 +462,37 @@ def make_stepper(
                     _place(body, nc, G[0, w, 0], G[0, w, 1], G[0, w, 2], wv, aabb, w)
             # 2. contacts, pair by pair (each pair owned by its lower index i)
             for blk in prange(n_blocks):
-                buf_a = bufs_a[blk]
-                buf_b = bufs_b[blk]
-                tag_a = tags_a[blk]
-                tag_b = tags_b[blk]
-                side = sides[blk]
-                geo = geos[blk]
-                for i in range(blk * BLOCK, min((blk + 1) * BLOCK, n_mob)):
-                    for p in range(nb_start[i], nb_start[i + 1]):
-                        j = nb_j[p]
-                        if (
-                            active[i] == 0
-                            or active[j] == 0
-                            or aabb[i, 1] < aabb[j, 0]
-                            or aabb[j, 1] < aabb[i, 0]
-                            or aabb[i, 3] < aabb[j, 2]
-                            or aabb[j, 3] < aabb[i, 2]
-                        ):
-                            _part(p, ft, aold, pout)
-                            continue
-                        xi = G[0, i, 0]
-                        yi = G[0, i, 1]
-                        xj = G[0, j, 0]
-                        yj = G[0, j, 1]
-                        _overlap_geometry(
-                            wv,
-                            i,
-                            nc[i],
-                            j,
-                            nc[j],
-                            xi,
-                            yi,
-                            xj,
-                            yj,
-                            buf_a,
-                            tag_a,
-                            buf_b,
-                            tag_b,
-                            side,
-                            geo,
-                            TRIM,
-                            hint,
-                            p,
-                        )
-                        A = geo[0]
-                        if A <= 0.0:
-                            _part(p, ft, aold, pout)
-                            continue
-                        wall = j >= n_mob
-                        nx, ny, L = _contact_frame(geo, xi, yi, xj, yj, wall, buf_a)
-                        tx = -ny
-                        ty = nx
-                        if centroid:
-                            sx = geo[7]
-                            sy = geo[8]
-                        else:
-                            sx = geo[5]
-                            sy = geo[6]
-                        rix = sx - xi
-                        riy = sy - yi
-                        rjx = sx - xj
-                        rjy = sy - yj
-                        wi = G[1, i, 2] / dt
-                        vix = G[1, i, 0] / dt - wi * riy
-                        viy = G[1, i, 1] / dt + wi * rix
-                        if wall:
-                            vjx = wall_vel[j, 0]
-                            vjy = wall_vel[j, 1]
-                            if SURF:
-                                vjx -= surf[j] * tx
-                                vjy -= surf[j] * ty
-                        else:
-                            wj = G[1, j, 2] / dt
-                            vjx = G[1, j, 0] / dt - wj * rjy
-                            vjy = G[1, j, 1] / dt + wj * rjx
-                        vt = (vix - vjx) * tx + (viy - vjy) * ty
-                        ell = 1.0 / (inv_r[i] + inv_r[j])
-                        if SIZE:
-                            ell *= sc
-                        fel = E * A / ell
-                        m_n = 1.0 / (inv_m[i] + inv_m[j])
-                        damp = gam * sqE * math.sqrt(m_n) * (A - aold[p]) / (ell * dt)
-                        fn = fel + max(damp, -fel)
-                        if COH:
-                            fn -= kcoh * L
-                        # tangential: Cundall-Strack spring 2/7 E, damping sqrt(2/7 E m_t), Coulomb cap
-                        ai = rix * nx + riy * ny  # lever arm of a tangential force: r x t = r . n
-                        aj = rjx * nx + rjy * ny
-                        m_t = 1.0 / (inv_m[i] + inv_m[j] + (ai * ai * inv_I[i] + aj * aj * inv_I[j]) * isc2)
-                        cap = mu * fel
-                        if WEAK:
-                            cap *= max(abs(vt), vmin) ** -0.1
-                        spring = ft[p] + kt * vt * dt
-                        dtan = gam_t * math.sqrt(kt * m_t) * vt
-                        f_t = spring + dtan
-                        if abs(f_t) > cap:
-                            f_t = math.copysign(cap, f_t)
-                            spring = f_t
-                        ft[p] = spring
-                        aold[p] = A
-                        fx = -fn * nx - f_t * tx
-                        fy = -fn * ny - f_t * ty
-                        pout[p, 0] = fx
-                        pout[p, 1] = fy
-                        pout[p, 2] = rix * fy - riy * fx
-                        pout[p, 3] = -(rjx * fy - rjy * fx)
-                        pout[p, 4] = sx
-                        pout[p, 5] = sy
-                        pout[p, 6] = fn
-                        pout[p, 7] = f_t
-                        pout[p, 8] = A
-                        pout[p, 9] = L
-                        ov = A * max(inv_r[i], inv_r[j]) ** 2 * isc2  # overlap relative to the smaller one
-                        scratch[i, 4] = max(scratch[i, 4], ov)
+                _block_contacts(
+                    blk,
+                    G,
+                    nc,
+                    wv,
+                    aabb,
+                    inv_m,
+                    inv_I,
+                    inv_r,
+                    active,
+                    n_mob,
+                    surf,
+                    nb_start,
+                    nb_j,
+                    ft,
+                    aold,
+                    hint,
+                    pout,
+                    scratch,
+                    bufs_a,
+                    bufs_b,
+                    tags_a,
+                    tags_b,
+                    sides,
+                    geos,
+                    wall_vel,
+                    mat,
+                    dt,
+                    sc,
+                    isc2,
+                )
             # 3. forces on each particle (fixed summation order: own pairs, then pairs where it is j), corrector
             if DRAG:
                 for s in range(drag_par.shape[0]):
