@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 import types
 
 import numba
@@ -22,11 +23,64 @@ NO_REFCOUNT: dict = {"_nrt": False}
 
 def set_threads(threads: int | None) -> int:
     """Set numba's thread count (None = all available) and return the count in force."""
-    if threads is None:
-        threads = numba.config.NUMBA_NUM_THREADS
-    threads = max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS))
+    threads = _thread_count(threads)
     numba.set_num_threads(threads)
     return threads
+
+
+def _thread_count(threads: int | None) -> int:
+    """The thread count :func:`set_threads` sets for ``threads`` (without starting numba's thread pool)."""
+    if threads is None:
+        threads = numba.config.NUMBA_NUM_THREADS
+    return max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS))
+
+
+#: spins a GNU OpenMP thread makes at a barrier before it sleeps, where every thread has an idle core: the granular
+#: pile (N = 10^4, 2 threads, idle machine) ran 1.07x faster with it than with passive waiting, and 1.03x faster
+#: than with 5000 spins
+IDLE_SPINCOUNT: int = 20000
+
+#: seconds over which :func:`openmp_wait_for_idle_cores` counts the machine's idle cores
+IDLE_SAMPLE_S: float = 0.2
+
+
+def idle_cores(sample_s: float = IDLE_SAMPLE_S) -> float | None:
+    """Cores the machine left idle over the next ``sample_s`` seconds (from ``/proc/stat``); None where unknown."""
+    try:
+        before = _cpu_times()
+        time.sleep(sample_s)
+        after = _cpu_times()
+    except (OSError, ValueError, IndexError):
+        return None
+    total = sum(after) - sum(before)
+    idle = (after[3] + after[4]) - (before[3] + before[4])
+    return None if total <= 0 else (os.cpu_count() or 1) * idle / total
+
+
+def _cpu_times() -> list[int]:
+    with open("/proc/stat") as stat:
+        return [int(x) for x in stat.readline().split()[1:]]
+
+
+def openmp_wait_for_idle_cores(threads: int | None) -> str:
+    """Choose how GNU OpenMP threads wait at barriers for a run on ``threads`` threads (None = all), before numba
+    starts its thread pool (:func:`set_threads` starts it); return the choice.
+
+    Spinning briefly (``GOMP_SPINCOUNT`` = :data:`IDLE_SPINCOUNT`) where the machine has an idle core for every
+    thread; passive waiting otherwise, because a spinning thread takes the core the thread it waits for needs
+    (the granular pile on 2 threads beside one busy process: 0.76-0.85x of passive waiting; GNU OpenMP's default,
+    spinning ~3 ms, 0.2x). The choice holds for the whole process. A user's ``OMP_WAIT_POLICY`` or
+    ``GOMP_SPINCOUNT`` is kept as it is (``"user"``).
+    """
+    if "OMP_WAIT_POLICY" in os.environ or "GOMP_SPINCOUNT" in os.environ:
+        return "user"
+    threads = _thread_count(threads)
+    free = idle_cores() if threads > 1 else None
+    if free is not None and free >= threads - 0.25:
+        os.environ["GOMP_SPINCOUNT"] = str(IDLE_SPINCOUNT)
+        return f"spin {IDLE_SPINCOUNT}"
+    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
+    return "passive"
 
 
 #: default largest array argument (elements) for which a one-thread call runs the serial variant of a

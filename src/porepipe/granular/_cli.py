@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import os
 
 from porepipe._shared.errors import PorepipeError
 
 
 def main(args) -> int:
-    # GNU OpenMP spins at barriers by default, which on a shared machine starves the other thread (2 threads ran
-    # at 0.2x of 1 here); passive waiting costs ~10 us per region, nothing next to a step of a large pile
-    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    from porepipe._shared.numba_config import openmp_wait_for_idle_cores, set_threads
+
+    # before set_threads starts numba's thread pool: GNU OpenMP reads its waiting policy once
+    openmp_wait_for_idle_cores(args.threads)
     from porepipe.granular._run import run
     from porepipe.scene import load_scene
 
@@ -21,8 +21,6 @@ def main(args) -> int:
         raise PorepipeError(
             f"{args.scene}: the scene has no `granular:` section with particles, blocks or drop_sources"
         )
-    from porepipe._shared.numba_config import set_threads
-
     threads = set_threads(args.threads)
     run(
         settings,
