@@ -56,6 +56,15 @@ loop over whole vectors and the count loop over N_ROWS equal; both shells of a r
 chords of every row kept in a per-plane pool, so that unions need not recompute the owner's, +1.4 % / 0-1 % /
 -3-0 % on the three sizes. Profiled (perf on the JIT code, 1 thread): chords ~23 %, row ranges ~10 %, chord
 counts ~15 %, row distances and room ~15 %; left out, unions and shares take ~13 % (shares 3 %).
+
+Session 13, tried and not kept (kernel alone, CPU time, same run against the kernel before, interleaved, 1 thread,
+load 1.1-2.4; spheres 10-20 / 20-40 / 40-80 voxels wide): chord ends and voxel starts in int16 (the counts then take
+3 vectors of 16 lanes instead of 5 of 8, as LLVM compiled them) +0.4 % / +0.1 % / +0.5 %, so the counts' arithmetic
+is not what limits them; the owner's frame found once per owner instead of per union voxel -2 %; the owner's chords
+kept across both shells of a row +0.8 % / +0.4 % / +0.4 %; a ball-plane's row distances and room found in a pre-pass
+(so that no vector load waits on the row's 36 scalar stores) -7 % / -6 % / -5 %; room from y distances tiled per
+ball-plane -13 % / -15 % / -15 %. More than half the JIT samples (perf, raw addresses) fall in the row block
+(distances, room, ranges ~35 %) and the chords (~21 %), spread over many instructions.
 """
 
 import numpy as np

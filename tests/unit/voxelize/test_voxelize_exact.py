@@ -1,5 +1,7 @@
 """The boundary-only voxelisation equals brute force and a naive numpy oracle bit for bit."""
 
+import itertools
+
 import numba
 import numpy as np
 import pytest
@@ -80,6 +82,32 @@ def test_images_cover_only_spheres_that_reach_the_box():
     c = np.array([[5.0, 5.0, 5.0], [0.5, 5.0, 5.0]])
     imgs = sphere_images(c, np.array([1.0, 1.0]), (10.0, 10.0, 10.0), periodic=True)
     assert len(imgs) == 3  # the centre sphere, and the face sphere plus its image across x = 0
+
+
+def _images_naive(c, r, box, reach=9):
+    """Every shift t in [-reach, reach]^3 (x slowest, then y, z), and for each the spheres that reach the box once
+    shifted by t*L (in their order): (x, y, z, r) rows.
+    """
+    rows = []
+    for t in itertools.product(range(-reach, reach + 1), repeat=3):
+        moved = c + np.array(t) * np.asarray(box)
+        keep = np.all((moved + r[:, None] >= 0) & (moved - r[:, None] <= box), axis=1)
+        rows.append(np.column_stack([moved[keep], r[keep]]))
+    return np.concatenate(rows)
+
+
+def test_images_equal_a_loop_over_shifts_in_order():
+    # the kernels add balls in the order of these rows (ties in x-min keep it): values and order as a loop over
+    # the shifts and then the spheres; spheres up to 4 boxes across in z (up to 5 images per axis)
+    rng = np.random.default_rng(5)
+    box = (10.0, 7.0, 4.0)
+    for n in (0, 1, 30):
+        c = rng.uniform(-6.0, 14.0, (n, 3))  # |c| + r + L < 9 L_z: the naive shifts reach every image
+        r = rng.uniform(0.4, 8.0, n)
+        imgs = sphere_images(c, r, box, periodic=True)
+        # exact: c + t*L computed once, as in the naive loop
+        np.testing.assert_array_equal(imgs, _images_naive(c, r, box))
+        assert imgs.flags.c_contiguous
 
 
 def test_grey_values_of_a_half_space_voxel_are_exact_fractions():
