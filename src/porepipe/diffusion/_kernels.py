@@ -221,7 +221,7 @@ def _slab_codes(codes):
     three thin axes (the first axis among equals).
 
     The widths across thin axis d at thickness t are the 2-D chessboard distance, in each plane across d, of the
-    voxels whose segment of half-length t along d is all pore. Memory: one plane.
+    voxels whose segment of half-length t along d is all pore. Memory: two planes.
     """
     flat = codes.reshape(codes.size)
     for f in range(flat.size):
@@ -230,27 +230,31 @@ def _slab_codes(codes):
     n = codes.shape
     for d in range(3):
         stride = _voxel(codes, d, 1, 0, 0)
-        plane = np.empty((n[1 if d == 0 else 0], n[1 if d == 2 else 2]), np.uint8)
-        for t in range(_SLAB_THICK):
-            for p in range(t, n[d] - t):
+        free = np.empty((n[1 if d == 0 else 0], n[1 if d == 2 else 2]), np.uint8)
+        plane = np.empty_like(free)
+        for p in range(n[d]):
+            for t in range(min(_SLAB_THICK, p + 1, n[d] - p)):
                 for a in range(plane.shape[0]):
                     for b in range(plane.shape[1]):
                         at = _voxel(codes, d, p, a, b)
-                        free = True
-                        for k in range(-t, t + 1):
-                            free &= flat[at + k * stride] != 0
-                        plane[a, b] = free
+                        if t == 0:
+                            free[a, b] = flat[at] != 0
+                        else:  # the segment of half-length t along d: that of t - 1 and its two new ends
+                            free[a, b] &= (flat[at - t * stride] != 0) & (flat[at + t * stride] != 0)
+                        plane[a, b] = free[a, b]
                 _plane_chessboard(plane)
                 for a in range(plane.shape[0]):
                     for b in range(plane.shape[1]):
                         at = _voxel(codes, d, p, a, b)
                         v = flat[at]
+                        if (_SMALLEST[v] != t) | (plane[a, b] < _SLAB_WIDTHS[0]):
+                            continue  # solid, not t + 1 from the nearest solid, or too narrow
                         j = np.searchsorted(_SLAB_WIDTHS, plane[a, b], side="right") - 1
-                        h0, h1, h2 = _HALF_WIDTH[0, v], _HALF_WIDTH[1, v], _HALF_WIDTH[2, v]
-                        if (v == 0) | (j < 0) | (min(h0, min(h1, h2)) != t):
-                            continue  # solid, too narrow, or not t + 1 from the nearest solid
-                        if max(h0, max(h1, h2)) < _SLAB_WIDTHS[j] - 1:  # wider than its box so far
-                            flat[at] = _SLAB_CODE + (3 * t + d) * nw + j
+                        if (
+                            max(_HALF_WIDTH[0, v], max(_HALF_WIDTH[1, v], _HALF_WIDTH[2, v]))
+                            < _SLAB_WIDTHS[j] - 1
+                        ):
+                            flat[at] = _SLAB_CODE + (3 * t + d) * nw + j  # wider than its box so far
 
 
 @njit(cache=True, inline="always")
