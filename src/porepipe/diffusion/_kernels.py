@@ -380,7 +380,7 @@ def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c):
     it reaches little ahead.
 
     The candidate centres are ``a`` voxels further along every axis the flight moves along, for ``a`` in _AHEAD in
-    turn. A centre whose box's smallest half-width is at least a >= _JUMP_CODE - 1 (_SMALLEST) still holds the
+    turn. A centre whose box's smallest half-width (_SMALLEST) is at least a and _JUMP_CODE - 1 still holds the
     particle's voxel (each offset is at most a), so the flight may jump to that box's surface; the first one wins,
     the largest offsets first because they give the largest boxes (the chessboard code is 1-Lipschitz: ca <= c + a).
     None (or outside the volume): (c, 0, 0, 0), the box of the voxel itself.
@@ -390,7 +390,7 @@ def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c):
         if (a0 < 0) | (a0 >= n0) | (a1 < 0) | (a1 >= n1) | (a2 < 0) | (a2 >= n2):
             continue
         ca = flat[(a0 * n1 + a1) * n2 + a2]
-        if _SMALLEST[ca] >= a:
+        if _SMALLEST[ca] >= max(a, _JUMP_CODE - 1):  # a code the flight jumps from, whatever _AHEAD holds
             return ca, a * s0, a * s1, a * s2
     return c, 0, 0, 0
 
