@@ -1,9 +1,12 @@
 """Numba kernels of the Knudsen engine: counter-based random numbers, the 1-byte distance geometry, exact flights
 (3-D DDA with empty-space jumps), wall laws, and the set-up kernels built by a factory from the scene's choices.
 
-Geometry code per voxel (uint8): 0 = solid; k >= 1 = pore whose L-infinity (chessboard) distance to the nearest
-solid voxel or to the outside of the box is k (saturated at 255). Every voxel of the cube of half-width k - 1 around a
-pore voxel is pore, so a particle may fly straight to that cube's surface without looking at single voxels.
+Geometry code per voxel (uint8), built by :func:`_chessboard_codes`: 0 = solid; any other code names a box centred
+on the voxel, inside the volume and all pore, of half-widths ``_HALF_WIDTH[:, code]`` along the three axes, so that a
+particle may fly straight to that box's surface without looking at single voxels. Codes 1..127: the L-infinity
+(chessboard) distance k to the nearest solid voxel or to the outside of the box (saturated), the cube of half-width
+k - 1; 128..199: slabs, thin across a wall, for the voxels next to one (:func:`_slab_codes`); 200..253: prisms,
+four times longer along one axis than across (:func:`_prism_codes`).
 
 Events returned by :func:`_fly`: 0..5 = wall face ``2 * axis + (step > 0)`` (the particle moved in direction ``step``
 along ``axis`` and met a solid voxel or the closed outside), 6 = left through the low face of the exit axis, 7 = left
@@ -72,6 +75,17 @@ def _uniform(state):
 # geometry: chessboard distance to the solid (outside of the box counts as solid), two raster passes
 @njit(cache=True)
 def _chessboard_codes(pore, out):
+    """The flights' geometry codes of ``pore`` in ``out`` (may be ``pore`` itself): the chessboard distances
+    (:func:`_chessboard_distance`), then slab and prism codes where those boxes get further (see the module's
+    docstring).
+    """
+    _chessboard_distance(pore, out)
+    _slab_codes(out)
+    _prism_codes(out)
+
+
+@njit(cache=True)
+def _chessboard_distance(pore, out):
     """``out[i,j,k]`` = 0 for solid, else min(255, L-inf distance to the nearest solid or outside voxel).
 
     Two raster passes of the 3x3x3 unit-weight chamfer mask, which is exact for the chessboard metric.
@@ -118,6 +132,198 @@ def _chessboard_codes(pore, out):
 
 
 # ---------------------------------------------------------------------------------------------------------------------
+# geometry: box codes (slabs across the walls, prisms along the free runs)
+#: first slab code; chessboard codes are saturated below it
+_SLAB_CODE = 128
+#: chessboard codes 1.._SLAB_THICK may become slab codes: those of the voxels next to a wall, where a flight walks
+_SLAB_THICK = 4
+#: the (half-widths + 1) across the thin axis a slab code can hold; a slab's is rounded down to one of them (so its
+#: box stays all pore), and one narrower than the first is not worth a jump
+_SLAB_WIDTHS = np.array([8, 10, 12, 16, 24, 32], np.int64)
+#: first prism code (after the slab codes)
+_PRISM_CODE = _SLAB_CODE + 3 * _SLAB_THICK * len(_SLAB_WIDTHS)
+#: the cross half-widths of the prism codes (that of a voxel of chessboard code r + 1; from _JUMP_CODE - 1)
+_PRISM_CROSS = np.arange(3, 21, dtype=np.int64)
+#: a prism's half-width along its long axis, in cross half-widths (3 to 12 measured alike on the capillary)
+_PRISM_LONG = 4
+
+
+def _half_width_table():
+    """(3, 256) float64: per code, the half-width along each axis of its all-pore box centred on the voxel.
+
+    Chessboard code c < _SLAB_CODE: the cube, c - 1 along every axis. Slab code _SLAB_CODE + (3 t + d) w + j (w =
+    len(_SLAB_WIDTHS), t < _SLAB_THICK): t along the thin axis d (the voxel's chessboard code is t + 1) and
+    _SLAB_WIDTHS[j] - 1 along the other two. Prism code _PRISM_CODE + 3 i + e: r = _PRISM_CROSS[i] across and
+    _PRISM_LONG r along the long axis e. Floats: the jump multiplies them by the times between crossings.
+    """
+    table = np.zeros((3, 256))
+    table[:, 1:_SLAB_CODE] = np.arange(_SLAB_CODE - 1)
+    nw = len(_SLAB_WIDTHS)
+    for t in range(_SLAB_THICK):
+        for d in range(3):
+            for j in range(nw):
+                code = _SLAB_CODE + (3 * t + d) * nw + j
+                table[:, code] = _SLAB_WIDTHS[j] - 1
+                table[d, code] = t
+    for i, r in enumerate(_PRISM_CROSS):
+        for e in range(3):
+            table[:, _PRISM_CODE + 3 * i + e] = r
+            table[e, _PRISM_CODE + 3 * i + e] = _PRISM_LONG * r
+    return table
+
+
+#: per-axis half-widths of the box of each code (see _half_width_table)
+_HALF_WIDTH = _half_width_table()
+#: per code, its box's smallest half-width (-1: solid)
+_SMALLEST = np.concatenate(([-1], _HALF_WIDTH[:, 1:].min(axis=0))).astype(np.int64)
+
+
+@njit(cache=True)
+def _plane_chessboard(plane):
+    """In place: the 2-D chessboard distance (saturated at 255) of the nonzero pixels of ``plane`` to the nearest
+    zero pixel or the outside (two raster passes of the 3x3 unit-weight mask, as :func:`_chessboard_distance`).
+    """
+    na, nb = plane.shape
+    for a in range(na):
+        for b in range(nb):
+            if plane[a, b] != 0:
+                best = 255
+                for da, db in ((-1, -1), (-1, 0), (-1, 1), (0, -1)):
+                    x, y = a + da, b + db
+                    best = min(best, (plane[x, y] if (x >= 0) & (y >= 0) & (y < nb) else 0) + 1)
+                plane[a, b] = best
+    for a in range(na - 1, -1, -1):
+        for b in range(nb - 1, -1, -1):
+            if plane[a, b] != 0:
+                best = plane[a, b]
+                for da, db in ((1, 1), (1, 0), (1, -1), (0, 1)):
+                    x, y = a + da, b + db
+                    best = min(best, (plane[x, y] if (x < na) & (y >= 0) & (y < nb) else 0) + 1)
+                plane[a, b] = best
+
+
+@njit(cache=True, inline="always")
+def _voxel(codes, d, p, a, b):
+    """Flat index into ``codes`` of the voxel at ``p`` along axis ``d`` and (a, b) along the other two, in order."""
+    n0, n1, n2 = codes.shape
+    if d == 0:
+        return (p * n1 + a) * n2 + b
+    if d == 1:
+        return (a * n1 + p) * n2 + b
+    return (a * n1 + b) * n2 + p
+
+
+@njit(cache=True)
+def _slab_codes(codes):
+    """In place on chessboard codes: saturate them at _SLAB_CODE - 1, and give a voxel of code c <= _SLAB_THICK a
+    slab code (see :func:`_half_width_table`) where a box centred on it, c - 1 voxels thick along one axis and at
+    least _SLAB_WIDTHS[0] - 1 wide along the other two, lies in the volume and is all pore: the widest such box of the
+    three thin axes (the first axis among equals).
+
+    The widths across thin axis d at thickness t are the 2-D chessboard distance, in each plane across d, of the
+    voxels whose segment of half-length t along d is all pore. Memory: two planes.
+    """
+    flat = codes.reshape(codes.size)
+    for f in range(flat.size):
+        flat[f] = min(flat[f], _SLAB_CODE - 1)
+    nw = _SLAB_WIDTHS.shape[0]
+    n = codes.shape
+    for d in range(3):
+        stride = _voxel(codes, d, 1, 0, 0)
+        free = np.empty((n[1 if d == 0 else 0], n[1 if d == 2 else 2]), np.uint8)
+        plane = np.empty_like(free)
+        for p in range(n[d]):
+            for t in range(min(_SLAB_THICK, p + 1, n[d] - p)):
+                for a in range(plane.shape[0]):
+                    for b in range(plane.shape[1]):
+                        at = _voxel(codes, d, p, a, b)
+                        if t == 0:
+                            free[a, b] = flat[at] != 0
+                        else:  # the segment of half-length t along d: that of t - 1 and its two new ends
+                            free[a, b] &= (flat[at - t * stride] != 0) & (flat[at + t * stride] != 0)
+                        plane[a, b] = free[a, b]
+                _plane_chessboard(plane)
+                for a in range(plane.shape[0]):
+                    for b in range(plane.shape[1]):
+                        at = _voxel(codes, d, p, a, b)
+                        v = flat[at]
+                        if (_SMALLEST[v] != t) | (plane[a, b] < _SLAB_WIDTHS[0]):
+                            continue  # solid, not t + 1 from the nearest solid, or too narrow
+                        j = np.searchsorted(_SLAB_WIDTHS, plane[a, b], side="right") - 1
+                        if (
+                            max(_HALF_WIDTH[0, v], max(_HALF_WIDTH[1, v], _HALF_WIDTH[2, v]))
+                            < _SLAB_WIDTHS[j] - 1
+                        ):
+                            flat[at] = _SLAB_CODE + (3 * t + d) * nw + j  # wider than its box so far
+
+
+@njit(cache=True, inline="always")
+def _mean_half_width(v):
+    """Harmonic mean of the half-widths + 1 of code ``v``'s box: how far a flight in a random direction gets."""
+    return 3.0 / (
+        1.0 / (_HALF_WIDTH[0, v] + 1.0) + 1.0 / (_HALF_WIDTH[1, v] + 1.0) + 1.0 / (_HALF_WIDTH[2, v] + 1.0)
+    )
+
+
+@njit(cache=True)
+def _prism_codes(codes):
+    """In place on slab codes: give a voxel of chessboard code r + 1 (r in _PRISM_CROSS) a prism code where a box
+    centred on it, r across and _PRISM_LONG r along one axis e, lies in the volume and is all pore, and gets further
+    than its box so far (:func:`_mean_half_width`; the first axis among equals).
+
+    That box is the union of the cubes of half-width r centred on the line along e within ell = (_PRISM_LONG - 1) r
+    of the voxel, each all pore where the code's smallest half-width is at least r (:func:`_free_run`). A code's
+    smallest half-width is the voxel's chessboard code - 1, also after recoding. Memory: one line.
+    """
+    flat = codes.reshape(codes.size)
+    n = codes.shape
+    for e in range(3):
+        stride = _voxel(codes, e, 1, 0, 0)
+        smallest = np.empty(n[e], np.int64)
+        lower = np.empty(n[e], np.int64)
+        upper = np.empty(n[e], np.int64)
+        for a in range(n[1 if e == 0 else 0]):
+            for b in range(n[1 if e == 2 else 2]):
+                first = _voxel(codes, e, 0, a, b)
+                for q in range(n[e]):
+                    smallest[q] = _SMALLEST[flat[first + q * stride]]
+                _free_run(smallest, lower, upper)
+                for q in range(n[e]):
+                    r = smallest[q]
+                    if (r < _PRISM_CROSS[0]) | (r > _PRISM_CROSS[-1]):
+                        continue
+                    if min(q - lower[q], upper[q] - q) <= (_PRISM_LONG - 1) * r:
+                        continue
+                    at = first + q * stride
+                    code = _PRISM_CODE + 3 * (r - _PRISM_CROSS[0]) + e
+                    if _mean_half_width(code) > _mean_half_width(flat[at]):
+                        flat[at] = code
+
+
+@njit(cache=True)
+def _free_run(values, lower, upper):
+    """Per entry q of ``values``: the nearest index below (``lower[q]``, -1 if none) and above (``upper[q]``,
+    len(values) if none) whose value is smaller than ``values[q]`` (a stack of rising values, O(n)).
+    """
+    n = values.shape[0]
+    stack = np.empty(n, np.int64)
+    top = 0
+    for q in range(n):
+        while top > 0 and values[stack[top - 1]] >= values[q]:
+            top -= 1
+        lower[q] = stack[top - 1] if top > 0 else -1
+        stack[top] = q
+        top += 1
+    top = 0
+    for q in range(n - 1, -1, -1):
+        while top > 0 and values[stack[top - 1]] >= values[q]:
+            top -= 1
+        upper[q] = stack[top - 1] if top > 0 else n
+        stack[top] = q
+        top += 1
+
+
+# ---------------------------------------------------------------------------------------------------------------------
 # the flight
 @intrinsic
 def _select(typingctx, cond, a, b):
@@ -151,17 +357,17 @@ def _axis_start(u, p, i, h):
 @njit(cache=True, inline="always")
 def _crossed(t_leave, t, rate, s, r):
     """How many faces of one axis (next crossing at ``t``, then ``rate`` per unit time) a flight crosses up to
-    ``t_leave``, at most ``r``: the index advance along that axis of a jump through a pore cube of half-width ``r``.
-    A face crossed exactly at ``t_leave`` counts (either order of a tie is exact); truncation is floor here, as the
-    argument is at least 0.
+    ``t_leave``, at most ``r``: the index advance along that axis of a jump through a pore box ``r`` faces deep ahead.
+    A face crossed exactly at ``t_leave`` counts (either order of a tie is exact). A float (whole): the crossing time
+    takes it without a conversion, the index converts it off that chain.
     """
     if s == 0:
-        return 0
-    return min(np.int64(max((t_leave - t) * rate, -1.0) + 1.0), r)
+        return 0.0
+    return min(math.floor(max((t_leave - t) * rate, -1.0)) + 1.0, r)
 
 
-#: smallest code of a voxel whose cube is jumped through: a jump costs several walk steps, and the cube of code 3
-#: (half-width 2) saves fewer
+#: smallest chessboard code of a voxel whose cube is jumped through: a jump costs several walk steps, and the cube of
+#: code 3 (half-width 2) saves fewer; every slab and prism code is above it
 _JUMP_CODE = 4
 #: offsets of the cube centres tried ahead of a voxel next to a wall, largest first (see _ahead_cube)
 _AHEAD = (8, 5, 3)
@@ -169,22 +375,22 @@ _AHEAD = (8, 5, 3)
 
 @njit(cache=True, inline="always")
 def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c):
-    """(code, centre offsets) of a pore cube that holds voxel (i0, i1, i2) and reaches far ahead of it, for a flight
-    that starts in a voxel of code ``c`` < _JUMP_CODE (next to a wall, where the cube centred on it is too small to
-    jump).
+    """(code, centre offsets) of a pore box that holds voxel (i0, i1, i2) and reaches far ahead of it, for a flight
+    that starts in a voxel next to a wall (chessboard code ``c`` < _JUMP_CODE or a slab code), where the box centred on
+    it reaches little ahead.
 
     The candidate centres are ``a`` voxels further along every axis the flight moves along, for ``a`` in _AHEAD in
-    turn. A centre's code ca >= a + 1 means the cube of half-width ca - 1 around it is all pore and still holds the
-    particle's voxel (each offset is at most a <= ca - 1), so the flight may jump to that cube's surface. The first
-    such centre with ca >= _JUMP_CODE wins; the largest offsets come first because they give the largest cubes (the
-    code is 1-Lipschitz: ca <= c + a). None (or outside the box): (c, 0, 0, 0), the plain cube.
+    turn. A centre whose box's smallest half-width (_SMALLEST) is at least a and _JUMP_CODE - 1 still holds the
+    particle's voxel (each offset is at most a), so the flight may jump to that box's surface; the first one wins,
+    the largest offsets first because they give the largest boxes (the chessboard code is 1-Lipschitz: ca <= c + a).
+    None (or outside the volume): (c, 0, 0, 0), the box of the voxel itself.
     """
     for a in _AHEAD:
         a0, a1, a2 = i0 + a * s0, i1 + a * s1, i2 + a * s2
         if (a0 < 0) | (a0 >= n0) | (a1 < 0) | (a1 >= n1) | (a2 < 0) | (a2 >= n2):
             continue
         ca = flat[(a0 * n1 + a1) * n2 + a2]
-        if (ca > a) & (ca >= _JUMP_CODE):
+        if _SMALLEST[ca] >= max(a, _JUMP_CODE - 1):  # a code the flight jumps from, whatever _AHEAD holds
             return ca, a * s0, a * s1, a * s2
     return c, 0, 0, 0
 
@@ -197,10 +403,10 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     Every face crossing is a time from the flight's start: per axis the next one, ``t0, t1, t2``, advanced by the
     fixed ``dt0, dt1, dt2`` (no position update, no division in the walk). A walk step picks the earliest axis
     (ties: lowest axis first) by selects, moves the flat index by that axis's stride and loads one byte. From a
-    voxel of code >= _JUMP_CODE, a jump through the pore cube of half-width r = code - 1 around it leaves the cube
-    at T = min_d(t_d + r dt_d) and advances every axis by the faces it crosses before T (at most r: the index stays
-    in the cube). A flight that starts in a voxel of lower code (after a wall hit) first tries cubes centred ahead
-    of it (:func:`_ahead_cube`): per axis it may then cross r + s_d o_d faces, up to the far face of that cube.
+    voxel of code >= _JUMP_CODE, a jump through the pore box of half-widths r_d = _HALF_WIDTH[d, code] around it
+    leaves the box at T = min_d(t_d + r_d dt_d) and advances every axis by the faces it crosses before T (at most
+    r_d: the index stays in the box). A flight that starts next to a wall (after a wall hit) first tries boxes
+    centred ahead of it (:func:`_ahead_cube`): per axis it may then cross r_d + s_d o_d faces, up to the far face.
     """
     st0 = n1 * n2
     u0, u1, u2 = u[0], u[1], u[2]
@@ -213,27 +419,29 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     w0 = w1 = w2 = 0  # periodic wraps
     lin = (i0 * n1 + i1) * n2 + i2
     c = flat[lin]
-    o0 = o1 = o2 = 0  # offset of the jump cube's centre from the particle's voxel (0 but for the first jump)
-    if c < _JUMP_CODE:
+    o0 = o1 = o2 = 0  # offset of the jump box's centre from the particle's voxel (0 but for the first jump)
+    if (c < _JUMP_CODE) | ((c >= _SLAB_CODE) & (c < _PRISM_CODE)):
         c, o0, o1, o2 = _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c)
     crossings = 0
     event = -1
     t = 0.0
     while True:
         if c >= _JUMP_CODE:
-            r = np.int64(c) - 1
-            m0, m1, m2 = r + s0 * o0, r + s1 * o1, r + s2 * o2  # faces ahead to the cube's far face, per axis
+            m0 = _HALF_WIDTH[0, c] + float(s0 * o0)  # faces ahead to the box's far face, per axis
+            m1 = _HALF_WIDTH[1, c] + float(s1 * o1)
+            m2 = _HALF_WIDTH[2, c] + float(s2 * o2)
             o0 = o1 = o2 = 0
             t_leave = min(t0 + m0 * dt0, min(t1 + m1 * dt1, t2 + m2 * dt2))
-            k0 = _crossed(t_leave, t0, q0, s0, m0)
-            k1 = _crossed(t_leave, t1, q1, s1, m1)
-            k2 = _crossed(t_leave, t2, q2, s2, m2)
+            g0 = _crossed(t_leave, t0, q0, s0, m0)
+            g1 = _crossed(t_leave, t1, q1, s1, m1)
+            g2 = _crossed(t_leave, t2, q2, s2, m2)
+            t0 += g0 * dt0
+            t1 += g1 * dt1
+            t2 += g2 * dt2
+            k0, k1, k2 = np.int64(g0), np.int64(g1), np.int64(g2)
             i0 += k0 * s0
             i1 += k1 * s1
             i2 += k2 * s2
-            t0 += k0 * dt0
-            t1 += k1 * dt1
-            t2 += k2 * dt2
             lin += k0 * f0 + k1 * f1 + k2 * f2
         while True:  # walk face by face until solid, the box's outside, or a voxel worth a jump
             x0 = (t0 <= t1) & (t0 <= t2)
@@ -313,7 +521,7 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
 def _fly(geom, h, periodic, exit_axis, pos, idx, u, img):
     """Fly from ``pos`` (inside pore voxel ``idx``) along the unit vector ``u`` to the next event.
 
-    Exact voxel traversal (Amanatides-Woo) with jumps through pore cubes of the distance code (see
+    Exact voxel traversal (Amanatides-Woo) with jumps through the pore boxes of the geometry codes (see
     :func:`_flight`). Ties between axes (a flight exactly through an edge or corner) are resolved
     deterministically, lowest axis first. On return ``pos``/``idx`` hold the event point and the (pore) voxel it
     belongs to; at a wall the coordinate of the hit axis is exactly the face plane. ``img`` counts periodic wraps

@@ -4,7 +4,17 @@ import numpy as np
 import pytest
 from naive_diffusion import flight_naive
 
-from porepipe.diffusion._kernels import _AHEAD, _JUMP_CODE, _ahead_cube, _chessboard_codes, _fly
+from porepipe.diffusion._kernels import (
+    _AHEAD,
+    _HALF_WIDTH,
+    _JUMP_CODE,
+    _PRISM_CODE,
+    _SLAB_CODE,
+    _ahead_cube,
+    _chessboard_codes,
+    _chessboard_distance,
+    _fly,
+)
 
 
 def _codes(pore):
@@ -213,8 +223,10 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
         a, b, c = rng.integers(0, 26), rng.integers(0, 22), rng.integers(0, 40)
         pore[a, b : b + 3, c : c + 2] = 0
     codes = _codes(pore)
+    chess = np.empty(pore.shape, np.uint8)
+    _chessboard_distance(pore, chess)
     h = np.array(h)
-    cells = np.argwhere((codes >= 1) & (codes < _JUMP_CODE))
+    cells = np.argwhere((chess >= 1) & (chess < _JUMP_CODE))  # some are slab voxels
     periodic = np.zeros(3, dtype=np.bool_)
     img = np.zeros(3, dtype=np.int64)
     n, used = codes.shape, {}
@@ -226,11 +238,11 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
         s = np.sign(u).astype(np.int64)
         c = codes[tuple(idx)]
         ahead = _ahead_cube(codes.reshape(-1), *n, *idx, *s, c)
-        if ahead[0] >= _JUMP_CODE:
+        if any(ahead[1:]):
             offset = int(np.abs(ahead[1:]).max())
             used[offset] = used.get(offset, 0) + 1
-            r, centre = int(ahead[0]) - 1, idx + np.array(ahead[1:])
-            assert np.all(np.abs(centre - idx) <= r)  # the cube holds the particle's voxel ...
+            r, centre = _HALF_WIDTH[:, ahead[0]].astype(np.int64), idx + np.array(ahead[1:])
+            assert np.all(np.abs(centre - idx) <= r)  # the box holds the particle's voxel ...
             lo, hi = centre - r, centre + r + 1
             assert np.all(lo >= 0) and np.all(hi <= n)
             assert codes[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]].all()  # ... and is all pore
@@ -243,3 +255,37 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
         _check_end(codes, h, p, i, event)
     assert sorted(used) == sorted(_AHEAD)  # every offset is taken ...
     assert sum(used.values()) < 1200  # ... and all are refused too
+
+
+@pytest.mark.parametrize("h", [(1.0, 1.0, 1.0), (0.6, 1.0, 1.7)])
+def test_flights_through_slabs_and_prisms_match_reference(h):
+    """Flights in a channel with flat walls and a few obstacles, where the codes next to the walls are slabs (thin
+    across the wall) and those along the free runs prisms (long along one axis): every start voxel and direction, on
+    the sort-all-crossings reference; slab, prism and cube voxels are all among the start voxels."""
+    rng = np.random.default_rng(23)
+    pore = np.ones((30, 26, 90), np.uint8)
+    for _ in range(5):
+        a, b, c = rng.integers(0, 30), rng.integers(0, 26), rng.integers(0, 90)
+        pore[a, b : b + 3, c : c + 2] = 0
+    pore[8:20, 4:7, 60] = 0
+    codes = _codes(pore)
+    h = np.array(h)
+    cells = np.argwhere(codes > 0)
+    periodic = np.zeros(3, dtype=np.bool_)
+    img = np.zeros(3, dtype=np.int64)
+    kinds = set()
+    for _ in range(1500):
+        idx = cells[rng.integers(len(cells))].astype(np.int64)
+        c = codes[tuple(idx)]
+        kinds.add("prism" if c >= _PRISM_CODE else ("slab" if c >= _SLAB_CODE else "cube"))
+        pos = (idx + rng.random(3)) * h
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        t_ref, ev_ref = flight_naive(codes, h, pos.copy(), u)
+        p, i = pos.copy(), idx.copy()
+        event, length, _ = _fly(codes, h, periodic, -1, p, i, u, img)
+        assert event == ev_ref
+        assert length == pytest.approx(t_ref, rel=1e-9, abs=1e-9)
+        np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
+        _check_end(codes, h, p, i, event)
+    assert kinds == {"cube", "slab", "prism"}

@@ -17,7 +17,13 @@ from porepipe.diffusion import (
     square_capillary,
     wall_area,
 )
-from porepipe.diffusion._kernels import _chessboard_codes
+from porepipe.diffusion._kernels import (
+    _HALF_WIDTH,
+    _PRISM_CODE,
+    _SLAB_CODE,
+    _chessboard_codes,
+    _chessboard_distance,
+)
 
 
 def _random_pore(shape, p, seed):
@@ -28,7 +34,7 @@ def _random_pore(shape, p, seed):
 def test_codes_equal_scipy_chessboard(seed):
     pore = _random_pore((13, 11, 17), 0.8 + 0.04 * seed, seed)
     codes = np.empty(pore.shape, np.uint8)
-    _chessboard_codes(pore, codes)
+    _chessboard_distance(pore, codes)
     np.testing.assert_array_equal(codes, chessboard_naive(pore))
 
 
@@ -36,11 +42,54 @@ def test_codes_saturate_at_255_and_fit_one_byte():
     pore = np.ones((520, 3, 3), np.uint8)  # distance along x never exceeds 2 here; a long open box instead:
     big = np.ones((600, 600, 1), np.uint8)
     codes = np.empty(big.shape, np.uint8)
-    _chessboard_codes(big, codes)
+    _chessboard_distance(big, codes)
     assert codes.dtype == np.uint8 and codes.max() == 1  # one layer thick: every voxel touches the outside
     codes = np.empty(pore.shape, np.uint8)
-    _chessboard_codes(pore, codes)
+    _chessboard_distance(pore, codes)
     np.testing.assert_array_equal(codes, chessboard_naive(pore))
+
+
+def _channel_with_pillars(seed):
+    """A 30 x 26 x 90 channel with a few solid pillars and plates: flat walls (slabs), long free runs (prisms), and
+    boxes that the obstacles cut short."""
+    rng = np.random.default_rng(seed)
+    pore = np.ones((30, 26, 90), np.uint8)
+    for _ in range(5):
+        a, b, c = rng.integers(0, 30), rng.integers(0, 26), rng.integers(0, 90)
+        pore[a, b : b + 3, c : c + 2] = 0
+    pore[8:20, 4:7, 60] = 0
+    return pore
+
+
+@pytest.mark.parametrize(
+    "pore",
+    [
+        _channel_with_pillars(0),
+        _channel_with_pillars(1),
+        square_capillary(30, 140).pore,
+        _random_pore((40, 44, 36), 0.995, 5),
+    ],
+)
+def test_every_code_is_an_all_pore_box_with_the_chessboard_distance_across(pore):
+    """Each code's box (per-axis half-widths _HALF_WIDTH, centred on the voxel) lies in the volume and is all pore,
+    and its smallest half-width is the voxel's chessboard distance - 1 (what the cube-ahead tries and the prism pass
+    rely on); slabs across and prisms along every axis occur."""
+    codes = np.empty(pore.shape, np.uint8)
+    _chessboard_codes(pore.copy(), codes)
+    chess = np.minimum(chessboard_naive(pore), _SLAB_CODE - 1)
+    np.testing.assert_array_equal(codes > 0, pore > 0)
+    for idx in np.argwhere(codes > 0):
+        half = _HALF_WIDTH[:, codes[tuple(idx)]].astype(np.int64)
+        lo, hi = idx - half, idx + half + 1
+        assert np.all(lo >= 0) and np.all(hi <= pore.shape)
+        assert pore[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]].all()
+        assert half.min() == chess[tuple(idx)] - 1
+    slabs = codes[(codes >= _SLAB_CODE) & (codes < _PRISM_CODE)]
+    prisms = codes[codes >= _PRISM_CODE]
+    if pore.shape == (30, 26, 90):
+        assert {int(np.argmin(_HALF_WIDTH[:, c])) for c in slabs} == {0, 1, 2}  # thin axis
+        assert {int(np.argmax(_HALF_WIDTH[:, c])) for c in prisms} == {0, 1, 2}  # long axis
+    assert len(slabs) > 0 and len(prisms) > 0
 
 
 def test_cylinder_voxels_are_the_centres_inside():
