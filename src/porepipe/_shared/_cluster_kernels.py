@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from porepipe._shared import numba_config  # noqa: F401  (the package-wide cache stamp, before any kernel)
+
 # the values flood() writes, "no axis" and "no seed yet", as typed int64, not literals: numba compiles a callee once
 # per literal argument value, so 3, 4, 5 and -1 written into the calls compiled flood five times (~6 CPU-s cold)
 _FILLED, _REFILLED, _WRAPPED = np.int64(3), np.int64(4), np.int64(5)

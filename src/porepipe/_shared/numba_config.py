@@ -9,6 +9,11 @@ import types
 import numba
 import numpy as np
 
+from porepipe._shared import numba_cache
+
+# before any kernel is defined: every module with kernels imports this one first
+numba_cache.install()
+
 #: fastmath for every kernel; off by default so results are bit-reproducible across machines.
 FASTMATH: bool = os.environ.get("POREPIPE_FASTMATH", "0") == "1"
 

@@ -118,7 +118,7 @@ def prepare(
     h = voxel / voxel.min()
     n_acc = int(np.count_nonzero(codes))
     area = wall_area(codes, h, per, open_axis=axis)
-    K._chessboard_codes(codes, codes)
+    K._box_codes(codes, codes)
     return Geometry(
         codes=codes,
         h=h,
@@ -703,7 +703,7 @@ def _closed_geometry(pore, voxel_um) -> Geometry:
     voxel = np.broadcast_to(np.asarray(voxel_um, dtype=float), (3,)).copy()
     keep = (pore > 0).astype(np.uint8)
     codes = np.empty(keep.shape, dtype=np.uint8)
-    K._chessboard_codes(keep, codes)
+    K._box_codes(keep, codes)
     h = voxel / voxel.min()
     n = int(keep.sum())
     per = np.zeros(3, dtype=bool)

@@ -1,7 +1,7 @@
 """Numba kernels of the Knudsen engine: counter-based random numbers, the 1-byte distance geometry, exact flights
 (3-D DDA with empty-space jumps), wall laws, and the set-up kernels built by a factory from the scene's choices.
 
-Geometry code per voxel (uint8), built by :func:`_chessboard_codes`: 0 = solid; any other code names a box centred
+Geometry code per voxel (uint8), built by :func:`_box_codes`: 0 = solid; any other code names a box centred
 on the voxel, inside the volume and all pore, of half-widths ``_HALF_WIDTH[:, code]`` along the three axes, so that a
 particle may fly straight to that box's surface without looking at single voxels. Codes 1..127: the L-infinity
 (chessboard) distance k to the nearest solid voxel or to the outside of the box (saturated), the cube of half-width
@@ -74,7 +74,7 @@ def _uniform(state):
 # ---------------------------------------------------------------------------------------------------------------------
 # geometry: chessboard distance to the solid (outside of the box counts as solid), two raster passes
 @njit(cache=True)
-def _chessboard_codes(pore, out):
+def _box_codes(pore, out):
     """The flights' geometry codes of ``pore`` in ``out`` (may be ``pore`` itself): the chessboard distances
     (:func:`_chessboard_distance`), then slab and prism codes where those boxes get further (see the module's
     docstring).

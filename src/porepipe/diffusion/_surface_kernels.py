@@ -68,6 +68,7 @@ import math
 import numpy as np
 from numba import njit
 
+from porepipe._shared import numba_config  # noqa: F401  (the package-wide cache stamp, before any kernel)
 from porepipe.diffusion._edmd_kernels import _heap_pop, _heap_push, _heap_room
 from porepipe.diffusion._kernels import (
     SPEED_FLUX,

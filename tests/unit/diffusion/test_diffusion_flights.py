@@ -11,7 +11,7 @@ from porepipe.diffusion._kernels import (
     _PRISM_CODE,
     _SLAB_CODE,
     _ahead_cube,
-    _chessboard_codes,
+    _box_codes,
     _chessboard_distance,
     _fly,
 )
@@ -19,7 +19,7 @@ from porepipe.diffusion._kernels import (
 
 def _codes(pore):
     codes = np.empty(pore.shape, np.uint8)
-    _chessboard_codes(pore.astype(np.uint8), codes)
+    _box_codes(pore.astype(np.uint8), codes)
     return codes
 
 

@@ -21,7 +21,7 @@ from porepipe.diffusion._kernels import (
     _HALF_WIDTH,
     _PRISM_CODE,
     _SLAB_CODE,
-    _chessboard_codes,
+    _box_codes,
     _chessboard_distance,
 )
 
@@ -75,7 +75,7 @@ def test_every_code_is_an_all_pore_box_with_the_chessboard_distance_across(pore)
     and its smallest half-width is the voxel's chessboard distance - 1 (what the cube-ahead tries and the prism pass
     rely on); slabs across and prisms along every axis occur."""
     codes = np.empty(pore.shape, np.uint8)
-    _chessboard_codes(pore.copy(), codes)
+    _box_codes(pore.copy(), codes)
     chess = np.minimum(chessboard_naive(pore), _SLAB_CODE - 1)
     np.testing.assert_array_equal(codes > 0, pore > 0)
     for idx in np.argwhere(codes > 0):

@@ -1,0 +1,82 @@
+"""numba's on-disk cache, kept valid only while a kernel's whole stage package is unchanged.
+
+numba keeps a cached kernel while the file that defines it is unchanged, but a kernel compiles the jitted functions
+it calls from other files into itself. After an edit or a ``git pull`` that changes only those, the cached caller
+still runs the old code on the new data: the Knudsen surface kernel, which inlines the flight of
+``diffusion/_kernels.py``, read the new geometry codes with the old flight and crashed (segmentation fault) until its
+cache was deleted. Here the stamp of a porepipe kernel is numba's (the digest of its own file) together with a digest
+of every source file of its stage package and of ``_shared``, so any change there recompiles that package's kernels
+once. Installed (:func:`install`) by :mod:`porepipe._shared.numba_config`, which the kernel modules import before
+they define kernels; numba's locator classes are private API (``numba.core.caching``), as is ``_nrt``.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+from pathlib import Path
+
+from numba.core import caching
+
+#: folders whose kernels get the package-wide stamp (the porepipe package; tests add their own)
+ROOTS: list[Path] = [Path(__file__).resolve().parent.parent]
+
+#: sub-folder of a root whose sources every stage's kernels depend on
+SHARED: str = "_shared"
+
+
+def package_digest(py_file: str | os.PathLike, root: Path) -> bytes:
+    """Digest of the sources ``py_file``'s kernels may compile in: every ``.py`` file of its stage package (the
+    first folder below ``root``; the root's own files for a module at the top) and of ``root/_shared``; found once
+    per process and package (numba's own stamp still follows the kernel's file within a process).
+    """
+    rel = Path(py_file).resolve().relative_to(root)
+    return _stage_digest(root, root / rel.parts[0] if len(rel.parts) > 1 else root)
+
+
+@functools.cache
+def _stage_digest(root: Path, stage: Path) -> bytes:
+    files = {*(root / SHARED).rglob("*.py"), *(stage.glob("*.py") if stage == root else stage.rglob("*.py"))}
+    h = hashlib.sha256()
+    for f in sorted(files):
+        h.update(str(f.relative_to(root)).encode())
+        h.update(f.read_bytes())
+    return h.digest()
+
+
+def _root_of(py_file: str) -> Path | None:
+    path = Path(py_file).resolve()
+    return next((root for root in ROOTS if path.is_relative_to(root)), None)
+
+
+class _PackageStamp:
+    """Locator mixin: only for files under :data:`ROOTS`; stamp = numba's and the package digest."""
+
+    def get_source_stamp(self):
+        return (super().get_source_stamp(), package_digest(self._py_file, _root_of(self._py_file)))
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if not os.path.exists(py_file) or _root_of(py_file) is None:
+            return None
+        return super().from_function(py_func, py_file)
+
+
+class _UserProvided(_PackageStamp, caching.UserProvidedCacheLocator):
+    """``NUMBA_CACHE_DIR`` set: cache there."""
+
+
+class _InTree(_PackageStamp, caching.InTreeCacheLocator):
+    """The source's ``__pycache__`` (a checkout, an editable install)."""
+
+
+class _UserWide(_PackageStamp, caching.UserWideCacheLocator):
+    """The user's cache folder (a read-only install)."""
+
+
+def install() -> None:
+    """Put the package-stamped locators first in numba's list (once); kernels decorated afterwards use them."""
+    classes = caching.CacheImpl._locator_classes
+    if _UserProvided not in classes:
+        classes[0:0] = [_UserProvided, _InTree, _UserWide]
