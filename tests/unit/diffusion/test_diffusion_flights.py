@@ -35,6 +35,20 @@ def _check_end(codes, h, pos, idx, event):
     assert not (0 <= nb[d] < codes.shape[d]) or codes[tuple(nb)] == 0
 
 
+def _assert_flight_as_reference(codes, h, pos, idx, u, tol=1e-9):
+    """One closed-box flight from ``pos`` (in voxel ``idx``) along ``u``: the event, length and end point of the
+    sort-all-crossings reference (length to ``tol``), ending in pore on the event's face (:func:`_check_end`)."""
+    ref = flight_naive(codes, h, pos.copy(), u)
+    assert ref is not None
+    t_ref, ev_ref = ref
+    p, i = pos.copy(), idx.copy()
+    event, length, _ = _fly(codes, h, np.zeros(3, np.bool_), -1, p, i, u, np.zeros(3, np.int64))
+    assert event == ev_ref
+    assert length == pytest.approx(t_ref, rel=tol, abs=tol)
+    np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
+    _check_end(codes, h, p, i, event)
+
+
 @pytest.mark.parametrize("h", [(1.0, 1.0, 1.0), (1.0, 1.0, 6.1), (0.5, 1.3, 1.0)])
 def test_random_flights_match_reference_and_never_enter_solid(h):
     rng = np.random.default_rng(42)
@@ -43,23 +57,13 @@ def test_random_flights_match_reference_and_never_enter_solid(h):
     codes = _codes(pore)
     h = np.array(h)
     cells = np.argwhere(codes > 0)
-    periodic = np.zeros(3, dtype=np.bool_)
-    img = np.zeros(3, dtype=np.int64)
     n_flights = 400
     for _ in range(n_flights):
         idx = cells[rng.integers(len(cells))].astype(np.int64)
         pos = (idx + rng.random(3)) * h
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
-        ref = flight_naive(codes, h, pos.copy(), u)
-        p, i = pos.copy(), idx.copy()
-        event, length, _ = _fly(codes, h, periodic, -1, p, i, u, img)
-        assert ref is not None
-        t_ref, ev_ref = ref
-        assert event == ev_ref
-        assert length == pytest.approx(t_ref, rel=1e-9, abs=1e-9)
-        np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
-        _check_end(codes, h, p, i, event)
+        _assert_flight_as_reference(codes, h, pos, idx, u)
 
 
 def test_many_consecutive_flights_stay_in_pore():
@@ -157,20 +161,13 @@ def test_jumps_with_zero_direction_components_match_reference(zero):
     codes = _codes(pore)
     h = np.array([1.0, 0.7, 1.3])
     cells = np.argwhere(codes >= 4)
-    periodic = np.zeros(3, dtype=np.bool_)
-    img = np.zeros(3, dtype=np.int64)
     for _ in range(200):
         idx = cells[rng.integers(len(cells))].astype(np.int64)
         pos = (idx + rng.random(3)) * h
         u = rng.normal(size=3)
         u[list(zero)] = 0.0
         u /= np.linalg.norm(u)
-        t_ref, ev_ref = flight_naive(codes, h, pos.copy(), u)
-        p, i = pos.copy(), idx.copy()
-        event, length, _ = _fly(codes, h, periodic, -1, p, i, u, img)
-        assert event == ev_ref
-        assert length == pytest.approx(t_ref, rel=1e-12, abs=1e-12)
-        _check_end(codes, h, p, i, event)
+        _assert_flight_as_reference(codes, h, pos, idx, u, tol=1e-12)
 
 
 def test_lengths_are_exact_to_round_off_after_many_jumps():
@@ -227,8 +224,6 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
     _chessboard_distance(pore, chess)
     h = np.array(h)
     cells = np.argwhere((chess >= 1) & (chess < _JUMP_CODE))  # some are slab voxels
-    periodic = np.zeros(3, dtype=np.bool_)
-    img = np.zeros(3, dtype=np.int64)
     n, used = codes.shape, {}
     for _ in range(1200):
         idx = cells[rng.integers(len(cells))].astype(np.int64)
@@ -246,13 +241,7 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
             lo, hi = centre - r, centre + r + 1
             assert np.all(lo >= 0) and np.all(hi <= n)
             assert codes[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]].all()  # ... and is all pore
-        t_ref, ev_ref = flight_naive(codes, h, pos.copy(), u)
-        p, i = pos.copy(), idx.copy()
-        event, length, _ = _fly(codes, h, periodic, -1, p, i, u, img)
-        assert event == ev_ref
-        assert length == pytest.approx(t_ref, rel=1e-9, abs=1e-9)
-        np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
-        _check_end(codes, h, p, i, event)
+        _assert_flight_as_reference(codes, h, pos, idx, u)
     assert sorted(used) == sorted(_AHEAD)  # every offset is taken ...
     assert sum(used.values()) < 1200  # ... and all are refused too
 
@@ -271,8 +260,6 @@ def test_flights_through_slabs_and_prisms_match_reference(h):
     codes = _codes(pore)
     h = np.array(h)
     cells = np.argwhere(codes > 0)
-    periodic = np.zeros(3, dtype=np.bool_)
-    img = np.zeros(3, dtype=np.int64)
     kinds = set()
     for _ in range(1500):
         idx = cells[rng.integers(len(cells))].astype(np.int64)
@@ -281,11 +268,5 @@ def test_flights_through_slabs_and_prisms_match_reference(h):
         pos = (idx + rng.random(3)) * h
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
-        t_ref, ev_ref = flight_naive(codes, h, pos.copy(), u)
-        p, i = pos.copy(), idx.copy()
-        event, length, _ = _fly(codes, h, periodic, -1, p, i, u, img)
-        assert event == ev_ref
-        assert length == pytest.approx(t_ref, rel=1e-9, abs=1e-9)
-        np.testing.assert_allclose(p, pos + t_ref * u, rtol=0, atol=1e-9)
-        _check_end(codes, h, p, i, event)
+        _assert_flight_as_reference(codes, h, pos, idx, u)
     assert kinds == {"cube", "slab", "prism"}
