@@ -27,9 +27,22 @@ SHARED: str = "_shared"
 
 
 def package_digest(py_file: str | os.PathLike, root: Path) -> bytes:
-    """Digest of the sources ``py_file``'s kernels may compile in: every ``.py`` file of its stage package (the
-    first folder below ``root``; the root's own files for a module at the top) and of ``root/_shared``; found once
-    per process and package (numba's own stamp still follows the kernel's file within a process).
+    """Digest of the sources ``py_file``'s kernels may compile in, found once per process and package (numba's own
+    stamp still follows the kernel's file within a process).
+
+    Parameters
+    ----------
+    py_file : path-like
+        The source file that defines the kernel.
+    root : Path
+        A folder of :data:`ROOTS` that holds ``py_file``: its first sub-folder on the way to ``py_file`` is the stage
+        package (all its ``.py`` files count; for a module at the top, the root's own files), and ``root/_shared``
+        counts too.
+
+    Returns
+    -------
+    bytes
+        sha256 over the files' relative paths and contents.
     """
     rel = Path(py_file).resolve().relative_to(root)
     return _stage_digest(root, root / rel.parts[0] if len(rel.parts) > 1 else root)
