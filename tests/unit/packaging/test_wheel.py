@@ -44,7 +44,7 @@ def test_installed_run_finds_its_snakefile_outside_the_repository(wheel, tmp_pat
     work = tmp_path / "work"
     work.mkdir()
     env = dict(os.environ, PYTHONPATH=str(site))
-    code = "import sys, porepipe.cli as c; print(c.__file__); sys.exit(c.main(sys.argv[1:]))"
+    code = "import sys, porepipe.cli as c; print(c.__file__, flush=True); sys.exit(c.main(sys.argv[1:]))"
     run = subprocess.run(
         [sys.executable, "-c", code, "run", "mini", "-n", "--cores", "1"],
         cwd=work,
@@ -53,6 +53,7 @@ def test_installed_run_finds_its_snakefile_outside_the_repository(wheel, tmp_pat
         text=True,
     )
     assert run.returncode == 0, run.stderr[-2000:]
+    # flushed before the run starts: Snakemake, a child process, writes to the same pipe
     assert run.stdout.splitlines()[0].startswith(str(site))  # the unpacked copy ran, not the repository's
     assert "rule voxelize" in run.stdout + run.stderr  # the DAG of the shipped mini scene was planned
 
