@@ -70,15 +70,18 @@ Session 14 (kernel alone, CPU time, same run against the kernel before, interlea
 each end one square root, one subtraction and one rounding from the reach) +1.3-2.3 % / +1.6-2.1 % / +2.3-2.8 %;
 with the squared z distances found only where the exact tests need them (no per-plane pass over the samples in
 reach) +3.6 % / +3.6 % / +2.8 %; with the hull gaps branch-free (:func:`porepipe._shared.sample_points.hull_gap`)
-+5.7 % / +6.0 % / +5.5 %; a first count stored without testing it for 0, +1.3 % / +2.3 % / +1.3 % (kept as one branch
-less, not for its speed). Tried and not kept: the room straight from ``r*r - dx*dx`` per plane and ``dy*dy`` per
-row, the row distances only where needed (-1 % / -1 % / -3 %); rows with no voxel wholly inside given one shell loop
-(-1 % / +1 % / -3 %); the run inside found branch-free (square root of max(inner, 0), empty run by selects) -3 %
-/ -5 % / -2 %; the row loop bounded by the rows in reach (the y range found as the z range of a row) +0 % / +0 % /
--1 %; the owner's frame found once per owner and row again -0 % / -2 % / +0 %. Timed by leaving out or doubling (spheres 10-20
-voxels wide): unions of two balls ~16 % of the time, the owner's row distances in them ~3 % (so the room straight
-from ``r*r - dx*dx`` for the owner alone would not pay either); the chords ~18 %, bound by their 36 float32 square
-roots per row (5 vectors); the row ranges up to ~20 %.
++5.7 % / +6.0 % / +5.5 %; a first count stored without testing it for 0, +1.3 % / +2.3 % / +1.3 % (kept as one
+branch less, not for its speed). All four against main's kernel (and main's hull gaps), four processes, best of 9
+each, load 1.4-1.5: +5.9-7.1 % / +4.5-6.5 % / +3.8-5.8 %; the ratio varies by ~2 % from one process to the next (the
+hull gaps alone, four processes: +0.5-3.0 % on spheres 10-20 voxels wide). Tried and not kept: the room straight
+from ``r*r - dx*dx`` per plane and ``dy*dy`` per row, the row distances only where needed (-1 % / -1 % / -3 %); rows
+with no voxel wholly inside given one shell loop (-1 % / +1 % / -3 %); the run inside found branch-free (square root
+of max(inner, 0), empty run by selects) -3 % / -5 % / -2 %; the row loop bounded by the rows in reach (the y range
+found as the z range of a row) +0 % / +0 % / -1 %; the owner's frame found once per owner and row again -0 % / -2 %
+/ +0 %. Timed by leaving out or doubling (spheres 10-20 voxels wide): unions of two balls ~16 % of the time: the
+owner's row distances, room and chords found again ~8.5 % (its row distances alone ~3 %, so the room straight from
+``r*r - dx*dx`` for the owner alone would not pay either), the union counts from both balls' chords ~2.7 %; the
+chords ~18 %, bound by their 36 float32 square roots per row (5 vectors); the row ranges up to ~20 %.
 """
 
 import numpy as np
