@@ -65,6 +65,23 @@ kept across both shells of a row +0.8 % / +0.4 % / +0.4 %; a ball-plane's row di
 (so that no vector load waits on the row's 36 scalar stores) -7 % / -6 % / -5 %; room from y distances tiled per
 ball-plane -13 % / -15 % / -15 %. More than half the JIT samples (perf, raw addresses) fall in the row block
 (distances, room, ranges ~35 %) and the chords (~21 %), spread over many instructions.
+Session 14 (kernel alone, CPU time, same run against the kernel before, interleaved, 1 thread, load 1.1-1.6; spheres
+10-20 / 20-40 / 40-80 voxels wide): kept, the row ranges from a per-ball frame in voxels (:func:`_ranges_frame`:
+each end one square root, one subtraction and one rounding from the reach) +1.3-2.3 % / +1.6-2.1 % / +2.3-2.8 %;
+with the squared z distances found only where the exact tests need them (no per-plane pass over the samples in
+reach) +3.6 % / +3.6 % / +2.8 %; with the hull gaps branch-free (:func:`porepipe._shared.sample_points.hull_gap`)
++5.7 % / +6.0 % / +5.5 %; a first count stored without testing it for 0, +1.3 % / +2.3 % / +1.3 % (kept as one
+branch less, not for its speed). All four against main's kernel (and main's hull gaps), four processes, best of 9
+each, load 1.4-1.5: +5.9-7.1 % / +4.5-6.5 % / +3.8-5.8 %; the ratio varies by ~2 % from one process to the next (the
+hull gaps alone, four processes: +0.5-3.0 % on spheres 10-20 voxels wide). Tried and not kept: the room straight
+from ``r*r - dx*dx`` per plane and ``dy*dy`` per row, the row distances only where needed (-1 % / -1 % / -3 %); rows
+with no voxel wholly inside given one shell loop (-1 % / +1 % / -3 %); the run inside found branch-free (square root
+of max(inner, 0), empty run by selects) -3 % / -5 % / -2 %; the row loop bounded by the rows in reach (the y range
+found as the z range of a row) +0 % / +0 % / -1 %; the owner's frame found once per owner and row again -0 % / -2 %
+/ +0 %. Timed by leaving out or doubling (spheres 10-20 voxels wide): unions of two balls ~16 % of the time: the
+owner's row distances, room and chords found again ~8.5 % (its row distances alone ~3 %, so the room straight from
+``r*r - dx*dx`` for the owner alone would not pay either), the union counts from both balls' chords ~2.7 %; the
+chords ~18 %, bound by their 36 float32 square roots per row (5 vectors); the row ranges up to ~20 %.
 """
 
 import numpy as np
@@ -160,30 +177,47 @@ def _row_reach(r2, near_xy):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _row_ranges(cz, r2, eps, near_xy, far_xy, inv_h, k0, k1):
+def _ranges_frame(cz, r, h):
+    """A ball's frame for :func:`_row_ranges` (µm in, voxels out): ``(a, b, s2)``, with ``s = 1/(6h)`` the voxels per µm,
+    ``a = cz*s - (SUB - 0.5)/SUB - eps*s``, ``b = cz*s - 0.5/SUB + eps*s`` and ``s2 = s*s``; ``eps = SLACK*(r + |cz|)``.
+    """
+    s = 1.0 / (SUB * h)
+    eps = SLACK * (r + abs(cz)) * s
+    centre = cz * s
+    return centre - (SUB - 0.5) / SUB - eps, centre - 0.5 / SUB + eps, s * s
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _row_ranges(frame, r2, near_xy, far_xy, k0, k1):
     """Voxel ranges of one voxel row (fixed x, y) for one ball: ``lo, hi, f_lo, f_hi``.
 
     ``[lo, hi)`` (within ``[k0, k1)``) holds every voxel that the brute-force reach test (squared hull distance
-    within ``r*r*(1 + MARGIN)``) accepts, widened by ``eps`` µm against rounding (of the square roots and of the
-    products with ``inv_h`` = 1/h); ``[f_lo, f_hi)`` inside it the
-    voxels whose whole sample hull is within ``r*r*(1 - MARGIN)``, narrowed by ``eps`` (empty as ``f_lo == f_hi ==
-    lo``). ``near_xy``/``far_xy``: the squared near/far hull distances in x and y.
+    within ``r*r*(1 + MARGIN)``) accepts, widened by ``eps`` µm (in ``frame``, from :func:`_ranges_frame`) against
+    rounding; ``[f_lo, f_hi)`` inside it the voxels whose whole sample hull is within ``r*r*(1 - MARGIN)``, narrowed
+    by ``eps`` (empty as ``f_lo == f_hi == lo``). ``near_xy``/``far_xy``: the squared near/far hull distances in x
+    and y. Voxel k's sample hull along z is ``(6k + 0.5 .. 6k + 5.5) h``, so with the half-width ``w`` (µm) of the
+    ball in the row, ``lo = ceil((cz - w - eps)/(6h) - 5.5/6)`` and ``hi = floor((cz + w + eps)/(6h) - 0.5/6) + 1``
+    (``f_lo``, ``f_hi`` alike with the hull's other end): in voxels, ``w/(6h) = sqrt(reach*s2)``, and the frame's
+    constants hold the rest, so that each end is one square root, one subtraction and one rounding from ``reach``.
+    The rounding of these few operations (a few ulp of ``|cz|/(6h) + w/(6h)``) is far below ``eps``/(6h)
+    (1e-7 relative), which also covers that of the square root near ``reach = 0`` (~1e-8 r).
     """
     reach = _row_reach(r2, near_xy)
     if reach < 0.0:
         return k0, k0, k0, k0
-    w = np.sqrt(reach) + eps
-    lo = max(int(np.ceil(((cz - w) * inv_h - (SUB - 0.5)) * (1.0 / SUB))), k0)
-    hi = min(int(np.floor(((cz + w) * inv_h - 0.5) * (1.0 / SUB))) + 1, k1)
+    a, b, s2 = frame
+    w = np.sqrt(reach * s2)
+    lo = max(int(np.ceil(a - w)), k0)
+    hi = min(int(np.floor(b + w)) + 1, k1)
     if lo >= hi:
         return k0, k0, k0, k0
     inner = r2 * (1.0 - MARGIN) - far_xy
     if inner <= 0.0:
         return lo, hi, lo, lo
-    wf = np.sqrt(inner) - eps
-    f_lo = max(int(np.ceil(((cz - wf) * inv_h - 0.5) * (1.0 / SUB))), lo)
-    f_hi = min(int(np.floor(((cz + wf) * inv_h - (SUB - 0.5)) * (1.0 / SUB))) + 1, hi)
-    if wf <= 0.0 or f_lo >= f_hi:
+    wf = np.sqrt(inner * s2)
+    f_lo = max(int(np.ceil(b - wf)), lo)
+    f_hi = min(int(np.floor(a + wf)) + 1, hi)
+    if f_lo >= f_hi:  # also where wf <= eps/(6h): then f_lo >= ceil(cz/(6h) - 0.5/6) > f_hi - 1
         return lo, hi, lo, lo
     return lo, hi, f_lo, f_hi
 
@@ -227,15 +261,14 @@ def _z_distances(k, cz, h):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _voxel_count(dxy, tz, k, r2):
-    """Samples of voxel ``k`` of a voxel row inside the ball: all 216 exact tests ``dxy + dz*dz <= r*r``, vectorised.
+def _voxel_count(dxy, t, r2):
+    """Samples of a voxel of a voxel row inside the ball: all 216 exact tests ``dxy + dz*dz <= r*r``, vectorised.
 
-    ``dxy`` (N_ROWS) from :func:`_row_distances`; ``tz[6k .. 6k + 5]`` the squared z distances of the voxel's
-    samples (:func:`_z_distances`). No early exit for empty or full voxels: shell voxels are mostly partly filled,
-    and the branch cost more than it saved (measured).
+    ``dxy`` (N_ROWS) from :func:`_row_distances`; ``t`` the squared z distances of the voxel's 6 samples
+    (:func:`_z_distances`). No early exit for empty or full voxels: shell voxels are mostly partly filled, and the
+    branch cost more than it saved (measured).
     """
-    m = SUB * k
-    t0, t1, t2, t3, t4, t5 = tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5]
+    t0, t1, t2, t3, t4, t5 = t
     total = 0
     for q in range(N_ROWS):  # branch-free: vectorises over the rows
         d = dxy[q]
@@ -474,7 +507,7 @@ def _chord_union_count(count_a, ends_a, base_a, ends_b, base_b):
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
 def _add_shell(
-    i, j, k0, k1, s, images, h, dxy, tz, r2, chords, frame, state, owner, second, mask, dx2, odxy, bits, out
+    i, j, k0, k1, s, images, h, dxy, r2, chords, frame, state, owner, second, mask, dx2, odxy, bits, out
 ):
     """Count ball ``s``'s samples into the shell voxels ``k0 .. k1 - 1`` of row ``j``.
 
@@ -502,12 +535,12 @@ def _add_shell(
             state = _chords_state(room[0], ends[0], frame, h)
         if g == 0:
             if state == CHORDS_AMBIGUOUS:
-                c = _voxel_count(dxy, tz, k, r2)
+                c = _voxel_count(dxy, _z_distances(k, images[s, 2], h), r2)
             else:
                 c = _chord_count(ends[0], np.int32(SUB * k - frame[0]))
-            if c:
-                out[j, k] = c
-                owner[j, k] = s
+            # stored without a test for c == 0 (26 of 1.10 M first counts): an owner is read only at 1..215
+            out[j, k] = c
+            owner[j, k] = s
             continue
         o = np.int64(owner[j, k])
         if o >= 0:
@@ -527,41 +560,34 @@ def _add_shell(
                     np.int64(g), ends[1], np.int32(base - o_frame[0]), ends[0], np.int32(base - frame[0])
                 )
             else:
-                m = SUB * k
-                t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
+                t = _z_distances(k, images[s, 2], h)
                 out[j, k] = _union_count(odxy, _z_distances(k, ocz, h), ro * ro, dxy, t, r2)
             owner[j, k] = PAIR - o
             second[j, k] = s
         else:
-            m = SUB * k
-            t = (tz[m], tz[m + 1], tz[m + 2], tz[m + 3], tz[m + 4], tz[m + 5])
+            t = _z_distances(k, images[s, 2], h)
             _share(i, j, k, images, h, owner, second, mask, dxy, t, r2, dx2, odxy, bits, out)
             cached = -1
     return state
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, room, ends, out):
+def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, room, ends, out):
     """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
 
-    ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS), ``tz`` (6 nz: the squared z distances of the samples in
-    the ball's reach, found once per plane), ``room`` (2, CHORD_ROWS) float32 and ``ends`` (2, 2, CHORD_ROWS) int32
-    (row 0: this ball's, row 1: an earlier ball's), zero from column N_ROWS on, are scratch.
+    ``dx2`` (2, SUB), ``dxy``/``odxy``/``bits`` (N_ROWS), ``room`` (2, CHORD_ROWS) float32 and ``ends`` (2, 2,
+    CHORD_ROWS) int32 (row 0: this ball's, row 1: an earlier ball's), zero from column N_ROWS on, are scratch. The
+    squared z distances of a voxel's samples are found where the exact tests need them (:func:`_z_distances`), not
+    for every sample in reach once per plane: the exact tests run on 0.3 % of first counts and on few unions.
     """
     cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
     r2 = r * r
-    eps = SLACK * (r + abs(cz))
     nx_, fx_ = hull_gap(cx, i, h)
     j0, j1 = axis_range(cy, r, h, ny)
     k0, k1 = axis_range(cz, r, h, nz)
     _plane_distances(i, cx, h, dx2[0])
     frame = _ball_frame(cz, r, h)
-    m0 = SUB * k0
-    # a view from 0: no negative-index wrap, so the loop vectorises without scatters (3 % of the time before)
-    tz_reach = tz[m0 : SUB * k1]
-    for n in range(tz_reach.size):  # squared z distances of the samples in reach, as in _z_distances
-        dz = (m0 + n + 0.5) * h - cz
-        tz_reach[n] = dz * dz
+    z_frame = _ranges_frame(cz, r, h)
     for j in range(j0, j1):
         ny_, fy_ = hull_gap(cy, j, h)
         near_xy = nx_ * nx_ + ny_ * ny_
@@ -569,7 +595,7 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
             continue
         _row_distances(dx2[0], j, cy, h, dxy)
         _row_room(dxy, r2, room[0])
-        lo, hi, f_lo, f_hi = _row_ranges(cz, r2, eps, near_xy, fx_ * fx_ + fy_ * fy_, 1.0 / h, k0, k1)
+        lo, hi, f_lo, f_hi = _row_ranges(z_frame, r2, near_xy, fx_ * fx_ + fy_ * fy_, k0, k1)
         if f_hi > f_lo:  # a slice fill: ~2x faster than a loop over these short runs (measured)
             out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
         if lo < f_lo or f_hi < hi:
@@ -584,7 +610,6 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
                     images,
                     h,
                     dxy,
-                    tz,
                     r2,
                     (room, ends),
                     frame,
@@ -607,15 +632,13 @@ def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, shell, out):
     int32 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey value a ball of
     this plane has already set to 1..215.
     """
-    owner, second, mask, dx2, dxy, odxy, bits, tz, room, ends = shell
+    owner, second, mask, dx2, dxy, odxy, bits, room, ends = shell
     out[:, :] = 0
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            _ball_plane(
-                i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, tz, room, ends, out
-            )
+            _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, room, ends, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -631,7 +654,6 @@ def _plane_scratch(ny, nz):
         np.empty(N_ROWS),  # dxy
         np.empty(N_ROWS),  # odxy
         np.empty(N_ROWS, dtype=np.int64),  # bits
-        np.empty(SUB * nz),  # tz
         np.zeros((2, CHORD_ROWS), dtype=np.float32),  # room (this ball's, an earlier one's)
         np.zeros((2, 2, CHORD_ROWS), dtype=np.int32),  # ends: zero (empty chords) from row N_ROWS on
     )
