@@ -1,9 +1,13 @@
 """Throughput of the granular DEM (gc2d polygons): polygon-steps per second in a dense pile.
 
 A pile of N random 8-10-gons (RAND1 shapes on ellipses, semi-axes 5 mm ± I) is laid out row by row with
-neighbours overlapping slightly (coordination ~ 3-4, as in the thesis's heaps; the measured value is printed)
-inside a box, under gravity, with friction and damping; it is stepped a little to build the contact state,
-then timed (best of 3). Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
+neighbours overlapping slightly inside a box, under gravity, with friction and damping; it is stepped a little
+to build the contact state, then timed (best of 3). That is a compressed lattice in its first few ms after
+release, not a pile at rest: coordination 4.6 at I = 0.1 (the measured value is printed; the thesis's heaps have
+3.6, its monodisperse piles ~4), and left alone it expands (coordination below 1 after 60 ms, grains at ~1 m/s),
+so it has more contacts and more list builds than a settled pile. A pile settled from a loose lattice (2500
+grains, 0.6 s at dt = 2 µs, coordination 3.4) ran 1.28-1.47x faster per CPU-s than this one in the same process
+(fourteenth session); it is not a case here yet (settling 10^4 grains takes minutes). Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
 list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
 distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
 optional effect compiled in (with neutral values), i.e. what the compile-time switches save, the narrow
@@ -50,7 +54,7 @@ TARGET = 5e6
 
 
 def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
-    """N random 8-10-gons packed row by row so that neighbours overlap slightly (coordination ~ 3-4)."""
+    """N random 8-10-gons packed row by row so that neighbours overlap slightly (coordination 4.6 just after release)."""
     a = 0.005
     shape = Shape(
         size_m=(a, a),
