@@ -5,9 +5,8 @@ neighbours overlapping slightly inside a box, under gravity, with friction and d
 to build the contact state, then timed (best of 3). That is a compressed lattice in its first few ms after
 release, not a pile at rest: coordination 4.6 at I = 0.1 (the measured value is printed; the thesis's heaps have
 3.6, its monodisperse piles ~4), and left alone it expands (coordination below 1 after 60 ms, grains at ~1 m/s),
-so it has more contacts and more list builds than a settled pile. A pile settled from a loose lattice (2500
-grains, 0.6 s at dt = 2 µs, coordination 3.4) ran 1.28-1.47x faster per CPU-s than this one in the same process
-(fourteenth session); it is not a case here yet (settling 10^4 grains takes minutes). Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
+so it has more contacts and more list builds than a settled pile. ``benchmarks/granular_settled.py`` times the
+same grains settled (coordination 3.6, cached after its first run) beside this lattice: 1.3-1.4x faster. Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
 list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
 distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
 optional effect compiled in (with neutral values), i.e. what the compile-time switches save, the narrow
@@ -51,11 +50,13 @@ PEERS = {
     "LAMMPS granular spheres (chute, per core)": 1.1e7,
 }
 TARGET = 5e6
+#: semi-axis of the grains' ellipses (m)
+GRAIN_M = 0.005
 
 
-def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
-    """N random 8-10-gons packed row by row so that neighbours overlap slightly (coordination 4.6 just after release)."""
-    a = 0.005
+def pile_shapes(n: int, spread: float, seed: int = 1) -> tuple[list, np.ndarray]:
+    """Outlines and orientations of the benchmark's N random 8-10-gons (RAND1 on ellipses, semi-axes 5 mm ± I)."""
+    a = GRAIN_M
     shape = Shape(
         size_m=(a, a),
         size_spread=spread,
@@ -66,9 +67,34 @@ def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
         angle_mode="RAND1",
         orientation_dist="EQUAL",
     )
-    outlines, phis = generate_shapes(shape, n, np.random.default_rng(seed))
+    return generate_shapes(shape, n, np.random.default_rng(seed))
+
+
+def pile_settings(parts: list, width: float, top: float, method: str, dt_s: float = 2e-6) -> Settings:
+    """The benchmark's box (``width`` wide, 4 grain sizes above ``top``), material and step for ``parts``."""
+    a = GRAIN_M
+    return Settings.model_validate(
+        {
+            "dt_s": dt_s,
+            "neighbour_search": method,
+            "material": {"young_N_m": 1e7, "density_kg_m2": 5000.0, "damping": 0.5, "friction": 0.6},
+            "box": {"lower_m": (0.0, 0.0), "upper_m": (width + 2 * a, top + 4 * a)},
+            "guard": {"max_overlap": 2.0},
+            "particles": parts,
+        }
+    )
+
+
+def pile_width(n: int) -> float:
+    """Inner width of the benchmark's box for N grains (m)."""
+    return 2.0 * GRAIN_M * math.sqrt(n) * 1.1
+
+
+def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
+    """N random 8-10-gons packed row by row so that neighbours overlap slightly (coordination 4.6 just after release)."""
+    outlines, phis = pile_shapes(n, spread, seed)
     r = np.array([math.sqrt(polygon_properties(v)["area_m2"] / math.pi) for v in outlines])
-    width = 2.0 * a * math.sqrt(n) * 1.1
+    width = pile_width(n)
     parts, row_r, prev_r, odd = [], [], 0.0, False
     x, y = 0.0, r.max()
     for v, phi, ri in zip(outlines, phis, r, strict=True):
@@ -80,16 +106,7 @@ def pile(n: int, spread: float, method: str, seed: int = 1) -> Settings:
         parts.append({"vertices_m": v.tolist(), "position_m": (x, y), "angle_rad": float(phi)})
         row_r.append(ri)
         prev_r = ri
-    return Settings.model_validate(
-        {
-            "dt_s": 2e-6,
-            "neighbour_search": method,
-            "material": {"young_N_m": 1e7, "density_kg_m2": 5000.0, "damping": 0.5, "friction": 0.6},
-            "box": {"lower_m": (0.0, 0.0), "upper_m": (width + 2 * a, y + 4 * a)},
-            "guard": {"max_overlap": 2.0},
-            "particles": parts,
-        }
-    )
+    return pile_settings(parts, width, y, method)
 
 
 def _time(sim: Simulation, steps: int, repeats: int) -> tuple[float, float]:
@@ -105,9 +122,12 @@ def _time(sim: Simulation, steps: int, repeats: int) -> tuple[float, float]:
     return sim.n_mob * steps / best, sim.n_mob * steps / max(best_cpu, 1e-9)
 
 
-def measure(n: int, spread: float, method: str, threads: int, warm: int, steps: int, repeats: int) -> dict:
+def measure(
+    n: int, spread: float, method: str, threads: int, warm: int, steps: int, repeats: int, settings=None
+) -> dict:
+    """Polygon-steps per second of the pile (or of ``settings``, the same grains placed otherwise) after ``warm``."""
     numba.set_num_threads(threads)
-    sim = Simulation(pile(n, spread, method), seed=1)
+    sim = Simulation(settings if settings is not None else pile(n, spread, method), seed=1)
     sim.advance(warm)
     rate, rate_cpu = _time(sim, steps, repeats)
     c = sim.contacts()
