@@ -3,18 +3,20 @@
 A pile of N random 8-10-gons (RAND1 shapes on ellipses, semi-axes 5 mm ± I) is laid out row by row with
 neighbours overlapping slightly inside a box, under gravity, with friction and damping; it is stepped a little
 to build the contact state, then timed (best of 3). That is a compressed lattice in its first few ms after
-release, not a pile at rest: coordination 4.6 at I = 0.1 (the measured value is printed; the thesis's heaps have
-3.6, its monodisperse piles ~4), and left alone it expands (coordination below 1 after 60 ms, grains at ~1 m/s),
-so it has more contacts and more list builds than a settled pile. ``benchmarks/granular_settled.py`` times the
-same grains settled (coordination 3.6, cached after its first run) beside this lattice: 1.3-1.4x faster. Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their
-list-build times first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size
-distribution, next to two peers' published figures. A last row compares the bare kernel with one that has every
-optional effect compiled in (with neutral values), i.e. what the compile-time switches save, the narrow
-phase against the whole-polygon clipping it replaced, and, with ``--reference``, an earlier step kernel file with the
-default skin of before issue 15's speed work (0.3 R_min; same pile, interleaved, trajectories checked bit for bit);
-``--reference-skin 0.6`` gives it today's skin, so that the row times the kernels alone. ``--contact-reference``
-times the narrow phase alone (one call per candidate pair whose boxes overlap, on the settled pile, 1 thread) of an
-earlier ``_contact.py`` beside the current one: a few ns per pair, far less noisy than whole steps on a shared machine.
+release, not a pile at rest: coordination 4.6 at I = 0.1 (the measured value is printed; the thesis's heaps
+have 3.6, its monodisperse piles ~4), and left alone it expands (coordination below 1 after 60 ms, grains at
+~1 m/s), so it has more contacts and more list builds than a settled pile. ``benchmarks/granular_settled.py``
+times the same grains settled (coordination 3.6, cached after its first run) beside this lattice: 1.3-1.4x
+faster. Reported for 1 and 2 threads, the three neighbour searches (sweep, swap, cells; their list-build times
+first), a monodisperse (I = 0.1) and a wide (I = 0.5, sizes 1:3) size distribution, next to two peers'
+published figures. A last row compares the bare kernel with one that has every optional effect compiled in
+(with neutral values), i.e. what the compile-time switches save, the narrow phase against the whole-polygon
+clipping it replaced, and, with ``--reference``, an earlier step kernel file with the default skin of before
+issue 15's speed work (0.3 R_min; same pile, interleaved, trajectories checked bit for bit);
+``--reference-skin 0.6`` gives it today's skin, so that the row times the kernels alone.
+``--contact-reference`` times the narrow phase alone (one call per candidate pair whose boxes overlap, on the
+pile, 1 thread) of an earlier ``_contact.py`` beside the current one: a few ns per pair, far less noisy than
+whole steps on a shared machine.
 
     python benchmarks/granular.py            # N = 10 000
     python benchmarks/granular.py --smoke    # N = 300, 1 thread, no effect row: seconds once compiled

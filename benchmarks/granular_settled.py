@@ -109,10 +109,10 @@ def settled_positions(out: Path, n: int, spread: float, seed: int) -> tuple[np.n
 
 def settled_pile(positions: np.ndarray, n: int, spread: float, method: str, seed: int = 1):
     """The settled grains at rest, at the benchmark's Δt."""
-    settings = loose_lattice(n, spread, method, seed, dt_s=2e-6)
+    outlines, _ = pile_shapes(n, spread, seed)
     parts = [
-        p | {"position_m": (float(x), float(y)), "angle_rad": float(phi)}
-        for p, (x, y, phi) in zip(settings.model_dump()["particles"], positions, strict=True)
+        {"vertices_m": v.tolist(), "position_m": (float(x), float(y)), "angle_rad": float(phi)}
+        for v, (x, y, phi) in zip(outlines, positions, strict=True)
     ]
     return pile_settings(parts, pile_width(n), float(positions[:, 1].max()), method)
 
