@@ -2,8 +2,8 @@
 
 ``granular.py`` times a lattice laid out with slight overlaps in its first few ms after release (coordination
 4.6): left alone it expands, so it is not the settled pile issue 15 names. Here the same N grains (same shapes and
-box) start from a loose lattice at circumradius spacing, where no two overlap, and settle under gravity at Δt = 8
-µs (0.18 Δt_rule: a pile at rest stays at rest there, README's known defect of the default step) until their
+box) start from a loose lattice at circumradius spacing, where no two overlap, and settle under gravity with velocity
+Verlet at Δt = 20 µs (0.45 Δt_rule; a pile at rest stays at rest under Verlet up to 2 Δt_rule) until their
 kinetic energy is below 2·10⁻⁵ J/m per grain (~7 mm/s) after at least 0.3 s. The settled positions are cached
 under the output folder (a file per N, size spread and seed, with the settling parameters in its name and checked
 on loading), so only the first run settles (N = 10⁴: 1.16 s simulated, 7 min on 2 cores beside a test run;
@@ -29,9 +29,11 @@ from granular import TARGET, measure, pile_settings, pile_shapes, pile_width
 
 from porepipe._shared.numba_config import openmp_wait_for_idle_cores
 from porepipe.granular import Simulation, polygon_properties
+from porepipe.granular._settings import Integrator
 
-#: settling step (s): 0.18 Δt_rule for these grains, where a settled pile restarted at rest stays at rest
-SETTLE_DT = 8e-6
+#: settling step (s) and integrator: velocity Verlet at 0.45 Δt_rule for these grains (a settled pile restarted at rest
+#: stays at rest under Verlet up to 2 Δt_rule, tests/unit/granular/test_pile_at_rest.py)
+SETTLE_DT, SETTLE_INTEGRATOR = 2e-5, Integrator.verlet
 #: settled when the kinetic energy per grain is below this (J/m) after at least SETTLE_MIN_S
 SETTLED_EKIN = 2e-5
 SETTLE_MIN_S, SETTLE_MAX_S, SETTLE_CHUNK_S = 0.3, 2.0, 0.02
@@ -55,7 +57,7 @@ def loose_lattice(n: int, spread: float, method: str, seed: int = 1, dt_s: float
         parts.append({"vertices_m": v.tolist(), "position_m": (x, y), "angle_rad": float(phi)})
         row.append(ri)
         prev = ri
-    return pile_settings(parts, width, y, method, dt_s)
+    return pile_settings(parts, width, y, method, dt_s).model_copy(update={"integrator": SETTLE_INTEGRATOR})
 
 
 def coordination(sim: Simulation) -> float:
@@ -85,7 +87,7 @@ def settle(n: int, spread: float, seed: int) -> tuple[np.ndarray, dict]:
 def cache_path(out: Path, n: int, spread: float, seed: int) -> Path:
     """The settled positions' file: every settling parameter is in its name."""
     return out / (
-        f"granular_settled_n{n}_I{spread:g}_seed{seed}_dt{SETTLE_DT:g}_ekin{SETTLED_EKIN:g}_min{SETTLE_MIN_S:g}.npz"
+        f"granular_settled_n{n}_I{spread:g}_seed{seed}_{SETTLE_INTEGRATOR.value}_dt{SETTLE_DT:g}_ekin{SETTLED_EKIN:g}_min{SETTLE_MIN_S:g}.npz"
     )
 
 

@@ -59,6 +59,11 @@ from porepipe.granular._system import collect_bodies, particle_properties, wall_
 PARTICLES_PER_THREAD = 1000
 #: largest damping rate x dt the default dt allows (Gear: unstable beyond 0.24-0.35; Verlet: beyond 0.78-2)
 DAMPING_DT = {Integrator.gear: 0.15, Integrator.verlet: 0.4}
+#: largest tangential damping rate x dt (one contact, :func:`tangential_damping_rate`) the default dt allows. Gear:
+#: one contact is stable to 0.165, but a settled pile's grains add their contacts' damping: 600 8-10-gons restarted
+#: at rest heat up from c_t dt = 0.074-0.09 (tangential_damping 0.5, 1, 2) and stay at rest at 0.07 and below
+#: (tests/unit/granular/test_pile_at_rest.py). Verlet: the same pile stays at rest up to c_t dt = 0.8 (2 dt_rule)
+TANGENTIAL_DT = {Integrator.gear: 0.06, Integrator.verlet: 0.4}
 _WAVE = {Waveform.cosinus: 1, Waveform.sawtooth: 2, Waveform.tapping: 3, Waveform.triangle: 4}
 _GKIND = {GravityKind.constant: 0, GravityKind.linear: 1, GravityKind.step: 2, GravityKind.smooth_step: 3}
 
@@ -128,6 +133,20 @@ def damping_rate(mass, radius, longest_edge, young_N_m: float, damping: float, p
     return float(damping * per.max() * (2.0 * math.sqrt(2.0) if pairs else 1.0))
 
 
+def tangential_damping_rate(
+    mass, inertia, r_circ, young_N_m: float, tangential_damping: float, pairs: bool
+) -> float:
+    """Largest tangential damping rate c_t = D_t / m_t of any contact, in 1/s.
+
+    The Cundall-Strack damping D_t = gamma_t sqrt(k_t m_t) v_t (k_t = 2/7 E) acts on the relative tangential
+    velocity, whose effective mass is 1/m_t = 1/m_i + 1/m_j + a_i²/I_i + a_j²/I_j with lever arms a <= the
+    circumradius: c_t = gamma_t sqrt(k_t / m_t) <= gamma_t sqrt(2 k_t max_k (1/m_k + r_k²/I_k)) over grains k
+    (particle pairs; a grain on a wall has the 2 dropped).
+    """
+    per = 1.0 / np.asarray(mass) + np.asarray(r_circ) ** 2 / np.asarray(inertia)
+    return float(tangential_damping * math.sqrt(2.0 / 7.0 * young_N_m * per.max() * (2.0 if pairs else 1.0)))
+
+
 @dataclasses.dataclass
 class Frame:
     """Particle state and contacts at one time."""
@@ -192,7 +211,13 @@ class Simulation:
             for p in props
         ]
         rate = damping_rate(self.mass, 1.0 / self.inv_r[:n], edge, E, s.material.damping, n > 1)
-        self.dt_damping = DAMPING_DT[s.integrator] / rate if rate > 0 else math.inf
+        rate_t = tangential_damping_rate(
+            self.mass, self.inertia, self.r_circ, E, s.material.tangential_damping, n > 1
+        )
+        self.dt_damping = min(
+            DAMPING_DT[s.integrator] / rate if rate > 0 else math.inf,
+            TANGENTIAL_DT[s.integrator] / rate_t if rate_t > 0 else math.inf,
+        )
         self.dt = s.dt_s if s.dt_s is not None else min(0.5 * self.dt_rule, self.dt_damping)
         # 0.6 R_min: vs 0.3, half the list builds for ~1.1x the candidates; the run is the same to the bit (a
         # candidate that does not touch adds zero), 1.09x per CPU-s on benchmarks/granular.py's wide pile

@@ -380,7 +380,9 @@ class Settings(_Strict):
     """The granular DEM run of a scene."""
 
     dt_s: PosFloat | None = Field(
-        None, description="time step; default 0.5 x (pi/10) sqrt(m_min/E) (Eq. 2.9)"
+        None,
+        description="time step; default the smallest of 0.5 x (pi/10) sqrt(m_min/E) (Eq. 2.9) and the normal and "
+        "tangential damping bounds (dt_damping_s in the results)",
     )
     duration_s: NonNegFloat = Field(0.1, description="simulated time")
     integrator: Integrator = Integrator.gear
