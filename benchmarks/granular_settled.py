@@ -6,12 +6,12 @@ box) start from a loose lattice at circumradius spacing, where no two overlap, a
 Verlet at Δt = 20 µs (0.45 Δt_rule; a pile at rest stays at rest under Verlet up to 2 Δt_rule) until their
 kinetic energy is below 2·10⁻⁵ J/m per grain (~7 mm/s) after at least 0.3 s. The settled positions are cached
 under the output folder (a file per N, size spread and seed, with the settling parameters in its name and checked
-on loading), so only the first run settles (N = 10⁴: 1.16 s simulated, 7 min on 2 cores beside a test run;
-coordination 3.60, as the thesis's heaps' 3.6; progress on the console). The pile is then restarted at rest at the
+on loading), so only the first run settles (N = 10⁴: 1.16 s simulated, 2 min on 2 cores;
+coordination 3.59, as the thesis's heaps' 3.6; progress on the console). The pile is then restarted at rest at the
 benchmark's Δt = 2 µs and timed (warm-up, then best of 3) beside the lattice, for 1 and 2 threads, with the
 coordination of each.
 
-    python benchmarks/granular_settled.py            # N = 10 000 (the first run settles, ~7 min; then ~1.5 min)
+    python benchmarks/granular_settled.py            # N = 10 000 (the first run settles, ~2 min; then ~25 s)
     python benchmarks/granular_settled.py --smoke    # N = 300, 1 thread
 """
 
