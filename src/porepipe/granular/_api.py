@@ -61,8 +61,9 @@ PARTICLES_PER_THREAD = 1000
 DAMPING_DT = {Integrator.gear: 0.15, Integrator.verlet: 0.4}
 #: largest tangential damping rate x dt (one contact, :func:`tangential_damping_rate`) the default dt allows. Gear:
 #: one contact is stable to 0.165, but a settled pile's grains add their contacts' damping: 600 8-10-gons restarted
-#: at rest heat up from c_t dt = 0.074-0.09 (tangential_damping 0.5, 1, 2) and stay at rest at 0.07 and below
-#: (tests/unit/granular/test_pile_at_rest.py). Verlet: the same pile stays at rest up to c_t dt = 0.8 (2 dt_rule)
+#: at rest heat up from c_t dt = 0.074-0.09 (tangential_damping 0.5, 1, 2) and stay at rest at 0.07 and below.
+#: Verlet: the same pile stays at rest up to c_t dt = 0.8-1.2 (benchmarks/granular_time_step.py;
+#: tests/unit/granular/test_pile_at_rest.py)
 TANGENTIAL_DT = {Integrator.gear: 0.06, Integrator.verlet: 0.4}
 _WAVE = {Waveform.cosinus: 1, Waveform.sawtooth: 2, Waveform.tapping: 3, Waveform.triangle: 4}
 _GKIND = {GravityKind.constant: 0, GravityKind.linear: 1, GravityKind.step: 2, GravityKind.smooth_step: 3}
