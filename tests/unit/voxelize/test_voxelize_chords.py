@@ -5,8 +5,8 @@ import numpy as np
 from porepipe.voxelize._kernels import (
     CHORD_ROWS,
     N_ROWS,
-    _chord_count,
     _chord_margin,
+    _chord_prefix,
     _chord_union_count,
     _row_chords,
     _row_room,
@@ -21,7 +21,8 @@ def _chords(dxy, cz, r, h):
     ends = np.zeros((2, CHORD_ROWS), np.int32)
     margin = np.float32(_chord_margin(cz, r, h))
     _row_room(dxy, r * r, room)
-    ambiguous = _row_chords(room, np.float32(e - e_int), np.float32(1.0 / h), margin, ends)
+    ambiguous, lo_sum, hi_sum = _row_chords(room, np.float32(e - e_int), np.float32(1.0 / h), margin, ends)
+    assert (lo_sum, hi_sum) == (ends[0].sum(), ends[1].sum())  # the sums the shell ends take
     return ends[0, :N_ROWS].astype(int), ends[1, :N_ROWS].astype(int), e_int, ambiguous
 
 
@@ -51,7 +52,9 @@ def test_unambiguous_chords_equal_the_exact_test():
             sel = (m >= 6 * k) & (m < 6 * k + 6)
             ends = np.zeros((2, CHORD_ROWS), np.int32)
             ends[0, :N_ROWS], ends[1, :N_ROWS] = lo, hi
-            assert _chord_count(ends, np.int32(6 * k - e_int)) == inside[:, sel].sum()
+            base = 6 * k - e_int
+            count = _chord_prefix(ends, np.int32(base + 6)) - _chord_prefix(ends, np.int32(base))
+            assert count == inside[:, sel].sum()
     assert checked > 300  # the float32 path is the common one
 
 
