@@ -374,7 +374,7 @@ _AHEAD = (8, 5, 3)
 
 
 @njit(cache=True, inline="always")
-def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c):
+def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, lin, c):
     """(code, centre offsets) of a pore box that holds voxel (i0, i1, i2) and reaches far ahead of it, for a flight
     that starts in a voxel next to a wall (chessboard code ``c`` < _JUMP_CODE or a slab code), where the box centred on
     it reaches little ahead.
@@ -383,13 +383,16 @@ def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c):
     turn. A centre whose box's smallest half-width (_SMALLEST) is at least a and _JUMP_CODE - 1 still holds the
     particle's voxel (each offset is at most a), so the flight may jump to that box's surface; the first one wins,
     the largest offsets first because they give the largest boxes (the chessboard code is 1-Lipschitz: ca <= c + a).
-    None (or outside the volume): (c, 0, 0, 0), the box of the voxel itself.
+    None (or outside the volume): (c, 0, 0, 0), the box of the voxel itself. ``lin`` is the voxel's flat index: a
+    centre's is ``lin + a * diagonal`` (the flat step of one voxel along every moving axis), no product of indices and
+    shape between the particle's voxel and the code loaded.
     """
+    diagonal = (s0 * n1 + s1) * n2 + s2
     for a in _AHEAD:
         a0, a1, a2 = i0 + a * s0, i1 + a * s1, i2 + a * s2
         if (a0 < 0) | (a0 >= n0) | (a1 < 0) | (a1 >= n1) | (a2 < 0) | (a2 >= n2):
             continue
-        ca = flat[(a0 * n1 + a1) * n2 + a2]
+        ca = flat[np.uint64(lin + a * diagonal)]  # in the volume: no wraparound check
         if _SMALLEST[ca] >= max(a, _JUMP_CODE - 1):  # a code the flight jumps from, whatever _AHEAD holds
             return ca, a * s0, a * s1, a * s2
     return c, 0, 0, 0
@@ -418,10 +421,10 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     f0, f1, f2 = s0 * st0, s1 * n2, s2  # flat index steps
     w0 = w1 = w2 = 0  # periodic wraps
     lin = (i0 * n1 + i1) * n2 + i2
-    c = flat[lin]
+    c = flat[np.uint64(lin)]
     o0 = o1 = o2 = 0  # offset of the jump box's centre from the particle's voxel (0 but for the first jump)
     if (c < _JUMP_CODE) | ((c >= _SLAB_CODE) & (c < _PRISM_CODE)):
-        c, o0, o1, o2 = _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, c)
+        c, o0, o1, o2 = _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, lin, c)
     crossings = 0
     event = -1
     t = 0.0
@@ -570,9 +573,10 @@ def _disk(state):
             return a, b, rho2, state
 
 
-@njit(cache=True, **NO_REFCOUNT)
-def _emit(law, axis, sign, u, state):
-    """Overwrite ``u`` with a diffuse direction about the normal ``sign * e_axis``.
+@njit(cache=True, inline="always")
+def _diffuse_direction(law, state):
+    """(c, wp, wq, state): a diffuse direction about a wall's normal for ``law``, as its component c > 0 along the
+    normal and wp, wq along the next two axes (cyclic); :func:`_emit` sets it.
 
     Lambert: a uniform point of the unit disk (:func:`_disk`) lifted onto the hemisphere (Malley's method): sin^2 of
     the angle to the normal is rho2, uniform on (0, 1), as for ``cos = sqrt(x)`` of :func:`_cos_theta`, and the
@@ -580,18 +584,26 @@ def _emit(law, axis, sign, u, state):
     :func:`_cos_theta`, the azimuth's (cos, sin) = ((a*a - b*b), 2*a*b) / rho2 of the disk point (the angle doubled).
     """
     a, b, rho2, state = _disk(state)
-    p = (axis + 1) % 3
-    q = (axis + 2) % 3
     if law == LAMBERT:
-        u[axis] = sign * math.sqrt(1.0 - rho2)
-        u[p] = a
-        u[q] = b
-        return state
+        return math.sqrt(1.0 - rho2), a, b, state
     c, state = _cos_theta(law, state)
     s = math.sqrt(max(0.0, 1.0 - c * c)) / rho2
+    return c, s * (a * a - b * b), s * (2.0 * a * b), state
+
+
+@njit(cache=True, inline="always")
+def _set_direction(axis, sign, c, wp, wq, u):
+    """``u`` = ``sign * c`` along ``axis``, ``wp`` and ``wq`` along the next two axes (cyclic)."""
     u[axis] = sign * c
-    u[p] = s * (a * a - b * b)
-    u[q] = s * (2.0 * a * b)
+    u[(axis + 1) % 3] = wp
+    u[(axis + 2) % 3] = wq
+
+
+@njit(cache=True, **NO_REFCOUNT)
+def _emit(law, axis, sign, u, state):
+    """Overwrite ``u`` with a diffuse direction about the normal ``sign * e_axis`` (:func:`_diffuse_direction`)."""
+    c, wp, wq, state = _diffuse_direction(law, state)
+    _set_direction(axis, sign, c, wp, wq, u)
     return state
 
 
@@ -657,6 +669,42 @@ def _uniform_in_codes(geom, h, pos, idx, state):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
+def _wall_draw(law, mixed, wall_speed, vmean, alpha, state):
+    """The random numbers of a wall hit by ``law`` (see :func:`_reflect`), in the order :func:`_reflect` draws them:
+    (diffuse, c, wp, wq, speed, state). A kernel may draw them before the flight that ends at the wall (they depend
+    on the stream only), so that they are computed while the flight's walk runs, and apply them with
+    :func:`_wall_apply` if the flight meets a wall (else it keeps the state from before the draw: the same stream).
+    """
+    diffuse = law != SPECULAR
+    if mixed:
+        x, state = _uniform(state)
+        diffuse = diffuse and x <= alpha
+    c = wp = wq = 0.0
+    speed = vmean
+    if diffuse:
+        c, wp, wq, state = _diffuse_direction(law, state)
+        if wall_speed == SPEED_FLUX:
+            speed, state = _speed(SPEED_FLUX, vmean, state)
+    return diffuse, c, wp, wq, speed, state
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _wall_apply(wall_speed, draw, event, u, speed_now):
+    """Reflect ``u`` at wall face ``event`` with the random numbers ``draw`` of :func:`_wall_draw`; returns the
+    speed after the hit.
+    """
+    diffuse, c, wp, wq, speed, _ = draw
+    axis = event >> 1
+    if diffuse:
+        _set_direction(axis, -1.0 if (event & 1) else 1.0, c, wp, wq, u)  # back into the pore
+        if wall_speed == SPEED_FLUX:
+            return speed
+    else:
+        u[axis] = -u[axis]
+    return speed_now
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
 def _reflect(law, mixed, wall_speed, event, u, speed_now, vmean, alpha, state):
     """Reflect ``u`` at wall face ``event`` by ``law``; returns (speed, state).
 
@@ -672,19 +720,8 @@ def _reflect(law, mixed, wall_speed, event, u, speed_now, vmean, alpha, state):
     wall_speed : int
         SPEED_KEPT (|v| unchanged, thesis) or SPEED_FLUX (thermal re-emission, flux-weighted MB).
     """
-    axis = event >> 1
-    sign = -1.0 if (event & 1) else 1.0  # back into the pore
-    diffuse = law != SPECULAR
-    if mixed:
-        x, state = _uniform(state)
-        diffuse = diffuse and x <= alpha
-    if diffuse:
-        state = _emit(law, axis, sign, u, state)
-        if wall_speed == SPEED_FLUX:
-            speed_now, state = _speed(SPEED_FLUX, vmean, state)
-    else:
-        u[axis] = -u[axis]
-    return speed_now, state
+    draw = _wall_draw(law, mixed, wall_speed, vmean, alpha, state)
+    return _wall_apply(wall_speed, draw, event, u, speed_now), draw[5]
 
 
 _CACHE: dict = {}
@@ -811,6 +848,8 @@ def make_transport_kernel(
                                 int((ph + math.pi) / _TWO_PI * orient_hist.shape[2]), orient_hist.shape[2] - 1
                             )
                             orient_hist[b, ob, pb] += 1
+                        # the next wall hit's random numbers ahead of the flight (they overlap its walk)
+                        draw = _wall_draw(LAW, MIXED, WSPEED, vmean, alpha, state)
                         ev, ln, cr = _flight(flat, n0, n1, n2, h, periodic, axis, pos, idx, u, img)
                         acc[T_CROSS] += cr
                         acc[T_PATH] += ln
@@ -837,7 +876,8 @@ def make_transport_kernel(
                             hitmap[b, ev, ma, mb] += 1
                         if hits >= max_hits:
                             break
-                        speed, state = _reflect(LAW, MIXED, WSPEED, ev, u, speed, vmean, alpha, state)
+                        speed = _wall_apply(WSPEED, draw, ev, u, speed)
+                        state = draw[5]
                     acc[T_TIME] += 0.0 if WK else t_now
                     if ev == -2:
                         break

@@ -232,7 +232,7 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
         u /= np.linalg.norm(u)
         s = np.sign(u).astype(np.int64)
         c = codes[tuple(idx)]
-        ahead = _ahead_cube(codes.reshape(-1), *n, *idx, *s, c)
+        ahead = _ahead_cube(codes.reshape(-1), *n, *idx, *s, np.ravel_multi_index(idx, n), c)
         if any(ahead[1:]):
             offset = int(np.abs(ahead[1:]).max())
             used[offset] = used.get(offset, 0) + 1
