@@ -598,6 +598,11 @@ def equilibrium(
         geom = prepare(pore, voxel_um, per, None)
     else:
         geom = _closed_geometry(pore, voxel_um)
+    if per.all() and geom.wall_area == 0:
+        raise PorepipeError(
+            f"the pore volume of shape {geom.codes.shape} has no wall and every axis is periodic: a flight would "
+            "never end (make an axis non-periodic or give the volume some solid)"
+        )
     msd = bool(per.any())
     kernel = K.make_equilibrium_kernel(_wall(settings), _SPEED[settings.initial_speed], msd)
     ext = np.array(geom.codes.shape) * geom.h

@@ -6,10 +6,12 @@ from naive_diffusion import chessboard_naive, largest_spanning_naive, wall_area_
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.diffusion import (
+    Settings,
     accessible_pore,
     closed_box,
     constricted_capillary,
     cylinder,
+    equilibrium,
     pocketed_capillary,
     prepare,
     rough_capillary,
@@ -149,6 +151,17 @@ def test_errors_all_solid_and_no_path():
         prepare(pore, axis=2)
     with pytest.raises(PorepipeError, match="x = 0"):
         prepare(np.transpose(pore, (2, 1, 0)), axis=0)
+
+
+def test_error_no_wall_with_every_axis_periodic():
+    # an all-pore volume periodic on every axis has no wall: a flight would never end (it hung before the check);
+    # one solid voxel gives it walls
+    with pytest.raises(PorepipeError, match=r"shape \(6, 6, 6\) has no wall and every axis is periodic"):
+        equilibrium(np.ones((6, 6, 6), np.uint8), Settings(setup="msd"), periodic=(1, 1, 1))
+    pore = np.ones((6, 6, 6), np.uint8)
+    pore[3, 3, 3] = 0
+    s = Settings(setup="msd", batches=2, batch_particles=4, msd_time_jiffies=20.0, max_rounds=1)
+    assert np.isfinite(equilibrium(pore, s, periodic=(1, 1, 1)).values["D_m2_s"])
 
 
 @pytest.mark.parametrize("periodic,open_axis", [((0, 0, 0), None), ((0, 1, 0), 2), ((1, 1, 0), None)])
