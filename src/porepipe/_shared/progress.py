@@ -45,6 +45,13 @@ def _say(text: str) -> None:
         print(text, file=stream, flush=True)
 
 
+def notice(text: str) -> None:
+    """One line about the run's input that is accepted but worth knowing, on stderr (and the console of
+    ``porepipe run``), prefixed ``porepipe:``; for a bad input raise a :class:`PorepipeError` instead.
+    """
+    _say(f"porepipe: {text}")
+
+
 def watch_compilation() -> None:
     """Announce numba compilation once per process and time it (numba's compile events); idempotent."""
     global _watching

@@ -27,7 +27,7 @@ import xarray as xr
 from porepipe._shared.atomic import atomic_path
 from porepipe._shared.cost import SpentClock, carried_by
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.progress import Progress
+from porepipe._shared.progress import Progress, notice
 from porepipe._shared.store import ResultWriter, result_hash
 from porepipe.granular._api import Frame, Simulation
 from porepipe.granular._settings import Settings
@@ -173,6 +173,8 @@ def run(
 def _simulate(settings, seed, checkpoint, resume, progress, key):
     """Step the simulation to the end, collecting frames and time series; checkpoint on the way."""
     sim = Simulation(settings, seed)
+    if (line := sim.damping_bound_notice()) is not None:
+        notice(line)
     total = round(settings.duration_s / sim.dt)
     frame_steps = np.unique(np.round(np.linspace(0, total, settings.output.frames + 1)).astype(np.int64))
     frames: list[Frame] = []

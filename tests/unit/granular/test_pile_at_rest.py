@@ -80,4 +80,10 @@ def test_settled_pile_stays_at_rest_at_the_default_step(settled, integrator):
 
 def test_settled_pile_heats_up_at_twice_the_default_gear_step(settled):
     default = pile(settled, "gear").dt
-    assert kinetic_energy_after(pile(settled, "gear", 2.0 * default), 0.03) > 3e-5
+    hot = pile(settled, "gear", 2.0 * default)
+    assert kinetic_energy_after(hot, 0.03) > 3e-5
+    # the step that heats the pile is named on the console (granular.run prints this line), the default is not
+    line = hot.damping_bound_notice()
+    assert line.startswith("granular.dt_s = ") and "c_t dt = 0.120, bound 0.06" in line and "verlet" in line
+    assert pile(settled, "gear", default).damping_bound_notice() is None
+    assert pile(settled, "gear").damping_bound_notice() is None

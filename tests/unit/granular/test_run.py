@@ -251,3 +251,13 @@ def test_cost_counts_only_active_particles(tmp_path):
     expected = np.sum(np.round((0.03 - t_k) / dt))
     assert abs(a["particle_steps"] - expected) <= len(t_k) * 10
     assert a["particle_steps"] < 0.7 * a["n_particles"] * steps
+
+
+def test_a_step_past_the_damping_bound_is_named_once_on_the_console(tmp_path, capsys):
+    default = Settings.model_validate(SMALL | {"duration_s": 0.002, "dt_s": None})
+    past = Settings.model_validate(SMALL | {"duration_s": 0.002})  # c dt 0.29, c_t dt 0.17 under Gear
+    run(default, tmp_path / "default.h5", progress=False)
+    assert "granular.dt_s" not in capsys.readouterr().err
+    run(past, tmp_path / "past.h5", progress=False)
+    lines = [x for x in capsys.readouterr().err.splitlines() if "granular.dt_s" in x]
+    assert len(lines) == 1 and lines[0].startswith("porepipe: granular.dt_s = 2e-05 s is past")
