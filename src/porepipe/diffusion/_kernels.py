@@ -204,6 +204,8 @@ _SMALLEST = np.concatenate(([-1], _HALF_WIDTH[:, 1:].min(axis=0))).astype(np.int
 _MEAN_REACH = 3.0 / (
     1.0 / (_HALF_WIDTH[0] + 1.0) + 1.0 / (_HALF_WIDTH[1] + 1.0) + 1.0 / (_HALF_WIDTH[2] + 1.0)
 )
+#: the largest half-width across of an edge box
+_EDGE_REACH = int(_EDGE_CROSS.max())
 #: the edge cross-sections (rows of _EDGE_CROSS), furthest-reaching first: the first that fits a voxel is its best
 _EDGE_ORDER = np.argsort(-_MEAN_REACH[_EDGE_CODE : _EDGE_CODE + 3 * len(_EDGE_CROSS) : 3], kind="stable")
 
@@ -354,34 +356,34 @@ def _edge_codes(codes):
 
     Plane by plane across e: a pixel is free where the segment of half-length _EDGE_LONG along e is all pore (a run
     of pore voxels along e, counted _EDGE_LONG planes ahead), and the box's cross-section is a rectangle of free
-    pixels (:func:`_free_half_runs`, :func:`_widest_edge`). Memory: a few planes.
+    pixels (:func:`_free_half_runs`, :func:`_widest_edge`). Memory: 4 bytes per pixel of a plane.
     """
     flat = codes.reshape(codes.size)
     n = codes.shape
+    segment = 2 * _EDGE_LONG + 1
     for e in range(3):
-        stride = _voxel(codes, e, 1, 0, 0)
+        stride, sa, sb = _voxel(codes, e, 1, 0, 0), _voxel(codes, e, 0, 1, 0), _voxel(codes, e, 0, 0, 1)
         shape = (n[1 if e == 0 else 0], n[1 if e == 2 else 2])
-        first = np.empty(shape, np.int64)  # flat index of each pixel's voxel in plane 0
-        for a in range(shape[0]):
-            for b in range(shape[1]):
-                first[a, b] = _voxel(codes, e, 0, a, b)
-        run = np.zeros(shape, np.int64)  # pore voxels in a row along e, up to the plane read last
+        run = np.zeros(
+            shape, np.uint8
+        )  # pore voxels in a row along e up to the plane read last (at most segment)
         free = np.empty(shape, np.bool_)
-        reach = np.empty((2, *shape), np.int64)
+        reach = np.empty((2, *shape), np.int8)
         for p in range(n[e]):
-            walk = False  # a voxel of plane p - _EDGE_LONG may take an edge code
+            back = (p - _EDGE_LONG) * stride  # the plane whose voxels may take an edge code
+            walk = False
             for a in range(shape[0]):
                 for b in range(shape[1]):
-                    run[a, b] = run[a, b] + 1 if flat[first[a, b] + p * stride] != 0 else 0
-                    free[a, b] = run[a, b] > 2 * _EDGE_LONG
-                    walk |= free[a, b] and _may_take_edge(flat[first[a, b] + (p - _EDGE_LONG) * stride])
+                    run[a, b] = min(run[a, b] + 1, segment) if flat[a * sa + b * sb + p * stride] != 0 else 0
+                    free[a, b] = run[a, b] == segment
+                    walk |= free[a, b] and _may_take_edge(flat[a * sa + b * sb + back])
             if not walk:
                 continue
             _free_half_runs(free.T, reach[0].T)
             _free_half_runs(free, reach[1])
             for a in range(shape[0]):
                 for b in range(shape[1]):
-                    at = first[a, b] + (p - _EDGE_LONG) * stride
+                    at = a * sa + b * sb + back
                     if free[a, b] and _may_take_edge(flat[at]):
                         flat[at] = _widest_edge(reach, a, b, e, flat[at])
 
@@ -394,18 +396,18 @@ def _may_take_edge(v):
 
 @njit(cache=True)
 def _free_half_runs(free, out):
-    """Per pixel of the 2-D ``free``: ``out[a, b]`` = the largest k such that the 2 k + 1 pixels centred on it along
-    the second axis are all free (-1 where it is not free): runs counted forward, then backward.
+    """Per pixel of the 2-D ``free``: ``out[a, b]`` = the largest k <= _EDGE_REACH such that the 2 k + 1 pixels
+    centred on it along the second axis are all free (-1 where it is not free): runs counted forward, then backward.
     """
     na, nb = free.shape
     for a in range(na):
         before = -1
         for b in range(nb):
-            before = before + 1 if free[a, b] else -1
+            before = min(before + 1, _EDGE_REACH) if free[a, b] else -1
             out[a, b] = before
         after = -1
         for b in range(nb - 1, -1, -1):
-            after = after + 1 if free[a, b] else -1
+            after = min(after + 1, _EDGE_REACH) if free[a, b] else -1
             out[a, b] = min(out[a, b], after)
 
 
