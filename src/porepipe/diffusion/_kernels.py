@@ -3,10 +3,11 @@
 
 Geometry code per voxel (uint8), built by :func:`_box_codes`: 0 = solid; any other code names a box centred
 on the voxel, inside the volume and all pore, of half-widths ``_HALF_WIDTH[:, code]`` along the three axes, so that a
-particle may fly straight to that box's surface without looking at single voxels. Codes 1..127: the L-infinity
+particle may fly straight to that box's surface without looking at single voxels. Codes 1..63: the L-infinity
 (chessboard) distance k to the nearest solid voxel or to the outside of the box (saturated), the cube of half-width
-k - 1; 128..199: slabs, thin across a wall, for the voxels next to one (:func:`_slab_codes`); 200..253: prisms,
-four times longer along one axis than across (:func:`_prism_codes`).
+k - 1; 64..123: edge boxes, thin across two axes and long along the third, for the voxels where two walls meet
+(:func:`_edge_codes`); 128..199: slabs, thin across a wall, for the voxels next to one (:func:`_slab_codes`);
+200..253: prisms, four times longer along one axis than across (:func:`_prism_codes`).
 
 Events returned by :func:`_fly`: 0..5 = wall face ``2 * axis + (step > 0)`` (the particle moved in direction ``step``
 along ``axis`` and met a solid voxel or the closed outside), 6 = left through the low face of the exit axis, 7 = left
@@ -76,12 +77,13 @@ def _uniform(state):
 @njit(cache=True)
 def _box_codes(pore, out):
     """The flights' geometry codes of ``pore`` in ``out`` (may be ``pore`` itself): the chessboard distances
-    (:func:`_chessboard_distance`), then slab and prism codes where those boxes get further (see the module's
+    (:func:`_chessboard_distance`), then slab, prism and edge codes where those boxes get further (see the module's
     docstring).
     """
     _chessboard_distance(pore, out)
     _slab_codes(out)
     _prism_codes(out)
+    _edge_codes(out)
 
 
 @njit(cache=True)
@@ -132,8 +134,25 @@ def _chessboard_distance(pore, out):
 
 
 # ---------------------------------------------------------------------------------------------------------------------
-# geometry: box codes (slabs across the walls, prisms along the free runs)
-#: first slab code; chessboard codes are saturated below it
+# geometry: box codes (slabs across the walls, prisms along the free runs, edge boxes where two walls meet)
+#: first edge code; chessboard codes are saturated below it (cubes of half-width up to 62)
+_EDGE_CODE = 64
+#: an edge box's half-width along its long axis (6 to 8 alike on the capillary, 16 and more slower: the box must fit
+#: between the inlet and the voxel, where a transmission run hits the walls most)
+_EDGE_LONG = 8
+#: the half-widths (across the lower, across the higher of the two other axes) the edge codes can hold: one of the two
+#: at most 2 (a voxel of chessboard code <= 3, where a flight walks), the other up to 6 (slabs take over from 7); a
+#: box is rounded down to one of them (so it stays all pore); 20 of them fit below _SLAB_CODE
+_EDGE_CROSS = np.array(
+    [(1, 1), (2, 2)]
+    + [
+        p
+        for x, y in ((0, 3), (0, 6), (1, 2), (1, 3), (1, 4), (1, 6), (2, 3), (2, 4), (2, 6))
+        for p in ((x, y), (y, x))
+    ],
+    np.int64,
+)
+#: first slab code
 _SLAB_CODE = 128
 #: chessboard codes 1.._SLAB_THICK may become slab codes: those of the voxels next to a wall, where a flight walks
 _SLAB_THICK = 4
@@ -151,13 +170,18 @@ _PRISM_LONG = 4
 def _half_width_table():
     """(3, 256) float64: per code, the half-width along each axis of its all-pore box centred on the voxel.
 
-    Chessboard code c < _SLAB_CODE: the cube, c - 1 along every axis. Slab code _SLAB_CODE + (3 t + d) w + j (w =
-    len(_SLAB_WIDTHS), t < _SLAB_THICK): t along the thin axis d (the voxel's chessboard code is t + 1) and
-    _SLAB_WIDTHS[j] - 1 along the other two. Prism code _PRISM_CODE + 3 i + e: r = _PRISM_CROSS[i] across and
+    Chessboard code c < _EDGE_CODE: the cube, c - 1 along every axis. Edge code _EDGE_CODE + 3 j + e: _EDGE_LONG
+    along the long axis e and _EDGE_CROSS[j] across the two others (lower axis first). Slab code _SLAB_CODE +
+    (3 t + d) w + j (w = len(_SLAB_WIDTHS), t < _SLAB_THICK): t along the thin axis d (the voxel's chessboard code is
+    t + 1) and _SLAB_WIDTHS[j] - 1 along the other two. Prism code _PRISM_CODE + 3 i + e: r = _PRISM_CROSS[i] across and
     _PRISM_LONG r along the long axis e. Floats: the jump multiplies them by the times between crossings.
     """
     table = np.zeros((3, 256))
-    table[:, 1:_SLAB_CODE] = np.arange(_SLAB_CODE - 1)
+    table[:, 1:_EDGE_CODE] = np.arange(_EDGE_CODE - 1)
+    for j, cross in enumerate(_EDGE_CROSS):
+        for e in range(3):
+            table[e, _EDGE_CODE + 3 * j + e] = _EDGE_LONG
+            table[[d for d in range(3) if d != e], _EDGE_CODE + 3 * j + e] = cross
     nw = len(_SLAB_WIDTHS)
     for t in range(_SLAB_THICK):
         for d in range(3):
@@ -176,6 +200,14 @@ def _half_width_table():
 _HALF_WIDTH = _half_width_table()
 #: per code, its box's smallest half-width (-1: solid)
 _SMALLEST = np.concatenate(([-1], _HALF_WIDTH[:, 1:].min(axis=0))).astype(np.int64)
+#: per code, the harmonic mean of its box's half-widths + 1: how far a flight in a random direction gets
+_MEAN_REACH = 3.0 / (
+    1.0 / (_HALF_WIDTH[0] + 1.0) + 1.0 / (_HALF_WIDTH[1] + 1.0) + 1.0 / (_HALF_WIDTH[2] + 1.0)
+)
+#: the largest half-width across of an edge box
+_EDGE_REACH = int(_EDGE_CROSS.max())
+#: the edge cross-sections (rows of _EDGE_CROSS), furthest-reaching first: the first that fits a voxel is its best
+_EDGE_ORDER = np.argsort(-_MEAN_REACH[_EDGE_CODE : _EDGE_CODE + 3 * len(_EDGE_CROSS) : 3], kind="stable")
 
 
 @njit(cache=True)
@@ -215,7 +247,7 @@ def _voxel(codes, d, p, a, b):
 
 @njit(cache=True)
 def _slab_codes(codes):
-    """In place on chessboard codes: saturate them at _SLAB_CODE - 1, and give a voxel of code c <= _SLAB_THICK a
+    """In place on chessboard codes: saturate them at _EDGE_CODE - 1, and give a voxel of code c <= _SLAB_THICK a
     slab code (see :func:`_half_width_table`) where a box centred on it, c - 1 voxels thick along one axis and at
     least _SLAB_WIDTHS[0] - 1 wide along the other two, lies in the volume and is all pore: the widest such box of the
     three thin axes (the first axis among equals).
@@ -225,7 +257,7 @@ def _slab_codes(codes):
     """
     flat = codes.reshape(codes.size)
     for f in range(flat.size):
-        flat[f] = min(flat[f], _SLAB_CODE - 1)
+        flat[f] = min(flat[f], _EDGE_CODE - 1)
     nw = _SLAB_WIDTHS.shape[0]
     n = codes.shape
     for d in range(3):
@@ -257,19 +289,11 @@ def _slab_codes(codes):
                             flat[at] = _SLAB_CODE + (3 * t + d) * nw + j  # wider than its box so far
 
 
-@njit(cache=True, inline="always")
-def _mean_half_width(v):
-    """Harmonic mean of the half-widths + 1 of code ``v``'s box: how far a flight in a random direction gets."""
-    return 3.0 / (
-        1.0 / (_HALF_WIDTH[0, v] + 1.0) + 1.0 / (_HALF_WIDTH[1, v] + 1.0) + 1.0 / (_HALF_WIDTH[2, v] + 1.0)
-    )
-
-
 @njit(cache=True)
 def _prism_codes(codes):
     """In place on slab codes: give a voxel of chessboard code r + 1 (r in _PRISM_CROSS) a prism code where a box
     centred on it, r across and _PRISM_LONG r along one axis e, lies in the volume and is all pore, and gets further
-    than its box so far (:func:`_mean_half_width`; the first axis among equals).
+    than its box so far (_MEAN_REACH; the first axis among equals).
 
     That box is the union of the cubes of half-width r centred on the line along e within ell = (_PRISM_LONG - 1) r
     of the voxel, each all pore where the code's smallest half-width is at least r (:func:`_free_run`). A code's
@@ -296,7 +320,7 @@ def _prism_codes(codes):
                         continue
                     at = first + q * stride
                     code = _PRISM_CODE + 3 * (r - _PRISM_CROSS[0]) + e
-                    if _mean_half_width(code) > _mean_half_width(flat[at]):
+                    if _MEAN_REACH[code] > _MEAN_REACH[flat[at]]:
                         flat[at] = code
 
 
@@ -321,6 +345,91 @@ def _free_run(values, lower, upper):
         upper[q] = stack[top - 1] if top > 0 else n
         stack[top] = q
         top += 1
+
+
+@njit(cache=True)
+def _edge_codes(codes):
+    """In place on prism codes: give a voxel of chessboard code < _JUMP_CODE (one a flight walks through, or already
+    an edge code) an edge code where a box centred on it, _EDGE_LONG along one axis e and _EDGE_CROSS[j] across, lies
+    in the volume and is all pore, and gets further than its box so far (_MEAN_REACH; the first axis among equals).
+    Its smallest half-width stays the voxel's chessboard code - 1.
+
+    Plane by plane across e: a pixel is free where the segment of half-length _EDGE_LONG along e is all pore (a run
+    of pore voxels along e, counted _EDGE_LONG planes ahead), and the box's cross-section is a rectangle of free
+    pixels (:func:`_free_half_runs`, :func:`_widest_edge`). Memory: 4 bytes per pixel of a plane.
+    """
+    flat = codes.reshape(codes.size)
+    n = codes.shape
+    segment = 2 * _EDGE_LONG + 1
+    for e in range(3):
+        stride, sa, sb = _voxel(codes, e, 1, 0, 0), _voxel(codes, e, 0, 1, 0), _voxel(codes, e, 0, 0, 1)
+        shape = (n[1 if e == 0 else 0], n[1 if e == 2 else 2])
+        run = np.zeros(
+            shape, np.uint8
+        )  # pore voxels in a row along e up to the plane read last (at most segment)
+        free = np.empty(shape, np.bool_)
+        reach = np.empty((2, *shape), np.int8)
+        for p in range(n[e]):
+            back = (p - _EDGE_LONG) * stride  # the plane whose voxels may take an edge code
+            walk = False
+            for a in range(shape[0]):
+                for b in range(shape[1]):
+                    run[a, b] = min(run[a, b] + 1, segment) if flat[a * sa + b * sb + p * stride] != 0 else 0
+                    free[a, b] = run[a, b] == segment
+                    walk |= free[a, b] and _may_take_edge(flat[a * sa + b * sb + back])
+            if not walk:
+                continue
+            _free_half_runs(free.T, reach[0].T)
+            _free_half_runs(free, reach[1])
+            for a in range(shape[0]):
+                for b in range(shape[1]):
+                    at = a * sa + b * sb + back
+                    if free[a, b] and _may_take_edge(flat[at]):
+                        flat[at] = _widest_edge(reach, a, b, e, flat[at])
+
+
+@njit(cache=True, inline="always")
+def _may_take_edge(v):
+    """Whether a voxel of code ``v`` (pore) may take an edge code: a chessboard code below _JUMP_CODE or an edge code."""
+    return (v < _JUMP_CODE) | ((v >= _EDGE_CODE) & (v < _SLAB_CODE))
+
+
+@njit(cache=True)
+def _free_half_runs(free, out):
+    """Per pixel of the 2-D ``free``: ``out[a, b]`` = the largest k <= _EDGE_REACH such that the 2 k + 1 pixels
+    centred on it along the second axis are all free (-1 where it is not free): runs counted forward, then backward.
+    """
+    na, nb = free.shape
+    for a in range(na):
+        before = -1
+        for b in range(nb):
+            before = min(before + 1, _EDGE_REACH) if free[a, b] else -1
+            out[a, b] = before
+        after = -1
+        for b in range(nb - 1, -1, -1):
+            after = min(after + 1, _EDGE_REACH) if free[a, b] else -1
+            out[a, b] = min(out[a, b], after)
+
+
+@njit(cache=True)
+def _widest_edge(reach, a, b, e, v):
+    """The code of the edge box along ``e`` centred on pixel (a, b) that gets furthest, or ``v`` if none gets further
+    than ``v``'s box: _EDGE_CROSS[j] = (x, y) fits where x <= ``reach[0, a, b]`` and the rows a - x .. a + x of column
+    b reach y along the second axis (``reach[1]``); tried furthest-reaching first (_EDGE_ORDER).
+    """
+    for j in _EDGE_ORDER:
+        code = _EDGE_CODE + 3 * j + e
+        if _MEAN_REACH[code] <= _MEAN_REACH[v]:
+            return v
+        x, y = _EDGE_CROSS[j, 0], _EDGE_CROSS[j, 1]
+        if (x > reach[0, a, b]) | (min(x, y) < _SMALLEST[v]):
+            continue
+        fits = True
+        for k in range(-x, x + 1):
+            fits &= reach[1, a + k, b] >= y
+        if fits:
+            return code
+    return v
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -376,8 +485,8 @@ _AHEAD = (8, 5, 3)
 @njit(cache=True, inline="always")
 def _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, lin, c):
     """(code, centre offsets) of a pore box that holds voxel (i0, i1, i2) and reaches far ahead of it, for a flight
-    that starts in a voxel next to a wall (chessboard code ``c`` < _JUMP_CODE or a slab code), where the box centred on
-    it reaches little ahead.
+    that starts in a voxel next to a wall (chessboard code ``c`` < _JUMP_CODE, an edge or a slab code), where the box
+    centred on it reaches little ahead.
 
     The candidate centres are ``a`` voxels further along every axis the flight moves along, for ``a`` in _AHEAD in
     turn. A centre whose box's smallest half-width (_SMALLEST) is at least a and _JUMP_CODE - 1 still holds the
@@ -423,7 +532,7 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     lin = (i0 * n1 + i1) * n2 + i2
     c = flat[np.uint64(lin)]
     o0 = o1 = o2 = 0  # offset of the jump box's centre from the particle's voxel (0 but for the first jump)
-    if (c < _JUMP_CODE) | ((c >= _SLAB_CODE) & (c < _PRISM_CODE)):
+    if (c < _JUMP_CODE) | ((c >= _EDGE_CODE) & (c < _PRISM_CODE)):
         c, o0, o1, o2 = _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, lin, c)
     crossings = 0
     event = -1

@@ -6,6 +6,7 @@ from naive_diffusion import flight_naive
 
 from porepipe.diffusion._kernels import (
     _AHEAD,
+    _EDGE_CODE,
     _HALF_WIDTH,
     _JUMP_CODE,
     _PRISM_CODE,
@@ -250,7 +251,7 @@ def test_flights_from_the_walls_jump_through_cubes_ahead_and_match_reference(h):
 def test_flights_through_slabs_and_prisms_match_reference(h):
     """Flights in a channel with flat walls and a few obstacles, where the codes next to the walls are slabs (thin
     across the wall) and those along the free runs prisms (long along one axis): every start voxel and direction, on
-    the sort-all-crossings reference; slab, prism and cube voxels are all among the start voxels."""
+    the sort-all-crossings reference; slab, prism, edge and cube voxels are all among the start voxels."""
     rng = np.random.default_rng(23)
     pore = np.ones((30, 26, 90), np.uint8)
     for _ in range(5):
@@ -264,9 +265,36 @@ def test_flights_through_slabs_and_prisms_match_reference(h):
     for _ in range(1500):
         idx = cells[rng.integers(len(cells))].astype(np.int64)
         c = codes[tuple(idx)]
-        kinds.add("prism" if c >= _PRISM_CODE else ("slab" if c >= _SLAB_CODE else "cube"))
+        kinds.add(_kind(c))
         pos = (idx + rng.random(3)) * h
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
         _assert_flight_as_reference(codes, h, pos, idx, u)
-    assert kinds == {"cube", "slab", "prism"}
+    assert kinds == {"cube", "slab", "prism", "edge"}
+
+
+def _kind(code):
+    if code >= _PRISM_CODE:
+        return "prism"
+    if code >= _SLAB_CODE:
+        return "slab"
+    return "edge" if code >= _EDGE_CODE else "cube"
+
+
+@pytest.mark.parametrize("h", [(1.0, 1.0, 1.0), (0.6, 1.0, 1.7)])
+def test_flights_from_edge_boxes_match_reference(h):
+    """Flights that start in the edge boxes of a square channel (thin across both walls of an edge, long along it),
+    with a pillar that cuts some short, in every direction: on the sort-all-crossings reference."""
+    rng = np.random.default_rng(5)
+    pore = np.ones((16, 14, 40), np.uint8)
+    pore[0:3, 4:6, 20] = 0
+    codes = _codes(pore)
+    h = np.array(h)
+    cells = np.argwhere((codes >= _EDGE_CODE) & (codes < _SLAB_CODE))
+    assert len(cells) > 0
+    for _ in range(800):
+        idx = cells[rng.integers(len(cells))].astype(np.int64)
+        pos = (idx + rng.random(3)) * h
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        _assert_flight_as_reference(codes, h, pos, idx, u)

@@ -20,8 +20,11 @@ from porepipe.diffusion import (
     wall_area,
 )
 from porepipe.diffusion._kernels import (
+    _EDGE_CODE,
+    _EDGE_CROSS,
     _HALF_WIDTH,
     _PRISM_CODE,
+    _PRISM_CROSS,
     _SLAB_CODE,
     _box_codes,
     _chessboard_distance,
@@ -51,6 +54,11 @@ def test_codes_saturate_at_255_and_fit_one_byte():
     np.testing.assert_array_equal(codes, chessboard_naive(pore))
 
 
+def test_code_ranges_do_not_overlap():
+    """Cubes, edge boxes, slabs and prisms each keep their own codes in one byte."""
+    assert _EDGE_CODE + 3 * len(_EDGE_CROSS) <= _SLAB_CODE < _PRISM_CODE <= 256 - 3 * len(_PRISM_CROSS)
+
+
 def _channel_with_pillars(seed):
     """A 30 x 26 x 90 channel with a few solid pillars and plates: flat walls (slabs), long free runs (prisms), and
     boxes that the obstacles cut short."""
@@ -75,10 +83,10 @@ def _channel_with_pillars(seed):
 def test_every_code_is_an_all_pore_box_with_the_chessboard_distance_across(pore):
     """Each code's box (per-axis half-widths _HALF_WIDTH, centred on the voxel) lies in the volume and is all pore,
     and its smallest half-width is the voxel's chessboard distance - 1 (what the cube-ahead tries and the prism pass
-    rely on); slabs across and prisms along every axis occur."""
+    rely on); slabs across and prisms along every axis occur, and edge boxes where two flat walls meet."""
     codes = np.empty(pore.shape, np.uint8)
     _box_codes(pore.copy(), codes)
-    chess = np.minimum(chessboard_naive(pore), _SLAB_CODE - 1)
+    chess = np.minimum(chessboard_naive(pore), _EDGE_CODE - 1)
     np.testing.assert_array_equal(codes > 0, pore > 0)
     for idx in np.argwhere(codes > 0):
         half = _HALF_WIDTH[:, codes[tuple(idx)]].astype(np.int64)
@@ -88,10 +96,13 @@ def test_every_code_is_an_all_pore_box_with_the_chessboard_distance_across(pore)
         assert half.min() == chess[tuple(idx)] - 1
     slabs = codes[(codes >= _SLAB_CODE) & (codes < _PRISM_CODE)]
     prisms = codes[codes >= _PRISM_CODE]
+    edges = codes[(codes >= _EDGE_CODE) & (codes < _SLAB_CODE)]
     if pore.shape == (30, 26, 90):
         assert {int(np.argmin(_HALF_WIDTH[:, c])) for c in slabs} == {0, 1, 2}  # thin axis
         assert {int(np.argmax(_HALF_WIDTH[:, c])) for c in prisms} == {0, 1, 2}  # long axis
     assert len(slabs) > 0 and len(prisms) > 0
+    if pore.shape[2] >= 90:  # the channels and the capillary: along their four edges
+        assert {int(np.argmax(_HALF_WIDTH[:, c])) for c in edges} >= {2}  # long axis
 
 
 def test_cylinder_voxels_are_the_centres_inside():
