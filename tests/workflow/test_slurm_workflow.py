@@ -29,7 +29,7 @@ from porepipe._shared.atomic import temporary_path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_volume
 
-pytestmark = [pytest.mark.slurm, pytest.mark.slow]
+pytestmark = [pytest.mark.slurm, pytest.mark.slow, pytest.mark.serial]
 
 ROOT = Path(__file__).resolve().parents[2]
 MINI = ROOT / "config" / "scenes" / "mini.yaml"

@@ -29,6 +29,7 @@ pytestmark = [
         reason="needs mpirun (Debian: apt-get install openmpi-bin libopenmpi-dev) and mpi4py (pip install '.[mpi]')",
     ),
     pytest.mark.slow,  # 7 mpirun launches: ~40 s on 2 idle cores
+    pytest.mark.serial,  # its two busy-polling ranks beside a second test worker ran past LIMIT_S
 ]
 
 #: relative κ̂ tolerance against the one-process run (see the module docstring)
