@@ -83,6 +83,15 @@ found as the z range of a row) +0 % / +0 % / -1 %; the owner's frame found once 
 owner's row distances, room and chords found again ~8.5 % (its row distances alone ~3 %, so the room straight from
 ``r*r - dx*dx`` for the owner alone would not pay either), the union counts from both balls' chords ~2.7 %; the
 chords ~18 %, bound by their 36 float32 square roots per row (5 vectors); the row ranges up to ~20 %.
+Session 16 (kernel alone, CPU time, same process against the kernel before, both from numba's cache, 1 thread,
+spheres 10-20 voxels wide, load 1.5-4.4): kept, :func:`_ball_plane` with 6 scratch arrays instead of 9 (see there),
+1.045-1.079x. Tried on top of it and not kept (each within +-2 % of it, three processes): the ``bits`` scratch
+dropped, the ball loop in a function without reference counting that inlines :func:`_ball_plane`, that one inlined
+into a :func:`_shell_plane` without reference counting, :func:`_share` with 6 arrays instead of 9 (equal from the
+cache; compiled in the process it ran 1.06x the kernel before where this one ran 1.00x), ``error_model="numpy"``,
+:func:`_chord_margin` inlined, the owner's frame found once per owner and row; slower: the row's room without storing
+its distances (found again where the exact tests need them) -2 to -3 %, a per-call table of every ball's frames
+(image, chord and ranges frames in one (N, 10) array in place of the images, so no argument more) -1 to -4 %.
 """
 
 import numpy as np
