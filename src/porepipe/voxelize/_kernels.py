@@ -83,6 +83,15 @@ found as the z range of a row) +0 % / +0 % / -1 %; the owner's frame found once 
 owner's row distances, room and chords found again ~8.5 % (its row distances alone ~3 %, so the room straight from
 ``r*r - dx*dx`` for the owner alone would not pay either), the union counts from both balls' chords ~2.7 %; the
 chords ~18 %, bound by their 36 float32 square roots per row (5 vectors); the row ranges up to ~20 %.
+Session 16 (kernel alone, CPU time, same process against the kernel before, both from numba's cache, 1 thread,
+spheres 10-20 voxels wide, load 1.5-4.4): kept, :func:`_ball_plane` with 6 scratch arrays instead of 9 (see there),
+1.045-1.079x. Tried on top of it and not kept (each within +-2 % of it, three processes): the ``bits`` scratch
+dropped, the ball loop in a function without reference counting that inlines :func:`_ball_plane`, that one inlined
+into a :func:`_shell_plane` without reference counting, :func:`_share` with 6 arrays instead of 9 (equal from the
+cache; compiled in the process it ran 1.06x the kernel before where this one ran 1.00x), ``error_model="numpy"``,
+:func:`_chord_margin` inlined, the owner's frame found once per owner and row; slower: the row's room without storing
+its distances (found again where the exact tests need them) -2 to -3 %, a per-call table of every ball's frames
+(image, chord and ranges frames in one (N, 10) array in place of the images, so no argument more) -1 to -4 %.
 """
 
 import numpy as np
@@ -626,20 +635,35 @@ def _add_shell(
 
 
 @njit(cache=True, fastmath=FASTMATH, **NO_REFCOUNT)
-def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, room, ends, out):
+def _ball_plane(i, s, images, h, owners, mask, dist, bits, room, ends, out):
     """Add ball ``s`` to plane ``i``: per voxel row its run inside as 216, its shell voxels counted (exact).
 
-    ``dx2`` (2, N_ROWS), ``dxy``/``odxy``/``bits`` (N_ROWS), ``room`` (2, CHORD_ROWS) float32 and ``ends`` (2, 2,
-    CHORD_ROWS) int32 (row 0: this ball's, row 1: an earlier ball's), zero from column N_ROWS on, are scratch. The
-    squared z distances of a voxel's samples are found where the exact tests need them (:func:`_z_distances`), not
-    for every sample in reach once per plane: the exact tests run on 0.3 % of first counts and on few unions.
+    ``owners`` (2, ny, nz) int32 holds ``owner`` and ``second`` (:func:`_add_shell`); ``dist`` (4, N_ROWS) the
+    squared x distances of this ball's samples and an earlier ball's, then ``dxy`` and ``odxy``; ``bits`` (N_ROWS),
+    ``room`` (2, CHORD_ROWS) float32 and ``ends`` (2, 2, CHORD_ROWS) int32 (row 0: this ball's, row 1: an earlier
+    ball's), zero from column N_ROWS on, are scratch. The squared z distances of a voxel's samples are found where
+    the exact tests need them (:func:`_z_distances`), not for every sample in reach once per plane: the exact tests
+    run on 0.3 % of first counts and on few unions.
+
+    Called once per ball and plane (27.5 k calls on spheres 10-20 voxels wide), so its arguments are few arrays: a
+    numba array argument is 7-11 machine words, all passed at every call. Against 9 scratch arrays (owner, second,
+    dx2, dxy, odxy apart) and ``ny``/``nz``, 6 arrays: kernel alone, CPU time, 1 thread, same process against the
+    kernel before, both from numba's cache, best of 9-13, load 1.4-1.9, 1.045-1.079x on spheres 10-20 voxels wide
+    (seven processes), 1.051x on 20-40, 1.016x on 40-80; the same with three more (unused) array arguments ran as
+    the kernel before. Also tried, no better than this within the noise: the ``bits`` scratch dropped (one array
+    less), the ball loop moved into a function without reference counting that inlines this one (no call per ball),
+    or this one inlined into :func:`_shell_plane` compiled without reference counting (earlier, inlined into a
+    :func:`_shell_plane` with reference counting, it ran 0.61-0.66x).
     """
+    owner, second = owners[0], owners[1]
+    dxy, odxy = dist[2], dist[3]
+    ny, nz = out.shape
     cx, cy, cz, r = images[s, 0], images[s, 1], images[s, 2], images[s, 3]
     r2 = r * r
     nx_, fx_ = hull_gap(cx, i, h)
     j0, j1 = axis_range(cy, r, h, ny)
     k0, k1 = axis_range(cz, r, h, nz)
-    _plane_distances(i, cx, h, dx2[0])
+    _plane_distances(i, cx, h, dist[0])
     frame = _ball_frame(cz, r, h)
     z_frame = _ranges_frame(cz, r, h)
     for j in range(j0, j1):
@@ -647,7 +671,7 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
         near_xy = nx_ * nx_ + ny_ * ny_
         if _row_reach(r2, near_xy) < 0.0:  # before the row's distances and room, which its ranges then follow
             continue
-        _row_distances(dx2[0], j, cy, h, dxy, r2, room[0])
+        _row_distances(dist[0], j, cy, h, dxy, r2, room[0])
         lo, hi, f_lo, f_hi = _row_ranges(z_frame, r2, near_xy, fx_ * fx_ + fy_ * fy_, k0, k1)
         if f_hi > f_lo:  # a slice fill: ~2x faster than a loop over these short runs (measured)
             out[j, f_lo:f_hi] = np.uint8(N_SAMPLES)
@@ -676,7 +700,7 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
                     owner,
                     second,
                     mask,
-                    dx2[1],
+                    dist[1],
                     odxy,
                     bits,
                     out,
@@ -687,17 +711,17 @@ def _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bi
 def _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, shell, out):
     """Grey values of plane x = i, ball after ball in one pass (bit-identical to brute force).
 
-    ``shell``: the scratch of :func:`_plane_scratch` that :func:`_ball_plane` takes; its ``owner``/``second`` (ny, nz)
+    ``shell``: the scratch of :func:`_plane_scratch` that :func:`_ball_plane` takes; its ``owners`` (2, ny, nz)
     int32 and ``mask`` (ny, nz, WORDS) need no clearing: they are read only in voxels whose grey value a ball of
     this plane has already set to 1..215.
     """
-    owner, second, mask, dx2, dxy, odxy, bits, room, ends = shell
+    owners, mask, dist, bits, room, ends = shell
     out[:, :] = 0
     plane_lo, first, last = plane_candidates(i, h, xmin_sorted, r_max)
     for q in range(first, last):
         s = order[q]
         if images[s, 0] + images[s, 3] >= plane_lo:
-            _ball_plane(i, s, images, h, ny, nz, owner, second, mask, dx2, dxy, odxy, bits, room, ends, out)
+            _ball_plane(i, s, images, h, owners, mask, dist, bits, room, ends, out)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -706,12 +730,9 @@ def _plane_scratch(ny, nz):
     force's two arrays besides status and mask (:func:`_voxelize_plane`)).
     """
     shell = (
-        np.empty((ny, nz), dtype=np.int32),  # owner
-        np.empty((ny, nz), dtype=np.int32),  # second
+        np.empty((2, ny, nz), dtype=np.int32),  # owner, second
         np.empty((ny, nz, WORDS), dtype=np.uint64),  # mask
-        np.empty((2, N_ROWS)),  # dx2
-        np.empty(N_ROWS),  # dxy
-        np.empty(N_ROWS),  # odxy
+        np.empty((4, N_ROWS)),  # dist: dx2 (this ball's, an earlier one's), dxy, odxy
         np.empty(N_ROWS, dtype=np.int64),  # bits
         np.zeros((2, CHORD_ROWS), dtype=np.float32),  # room (this ball's, an earlier one's)
         np.zeros((2, 2, CHORD_ROWS), dtype=np.int32),  # ends: zero (empty chords) from row N_ROWS on
@@ -739,5 +760,5 @@ def _voxelize_slab(i0, i1, images, order, xmin_sorted, r_max, h, ny, nz, boundar
                 _shell_plane(i, images, order, xmin_sorted, r_max, h, ny, nz, shell, out[p])
             else:
                 _voxelize_plane(
-                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, shell[2], brute, words, out[p]
+                    i, images, order, xmin_sorted, r_max, h, ny, nz, status, shell[1], brute, words, out[p]
                 )
