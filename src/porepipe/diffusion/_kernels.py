@@ -475,6 +475,25 @@ def _crossed(t_leave, t, rate, s, r):
     return min(math.floor(max((t_leave - t) * rate, -1.0)) + 1.0, r)
 
 
+@njit(cache=True, inline="always")
+def _outside(i, n):
+    """Whether index ``i`` is outside 0..n-1 (one unsigned compare: a negative ``i`` wraps to a huge one)."""
+    return np.uint64(i) >= np.uint64(n)
+
+
+@njit(cache=True, inline="always")
+def _jump(m0, m1, m2, t0, t1, t2, dt0, dt1, dt2, q0, q1, q2, s0, s1, s2):
+    """A jump through a pore box ``m0, m1, m2`` faces deep ahead per axis: it leaves the box at the earliest axis's
+    far face, T = min_d(t_d + m_d dt_d), and each axis crosses its faces up to T (:func:`_crossed`). Returns the next
+    crossing times and the faces crossed per axis (t0, t1, t2, k0, k1, k2).
+    """
+    t_leave = min(t0 + m0 * dt0, min(t1 + m1 * dt1, t2 + m2 * dt2))
+    g0 = _crossed(t_leave, t0, q0, s0, m0)
+    g1 = _crossed(t_leave, t1, q1, s1, m1)
+    g2 = _crossed(t_leave, t2, q2, s2, m2)
+    return t0 + g0 * dt0, t1 + g1 * dt1, t2 + g2 * dt2, np.int64(g0), np.int64(g1), np.int64(g2)
+
+
 #: smallest chessboard code of a voxel whose cube is jumped through: a jump costs several walk steps, and the cube of
 #: code 3 (half-width 2) saves fewer; every slab and prism code is above it
 _JUMP_CODE = 4
@@ -519,6 +538,8 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     leaves the box at T = min_d(t_d + r_d dt_d) and advances every axis by the faces it crosses before T (at most
     r_d: the index stays in the box). A flight that starts next to a wall (after a wall hit) first tries boxes
     centred ahead of it (:func:`_ahead_cube`): per axis it may then cross r_d + s_d o_d faces, up to the far face.
+    That first jump is taken before the walk; the later ones inside the walk's loop (a step into a voxel of code >=
+    _JUMP_CODE jumps on at once), so that only solid, the volume's outside or a periodic wrap leave the loop.
     """
     st0 = n1 * n2
     u0, u1, u2 = u[0], u[1], u[2]
@@ -531,31 +552,26 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     w0 = w1 = w2 = 0  # periodic wraps
     lin = (i0 * n1 + i1) * n2 + i2
     c = flat[np.uint64(lin)]
-    o0 = o1 = o2 = 0  # offset of the jump box's centre from the particle's voxel (0 but for the first jump)
     if (c < _JUMP_CODE) | ((c >= _EDGE_CODE) & (c < _PRISM_CODE)):
         c, o0, o1, o2 = _ahead_cube(flat, n0, n1, n2, i0, i1, i2, s0, s1, s2, lin, c)
+        if c >= _JUMP_CODE:  # the first jump: to the far face of a box centred (o0, o1, o2) from the voxel
+            m0 = _HALF_WIDTH[0, c] + float(s0 * o0)  # faces ahead to the box's far face, per axis
+            m1 = _HALF_WIDTH[1, c] + float(s1 * o1)
+            m2 = _HALF_WIDTH[2, c] + float(s2 * o2)
+            t0, t1, t2, k0, k1, k2 = _jump(m0, m1, m2, t0, t1, t2, dt0, dt1, dt2, q0, q1, q2, s0, s1, s2)
+            i0, i1, i2 = i0 + k0 * s0, i1 + k1 * s1, i2 + k2 * s2
+            lin += k0 * f0 + k1 * f1 + k2 * f2
+            c = 1  # walk on from the box's far face
     crossings = 0
     event = -1
     t = 0.0
     while True:
-        if c >= _JUMP_CODE:
-            m0 = _HALF_WIDTH[0, c] + float(s0 * o0)  # faces ahead to the box's far face, per axis
-            m1 = _HALF_WIDTH[1, c] + float(s1 * o1)
-            m2 = _HALF_WIDTH[2, c] + float(s2 * o2)
-            o0 = o1 = o2 = 0
-            t_leave = min(t0 + m0 * dt0, min(t1 + m1 * dt1, t2 + m2 * dt2))
-            g0 = _crossed(t_leave, t0, q0, s0, m0)
-            g1 = _crossed(t_leave, t1, q1, s1, m1)
-            g2 = _crossed(t_leave, t2, q2, s2, m2)
-            t0 += g0 * dt0
-            t1 += g1 * dt1
-            t2 += g2 * dt2
-            k0, k1, k2 = np.int64(g0), np.int64(g1), np.int64(g2)
-            i0 += k0 * s0
-            i1 += k1 * s1
-            i2 += k2 * s2
-            lin += k0 * f0 + k1 * f1 + k2 * f2
-        while True:  # walk face by face until solid, the box's outside, or a voxel worth a jump
+        while True:  # face by face until solid or the volume's outside, jumping through the boxes worth it
+            if c >= _JUMP_CODE:
+                m0, m1, m2 = _HALF_WIDTH[0, c], _HALF_WIDTH[1, c], _HALF_WIDTH[2, c]
+                t0, t1, t2, k0, k1, k2 = _jump(m0, m1, m2, t0, t1, t2, dt0, dt1, dt2, q0, q1, q2, s0, s1, s2)
+                i0, i1, i2 = i0 + k0 * s0, i1 + k1 * s1, i2 + k2 * s2
+                lin += k0 * f0 + k1 * f1 + k2 * f2
             x0 = (t0 <= t1) & (t0 <= t2)
             x1 = (not x0) & (t1 <= t2)
             x01 = x0 | x1
@@ -567,11 +583,11 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
             t1 = _select(x1, t1 + dt1, t1)
             t2 = _select(x01, t2, t2 + dt2)
             lin += _select(x0, f0, _select(x1, f1, f2))
-            out = (i0 < 0) | (i0 >= n0) | (i1 < 0) | (i1 >= n1) | (i2 < 0) | (i2 >= n2)
+            out = _outside(i0, n0) | _outside(i1, n1) | _outside(i2, n2)
             if out:
                 break
             c = flat[np.uint64(lin)]  # unsigned: no wraparound check
-            if (c == 0) | (c >= _JUMP_CODE):
+            if c == 0:
                 break
             crossings += 1
         d = 0 if x0 else (1 if x1 else 2)
@@ -599,9 +615,6 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
                         w2 += s2
                     crossings += 1
                     continue
-        if c != 0 and not out:
-            crossings += 1
-            continue  # c >= _JUMP_CODE: jump
         if event < 0:
             event = 2 * d + ((s0 if x0 else (s1 if x1 else s2)) > 0)
         break
