@@ -271,7 +271,9 @@ def _row_distances(dx2, j, cy, h, dxy, r2=0.0, room=None):
             room[q] = np.float32(r2 - d)
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+# not inline="always" (issue #22): called on the rare paths of :func:`_add_shell` (exact tests, unions), so a plain
+# call costs nothing measurable, and numba's IR inlining of it into every call site cost compile time
+@njit(cache=True, fastmath=FASTMATH)
 def _z_distances(k, cz, h):
     """Squared z distances of the 6 samples of voxel ``k`` along z (as in :func:`_mark_points`)."""
     d0 = sample_coord(k, 0, h) - cz
@@ -283,7 +285,9 @@ def _z_distances(k, cz, h):
     return d0 * d0, d1 * d1, d2 * d2, d3 * d3, d4 * d4, d5 * d5
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+# not inline="always" (issue #22): called on the rare paths of :func:`_add_shell` (exact tests, unions), so a plain
+# call costs nothing measurable, and numba's IR inlining of it into every call site cost compile time
+@njit(cache=True, fastmath=FASTMATH)
 def _voxel_count(dxy, t, r2):
     """Samples of a voxel of a voxel row inside the ball: all 216 exact tests ``dxy + dz*dz <= r*r``, vectorised.
 
@@ -456,7 +460,9 @@ SHARED = -1
 PAIR = -2
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+# not inline="always" (issue #22): called on the rare paths of :func:`_add_shell` (exact tests, unions), so a plain
+# call costs nothing measurable, and numba's IR inlining of it into every call site cost compile time
+@njit(cache=True, fastmath=FASTMATH)
 def _ball_rows(i, j, b, images, h, dx2, dxy):
     """Row distances of ball ``b`` in voxel row (i, j) into ``dxy`` (``dx2`` scratch); returns its r*r."""
     _plane_distances(i, images[b, 0], h, dx2)
@@ -464,7 +470,9 @@ def _ball_rows(i, j, b, images, h, dx2, dxy):
     return images[b, 3] * images[b, 3]
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+# not inline="always" (issue #22): called on the rare paths of :func:`_add_shell` (exact tests, unions), so a plain
+# call costs nothing measurable, and numba's IR inlining of it into every call site cost compile time
+@njit(cache=True, fastmath=FASTMATH)
 def _union_count(da, ta, ra2, db, tb, rb2):
     """Samples of a voxel inside ball a or ball b (row distances ``da``/``db``, squared z distances ``ta``/``tb``):
     the 2 x 216 exact tests of :func:`_voxel_count`, ORed per sample and counted, vectorised over the rows.
