@@ -203,13 +203,14 @@ def _full_gather(pore: np.ndarray, periodic) -> np.ndarray:
 
 
 def _irregular_columns(full: np.ndarray, irregular: np.ndarray) -> np.ndarray:
-    """The columns of the irregular nodes: compacted in place (no second table) when they are most of the table,
-    else copied so that the full table can be freed.
+    """The columns of the irregular nodes, C-contiguous either way (the step kernel compiles once per array layout):
+    packed in place into the front of the table (no second table) when they are most of it, else copied so that the
+    full table can be freed.
     """
     k = int(np.count_nonzero(irregular))
     if 2 * k > full.shape[1]:
         _compact_columns(full, irregular)
-        return full[:, :k]
+        return full.reshape(-1)[: full.shape[0] * k].reshape(full.shape[0], k)
     return np.ascontiguousarray(full[:, irregular])
 
 

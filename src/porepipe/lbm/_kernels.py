@@ -332,14 +332,22 @@ def _wall_links(gather):
 
 @njit(cache=True)
 def _compact_columns(table, keep):
-    """Move the columns ``keep`` of ``table`` to its front, in order (in place); returns their number."""
-    count = 0
-    for n in range(table.shape[1]):
-        if keep[n]:
-            for q in range(table.shape[0]):
-                table[q, count] = table[q, n]
-            count += 1
-    return count
+    """Pack the columns ``keep`` of the C-contiguous ``table`` (R, N), in order, into its first R k elements as a
+    C-contiguous (R, k) table (in place); returns k. Row by row, element by element: a value moves from flat index
+    q N + n to q k + i with i <= n and k <= N, never onto one not yet moved.
+    """
+    rows, n_cols = table.shape
+    k = 0
+    for n in range(n_cols):
+        k += keep[n]
+    flat = table.reshape(rows * n_cols)
+    for q in range(rows):
+        count = q * k
+        for n in range(n_cols):
+            if keep[n]:
+                flat[count] = flat[q * n_cols + n]
+                count += 1
+    return k
 
 
 @njit(cache=True)

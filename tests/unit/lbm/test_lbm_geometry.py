@@ -165,3 +165,18 @@ def test_lattice_build_memory_stays_within_its_budget(geometry):
     n = lat.n_nodes
     assert peak <= 4 * pore.size + 100 * n
     assert kept <= (10 if geometry == "dense" else 76) * n
+
+
+@pytest.mark.parametrize("kept", [0.3, 0.7, 1.0])
+def test_irregular_columns_are_numpys_column_selection_and_c_contiguous(kept):
+    # in place (most columns kept) or copied, the table is C-contiguous: the step kernel compiles once per array
+    # layout, so a strided view for one geometry and a copy for another compiled it twice (~16 CPU-s each)
+    from porepipe.lbm._domain import _irregular_columns
+
+    rng = np.random.default_rng(3)
+    full = rng.integers(0, 2**32, (18, 997), dtype=np.uint32)
+    keep = rng.random(997) < kept
+    expected = full[:, keep].copy()  # numpy's own selection
+    got = _irregular_columns(full, keep)
+    assert got.flags.c_contiguous and got.dtype == np.uint32
+    np.testing.assert_array_equal(got, expected)
