@@ -10,6 +10,7 @@ if not config.get("scene") and not config.get("scenes"):
 
 
 include: "workflow/rules/common.smk"
+include: "workflow/rules/warm.smk"
 include: "workflow/rules/pack.smk"
 include: "workflow/rules/decorate.smk"
 include: "workflow/rules/voxelize.smk"

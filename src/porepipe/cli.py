@@ -12,6 +12,7 @@ from porepipe import __version__
 from porepipe._registry import STAGES, stage_cli_modules, stage_settings
 from porepipe._shared.cost import mark_compute_start
 from porepipe._shared.errors import PorepipeError
+from porepipe.warm import STAGES as WARM_STAGES
 
 
 def _validate(args) -> int:
@@ -93,6 +94,17 @@ def _job_environment() -> dict:
     return env
 
 
+def _warm(args) -> int:
+    from porepipe._shared.resources import scene_path
+    from porepipe.warm import warm
+
+    # a failed warm-up says so in one line and leaves the compiling to the stage's jobs
+    warm(scene_path(args.scene), args.stage, main)
+    if args.out:
+        Path(args.out).touch()
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``porepipe`` argument parser with every stage's subcommands."""
     parser = argparse.ArgumentParser(prog="porepipe", description=__doc__)
@@ -119,6 +131,13 @@ def build_parser() -> argparse.ArgumentParser:
         "Arguments after `--` go to Snakemake unchanged, e.g. `porepipe run S.yaml --cores 2 -- --forceall`."
     )
     p.set_defaults(func=_run, snakemake_args=[])
+    p = sub.add_parser(
+        "warm", help="compile one stage's kernels for a scene ahead of its jobs, on a tiny twin"
+    )
+    p.add_argument("stage", choices=WARM_STAGES, help="the stage whose kernels to compile")
+    p.add_argument("--scene", required=True, help="scene YAML file, or the name of a shipped scene")
+    p.add_argument("-o", "--out", help="a file to create when done (the workflow's marker)")
+    p.set_defaults(func=_warm)
     settings = stage_settings()
     for (_package, key), module in zip(STAGES, stage_cli_modules()):
         before = set(sub.choices)

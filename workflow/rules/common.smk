@@ -11,6 +11,8 @@ from pathlib import Path
 from porepipe._shared.naming import TAG_RE, res_tag
 from porepipe.diffusion import check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
+from porepipe.warm import STAGES as WARM_STAGES
+from porepipe.warm import is_warm, warmable
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH
 shell.prefix(f'export PATH={shlex.quote(str(Path(sys.executable).parent))}:"$PATH"; ')
@@ -290,6 +292,51 @@ def every_core(cluster_threads):
         return cluster_threads
 
     return threads
+
+
+def pack_threads(wildcards):
+    """The pack job's threads: one up to PACK_SPHERES_PER_THREAD spheres (the mini scene's 300 pack in 3.3 s on one
+    or two threads, 5 000 in 8.0 s on either), so that a warm job runs beside it; more for larger packings, at most
+    every core (8 on a cluster).
+    """
+    types = scene_of(wildcards).packing.types
+    spheres = sum(t.count or 0 for t in types) if all(t.count is not None for t in types) else math.inf
+    cap = every_core(8)(wildcards)
+    return max(1, min(cap, math.ceil(spheres / PACK_SPHERES_PER_THREAD))) if spheres < math.inf else cap
+
+
+#: spheres per thread of a pack job (pack_threads)
+PACK_SPHERES_PER_THREAD = 5000
+
+
+_warm_planned = {}
+
+
+def warm_planned(scene, stage):
+    """Whether this run compiles `stage`'s kernels for `scene` in a warm job first (porepipe.warm): a local run on
+    two or more cores (on one, a warm job has no idle core to fill and only adds its twin's run), a scene whose grey
+    volumes come from spheres, and no finished warm-up since porepipe's sources last changed.
+    """
+    key = (scene.name, stage)
+    if key not in _warm_planned:
+        local = workflow.local_exec and not workflow.remote_exec and (workflow.cores or 1) > 1
+        _warm_planned[key] = local and warmable(scene) and not is_warm(SCENE_FILES[scene.name], stage)
+    return _warm_planned[key]
+
+
+def warm_input(stage):
+    """An input function for `stage`'s jobs: the marker of its warm job, when the run plans one."""
+
+    def marker(wildcards):
+        scene = scene_of(wildcards)
+        return [results(scene, "warm", f"{stage}.done")] if warm_planned(scene, stage) else []
+
+    return marker
+
+
+def warm_before(wildcards):
+    """The warm jobs after voxelize's wait for it: their twins voxelise and segment first."""
+    return warm_input("voxelize")(wildcards) if wildcards.stage != "voxelize" else []
 
 
 def threads_by_volume(most, voxels_per_thread):

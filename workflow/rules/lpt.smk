@@ -7,6 +7,7 @@ rule lpt:
     input:
         binary=binary_volume,
         scene=scene_file,
+        warm=warm_input("lpt"),
     output:
         "results/{scene}/lpt/lpt_a{a}{sub}.h5",
     log:

@@ -6,6 +6,7 @@
 rule minkowski:
     input:
         unpack(minkowski_inputs),
+        warm=warm_input("minkowski"),
     output:
         "results/{scene}/minkowski/minkowski_a{a}{sub}.h5",
     log:

@@ -13,7 +13,7 @@ rule pack:
         "results/{scene}/cost/pack.tsv"
     conda:
         "../envs/porepipe.yaml"
-    threads: every_core(8)
+    threads: pack_threads
     resources:
         cpus_per_task=cpus_per_task,
         mem_mb=4000,

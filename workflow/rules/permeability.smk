@@ -6,6 +6,7 @@
 rule permeability:
     input:
         unpack(permeability_inputs),
+        warm=warm_input("permeability"),
     output:
         "results/{scene}/permeability/perm_a{a}{sub}_{axis}.h5",
     log:

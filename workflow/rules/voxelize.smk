@@ -5,6 +5,7 @@ rule voxelize:
     input:
         scene=scene_file,
         packing=packing_input,
+        warm=warm_input("voxelize"),
     output:
         "results/{scene}/voxelize/grey_a{a}.h5",
     log:
