@@ -11,8 +11,9 @@ on a volume past the memory budget (chunked) or with MPI still compiles what the
 
 Warming is a shortcut, never a condition: a twin that fails (a setting the tiny box cannot satisfy) prints one line and
 leaves the compilation to the real jobs. A marker beside numba's cache (:func:`marker_path`, keyed by the porepipe
-sources, the twin and the numba and Python versions) records a finished warm-up, so a later run of the same scene
-plans no warm jobs; deleting the cache deletes the marker, and a stale marker only costs the time a cold job takes.
+sources, the scene file and the numba and Python versions) records a finished warm-up, so a later run of the same
+scene plans no warm jobs; deleting the cache deletes the marker, and a stale marker only costs the time a cold job
+takes. Where that folder cannot be written, no marker is kept and each run warms again (from numba's cache: seconds).
 """
 
 from __future__ import annotations
@@ -95,7 +96,7 @@ def marker_path(scene_path: str | os.PathLike, stage: str) -> Path:
     """Where a finished warm-up of ``stage`` for this scene leaves its marker: in numba's cache folder
     (``NUMBA_CACHE_DIR``, else the ``__pycache__`` of porepipe's package), named by the key of the module docstring.
     """
-    import numba
+    from importlib.metadata import version  # not numba itself: the Snakefile asks before any job runs
 
     root = Path(__file__).resolve().parent
     h = hashlib.sha256()
@@ -103,7 +104,7 @@ def marker_path(scene_path: str | os.PathLike, stage: str) -> Path:
         h.update(str(f.relative_to(root)).encode())
         h.update(f.read_bytes())
     h.update(Path(scene_path).read_bytes())
-    h.update(f"{stage} {numba.__version__} {sys.version}".encode())
+    h.update(f"{stage} {version('numba')} {sys.version}".encode())
     cache = os.environ.get("NUMBA_CACHE_DIR")
     folder = Path(cache) if cache else root / "__pycache__"
     return folder / f"porepipe-warm-{stage}-{h.hexdigest()[:20]}"
@@ -179,8 +180,11 @@ def _warm_in_temp(scene_path, stage: str, main, load_scene) -> bool:
         if not _run_twin(scene_path, stage, edge, main, load_scene):
             return False
     marker = marker_path(scene_path, stage)
-    marker.parent.mkdir(parents=True, exist_ok=True)
-    marker.touch()
+    try:
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
+    except OSError as err:  # a read-only install: warm again next time
+        print(f"porepipe warm {stage}: no marker kept ({err})", file=sys.stderr)
     return True
 
 

@@ -120,3 +120,12 @@ def test_every_shipped_scene_with_a_warm_up_has_valid_twins(tmp_path):
             load_scene(twin)
             checked += 1
     assert checked >= 10
+
+
+def test_a_marker_folder_that_cannot_be_written_costs_the_marker_not_the_run(tmp_path, monkeypatch, capsys):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(blocker / "cache"))  # a folder inside a file: mkdir fails
+    monkeypatch.setattr(W, "_run_twin", lambda *args: True)
+    assert W.warm(MINI, "minkowski", main) is True
+    assert "no marker kept" in capsys.readouterr().err and not W.is_warm(MINI, "minkowski")
