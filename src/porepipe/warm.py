@@ -19,6 +19,7 @@ takes. Where that folder cannot be written, no marker is kept and each run warms
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import io
 import math
@@ -96,6 +97,19 @@ def marker_path(scene_path: str | os.PathLike, stage: str) -> Path:
     """Where a finished warm-up of ``stage`` for this scene leaves its marker: in numba's cache folder
     (``NUMBA_CACHE_DIR``, else the ``__pycache__`` of porepipe's package), named by the key of the module docstring.
     """
+    h = hashlib.sha256(_sources_digest())
+    h.update(Path(scene_path).read_bytes())
+    h.update(stage.encode())
+    cache = os.environ.get("NUMBA_CACHE_DIR")
+    folder = Path(cache) if cache else Path(__file__).resolve().parent / "__pycache__"
+    return folder / f"porepipe-warm-{stage}-{h.hexdigest()[:20]}"
+
+
+@functools.cache
+def _sources_digest() -> bytes:
+    """sha256 of porepipe's sources and the numba and Python versions, once per process (the Snakefile asks for
+    every stage's marker).
+    """
     from importlib.metadata import version  # not numba itself: the Snakefile asks before any job runs
 
     root = Path(__file__).resolve().parent
@@ -103,11 +117,8 @@ def marker_path(scene_path: str | os.PathLike, stage: str) -> Path:
     for f in sorted(root.rglob("*.py")):
         h.update(str(f.relative_to(root)).encode())
         h.update(f.read_bytes())
-    h.update(Path(scene_path).read_bytes())
-    h.update(f"{stage} {version('numba')} {sys.version}".encode())
-    cache = os.environ.get("NUMBA_CACHE_DIR")
-    folder = Path(cache) if cache else root / "__pycache__"
-    return folder / f"porepipe-warm-{stage}-{h.hexdigest()[:20]}"
+    h.update(f"{version('numba')} {sys.version}".encode())
+    return h.digest()
 
 
 def is_warm(scene_path: str | os.PathLike, stage: str) -> bool:

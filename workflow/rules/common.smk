@@ -299,10 +299,11 @@ def pack_threads(wildcards):
     or two threads, 5 000 in 8.0 s on either), so that a warm job runs beside it; more for larger packings, at most
     every core (8 on a cluster).
     """
-    types = scene_of(wildcards).packing.types
-    spheres = sum(t.count or 0 for t in types) if all(t.count is not None for t in types) else math.inf
+    counts = [t.count for t in scene_of(wildcards).packing.types]  # None: given as a number density
     cap = every_core(8)(wildcards)
-    return max(1, min(cap, math.ceil(spheres / PACK_SPHERES_PER_THREAD))) if spheres < math.inf else cap
+    if None in counts:
+        return cap
+    return max(1, min(cap, math.ceil(sum(counts) / PACK_SPHERES_PER_THREAD)))
 
 
 #: spheres per thread of a pack job (pack_threads)
