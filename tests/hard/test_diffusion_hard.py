@@ -16,6 +16,7 @@ def _finite(values):
     return all(math.isfinite(v) for v in values.values() if isinstance(v, float))
 
 
+@pytest.mark.slow
 def test_one_voxel_channel_equals_the_scaled_square_channel():
     """A 1 x 1 x 10 channel is the a = 30, L = 300 square channel scaled by 1/30: W = 0.119 (digest table)."""
     r = transport(np.ones((1, 1, 10), np.uint8), 2, S, seed=1)

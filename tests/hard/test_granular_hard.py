@@ -22,6 +22,7 @@ def _finite(sim):
     assert np.all(np.isfinite(sim.G)) and np.all(np.isfinite(sim.pout))
 
 
+@pytest.mark.slow
 def test_coincident_polygons_are_refused_at_the_start_and_finite_when_allowed():
     p = {"vertices_m": square(0.01), "position_m": (0.0, 0.0)}
     with pytest.raises(PorepipeError, match="initial placement overlaps"):

@@ -18,6 +18,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 import yaml
 from h5content import differences, h5_results
 
@@ -89,6 +90,7 @@ def _run_until(scene: Path, cwd: Path, ready) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_killed_workflow_reruns_to_bit_identical_results(tmp_path):
     scene = _scene(tmp_path)
     reference, killed = tmp_path / "reference", tmp_path / "killed"

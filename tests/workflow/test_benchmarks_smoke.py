@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[2]
 BENCHMARKS = sorted(
     p for p in (ROOT / "benchmarks").glob("*.py") if not p.name.startswith("_")

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pint
+import pytest
 import xarray as xr
 import yaml
 
@@ -58,6 +59,7 @@ def test_dry_run_without_segmentation_has_no_segment_jobs(tmp_path):
     assert rules == {"all": 1, "pack": 1, "voxelize": len(scene["resolutions_um"]), "estimate": 1}, rules
 
 
+@pytest.mark.slow
 def test_mini_scene_runs_end_to_end(mini_local_run):
     cwd, out, _ = mini_local_run
     assert out.returncode == 0, out.stderr[-3000:]

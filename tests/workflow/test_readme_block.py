@@ -73,6 +73,7 @@ def fresh_clone(tmp_path, monkeypatch):
     return tmp_path
 
 
+@pytest.mark.slow
 def test_using_it_block_runs_in_order(fresh_clone, capsys):
     lines = _block()
     skipped = [line for line in lines if _argv(line) is None]

@@ -96,6 +96,9 @@ def test_mini_scene_on_slurm_equals_the_local_run(cluster, tmp_path, mini_local_
             "squeue",
             "--slurm-init-seconds-before-status-checks",
             "2",
+            # a one-node test cluster: poll every second, not every 10 s (each of the ~18 jobs waits for a poll)
+            "--seconds-between-status-checks",
+            "1",
         ],
         cwd=slurm,
     )

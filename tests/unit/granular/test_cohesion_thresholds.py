@@ -41,6 +41,7 @@ def _hanging(k, n=1, depths=None, damping=1.0):
     return simulation(parts, [ceiling], dt_s=DT, material=mat, gravity_m_s2=(0.0, -G))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("factor", [0.9, 1.1])
 def test_block_hangs_under_a_ceiling_iff_k_a_exceeds_m_g(factor):
     sim = _hanging(factor * K_HANG)

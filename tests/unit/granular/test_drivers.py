@@ -29,6 +29,7 @@ def test_size_scale_is_eq_b1():
         assert _size_scale(hp, t) == pytest.approx(expect, rel=1e-15)
 
 
+@pytest.mark.slow
 def test_piston_settles_where_the_grain_pushes_back_and_follows_its_growth():
     # a square (g = 0) between the floor (top y = 0) and a piston slab pressed down with F. At rest both contacts
     # carry F = E A_c / l with l = r = sqrt(area/pi) (wall: r = inf): overlap A_c = F r / E, depth h = A_c / a,

@@ -37,6 +37,7 @@ def test_waveforms_and_gravity_schedules():
     assert _gravity_scale(gp, 0.6) == pytest.approx(0.6)
 
 
+@pytest.mark.slow
 def test_effects_against_closed_forms():
     g0, g1, t_ramp = 9.81, 4.905, 0.1
     u_belt, w, f = 0.1, 1e-3, 5.0

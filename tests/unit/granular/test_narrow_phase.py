@@ -108,6 +108,7 @@ def test_climb_does_not_depend_on_its_start():
         assert all(np.array_equal(o, outs[0]) for o in outs)
 
 
+@pytest.mark.slow
 def test_simulation_with_facing_chain_follows_the_reference():
     # 30 random 7-gons (5 mm) falling onto the floor of a box and each other, 3000 steps (impacts, 50 list
     # rebuilds): the default stepper (facing chain) against the whole-polygon clipping. The two differ by

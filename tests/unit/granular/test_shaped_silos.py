@@ -42,7 +42,8 @@ from porepipe.scene import load_scene
 
 SCENES = Path(__file__).parents[3] / "config" / "scenes"
 
-pytestmark = pytest.mark.slow
+# one worker runs this module's fixture once (the README's --dist loadgroup)
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("shaped_silos")]
 
 #: seed-to-seed standard deviation of one run's statistics, pooled over the three shapes and 22 runs (see the
 #: module docstring)

@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 import yaml
 
 from porepipe import warm as W
@@ -37,6 +38,7 @@ def _porepipe(*args, cwd, env):
     )
 
 
+@pytest.mark.slow
 def test_after_the_warm_up_the_stages_own_jobs_compile_nothing(tmp_path):
     # a fresh numba cache: everything compiles here, in the warm-up, and not again in the jobs; the jobs' own
     # announcement of a real compilation ("compiling kernels") is what tells
