@@ -17,9 +17,12 @@ through its high face.
 from __future__ import annotations
 
 import math
+import platform
 
 import numpy as np
+from llvmlite import ir
 from numba import njit, prange, types
+from numba.core import cgutils
 from numba.extending import intrinsic
 
 from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
@@ -448,6 +451,61 @@ def _select(typingctx, cond, a, b):
     return a(cond, a, b), codegen
 
 
+#: scalar double compares into an all-ones / all-zeros bit mask (SSE2's cmpsd), which x86's backend keeps in vector
+#: registers; elsewhere the generic compare, which LLVM may turn back into selects
+_X86 = platform.machine().lower() in ("x86_64", "amd64")
+
+
+_V2 = ir.VectorType(ir.DoubleType(), 2)
+_MASK2 = ir.VectorType(ir.IntType(64), 2)
+_LANE = ir.Constant(ir.IntType(32), 0)
+
+
+def _lane(builder, x):
+    """Double ``x`` in lane 0 of a 2-vector (the other lane undefined)."""
+    return builder.insert_element(ir.Constant(_V2, ir.Undefined), x, _LANE)
+
+
+def _le_mask(builder, a, b):
+    """Lane 0 all-ones bits where double ``a <= b``, else 0 (a 2 x i64 vector: the masks stay in vector
+    registers).
+    """
+    if not _X86:
+        bit = builder.sext(builder.fcmp_ordered("<=", a, b), ir.IntType(64))
+        return builder.insert_element(ir.Constant(_MASK2, ir.Undefined), bit, _LANE)
+    cmp = cgutils.get_or_insert_function(
+        builder.module, ir.FunctionType(_V2, [_V2, _V2, ir.IntType(8)]), "llvm.x86.sse2.cmp.sd"
+    )
+    mask = builder.call(cmp, [_lane(builder, a), _lane(builder, b), ir.Constant(ir.IntType(8), 2)])  # 2: <=
+    return builder.bitcast(mask, _MASK2)
+
+
+@intrinsic
+def _advance(typingctx, t0, t1, t2, dt0, dt1, dt2):
+    """The walk's next crossing times after one step: the earliest axis (ties: lowest axis first) advances by its
+    ``dt``, the others keep theirs — by bit masks from the compares (``t + (mask & dt)``), no branch and no select.
+    Bit for bit ``t + dt`` or ``t + 0.0 = t`` (times are >= 0 and finite).
+    """
+    if not all(isinstance(x, types.Float) for x in (t0, t1, t2, dt0, dt1, dt2)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        a0, a1, a2, d0, d1, d2 = args
+        m0 = builder.and_(_le_mask(builder, a0, a1), _le_mask(builder, a0, a2))  # axis 0 earliest
+        m1 = builder.and_(builder.not_(m0), _le_mask(builder, a1, a2))  # else axis 1 if not after axis 2
+        m2 = builder.not_(builder.or_(m0, m1))
+
+        def step(t, m, d):
+            masked = builder.and_(m, builder.bitcast(_lane(builder, d), _MASK2))
+            return builder.fadd(t, builder.extract_element(builder.bitcast(masked, _V2), _LANE))
+
+        return context.make_tuple(
+            builder, signature.return_type, [step(a0, m0, d0), step(a1, m1, d1), step(a2, m2, d2)]
+        )
+
+    return types.UniTuple(types.float64, 3)(t0, t1, t2, dt0, dt1, dt2), codegen
+
+
 @njit(cache=True, inline="always")
 def _axis_start(u, p, i, h):
     """(step sign, time to the first face crossing, time between crossings, crossings per unit time) of one axis for
@@ -533,7 +591,8 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
 
     Every face crossing is a time from the flight's start: per axis the next one, ``t0, t1, t2``, advanced by the
     fixed ``dt0, dt1, dt2`` (no position update, no division in the walk). A walk step picks the earliest axis
-    (ties: lowest axis first) by selects, moves the flat index by that axis's stride and loads one byte. From a
+    (ties: lowest axis first) — its times by bit masks (:func:`_advance`), its indices by selects —, moves the flat
+    index by that axis's stride and loads one byte. From a
     voxel of code >= _JUMP_CODE, a jump through the pore box of half-widths r_d = _HALF_WIDTH[d, code] around it
     leaves the box at T = min_d(t_d + r_d dt_d) and advances every axis by the faces it crosses before T (at most
     r_d: the index stays in the box). A flight that starts next to a wall (after a wall hit) first tries boxes
@@ -579,9 +638,7 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
             i0 = _select(x0, i0 + s0, i0)
             i1 = _select(x1, i1 + s1, i1)
             i2 = _select(x01, i2, i2 + s2)
-            t0 = _select(x0, t0 + dt0, t0)
-            t1 = _select(x1, t1 + dt1, t1)
-            t2 = _select(x01, t2, t2 + dt2)
+            t0, t1, t2 = _advance(t0, t1, t2, dt0, dt1, dt2)
             lin += _select(x0, f0, _select(x1, f1, f2))
             out = _outside(i0, n0) | _outside(i1, n1) | _outside(i2, n2)
             if out:

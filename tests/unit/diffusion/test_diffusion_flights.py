@@ -3,14 +3,18 @@
 import numpy as np
 import pytest
 from naive_diffusion import flight_naive
+from numba import njit
 
+from porepipe.diffusion import _kernels as K
 from porepipe.diffusion._kernels import (
     _AHEAD,
     _EDGE_CODE,
     _HALF_WIDTH,
     _JUMP_CODE,
+    _NEVER,
     _PRISM_CODE,
     _SLAB_CODE,
+    _advance,
     _ahead_cube,
     _box_codes,
     _chessboard_distance,
@@ -298,3 +302,32 @@ def test_flights_from_edge_boxes_match_reference(h):
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
         _assert_flight_as_reference(codes, h, pos, idx, u)
+
+
+def _advance_all(times, steps):
+    out = np.empty_like(times)
+    for k in range(times.shape[0]):
+        t0, t1, t2 = _advance(times[k, 0], times[k, 1], times[k, 2], steps[k, 0], steps[k, 1], steps[k, 2])
+        out[k, 0], out[k, 1], out[k, 2] = t0, t1, t2
+    return out
+
+
+@pytest.mark.parametrize("x86", [True, False], ids=["sse2-masks", "generic"])
+def test_a_walk_step_advances_exactly_the_earliest_axis_lowest_first_on_ties(x86, monkeypatch):
+    """The walk's branch-free step (bit masks from the compares) against the rule written out: the earliest of the
+    three crossing times advances by its own step, a tie goes to the lowest axis, the others keep their bits.
+    Ties, equal pairs, an axis that never crosses (_NEVER) and zeros are drawn on purpose; both code paths (SSE2's
+    compare on x86, the generic compare elsewhere), compiled afresh for each."""
+    if x86 and not K._X86:
+        pytest.skip("SSE2 masks: x86-64 only")
+    monkeypatch.setattr(K, "_X86", x86)
+    rng = np.random.default_rng(3)
+    pool = np.array([0.0, 0.5, 1.0, 1.0 + 2.0**-52, 2.5, _NEVER])
+    times = np.concatenate([rng.choice(pool, (4000, 3)), rng.random((4000, 3)) * 10.0])
+    steps = np.concatenate([rng.choice([0.25, 1.0, _NEVER], (4000, 3)), rng.random((4000, 3))])
+    got = njit(_advance_all)(times, steps)
+    want = times.copy()
+    for k in range(times.shape[0]):
+        axis = int(np.argmin(times[k]))  # argmin: the first of equal minima
+        want[k, axis] = times[k, axis] + steps[k, axis]
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))
