@@ -30,10 +30,6 @@ VOXEL_UM = 6.0
 LO, HI, ALPHA = 40.0, 80.0, 0.05
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("acquire_calibration")
-
-
 def _experiment():
     stage = {
         "name": "one",

@@ -31,10 +31,6 @@ from porepipe.lbm._walls import build_links, geometry_from_files
 SCENE = Path(__file__).parents[2] / "config" / "scenes" / "fontainebleau-like.yaml"
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("lbm_crevices")
-
-
 def _porepipe(*args):
     exe = shutil.which("porepipe", path=str(Path(sys.executable).parent)) or "porepipe"
     subprocess.run(

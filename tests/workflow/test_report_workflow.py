@@ -21,10 +21,6 @@ ROOT = Path(__file__).resolve().parents[2]
 REPORT_CPU_S = 15.0
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("report_workflow")
-
-
 def _porepipe(*args, cwd):
     return subprocess.run(
         [sys.executable, "-m", "porepipe.cli", *args], cwd=cwd, capture_output=True, text=True, check=False

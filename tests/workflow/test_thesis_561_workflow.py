@@ -22,8 +22,7 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "config" / "scenes"
 FP, PP = "thesis-5.6.1-ci", "thesis-5.6.1-pp-ci"
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("thesis_561_workflow")]
+pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")

@@ -18,10 +18,6 @@ from porepipe.scene import load_scene
 ALL = [Family.uniform, Family.exponential, Family.discrete]
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("calibrate")
-
-
 def _truncexp(rng, n, lo, hi, alpha):
     u = rng.random(n)  # inverse CDF, written here independently of the packer's sampler
     return lo - np.log(1 - u * (1 - np.exp(-alpha * (hi - lo)))) / alpha

@@ -18,10 +18,6 @@ SCENES = Path(__file__).parents[3] / "config" / "scenes"
 FRICTION_ANGLE = np.degrees(np.arctan(0.6))
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("cohesive_heap")
-
-
 @pytest.fixture(scope="module")
 def heaps(tmp_path_factory):
     d = tmp_path_factory.mktemp("cohesive")

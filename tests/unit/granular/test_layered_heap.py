@@ -25,10 +25,6 @@ SCENE = Path(__file__).parents[3] / "config" / "scenes" / "granular-heap-layered
 SEEDS = (1, 2, 3, 4)
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("layered_heap")
-
-
 @pytest.fixture(scope="module")
 def heaps(tmp_path_factory):
     scene = load_scene(SCENE)

@@ -42,8 +42,7 @@ from porepipe.scene import load_scene
 
 SCENES = Path(__file__).parents[3] / "config" / "scenes"
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("shaped_silos")]
+pytestmark = pytest.mark.slow
 
 #: seed-to-seed standard deviation of one run's statistics, pooled over the three shapes and 22 runs (see the
 #: module docstring)

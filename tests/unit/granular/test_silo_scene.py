@@ -18,10 +18,6 @@ from porepipe.scene import load_scene
 SCENE = Path(__file__).parents[3] / "config" / "scenes" / "granular-silo-ci.yaml"
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("silo_scene")
-
-
 @pytest.fixture(scope="module")
 def silo(tmp_path_factory):
     scene = load_scene(SCENE)

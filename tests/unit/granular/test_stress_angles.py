@@ -20,10 +20,6 @@ SCENES = Path(__file__).parents[3] / "config" / "scenes"
 PHI = math.atan(0.65)
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("stress_angles")
-
-
 def test_fpa_keeps_the_surface_angle_and_bcc_turns_vertical_on_the_axis():
     S = np.linspace(1e-6, 0.999, 50)  # at S = 0 itself FPA's stress is isotropic (s_xx = s_zz, s_xz = 0)
     w = wittmer_angles(S, PHI)

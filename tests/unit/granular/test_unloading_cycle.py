@@ -35,10 +35,6 @@ G_PRIME = 2.45e-3  # the thesis's unloaded gravity (§4.3.3)
 RAMP_S, HOLD_S = 0.2, 0.05
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("unloading_cycle")
-
-
 def _settled_block(gravity=True) -> Simulation:
     grain = {"size_m": (0.001, 0.001), "size_spread": 0.15, "size_dist": "EQUAL", "corners": 9}
     grain |= {

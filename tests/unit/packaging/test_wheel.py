@@ -16,10 +16,6 @@ from porepipe._shared.resources import scene_path, workflow_root
 ROOT = Path(__file__).resolve().parents[3]
 
 
-# one worker runs this module's fixture once (the README's --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("wheel")
-
-
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory):
     out = tmp_path_factory.mktemp("wheel")
