@@ -454,8 +454,6 @@ def _select(typingctx, cond, a, b):
 #: scalar double compares into an all-ones / all-zeros bit mask (SSE2's cmpsd), which x86's backend keeps in vector
 #: registers; elsewhere the generic compare, which LLVM may turn back into selects
 _X86 = platform.machine().lower() in ("x86_64", "amd64")
-
-
 _V2 = ir.VectorType(ir.DoubleType(), 2)
 _MASK2 = ir.VectorType(ir.IntType(64), 2)
 _LANE = ir.Constant(ir.IntType(32), 0)
@@ -592,10 +590,9 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     Every face crossing is a time from the flight's start: per axis the next one, ``t0, t1, t2``, advanced by the
     fixed ``dt0, dt1, dt2`` (no position update, no division in the walk). A walk step picks the earliest axis
     (ties: lowest axis first) — its times by bit masks (:func:`_advance`), its indices by selects —, moves the flat
-    index by that axis's stride and loads one byte. From a
-    voxel of code >= _JUMP_CODE, a jump through the pore box of half-widths r_d = _HALF_WIDTH[d, code] around it
-    leaves the box at T = min_d(t_d + r_d dt_d) and advances every axis by the faces it crosses before T (at most
-    r_d: the index stays in the box). A flight that starts next to a wall (after a wall hit) first tries boxes
+    index by that axis's stride and loads one byte. From a voxel of code >= _JUMP_CODE, a jump through the pore box
+    of half-widths r_d = _HALF_WIDTH[d, code] around it leaves the box at T = min_d(t_d + r_d dt_d) and advances
+    every axis by the faces it crosses before T (at most r_d: the index stays in the box). A flight that starts next to a wall (after a wall hit) first tries boxes
     centred ahead of it (:func:`_ahead_cube`): per axis it may then cross r_d + s_d o_d faces, up to the far face.
     That first jump is taken before the walk; the later ones inside the walk's loop (a step into a voxel of code >=
     _JUMP_CODE jumps on at once), so that only solid, the volume's outside or a periodic wrap leave the loop.
