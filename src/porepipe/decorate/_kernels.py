@@ -302,8 +302,9 @@ def _point_hits(points, q, centre, kind, radius, plane_ptr, planes, grain_ids):
 @njit(cache=True, fastmath=FASTMATH, parallel=True)
 def _points_inside(points, centre, kind, radius, plane_ptr, planes, grain_ids, out):
     """out[q] = number of the grains ``grain_ids`` containing points[q] (see :func:`_point_hits`), parallel."""
+    # np.int64: the parallel loop's index may be unsigned, which would compile _point_hits a second time
     for q in prange(points.shape[0]):
-        out[q] = _point_hits(points, q, centre, kind, radius, plane_ptr, planes, grain_ids)
+        out[q] = _point_hits(points, np.int64(q), centre, kind, radius, plane_ptr, planes, grain_ids)
 
 
 @njit(cache=True, fastmath=FASTMATH)

@@ -114,7 +114,8 @@ def _heap_room(ht, hi, hj, hci, hcj, n, need, cnt):
         cap = 2 * (m + need) + 1024
         ht2, hi2, hj2 = np.empty(cap), np.empty(cap, np.int64), np.empty(cap, np.int64)
         hci2, hcj2 = np.empty(cap, np.int64), np.empty(cap, np.int64)
-        ht2[:m], hi2[:m], hj2[:m], hci2[:m], hcj2[:m] = ht[:m], hi[:m], hj[:m], hci[:m], hcj[:m]
+        for k in range(m):  # element by element: a slice copy compiles its shape-error message (~4 CPU-s)
+            ht2[k], hi2[k], hj2[k], hci2[k], hcj2[k] = ht[k], hi[k], hj[k], hci[k], hcj[k]
         ht, hi, hj, hci, hcj = ht2, hi2, hj2, hci2, hcj2
     # re-heapify the kept events (Floyd)
     for k in range((m - 2) // 2, -1, -1):

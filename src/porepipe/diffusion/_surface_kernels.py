@@ -95,6 +95,9 @@ O_LAW, O_REXP, O_REPL = range(3)
 W_LH, W_ER, W_REV, W_LH_REV = range(4)
 #: start site of a spare slot (GONE at the start: room for the B that a reverse Eley-Rideal reaction puts back)
 SPARE = -2
+#: ``_fly``'s exit axis for closed geometries: no exit. An int64, not the literal -1, so that ``_fly`` compiles once
+#: for this module and the event-driven gas's (which passes its exit axis as an integer)
+_NO_EXIT = np.int64(-1)
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -158,7 +161,7 @@ def _flight(codes, h, periodic, law, ev, vmean, pos, idx, u, state):
     state = _emit(law, ev >> 1, sign, u, state)
     v, state = _speed(SPEED_FLUX, vmean, state)
     img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(codes, h, periodic, -1, pos, idx, u, img)
+    e2, ln, _ = _fly(codes, h, periodic, _NO_EXIT, pos, idx, u, img)
     return ln / v, v, e2, state
 
 
@@ -412,8 +415,11 @@ def surface_kernel(
     while k_sample < t_samples.shape[0]:
         _sample(series, k_sample, n_gas, n_ads)
         k_sample += 1
-    final_species[:] = sp
-    final_state[:] = st
+    for i in range(
+        sp.shape[0]
+    ):  # element by element: a slice copy compiles its shape-error message (~4 CPU-s)
+        final_species[i] = sp[i]
+        final_state[i] = st[i]
     return events
 
 
@@ -439,7 +445,7 @@ def _insert_gas(geo, pt, i, t, vmean, state):
     state = _isotropic(d, state)
     v, state = _speed(SPEED_MAXWELL, vmean, state)
     img = np.zeros(3, dtype=np.int64)
-    e2, ln, _ = _fly(codes, h, periodic, -1, p, q, d, img)
+    e2, ln, _ = _fly(codes, h, periodic, _NO_EXIT, p, q, d, img)
     speed[i] = v
     tev[i] = e2
     return t + ln / v, state

@@ -461,9 +461,10 @@ def make_stepper(
                     wall_vel[w, 1] = da * wall_vib[w, 4]
                     _place(body, nc, G[0, w, 0], G[0, w, 1], G[0, w, 2], wv, aabb, w)
             # 2. contacts, pair by pair (each pair owned by its lower index i)
+            # np.int64: the parallel loop's index may be unsigned, which compiled _block_contacts twice (~20 CPU-s)
             for blk in prange(n_blocks):
                 _block_contacts(
-                    blk,
+                    np.int64(blk),
                     G,
                     nc,
                     wv,

@@ -284,7 +284,7 @@ def _half_counts(
     dummy = np.empty(0, dtype=np.int64)
     for i in prange(x.shape[0]):
         counts[i] = _scan_half(
-            i,
+            np.int64(i),  # the parallel loop's index may be unsigned: one compile for both variants
             x,
             r,
             types,
@@ -327,7 +327,7 @@ def _half_fill(
 ):
     for i in prange(x.shape[0]):
         _scan_half(
-            i,
+            np.int64(i),  # (see _half_counts)
             x,
             r,
             types,
