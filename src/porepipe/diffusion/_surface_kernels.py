@@ -95,8 +95,8 @@ O_LAW, O_REXP, O_REPL = range(3)
 W_LH, W_ER, W_REV, W_LH_REV = range(4)
 #: start site of a spare slot (GONE at the start: room for the B that a reverse Eley-Rideal reaction puts back)
 SPARE = -2
-#: ``_fly``'s exit axis for closed geometries: no exit. An int64, not the literal -1, so that ``_fly`` compiles once
-#: for this module and the event-driven gas's (which passes its exit axis as an integer)
+#: ``_fly``'s exit axis for closed geometries: no exit. An int64, not the literal -1 (which numba compiles as a
+#: specialisation of its own, ~7 CPU-s): the type the event-driven gas's kernel passes its exit axis as
 _NO_EXIT = np.int64(-1)
 
 
@@ -415,9 +415,8 @@ def surface_kernel(
     while k_sample < t_samples.shape[0]:
         _sample(series, k_sample, n_gas, n_ads)
         k_sample += 1
-    for i in range(
-        sp.shape[0]
-    ):  # element by element: a slice copy compiles its shape-error message (~4 CPU-s)
+    # element by element: a slice copy compiles its shape-error message (~4 CPU-s)
+    for i in range(sp.shape[0]):
         final_species[i] = sp[i]
         final_state[i] = st[i]
     return events
