@@ -592,10 +592,11 @@ def _flight(flat, n0, n1, n2, h, periodic, exit_axis, pos, idx, u, img):
     (ties: lowest axis first) — its times by bit masks (:func:`_advance`), its indices by selects —, moves the flat
     index by that axis's stride and loads one byte. From a voxel of code >= _JUMP_CODE, a jump through the pore box
     of half-widths r_d = _HALF_WIDTH[d, code] around it leaves the box at T = min_d(t_d + r_d dt_d) and advances
-    every axis by the faces it crosses before T (at most r_d: the index stays in the box). A flight that starts next to a wall (after a wall hit) first tries boxes
-    centred ahead of it (:func:`_ahead_cube`): per axis it may then cross r_d + s_d o_d faces, up to the far face.
-    That first jump is taken before the walk; the later ones inside the walk's loop (a step into a voxel of code >=
-    _JUMP_CODE jumps on at once), so that only solid, the volume's outside or a periodic wrap leave the loop.
+    every axis by the faces it crosses before T (at most r_d: the index stays in the box). A flight that starts
+    next to a wall (after a wall hit) first tries boxes centred ahead of it (:func:`_ahead_cube`): per axis it may
+    then cross r_d + s_d o_d faces, up to the far face. That first jump is taken before the walk; the later ones
+    inside the walk's loop (a step into a voxel of code >= _JUMP_CODE jumps on at once), so that only solid, the
+    volume's outside or a periodic wrap leave the loop.
     """
     st0 = n1 * n2
     u0, u1, u2 = u[0], u[1], u[2]
