@@ -17,7 +17,8 @@ import hashlib
 import os
 from pathlib import Path
 
-from numba.core import caching
+from numba.core import caching, serialize
+from numba.core.dispatcher import Dispatcher
 
 #: folders whose kernels get the package-wide stamp (the porepipe package; tests add their own)
 ROOTS: list[Path] = [Path(__file__).resolve().parent.parent]
@@ -86,6 +87,42 @@ class _InTree(_PackageStamp, caching.InTreeCacheLocator):
 
 class _UserWide(_PackageStamp, caching.UserWideCacheLocator):
     """The user's cache folder (a read-only install)."""
+
+
+def key_closure_kernels_by_name(dispatcher: Dispatcher) -> Dispatcher:
+    """Let ``dispatcher`` (a cached kernel defined in a function) find its disk cache in every process although its
+    closure holds other compiled kernels; returns it.
+
+    numba keys a closure's cache entries by its bytecode and the pickled values of its closure; a captured
+    dispatcher pickles with a random id of the process, so such a kernel never found its cache in a new process
+    and compiled again: the granular stepper, which captures its contact kernel, 11–20 CPU-s per variant in every
+    run and every test process. Here a captured dispatcher counts by its function's module, qualified name and
+    bytecode and (recursively) its own closure, every other value as numba pickles it. The package stamp
+    (:class:`_PackageStamp`) still drops the whole index when a source of the stage changes.
+    """
+    py_func = dispatcher.py_func
+
+    def index_key(sig, codegen):
+        code = hashlib.sha256(py_func.__code__.co_code).hexdigest()
+        return (sig, codegen.magic_tuple(), (code, hashlib.sha256(_closure_bytes(py_func)).hexdigest()))
+
+    dispatcher._cache._index_key = index_key  # private: numba's Cache computes its index key there
+    return dispatcher
+
+
+def _closure_bytes(py_func) -> bytes:
+    """The closure of ``py_func`` as bytes that are the same in every process (see :func:`key_closure_kernels_by_name`)."""
+    parts = []
+    for cell in py_func.__closure__ or ():
+        value = cell.cell_contents
+        if isinstance(value, Dispatcher):
+            inner = value.py_func
+            part = repr((inner.__module__, inner.__qualname__)).encode() + inner.__code__.co_code
+            part += _closure_bytes(inner)
+        else:
+            part = serialize.dumps(value)
+        parts.append(len(part).to_bytes(8, "little") + part)
+    return b"".join(parts)
 
 
 def install() -> None:

@@ -15,6 +15,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from porepipe._shared.numba_cache import key_closure_kernels_by_name
 from porepipe._shared.numba_config import FASTMATH, NO_REFCOUNT
 from porepipe.granular._contact import _contact_frame, _overlap_geometry_inlined
 
@@ -611,5 +612,5 @@ def make_stepper(
                     return step + 1, REBUILD
         return nsteps, DONE
 
-    _STEPPERS[key] = _steps
-    return _steps
+    _STEPPERS[key] = key_closure_kernels_by_name(_steps)  # it captures _block_contacts
+    return _STEPPERS[key]
