@@ -1467,11 +1467,12 @@ def step(op, with_aa, *args):
     if args[_STREAMING_ARG] == IN_PLACE and not with_aa:
         raise ValueError("step: streaming IN_PLACE needs the kernel variant compiled with_aa")
     kernel = _step.pick(*args)
-    compiled = kernel.overloads.get((types.literal(op), types.literal(with_aa), *(typeof(a) for a in args)))
-    if compiled is None:
-        kernel(op, with_aa, *args)
-    else:
-        compiled.entry_point(op, with_aa, *args)
+    signature = (types.literal(op), types.literal(with_aa), *(typeof(a) for a in args))
+    compiled = kernel.overloads.get(signature)
+    if compiled is None:  # load from the disk cache or compile, for the literals at once (no retyping first)
+        kernel.compile(signature)
+        compiled = kernel.overloads[signature]
+    compiled.entry_point(op, with_aa, *args)
 
 
 # -- reductions ---------------------------------------------------------------------------------------------------------
