@@ -7,7 +7,9 @@ still runs the old code on the new data: the Knudsen surface kernel, which inlin
 cache was deleted. Here the stamp of a porepipe kernel is numba's (the digest of its own file) together with a digest
 of every source file of its stage package and of ``_shared``, so any change there recompiles that package's kernels
 once. Installed (:func:`install`) by :mod:`porepipe._shared.numba_config`, which the kernel modules import before
-they define kernels; numba's locator classes are private API (``numba.core.caching``), as is ``_nrt``.
+they define kernels; numba's locator classes are private API (``numba.core.caching``), as is ``_nrt``. A kernel made
+in a function that captures another compiled kernel gets a cache key that holds in every process
+(:func:`key_closure_kernels_by_name`; numba's own changes from process to process).
 """
 
 from __future__ import annotations

@@ -89,3 +89,56 @@ def test_porepipe_kernels_use_the_package_stamp():
 
     locator = _surface_kernels.surface_kernel._cache._impl.locator
     assert isinstance(locator, numba_cache._PackageStamp)
+
+
+# a kernel made in a function that captures another such kernel (as the granular stepper captures its contact kernel)
+_FACTORY = """
+from numba import njit
+from porepipe._shared.numba_cache import key_closure_kernels_by_name
+
+
+def make(flag, keyed):
+    @njit(cache=True)
+    def inner(x):
+        return x + (1 if flag else 2)
+
+    @njit(cache=True)
+    def outer(x):
+        return 10 * inner(x)
+
+    return key_closure_kernels_by_name(outer) if keyed else outer
+"""
+
+_RUN_FACTORY = """
+import sys
+from pathlib import Path
+root = Path(sys.argv[1])
+from porepipe._shared import numba_cache, numba_config  # numba_config installs the locators
+numba_cache.ROOTS.append(root)
+sys.path.insert(0, str(root.parent))
+from fakepkg.stage.factory import make
+kernel = make(sys.argv[2] == "1", sys.argv[3] == "keyed")
+print(kernel(1), sum(kernel.stats.cache_hits.values()))
+"""
+
+
+def _factory_run(root, flag, keyed):
+    """(kernel(1), disk-cache hits of the outer kernel) in a fresh interpreter."""
+    out = subprocess.run(
+        [sys.executable, "-c", _RUN_FACTORY, str(root), str(int(flag)), keyed],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split()
+    return int(out[0]), int(out[1])
+
+
+def test_a_kernel_that_captures_a_kernel_loads_from_the_cache_in_a_new_process_and_per_variant(tmp_path):
+    root = _package(tmp_path, "x")
+    (root / "stage" / "factory.py").write_text(_FACTORY)
+    assert _factory_run(root, True, "keyed") == (20, 0)  # compiled
+    assert _factory_run(root, True, "keyed") == (20, 1)  # another process: from the disk cache
+    # the captured kernel's own closure is part of the key: the other variant compiles and computes its own result
+    assert _factory_run(root, False, "keyed") == (30, 0)
+    assert _factory_run(root, False, "keyed") == (30, 1)
+    assert _factory_run(root, True, "keyed") == (20, 1)
