@@ -113,7 +113,9 @@ def key_closure_kernels_by_name(dispatcher: Dispatcher) -> Dispatcher:
 
 
 def _closure_bytes(py_func) -> bytes:
-    """The closure of ``py_func`` as bytes that are the same in every process (see :func:`key_closure_kernels_by_name`)."""
+    """The closure of ``py_func`` as bytes that are the same in every process (see
+    :func:`key_closure_kernels_by_name`).
+    """
     parts = []
     for cell in py_func.__closure__ or ():
         value = cell.cell_contents
