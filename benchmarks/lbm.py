@@ -423,9 +423,8 @@ def main(argv=None) -> int:
     if args.steps < 2 or args.steps % 2:
         p.error(f"--steps {args.steps}: give an even number ≥ 2 (the in-place kernel steps in pairs)")
     collisions, precisions = ("bgk", "trt", "mrt"), ("float64", "float32")
-    if (
-        args.smoke
-    ):  # each operator and precision is a kernel of its own to compile: the smoke runs TRT float64
+    # each operator and precision is a step kernel of its own to compile: the smoke runs TRT float64
+    if args.smoke:
         args.size, args.steps, args.rounds, args.no_lbmpy = 24, 2, 1, True
         collisions, precisions = ("trt",), ("float64",)
     max_threads = min(2, numba.config.NUMBA_NUM_THREADS)

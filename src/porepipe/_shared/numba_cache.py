@@ -103,10 +103,13 @@ def key_closure_kernels_by_name(dispatcher: Dispatcher) -> Dispatcher:
     (:class:`_PackageStamp`) still drops the whole index when a source of the stage changes.
     """
     py_func = dispatcher.py_func
+    hashes = (
+        hashlib.sha256(py_func.__code__.co_code).hexdigest(),
+        hashlib.sha256(_closure_bytes(py_func)).hexdigest(),  # a closure's values are fixed once it is made
+    )
 
     def index_key(sig, codegen):
-        code = hashlib.sha256(py_func.__code__.co_code).hexdigest()
-        return (sig, codegen.magic_tuple(), (code, hashlib.sha256(_closure_bytes(py_func)).hexdigest()))
+        return (sig, codegen.magic_tuple(), hashes)
 
     dispatcher._cache._index_key = index_key  # private: numba's Cache computes its index key there
     return dispatcher

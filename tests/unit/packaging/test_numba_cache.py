@@ -97,7 +97,7 @@ from numba import njit
 from porepipe._shared.numba_cache import key_closure_kernels_by_name
 
 
-def make(flag, keyed):
+def make(flag):
     @njit(cache=True)
     def inner(x):
         return x + (1 if flag else 2)
@@ -106,7 +106,7 @@ def make(flag, keyed):
     def outer(x):
         return 10 * inner(x)
 
-    return key_closure_kernels_by_name(outer) if keyed else outer
+    return key_closure_kernels_by_name(outer)
 """
 
 _RUN_FACTORY = """
@@ -117,15 +117,15 @@ from porepipe._shared import numba_cache, numba_config  # numba_config installs 
 numba_cache.ROOTS.append(root)
 sys.path.insert(0, str(root.parent))
 from fakepkg.stage.factory import make
-kernel = make(sys.argv[2] == "1", sys.argv[3] == "keyed")
+kernel = make(sys.argv[2] == "1")
 print(kernel(1), sum(kernel.stats.cache_hits.values()))
 """
 
 
-def _factory_run(root, flag, keyed):
+def _factory_run(root, flag):
     """(kernel(1), disk-cache hits of the outer kernel) in a fresh interpreter."""
     out = subprocess.run(
-        [sys.executable, "-c", _RUN_FACTORY, str(root), str(int(flag)), keyed],
+        [sys.executable, "-c", _RUN_FACTORY, str(root), str(int(flag))],
         capture_output=True,
         text=True,
         check=True,
@@ -136,9 +136,9 @@ def _factory_run(root, flag, keyed):
 def test_a_kernel_that_captures_a_kernel_loads_from_the_cache_in_a_new_process_and_per_variant(tmp_path):
     root = _package(tmp_path, "x")
     (root / "stage" / "factory.py").write_text(_FACTORY)
-    assert _factory_run(root, True, "keyed") == (20, 0)  # compiled
-    assert _factory_run(root, True, "keyed") == (20, 1)  # another process: from the disk cache
+    assert _factory_run(root, True) == (20, 0)  # compiled
+    assert _factory_run(root, True) == (20, 1)  # another process: from the disk cache
     # the captured kernel's own closure is part of the key: the other variant compiles and computes its own result
-    assert _factory_run(root, False, "keyed") == (30, 0)
-    assert _factory_run(root, False, "keyed") == (30, 1)
-    assert _factory_run(root, True, "keyed") == (20, 1)
+    assert _factory_run(root, False) == (30, 0)
+    assert _factory_run(root, False) == (30, 1)
+    assert _factory_run(root, True) == (20, 1)
