@@ -84,7 +84,7 @@ def _pair_potential(dx, dxeq, k):
     return k * (0.25 * u8 * u8 - 0.5 * u8)
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+@njit(cache=True, fastmath=FASTMATH)
 def _splitmix(z):
     """SplitMix64 finaliser on a uint64 (counter-based random numbers: same value for any thread count)."""
     z = z + np.uint64(0x9E3779B97F4A7C15)
@@ -93,7 +93,7 @@ def _splitmix(z):
     return z ^ (z >> np.uint64(31))
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always")
+@njit(cache=True, fastmath=FASTMATH)
 def _uniform(seed, a, b, c):
     """Uniform double in [0, 1) from the counter (seed, a, b, c)."""
     z = _splitmix(
@@ -103,8 +103,8 @@ def _uniform(seed, a, b, c):
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
-def _tie_axis(i, j, axis):
-    """Component ``axis`` of the push direction on sphere id i from sphere id j when their centres coincide.
+def _tie_direction(i, j):
+    """Push direction (x, y, z) on sphere id i from sphere id j when their centres coincide.
 
     A unit vector drawn from the unordered pair, with the sign flipped for the other partner, so that
     f_ij = -f_ji holds exactly (Newton's third law) even at dx = 0.
@@ -116,8 +116,13 @@ def _tie_axis(i, j, axis):
     uz = _uniform(0x5EED, a, b, 2) - 0.5
     norm = math.sqrt(ux * ux + uy * uy + uz * uz) + 1e-300
     sign = 1.0 if i < j else -1.0
-    comp = ux if axis == 0 else (uy if axis == 1 else uz)
-    return sign * comp / norm
+    return sign * ux / norm, sign * uy / norm, sign * uz / norm
+
+
+@njit(cache=True, fastmath=FASTMATH, inline="always")
+def _tie_axis(i, j, axis):
+    """Component ``axis`` of :func:`_tie_direction` (for the earlier kernels of ``benchmarks/_pack_previous.py``)."""
+    return _tie_direction(i, j)[axis]
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always")
@@ -573,15 +578,20 @@ def _pair_terms(w, npairs, box, half_box, cut):
         w[_REACH, k] = 1.0 if in_reach else 0.0
 
 
-@njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
-def _tie_force(i, j, xr, types, ids, hcoef, sigp, axis):
-    """Component ``axis`` of the pair force on i from j when their centres coincide: the harmonic force at
-    distance 0, hcoef / dx_eq, along the pair's random direction :func:`_tie_axis`.
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", **NO_REFCOUNT)
+def _tie_force(i, j, xr, types, ids, hcoef, sigp):
+    """The pair force (x, y, z) on i from j when their centres coincide: the harmonic force at distance 0,
+    hcoef / dx_eq, along the pair's random direction :func:`_tie_direction`.
+
+    Not inlined: coincident centres are rare, and this cold path inlined once per axis (as it was) made up most of
+    the pair loop's compile time (:func:`_slab_pairs` 15 CPU-s on this project's 2-core machine, 4 without).
     """
     rsum = xr[i, 3] + xr[j, 3]
     rmin2 = rsum - abs(xr[i, 3] - xr[j, 3])
     dxeq = rsum - 0.5 * sigp[types[i], types[j]] * rmin2
-    return hcoef[types[i], types[j]] / dxeq * _tie_axis(ids[i], ids[j], axis)
+    f = hcoef[types[i], types[j]] / dxeq
+    ex, ey, ez = _tie_direction(ids[i], ids[j])
+    return f * ex, f * ey, f * ez
 
 
 @njit(cache=True, fastmath=FASTMATH, inline="always", error_model="numpy")
@@ -620,9 +630,7 @@ def _scatter_pairs(i, k, half_start, half_idx, xr, types, ids, frozen, hcoef, si
             c1 = w[_C0 + 1, col]
             c2 = w[_C0 + 2, col]
         elif in_reach:
-            c0 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 0)
-            c1 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 1)
-            c2 = _tie_force(i, j, xr, types, ids, hcoef, sigp, 2)
+            c0, c1, c2 = _tie_force(i, j, xr, types, ids, hcoef, sigp)
         else:
             continue  # coincident centres out of reach: no force
         reach_any |= in_reach

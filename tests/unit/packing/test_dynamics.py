@@ -114,6 +114,30 @@ def test_coincident_centres_push_apart_with_the_harmonic_force_at_distance_zero(
     assert np.linalg.norm(run.f[0]) == pytest.approx(expected, rel=1e-12)
     assert np.array_equal(run.f[1], -run.f[0])
     assert np.array_equal(run.f[2], np.zeros(3))
+    # the direction is the pair's own draw (ids 0 and 1), the same for any list order or thread count: SplitMix64
+    # counters (0x5EED, 0, 1, axis) written out here in Python integers; 1e-15: one rounding per component
+    np.testing.assert_allclose(
+        run.f[0] / np.linalg.norm(run.f[0]), _tie_direction_reference(0, 1), rtol=0, atol=1e-15
+    )
+
+
+def _splitmix64(z: int) -> int:
+    mask = (1 << 64) - 1
+    z = (z + 0x9E3779B97F4A7C15) & mask
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & mask
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & mask
+    return z ^ (z >> 31)
+
+
+def _tie_direction_reference(i: int, j: int) -> np.ndarray:
+    """The unit push direction on sphere id i from id j at coincident centres: uniform numbers in [0, 1) from the
+    counters (0x5EED, min, max, axis), shifted by 1/2 and normalised, the sign flipped for the larger id."""
+    a, b = min(i, j), max(i, j)
+    u = [
+        (_splitmix64(0x5EED ^ _splitmix64(a ^ _splitmix64(b ^ _splitmix64(c)))) >> 11) / 2.0**53 - 0.5
+        for c in range(3)
+    ]
+    return (1.0 if i < j else -1.0) * np.array(u) / np.linalg.norm(u)
 
 
 def _all_pairs_forces(x, r, types, box, per, k_t, sig_t, cut):
