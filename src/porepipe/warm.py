@@ -10,10 +10,12 @@ spheres instead of the packing. Its jobs run one thread each, as the jobs of a s
 on a volume past the memory budget (chunked) or with MPI still compiles what the twin did not.
 
 Warming is a shortcut, never a condition: a twin that fails (a setting the tiny box cannot satisfy) prints one line and
-leaves the compilation to the real jobs. A marker beside numba's cache (:func:`marker_path`, keyed by the porepipe
-sources, the scene file and the numba and Python versions) records a finished warm-up, so a later run of the same
-scene plans no warm jobs; deleting the cache deletes the marker, and a stale marker only costs the time a cold job
-takes. Where that folder cannot be written, no marker is kept and each run warms again (from numba's cache: seconds).
+leaves the compilation to the real jobs. A marker beside numba's cache (:func:`marker_path`, keyed by
+:func:`twin_key`: the porepipe sources, the numba and Python versions, the stage and the twins it runs) records a
+finished warm-up, so a later run of the same scene, or of any scene with the same twins (a model and its variant that
+differ only in the packing, say), plans no warm jobs, and one run of such scenes plans one warm job per stage for
+them all; deleting the cache deletes the marker, and a stale marker only costs the time a cold job takes. Where that
+folder cannot be written, no marker is kept and each run warms again (from numba's cache: seconds).
 """
 
 from __future__ import annotations
@@ -93,16 +95,29 @@ def twin_edges(scene, stage: str) -> list[int]:
     return edges + ([LARGE_EDGE] if max(volumes) > SERIAL_MAX_ELEMENTS else [])
 
 
-def marker_path(scene_path: str | os.PathLike, stage: str) -> Path:
-    """Where a finished warm-up of ``stage`` for this scene leaves its marker: in numba's cache folder
-    (``NUMBA_CACHE_DIR``, else the ``__pycache__`` of porepipe's package), named by the key of the module docstring.
+def twin_key(scene_path: str | os.PathLike, stage: str, scene=None) -> str:
+    """20 hex digits that name ``stage``'s warm-up of the scene file ``scene_path`` by what it runs: the twins of
+    :func:`twin_edges` (all the warm-up reads of the scene), the stage, porepipe's sources and the numba and Python
+    versions. Scenes with equal keys warm the same kernels; ``scene`` is the loaded scene, where the caller has it.
     """
+    if scene is None:
+        from porepipe.scene import load_scene
+
+        scene = load_scene(scene_path)
     h = hashlib.sha256(_sources_digest())
-    h.update(Path(scene_path).read_bytes())
     h.update(stage.encode())
+    for edge in twin_edges(scene, stage):
+        h.update(yaml.safe_dump(twin(scene_path, edge), sort_keys=True).encode())
+    return h.hexdigest()[:20]
+
+
+def marker_path(scene_path: str | os.PathLike, stage: str, scene=None) -> Path:
+    """Where a finished warm-up of ``stage`` for this scene leaves its marker: in numba's cache folder
+    (``NUMBA_CACHE_DIR``, else the ``__pycache__`` of porepipe's package), named by :func:`twin_key`.
+    """
     cache = os.environ.get("NUMBA_CACHE_DIR")
     folder = Path(cache) if cache else Path(__file__).resolve().parent / "__pycache__"
-    return folder / f"porepipe-warm-{stage}-{h.hexdigest()[:20]}"
+    return folder / f"porepipe-warm-{stage}-{twin_key(scene_path, stage, scene)}"
 
 
 @functools.cache
@@ -121,9 +136,9 @@ def _sources_digest() -> bytes:
     return h.digest()
 
 
-def is_warm(scene_path: str | os.PathLike, stage: str) -> bool:
-    """Whether a warm-up of ``stage`` for this scene finished since the sources last changed."""
-    return marker_path(scene_path, stage).is_file()
+def is_warm(scene_path: str | os.PathLike, stage: str, scene=None) -> bool:
+    """Whether a warm-up of ``stage`` with this scene's twins finished since the sources last changed."""
+    return marker_path(scene_path, stage, scene).is_file()
 
 
 def _commands(stage: str, scene: Path, tmp: Path, twin_scene) -> list[list[str]]:
@@ -187,10 +202,11 @@ def warm(scene_path: str | os.PathLike, stage: str, run) -> bool:
 
 
 def _warm_in_temp(scene_path, stage: str, main, load_scene) -> bool:
-    for edge in twin_edges(load_scene(scene_path), stage):
+    scene = load_scene(scene_path)
+    for edge in twin_edges(scene, stage):
         if not _run_twin(scene_path, stage, edge, main, load_scene):
             return False
-    marker = marker_path(scene_path, stage)
+    marker = marker_path(scene_path, stage, scene)
     try:
         marker.parent.mkdir(parents=True, exist_ok=True)
         marker.touch()

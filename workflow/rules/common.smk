@@ -12,7 +12,7 @@ from porepipe._shared.naming import TAG_RE, res_tag
 from porepipe.diffusion import check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
 from porepipe.warm import STAGES as WARM_STAGES
-from porepipe.warm import is_warm, warmable
+from porepipe.warm import is_warm, twin_key, warmable
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH
 shell.prefix(f'export PATH={shlex.quote(str(Path(sys.executable).parent))}:"$PATH"; ')
@@ -310,34 +310,58 @@ def pack_threads(wildcards):
 PACK_SPHERES_PER_THREAD = 5000
 
 
-_warm_planned = {}
+#: the twin key (porepipe.warm.twin_key) of each planned warm job: (scene name, stage) -> key or None (none planned)
+_warm_twins = {}
+#: the scene whose file a planned warm job reads: twin key -> scene name (scenes with the same key share the job)
+WARM_SCENES = {}
 
 
-def warm_planned(scene, stage):
-    """Whether this run compiles `stage`'s kernels for `scene` in a warm job first (porepipe.warm): a local run on
-    two or more cores (on one, a warm job has no idle core to fill and only adds its twin's run), a scene whose grey
-    volumes come from spheres, and no finished warm-up since porepipe's sources last changed.
+def warm_twin(scene, stage):
+    """The twin key of the warm job that compiles `stage`'s kernels for `scene` first (porepipe.warm), or None where
+    this run plans none: it plans one on a local run of two or more cores (on one, a warm job has no idle core to
+    fill and only adds its twin's run), for a scene whose grey volumes come from spheres, when no warm-up with the
+    same twins finished since porepipe's sources last changed. Scenes with the same twins share one warm job.
     """
     key = (scene.name, stage)
-    if key not in _warm_planned:
+    if key not in _warm_twins:
         local = workflow.local_exec and not workflow.remote_exec and (workflow.cores or 1) > 1
-        _warm_planned[key] = local and warmable(scene) and not is_warm(SCENE_FILES[scene.name], stage)
-    return _warm_planned[key]
+        twin = None
+        if local and warmable(scene):
+            path = SCENE_FILES[scene.name]
+            twin = twin_key(path, stage, scene)
+            if is_warm(path, stage, scene):
+                twin = None
+            else:
+                WARM_SCENES.setdefault(twin, scene.name)
+        _warm_twins[key] = twin
+    return _warm_twins[key]
+
+
+def warm_marker(twin, stage):
+    return str(Path("results", "_warm", twin, f"{stage}.done"))
 
 
 def warm_input(stage):
     """An input function for `stage`'s jobs: the marker of its warm job, when the run plans one."""
 
     def marker(wildcards):
-        scene = scene_of(wildcards)
-        return [results(scene, "warm", f"{stage}.done")] if warm_planned(scene, stage) else []
+        twin = warm_twin(scene_of(wildcards), stage)
+        return [warm_marker(twin, stage)] if twin else []
 
     return marker
 
 
+def warm_scene_file(wildcards):
+    """The scene file a warm job reads its twins from (any scene with its twin key)."""
+    return SCENE_FILES[WARM_SCENES[wildcards.twin]]
+
+
 def warm_before(wildcards):
-    """The warm jobs after voxelize's wait for it: their twins voxelise and segment first."""
-    return warm_input("voxelize")(wildcards) if wildcards.stage != "voxelize" else []
+    """The warm jobs after voxelize's wait for it (of the same scene): their twins voxelise and segment first."""
+    if wildcards.stage == "voxelize":
+        return []
+    twin = warm_twin(SCENES[WARM_SCENES[wildcards.twin]], "voxelize")
+    return [warm_marker(twin, "voxelize")] if twin else []
 
 
 def threads_by_volume(most, voxels_per_thread):

@@ -1,20 +1,22 @@
 # Kernel warm-up (porepipe.warm): on a local run whose numba cache does not yet hold a stage's kernels for this scene,
 # one job per stage compiles them on a small twin of the scene, beside the pack job's single thread, before the
 # stage's own jobs start (they take warm_input's marker); voxelize's first, the others after it (their twins
-# voxelise too). A run with the kernels cached, or on a cluster, plans none of these jobs.
+# voxelise too). A job is named by its twin key (porepipe.warm.twin_key), so scenes with the same twins (a model
+# and its variant) share it. A run with the kernels cached, or on a cluster, plans none of these jobs.
 
 
 rule warm:
     input:
-        scene=scene_file,
+        scene=warm_scene_file,
         before=warm_before,
     output:
-        temp("results/{scene}/warm/{stage}.done"),
+        temp("results/_warm/{twin}/{stage}.done"),
     log:
-        "results/{scene}/logs/warm_{stage}.log",
+        "results/_warm/{twin}/{stage}.log",
     benchmark:
-        "results/{scene}/cost/warm_{stage}.tsv"
+        "results/_warm/{twin}/{stage}_cost.tsv"
     wildcard_constraints:
+        twin="[0-9a-f]{20}",
         stage="|".join(WARM_STAGES),
     conda:
         "../envs/porepipe.yaml"

@@ -98,13 +98,19 @@ def test_the_twin_keeps_the_kernel_selecting_settings_and_shrinks_the_rest(tmp_p
     assert W.LARGE_EDGE**3 > 2**17 >= W.SMALL_EDGE**3
 
 
-def test_the_marker_follows_the_scene_file(tmp_path, monkeypatch):
+def test_the_marker_follows_the_twins_not_the_scene_file(tmp_path, monkeypatch):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     scene = tmp_path / "s.yaml"
     scene.write_text(yaml.safe_dump(SMALL_SCENE))
     first = W.marker_path(scene, "minkowski")
     assert first.parent == tmp_path and first != W.marker_path(scene, "lpt")
-    scene.write_text(yaml.safe_dump({**SMALL_SCENE, "resolutions_um": [4, 1]}))
+    # a finer resolution whose volume (20^3 -> 40^3) still runs the serial variants: the same twin, the same marker
+    scene.write_text(yaml.safe_dump({**SMALL_SCENE, "name": "other", "resolutions_um": [4, 1]}))
+    assert W.marker_path(scene, "minkowski") == first
+    # what the twin keeps changes it: a kernel-selecting setting, or a volume that needs the parallel variants
+    scene.write_text(yaml.safe_dump({**SMALL_SCENE, "segmentation": {"method": "fixed", "threshold": 128}}))
+    assert W.marker_path(scene, "minkowski") != first
+    scene.write_text(yaml.safe_dump({**SMALL_SCENE, "resolutions_um": [4, 0.5]}))
     assert W.marker_path(scene, "minkowski") != first
 
 
