@@ -325,19 +325,16 @@ def warm_twin(scene, stage):
     key = (scene.name, stage)
     if key not in _warm_twins:
         local = workflow.local_exec and not workflow.remote_exec and (workflow.cores or 1) > 1
-        twin = None
-        if local and warmable(scene):
-            path = SCENE_FILES[scene.name]
+        path, twin = SCENE_FILES[scene.name], None
+        if local and warmable(scene) and not is_warm(path, stage, scene):
             twin = twin_key(path, stage, scene)
-            if is_warm(path, stage, scene):
-                twin = None
-            else:
-                WARM_SCENES.setdefault(twin, scene.name)
+            WARM_SCENES.setdefault(twin, scene.name)
         _warm_twins[key] = twin
     return _warm_twins[key]
 
 
 def warm_marker(twin, stage):
+    """The marker a warm job leaves: one folder per twin key, shared by the scenes with that key."""
     return str(Path("results", "_warm", twin, f"{stage}.done"))
 
 
