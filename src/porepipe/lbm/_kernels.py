@@ -1248,8 +1248,9 @@ def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt
 #: operators whose AA gather step pulls an irregular run into the scratch, collides it there (vectorised) and
 #: scatters it back (:func:`_scatter_segment`) instead of colliding in place through the gather table: TRT, whose
 #: scalar in-place collision ran 0.8x BGK's per fluid node on a porous sample (porous 128^3, 1 and 2 threads, on an
-#: AVX-512 Intel machine: TRT's in-place step pair 1.10-1.18x faster this way; BGK and MRT, for which the in-place
-#: collision measured 1.13-1.32x on an earlier machine, read within 1-10 % either way here and stay in place).
+#: AVX-512 Intel machine: TRT's in-place step pair 1.06-1.18x faster this way). BGK and MRT stay in place: this way
+#: they ran 0.91-0.94x and 0.85-0.88x there (4-step bursts after a cache flush). On the ninth session's machine the
+#: in-place collision had measured 1.13-1.32x for the gather step alone, TRT included (docs/speed.md).
 #: The same arithmetic on the same values: the same bits either way.
 SCRATCH_GATHER_OPS = (TRT,)
 
