@@ -112,12 +112,19 @@ def twin_key(scene_path: str | os.PathLike, stage: str, scene=None) -> str:
 
 
 def marker_path(scene_path: str | os.PathLike, stage: str, scene=None) -> Path:
-    """Where a finished warm-up of ``stage`` for this scene leaves its marker: in numba's cache folder
-    (``NUMBA_CACHE_DIR``, else the ``__pycache__`` of porepipe's package), named by :func:`twin_key`.
+    """Where a finished warm-up of ``stage`` for this scene leaves its marker: :func:`marker_of` its
+    :func:`twin_key`.
+    """
+    return marker_of(twin_key(scene_path, stage, scene), stage)
+
+
+def marker_of(key: str, stage: str) -> Path:
+    """The marker of ``stage``'s warm-up with twin key ``key``: in numba's cache folder (``NUMBA_CACHE_DIR``, else
+    the ``__pycache__`` of porepipe's package).
     """
     cache = os.environ.get("NUMBA_CACHE_DIR")
     folder = Path(cache) if cache else Path(__file__).resolve().parent / "__pycache__"
-    return folder / f"porepipe-warm-{stage}-{twin_key(scene_path, stage, scene)}"
+    return folder / f"porepipe-warm-{stage}-{key}"
 
 
 @functools.cache

@@ -33,19 +33,15 @@ def _jobs(blocks, rule):
     return [b for b in blocks if re.match(rf"(?:local)?rule {rule}:", b)]
 
 
-def _markers(tmp_path, scene=MINI):
+def _markers(scene=MINI):
     """Each stage's warm marker in the workflow, as its jobs name it."""
-    os.environ["NUMBA_CACHE_DIR"] = str(tmp_path / "cache")  # the key does not depend on the folder
-    try:
-        return {stage: f"results/_warm/{twin_key(scene, stage)}/{stage}.done" for stage in STAGES}
-    finally:
-        del os.environ["NUMBA_CACHE_DIR"]
+    return {stage: f"results/_warm/{twin_key(scene, stage)}/{stage}.done" for stage in STAGES}
 
 
 def test_a_cold_cache_plans_one_warm_job_per_stage_before_the_stages_jobs(tmp_path):
     blocks = _planned(tmp_path, 2, tmp_path / "cache")
     warm = {re.search(r"stage=(\w+)", b).group(1): b for b in _jobs(blocks, "warm")}
-    markers = _markers(tmp_path)
+    markers = _markers()
     assert sorted(warm) == sorted(STAGES)
     assert markers["voxelize"] not in warm["voxelize"].split("output:")[0]
     for stage in ("permeability", "minkowski", "lpt"):  # their twins voxelise: after voxelize's warm-up
@@ -75,9 +71,9 @@ def test_scenes_with_the_same_twins_share_their_warm_jobs(tmp_path):
     # packing), so one warm job per stage, whose marker both scenes' jobs wait for
     fp, pp = SCENES / "thesis-5.6.1-ci.yaml", SCENES / "thesis-5.6.1-pp-ci.yaml"
     blocks = _planned(tmp_path, 2, tmp_path / "cache", scene=fp)
-    assert _markers(tmp_path, fp) == _markers(tmp_path, pp)
+    assert _markers(fp) == _markers(pp)
     assert sorted(re.search(r"stage=(\w+)", b).group(1) for b in _jobs(blocks, "warm")) == sorted(STAGES)
-    markers = _markers(tmp_path, fp)
+    markers = _markers(fp)
     for name in ("thesis-5.6.1-ci", "thesis-5.6.1-pp-ci"):
         lpt = [b for b in _jobs(blocks, "lpt") if f"results/{name}/" in b.split("output:")[1]]
         assert lpt and all(markers["lpt"] in job.split("output:")[0] for job in lpt), name

@@ -12,7 +12,7 @@ from porepipe._shared.naming import TAG_RE, res_tag
 from porepipe.diffusion import check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
 from porepipe.warm import STAGES as WARM_STAGES
-from porepipe.warm import is_warm, twin_key, warmable
+from porepipe.warm import marker_of, twin_key, warmable
 
 # the `porepipe` command of the interpreter that runs Snakemake comes first on the jobs' PATH
 shell.prefix(f'export PATH={shlex.quote(str(Path(sys.executable).parent))}:"$PATH"; ')
@@ -325,9 +325,10 @@ def warm_twin(scene, stage):
     key = (scene.name, stage)
     if key not in _warm_twins:
         local = workflow.local_exec and not workflow.remote_exec and (workflow.cores or 1) > 1
-        path, twin = SCENE_FILES[scene.name], None
-        if local and warmable(scene) and not is_warm(path, stage, scene):
-            twin = twin_key(path, stage, scene)
+        twin = twin_key(SCENE_FILES[scene.name], stage, scene) if local and warmable(scene) else None
+        if twin and marker_of(twin, stage).is_file():  # warmed since the sources last changed
+            twin = None
+        if twin:
             WARM_SCENES.setdefault(twin, scene.name)
         _warm_twins[key] = twin
     return _warm_twins[key]

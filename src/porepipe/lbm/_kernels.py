@@ -563,6 +563,16 @@ def _load_segment(src, gather, run_offset, run_base, r, n0, cnt, t, f):
 
 
 @njit(inline="always", **_NUMERIC)
+def _pull_segment(src, gather, run_offset, run_base, r, n0, t, seg, f):
+    """Pull all 19 populations of nodes n0 + t … n0 + t + seg - 1 (all in run r) into tile lanes t … t+seg-1: the
+    rest population from the node itself, the others by :func:`_load_segment`.
+    """
+    for i in range(seg):
+        _set(f, t + i, _get(src, n0 + t + i))
+    _load_segment(src, gather, run_offset, run_base, r, n0 + t, seg, t, f)
+
+
+@njit(inline="always", **_NUMERIC)
 def _run_segment(run_start, r, pos, rest):
     """The run holding node ``pos`` (``r``: that run or an earlier one) and how many nodes from ``pos`` on lie in it,
     at most ``rest``: the step of a loop that walks a tile run by run.
@@ -1206,9 +1216,7 @@ def _pull_collide(
                 _fields_tile(view, t, t + seg, n0, fz[0], fz[1], force, fields)
             _collide(literally(op), view, t, t + seg, n0, fz[0], fz[1], force, w, s)
         else:
-            for i in range(seg):
-                _set(f, t + i, _get(src, n0 + t + i))
-            _load_segment(src, gather, run_offset, run_base, r, n0 + t, seg, t, f)
+            _pull_segment(src, gather, run_offset, run_base, r, n0, t, seg, f)
             if keep:
                 _fields_tile(scratch, t, t + seg, n0, fz[0], fz[1], force, fields)
             _collide(literally(op), scratch, t, t + seg, n0, fz[0], fz[1], force, w, s)
@@ -1233,9 +1241,7 @@ def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt
             _collide(literally(op), view, t, t + seg, n0, fz[0], fz[1], force, w, s)
             _scatter_run(src, run_offset, r, n0, t, seg, f)
         elif op in SCRATCH_GATHER_OPS:
-            for i in range(seg):
-                _set(f, t + i, _get(src, n0 + t + i))
-            _load_segment(src, gather, run_offset, run_base, r, n0 + t, seg, t, f)
+            _pull_segment(src, gather, run_offset, run_base, r, n0, t, seg, f)
             _collide(literally(op), _scratch_view(f), t, t + seg, n0, fz[0], fz[1], force, w, s)
             _scatter_segment(src, gather, n0 + run_base[r], n0, t, seg, f)
         else:
