@@ -18,8 +18,8 @@ step has just read (1.4x dense, 2x porous at 2 threads in one run of benchmarks/
 walls, and with linear interpolated links (each link's value goes into its halfway slot before the tile collides;
 the node's outgoing population it needs from the step before is kept per link). In its gather step the irregular
 nodes collide in place through the gather table (:func:`_indexed_view`), in one pass instead of three (pull into
-the scratch, collide, scatter back) — except for the operators of ``SCRATCH_GATHER_OPS`` (TRT), which measured
-faster with the three.
+the scratch, collide, scatter back) — for float64 storage; float32 storage measured faster with the three
+(:func:`_gathers_in_scratch`).
 """
 
 from __future__ import annotations
@@ -854,82 +854,50 @@ def _force_coefficient(q, force):
     return 3.0 * _W[q] * (_CX[q] * force[0] + _CY[q] * force[1] + _CZ[q] * force[2])
 
 
-@njit(inline="always", **_NUMERIC)
-def _equilibria(cj, d, jj, inv, w):
-    """Zero-centred equilibria (f̃^eq_p, f̃^eq_p+1) of an opposite pair with c_p·j = cj (thesis Eq. 6.1.11):
-    w [δρ ± 3 c·j + (9/2 (c·j)² − 3/2 j²)/ρ], rounded as the population-by-population formula.
-    """
-    quad = (4.5 * cj * cj - 1.5 * jj) * inv
-    t = 3.0 * cj
-    return w * (d + t + quad), w * (d - t + quad)
-
-
-@njit(inline="always", **_NUMERIC)
-def _rest_equilibrium(d, jj, inv):
-    """f̃^eq_0 = w_0 (δρ − 3/2 j²/ρ)."""
-    return _W[0] * (d + -(1.5 * jj) * inv)
-
-
 # -- collision operators on a tile (in place on the float64 scratch f). ``force`` is a tuple (b_x, b_y, b_z) so that
 #    no array but f is touched in the node loop. Pairs (p, p + 1) are opposite; their c_p·j are listed in each loop.
+#    BGK is TRT with ω⁻ = ω⁺ = ω (:func:`_collide`): the same operator, f + ω (f^eq − f) + φ population by population.
 @njit(inline="always", **_NUMERIC)
-def _bgk_pair(f, i, p, cj, d, jj, inv, rho_on, force, omega):
-    e_p, e_r = _equilibria(cj, d, jj, inv, _W[p])
+def _trt_pair(f, i, p, cj, base, inv45, rho_on, force, half_plus, half_minus):
+    """TRT collision of the opposite pair (p, p + 1) with c_p·j = cj, written in the pair's sum and difference: the
+    even part relaxes towards f̃^eq_p + f̃^eq_p+1 = 2 w (δρ + (9/2 (c·j)² − 3/2 j²)/ρ) at ω⁺, the odd part towards
+    f̃^eq_p − f̃^eq_p+1 = 6 w c·j at ω⁻; the pair's force terms are opposite (φ_p+1 = −φ_p exactly: c and b·c change
+    sign, w does not), so they ride with the odd part. ``base`` = δρ − 3/2 j²/ρ, ``inv45`` = 9/2 / ρ.
+
+    The same operator as (f_p, f_p+1) − ½ω⁺ (…)⁺ ∓ ½ω⁻ (…)⁻ population by population, in 17 operations per pair
+    instead of 27 (BGK's population-by-population form took 21): in place (the AA gather step, scalar through the
+    gather table) the collision's arithmetic is what limits the step.
+    """
+    w = _W[p]
     f_p, f_r = _pop(f, p, i), _pop(f, p + 1, i)
-    _out(f, p, i, f_p + (omega * (e_p - f_p) + _force_coefficient(p, force) * rho_on))
-    _out(f, p + 1, i, f_r + (omega * (e_r - f_r) + _force_coefficient(p + 1, force) * rho_on))
-
-
-@njit(**_NUMERIC)
-def _collide_bgk(f, lo, hi, n0, force_lo, force_hi, force, omega):
-    for i in range(lo, hi):
-        d, jx, jy, jz = _moments(f, i)
-        rho = 1.0 + d
-        inv = 1.0 / rho
-        jj = jx * jx + jy * jy + jz * jz
-        on = rho * _force_on(n0 + i, force_lo, force_hi)
-        _out(f, 0, i, _pop(f, 0, i) + omega * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
-        _bgk_pair(f, i, 1, jx, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 3, jy, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 5, jz, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 7, jx + jy, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 9, jx - jy, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 11, jx + jz, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 13, jx - jz, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 15, jy + jz, d, jj, inv, on, force, omega)
-        _bgk_pair(f, i, 17, jy - jz, d, jj, inv, on, force, omega)
-
-
-@njit(inline="always", **_NUMERIC)
-def _trt_pair(f, i, p, cj, d, jj, inv, rho_on, force, half_plus, half_minus):
-    e_p, e_r = _equilibria(cj, d, jj, inv, _W[p])
-    f_p, f_r = _pop(f, p, i), _pop(f, p + 1, i)
-    sym = half_plus * (e_p + e_r - f_p - f_r)
-    anti = half_minus * (e_p - e_r - f_p + f_r)
-    _out(f, p, i, f_p + (sym + anti + _force_coefficient(p, force) * rho_on))
-    _out(f, p + 1, i, f_r + (sym - anti + _force_coefficient(p + 1, force) * rho_on))
+    sym = half_plus * ((2.0 * w) * (base + inv45 * (cj * cj)) - (f_p + f_r))
+    anti = half_minus * ((6.0 * w) * cj - (f_p - f_r)) + _force_coefficient(p, force) * rho_on
+    _out(f, p, i, f_p + (sym + anti))
+    _out(f, p + 1, i, f_r + (sym - anti))
 
 
 @njit(**_NUMERIC)
 def _collide_trt(f, lo, hi, n0, force_lo, force_hi, force, omega_plus, omega_minus):
+    """TRT (BGK where ω⁻ = ω⁺) collision of tile lanes lo … hi-1, with the body force on nodes in [force_lo, force_hi)."""
     hp = 0.5 * omega_plus
     hm = 0.5 * omega_minus
     for i in range(lo, hi):
         d, jx, jy, jz = _moments(f, i)
         rho = 1.0 + d
         inv = 1.0 / rho
-        jj = jx * jx + jy * jy + jz * jz
+        base = d - 1.5 * (jx * jx + jy * jy + jz * jz) * inv
+        inv45 = 4.5 * inv
         on = rho * _force_on(n0 + i, force_lo, force_hi)
-        _out(f, 0, i, _pop(f, 0, i) + omega_plus * (_rest_equilibrium(d, jj, inv) - _pop(f, 0, i)))
-        _trt_pair(f, i, 1, jx, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 3, jy, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 5, jz, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 7, jx + jy, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 9, jx - jy, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 11, jx + jz, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 13, jx - jz, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 15, jy + jz, d, jj, inv, on, force, hp, hm)
-        _trt_pair(f, i, 17, jy - jz, d, jj, inv, on, force, hp, hm)
+        _out(f, 0, i, _pop(f, 0, i) + omega_plus * (_W[0] * base - _pop(f, 0, i)))
+        _trt_pair(f, i, 1, jx, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 3, jy, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 5, jz, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 7, jx + jy, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 9, jx - jy, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 11, jx + jz, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 13, jx - jz, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 15, jy + jz, base, inv45, on, force, hp, hm)
+        _trt_pair(f, i, 17, jy - jz, base, inv45, on, force, hp, hm)
 
 
 # -- MRT (d'Humières 2002 basis, rows of :func:`porepipe.lbm._lattice.dhumieres_matrix`), per node as BGK/TRT.
@@ -1229,9 +1197,10 @@ def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt
     """AA gather step of the tile at n0 (cnt nodes; linear links already in their halfway slots) in place, run by
     run: a regular run collides straight from ``src`` into the scratch ``f`` and writes back by its stream offsets
     (:func:`_scatter_run`); an irregular run collides in place through the gather table (:func:`_indexed_view`: one
-    pass, no scratch) or, for the operators of :data:`SCRATCH_GATHER_OPS`, is pulled into the scratch, collided
-    there and scattered back (:func:`_scatter_segment`). Arguments as :func:`_pull_collide` (no fields: a gather
-    step is never a run's last step, which is a local or a pull step); returns the run holding the tile's last node.
+    pass, no scratch) or, where :func:`_gathers_in_scratch` says so (float32 storage), is pulled into the scratch,
+    collided there and scattered back (:func:`_scatter_segment`). Arguments as :func:`_pull_collide` (no fields: a
+    gather step is never a run's last step, which is a local or a pull step); returns the run holding the tile's
+    last node.
     """
     t = _ZERO
     while t < cnt:
@@ -1240,7 +1209,7 @@ def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt
             view = _run_view(src, run_offset, r, n0, f)
             _collide(literally(op), view, t, t + seg, n0, fz[0], fz[1], force, w, s)
             _scatter_run(src, run_offset, r, n0, t, seg, f)
-        elif op in SCRATCH_GATHER_OPS:
+        elif _gathers_in_scratch(src):
             _pull_segment(src, gather, run_offset, run_base, r, n0, t, seg, f)
             _collide(literally(op), _scratch_view(f), t, t + seg, n0, fz[0], fz[1], force, w, s)
             _scatter_segment(src, gather, n0 + run_base[r], n0, t, seg, f)
@@ -1251,14 +1220,22 @@ def _aa_gather_tile(op, src, gather, run_start, run_offset, run_base, r, n0, cnt
     return r
 
 
-#: operators whose AA gather step pulls an irregular run into the scratch, collides it there (vectorised) and
-#: scatters it back (:func:`_scatter_segment`) instead of colliding in place through the gather table: TRT, whose
-#: scalar in-place collision ran 0.8x BGK's per fluid node on a porous sample (porous 128^3, 1 and 2 threads, on an
-#: AVX-512 Intel machine: TRT's in-place step pair 1.06-1.18x faster this way). BGK and MRT stay in place: this way
-#: they ran 0.91-0.94x and 0.85-0.88x there (4-step bursts after a cache flush). On the ninth session's machine the
-#: in-place collision had measured 1.13-1.32x for the gather step alone, TRT included (docs/speed.md).
-#: The same arithmetic on the same values: the same bits either way.
-SCRATCH_GATHER_OPS = (TRT,)
+def _gathers_in_scratch(src):
+    """Whether the AA gather step pulls an irregular run of population array ``src`` into the scratch, collides it
+    there (vectorised) and scatters it back (:func:`_scatter_segment`), instead of colliding it in place through the
+    gather table (scalar, one pass): for float32 storage, not for float64. Porous 128^3, 4-step bursts after a cache
+    flush, three processes alternated, on an AVX-512 Intel machine: float32 BGK / TRT / MRT 1.2x / 1.05x / 1.2x
+    faster in the scratch at 2 threads (the in-place loop converts every value it reads and writes one by one);
+    float64 in place 1.15x / 1.17x / 1.0-1.2x faster, once TRT's arithmetic was slimmed (:func:`_trt_pair`; before,
+    TRT alone ran faster in the scratch). The same arithmetic on the same values: the same bits either way.
+    """
+
+
+@overload(_gathers_in_scratch, jit_options=_NUMERIC)
+def _gathers_in_scratch_of(src):
+    """The jitted :func:`_gathers_in_scratch`: a constant of ``src``'s dtype, so the other path is not compiled."""
+    in_scratch = src.dtype == types.float32
+    return lambda src: in_scratch
 
 
 @njit(**_NUMERIC)
@@ -1318,7 +1295,7 @@ def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
     the three (the step kernel's cold compile shrinks by ~40 %, the mini scene's by ~8 CPU-s).
     """
     if op == BGK:
-        _collide_bgk(v, lo, hi, n0, force_lo, force_hi, force, omega[0])
+        _collide_trt(v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[0])
     elif op == TRT:
         _collide_trt(v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[1])
     else:
@@ -1333,8 +1310,8 @@ def _collide_one_operator(op, v, lo, hi, n0, force_lo, force_hi, force, omega, r
             "_collide: op must be a literal (call it with literally(op)), so one operator compiles"
         )
     if op.literal_value == BGK:
-        return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_bgk(
-            v, lo, hi, n0, force_lo, force_hi, force, omega[0]
+        return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_trt(
+            v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[0]
         )
     if op.literal_value == TRT:
         return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_trt(

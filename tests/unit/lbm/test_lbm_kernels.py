@@ -124,8 +124,9 @@ def test_store_modes_write_identical_populations(precision, geometry, steps):
     head and tail), the old element-wise non-temporal loop and in-place AA streaming (step pairs in one array, an
     odd last step pulled into the other) write the same bits, and the same fields of the last step: how a value
     is streamed and stored cannot change it. TRT steps with a body force from random populations, compared exactly.
-    The AA gather step collides the irregular nodes in place through the gather table, the regular runs via the tile
-    scratch: "random" is all irregular, "chunks" has both."""
+    The AA gather step collides the irregular nodes in place through the gather table for float64 storage, through
+    the tile scratch (pulled, collided, scattered back) for float32, the regular runs via the tile scratch: "random" is
+    all irregular, "chunks" has both."""
     from porepipe.lbm import _kernels
 
     pore = _GEOMETRIES[geometry]()
