@@ -856,7 +856,8 @@ def _force_coefficient(q, force):
 
 # -- collision operators on a tile (in place on the float64 scratch f). ``force`` is a tuple (b_x, b_y, b_z) so that
 #    no array but f is touched in the node loop. Pairs (p, p + 1) are opposite; their c_p·j are listed in each loop.
-#    BGK is TRT with ω⁻ = ω⁺ = ω (:func:`_collide`): the same operator, f + ω (f^eq − f) + φ population by population.
+#    BGK is TRT with ω⁻ = ω⁺ = ω (:func:`_collide`; the solver passes (ω, ω)): f + ω (f^eq − f) + φ population by
+#    population.
 @njit(inline="always", **_NUMERIC)
 def _trt_pair(f, i, p, cj, base, inv45, rho_on, force, half_plus, half_minus):
     """TRT collision of the opposite pair (p, p + 1) with c_p·j = cj, written in the pair's sum and difference: the
@@ -1224,10 +1225,10 @@ def _gathers_in_scratch(src):
     """Whether the AA gather step pulls an irregular run of population array ``src`` into the scratch, collides it
     there (vectorised) and scatters it back (:func:`_scatter_segment`), instead of colliding it in place through the
     gather table (scalar, one pass): for float32 storage, not for float64. Porous 128^3, 4-step bursts after a cache
-    flush, three processes alternated, on an AVX-512 Intel machine: float32 BGK / TRT / MRT 1.2x / 1.05x / 1.2x
-    faster in the scratch at 2 threads (the in-place loop converts every value it reads and writes one by one);
-    float64 in place 1.15x / 1.17x / 1.0-1.2x faster, once TRT's arithmetic was slimmed (:func:`_trt_pair`; before,
-    TRT alone ran faster in the scratch). The same arithmetic on the same values: the same bits either way.
+    flush, processes alternated, 2 threads, on an AVX-512 Intel machine: float32 BGK / TRT / MRT 1.2x / 1.2x /
+    1.24x faster in the scratch (the in-place loop converts every value it reads and writes one by one); float64 in
+    place 1.16x / 1.12-1.17x / 1.13-1.2x faster, once TRT's arithmetic was slimmed (:func:`_trt_pair`; before, TRT
+    alone ran faster in the scratch). The same arithmetic on the same values: the same bits either way.
     """
 
 
@@ -1288,18 +1289,16 @@ def _gather_step_if_compiled(
 
 
 def _collide(op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates):
-    """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω, ω⁻) (ω⁻ for TRT only),
-    ``rates`` (s_k/|M_k|²) for MRT.
+    """Collide tile lanes lo … hi-1 of view ``v`` with operator ``op``; ``omega`` = (ω⁺, ω⁻) for TRT and BGK (which
+    is TRT with ω⁻ = ω⁺: the solver passes (ω, ω)), ``rates`` (s_k/|M_k|²) for MRT.
 
     In jitted code ``op`` must be a literal (``literally(op)``): only that operator's code is compiled, a third of
     the three (the step kernel's cold compile shrinks by ~40 %, the mini scene's by ~8 CPU-s).
     """
-    if op == BGK:
-        _collide_trt(v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[0])
-    elif op == TRT:
-        _collide_trt(v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[1])
-    else:
+    if op == MRT:
         _collide_mrt(v, lo, hi, n0, force_lo, force_hi, force, rates)
+    else:
+        _collide_trt(v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[1])
 
 
 @overload(_collide, prefer_literal=True, jit_options=_NUMERIC)
@@ -1309,16 +1308,12 @@ def _collide_one_operator(op, v, lo, hi, n0, force_lo, force_hi, force, omega, r
         raise TypeError(
             "_collide: op must be a literal (call it with literally(op)), so one operator compiles"
         )
-    if op.literal_value == BGK:
-        return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_trt(
-            v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[0]
+    if op.literal_value == MRT:
+        return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_mrt(
+            v, lo, hi, n0, force_lo, force_hi, force, rates
         )
-    if op.literal_value == TRT:
-        return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_trt(
-            v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[1]
-        )
-    return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_mrt(
-        v, lo, hi, n0, force_lo, force_hi, force, rates
+    return lambda op, v, lo, hi, n0, force_lo, force_hi, force, omega, rates: _collide_trt(
+        v, lo, hi, n0, force_lo, force_hi, force, omega[0], omega[1]
     )
 
 
