@@ -143,11 +143,6 @@ def _sources_digest() -> bytes:
     return h.digest()
 
 
-def is_warm(scene_path: str | os.PathLike, stage: str, scene=None) -> bool:
-    """Whether a warm-up of ``stage`` with this scene's twins finished since the sources last changed."""
-    return marker_path(scene_path, stage, scene).is_file()
-
-
 def _commands(stage: str, scene: Path, tmp: Path, twin_scene) -> list[list[str]]:
     """The ``porepipe`` commands (argument lists) that run ``stage`` on the twin, with the stages it reads first,
     each with the options its workflow rule gives it.

@@ -71,7 +71,7 @@ def test_a_twin_that_fails_says_so_in_one_line_and_leaves_no_marker(tmp_path, mo
     assert (
         len(lines) == 1 and "`porepipe segment` on the twin failed" in lines[0] and "missing.h5" in lines[0]
     )
-    assert not W.is_warm(MINI, "lpt")
+    assert not W.marker_path(MINI, "lpt").is_file()
 
 
 def test_the_twin_keeps_the_kernel_selecting_settings_and_shrinks_the_rest(tmp_path):
@@ -136,4 +136,4 @@ def test_a_marker_folder_that_cannot_be_written_costs_the_marker_not_the_run(tmp
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(blocker / "cache"))  # a folder inside a file: mkdir fails
     monkeypatch.setattr(W, "_run_twin", lambda *args: True)
     assert W.warm(MINI, "minkowski", main) is True
-    assert "no marker kept" in capsys.readouterr().err and not W.is_warm(MINI, "minkowski")
+    assert "no marker kept" in capsys.readouterr().err and not W.marker_path(MINI, "minkowski").is_file()
