@@ -1068,23 +1068,26 @@ def aa_link_slots(gather, run_start, run_offset, run_base, tile_start, link_slot
 @njit(inline="always", **_NUMERIC)
 def _aa_link_at(n0, n_nodes, link_slot, behind_gather, local, k):
     """(halfway slot, behind slot) of link k of the tile at n0, in a local or a gather step."""
-    s = np.int64(link_slot[k])
+    s = np.int64(_get(link_slot, k))
     p = s // _TILE
     x = n0 + s - p * _TILE
-    behind = p * n_nodes + x if local else np.int64(behind_gather[k])
+    behind = p * n_nodes + x if local else np.int64(_get(behind_gather, k))
     return _OPP[p] * n_nodes + x, behind
 
 
 @njit(**_NUMERIC)
 def _aa_links_in(a, n0, n_nodes, tile_start, link_slot, link_b, link_c, behind_gather, local, own):
     """Before the tile at n0 collides in place: each linear link's value into its halfway slot (in link order, as
-    :func:`_apply_links`).
+    :func:`_apply_links`). Indexed by ``_get``/``_set`` (no wrap-around test per index), as :func:`_aa_links_own`:
+    both passes together ~1.5 ms less per step on the porous 128³ φ 0.2 sample with CLI walls (~1.0 M links;
+    13.4-14.6 against 15.2-16.4 ms, 1 thread, alternated processes).
     """
     tile = n0 // _TILE
     for k in range(tile_start[tile], tile_start[tile + 1]):
         halfway, behind = _aa_link_at(n0, n_nodes, link_slot, behind_gather, local, k)
-        h = np.float64(a[halfway])
-        a[halfway] = _link_value(h, np.float64(a[behind]), own[k], link_b[k], link_c[k])
+        h = np.float64(_get(a, halfway))
+        link = _link_value(h, np.float64(_get(a, behind)), _get(own, k), _get(link_b, k), _get(link_c, k))
+        _set(a, halfway, link)
 
 
 @njit(**_NUMERIC)
@@ -1094,7 +1097,7 @@ def _aa_links_own(a, n0, n_nodes, tile_start, link_slot, behind_gather, local, o
     """
     tile = n0 // _TILE
     for k in range(tile_start[tile], tile_start[tile + 1]):
-        own[k] = a[_aa_link_at(n0, n_nodes, link_slot, behind_gather, local, k)[1]]
+        _set(own, k, _get(a, _aa_link_at(n0, n_nodes, link_slot, behind_gather, local, k)[1]))
 
 
 # -- multi-reflection (MR1) links add, per link, d (f*_ō(x + 2c_p) − f*_p(x + c_p)) (two flat indices into the source
