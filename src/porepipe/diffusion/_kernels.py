@@ -917,9 +917,22 @@ T_PARTICLES, T_OUT_HIGH, T_OUT_LOW, T_TRUNC, T_HITS, T_CROSS, T_PATH, T_TIME, T_
 N_TALLY = 9
 
 
+#: bins of a flight's axial profile added without a branch on where it ends (:func:`_profile_add`)
+_PROFILE_UNROLLED = 4
+
+
 @njit(cache=True, **NO_REFCOUNT)
 def _profile_add(prof, p_start, u_ax, length, speed, bin_w):
-    """Add the time a straight flight of ``length`` from axial coordinate ``p_start`` spends in each axial bin."""
+    """Add the time a straight flight of ``length`` from axial coordinate ``p_start`` spends in each axial bin.
+
+    Bin by bin from the one holding the lower end: the first bin from the lower end, each next one from its lower
+    edge, up to the higher end or the last bin. The first _PROFILE_UNROLLED bins are added without a branch on
+    where the flight ends (a bin it does not reach adds 0.0 to the first: the same bits), the rest, if any, by the
+    loop: that loop's exit, decided late by the divisions before it, was mispredicted at about every flight. Bit
+    for bit the bin-by-bin loop alone (tested); the default transmission run (profile on, capillary 30 x 30 x 300,
+    1 thread, CPU time, three alternated process pairs) 142-145 -> 137-139 ns per wall hit, the profile's cost
+    over none ~25 -> ~19 ns (2 or 6 bins unrolled: no better or slower).
+    """
     nb = prof.shape[0]
     if length <= 0.0:
         return
@@ -933,6 +946,19 @@ def _profile_add(prof, p_start, u_ax, length, speed, bin_w):
         return
     per_len = total_t / (hi - lo)
     b = min(max(int(lo / bin_w), 0), nb - 1)
+    edge = (b + 1) * bin_w
+    top = min(hi, edge)
+    prof[b] += (top - lo) * per_len if top > lo else 0.0
+    for k in range(1, _PROFILE_UNROLLED):
+        reached = (hi > edge) & (b + k <= nb - 1)  # the loop would have gone on to bin b + k
+        lower = edge
+        edge = (b + k + 1) * bin_w
+        top = min(hi, edge)
+        prof[b + k if reached else b] += (top - lower) * per_len if reached else 0.0
+    if (hi <= edge) | (b + _PROFILE_UNROLLED > nb - 1):
+        return
+    lo = edge
+    b += _PROFILE_UNROLLED
     while True:
         edge = (b + 1) * bin_w
         top = min(hi, edge)
