@@ -76,7 +76,8 @@ def test_profile_adds_the_exact_time_in_each_bin(u_ax):
     for _ in range(500):
         p_start, p_end = (float(x) for x in rng.uniform(0, nb * bin_w, 2))
         length = abs(p_end - p_start) / abs(u_ax)
-        p_start = p_start if (p_end - p_start) * u_ax >= 0 else p_end  # the flight runs from p_start along u_ax
+        if (p_end - p_start) * u_ax < 0:  # the flight runs from p_start along u_ax
+            p_start = p_end
         prof = np.zeros(nb)
         _profile_add(prof, p_start, u_ax, length, speed, bin_w)
         lo, hi = sorted((p_start, p_start + u_ax * length))
