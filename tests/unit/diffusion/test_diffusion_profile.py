@@ -8,27 +8,30 @@ from porepipe.diffusion._kernels import _PROFILE_UNROLLED, _profile_add
 
 
 def _bin_by_bin(prof, p_start, u_ax, length, speed, bin_w):
-    """The rule as one loop (the kernel before its first bins were unrolled), in plain Python floats."""
+    """The rule written out in plain Python floats: the flight's axial segment cut at the bin edges, from the bin
+    holding its lower end (clamped to the bins) up to its higher end or the last bin; each piece's length times the
+    time per length goes to its bin, pieces of no length are skipped."""
     nb = prof.shape[0]
     if length <= 0.0:
         return
     p_end = p_start + u_ax * length
     lo, hi = min(p_start, p_end), max(p_start, p_end)
-    total_t = length / speed
-    b = min(max(int(lo / bin_w), 0), nb - 1)
+    first = min(max(int(lo / bin_w), 0), nb - 1)
     if hi - lo <= 1e-300:
-        prof[b] += total_t
+        prof[first] += length / speed
         return
-    per_len = total_t / (hi - lo)
-    while True:
-        edge = (b + 1) * bin_w
-        top = min(hi, edge)
-        if top > lo:
-            prof[b] += (top - lo) * per_len
-        if hi <= edge or b == nb - 1:
+    per_len = length / speed / (hi - lo)
+    pieces = []  # (bin, lower end, upper end)
+    lower = lo
+    for k in range(first, nb):
+        upper = (k + 1) * bin_w
+        pieces.append((k, lower, min(hi, upper)))
+        if hi <= upper:
             break
-        lo = edge
-        b += 1
+        lower = upper
+    for k, a, z in pieces:
+        if z > a:
+            prof[k] += (z - a) * per_len
 
 
 def _flights(n, seed):
