@@ -540,10 +540,14 @@ def _derived(v, geom, settings):
     eps = geom.accessible_porosity
     psi = v["D_eff"] / v["D_ref"]
     v.update(psi=psi, labyrinth_factor=psi / eps, tortuosity=eps / psi if psi > 0 else float("inf"))
-    # V and S are exact counts, so Ψ, χ and τ carry the relative statistical error of D_eff (τ to first order)
-    rel = v["D_eff_err"] / v["D_eff"] if v["D_eff"] > 0 else float("inf")
-    for k in ("psi", "labyrinth_factor", "tortuosity"):
-        v[f"{k}_err"] = abs(v[k]) * rel
+    # V and S are exact counts, so Ψ and χ carry the statistical error of D_eff, and τ = ε/Ψ its relative error (to
+    # first order); Ψ's as D_eff_err / D_ref, which stays finite where nothing was transmitted (Ψ = 0, τ = inf)
+    psi_err = v["D_eff_err"] / v["D_ref"]
+    v.update(
+        psi_err=psi_err,
+        labyrinth_factor_err=psi_err / eps,
+        tortuosity_err=v["tortuosity"] * psi_err / psi if psi > 0 else float("inf"),
+    )
 
 
 def _arrays(tallies, settings, geom, axis):

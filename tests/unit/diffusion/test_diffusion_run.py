@@ -2,6 +2,7 @@
 checkpoint/resume; the CLI."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -48,6 +49,29 @@ def test_run_writes_readable_result_with_cost(tmp_path):
     assert "tortuosity" in ds and "definitions" in ds.attrs
     assert all(math.isfinite(float(ds[k])) for k in ds.data_vars if ds[k].ndim == 0)
     assert not (tmp_path / ".d.h5.checkpoint.npz").exists()
+
+
+def test_nothing_transmitted_gives_finite_errors_not_nan():
+    """A run in which no particle gets through (a long tube, one round of a few particles): W = 0 and Ψ = 0 with
+    finite errors (Ψ's from D_eff's absolute error; it was 0 x inf = nan, with a RuntimeWarning), τ = inf."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        v = transport(
+            square_capillary(4, 200).pore, 2, Settings(batches=2, batch_particles=2, max_rounds=1), seed=1
+        )
+    v = v.values
+    assert v["W"] == 0.0 and v["psi"] == 0.0
+    for k in ("psi_err", "labyrinth_factor_err"):
+        assert math.isfinite(v[k]) and v[k] >= 0.0
+    assert v["tortuosity"] == math.inf and v["tortuosity_err"] == math.inf
+
+
+def test_errors_of_psi_chi_and_tau_are_those_of_d_eff():
+    """Where something is transmitted: Ψ and χ carry D_eff's relative error, τ = ε/Ψ the same relative error."""
+    v = transport(square_capillary(5, 40).pore, 2, SMALL, seed=9).values
+    rel = v["D_eff_err"] / v["D_eff"]
+    for k in ("psi", "labyrinth_factor", "tortuosity"):
+        assert v[f"{k}_err"] == pytest.approx(v[k] * rel, rel=1e-12)
 
 
 def test_same_numbers_for_one_and_two_threads():
