@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 import numpy as np
@@ -262,6 +263,25 @@ def _check_distributable(settings: Settings) -> None:
         )
 
 
+def _not_converged(run, axis: Axis, settings: Settings) -> str:
+    """The one line of a run that hit ``max_steps`` unconverged: its last changes, or, before the first full
+    convergence window (steps ``window_steps`` to ``2 window_steps``; the changes are inf until then), that no check
+    could run yet.
+    """
+    head = f"LBM run along {axis.value} not converged after {run.steps} steps"
+    tail = "raise `max_steps` (the run resumes from its checkpoint)"
+    if not any(math.isfinite(d) for d in run.history["delta_rho"]):
+        return (
+            f"{head}: no convergence check has run yet (the first compares steps window_steps="
+            f"{settings.window_steps} and {2 * settings.window_steps}); {tail} or lower `window_steps`"
+        )
+    h = run.history
+    return (
+        f"{head} (last δv={h['delta_v'][-1]:.3g}, δρ={h['delta_rho'][-1]:.3g}, δκ={h['delta_kappa'][-1]:.3g}): "
+        f"{tail} or loosen the tolerances"
+    )
+
+
 def permeability(
     pore: np.ndarray,
     axis: Axis | str = Axis.z,
@@ -391,12 +411,7 @@ def permeability(
         else f"step limit max_steps={settings.max_steps} reached before convergence"
     )
     if not run.converged and not settings.accept_unconverged:
-        raise StabilityError(
-            f"LBM run along {axis.value} not converged after {run.steps} steps "
-            f"(last δv={run.history['delta_v'][-1]:.3g}, δρ={run.history['delta_rho'][-1]:.3g}, "
-            f"δκ={run.history['delta_kappa'][-1]:.3g}): raise `max_steps` (the run resumes from "
-            "its checkpoint) or loosen the tolerances"
-        )
+        raise StabilityError(_not_converged(run, axis, settings))
     if run.converged and checkpoint is not None:
         Path(checkpoint).unlink(missing_ok=True)
     velocity = pressure = None

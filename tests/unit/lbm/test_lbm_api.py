@@ -81,6 +81,18 @@ def test_checkpoint_resume_gives_the_same_answer(tmp_path):
     assert not ckpt.exists(), "a converged run removes its checkpoint"
 
 
+def test_step_limit_before_the_first_check_says_so():
+    """max_steps below the first full convergence window: the changes are still inf, and the error says that no
+    check could run (not 'last δv=inf', which read as a blow-up); after a window it quotes the last changes."""
+    pore = _slit(h=8)
+    with pytest.raises(StabilityError, match=r"no convergence check has run yet .*window_steps=50 and 100"):
+        permeability(pore, "x", Settings(window_steps=50, max_steps=60), progress=False)
+    with pytest.raises(StabilityError, match=r"not converged after 200 steps \(last δv="):
+        permeability(
+            pore, "x", Settings(window_steps=50, max_steps=200, tolerance_kappa=1e-12), progress=False
+        )
+
+
 class _PlaneQ:
     """Every wall link cut at q = 0.3 (a slit's plates 0.3 off the outer nodes)."""
 
