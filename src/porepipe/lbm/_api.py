@@ -303,7 +303,8 @@ def permeability(
     axis : Axis or {"x", "y", "z"}
         Flow direction; gives one diagonal element of the permeability tensor.
     settings : Settings, optional
-        Operator, set-up, tolerances (defaults: thesis MRT, τ̂ = 0.857, periodic body force).
+        Operator, set-up, tolerances (defaults: TRT with Λ = 3/16, τ̂ = 0.857 as the thesis's, periodic body
+        force, CLI walls where a geometry is given).
     voxel_um : float
         Voxel edge in µm, for κ in m², mD and D.
     checkpoint : path, optional
