@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 
+from porepipe._shared.errors import PorepipeError
+from porepipe.estimate import richardson_limit
 from porepipe.estimate._api import estimate_from_histograms
 
 
@@ -26,3 +28,21 @@ def test_faces_on_voxel_planes_give_the_exact_porosity():
     ds = estimate_from_histograms([4.0, 2.0, 1.0], hists)
     assert float(ds.phi_limit) == 0.75
     assert ds.phi_regression.attrs["error_method"] == "exact"
+
+
+def test_richardson_limit_is_exact_on_a_parabola_and_refuses_what_it_cannot_fit():
+    """q = 0.3 + 0.05 a - 0.02 a² through three resolutions: the limit 0.3 to round-off; a repeated resolution (a
+    singular fit, which numpy only warned about), a non-positive one, mismatched lengths or a NaN value give one
+    clear line instead of a number."""
+    a = np.array([4.0, 2.0, 1.0])
+    limit, err = richardson_limit(a, 0.3 + 0.05 * a - 0.02 * a**2)
+    assert limit == pytest.approx(0.3, abs=1e-14)
+    assert err > 0  # the linear two-point limit differs: the error estimate sees the curvature
+    for bad_a, bad_q, match in (
+        ([4.0, 1.0, 1.0], [0.31, 0.30, 0.30], "distinct positive"),
+        ([2.0, 1.0, 0.0], [0.31, 0.30, 0.30], "distinct positive"),
+        ([4.0, 2.0, 1.0], [0.31, 0.30], "one value per resolution"),
+        ([4.0, 2.0, 1.0], [0.31, np.nan, 0.30], "finite values"),
+    ):
+        with pytest.raises(PorepipeError, match=match):
+            richardson_limit(bad_a, bad_q)

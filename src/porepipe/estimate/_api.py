@@ -58,7 +58,16 @@ def richardson_limit(a, q) -> tuple[float, float]:
     q = np.asarray(q, dtype=np.float64)
     if a.size < 3:
         raise PorepipeError(f"a three-point limit needs 3 resolutions, got {a.size}")
+    if a.shape != q.shape:
+        raise PorepipeError(f"a three-point limit needs one value per resolution, got {a.size} and {q.size}")
     idx = np.argsort(a)[:3]
+    finest = a[idx]
+    if not (np.all(np.isfinite(finest)) and finest[0] > 0 and np.all(np.diff(finest) > 0)):
+        raise PorepipeError(
+            f"a three-point limit needs three distinct positive resolutions, got the finest {finest.tolist()} µm"
+        )
+    if not np.all(np.isfinite(q[idx])):
+        raise PorepipeError(f"a three-point limit needs finite values, got {q[idx].tolist()}")
     coef = np.polyfit(a[idx], q[idx], 2)
     linear = np.polyfit(a[idx[:2]], q[idx[:2]], 1)
     return float(coef[-1]), float(abs(coef[-1] - linear[-1]))
