@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.estimate import richardson_limit
+from porepipe.estimate import regress_porosity_limit, richardson_limit
 from porepipe.estimate._api import estimate_from_histograms
 
 
@@ -46,3 +46,9 @@ def test_richardson_limit_is_exact_on_a_parabola_and_refuses_what_it_cannot_fit(
     ):
         with pytest.raises(PorepipeError, match=match):
             richardson_limit(bad_a, bad_q)
+
+
+def test_regression_refuses_non_finite_intercepts():
+    """A NaN intercept made LAPACK print 'illegal value' and raise LinAlgError; now one line names the intercepts."""
+    with pytest.raises(PorepipeError, match="finite intercepts"):
+        regress_porosity_limit([0.3, np.nan], [0.35, 0.33])

@@ -128,6 +128,10 @@ def regress_porosity_limit(phi0_lines, phi215_lines) -> PorosityLimit:
         raise PorepipeError(
             f"the φ*/φ** regression needs at least 2 resolution pairs (3 resolutions), got {p0.size}"
         )
+    if not (np.all(np.isfinite(p0)) and np.all(np.isfinite(p1))):
+        raise PorepipeError(
+            f"the φ*/φ** regression needs finite intercepts, got {p0.tolist()} and {p1.tolist()}"
+        )
     star = 0.5 * (p0 + p1)
     star2 = p1 - p0
     if np.ptp(star2) == 0:
