@@ -264,21 +264,23 @@ def _check_distributable(settings: Settings) -> None:
 
 
 def _not_converged(run, axis: Axis, settings: Settings) -> str:
-    """The one line of a run that hit ``max_steps`` unconverged: its last changes, or, before the first full
-    convergence window (steps ``window_steps`` to ``2 window_steps``; the changes are inf until then), that no check
-    could run yet.
+    """The one line of a run that hit ``max_steps`` unconverged: the changes of its last full convergence window, or,
+    before the first (steps ``window_steps`` to ``2 window_steps``; a check after a shorter chunk has no changes: inf),
+    that no check could run yet.
     """
     head = f"LBM run along {axis.value} not converged after {run.steps} steps"
     tail = "raise `max_steps` (the run resumes from its checkpoint)"
-    if not any(math.isfinite(d) for d in run.history["delta_rho"]):
+    h = run.history
+    checked = [i for i, d in enumerate(h["delta_rho"]) if math.isfinite(d)]  # inf after a shorter chunk
+    if not checked:
         return (
             f"{head}: no convergence check has run yet (the first compares steps window_steps="
             f"{settings.window_steps} and {2 * settings.window_steps}); {tail} or lower `window_steps`"
         )
-    h = run.history
+    i = checked[-1]
     return (
-        f"{head} (last δv={h['delta_v'][-1]:.3g}, δρ={h['delta_rho'][-1]:.3g}, δκ={h['delta_kappa'][-1]:.3g}): "
-        f"{tail} or loosen the tolerances"
+        f"{head} (at step {int(h['step'][i])}: δv={h['delta_v'][i]:.3g}, δρ={h['delta_rho'][i]:.3g}, "
+        f"δκ={h['delta_kappa'][i]:.3g}): {tail} or loosen the tolerances"
     )
 
 
