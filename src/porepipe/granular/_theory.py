@@ -220,6 +220,10 @@ def parabolic_sigma_zz(z, a: float, b: float, k: float, mu_j: float, rho_g: floa
     return silo_sigma_zz(z, r, dr, k, mu_j, rho_g, xi=xi)
 
 
+#: bounds of k and mu_j in :func:`fit_janssen`'s least squares
+_JANSSEN_BOUNDS = (1e-3, 20.0)
+
+
 def fit_janssen(depth_m, wall_pressure, r: float, rho_g: float, k: float | None = None) -> dict[str, float]:
     """Least-squares fit of Janssen's wall pressure (Eq. 3.4) to a measured profile.
 
@@ -237,7 +241,15 @@ def fit_janssen(depth_m, wall_pressure, r: float, rho_g: float, k: float | None 
     Returns
     -------
     dict
-        ``k``, ``mu_j``, their standard errors ``k_err``, ``mu_j_err``, and ``rms`` (residual, same unit as p).
+        ``k``, ``mu_j``, their standard errors ``k_err``, ``mu_j_err``, ``rms`` (residual, same unit as p), and
+        ``at_bound``: a fitted parameter sits on its bound (1e-3 or 20): the profile is not Janssen's (e.g. a
+        pressure that falls with depth), and the errors at the bound mean nothing.
+
+    Raises
+    ------
+    PorepipeError
+        Fewer than 3 finite points, a pressure that is nowhere positive, or a given ``k`` that is not finite and
+        positive (each gave scipy's "initial guess is outside of provided bounds" or a fit of NaN).
     """
     from scipy.optimize import curve_fit
 
@@ -247,13 +259,20 @@ def fit_janssen(depth_m, wall_pressure, r: float, rho_g: float, k: float | None 
     z, p = z[good], p[good]
     if len(z) < 3:
         raise PorepipeError(f"fit_janssen: need at least 3 finite points of the wall pressure, got {len(z)}")
-    mu0 = max(rho_g * r / max(p.max(), 1e-300), 0.05)
+    if not p.max() > 0:
+        raise PorepipeError(
+            f"fit_janssen: the wall pressure is nowhere positive (max {p.max():.3g}): nothing to fit"
+        )
+    if k is not None and not (math.isfinite(k) and k > 0):
+        raise PorepipeError(f"fit_janssen: a fixed k must be finite and positive, got {k}")
+    lo, hi = _JANSSEN_BOUNDS
+    mu0 = min(max(rho_g * r / p.max(), 0.05), hi)
     if k is None:
 
         def model(zz, kk, mm):
             return janssen(zz, r, kk, mm, rho_g)[1]
 
-        popt, pcov = curve_fit(model, z, p, p0=(0.6, mu0), bounds=([1e-3, 1e-3], [20.0, 20.0]))
+        popt, pcov = curve_fit(model, z, p, p0=(0.6, mu0), bounds=([lo, lo], [hi, hi]))
         err = np.sqrt(np.diag(pcov))
         kk, mm, kerr, merr = popt[0], popt[1], err[0], err[1]
     else:
@@ -261,10 +280,18 @@ def fit_janssen(depth_m, wall_pressure, r: float, rho_g: float, k: float | None 
         def model(zz, mm):
             return janssen(zz, r, k, mm, rho_g)[1]
 
-        popt, pcov = curve_fit(model, z, p, p0=(mu0,), bounds=([1e-3], [20.0]))
+        popt, pcov = curve_fit(model, z, p, p0=(mu0,), bounds=([lo], [hi]))
         kk, mm, kerr, merr = k, popt[0], 0.0, float(np.sqrt(pcov[0, 0]))
     rms = float(np.sqrt(np.mean((janssen(z, r, kk, mm, rho_g)[1] - p) ** 2)))
-    return {"k": float(kk), "mu_j": float(mm), "k_err": float(kerr), "mu_j_err": float(merr), "rms": rms}
+    at_bound = bool(np.any(np.isclose(popt, lo, rtol=1e-6) | np.isclose(popt, hi, rtol=1e-6)))
+    return {
+        "k": float(kk),
+        "mu_j": float(mm),
+        "k_err": float(kerr),
+        "mu_j_err": float(merr),
+        "rms": rms,
+        "at_bound": at_bound,
+    }
 
 
 # -- heaps (Wittmer-Cates-Claudin) -------------------------------------------------------------------------------

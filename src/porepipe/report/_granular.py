@@ -135,11 +135,17 @@ def _silo_rows(a: dict, th: dict) -> list[list[str]]:
         ],
     ]
     if janssen_fit:
+        # a fit pinned on a bound of its least squares: not a Janssen profile, its errors mean nothing
+        pinned = " (on the fit's bound: not a Janssen profile)" if a["fit"].get("at_bound") else ""
         rows += [
-            ["k (Janssen fit, k and mu_j free)", f"{a['fit']['k']:.2f} ± {a['fit']['k_err']:.2f}", "–"],
+            [
+                "k (Janssen fit, k and mu_j free)",
+                f"{a['fit']['k']:.2f} ± {a['fit']['k_err']:.2f}{pinned}",
+                "–",
+            ],
             [
                 "mu_j (Janssen fit, k free)",
-                f"{a['fit']['mu_j']:.3f} ± {a['fit']['mu_j_err']:.3f}",
+                f"{a['fit']['mu_j']:.3f} ± {a['fit']['mu_j_err']:.3f}{pinned}",
                 f"{th['mu_j']}",
             ],
         ]

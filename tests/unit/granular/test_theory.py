@@ -131,6 +131,19 @@ def test_fit_janssen_recovers_parameters():
     assert fit["mu_j"] == pytest.approx(0.3, rel=1e-6)
     fixed = T.fit_janssen(z, p, 0.02, RHO_G, k=0.55)
     assert fixed["mu_j"] == pytest.approx(0.3, rel=1e-6)
+    assert not fit["at_bound"] and not fixed["at_bound"]
+
+
+def test_fit_janssen_flags_a_non_janssen_profile_and_refuses_what_it_cannot_fit():
+    """A pressure that falls with depth pins the fit on a bound (flagged: its errors mean nothing); a pressure that
+    is nowhere positive and a fixed k that is NaN gave scipy's 'initial guess is outside of provided bounds' or a
+    fit of NaN, now one line each."""
+    z = np.linspace(0.01, 0.3, 12)
+    assert T.fit_janssen(z, 3.0 - 5.0 * z, 0.02, RHO_G)["at_bound"]
+    with pytest.raises(PorepipeError, match="nowhere positive"):
+        T.fit_janssen(z, np.zeros_like(z), 0.02, RHO_G)
+    with pytest.raises(PorepipeError, match="fixed k must be finite and positive"):
+        T.fit_janssen(z, T.janssen(z, 0.02, 0.55, 0.3, RHO_G)[1], 0.02, RHO_G, k=float("nan"))
 
 
 def test_bounds_and_ife_closure_are_mohr_coulomb():
