@@ -248,8 +248,8 @@ def fit_janssen(depth_m, wall_pressure, r: float, rho_g: float, k: float | None 
     Raises
     ------
     PorepipeError
-        Fewer than 3 finite points, a pressure that is nowhere positive, or a given ``k`` that is not finite and
-        positive (each gave scipy's "initial guess is outside of provided bounds" or a fit of NaN).
+        Fewer than 3 finite points, or a pressure that is nowhere positive (it gave scipy's "initial guess is outside
+        of provided bounds"); a given ``k`` that is not finite and positive (from :func:`janssen`).
     """
     from scipy.optimize import curve_fit
 
@@ -263,8 +263,6 @@ def fit_janssen(depth_m, wall_pressure, r: float, rho_g: float, k: float | None 
         raise PorepipeError(
             f"fit_janssen: the wall pressure is nowhere positive (max {p.max():.3g}): nothing to fit"
         )
-    if k is not None and not (math.isfinite(k) and k > 0):
-        raise PorepipeError(f"fit_janssen: a fixed k must be finite and positive, got {k}")
     lo, hi = _JANSSEN_BOUNDS
     mu0 = min(max(rho_g * r / p.max(), 0.05), hi)
     if k is None:

@@ -136,13 +136,13 @@ def test_fit_janssen_recovers_parameters():
 
 def test_fit_janssen_flags_a_non_janssen_profile_and_refuses_what_it_cannot_fit():
     """A pressure that falls with depth pins the fit on a bound (flagged: its errors mean nothing); a pressure that
-    is nowhere positive and a fixed k that is NaN gave scipy's 'initial guess is outside of provided bounds' or a
-    fit of NaN, now one line each."""
+    is nowhere positive gave scipy's 'initial guess is outside of provided bounds', now one line; a NaN k is
+    refused by the model itself."""
     z = np.linspace(0.01, 0.3, 12)
     assert T.fit_janssen(z, 3.0 - 5.0 * z, 0.02, RHO_G)["at_bound"]
     with pytest.raises(PorepipeError, match="nowhere positive"):
         T.fit_janssen(z, np.zeros_like(z), 0.02, RHO_G)
-    with pytest.raises(PorepipeError, match="fixed k must be finite and positive"):
+    with pytest.raises(PorepipeError, match="k must be a positive finite number"):
         T.fit_janssen(z, T.janssen(z, 0.02, 0.55, 0.3, RHO_G)[1], 0.02, RHO_G, k=float("nan"))
 
 
