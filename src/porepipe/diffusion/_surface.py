@@ -32,7 +32,7 @@ Model (each choice stated so the analytic truths below are exact):
   arriving on a site turns into its by-product there with probability w, tried before any Langmuir-Hinshelwood
   reaction; the by-product keeps the site for its own residence time.
 
-Analytic truths (tests/validation/test_surface_mechanisms.py):
+Analytic truths (tests/unit/diffusion/test_surface_mechanisms.py and the reverse / side-reaction tests beside it):
 
 - Langmuir (competitive, one site per particle): with Lambert walls the equilibrium gas hits every site at
   F_X = n_X·v̄_X·A_site/4 per time, so each active site is a Markov chain empty ⇄ X with rates a_X·F_X and 1/τ_X:
