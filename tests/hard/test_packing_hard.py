@@ -239,3 +239,39 @@ def test_matching_checkpoint_still_resumes(tmp_path):
         Path("."),
     )  # run control does not enter the key
     assert key != checkpoint_key(settings, np.array([400.0] * 3), np.array([True] * 3), 2, Path("."))
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        ({"x": [[np.nan, 10, 10], [25, 10, 10]]}, "must be finite"),  # before: a segmentation fault
+        ({"r": [8.0]}, r"radii need shape \(2,\)"),  # before: a segmentation fault
+        ({"r": [8.0, 0.0]}, "sphere 1 has radius 0.0"),
+        ({"types": [0, 3]}, r"types span 0..3, outside 0..0"),  # before: read past the type tables
+        ({"types": [0]}, r"types need \(2,\) integers"),
+        ({"sig": [np.nan]}, "max_overlap_t needs one finite value per type"),
+        ({"box": [20.0, 100, 100]}, "too small for the interaction reach"),  # before: sigma of its own image
+        ({"periodic": [True, True]}, "periodic must be one flag or 3"),
+    ],
+)
+def test_sphere_overlaps_refuses_what_the_kernels_cannot_read(change, match):
+    args = {
+        "x": [[10.0, 10, 10], [25.0, 10, 10]],
+        "r": [8.0, 8.0],
+        "types": [0, 0],
+        "box": [100.0] * 3,
+        "periodic": [True] * 3,
+        "sig": [0.3],
+    }
+    args.update(change)
+    x, r, types, box, periodic, sig = (np.asarray(args[k]) for k in args)
+    with pytest.raises(PorepipeError, match=match):
+        sphere_overlaps(x, r, types, box, periodic, sig)
+
+
+def test_neighbour_search_refuses_a_type_outside_pair_on():
+    x, r = np.array([[10.0, 10, 10], [25.0, 10, 10]]), np.array([8.0, 8.0])
+    with pytest.raises(PorepipeError, match=r"types span 0..1, outside 0..0"):
+        build_neighbours(
+            x, r, np.array([0, 1]), np.full(3, 100.0), np.ones(3, bool), np.ones((1, 1), np.uint8), 1.0, 0.0
+        )

@@ -40,6 +40,7 @@ from porepipe._shared import rng
 from porepipe._shared.cost import SpentClock
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
+from porepipe._shared.spheres import check_spheres
 from porepipe._shared.store import hash_of
 from porepipe.packing import _kernels as K
 from porepipe.packing._io import load_checkpoint, read_checkpoint_key, save_checkpoint
@@ -519,14 +520,25 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     x = np.ascontiguousarray(centres_um, dtype=np.float64)
     r = np.ascontiguousarray(radii_um, dtype=np.float64)
     types = np.ascontiguousarray(types, dtype=np.int64)
-    nt = len(max_overlap_t)
+    sig_t = np.asarray(max_overlap_t, dtype=np.float64)
+    nt = sig_t.size
+    if sig_t.shape != (nt,) or nt == 0 or not np.all(np.isfinite(sig_t)):
+        raise PorepipeError(
+            f"sphere_overlaps: max_overlap_t needs one finite value per type, got {max_overlap_t!r}"
+        )
     pair_on = np.ones((nt, nt), dtype=np.uint8) if pair_on is None else pair_on
+    if np.shape(pair_on) != (nt, nt):
+        raise PorepipeError(
+            f"sphere_overlaps: pair_on needs shape ({nt}, {nt}) for {nt} type(s), got {np.shape(pair_on)}"
+        )
     n = r.size
     sig = np.full(n, -np.inf)
     conv = np.zeros(n, dtype=np.uint8)
     if n == 0:
         return sig, conv
     box, per = _as_box(box_um, periodic)  # a writable `per`: a read-only one would compile every kernel again
+    check_spheres(x, r, "sphere_overlaps")  # before the wrap below, which would turn a NaN into a crash
+    check_box(r, box, per, 1.0, 0.0)  # a sphere reaching its own periodic image: the minimum image breaks
     x = x.copy()
     x[:, per] = np.mod(x[:, per], box[per])  # the kernels assume periodic coordinates in [0, L)
     lists = build_neighbours(x, r, types, box, per, pair_on, 1.0, 0.0, half=True)
@@ -537,7 +549,6 @@ def sphere_overlaps(centres_um, radii_um, types, box_um, periodic, max_overlap_t
     frozen = np.ones(n, dtype=np.uint8)
     zeros = np.zeros((n, 3))
     ones = np.ones(nt)
-    sig_t = np.asarray(max_overlap_t, dtype=np.float64)
     kernel(
         x,
         np.empty_like(x),
@@ -575,6 +586,8 @@ def _as_box(box_um, periodic) -> tuple[np.ndarray, np.ndarray]:
     box = np.asarray(box_um, dtype=np.float64).reshape(-1)
     if box.shape != (3,) or not np.all(np.isfinite(box)) or np.any(box <= 0):
         raise PorepipeError(f"packing box_um must be 3 positive edge lengths in µm, got {box_um!r}")
+    if np.shape(periodic) not in ((), (3,)):
+        raise PorepipeError(f"packing periodic must be one flag or 3 (x, y, z), got {periodic!r}")
     per = np.broadcast_to(np.asarray(periodic, dtype=np.bool_), (3,)).copy()
     return box, per
 

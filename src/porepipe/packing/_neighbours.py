@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.spheres import check_spheres
 from porepipe.packing import _kernels as K
 
 #: cells per class grid at most this many times its members (+ a constant), bounding memory for sparse classes
@@ -46,6 +47,36 @@ def check_box(
                 f"cutoff * (r_1 + r_2) + skin = {reach:.6g} µm of the two largest spheres (needs more than twice "
                 "that with periodic faces); enlarge domain.size_um, lower packing.cutoff or the largest radii"
             )
+
+
+def _check_inputs(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um) -> None:
+    """Refuse what the kernels would read out of bounds or silently get wrong: shapes, NaN/Inf, r <= 0, a type
+    outside ``pair_on``, a bad box, cutoff or skin (one line each, naming the argument).
+    """
+    check_spheres(x_um, r_um, "neighbour search")
+    types, pair_on = np.asarray(types), np.asarray(pair_on)
+    nt = pair_on.shape[0] if pair_on.ndim == 2 and pair_on.shape[0] == pair_on.shape[1] else -1
+    if nt < 1:
+        raise PorepipeError(f"neighbour search: pair_on needs shape (T, T) with T >= 1, got {pair_on.shape}")
+    if types.shape != np.shape(r_um) or types.dtype.kind not in "iu":
+        raise PorepipeError(
+            f"neighbour search: types need {np.shape(r_um)} integers, got {types.shape} {types.dtype}"
+        )
+    if types.size and (types.min() < 0 or types.max() >= nt):
+        raise PorepipeError(
+            f"neighbour search: types span {types.min()}..{types.max()}, outside 0..{nt - 1} (the {nt} type(s) of "
+            "pair_on)"
+        )
+    box = np.asarray(box_um, dtype=np.float64)
+    if box.shape != (3,) or not np.all(np.isfinite(box)) or np.any(box <= 0) or np.shape(periodic) != (3,):
+        raise PorepipeError(
+            f"neighbour search: box_um needs 3 positive finite edges and periodic 3 flags, got {box_um!r} and "
+            f"{periodic!r}"
+        )
+    if not (np.isfinite(cutoff) and cutoff > 0 and np.isfinite(skin_um) and skin_um >= 0):
+        raise PorepipeError(
+            f"neighbour search: cutoff must be positive and skin >= 0 (both finite), got {cutoff} and {skin_um}"
+        )
 
 
 def _check_in_box(x_um, box_um, periodic) -> None:
@@ -102,6 +133,7 @@ def build_neighbours(
     With ``half`` the step kernel's lists come instead of (start, idx): the half list (half_start, half_idx; each
     unordered pair once) and the slabs (slab_start, slab_items) of :func:`slabs`.
     """
+    _check_inputs(x_um, r_um, types, box_um, periodic, pair_on, cutoff, skin_um)
     n = x_um.shape[0]
     if n == 0:
         empty = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
