@@ -6,7 +6,7 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter
-from porepipe.sweep import Status, build_sweep, decide, fit_power, limit_of, predict_cost
+from porepipe.sweep import Status, build_sweep, decide, fit_power, limit_of, predict_cost, two_point_limit
 
 
 def test_converged_constant_data_give_the_value_with_zero_error():
@@ -67,3 +67,28 @@ def test_infinite_quantity_is_not_extrapolated(tmp_path):
     ds = build_sweep(paths)
     sel = ds.sel(quantity="e.k", form="linear", sample_um=np.inf)
     assert int(sel.n) == 3 and np.isfinite(float(sel.q_inf))
+
+
+_A, _Q = [2.0, 1.0, 0.5, 0.25], [2.0, 1.5, 1.2, 1.1]
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"exponent": float("nan")}, "exponent p"),  # before: status ok with q_inf = NaN
+        ({"exponent": -1.0}, "exponent p"),  # before: status ok for a curve that diverges as a -> 0
+        ({"exponent": 0.0}, "exponent p"),  # a^0 = 1 cannot be told from q_inf
+        ({"confidence": 1.0}, "confidence"),  # before: status ok with err = NaN
+        ({"confidence": 0.0}, "confidence"),  # before: status ok with err = 0
+        ({"sigma": float("inf")}, "sigma"),  # before: RuntimeWarning and NaN weights
+        ({"sigma": [1.0, 2.0]}, "sigma"),  # before: numpy's broadcast ValueError
+    ],
+)
+def test_fit_power_refuses_parameters_without_a_meaning(kwargs, match):
+    with pytest.raises(PorepipeError, match=match):
+        fit_power(_A, _Q, **kwargs)
+
+
+def test_two_point_limit_refuses_an_infinite_ratio():
+    with pytest.raises(PorepipeError, match="ratio"):  # before: NaN returned
+        two_point_limit(1.0, 2.0, float("inf"))

@@ -79,7 +79,7 @@ def two_point_limit(q_coarse: float, q_fine: float, ratio: float = 2.0) -> float
     -----
     Zauner (2020) §6.2, Table 6.4: κ linear in 1/L_S with L_S doubling gives κ_extrap = 2κ_h.r. − κ_l.r.
     """
-    if not ratio > 1:
+    if not 1 < ratio < np.inf:
         raise PorepipeError(f"two_point_limit needs ratio = a_coarse/a_fine > 1, got {ratio}")
     return (ratio * q_fine - q_coarse) / (ratio - 1.0)
 
@@ -94,9 +94,13 @@ def _check(x, q, sigma):
     if np.any(x <= 0) or np.unique(x).size != x.size:
         raise PorepipeError(f"resolutions must be positive and distinct, got {x.tolist()}")
     if sigma is not None:
-        sigma = np.broadcast_to(np.asarray(sigma, dtype=np.float64), x.shape).copy()
-        if not np.all(sigma > 0):
-            raise PorepipeError("sigma (noise of each point) must be positive")
+        sigma = np.asarray(sigma, dtype=np.float64)
+        if sigma.shape not in ((), x.shape) or not np.all(np.isfinite(sigma) & (sigma > 0)):
+            raise PorepipeError(
+                f"sigma (noise of each point) must be one positive finite number or one per resolution "
+                f"({x.size}), got {sigma.tolist()}"
+            )
+        sigma = np.broadcast_to(sigma, x.shape).copy()
     order = np.argsort(x)
     return x[order], q[order], (None if sigma is None else sigma[order])
 
@@ -204,6 +208,12 @@ def fit_power(
     permeability (§6.2, Table 6.4); the power law generalises both.
     """
     x, y, s = _check(a, q, sigma)
+    if exponent is not None and not (np.isfinite(exponent) and exponent > 0):
+        raise PorepipeError(
+            f"the exponent p of q_inf + c*a^p must be positive and finite (or None: fitted), got {exponent}"
+        )
+    if not 0 < confidence < 1:
+        raise PorepipeError(f"confidence must lie strictly between 0 and 1, got {confidence}")
     # fit in units of the largest |q| and the largest a, so extreme magnitudes neither overflow nor underflow
     q_scale = float(np.abs(y).max(initial=0.0)) or 1.0
     x_scale = float(x.max(initial=0.0)) or 1.0
