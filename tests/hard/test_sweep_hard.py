@@ -6,7 +6,17 @@ import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter
-from porepipe.sweep import Status, build_sweep, decide, fit_power, limit_of, predict_cost, two_point_limit
+from porepipe.sweep import (
+    Status,
+    build_sweep,
+    corner_voxels,
+    decide,
+    fit_power,
+    limit_of,
+    predict_cost,
+    subsample_offsets,
+    two_point_limit,
+)
 
 
 def test_converged_constant_data_give_the_value_with_zero_error():
@@ -92,3 +102,16 @@ def test_fit_power_refuses_parameters_without_a_meaning(kwargs, match):
 def test_two_point_limit_refuses_an_infinite_ratio():
     with pytest.raises(PorepipeError, match="ratio"):  # before: NaN returned
         two_point_limit(1.0, 2.0, float("inf"))
+
+
+@pytest.mark.parametrize("edge_um, voxel_um", [(2.0, 0.0), (2.0, float("nan")), (float("inf"), 1.0)])
+def test_corner_cube_refuses_a_bad_voxel_size_or_edge(edge_um, voxel_um):
+    # before: ZeroDivisionError, "cannot convert float NaN to integer", OverflowError
+    with pytest.raises(PorepipeError, match="must be finite"):
+        corner_voxels(edge_um, voxel_um, (10, 10, 10))
+
+
+def test_subsample_cube_larger_than_the_volume_is_refused():
+    # before: offsets (-10, -10, -10), i.e. a cube cut from outside the volume
+    with pytest.raises(PorepipeError, match="does not fit the volume shape"):
+        subsample_offsets(7, 8, 20, (10, 10, 10))

@@ -16,6 +16,10 @@ _WHOLE_RTOL = 1e-9
 
 def corner_voxels(edge_um: float, voxel_um: float, shape) -> int:
     """Edge of the corner cube in voxels; the edge must be a whole number of voxels and fit in the volume."""
+    if not (0 < voxel_um < np.inf and edge_um < np.inf):
+        raise PorepipeError(
+            f"sub-sample edge {edge_um} µm and voxel size {voxel_um} µm must be finite, the voxel size positive"
+        )
     n = edge_um / voxel_um
     if not edge_um > 0 or abs(n - round(n)) > _WHOLE_RTOL * max(1.0, n):
         raise PorepipeError(
@@ -44,6 +48,8 @@ def subsample_offsets(index: int, count: int, n: int, shape) -> tuple[int, int, 
         raise PorepipeError(f"sweep.subsamples must be one of {SUBSAMPLE_COUNTS}, got {count}")
     if not 0 <= index < count:
         raise PorepipeError(f"sub-sample index {index} outside 0..{count - 1}")
+    if not 1 <= n <= min(shape):
+        raise PorepipeError(f"sub-sample edge of {n} voxels does not fit the volume shape {tuple(shape)}")
     m = round(count ** (1 / 3))
     if m == 1:
         return (0, 0, 0)
