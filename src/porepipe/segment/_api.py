@@ -46,9 +46,10 @@ def otsu_threshold(hist: np.ndarray) -> int:
     N. Otsu, IEEE Trans. SMC 9 (1979) 62. Computed from the histogram alone, so a volume of any size costs O(G).
     """
     hist = np.asarray(hist, dtype=np.float64)
-    if hist.ndim != 1 or hist.sum() <= 0:
+    if hist.ndim != 1 or hist.size < 2 or not np.all(np.isfinite(hist) & (hist >= 0)) or hist.sum() <= 0:
         raise PorepipeError(
-            f"otsu needs a 1-D histogram with counts, got shape {hist.shape} and sum {hist.sum()}"
+            f"otsu needs a 1-D histogram of >= 2 bins with finite counts >= 0, not all 0; got shape "
+            f"{hist.shape}, smallest count {hist.min() if hist.size else None} and sum {hist.sum()}"
         )
     g = np.arange(hist.size, dtype=np.float64)
     w0 = np.cumsum(hist)[:-1]
