@@ -132,3 +132,13 @@ def test_cli_reports_bad_raw_clearly(tmp_path, capsys):
     )
     assert code == 2
     assert "has 100 bytes" in capsys.readouterr().err
+
+
+def test_signed_8_bit_image_spanning_more_than_127_grey_levels(tmp_path):
+    # before: the histogram's offsets from the minimum wrapped round in int8 (100 - (-100) = -56) and numpy's
+    # bincount raised "'list' argument must have no negative elements"
+    pore = np.random.default_rng(4).random((12, 12, 12)) < 0.4
+    np.save(tmp_path / "i8.npy", np.where(pore, -100, 100).astype(np.int8))
+    ds = acquire(Settings(image=tmp_path / "i8.npy", voxel_um=1.0), tmp_path / "s.h5")[None]
+    assert float(ds.porosity) == pore.mean()  # exact: both are count / 1728 in float64
+    assert int(ds.grey_count.sum()) == pore.size and int(ds.grey_count[0]) == pore.sum()

@@ -124,8 +124,10 @@ def grey_histogram(grey: np.ndarray, bins: int = 256) -> GreyHistogram:
     if lo == hi:
         return GreyHistogram(np.array([grey.size], np.int64), np.array([lo]))
     if grey.dtype.kind in "ui" and hi - lo + 1 <= bins:
+        # offsets from the minimum, signed types in int64: in int8, 127 - (-128) wraps round to -1
+        wide = np.int64 if grey.dtype.kind == "i" else grey.dtype
         counts = np.bincount(
-            (grey.ravel() - grey.dtype.type(lo)).astype(np.int64), minlength=int(hi - lo) + 1
+            np.subtract(grey.ravel(), grey.min(), dtype=wide).astype(np.int64), minlength=int(hi - lo) + 1
         )
         return GreyHistogram(counts.astype(np.int64), lo + np.arange(counts.size, dtype=np.float64))
     counts, edges = np.histogram(grey, bins=bins, range=(lo, hi))
