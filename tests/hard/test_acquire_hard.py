@@ -142,3 +142,23 @@ def test_signed_8_bit_image_spanning_more_than_127_grey_levels(tmp_path):
     ds = acquire(Settings(image=tmp_path / "i8.npy", voxel_um=1.0), tmp_path / "s.h5")[None]
     assert float(ds.porosity) == pore.mean()  # exact: both are count / 1728 in float64
     assert int(ds.grey_count.sum()) == pore.size and int(ds.grey_count[0]) == pore.sum()
+
+
+@pytest.mark.parametrize(
+    "statistics, match",
+    [
+        # before: "grain segmentation needs a 3-D image ... got shape (1, 1, 1) (a 2-D section ...)" of an 8³ image
+        ({"grain_max_voxels": 1}, r"grain_max_voxels = 1 leaves a grain window of 1x1x1 voxels of the 8x8x8"),
+        # before: MemoryError, the watershed's peak search asked for a (2 000 001)³ footprint (6.9 EiB)
+        ({"grain_min_distance_um": 1e6}, r"grain_min_distance_um = 1000000.0 µm .* give at most 8 µm"),
+    ],
+)
+def test_grain_window_and_marker_distance_that_cannot_work(statistics, match, tmp_path):
+    rng = np.random.default_rng(5)
+    np.save(tmp_path / "v.npy", np.where(rng.random((8, 8, 8)) < 0.4, 30, 220).astype(np.uint8))
+    settings = Settings.model_validate(
+        {"image": str(tmp_path / "v.npy"), "voxel_um": 1.0, "statistics": statistics}
+    )
+    with pytest.raises(PorepipeError, match=match):
+        acquire(settings, tmp_path / "s.h5")
+    assert not (tmp_path / "s.h5").exists()

@@ -123,13 +123,13 @@ def image_statistics(
         parts.append(xr.Dataset({k: ((), v) for k, v in mk.items()}))
         parts.append(timed("percolation", _stats.percolation, pore))
         if stats.grains:
-            window = central_window(shape, stats.grain_max_voxels)
+            window, min_distance = _grain_window(shape, stats, voxel_um)
             grains = timed(
                 "grains",
                 _stats.grain_statistics,
                 _grain_mask(phases, stats.grain_phase)[window],
                 voxel_um,
-                _min_distance(stats.grain_min_distance_um, voxel_um),
+                min_distance,
                 settings.periodic and window == tuple(slice(0, n) for n in shape),
             )
             grains.attrs["grain_window_voxels"] = np.asarray([w.stop - w.start for w in window], np.int64)
@@ -186,6 +186,28 @@ def _grain_mask(phases: Phases, grain_phase: str | None) -> np.ndarray:
 
 def _min_distance(min_distance_um: float | None, voxel_um: float) -> int:
     return 2 if min_distance_um is None else max(1, int(round(min_distance_um / voxel_um)))
+
+
+def _grain_window(shape, stats, voxel_um: float) -> tuple[tuple[slice, slice, slice], int]:
+    """The grain statistics' central window and marker distance (voxels); refuses a window without two voxels per
+    axis, and a distance beyond the window (the watershed's peak search would allocate a (2 d + 1)³ footprint).
+    """
+    window = central_window(shape, stats.grain_max_voxels)
+    edges = [w.stop - w.start for w in window]
+    if min(edges) < 2:
+        raise PorepipeError(
+            f"acquire.statistics.grain_max_voxels = {stats.grain_max_voxels} leaves a grain window of "
+            f"{'x'.join(map(str, edges))} voxels of the {'x'.join(map(str, shape))} image; give 0 (the whole "
+            "image) or a larger value"
+        )
+    min_distance = _min_distance(stats.grain_min_distance_um, voxel_um)
+    if min_distance > max(edges):
+        raise PorepipeError(
+            f"acquire.statistics.grain_min_distance_um = {stats.grain_min_distance_um} µm is {min_distance} "
+            f"voxels, more than the grain window of {'x'.join(map(str, edges))} voxels; give at most "
+            f"{max(edges) * voxel_um:g} µm"
+        )
+    return window, min_distance
 
 
 def acquire(
