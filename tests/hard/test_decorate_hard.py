@@ -6,7 +6,14 @@ import pytest
 from pydantic import ValidationError
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.decorate import decorate, polyhedron, random_type, read_plane_file, voxelize_grains
+from porepipe.decorate import (
+    decorate,
+    points_in_grains,
+    polyhedron,
+    random_type,
+    read_plane_file,
+    voxelize_grains,
+)
 from porepipe.decorate._settings import Settings
 from tests.unit.decorate.naive_grains import naive_grey
 
@@ -114,3 +121,16 @@ def test_bad_decoration_sections(section, match):
 def test_overlap_minimiser_needs_the_box():
     with pytest.raises(PorepipeError, match="box_um"):
         decorate(np.zeros((2, 3)), np.ones(2), Settings(orientation={"mode": "overlap_minimizer"}))
+
+
+@pytest.mark.parametrize(
+    "points",
+    [
+        [[np.nan, 5.0, 5.0]],  # before: reported inside a grain
+        [[5.0, 5.0]],  # before: the kernel read a z past the array
+    ],
+)
+def test_points_in_grains_refuses_nan_or_two_coordinates(points):
+    deco = decorate(np.array([[5.0, 5.0, 5.0]]), np.array([2.0]), Settings(), seed=0)
+    with pytest.raises(PorepipeError, match=r"points need shape \(M, 3\) and finite values"):
+        points_in_grains(np.array(points), deco, (10.0, 10.0, 10.0))

@@ -223,6 +223,10 @@ def voxelize_grains(
 def points_in_grains(points_um, deco: Decoration, box_um, periodic: bool = True) -> np.ndarray:
     """Boolean (M,): is each point in the union of the grains (the continuum model)? For Monte Carlo checks."""
     pts = np.ascontiguousarray(points_um, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3 or not np.all(np.isfinite(pts)):
+        raise PorepipeError(
+            f"points_in_grains: points need shape (M, 3) and finite values, got shape {pts.shape}"
+        )
     world = world_grains(deco)
     img_pos, img_grain = grain_images(deco.centres_um, world.half_um, box_um, periodic)
     hits = np.zeros(len(pts), dtype=np.int64)
