@@ -77,12 +77,14 @@ def write_image(path, fields: dict, *, voxel_um: float, origin_um=(0.0, 0.0, 0.0
     if len(shapes) != 1 or len(next(iter(shapes))) != 3:
         raise PorepipeError(f"write_image: fields need one common 3-D grid, got shapes {sorted(shapes)}")
     (shape,) = shapes
+    _check_grid(fields, shape, voxel_um, origin_um)
     image = model.vtkImageData()
     image.SetDimensions(*(n + 1 for n in shape))
     image.SetSpacing(*(float(voxel_um),) * 3)
     image.SetOrigin(*(float(o) for o in origin_um))
     for name, values in fields.items():
         values = np.asarray(values)
+        values = values.astype(np.uint8) if values.dtype == bool else values  # VTK has no bool arrays
         # VTK's cell order is x fastest: Fortran order of (X, Y, Z), i.e. C order of the transposed array
         if values.ndim == 4:
             flat = np.stack([values[..., k].ravel(order="F") for k in range(3)], axis=1)
@@ -90,6 +92,32 @@ def write_image(path, fields: dict, *, voxel_um: float, origin_um=(0.0, 0.0, 0.0
             flat = values.ravel(order="F")
         image.GetCellData().AddArray(_vtk_array(numpy_support, name, flat))
     return _write(io.vtkXMLImageDataWriter(), image, path)
+
+
+def _check_grid(fields: dict, shape, voxel_um, origin_um) -> None:
+    """Refuse an empty grid, a voxel size that is not positive and finite, an origin that is not 3 finite numbers
+    and a 4-D field that is not 3-vectors (VTK would write a broken file or fail with its own messages).
+    """
+    if min(shape) < 1:
+        raise PorepipeError(f"write_image: the grid {shape} has no voxel; nothing to write")
+    if not 0 < float(voxel_um) < np.inf:
+        raise PorepipeError(f"write_image: voxel_um must be positive and finite, got {voxel_um}")
+    if np.shape(origin_um) != (3,) or not np.all(np.isfinite(origin_um)):
+        raise PorepipeError(f"write_image: origin_um needs 3 finite numbers, got {origin_um!r}")
+    for name, values in fields.items():
+        if np.ndim(values) not in (3, 4) or (np.ndim(values) == 4 and np.shape(values)[3] != 3):
+            raise PorepipeError(
+                f"write_image: field {name!r} of shape {np.shape(values)} is neither (X, Y, Z) nor (X, Y, Z, 3)"
+            )
+
+
+def _check_lengths(where: str, item: str, data: dict, n: int) -> None:
+    """Refuse a per-point or per-face array whose length is not the number of points or faces."""
+    for name, values in data.items():
+        if len(np.atleast_1d(values)) != n:
+            raise PorepipeError(
+                f"{where}: {name!r} has {len(np.atleast_1d(values))} values for {n} {item}(s)"
+            )
 
 
 def write_points(path, centres_um: np.ndarray, point_data: dict) -> Path:
@@ -110,7 +138,10 @@ def write_points(path, centres_um: np.ndarray, point_data: dict) -> Path:
         ``path``.
     """
     core, model, io, numpy_support = _vtk()
-    centres = np.asarray(centres_um, dtype=np.float64).reshape(-1, 3)
+    centres = np.asarray(centres_um, dtype=np.float64)
+    if centres.ndim != 2 or centres.shape[1] != 3:
+        raise PorepipeError(f"write_points: centres need shape (N, 3), got {centres.shape}")
+    _check_lengths("write_points", "point", point_data, len(centres))
     points = core.vtkPoints()
     points.SetData(_vtk_array(numpy_support, "points", centres))
     cells = model.vtkCellArray()
@@ -148,6 +179,14 @@ def write_polygons(path, vertices_um: np.ndarray, faces: list[np.ndarray], cell_
         ``path``.
     """
     core, model, io, numpy_support = _vtk()
+    n_vertices = len(vertices_um)
+    bad = [i for i, f in enumerate(faces) if len(f) < 3 or np.min(f) < 0 or np.max(f) >= n_vertices]
+    if bad:
+        raise PorepipeError(
+            f"write_polygons: face {bad[0]} ({np.asarray(faces[bad[0]]).tolist()}) needs >= 3 vertex indices in "
+            f"0..{n_vertices - 1}"
+        )
+    _check_lengths("write_polygons", "face", cell_data, len(faces))
     points = core.vtkPoints()
     points.SetData(_vtk_array(numpy_support, "points", np.asarray(vertices_um, dtype=np.float64)))
     offsets = np.concatenate([[0], np.cumsum([len(f) for f in faces])]).astype(np.int64)
@@ -329,7 +368,6 @@ def export_result(
     if kind == "volume":
         meta = next(iter(volumes.values()))
         fields = {name: _read_volume(path, name) for name in volumes}
-        fields = {k: v.astype(np.uint8) if v.dtype == bool else v for k, v in fields.items()}
         write_image(out, fields, voxel_um=float(meta["voxel_um"]), origin_um=meta["origin_um"])
         return f"volume(s) {', '.join(fields)} ({'×'.join(map(str, next(iter(fields.values())).shape))} voxels) -> {out}"
     if kind == "packing":
