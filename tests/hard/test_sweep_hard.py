@@ -115,3 +115,24 @@ def test_subsample_cube_larger_than_the_volume_is_refused():
     # before: offsets (-10, -10, -10), i.e. a cube cut from outside the volume
     with pytest.raises(PorepipeError, match="does not fit the volume shape"):
         subsample_offsets(7, 8, 20, (10, 10, 10))
+
+
+@pytest.mark.parametrize(
+    "a_um, cost, next_a, match",
+    [
+        ([], [], 0.5, "at least one"),  # before: IndexError
+        ([2.0, -1.0], [1.0, 2.0], 0.5, "positive, finite, distinct"),  # before: RuntimeWarning of log
+        ([1.0, 1.0], [1.0, 2.0], 0.5, "positive, finite, distinct"),  # before: divide by zero
+        ([2.0, 1.0], [1.0], 0.5, "one finite non-negative value per resolution"),  # before: IndexError
+        ([2.0, 1.0], [1.0, 2.0], 0.0, "next_a must be positive and finite"),  # before: divide by zero
+        ([2.0, 1.0], [1.0, 2.0], float("nan"), "next_a must be positive and finite"),  # before: NaN
+    ],
+)
+def test_predict_cost_refuses_runs_it_cannot_scale_from(a_um, cost, next_a, match):
+    with pytest.raises(PorepipeError, match=match):
+        predict_cost(a_um, cost, next_a)
+
+
+def test_decide_without_runs_is_refused():
+    with pytest.raises(PorepipeError, match="a_um need at least one"):  # before: numpy's zero-size ValueError
+        decide([], [], [], target_rel_err=0.1, budget=10.0)

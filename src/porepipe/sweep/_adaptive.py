@@ -53,10 +53,24 @@ class Decision:
         return {**dataclasses.asdict(self), "outcome": self.outcome.value}
 
 
-def predict_cost(a_um, cost, next_a: float) -> float:
-    """Cost of a run at ``next_a`` from cost ∝ a^-k, k from the two finest runs (clamped to [1, 6]), else 3."""
+def _check_runs(a_um, cost) -> tuple[np.ndarray, np.ndarray]:
+    """Refuse no runs, resolutions not positive, finite and distinct, and costs not one finite value >= 0 each."""
     a = np.asarray(a_um, dtype=np.float64)
     c = np.asarray(cost, dtype=np.float64)
+    if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a) & (a > 0)) or np.unique(a).size != a.size:
+        raise PorepipeError(
+            f"resolutions a_um need at least one positive, finite, distinct value, got {a.tolist()}"
+        )
+    if c.shape != a.shape or np.any(~np.isfinite(c)) or np.any(c < 0):
+        raise PorepipeError(f"cost needs one finite non-negative value per resolution, got {c.tolist()}")
+    return a, c
+
+
+def predict_cost(a_um, cost, next_a: float) -> float:
+    """Cost of a run at ``next_a`` from cost ∝ a^-k, k from the two finest runs (clamped to [1, 6]), else 3."""
+    a, c = _check_runs(a_um, cost)
+    if not 0 < next_a < np.inf:
+        raise PorepipeError(f"the next resolution next_a must be positive and finite, got {next_a}")
     order = np.argsort(a)
     a, c = a[order], c[order]
     k = DEFAULT_COST_EXPONENT
@@ -101,10 +115,7 @@ def decide(
             f"adaptive mode needs 0 < target_rel_err < 1, budget > 0 and refine_factor > 1, got "
             f"{target_rel_err}, {budget}, {refine_factor}"
         )
-    a = np.asarray(a_um, dtype=np.float64)
-    cost = np.asarray(cost, dtype=np.float64)
-    if cost.shape != a.shape or np.any(~np.isfinite(cost)) or np.any(cost < 0):
-        raise PorepipeError(f"cost needs one finite non-negative value per resolution, got {cost.tolist()}")
+    a, cost = _check_runs(a_um, cost)
     lim = fit_power(a, values, exponent=exponent, confidence=confidence)
     spent = float(cost.sum())
     next_a = float(a.min() / refine_factor)
