@@ -88,6 +88,7 @@ _A, _Q = [2.0, 1.0, 0.5, 0.25], [2.0, 1.5, 1.2, 1.1]
         ({"exponent": float("nan")}, "exponent p"),  # before: status ok with q_inf = NaN
         ({"exponent": -1.0}, "exponent p"),  # before: status ok for a curve that diverges as a -> 0
         ({"exponent": 0.0}, "exponent p"),  # a^0 = 1 cannot be told from q_inf
+        ({"exponent": 2000.0}, r"exponent p .* must lie in \[0.2, 6.0\]"),  # before: OverflowError of a^p
         ({"confidence": 1.0}, "confidence"),  # before: status ok with err = NaN
         ({"confidence": 0.0}, "confidence"),  # before: status ok with err = 0
         ({"sigma": float("inf")}, "sigma"),  # before: RuntimeWarning and NaN weights

@@ -189,7 +189,7 @@ def fit_power(
     q : (n,) array_like
         The quantity at each resolution.
     exponent : float, optional
-        Fixed p (1: linear in a, 2: quadratic); None fits p in [0.2, 6].
+        Fixed p, in the range [0.2, 6] of a fitted one (1: linear in a, 2: quadratic); None fits p.
     sigma : float or (n,) array_like, optional
         Known noise (standard deviation) of each q; None estimates it from the residuals.
     confidence : float
@@ -208,9 +208,9 @@ def fit_power(
     permeability (§6.2, Table 6.4); the power law generalises both.
     """
     x, y, s = _check(a, q, sigma)
-    if exponent is not None and not (np.isfinite(exponent) and exponent > 0):
+    if exponent is not None and not P_BOUNDS[0] <= exponent <= P_BOUNDS[1]:
         raise PorepipeError(
-            f"the exponent p of q_inf + c*a^p must be positive and finite (or None: fitted), got {exponent}"
+            f"the exponent p of q_inf + c*a^p must lie in {list(P_BOUNDS)} (or be None: fitted), got {exponent}"
         )
     if not 0 < confidence < 1:
         raise PorepipeError(f"confidence must lie strictly between 0 and 1, got {confidence}")
