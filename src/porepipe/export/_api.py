@@ -309,6 +309,14 @@ def _flow_fields(path, attrs: dict, gradient_pa_m: float, viscosity_pa_s: float)
     }
 
 
+def _check_fluid(gradient_pa_m, viscosity_pa_s) -> None:
+    """Refuse a gradient that is not finite and a viscosity that is not positive and finite (NaN or Inf fields)."""
+    if not np.isfinite(gradient_pa_m):
+        raise PorepipeError(f"export: gradient_pa_m must be finite, got {gradient_pa_m}")
+    if not 0 < viscosity_pa_s < np.inf:
+        raise PorepipeError(f"export: viscosity_pa_s must be positive and finite, got {viscosity_pa_s}")
+
+
 def export_result(
     path,
     out,
@@ -335,6 +343,7 @@ def export_result(
     str
         What was written.
     """
+    _check_fluid(gradient_pa_m, viscosity_pa_s)
     path, out = Path(path), Path(out)
     attrs = read_attrs(path)
     volumes = _volumes(path)
