@@ -162,3 +162,10 @@ def test_grain_window_and_marker_distance_that_cannot_work(statistics, match, tm
     with pytest.raises(PorepipeError, match=match):
         acquire(settings, tmp_path / "s.h5")
     assert not (tmp_path / "s.h5").exists()
+
+
+@pytest.mark.parametrize("bad", [np.nan, -1.0, np.inf, 0.0])
+def test_radius_fit_refuses_radii_that_are_not_positive_and_finite(bad):
+    # before: dropped silently, the fit made from the rest
+    with pytest.raises(PorepipeError, match=r"radii_um\[1\] = .*; allowed: positive, finite radii"):
+        fit_radius_distribution([4.0, bad, 5.0, 6.0], [Family.uniform])

@@ -63,8 +63,10 @@ def fit_exponential_alpha(radii: np.ndarray, lo: float, hi: float) -> float:
 
 def fit_radius_distribution(radii_um, families: list[Family], discrete_bins: int = 12) -> RadiusFit:
     """Fit the radius sample with each family; the best-KS parametric family wins if acceptable, else discrete."""
-    r = np.asarray(radii_um, dtype=np.float64)
-    r = r[np.isfinite(r) & (r > 0)]
+    r = np.asarray(radii_um, dtype=np.float64).ravel()
+    bad = np.flatnonzero(~(np.isfinite(r) & (r > 0)))
+    if bad.size:
+        raise PorepipeError(f"radii_um[{bad[0]}] = {r[bad[0]]}; allowed: positive, finite radii")
     if r.size < 2:
         raise PorepipeError(
             f"calibration needs at least 2 grain radii, got {r.size}: the image has (almost) no "
