@@ -8,6 +8,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs
 from porepipe.acquire._api import acquire, write_binary
 from porepipe.acquire._calibrate import calibrated_scene, fit_radius_distribution
+from porepipe.acquire._prepare import denoise
 from porepipe.acquire._settings import Calibration, Family, Settings
 from porepipe.cli import main
 
@@ -169,3 +170,20 @@ def test_radius_fit_refuses_radii_that_are_not_positive_and_finite(bad):
     # before: dropped silently, the fit made from the rest
     with pytest.raises(PorepipeError, match=r"radii_um\[1\] = .*; allowed: positive, finite radii"):
         fit_radius_distribution([4.0, bad, 5.0, 6.0], [Family.uniform])
+
+
+@pytest.mark.parametrize("shape", [(1, 8, 8), (1, 8, 1), (8, 1, 1)])
+def test_nl_means_of_an_image_one_voxel_thick(shape):
+    # before: (1, 8, 8) "Mean of empty slice" (a NaN noise level) and an (8, 8) result; the others an IndexError
+    grey = np.random.default_rng(6).integers(0, 200, shape).astype(np.uint8)
+    out = denoise(grey, "nl_means")
+    assert out.shape == shape and out.dtype == np.uint8
+    flat = np.full(shape, 50, np.uint8)
+    np.testing.assert_array_equal(denoise(flat, "nl_means"), flat)  # a constant image stays as it is
+
+
+def test_denoise_refuses_an_image_that_is_not_x_y_z():
+    with pytest.raises(PorepipeError, match=r"denoise needs an \(X, Y, Z\) image"):  # before: IndexError
+        denoise(np.zeros((4, 4), np.uint8), "median")
+    with pytest.raises(PorepipeError, match="2 voxels or more"):  # before: "Mean of empty slice", NaN noise
+        denoise(np.zeros((1, 1, 1), np.float32), "nl_means")

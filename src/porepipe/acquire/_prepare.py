@@ -57,7 +57,13 @@ def load_region(image: Image, crop: Crop | None) -> np.ndarray:
 
 
 def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
-    """Median (cube of ``size`` voxels) or non-local-means filter; ``none`` returns the input."""
+    """Median (cube of ``size`` voxels) or non-local-means filter of an (X, Y, Z) image (a section: Z = 1);
+    ``none`` returns the input.
+    """
+    if np.ndim(grey) != 3:
+        raise PorepipeError(
+            f"denoise needs an (X, Y, Z) image (a section has Z = 1), got shape {np.shape(grey)}"
+        )
     method = Denoise(method)
     if method is Denoise.none:
         return grey
@@ -66,12 +72,15 @@ def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
         return ndimage.median_filter(grey, size=footprint, mode="reflect")
     from skimage.restoration import denoise_nl_means
 
+    if grey.size < 2:
+        raise PorepipeError(
+            f"acquire.denoise nl_means needs an image of 2 voxels or more, got shape {grey.shape}"
+        )
     work = grey.astype(np.float32)
-    squeeze = work.shape[2] == 1
-    work = work[:, :, 0] if squeeze else work
+    work = work[:, :, 0] if work.shape[2] == 1 else work
     sigma = _noise_sigma(work)
     out = denoise_nl_means(work, h=0.8 * sigma, sigma=sigma, fast_mode=True, patch_size=3, patch_distance=5)
-    out = out[:, :, None] if squeeze else out
+    out = out.reshape(grey.shape)  # scikit-image drops every axis of length 1
     return (
         out.astype(grey.dtype)
         if grey.dtype.kind == "f"
@@ -80,8 +89,11 @@ def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
 
 
 def _noise_sigma(work: np.ndarray) -> float:
-    """Robust noise level: MAD of neighbour differences along x, / sqrt(2) (differences double the variance)."""
-    d = np.diff(work, axis=0).ravel()
+    """Robust noise level: MAD of neighbour differences along x (else the first axis of >= 2 voxels), / sqrt(2)
+    (differences double the variance).
+    """
+    axis = next(k for k, n in enumerate(work.shape) if n >= 2)
+    d = np.diff(work, axis=axis).ravel()
     mad = np.median(np.abs(d - np.median(d)))
     return max(float(1.4826 * mad / np.sqrt(2.0)), 1e-6)
 
