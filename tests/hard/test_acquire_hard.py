@@ -8,7 +8,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs
 from porepipe.acquire._api import acquire, write_binary
 from porepipe.acquire._calibrate import calibrated_scene, fit_radius_distribution
-from porepipe.acquire._prepare import denoise
+from porepipe.acquire._prepare import denoise, grey_histogram
 from porepipe.acquire._settings import Calibration, Family, Settings
 from porepipe.cli import main
 
@@ -187,3 +187,20 @@ def test_denoise_refuses_an_image_that_is_not_x_y_z():
         denoise(np.zeros((4, 4), np.uint8), "median")
     with pytest.raises(PorepipeError, match="2 voxels or more"):  # before: "Mean of empty slice", NaN noise
         denoise(np.zeros((1, 1, 1), np.float32), "nl_means")
+
+
+@pytest.mark.parametrize(
+    "grey, match",
+    [
+        (np.array([-1e308, 1e308, 0.0]), "wider than the largest float64"),  # before: overflow warning
+        (
+            np.array([-3e38, 3e38, 0.0], np.float32),
+            "wider than the largest float32",
+        ),  # before: overflow, IndexError
+        (np.array([np.nan, 1.0, 2.0]), "finite grey values"),  # before: numpy's "range of [nan, nan]"
+        (np.zeros((0, 3, 3), np.float32), "non-empty image"),  # before: numpy's zero-size ValueError
+    ],
+)
+def test_grey_histogram_refuses_values_it_cannot_bin(grey, match):
+    with pytest.raises(PorepipeError, match=match):
+        grey_histogram(grey)

@@ -132,7 +132,17 @@ def grey_histogram(grey: np.ndarray, bins: int = 256) -> GreyHistogram:
     if grey.dtype == np.uint8:
         counts = np.bincount(grey.ravel(), minlength=256).astype(np.int64)
         return GreyHistogram(counts, np.arange(256, dtype=np.float64))
+    if grey.size == 0 or (grey.dtype.kind == "f" and not np.all(np.isfinite(grey))):
+        raise PorepipeError(
+            f"grey_histogram needs a non-empty image of finite grey values (no NaN or Inf), got shape {grey.shape}"
+        )
     lo, hi = float(grey.min()), float(grey.max())
+    widest = float(np.finfo(grey.dtype).max) if grey.dtype.kind == "f" else np.inf
+    if not hi - lo <= widest:
+        raise PorepipeError(
+            f"grey values span {lo:g} to {hi:g}, wider than the largest {grey.dtype} ({widest:g}), so the bins "
+            "cannot be computed; rescale the image"
+        )
     if lo == hi:
         return GreyHistogram(np.array([grey.size], np.int64), np.array([lo]))
     if grey.dtype.kind in "ui" and hi - lo + 1 <= bins:
