@@ -7,11 +7,13 @@ from pydantic import ValidationError
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.decorate import (
+    anisotropic_rotations,
     decorate,
     points_in_grains,
     polyhedron,
     random_type,
     read_plane_file,
+    von_mises_fisher,
     voxelize_grains,
 )
 from porepipe.decorate._settings import Settings
@@ -134,3 +136,23 @@ def test_points_in_grains_refuses_nan_or_two_coordinates(points):
     deco = decorate(np.array([[5.0, 5.0, 5.0]]), np.array([2.0]), Settings(), seed=0)
     with pytest.raises(PorepipeError, match=r"points need shape \(M, 3\) and finite values"):
         points_in_grains(np.array(points), deco, (10.0, 10.0, 10.0))
+
+
+@pytest.mark.parametrize(
+    "axis, kappa, match",
+    [
+        (
+            (0.0, 0.0, 0.0),
+            1.0,
+            "axis .* must be a finite non-zero 3-vector",
+        ),  # before: NaN and a RuntimeWarning
+        ((0.0, 0.0, np.nan), 1.0, "axis .* must be a finite non-zero 3-vector"),  # before: NaN vectors
+        ((0.0, 0.0, 1.0), np.nan, "kappa must be >= 0"),  # before: NaN rotations, silently
+        ((0.0, 0.0, 1.0), -5.0, "kappa must be >= 0"),  # before: uniform, silently
+    ],
+)
+def test_orientations_refuse_a_zero_axis_or_a_concentration_without_a_meaning(axis, kappa, match):
+    with pytest.raises(PorepipeError, match=match):
+        von_mises_fisher(np.random.default_rng(0), 3, axis, kappa)
+    with pytest.raises(PorepipeError, match=match):
+        anisotropic_rotations(np.random.default_rng(0), 3, axis, kappa)

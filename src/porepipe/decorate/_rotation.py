@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from porepipe._shared.errors import PorepipeError
+
 
 def quaternion_to_matrix(q: np.ndarray) -> np.ndarray:
     """(n, 4) unit quaternions (w, x, y, z) -> (n, 3, 3) rotation matrices."""
@@ -50,6 +52,11 @@ def von_mises_fisher(rng: np.random.Generator, n: int, axis, kappa: float) -> np
     -----
     Inverse CDF of w = cos(angle to the axis): w = 1 + log(u + (1 − u) e^{−2κ}) / κ; E[w] = coth κ − 1/κ.
     """
+    a = np.asarray(axis, dtype=np.float64)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or not np.linalg.norm(a) > 0:
+        raise PorepipeError(f"von Mises-Fisher axis {axis} must be a finite non-zero 3-vector")
+    if not kappa >= 0:
+        raise PorepipeError(f"von Mises-Fisher concentration kappa must be >= 0 (0: uniform), got {kappa}")
     u = rng.uniform(size=n)
     if kappa < 1e-8:
         w = 2.0 * u - 1.0
@@ -59,7 +66,6 @@ def von_mises_fisher(rng: np.random.Generator, n: int, axis, kappa: float) -> np
     phi = rng.uniform(0.0, 2.0 * np.pi, size=n)
     s = np.sqrt(1.0 - w * w)
     local = np.column_stack([s * np.cos(phi), s * np.sin(phi), w])
-    a = np.asarray(axis, dtype=np.float64)
     a = a / np.linalg.norm(a)
     return local @ align_z(a[None, :])[0].T
 
