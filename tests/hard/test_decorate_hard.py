@@ -156,3 +156,21 @@ def test_orientations_refuse_a_zero_axis_or_a_concentration_without_a_meaning(ax
         von_mises_fisher(np.random.default_rng(0), 3, axis, kappa)
     with pytest.raises(PorepipeError, match=match):
         anisotropic_rotations(np.random.default_rng(0), 3, axis, kappa)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"perturbation": np.nan},  # before: OverflowError of numpy's uniform
+        {"perturbation": -0.1},  # before: numpy's "high - low < 0"
+        {"elongation": np.nan},  # before: "perturbation 0.1 too large?"
+        {"elongation": 1.0},  # before: "perturbation 0.1 too large?"
+        {"elongation": 2.0},  # before: a mirrored body, silently
+        {"facets": 3},  # before: "perturbation 0.1 too large?"
+    ],
+)
+def test_random_type_refuses_parameters_without_a_body(kwargs):
+    with pytest.raises(
+        PorepipeError, match=r"needs facets >= 4, 0 <= elongation < 1 and a finite perturbation"
+    ):
+        random_type("r", np.random.default_rng(0), **{"facets": 12, **kwargs})

@@ -316,6 +316,11 @@ def random_type(
     """
     from porepipe.decorate._rotation import uniform_rotations
 
+    if not (facets >= 4 and 0 <= elongation < 1 and 0 <= perturbation < np.inf):
+        raise PorepipeError(
+            f"grain type {name!r}: needs facets >= 4, 0 <= elongation < 1 and a finite perturbation >= 0, got "
+            f"{facets}, {elongation}, {perturbation}"
+        )
     k = np.arange(facets) + 0.5
     polar = np.arccos(1.0 - 2.0 * k / facets)
     azim = np.pi * (1.0 + 5.0**0.5) * k
