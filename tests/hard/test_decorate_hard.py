@@ -13,6 +13,7 @@ from porepipe.decorate import (
     polyhedron,
     random_type,
     read_plane_file,
+    sphere_type,
     von_mises_fisher,
     voxelize_grains,
 )
@@ -174,3 +175,11 @@ def test_random_type_refuses_parameters_without_a_body(kwargs):
         PorepipeError, match=r"needs facets >= 4, 0 <= elongation < 1 and a finite perturbation"
     ):
         random_type("r", np.random.default_rng(0), **{"facets": 12, **kwargs})
+
+
+@pytest.mark.parametrize("families", [np.array([3]), np.array([0, 0]), np.zeros(0, np.int64)])
+def test_decorate_refuses_a_library_that_does_not_cover_the_families(families):
+    # before: IndexError when a sphere drew a family without a type
+    lib = [sphere_type("s")] * min(len(families), 1)
+    with pytest.raises(PorepipeError, match="library: family indices .* cover the 1 decoration.families"):
+        decorate(np.array([[5.0, 5.0, 5.0]]), np.array([2.0]), Settings(), library=(lib, families))

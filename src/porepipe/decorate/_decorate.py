@@ -39,6 +39,16 @@ def _assign_types(radii, sphere_types, settings, families, rng) -> np.ndarray:
     return np.array([members[f][int(u * len(members[f]))] for f, u in zip(fam, pick)], dtype=np.int64)
 
 
+def _check_library(lib, families, n_families: int) -> None:
+    """Refuse a library whose family indices are not one per type, each family of the settings given a type."""
+    families = np.asarray(families)
+    if families.shape != (len(lib),) or not np.array_equal(np.unique(families), np.arange(n_families)):
+        raise PorepipeError(
+            f"library: family indices {families.tolist()} must be one per type ({len(lib)}) and cover the "
+            f"{n_families} decoration.families 0..{n_families - 1}"
+        )
+
+
 def scale_factors(library, types, radii, rule: ScaleRule) -> np.ndarray:
     """Scale s of each grain so that it matches its sphere of radius r.
 
@@ -94,6 +104,7 @@ def decorate(
     if st.shape != radii.shape:
         raise PorepipeError(f"sphere types need shape {radii.shape}, got {st.shape}")
     lib, families = library if library is not None else build_library(settings, seed, base_dir)
+    _check_library(lib, families, len(settings.families))
     types = _assign_types(radii, st, settings, families, _rng(seed, _STREAM_ASSIGN))
     scales = scale_factors(lib, types, radii, settings.scale)
     orient = settings.orientation
