@@ -9,6 +9,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe.decorate import (
     anisotropic_rotations,
     decorate,
+    pair_overlap_volume,
     points_in_grains,
     polyhedron,
     random_type,
@@ -183,3 +184,9 @@ def test_decorate_refuses_a_library_that_does_not_cover_the_families(families):
     lib = [sphere_type("s")] * min(len(families), 1)
     with pytest.raises(PorepipeError, match="library: family indices .* cover the 1 decoration.families"):
         decorate(np.array([[5.0, 5.0, 5.0]]), np.array([2.0]), Settings(), library=(lib, families))
+
+
+def test_pair_overlap_volume_refuses_a_grain_index_out_of_range():
+    deco = decorate(np.array([[5.0, 5.0, 5.0], [8.0, 5.0, 5.0]]), np.array([2.0, 2.0]), Settings(), seed=0)
+    with pytest.raises(PorepipeError, match=r"grains i = 0, j = 5; allowed: 0..1"):  # before: IndexError
+        pair_overlap_volume(deco, 0, 5, (10.0, 10.0, 10.0))

@@ -290,6 +290,8 @@ def _halfspaces(deco, g, shift):
 
 def pair_overlap_volume(deco: Decoration, i: int, j: int, box_um, periodic: bool = True) -> float:
     """Exact volume of grain i ∩ grain j (nearest image of j), by vertex enumeration of the joint half-spaces."""
+    if not (0 <= i < len(deco) and 0 <= j < len(deco)):
+        raise PorepipeError(f"pair_overlap_volume: grains i = {i}, j = {j}; allowed: 0..{len(deco) - 1}")
     box = np.asarray(box_um, dtype=np.float64)
     d = _separation(deco.centres_um, np.array([i]), np.array([j]), box, periodic)[0]
     ni, oi = _halfspaces(deco, i, np.zeros(3))
