@@ -9,6 +9,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe.decorate import (
     anisotropic_rotations,
     decorate,
+    om_cells,
     pair_overlap_volume,
     points_in_grains,
     polyhedron,
@@ -190,3 +191,9 @@ def test_pair_overlap_volume_refuses_a_grain_index_out_of_range():
     deco = decorate(np.array([[5.0, 5.0, 5.0], [8.0, 5.0, 5.0]]), np.array([2.0, 2.0]), Settings(), seed=0)
     with pytest.raises(PorepipeError, match=r"grains i = 0, j = 5; allowed: 0..1"):  # before: IndexError
         pair_overlap_volume(deco, 0, 5, (10.0, 10.0, 10.0))
+
+
+@pytest.mark.parametrize("volume", [0.0, np.nan])  # before: divide-by-zero / invalid-cast warnings
+def test_om_cells_refuse_a_cell_volume_that_is_not_positive_and_finite(volume):
+    with pytest.raises(PorepipeError, match="cell_volume_um3 must be positive and finite"):
+        om_cells(np.array([[5.0, 5.0, 5.0], [8.0, 5.0, 5.0]]), np.array([10.0, 10.0, 10.0]), True, volume)

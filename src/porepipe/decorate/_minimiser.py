@@ -25,6 +25,7 @@ import dataclasses
 
 import numpy as np
 
+from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
 from porepipe.decorate._api import (
     _STREAM_MINIMISER,
@@ -52,6 +53,8 @@ class Trials:
 
 def om_cells(centres, box, periodic: bool, cell_volume_um3: float) -> list[np.ndarray]:
     """Grain indices of every cell of the two staggered grids of cells of volume ≈ ``cell_volume_um3``."""
+    if not 0 < cell_volume_um3 < np.inf:
+        raise PorepipeError(f"cell_volume_um3 must be positive and finite, got {cell_volume_um3}")
     box = np.asarray(box, dtype=np.float64)
     n = np.maximum(1, np.floor(box / cell_volume_um3 ** (1.0 / 3.0))).astype(np.int64)
     edge = box / n
