@@ -197,3 +197,11 @@ def test_pair_overlap_volume_refuses_a_grain_index_out_of_range():
 def test_om_cells_refuse_a_cell_volume_that_is_not_positive_and_finite(volume):
     with pytest.raises(PorepipeError, match="cell_volume_um3 must be positive and finite"):
         om_cells(np.array([[5.0, 5.0, 5.0], [8.0, 5.0, 5.0]]), np.array([10.0, 10.0, 10.0]), True, volume)
+
+
+@pytest.mark.parametrize("box", [(10.0, np.nan, 10.0), (10.0, 10.0)])
+def test_voxelize_grains_names_a_box_without_3_finite_edges(box):
+    # before: "cannot convert float NaN to integer" and numpy's broadcast ValueError
+    deco = decorate(np.array([[5.0, 5.0, 5.0]]), np.array([2.0]), Settings(), seed=0)
+    with pytest.raises(PorepipeError, match=r"box_um needs 3 finite edges"):
+        voxelize_grains(deco, box, 1.0)

@@ -20,6 +20,9 @@ def grid_shape(box_um, voxel_um: float) -> tuple[int, int, int]:
     """Voxels per axis for a box; raises if ``voxel_um`` does not divide every edge."""
     if not (np.isfinite(voxel_um) and voxel_um > 0):
         raise PorepipeError(f"voxel size must be positive and finite, got {voxel_um}")
+    box = np.asarray(box_um, dtype=np.float64)
+    if box.shape != (3,) or not np.all(np.isfinite(box)):
+        raise PorepipeError(f"box_um needs 3 finite edges (µm), got {box.ravel().tolist()}")
     shape = []
     for axis, edge in enumerate(box_um):
         n = edge / voxel_um
