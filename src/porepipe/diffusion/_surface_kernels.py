@@ -193,6 +193,8 @@ def _tally_time(tally, t_last, t, t_warm, blk_len, n_gas, n_ads):
     a0 = max(t_last, t_warm)
     while a0 < t:
         bk = min(int((a0 - t_warm) / blk_len), n_blk - 1)
+        while bk < n_blk - 1 and t_warm + (bk + 1) * blk_len <= a0:
+            bk += 1  # a0 on a block's end that the division rounded below it (else a1 = a0 for ever)
         a1 = min(t, t_warm + (bk + 1) * blk_len) if bk < n_blk - 1 else t
         for x in range(n_gas.shape[0]):
             tally[bk, x, S_GAS_T] += n_gas[x] * (a1 - a0)
