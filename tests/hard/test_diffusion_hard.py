@@ -118,3 +118,21 @@ def test_surface_blocks_whose_ends_round_below_them_do_not_hang():
     )
     per_block = run["blocks_tally"][:, 0, SK.S_GAS_T] + run["blocks_tally"][:, 0, SK.S_ADS_T]
     np.testing.assert_allclose(per_block, 5 * 10.0 / 15, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "pore_periodic,times,match",
+    [
+        ((np.ones((2, 2, 2), np.uint8), (1, 1, 1)), {"t_end": 5.0}, "no wall face"),
+        ((np.ones((2, 2, 2), np.uint8), (0, 0, 0)), {"t_end": math.inf}, "t_end < inf"),
+        ((np.ones((2, 2, 2), np.uint8), (0, 0, 0)), {"t_end": 5.0, "blocks": 2.5}, "whole number of blocks"),
+    ],
+)
+def test_surface_run_refuses_what_never_ends(pore_periodic, times, match):
+    """A pore without walls (a flight never ends) and an infinite t_end hung the event loop; 2.5 blocks was numpy's
+    TypeError."""
+    from porepipe.diffusion import Adsorbate, surface_run
+
+    pore, periodic = pore_periodic
+    with pytest.raises(PorepipeError, match=match):
+        surface_run(pore, [Adsorbate("A", gas=2, adsorption=0.5, residence=1.0)], periodic=periodic, **times)

@@ -327,15 +327,17 @@ def surface_run(
         raise PorepipeError(f"residence_law must be fixed or exponential, got {residence_law!r}")
     if int(sites_per_edge) != sites_per_edge or sites_per_edge < 1:
         raise PorepipeError(f"sites_per_edge must be a positive whole number, got {sites_per_edge!r}")
-    if not (0.0 <= t_warm < t_end) or blocks < 1:
-        raise PorepipeError(
-            f"need 0 <= t_warm < t_end and blocks >= 1, got {t_warm!r}, {t_end!r}, {blocks!r}"
-        )
+    _check_times(t_end, t_warm, blocks)
     mech = _mechanism_tuple(mechanisms, side_reactions, species, replenish)
     geom = prepare(pore, voxel_um, periodic, axis=None)
     if not np.allclose(geom.h, 1.0):
         raise PorepipeError(f"the adsorbing gas needs cubic voxels, got voxel_um {geom.voxel_um.tolist()}")
     face_of, site_face = wall_sites(geom.codes, geom.periodic)
+    if site_face.shape[0] == 0:
+        raise PorepipeError(
+            "the pore has no wall face (all pore and periodic on every axis): the adsorbing gas needs walls; "
+            "close an axis or give solid voxels"
+        )
     s = int(sites_per_edge)
     n_sites, active = _sites_and_activity(site_face.shape[0], s, active_fraction, seed)
     spare_of = {int(mech[k][2]) for k, rev in ((1, S.W_REV), (0, S.W_LH_REV)) if mech[2][rev] > 0.0}
@@ -367,6 +369,15 @@ def surface_run(
     return _summary(
         tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, t_end - t_warm, events
     )
+
+
+def _check_times(t_end, t_warm, blocks) -> None:
+    """A finite run 0 <= t_warm < t_end cut into a whole number of blocks >= 1 (an infinite t_end never ends)."""
+    if not (0.0 <= t_warm < t_end < math.inf) or not isinstance(blocks, int | np.integer) or blocks < 1:
+        raise PorepipeError(
+            f"need 0 <= t_warm < t_end < inf and a whole number of blocks >= 1, got t_warm {t_warm!r}, "
+            f"t_end {t_end!r}, blocks {blocks!r}"
+        )
 
 
 def _summary(tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, span, events) -> dict:
