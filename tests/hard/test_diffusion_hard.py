@@ -136,3 +136,13 @@ def test_surface_run_refuses_what_never_ends(pore_periodic, times, match):
     pore, periodic = pore_periodic
     with pytest.raises(PorepipeError, match=match):
         surface_run(pore, [Adsorbate("A", gas=2, adsorption=0.5, residence=1.0)], periodic=periodic, **times)
+
+
+@pytest.mark.parametrize("t_samples", [[8.0, 2.0], [np.nan], [1.0, 20.0]])
+def test_surface_sample_times_must_be_ascending_inside_the_run(t_samples):
+    """The event loop takes the sample times in order: [8, 2] recorded the state at 8 twice, NaN and 20 > t_end the
+    final state, all silently."""
+    from porepipe.diffusion import Adsorbate, surface_run
+
+    with pytest.raises(PorepipeError, match=r"t_samples must be ascending times in \[0, t_end = 10.0\]"):
+        surface_run(np.ones((2, 2, 2), np.uint8), [Adsorbate("A", gas=2)], t_end=10.0, t_samples=t_samples)

@@ -348,7 +348,7 @@ def surface_run(
     n_sp = len(species)
     tally = np.zeros((blocks, n_sp, S.N_STALLY))
     rtally = np.zeros((blocks, S.N_XTALLY))
-    samples = np.asarray(t_samples, dtype=float).reshape(-1)
+    samples = _sample_times(t_samples, t_end)
     series = np.zeros((samples.size, n_sp, 2))
     final_sp = np.empty(kinds.size, np.int64)
     final_st = np.empty(kinds.size, np.int64)
@@ -378,6 +378,16 @@ def _check_times(t_end, t_warm, blocks) -> None:
             f"need 0 <= t_warm < t_end < inf and a whole number of blocks >= 1, got t_warm {t_warm!r}, "
             f"t_end {t_end!r}, blocks {blocks!r}"
         )
+
+
+def _sample_times(t_samples, t_end) -> np.ndarray:
+    """``t_samples`` as a 1-D array, ascending in [0, t_end] (the event loop takes them in order)."""
+    samples = np.asarray(t_samples, dtype=float).reshape(-1)
+    if not (np.all((samples >= 0) & (samples <= t_end)) and np.all(np.diff(samples) >= 0)):
+        raise PorepipeError(
+            f"t_samples must be ascending times in [0, t_end = {t_end!r}], got {samples.tolist()}"
+        )
+    return samples
 
 
 def _summary(tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, span, events) -> dict:
