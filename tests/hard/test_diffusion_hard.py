@@ -146,3 +146,11 @@ def test_surface_sample_times_must_be_ascending_inside_the_run(t_samples):
 
     with pytest.raises(PorepipeError, match=r"t_samples must be ascending times in \[0, t_end = 10.0\]"):
         surface_run(np.ones((2, 2, 2), np.uint8), [Adsorbate("A", gas=2)], t_end=10.0, t_samples=t_samples)
+
+
+def test_surface_with_no_active_site_is_refused():
+    """active_fraction 1e-9 of 96 sites draws none active: the coverage was 0/0 (NaN and a RuntimeWarning)."""
+    from porepipe.diffusion import Adsorbate, surface_run
+
+    with pytest.raises(PorepipeError, match="active_fraction 1e-09 left none of the 96 sites active"):
+        surface_run(np.ones((2, 2, 2), np.uint8), [Adsorbate("A", gas=2)], t_end=5.0, active_fraction=1e-9)

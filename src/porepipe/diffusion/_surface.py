@@ -162,6 +162,11 @@ def _sites_and_activity(n_faces, s, active_fraction, seed):
         raise PorepipeError(f"active_fraction must lie in (0, 1], got {active_fraction!r}")
     rng = np.random.default_rng(kernel_seed(seed, STAGE, 19))
     active = rng.random(n_sites) < active_fraction if active_fraction < 1.0 else np.ones(n_sites, bool)
+    if not active.any():
+        raise PorepipeError(
+            f"active_fraction {active_fraction!r} left none of the {n_sites} sites active (the coverage would be "
+            "0/0); raise active_fraction or sites_per_edge"
+        )
     return n_sites, active
 
 
