@@ -154,3 +154,20 @@ def test_surface_with_no_active_site_is_refused():
 
     with pytest.raises(PorepipeError, match="active_fraction 1e-09 left none of the 96 sites active"):
         surface_run(np.ones((2, 2, 2), np.uint8), [Adsorbate("A", gas=2)], t_end=5.0, active_fraction=1e-9)
+
+
+@pytest.mark.parametrize("n_part", [1, 3])
+def test_edmd_with_fewer_particles_than_msd_groups_is_finite(n_part):
+    """Setup edmd with 1 or 3 particles in a periodic box: the msd was averaged over 8 particle groups, most of them
+    empty (NaN msd and D_self and a RuntimeWarning). Now a group per particle; one group has an infinite error.
+    The msd is non-negative and grows (a free particle's msd is (v t)², so the last sample exceeds the first)."""
+    from porepipe.diffusion._edmd import edmd_result
+
+    settings = Settings(
+        setup="edmd", gas={"particles": {"N2": n_part}, "voxel_nm": 2.0, "duration_ps": 5.0, "samples": 4}
+    )
+    r = edmd_result(np.ones((3, 3, 3), np.uint8), settings, 1.0, (1, 1, 1))
+    msd = r.arrays["msd_nm2"].sum(axis=1)
+    assert np.all(np.isfinite(msd)) and msd[-1] > msd[0] >= 0
+    assert math.isfinite(r.values["D_self_nm2_ps"])
+    assert (r.values["D_self_err_nm2_ps"] == math.inf) == (n_part == 1)

@@ -386,7 +386,8 @@ def measure(
     axis: int = 2,
 ) -> dict:
     """Run ``gas`` for ``duration_ps`` in ``samples`` steps; collision rate, λ_eff, msd D (periodic axes) with
-    batch errors over ``groups`` particle groups, and the event cost. ``orientation_bins`` > 0: the velocity
+    batch errors over ``groups`` particle groups (at most one per particle; one group: an infinite error), and the
+    event cost. ``orientation_bins`` > 0: the velocity
     orientations of all particles at the sample times (:func:`orientation_histogram` about ``axis``), summed, as
     ``orientation`` (thesis §3.7, Figs. 3.21-3.22).
     """
@@ -394,6 +395,7 @@ def measure(
 
     physics = physics or Physics()
     n = gas.pos.shape[0]
+    groups = max(1, min(groups, n))  # no empty group: a gas of fewer particles has one per group
     t0 = gas.tally.copy()
     pairs0, walls0 = gas.tally[E.E_PAIRS], gas.tally[E.E_WALLS]
     start = gas.unwrapped().copy()
@@ -435,7 +437,7 @@ def measure(
     if per.any():
         dg = slopes[:, per].mean(axis=1)
         out["D_self_nm2_ps"] = float(dg.mean())
-        out["D_self_err_nm2_ps"] = float(dg.std(ddof=1) / math.sqrt(groups))
+        out["D_self_err_nm2_ps"] = float(dg.std(ddof=1) / math.sqrt(groups)) if groups > 1 else math.inf
     out["msd"] = msd.mean(axis=1)
     out["msd_time_ps"] = times
     if orientation_bins:
