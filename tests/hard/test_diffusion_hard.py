@@ -171,3 +171,17 @@ def test_edmd_with_fewer_particles_than_msd_groups_is_finite(n_part):
     assert np.all(np.isfinite(msd)) and msd[-1] > msd[0] >= 0
     assert math.isfinite(r.values["D_self_nm2_ps"])
     assert (r.values["D_self_err_nm2_ps"] == math.inf) == (n_part == 1)
+
+
+def test_edmd_whose_first_species_has_no_particles_tests_the_next():
+    """particles {N2: 0, Ar: 12}: the speed test and Chapman-Enskog were taken over the absent N2 (mean of an empty
+    slice: NaN and a RuntimeWarning). Now over Ar: the speed histogram holds its 12 particles, and D_CE is Ar's
+    (the N2 value differs by its diameter and mass, so rel 1e-12 tells them apart)."""
+    from porepipe.diffusion._edmd import chapman_enskog_d, edmd_result
+
+    gas = {"particles": {"N2": 0, "Ar": 12}, "voxel_nm": 2.0, "duration_ps": 5.0, "samples": 4}
+    r = edmd_result(np.ones((3, 3, 3), np.uint8), Settings(setup="edmd", gas=gas), 1.0, (1, 1, 1))
+    assert r.arrays["speed_histogram"].sum() == 12 and 0 <= r.values["ks_pvalue"] <= 1
+    n = 12 / 6.0**3
+    d_ar = chapman_enskog_d(n, 2 * 0.1771, "Ar", 298.15) * 1e-6
+    assert r.values["D_chapman_enskog_m2_s"] == pytest.approx(d_ar, rel=1e-12)
