@@ -135,3 +135,26 @@ def test_granular_scene_needs_no_box_or_resolutions_but_others_still_do():
     assert scene.granular.duration_s == 0.1 and scene.domain is None
     with pytest.raises(SceneError, match="resolutions_um"):
         parse_scene({"name": "x", "domain": {"size_um": [10, 10, 10]}, "spheres": {"inline": [[1, 1, 1, 1]]}})
+
+
+@pytest.mark.parametrize(
+    "coord,force,kw,match",
+    [
+        ([0.5], [2.0], {}, "all 1 contacts lie at one coordinate 0.5"),
+        ([0.5, 0.5], [2.0, 1.0], {}, "all 2 contacts lie at one coordinate 0.5"),
+        ([0.1, 0.5], [2.0, 1.0], {"half_width": 0.0}, "half_width must be positive"),
+        ([0.1, np.nan], [2.0, 1.0], {}, "must be finite"),
+    ],
+)
+def test_pressure_profile_of_a_single_contact_or_a_zero_window(coord, force, kw, match):
+    """One grain on a wall (or all contacts at one place) set the window half-width to 1e-300-ish: a pressure of
+    1e299 N/m, silently; half_width 0 divided by zero; a NaN coordinate made every window NaN."""
+    from porepipe.granular import pressure_profile
+
+    with pytest.raises(PorepipeError, match=match):
+        pressure_profile(coord, force, 1.0, **kw)
+    if len(coord) == 1:  # with a window given, one contact is a plain box: F / (2 b) inside it
+        p = pressure_profile(coord, force, 1.0, centres=[0.5], half_width=0.25)
+        assert p["pressure"][0] == pytest.approx(
+            2.0 / 0.5, rel=1e-15
+        )  # exact but for the division's rounding

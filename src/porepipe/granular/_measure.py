@@ -274,10 +274,21 @@ def pressure_profile(
         raise PorepipeError(f"pressure_profile: wall length must be positive, got {length}")
     if len(u) == 0:
         raise PorepipeError("pressure_profile: no contacts on this wall")
+    if u.shape != fn.shape or not (np.all(np.isfinite(u)) and np.all(np.isfinite(fn))):
+        raise PorepipeError(
+            f"pressure_profile: coord and normal_force must be finite and of one shape, got {u.shape}, {fn.shape}"
+        )
     span = float(u.max() - u.min())
+    if half_width is None and not span > 0:
+        raise PorepipeError(
+            f"pressure_profile: all {len(u)} contacts lie at one coordinate {u[0]:g}, which sets no window width; "
+            "give half_width"
+        )
     if half_width is None:
-        half_width = 0.5 * max(span, 1e-300) * contacts_per_window / max(len(u), 1)
+        half_width = 0.5 * span * contacts_per_window / len(u)
     b = float(half_width)
+    if not (b > 0 and np.isfinite(b)):
+        raise PorepipeError(f"pressure_profile: half_width must be positive and finite, got {half_width}")
     if centres is None:
         centres = np.linspace(u.min(), u.max(), 200)
     centres = np.asarray(centres, dtype=np.float64)
