@@ -158,3 +158,19 @@ def test_pressure_profile_of_a_single_contact_or_a_zero_window(coord, force, kw,
         assert p["pressure"][0] == pytest.approx(
             2.0 / 0.5, rel=1e-15
         )  # exact but for the division's rounding
+
+
+@pytest.mark.parametrize("what", ["analyse_heap", "analyse_silo"])
+def test_heap_and_silo_read_outs_of_a_frame_without_grains(what, tmp_path):
+    """A run that ends before its drop source inserts anything: every frame is empty. analyse_heap failed in
+    numpy's concatenate, analyse_silo with 'Mean of empty slice'."""
+    from porepipe import granular
+
+    box_floor = {**floor(), "name": "box floor"}
+    source = {"x_m": 0.0, "y_m": 0.1, "from_s": 1.0, "to_s": 2.0, "shape": {"size_m": (0.005, 0.005)}}
+    settings = Settings.model_validate(
+        {"walls": [box_floor], "drop_sources": [source], "duration_s": 1e-3, "material": SOFT}
+    )
+    tables = granular.read_granular(granular.run(settings, tmp_path / "g.h5", progress=False))
+    with pytest.raises(PorepipeError, match=f"{what}: frame 10 has no active grains"):
+        getattr(granular, what)(tables)

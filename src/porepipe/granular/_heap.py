@@ -42,6 +42,7 @@ def analyse_heap(
         mean x, the heap's axis for :func:`floor_dip_ensemble`).
     """
     parts = M.frame_particles(tables, frame)
+    M.require_grains(parts, "analyse_heap")
     contacts = M.frame_contacts(tables, frame)
     n = len(parts["centroid"])
     act = parts["active"]

@@ -57,6 +57,15 @@ def frame_particles(tables: dict, frame: int = -1) -> dict:
     }
 
 
+def require_grains(parts: dict, who: str) -> None:
+    """One line naming ``who`` and the frame when :func:`frame_particles` found no active grain in it."""
+    if not parts["active"].any():
+        raise PorepipeError(
+            f"{who}: frame {parts['index']} has no active grains (none inserted yet, or all removed); "
+            "pick a frame with grains"
+        )
+
+
 def frame_contacts(tables: dict, frame: int = -1) -> dict:
     """The contact rows of one frame as a dict of arrays (keys as in the ``contacts`` table)."""
     nf = tables["frames"].sizes["frame"]

@@ -235,6 +235,7 @@ def analyse_silo(
         ``wall_at_coulomb_limit``, ``bounds``, ``n_particles``, ``weight_N_m``.
     """
     parts = M.frame_particles(tables, frame)
+    M.require_grains(parts, "analyse_silo")
     contacts = M.frame_contacts(tables, frame)
     n = len(parts["centroid"])
     act = parts["active"]
