@@ -174,3 +174,12 @@ def test_heap_and_silo_read_outs_of_a_frame_without_grains(what, tmp_path):
     tables = granular.read_granular(granular.run(settings, tmp_path / "g.h5", progress=False))
     with pytest.raises(PorepipeError, match=f"{what}: frame 10 has no active grains"):
         getattr(granular, what)(tables)
+
+
+def test_force_directions_without_contacts():
+    """A single grain in the air has no contacts: the normalised histogram was 0/0 (NaN and a RuntimeWarning)."""
+    from porepipe.granular import force_directions
+
+    sim = simulation([{"vertices_m": square(0.01), "position_m": (0.0, 0.0)}], material=SOFT)
+    with pytest.raises(PorepipeError, match="force_directions: no contacts"):
+        force_directions(sim.contacts())

@@ -426,6 +426,8 @@ def force_directions(contacts: dict, bins: int = 36) -> dict:
     Returns ``edges`` (rad, on [0, pi)), ``density`` (normalised to integrate to 1 over [0, pi)) and ``alpha``.
     """
     f = np.column_stack([contacts["fx_N"], contacts["fy_N"]])
+    if len(f) == 0:
+        raise PorepipeError("force_directions: no contacts (a density of no directions is 0/0)")
     alpha = np.mod(np.arctan2(f[:, 1], f[:, 0]), np.pi)
     density, edges = np.histogram(alpha, bins=bins, range=(0.0, np.pi), density=True)
     return {"edges": edges, "density": density, "alpha": alpha}
