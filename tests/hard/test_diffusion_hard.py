@@ -185,3 +185,15 @@ def test_edmd_whose_first_species_has_no_particles_tests_the_next():
     n = 12 / 6.0**3
     d_ar = chapman_enskog_d(n, 2 * 0.1771, "Ar", 298.15) * 1e-6
     assert r.values["D_chapman_enskog_m2_s"] == pytest.approx(d_ar, rel=1e-12)
+
+
+def test_thiele_modulus_negative_or_huge():
+    """eta_of_phi(-2) gave 1 - 4/3 = -0.33 (the small-Φ series used for every Φ <= 1e-8), a wrong number; the
+    series term Φ² was computed for every Φ and overflowed (a RuntimeWarning) above 1.3e154, e.g. inside
+    phi_of_eta(1e-300). There tanh Φ = 1 to double precision, so Φ = 1/η (rel 1e-11: the bisection's 1e-12)."""
+    from porepipe.diffusion import eta_of_phi, phi_of_eta
+
+    with pytest.raises(PorepipeError, match=r"Thiele modulus must be >= 0 \(Φ = L·√\(k/D\)\), got -2.0$"):
+        eta_of_phi(-2.0)
+    assert phi_of_eta(1e-300) == pytest.approx(1e300, rel=1e-11)
+    assert float(eta_of_phi(1e200)) == pytest.approx(1e-200, rel=1e-15)

@@ -21,10 +21,14 @@ from porepipe._shared.errors import PorepipeError
 
 
 def eta_of_phi(phi):
-    """Slab effectiveness factor η = tanh Φ / Φ (4.7); η(0) = 1."""
+    """Slab effectiveness factor η = tanh Φ / Φ (4.7); η(0) = 1. Φ = L·√(k/D) >= 0."""
     phi = np.asarray(phi, dtype=float)
-    safe = np.where(phi > 1e-8, phi, 1.0)
-    return np.where(phi > 1e-8, np.tanh(safe) / safe, 1.0 - phi * phi / 3.0)
+    if np.any(phi < 0):
+        raise PorepipeError(f"the Thiele modulus must be >= 0 (Φ = L·√(k/D)), got {float(phi.min())!r}")
+    small = phi <= 1e-8
+    safe = np.where(small, 1.0, phi)
+    tiny = np.where(small, phi, 0.0)  # the series only where it is used: Φ² of a large Φ overflows
+    return np.where(small, 1.0 - tiny * tiny / 3.0, np.tanh(safe) / safe)
 
 
 def phi_of_eta(eta: float, tol: float = 1e-12) -> float:
