@@ -197,3 +197,20 @@ def test_thiele_modulus_negative_or_huge():
         eta_of_phi(-2.0)
     assert phi_of_eta(1e-300) == pytest.approx(1e300, rel=1e-11)
     assert float(eta_of_phi(1e200)) == pytest.approx(1e-200, rel=1e-15)
+
+
+@pytest.mark.parametrize(
+    "x,d,d_err",
+    [
+        ([0.1, 0.2, 0.3], [1.0, np.nan, 2.0], [0.1, 0.1, 0.1]),
+        ([0.1, 0.2], [1.0, 2.0], [0.1, np.inf]),
+        ([0.1, np.inf, 0.3], [1.0, 1.5, 2.0], [0.1, 0.1, 0.1]),
+    ],
+)
+def test_length_series_fit_refuses_non_finite_points(x, d, d_err):
+    """A NaN D or an infinite r/L gave alpha = D0 = NaN silently; an infinite error (weight 0) left two points for
+    two parameters with one of them weightless: LinAlgError 'Singular matrix'."""
+    from porepipe.diffusion import fit_length_series
+
+    with pytest.raises(PorepipeError, match="the length series needs finite r/L, D > 0 and errors > 0"):
+        fit_length_series(x, d, d_err)

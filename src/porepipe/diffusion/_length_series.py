@@ -28,8 +28,11 @@ def fit_length_series(r_over_l, d, d_err) -> dict:
     x, d, d_err = (np.asarray(v, dtype=float) for v in (r_over_l, d, d_err))
     if x.size < 2 or not (x.shape == d.shape == d_err.shape):
         raise PorepipeError(f"the length series needs >= 2 lengths with D and its error, got {x.size}")
-    if np.any(d <= 0) or np.any(d_err <= 0) or np.unique(x).size < 2:
-        raise PorepipeError("the length series needs D > 0, errors > 0 and at least two distinct lengths")
+    finite = np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(d_err))
+    if not finite or np.any(d <= 0) or np.any(d_err <= 0) or np.unique(x).size < 2:
+        raise PorepipeError(
+            "the length series needs finite r/L, D > 0 and errors > 0, and at least two distinct lengths"
+        )
     y = 1.0 / d
     sy = d_err / d**2
     a = np.column_stack([np.ones_like(x), x]) / sy[:, None]
