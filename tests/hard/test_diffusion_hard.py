@@ -214,3 +214,24 @@ def test_length_series_fit_refuses_non_finite_points(x, d, d_err):
 
     with pytest.raises(PorepipeError, match="the length series needs finite r/L, D > 0 and errors > 0"):
         fit_length_series(x, d, d_err)
+
+
+def test_event_driven_gas_refuses_non_finite_start():
+    """An infinite temperature gave infinite speeds and a NaN velocity a NaN position after the first step, both
+    silently; a NaN count was int()'s ValueError and a (1, 2) position numpy's reshape error."""
+    from porepipe.diffusion import make_gas, mean_speed
+
+    box = np.ones((3, 3, 3), np.uint8)
+    one = {"positions": [[1.0, 1.0, 1.0]], "species": ["N2"]}
+    with pytest.raises(PorepipeError, match="temperature_K must be finite and > 0, got inf"):
+        make_gas(box, 2.0, {"N2": 3}, temperature_K=math.inf)
+    with pytest.raises(PorepipeError, match="temperature_K must be finite and > 0, got inf"):
+        mean_speed("N2", math.inf)
+    with pytest.raises(PorepipeError, match="particle velocities must be finite"):
+        make_gas(box, 2.0, {"N2": 0}, velocities=[[math.nan, 0.0, 0.0]], **one)
+    with pytest.raises(PorepipeError, match="particle count of N2 must be a whole number >= 0, got nan"):
+        make_gas(box, 2.0, {"N2": math.nan})
+    with pytest.raises(
+        PorepipeError, match=r"positions \(1, 2\) and velocities \(1, 2\) must both be \(1, 3\)"
+    ):
+        make_gas(box, 2.0, {"N2": 0}, positions=[[1.0, 1.0]], velocities=[[0.0, 0.0]], species=["N2"])

@@ -115,7 +115,7 @@ def _species_table(counts: dict) -> tuple[tuple, np.ndarray]:
     for name, n in counts.items():
         if name not in SPECIES:
             raise PorepipeError(f"unknown species {name!r}; allowed: {', '.join(SPECIES)}")
-        if int(n) != n or n < 0:
+        if not (float(n).is_integer() and n >= 0):
             raise PorepipeError(f"particle count of {name} must be a whole number >= 0, got {n!r}")
     names = tuple(counts)
     return names, np.repeat(np.arange(len(names), dtype=np.int64), [int(counts[s]) for s in names])
@@ -163,8 +163,8 @@ def make_gas(
         )
     if not (voxel_nm > 0 and math.isfinite(voxel_nm)):
         raise PorepipeError(f"voxel_nm must be positive, got {voxel_nm!r}")
-    if not temperature_K > 0:
-        raise PorepipeError(f"temperature_K must be > 0, got {temperature_K!r}")
+    if not (temperature_K > 0 and math.isfinite(temperature_K)):
+        raise PorepipeError(f"temperature_K must be finite and > 0, got {temperature_K!r}")
     per = np.array([bool(p) for p in np.broadcast_to(periodic, (3,))])
     names, sp = _species_table(counts)
     if positions is not None:
@@ -206,12 +206,13 @@ def make_gas(
             )
         vel = _velocities(names, sp, temperature_K, speed, seed)
     else:
-        pos = np.array(positions, dtype=float).reshape(-1, 3)
-        vel = np.array(velocities, dtype=float).reshape(-1, 3)
-        if pos.shape != vel.shape or pos.shape[0] != sp.size:
+        pos, vel = np.array(positions, dtype=float), np.array(velocities, dtype=float)
+        if pos.shape != vel.shape or pos.shape != (sp.size, 3):
             raise PorepipeError(
-                f"positions {pos.shape}, velocities {vel.shape} and {sp.size} species disagree"
+                f"positions {pos.shape} and velocities {vel.shape} must both be ({sp.size}, 3), one row a species"
             )
+        if not np.all(np.isfinite(vel)):
+            raise PorepipeError("particle velocities must be finite")
         pos = _check_positions(pos, cells, h)
     gas = Gas(pos, vel, sp, names, float(temperature_K), cells, h, per, state=int(state))
     _check_overlap(gas)
