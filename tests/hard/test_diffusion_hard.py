@@ -235,3 +235,13 @@ def test_event_driven_gas_refuses_non_finite_start():
         PorepipeError, match=r"positions \(1, 2\) and velocities \(1, 2\) must both be \(1, 3\)"
     ):
         make_gas(box, 2.0, {"N2": 0}, positions=[[1.0, 1.0]], velocities=[[0.0, 0.0]], species=["N2"])
+
+
+def test_edmd_in_a_box_without_walls_has_infinite_chord():
+    """A periodic box of pore has no wall: the mean chord 4V/S is infinite and Kn = 0 exactly; the 1e-300 floor on
+    S reported 8.6e302 nm and Kn = 2e-302 instead."""
+    from porepipe.diffusion._edmd import edmd_result
+
+    gas = {"particles": {"N2": 8}, "voxel_nm": 2.0, "duration_ps": 2.0, "samples": 4}
+    r = edmd_result(np.ones((3, 3, 3), np.uint8), Settings(setup="edmd", gas=gas), 1.0, (1, 1, 1))
+    assert r.values["mean_chord_nm"] == math.inf and r.values["Kn"] == 0.0  # exact by construction

@@ -644,7 +644,8 @@ def edmd_result(pore, settings, voxel_um, periodic, seed: int = 0, axis: int = 2
     d = 2.0 * SPECIES[first][0]
     n = n_part / gas.pore_volume
     keep = (np.asarray(pore) > 0).astype(np.uint8)
-    chord = 4.0 * gas.pore_volume / max(wall_area(keep, np.full(3, voxel_nm), gas.periodic), 1e-300)
+    area = wall_area(keep, np.full(3, voxel_nm), gas.periodic)
+    chord = 4.0 * gas.pore_volume / area if area > 0 else math.inf  # no wall at all: Kn = 0
     mine = gas.species == 0
     speeds = np.linalg.norm(gas.vel[mine], axis=1)
     scale = math.sqrt(np.mean(speeds**2) / 3.0)
