@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import enum
 import os
 import subprocess
 import sys
@@ -160,7 +161,17 @@ def _help_from_settings(parser: argparse.ArgumentParser, model) -> None:
             action.help = _COMMON_HELP[action.dest]
         field = model.model_fields.get(action.dest) if model is not None else None
         if action.help is None and field is not None and field.description:
-            action.help = f"{field.description} (default: the scene's, else {field.default!r})"
+            default = _shown(field.get_default(call_default_factory=True))
+            action.help = f"{field.description} (default: the scene's, else {default!r})"
+
+
+def _shown(value):
+    """A setting's default as a scene writes it: an Enum by its value, a list element by element."""
+    if isinstance(value, enum.Enum):
+        return value.value
+    if isinstance(value, list | tuple):
+        return [_shown(v) for v in value]
+    return value
 
 
 def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
