@@ -163,7 +163,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=_binary)
 
     p = subparsers.add_parser("acquire-calibrate", help="model scene YAML calibrated to image statistics")
-    p.add_argument("statistics")
+    p.add_argument("statistics", help="statistics.h5 from `porepipe acquire`")
     p.add_argument("--scene", default=None, help="the image scene (its acquire.calibration settings)")
     p.add_argument("--name", default=None, help="name of the model scene (default: <scene>-model)")
     p.add_argument("-o", "--out", required=True, help="output YAML")
