@@ -270,7 +270,9 @@ class Settings(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False, allow_inf_nan=False)
 
-    setup: Setup = Field(Setup.transmission, description="transmission, wicke_kallenbach or msd")
+    setup: Setup = Field(
+        Setup.transmission, description="transmission, wicke_kallenbach, msd, edmd, reaction or surface"
+    )
     axes: list[Axis] = Field(
         default_factory=lambda: [Axis.z], description="transport axes (one result file each)"
     )
