@@ -1,5 +1,8 @@
 # Knudsen diffusion in the voxel pore space (Mahler 2001, ch. 2-3): one job per resolution and transport axis.
 # A scene with diffusion.geometry gets its binary volumes from rule capillary (a synthetic capillary per resolution).
+# Transmission, Wicke-Kallenbach and msd runs checkpoint after each round beside the result
+# (.diffusion_a{a}_{axis}.h5.checkpoint.npz), and a rerun of a killed job resumes from it (a checkpoint of another
+# input, seed or settings is discarded).
 
 
 rule diffusion:
@@ -25,7 +28,7 @@ rule diffusion:
         runtime=240,
     shell:
         "porepipe diffusion {input.binary:q} --scene {input.scene:q} --axis {wildcards.axis} -o {output:q}"
-        " --threads {threads} > {log:q} 2>&1"
+        " --threads {threads} --resume > {log:q} 2>&1"
 
 
 rule capillary:
