@@ -182,13 +182,42 @@ def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
     return argv, []
 
 
+#: the options that name a subcommand's outputs
+_OUTPUTS = ("out", "xyzr")
+
+
+def _input_files(args) -> list[Path]:
+    """The existing files that a subcommand's other arguments name (its inputs: volumes, scene, checkpoint ...)."""
+    files = []
+    for key, value in vars(args).items():
+        if key in _OUTPUTS or key == "func":
+            continue
+        for item in value if isinstance(value, (list, tuple)) else (value,):
+            if isinstance(item, (str, os.PathLike)) and Path(item).is_file():
+                files.append(Path(item))
+    return files
+
+
 def _check_outputs(args) -> None:
-    """Every subcommand's output names (``-o``, ``--xyzr``, ``--out-dir``) are checked before it computes anything."""
+    """Every subcommand's output names (``-o``, ``--xyzr``, ``--out-dir``) are checked before it computes anything:
+    an output that is one of the command's own input files is refused (its atomic write would replace the input).
+    """
     from porepipe._shared.atomic import prepare_output, prepare_output_dir
 
-    for option in ("out", "xyzr"):
-        if getattr(args, option, None):
-            prepare_output(getattr(args, option))
+    inputs = None
+    for option in _OUTPUTS:
+        target = getattr(args, option, None)
+        if not target:
+            continue
+        if Path(target).is_file():
+            inputs = _input_files(args) if inputs is None else inputs
+            if any(os.path.samefile(f, target) for f in inputs):
+                flag = "-o" if option == "out" else f"--{option}"
+                raise PorepipeError(
+                    f"output {target} ({flag}) is also an input of this command and would be overwritten; "
+                    "give another output name"
+                )
+        prepare_output(target)
     if getattr(args, "out_dir", None):
         prepare_output_dir(args.out_dir)
 

@@ -1,5 +1,8 @@
 """``permeability --out-dir`` is checked before anything is computed, like ``-o`` (issue 20, item 5)."""
 
+import numpy as np
+
+from porepipe._shared.store import ResultWriter
 from porepipe.cli import main
 
 
@@ -32,3 +35,32 @@ def test_out_dir_is_created_when_missing(tmp_path, capsys):
     assert folder.is_dir()  # created before the run; the missing input is then the one error
     assert code == 2
     assert "missing.h5" in capsys.readouterr().err
+
+
+def test_output_that_is_the_input_is_refused_and_the_input_kept(tmp_path, capsys):
+    """``-o`` naming the command's own input (also by another spelling or through a link) was written over it by the
+    atomic rename: the binary volume became a Minkowski result. Now one line, and the input keeps its bytes."""
+    binary = tmp_path / "binary.h5"
+    with ResultWriter(binary, stage="segment", scene="t") as w:
+        w.write_volume("pore", np.ones((4, 4, 4), dtype=np.uint8), voxel_um=1.0, periodic=(True, True, True))
+    before = binary.read_bytes()
+    (tmp_path / "link.h5").symlink_to(binary)
+    for argv in (
+        ["minkowski", str(binary), "-o", str(binary)],
+        ["minkowski", str(tmp_path / "." / "binary.h5"), "-o", str(binary)],
+        ["minkowski", str(tmp_path / "link.h5"), "-o", str(binary)],
+    ):
+        code = main(argv)
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2
+        assert len(err) == 1 and "is also an input of this command" in err[0]
+    assert binary.read_bytes() == before
+
+
+def test_a_bad_command_line_option_is_one_line_naming_each_value(tmp_path, capsys):
+    """pydantic's reasons for an option laid over the scene came as four lines per problem; now one line."""
+    code = main(["lpt", str(tmp_path / "missing.h5"), "-o", str(tmp_path / "l.h5"), "--cell-um", "0", "-5"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1
+    assert "cell_um.0 = 0.0: Input should be greater than 0" in err[0] and "cell_um.1 = -5.0" in err[0]
