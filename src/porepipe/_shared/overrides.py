@@ -57,4 +57,13 @@ def merge_settings(
     try:
         return model.model_validate(_deep_merge(base or {}, overrides))
     except ValidationError as err:
-        raise PorepipeError(f"{what}: {err}") from None
+        raise PorepipeError(f"{what}: {_reasons(err)}") from None
+
+
+def _reasons(err: ValidationError) -> str:
+    """The validation's reasons on one line, one ``key = value: reason`` per problem (its own text spans 4 lines each)."""
+    return "; ".join(
+        f"{'.'.join(map(str, e['loc'])) or 'settings'} = {repr(e['input'])[:80]}: "
+        f"{e['msg'].removeprefix('Value error, ')}"
+        for e in err.errors()
+    )
