@@ -1,14 +1,17 @@
-"""Command-line options laid over a scene's settings: the one merge that acquire, lpt and permeability share."""
+"""Command-line options laid over a scene's settings: the one merge that acquire, lpt and permeability share, and the
+``--threads`` option every compute subcommand takes.
+"""
 
 from __future__ import annotations
 
+import argparse
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
 from porepipe._shared.errors import PorepipeError
 
-__all__ = ["given_options", "merge_settings"]
+__all__ = ["add_threads_option", "given_options", "merge_settings"]
 
 
 def given_options(args: Any, keys) -> dict:
@@ -66,4 +69,25 @@ def _reasons(err: ValidationError) -> str:
         f"{'.'.join(map(str, e['loc'])) or 'settings'} = {repr(e['input'])[:80]}: "
         f"{e['msg'].removeprefix('Value error, ')}"
         for e in err.errors()
+    )
+
+
+def _thread_count(text: str) -> int:
+    """``--threads``' value: a whole number >= 1 (0 or a negative count was taken as 1 without a word)."""
+    try:
+        count = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if count < 1:
+        raise argparse.ArgumentTypeError(f"{count}: give 1 or more (leave --threads out for every core)")
+    return count
+
+
+def add_threads_option(parser: argparse.ArgumentParser) -> None:
+    """``--threads N``: numba threads for the subcommand's kernels (default every core; more than there are: capped)."""
+    parser.add_argument(
+        "--threads",
+        type=_thread_count,
+        default=None,
+        help="threads for the kernels (default: every core; a count above the cores is capped)",
     )

@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from porepipe._shared.overrides import merge_settings
+from porepipe._shared.overrides import add_threads_option, merge_settings
 
 
 def _scene(path):
@@ -149,7 +149,7 @@ def register(subparsers) -> None:
         default=True,
         help="run the watershed grain analysis (--no-grains skips it)",
     )
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=_main)
 
     p = subparsers.add_parser(
@@ -173,7 +173,7 @@ def register(subparsers) -> None:
     p.add_argument("model_scene", help="calibrated scene YAML")
     p.add_argument("--scene", default=None, help="the image scene (which statistics to measure)")
     p.add_argument("-o", "--out", required=True, help="output model_statistics.h5")
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=_model)
 
     p = subparsers.add_parser("acquire-compare", help="model vs experiment (Tables 8.4/8.5, LPT overlays)")

@@ -5,6 +5,8 @@ Argparse only; the work is in ``_run``.
 
 from __future__ import annotations
 
+from porepipe._shared.overrides import add_threads_option
+
 
 def _main_decorate(args) -> int:
     from porepipe.decorate._run import run
@@ -30,7 +32,7 @@ def register(subparsers) -> None:
     p.add_argument("scene", help="scene YAML with a `decoration:` section")
     p.add_argument("-o", "--out", required=True, help="output grains.h5")
     p.add_argument("--packing", help="packing.h5 from the pack stage (when spheres.pack is set)")
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=_main_decorate)
     p = subparsers.add_parser(
         "voxelize-grains", help="grey volume (0..216) of the decorated grains at one voxel size"
@@ -39,5 +41,5 @@ def register(subparsers) -> None:
     p.add_argument("--grains", required=True, help="grains.h5 from `porepipe decorate`")
     p.add_argument("--a", type=float, required=True, help="voxel size in µm")
     p.add_argument("-o", "--out", required=True, help="output grey_a{a}.h5")
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=_main_voxelize)

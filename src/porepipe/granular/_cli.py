@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.overrides import add_threads_option
 
 
 def main(args) -> int:
@@ -48,7 +49,7 @@ def register(subparsers) -> None:
         default=False,
         help="continue from --checkpoint if it exists",
     )
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.add_argument(
         "--seed",
         type=int,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import given_options, merge_settings
+from porepipe._shared.overrides import add_threads_option, given_options, merge_settings
 from porepipe.lbm._settings import (
     Axis,
     Collision,
@@ -120,7 +120,7 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--out", help="output file (one axis); default perm_a{a}_{axis}.h5 beside the input")
     p.add_argument("--out-dir", help="directory for perm_a{a}_{axis}.h5 files")
     p.add_argument("--scene", help="scene YAML whose `permeability` section gives the defaults")
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.add_argument(
         "--checkpoint", help="checkpoint file (one axis; default .<out>.checkpoint.h5 beside the result)"
     )

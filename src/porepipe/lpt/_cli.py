@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 
-from porepipe._shared.overrides import given_options, merge_settings
+from porepipe._shared.overrides import add_threads_option, given_options, merge_settings
 from porepipe.lpt._settings import Connectivity, Direction, Placement, Settings
 
 #: command-line options that override the scene's ``lpt`` section (flag name = settings key)
@@ -100,5 +100,5 @@ def register(subparsers) -> None:
     p.add_argument(
         "--memory-budget-mb", type=int, help="a volume larger than this goes box by box (overrides the scene)"
     )
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=main)

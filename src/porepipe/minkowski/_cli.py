@@ -5,7 +5,7 @@ volume at every threshold), written to ``minkowski_a{a}.h5``. Argparse only; the
 from __future__ import annotations
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import given_options, merge_settings
+from porepipe._shared.overrides import add_threads_option, given_options, merge_settings
 from porepipe.minkowski._settings import Adjacency, Settings
 
 
@@ -48,5 +48,5 @@ def register(subparsers) -> None:
     p.add_argument(
         "--memory-budget-mb", type=int, help="volumes larger than this go box by box (overrides the scene)"
     )
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=main)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from porepipe._shared.overrides import add_threads_option
+
 
 def main(args) -> int:
     """Run the subcommand; returns the exit code."""
@@ -40,5 +42,5 @@ def register(subparsers) -> None:
         default=False,
         help="continue from --checkpoint if it exists",
     )
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=main)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from porepipe._shared.overrides import add_threads_option
+
 
 def main(args) -> int:
     """Run the subcommand; returns the exit code."""
@@ -21,5 +23,5 @@ def register(subparsers) -> None:
     p.add_argument("--a", type=float, required=True, help="voxel size in µm")
     p.add_argument("-o", "--out", required=True, help="output grey_a{a}.h5")
     p.add_argument("--packing", help="packing.h5 from the pack stage (when spheres.pack is set)")
-    p.add_argument("--threads", type=int, default=None)
+    add_threads_option(p)
     p.set_defaults(func=main)

@@ -91,3 +91,18 @@ def test_run_names_its_terminal_to_the_jobs_only_on_a_terminal_outside_ci(monkey
     assert cli._job_environment()[CONSOLE_ENV] == "/dev/tty"
     monkeypatch.setenv("CI", "1")
     assert CONSOLE_ENV not in cli._job_environment()
+
+
+def test_threads_below_one_are_refused_by_every_subcommand(capsys):
+    """``--threads 0`` or ``-3`` ran on one thread without a word; every subcommand that takes it now refuses it."""
+    taking = [(name, a) for name, a in _actions(build_parser()) if "--threads" in a.option_strings]
+    assert len(taking) >= 11
+    for name, action in taking:
+        assert action.type("2") == 2, name
+        for bad in ("0", "-3", "two"):
+            with pytest.raises(argparse.ArgumentTypeError):
+                action.type(bad)
+    with pytest.raises(SystemExit) as stop:
+        build_parser().parse_args(["minkowski", "b.h5", "-o", "m.h5", "--threads", "0"])
+    assert stop.value.code == 2
+    assert "argument --threads: 0: give 1 or more" in capsys.readouterr().err
