@@ -105,10 +105,13 @@ def test_two_point_limit_refuses_an_infinite_ratio():
         two_point_limit(1.0, 2.0, float("inf"))
 
 
-@pytest.mark.parametrize("edge_um, voxel_um", [(2.0, 0.0), (2.0, float("nan")), (float("inf"), 1.0)])
+@pytest.mark.parametrize(
+    "edge_um, voxel_um", [(2.0, 0.0), (2.0, float("nan")), (float("inf"), 1.0), (0.0, 1.0), (-2.0, 1.0)]
+)
 def test_corner_cube_refuses_a_bad_voxel_size_or_edge(edge_um, voxel_um):
-    # before: ZeroDivisionError, "cannot convert float NaN to integer", OverflowError
-    with pytest.raises(PorepipeError, match="must be finite"):
+    # before: ZeroDivisionError, "cannot convert float NaN to integer", OverflowError; an edge of 0 or below was
+    # "not a whole number of voxels"
+    with pytest.raises(PorepipeError, match="must both be positive and finite"):
         corner_voxels(edge_um, voxel_um, (10, 10, 10))
 
 

@@ -16,12 +16,12 @@ _WHOLE_RTOL = 1e-9
 
 def corner_voxels(edge_um: float, voxel_um: float, shape) -> int:
     """Edge of the corner cube in voxels; the edge must be a whole number of voxels and fit in the volume."""
-    if not (0 < voxel_um < np.inf and edge_um < np.inf):
+    if not (0 < voxel_um < np.inf and 0 < edge_um < np.inf):
         raise PorepipeError(
-            f"sub-sample edge {edge_um} µm and voxel size {voxel_um} µm must be finite, the voxel size positive"
+            f"sub-sample edge {edge_um} µm and voxel size {voxel_um} µm must both be positive and finite"
         )
     n = edge_um / voxel_um
-    if not edge_um > 0 or abs(n - round(n)) > _WHOLE_RTOL * max(1.0, n):
+    if abs(n - round(n)) > _WHOLE_RTOL * max(1.0, n):
         raise PorepipeError(
             f"sub-sample edge {edge_um} µm is not a whole number of voxels of {voxel_um} µm "
             f"({n:.6g}); pick sweep.sample_um as multiples of every resolution"
