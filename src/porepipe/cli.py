@@ -182,12 +182,16 @@ def _split_passthrough(argv: list[str]) -> tuple[list[str], list[str]]:
     return argv, []
 
 
-#: the options that name a subcommand's outputs
-_OUTPUTS = ("out", "xyzr")
+#: the options that name files a subcommand writes (a checkpoint is also read on resume)
+_OUTPUTS = ("out", "xyzr", "checkpoint")
+
+
+def _flag(option: str) -> str:
+    return "-o" if option == "out" else f"--{option}"
 
 
 def _input_files(args) -> list[Path]:
-    """The existing files that a subcommand's other arguments name (its inputs: volumes, scene, checkpoint ...)."""
+    """The existing files that a subcommand's other arguments name (its inputs: volumes, scene ...)."""
     files = []
     for key, value in vars(args).items():
         if key in _OUTPUTS or key == "func":
@@ -199,23 +203,28 @@ def _input_files(args) -> list[Path]:
 
 
 def _check_outputs(args) -> None:
-    """Every subcommand's output names (``-o``, ``--xyzr``, ``--out-dir``) are checked before it computes anything:
-    an output that is one of the command's own input files is refused (its atomic write would replace the input).
+    """Every subcommand's output names (``-o``, ``--xyzr``, ``--checkpoint``, ``--out-dir``) are checked before it
+    computes anything. Refused: two of them naming one file (the last write, or the checkpoint's removal at the end,
+    would take the result), and one that is the command's own input file (its atomic write would replace it).
     """
     from porepipe._shared.atomic import prepare_output, prepare_output_dir
 
-    inputs = None
+    named, inputs = {}, None
     for option in _OUTPUTS:
         target = getattr(args, option, None)
         if not target:
             continue
+        same = named.setdefault(Path(target).resolve(), option)
+        if same != option:
+            raise PorepipeError(
+                f"{_flag(same)} and {_flag(option)} both name {target}; give each its own file"
+            )
         if Path(target).is_file():
             inputs = _input_files(args) if inputs is None else inputs
             if any(os.path.samefile(f, target) for f in inputs):
-                flag = "-o" if option == "out" else f"--{option}"
                 raise PorepipeError(
-                    f"output {target} ({flag}) is also an input of this command and would be overwritten; "
-                    "give another output name"
+                    f"output {target} ({_flag(option)}) is also an input of this command and would be "
+                    "overwritten; give another output name"
                 )
         prepare_output(target)
     if getattr(args, "out_dir", None):

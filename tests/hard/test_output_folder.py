@@ -1,9 +1,13 @@
 """``permeability --out-dir`` is checked before anything is computed, like ``-o`` (issue 20, item 5)."""
 
+from pathlib import Path
+
 import numpy as np
 
 from porepipe._shared.store import ResultWriter
 from porepipe.cli import main
+
+SCENES = Path(__file__).resolve().parents[2] / "config" / "scenes"
 
 
 def test_out_dir_with_a_file_in_the_way_is_one_line_before_any_work(tmp_path, capsys):
@@ -64,3 +68,26 @@ def test_a_bad_command_line_option_is_one_line_naming_each_value(tmp_path, capsy
     assert code == 2
     assert len(err) == 1
     assert "cell_um.0 = 0.0: Input should be greater than 0" in err[0] and "cell_um.1 = -5.0" in err[0]
+
+
+def test_two_outputs_naming_one_file_are_refused_before_any_work(tmp_path, capsys):
+    """``pack -o p.h5 --xyzr p.h5`` left the xyzr text where the packing was; ``granular -o g.h5 --checkpoint g.h5``
+    removed the result with the checkpoint at the end, exit code 0; a checkpoint on the scene file would overwrite it.
+    """
+    scene = tmp_path / "box.yaml"
+    scene.write_text((SCENES / "granular-box.yaml").read_text())
+    out = tmp_path / "r.h5"
+    for argv, words in (
+        (
+            ["pack", str(SCENES / "mini.yaml"), "-o", str(out), "--xyzr", str(tmp_path / "." / "r.h5")],
+            "-o and --xyzr",
+        ),
+        (["granular", str(scene), "-o", str(out), "--checkpoint", str(out)], "-o and --checkpoint"),
+        (["granular", str(scene), "-o", str(out), "--checkpoint", str(scene)], "is also an input"),
+    ):
+        code = main(argv)
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2
+        assert len(err) == 1 and words in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.yaml"]
+    assert scene.read_text() == (SCENES / "granular-box.yaml").read_text()
