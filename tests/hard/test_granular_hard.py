@@ -183,3 +183,21 @@ def test_force_directions_without_contacts():
     sim = simulation([{"vertices_m": square(0.01), "position_m": (0.0, 0.0)}], material=SOFT)
     with pytest.raises(PorepipeError, match="force_directions: no contacts"):
         force_directions(sim.contacts())
+
+
+@pytest.mark.parametrize(
+    "mass,young,match",
+    [
+        (-1.0, 1e6, "min_mass_kg must be a positive finite number, got -1.0"),
+        (0.0, 1e6, "min_mass_kg must be a positive finite number, got 0.0"),
+        (1.0, 0.0, "young_N_m must be a positive finite number, got 0.0"),
+        (1.0, math.inf, "young_N_m must be a positive finite number, got inf"),
+    ],
+)
+def test_time_step_rule_refuses_a_mass_or_modulus_that_is_not_positive(mass, young, match):
+    """A negative mass failed in math.sqrt ('math domain error'), E = 0 divided by zero, a zero mass or an infinite
+    E gave dt = 0 silently."""
+    from porepipe.granular import time_step_rule
+
+    with pytest.raises(PorepipeError, match=f"time_step_rule: {match}"):
+        time_step_rule(mass, young)
