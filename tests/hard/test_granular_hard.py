@@ -201,3 +201,29 @@ def test_time_step_rule_refuses_a_mass_or_modulus_that_is_not_positive(mass, you
 
     with pytest.raises(PorepipeError, match=f"time_step_rule: {match}"):
         time_step_rule(mass, young)
+
+
+@pytest.mark.parametrize(
+    "pressure,apex,match",
+    [
+        ([np.nan] * 3, 1.0, "nor NaN at the apex x = 1.0"),
+        ([np.nan, 1.0, 2.0], 0.0, "nor NaN at the apex x = 0.0"),
+        ([1.0, np.inf, 2.0], 1.0, "must not be infinite"),
+    ],
+)
+def test_pressure_dip_of_a_profile_without_numbers(pressure, apex, match):
+    """An all-NaN profile failed in numpy's nanargmax ('All-NaN slice encountered'); a NaN at the apex or an
+    infinite pressure gave dip = NaN or 1 silently."""
+    from porepipe.granular import pressure_dip
+
+    with pytest.raises(PorepipeError, match=f"pressure_dip: pressure .*{match}"):
+        pressure_dip([0.0, 1.0, 2.0], pressure, apex)
+
+
+@pytest.mark.parametrize("centres", [[], [0.2, np.nan], [[0.2, 0.3]]])
+def test_pressure_profile_refuses_empty_or_nan_centres(centres):
+    """No centres failed in np.pad ('can't extend empty axis'); a NaN centre gave a pressure of 0 there."""
+    from porepipe.granular import pressure_profile
+
+    with pytest.raises(PorepipeError, match="pressure_profile: centres must be a non-empty 1-D array"):
+        pressure_profile([0.1, 0.5], [2.0, 1.0], 1.0, centres=centres)

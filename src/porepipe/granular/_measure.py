@@ -301,6 +301,11 @@ def pressure_profile(
     if centres is None:
         centres = np.linspace(u.min(), u.max(), 200)
     centres = np.asarray(centres, dtype=np.float64)
+    if centres.ndim != 1 or len(centres) == 0 or not np.all(np.isfinite(centres)):
+        raise PorepipeError(
+            "pressure_profile: centres must be a non-empty 1-D array of finite window centres, "
+            f"got shape {centres.shape}"
+        )
     inside = np.abs(u[None, :] - centres[:, None]) <= b
     width = np.full(len(centres), 2 * b)
     if extent is not None:
@@ -356,6 +361,10 @@ def pressure_dip(x, pressure, apex_x: float, noise=None) -> dict[str, float]:
         raise PorepipeError(f"pressure_dip: apex x = {apex_x} outside the profile [{x[0]}, {x[-1]}]")
     p_apex = float(np.interp(apex_x, x, p))
     left, right = x <= apex_x, x >= apex_x
+    if np.isinf(p).any() or math.isnan(p_apex) or np.isnan(p[left]).all() or np.isnan(p[right]).all():
+        raise PorepipeError(
+            f"pressure_dip: pressure must not be infinite, nor NaN at the apex x = {apex_x} or all along one side"
+        )
     il = np.flatnonzero(left)[np.nanargmax(p[left])] if left.any() else None
     ir = np.flatnonzero(right)[np.nanargmax(p[right])] if right.any() else None
     sides = [max(p[k], p_apex) for k in (il, ir) if k is not None]
