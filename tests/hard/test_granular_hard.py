@@ -227,3 +227,16 @@ def test_pressure_profile_refuses_empty_or_nan_centres(centres):
 
     with pytest.raises(PorepipeError, match="pressure_profile: centres must be a non-empty 1-D array"):
         pressure_profile([0.1, 0.5], [2.0, 1.0], 1.0, centres=centres)
+
+
+@pytest.mark.parametrize("outlet", [0.0, -0.01, 0.003, 0.2, np.nan])
+def test_galton_funnel_outlet_between_a_ball_and_the_hopper_top(outlet):
+    """An outlet of 0 (or under ~0.7 ball diameters) failed in the drop source's schema (a negative width_m), NaN in
+    the wall schema; 0.003 m built a funnel no ball passes (a clog after the whole feed); 0.2 m, wider than the
+    board, put the funnel's walls outside the side walls: no funnel, silently."""
+    from porepipe.granular import GaltonBoard
+
+    with pytest.raises(PorepipeError, match="GaltonBoard: outlet_m must be wider than a ball"):
+        GaltonBoard(outlet_m=outlet)
+    # inside the bounds the outlet is taken as given
+    assert GaltonBoard(outlet_m=0.05).outlet[0] == pytest.approx(0.05, rel=1e-15)

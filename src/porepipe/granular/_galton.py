@@ -87,6 +87,11 @@ class GaltonBoard:
                 f"GaltonBoard: spacing_m {self.spacing_m:g} leaves no gap wider than a ball ({2 * BALL_R:g} m) "
                 f"between nails of radius {self.nail_r_m:g}"
             )
+        if self.outlet_m is not None and not 2 * BALL_R < self.outlet_m <= HOPPER_W:
+            raise PorepipeError(
+                f"GaltonBoard: outlet_m must be wider than a ball ({2 * BALL_R:g} m) and at most the hopper's top "
+                f"({HOPPER_W:g} m), got {self.outlet_m!r}"
+            )
 
     @classmethod
     def two_thirds(cls, **changes) -> GaltonBoard:
