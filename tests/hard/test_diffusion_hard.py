@@ -245,3 +245,21 @@ def test_edmd_in_a_box_without_walls_has_infinite_chord():
     gas = {"particles": {"N2": 8}, "voxel_nm": 2.0, "duration_ps": 2.0, "samples": 4}
     r = edmd_result(np.ones((3, 3, 3), np.uint8), Settings(setup="edmd", gas=gas), 1.0, (1, 1, 1))
     assert r.values["mean_chord_nm"] == math.inf and r.values["Kn"] == 0.0  # exact by construction
+
+
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        ({"batches": 0}, "batches must be a whole number >= 1, got 0"),
+        ({"batches": 2.5}, "batches must be a whole number >= 1, got 2.5"),
+        ({"poisoning": math.inf, "rounds": 2}, "poisoning must be finite and >= 0"),
+        ({"poisoning": math.nan, "rounds": 2}, "poisoning must be finite and >= 0"),
+    ],
+)
+def test_reactive_pore_refuses_no_batches_and_endless_poisoning(kw, match):
+    """batches = 0 divided by zero (particles // batches), 2.5 batches failed in numpy's zeros; an infinite
+    poisoning made exp(-inf·0) NaN site factors (a RuntimeWarning), a NaN one was ignored silently."""
+    from porepipe.diffusion import reactive_pore
+
+    with pytest.raises(PorepipeError, match=match):
+        reactive_pore(np.ones((2, 2, 4), np.uint8), 2, 0.1, particles=32, **kw)

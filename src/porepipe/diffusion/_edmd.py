@@ -506,8 +506,12 @@ def reactive_pore(
             f"adsorption must lie in [0, 1], residence >= 0 and residence_law fixed or exponential; got "
             f"{adsorption!r}, {residence!r}, {residence_law!r}"
         )
-    if poisoning < 0 or rounds < 1:
-        raise PorepipeError(f"poisoning must be >= 0 and rounds >= 1, got {poisoning!r}, {rounds!r}")
+    if not 0.0 <= poisoning < math.inf or rounds < 1:
+        raise PorepipeError(
+            f"poisoning must be finite and >= 0 and rounds >= 1, got {poisoning!r}, {rounds!r}"
+        )
+    if not isinstance(batches, int | np.integer) or batches < 1:
+        raise PorepipeError(f"batches must be a whole number >= 1, got {batches!r}")
     if poisoning > 0 and sites is None:
         sites = np.ones(np.shape(pore))
     if sites is not None:
