@@ -263,3 +263,20 @@ def test_reactive_pore_refuses_no_batches_and_endless_poisoning(kw, match):
 
     with pytest.raises(PorepipeError, match=match):
         reactive_pore(np.ones((2, 2, 4), np.uint8), 2, 0.1, particles=32, **kw)
+
+
+@pytest.mark.parametrize("t_warm,blocks", [(5.0 - 1e-15, 16), (5.0 - 1e-9, 2)])
+def test_surface_blocks_below_the_float_resolution_are_refused(t_warm, blocks):
+    """A warmup ending 1e-15 before t_end = 5 left a window of one float spacing (8.9e-16) cut into 16 blocks of
+    5.6e-17: the run returned one block at coverage 1/3 and fifteen at 0, a coverage of 0.02 +- 0.02, silently.
+    Blocks of 5e-10 = 1e-10 t_end (ends resolved to ~2e-6 of their length) are below the bound as well."""
+    from porepipe.diffusion import Adsorbate, surface_run
+
+    with pytest.raises(PorepipeError, match=f"into {blocks} blocks gives blocks shorter than 1e-09 t_end"):
+        surface_run(
+            np.ones((2, 2, 2), np.uint8),
+            [Adsorbate("A", gas=5, adsorption=0.5, residence=2.0)],
+            t_end=5.0,
+            t_warm=t_warm,
+            blocks=blocks,
+        )

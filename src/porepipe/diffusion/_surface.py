@@ -73,6 +73,9 @@ from porepipe.diffusion._surface_sites import site_neighbours, wall_sites
 
 STAGE = "diffusion"
 _LAWS = {"lambert": 1, "isotropic": 3, "cosine_dtheta": 2}
+#: shortest time block as a fraction of t_end: its ends are then resolved to ~2e-7 of its length (t_end's float
+#: spacing is 2.2e-16 t_end); shorter blocks round onto one another and their tallies are noise
+MIN_BLOCK = 1e-9
 
 
 @dataclass(frozen=True)
@@ -377,11 +380,18 @@ def surface_run(
 
 
 def _check_times(t_end, t_warm, blocks) -> None:
-    """A finite run 0 <= t_warm < t_end cut into a whole number of blocks >= 1 (an infinite t_end never ends)."""
+    """A finite run 0 <= t_warm < t_end cut into a whole number of blocks >= 1 (an infinite t_end never ends), each
+    at least ``MIN_BLOCK`` t_end long.
+    """
     if not (0.0 <= t_warm < t_end < math.inf) or not isinstance(blocks, int | np.integer) or blocks < 1:
         raise PorepipeError(
             f"need 0 <= t_warm < t_end < inf and a whole number of blocks >= 1, got t_warm {t_warm!r}, "
             f"t_end {t_end!r}, blocks {blocks!r}"
+        )
+    if (t_end - t_warm) / blocks < MIN_BLOCK * t_end:
+        raise PorepipeError(
+            f"t_end - t_warm = {t_end - t_warm:g} cut into {blocks} blocks gives blocks shorter than {MIN_BLOCK:g} "
+            "t_end (float resolution): use fewer blocks or a shorter warmup t_warm"
         )
 
 
