@@ -13,6 +13,7 @@ from porepipe import __version__
 from porepipe._registry import STAGES, stage_cli_modules, stage_settings
 from porepipe._shared.cost import mark_compute_start
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.overrides import whole_count
 from porepipe.warm import STAGES as WARM_STAGES
 
 
@@ -117,7 +118,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("run", help="run the whole workflow of a scene with Snakemake")
     p.add_argument("scene", help="scene YAML file, or the name of a shipped scene (mini, granular-box, …)")
     p.add_argument(
-        "--cores", type=int, default=os.cpu_count() or 1, help="cores Snakemake may use (default: all)"
+        "--cores",
+        type=whole_count("--cores"),
+        default=os.cpu_count() or 1,
+        help="cores Snakemake may use (default: all)",
     )
     p.add_argument(
         "-n", "--dry-run", action=argparse.BooleanOptionalAction, default=False, help="list the jobs only"

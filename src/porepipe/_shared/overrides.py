@@ -11,7 +11,7 @@ from pydantic import BaseModel, ValidationError
 
 from porepipe._shared.errors import PorepipeError
 
-__all__ = ["add_threads_option", "given_options", "merge_settings"]
+__all__ = ["add_threads_option", "given_options", "merge_settings", "whole_count"]
 
 
 def given_options(args: Any, keys) -> dict:
@@ -72,22 +72,28 @@ def _reasons(err: ValidationError) -> str:
     )
 
 
-def _thread_count(text: str) -> int:
-    """``--threads``' value: a whole number >= 1 (0 or a negative count was taken as 1 without a word)."""
-    try:
-        count = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if count < 1:
-        raise argparse.ArgumentTypeError(f"{count}: give 1 or more (leave --threads out for every core)")
-    return count
+def whole_count(option: str):
+    """The argparse ``type`` of a count option such as ``--threads`` or ``--cores``: a whole number >= 1 (0 or a
+    negative count ran on one thread without a word, or, for Snakemake's ``--cores``, scheduled nothing for ever).
+    """
+
+    def parse(text: str) -> int:
+        try:
+            count = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if count < 1:
+            raise argparse.ArgumentTypeError(f"{count}: give 1 or more (leave {option} out for every core)")
+        return count
+
+    return parse
 
 
 def add_threads_option(parser: argparse.ArgumentParser) -> None:
     """``--threads N``: numba threads for the subcommand's kernels (default every core; more than there are: capped)."""
     parser.add_argument(
         "--threads",
-        type=_thread_count,
+        type=whole_count("--threads"),
         default=None,
         help="threads for the kernels (default: every core; a count above the cores is capped)",
     )

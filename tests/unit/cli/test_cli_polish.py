@@ -106,3 +106,12 @@ def test_threads_below_one_are_refused_by_every_subcommand(capsys):
         build_parser().parse_args(["minkowski", "b.h5", "-o", "m.h5", "--threads", "0"])
     assert stop.value.code == 2
     assert "argument --threads: 0: give 1 or more" in capsys.readouterr().err
+
+
+def test_run_refuses_fewer_than_one_core(capsys):
+    """``porepipe run S --cores 0`` handed Snakemake 0 cores, which scheduled nothing and waited for ever."""
+    assert build_parser().parse_args(["run", "mini", "--cores", "3"]).cores == 3
+    with pytest.raises(SystemExit) as stop:
+        build_parser().parse_args(["run", "mini", "--cores", "0"])
+    assert stop.value.code == 2
+    assert "argument --cores: 0: give 1 or more (leave --cores out for every core)" in capsys.readouterr().err
