@@ -10,7 +10,6 @@ import copy
 import difflib
 import enum
 import math
-import os
 import reprlib
 import typing
 from pathlib import Path
@@ -27,7 +26,7 @@ from pydantic import (
 )
 
 from porepipe._registry import OPTIONAL_SECTIONS, stage_settings
-from porepipe._shared.budget import Resources
+from porepipe._shared.budget import Resources, machine_bytes
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.yaml_safe import load_yaml
 from porepipe.segment._settings import Segmentation, SegmentationMethod
@@ -268,20 +267,13 @@ def _is_length(value) -> bool:
     )
 
 
-def _machine_bytes() -> int:
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return 2**62
-
-
 #: bytes per sphere the packing engine holds (positions, velocities, forces, radii, ids, cell and neighbour lists)
 _PACK_BYTES_PER_SPHERE = 256
 
 
 def _size_problems(raw: dict, size, res) -> list[str]:
     """Resolutions that do not divide the box, and volumes or packings that cannot fit in this machine's memory."""
-    problems, memory = [], _machine_bytes()
+    problems, memory = [], machine_bytes()
     for i, a in enumerate(res):
         if not _is_length(a):
             continue

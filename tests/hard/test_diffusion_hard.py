@@ -280,3 +280,24 @@ def test_surface_blocks_below_the_float_resolution_are_refused(t_warm, blocks):
             t_warm=t_warm,
             blocks=blocks,
         )
+
+
+@pytest.mark.parametrize(
+    ("a_um", "words"),
+    [
+        (0.0, "positive, finite voxel size"),
+        (-1.0, "positive, finite voxel size"),
+        (math.nan, "positive, finite"),
+        (1e-6, "more than this machine's"),
+    ],
+)
+def test_capillary_at_a_resolution_it_cannot_have_is_one_line(tmp_path, a_um, words):
+    """``porepipe diffusion-capillary --a 0`` raised a ZeroDivisionError, ``--a 1e-6`` numpy's 466 TiB allocation
+    error (a cylinder of radius 4 µm); both are refused before anything is built or written."""
+    from porepipe.diffusion._capillary import CapillaryGeometry, write_capillary
+
+    with pytest.raises(PorepipeError, match=words):
+        write_capillary(
+            CapillaryGeometry(kind="cylinder", radius_um=4.0, length_um=8.0), a_um, tmp_path / "b.h5"
+        )
+    assert list(tmp_path.iterdir()) == []

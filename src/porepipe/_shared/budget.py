@@ -9,6 +9,7 @@ is refused with one line naming the budget and the chunk.
 from __future__ import annotations
 
 import math
+import os
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -31,6 +32,14 @@ class Resources(BaseModel):
         description="memory (MB = 10^6 bytes) a stage may hold for volume data; a volume that does not fit is "
         "processed in chunks with Dask (none: every volume is held whole where the stage needs it)",
     )
+
+
+def machine_bytes() -> int:
+    """Physical memory of the machine in bytes (2**62 where the system does not say)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 2**62
 
 
 def budget_bytes(budget_mb: int | None) -> int | None:

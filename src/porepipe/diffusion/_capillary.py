@@ -9,9 +9,11 @@ sizes make the resolutions a refinement series of one continuum shape (a cylinde
 from __future__ import annotations
 
 import enum
+import math
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from porepipe._shared.budget import machine_bytes
 from porepipe._shared.errors import PorepipeError
 
 #: relative slack when a µm size must be a whole number of voxels
@@ -129,6 +131,26 @@ def check_capillary_resolutions(geometry: CapillaryGeometry, resolutions_um) -> 
         geometry.voxel_sizes(float(a))
 
 
+#: bytes per voxel of the bounding box while a capillary is built (the 1-byte volume, float64 cross-section grids)
+_BUILD_BYTES_PER_VOXEL = 9
+
+
+def _check_fits(size: dict, a_um: float) -> None:
+    """Refuse a capillary whose bounding box (widest cross-section squared times length) cannot fit in memory."""
+    across = max(
+        size.get("a", 0.0) + 2.0 * size.get("pocket_depth", 0.0),
+        2.0 * size.get("radius", 0.0),
+        max(size.get("width", 0.0), size.get("depth", 4.0)),
+    )
+    need = _BUILD_BYTES_PER_VOXEL * (math.ceil(across) + 1) ** 2 * math.ceil(size["length"])
+    if need > machine_bytes():
+        raise PorepipeError(
+            f"the capillary at a = {a_um!r} µm is ~{math.ceil(across)} x {math.ceil(across)} x "
+            f"{math.ceil(size['length'])} voxels, {need / 1e9:.3g} GB to build, more than this machine's "
+            f"{machine_bytes() / 1e9:.3g} GB; use a coarser resolution"
+        )
+
+
 def build_capillary(geometry: CapillaryGeometry, a_um: float, seed: int = 0):
     """The capillary at resolution ``a_um`` as a :class:`~porepipe.diffusion._geometry.PoreVolume` (voxels 1 x 1 x 1).
 
@@ -139,7 +161,10 @@ def build_capillary(geometry: CapillaryGeometry, a_um: float, seed: int = 0):
     """
     from porepipe.diffusion import _geometry as G
 
+    if not 0.0 < float(a_um) < math.inf:
+        raise PorepipeError(f"capillary resolution a = {a_um!r} µm: allowed a positive, finite voxel size")
     size = geometry.voxel_sizes(float(a_um))
+    _check_fits(size, a_um)
     kind = geometry.kind
     if kind is CapillaryKind.square:
         return G.square_capillary(size["a"], size["length"])
