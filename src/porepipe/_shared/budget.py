@@ -72,7 +72,7 @@ def planes_within(budget_mb: int | None, plane_bytes: int, fixed_bytes: int, wan
     Parameters
     ----------
     budget_mb : int or None
-        ``resources.memory_budget_mb`` (None: ``wanted``).
+        ``resources.memory_budget_mb`` (None: ``wanted``, as far as half the machine's memory holds them).
     plane_bytes : int
         Bytes one plane costs (its input, output and temporaries together).
     fixed_bytes : int
@@ -90,11 +90,17 @@ def planes_within(budget_mb: int | None, plane_bytes: int, fixed_bytes: int, wan
     Raises
     ------
     PorepipeError
-        Not even one plane fits; the message names the budget and the plane.
+        Not even one plane fits the budget, or without one the machine's memory; the message names both.
     """
     limit = budget_bytes(budget_mb)
     if limit is None:
-        return int(wanted)
+        memory, need = machine_bytes(), int(fixed_bytes) + int(plane_bytes)
+        if need > memory:
+            raise PorepipeError(
+                f"{chunk} needs {need / 1e9:.3g} GB, more than this machine's {memory / 1e9:.3g} GB; use a coarser "
+                "resolution"
+            )
+        return max(1, min(int(wanted), (memory // 2 - int(fixed_bytes)) // max(1, int(plane_bytes))))
     planes = (limit - int(fixed_bytes)) // max(1, int(plane_bytes))
     if planes < 1:
         raise chunk_too_large(int(fixed_bytes) + int(plane_bytes), budget_mb, chunk)
