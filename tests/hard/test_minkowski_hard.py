@@ -148,3 +148,23 @@ def test_bad_adjacency_and_slabs():
         configuration_histogram_slabs([])
     with pytest.raises(PorepipeError, match="3-D uint8"):
         minkowski_functions_of_threshold(np.zeros((3, 3, 3), np.float64), 1.0)
+
+
+@pytest.mark.parametrize(
+    ("grey_shape", "grey_voxel", "grey_periodic"),
+    [((8, 8, 8), 1.0, (True, True, True)), ((4, 4, 4), 2.0, (True, True, True)), ((4, 4, 4), 1.0, (0, 0, 0))],
+)
+def test_grey_volume_on_another_grid_is_refused(tmp_path, grey_shape, grey_voxel, grey_periodic):
+    """``minkowski binary_a4.h5 --grey grey_a2.h5`` wrote the 2 µm grey volume's threshold table beside the 4 µm
+    binary volume's functionals without a word; a grey volume of another shape, voxel size or periodicity is now one
+    line, before any work and with no result file."""
+    from porepipe._shared.store import ResultWriter
+    from porepipe.minkowski._run import run
+
+    with ResultWriter(tmp_path / "binary.h5", stage="segment", scene="t") as w:
+        w.write_volume("pore", np.ones((4, 4, 4), np.uint8), voxel_um=1.0, periodic=(True, True, True))
+    with ResultWriter(tmp_path / "grey.h5", stage="voxelize", scene="t") as w:
+        w.write_volume("grey", np.zeros(grey_shape, np.uint8), voxel_um=grey_voxel, periodic=grey_periodic)
+    with pytest.raises(PorepipeError, match="is not on the grid of binary volume"):
+        run(tmp_path / "binary.h5", tmp_path / "m.h5", grey_path=tmp_path / "grey.h5", threads=1)
+    assert not (tmp_path / "m.h5").exists()

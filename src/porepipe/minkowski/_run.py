@@ -7,6 +7,7 @@ import xarray as xr
 
 from porepipe._shared.budget import fits
 from porepipe._shared.chunked import volume_bytes
+from porepipe._shared.errors import PorepipeError
 from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import ResultWriter, open_volume, read_attrs, result_hash, volume_meta
 from porepipe.minkowski._api import (
@@ -31,6 +32,25 @@ def _binary_histogram(path, slab_planes: int, budget_mb: int | None, threads: in
             return (*configuration_histogram_slabs(iter_slabs(pore, slab_planes), meta.periodic), meta)
     hist = configuration_histogram_chunked(path, "pore", shape, meta.periodic, budget_mb, threads)
     return hist, shape, meta
+
+
+def _check_grey_grid(grey_path, binary_path, shape, meta) -> None:
+    """Refuse a grey volume on another grid than the binary one (another resolution, shape or periodicity): its
+    threshold table would describe another sample than the file's root table.
+    """
+    with open_volume(grey_path, "grey") as grey:
+        gmeta, gshape = volume_meta(grey, grey_path), grey.shape
+
+    def grid(shape_, meta_):
+        return (
+            f"{'x'.join(map(str, shape_))} voxels of {meta_.voxel_um:g} µm, periodic {list(meta_.periodic)}"
+        )
+
+    if (gshape, gmeta.voxel_um, tuple(gmeta.periodic)) != (tuple(shape), meta.voxel_um, tuple(meta.periodic)):
+        raise PorepipeError(
+            f"grey volume {grey_path} ({grid(gshape, gmeta)}) is not on the grid of binary volume {binary_path} "
+            f"({grid(shape, meta)}); give the grey volume it was segmented from"
+        )
 
 
 def _grey_histograms(path, slab_planes: int, budget_mb: int | None, threads: int):
@@ -80,6 +100,9 @@ def run(
     digest = result_hash(
         "minkowski", settings=settings, inputs=[binary_path] + ([grey_path] if grey_path else [])
     )
+    if grey_path:  # before any work
+        with open_volume(binary_path, "pore") as pore:
+            _check_grey_grid(grey_path, binary_path, pore.shape, volume_meta(pore, binary_path))
     hist, shape, meta = _binary_histogram(binary_path, settings.slab_planes, memory_budget_mb, threads)
     table = minkowski_from_histogram(hist, meta.voxel_um, settings.adjacency, meta.periodic)
     with ResultWriter(
