@@ -215,3 +215,15 @@ def test_cli_writes_dataset_and_plots(tmp_path):
     )
     ds = read_table(tmp_path / "lpt_a2_L16.h5")
     assert ds.L.values.tolist() == [1, 4] and "corner cube of 16 µm" in ds.attrs["sample"]
+
+
+def test_plots_of_one_voxel_cells_only_draw_without_a_warning(tmp_path):
+    """With cells of one voxel only (``--cell-um 3`` at 4 µm rounds to L = 1) the S_V plot has no curve, and its
+    legend() printed matplotlib's 'No artists with labels' warning into every such run's log."""
+    pore = (np.random.default_rng(4).random((12, 12, 12)) < 0.35).astype(np.uint8)
+    src = tmp_path / "binary_a4.h5"
+    write_binary(src, pore, voxel_um=4.0)
+    out = tmp_path / "lpt_a4.h5"
+    assert cli_main(["lpt", str(src), "-o", str(out), "--cell-um", "3", "--threads", "1"]) == 0  # warnings: errors
+    assert read_table(out).L.values.tolist() == [1]
+    assert (tmp_path / "lpt_a4_sv.png").is_file()

@@ -25,7 +25,10 @@ def _curve(ax, x: np.ndarray, y: np.ndarray, label: str) -> None:
 
 
 def _save(fig: Figure, path: Path) -> Path:
-    fig.tight_layout()
+    """Legend (where a curve was drawn: with cells of one voxel only, the S_V plot has none), layout, PNG."""
+    for ax in fig.axes:
+        if ax.get_legend_handles_labels()[0]:
+            fig.tight_layout()
     fig.savefig(path, dpi=110)
     return path
 
@@ -48,7 +51,6 @@ def plot_mu(ds: xr.Dataset, path) -> Path:
         xlim=(0, 1),
         title="local porosity distribution",
     )
-    ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
 
@@ -69,7 +71,6 @@ def plot_lambda(ds: xr.Dataset, path, alpha: str | None = None) -> Path:
         ylim=(-0.02, 1.02),
         title=f"local percolation probability (bins with >= {MIN_LAMBDA_CELLS} cells)",
     )
-    ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
 
@@ -86,7 +87,6 @@ def plot_p(ds: xr.Dataset, path) -> Path:
         ylim=(-0.02, 1.02),
         title="fraction of percolating cells",
     )
-    ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
 
@@ -101,7 +101,6 @@ def plot_surface(ds: xr.Dataset, path) -> Path:
     ax.set(
         xlabel="local S_V [1/µm]", ylabel="μ(S_V, L)  (per bin)", title="local specific-surface distribution"
     )
-    ax.legend(fontsize=7)
     return _save(fig, Path(path))
 
 
