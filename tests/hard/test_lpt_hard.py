@@ -224,6 +224,8 @@ def test_plots_of_one_voxel_cells_only_draw_without_a_warning(tmp_path):
     src = tmp_path / "binary_a4.h5"
     write_binary(src, pore, voxel_um=4.0)
     out = tmp_path / "lpt_a4.h5"
-    assert cli_main(["lpt", str(src), "-o", str(out), "--cell-um", "3", "--threads", "1"]) == 0  # warnings: errors
+    assert (
+        cli_main(["lpt", str(src), "-o", str(out), "--cell-um", "3", "--threads", "1"]) == 0
+    )  # warnings: errors
     assert read_table(out).L.values.tolist() == [1]
     assert (tmp_path / "lpt_a4_sv.png").is_file()
