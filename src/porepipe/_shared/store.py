@@ -608,7 +608,7 @@ def volume_meta(dset: h5py.Dataset, path, anisotropic: bool = False) -> VolumeMe
             f"{path}: volume {dset.name} lacks the attribute(s) {', '.join(missing)}; a porepipe "
             "volume needs voxel_um, origin_um and periodic (rewrite it with a current porepipe)"
         )
-    voxel = np.atleast_1d(np.asarray(attrs["voxel_um"], dtype=np.float64))
+    voxel = _numbers(attrs["voxel_um"])
     if voxel.size == 3 and np.allclose(voxel, voxel[0], rtol=1e-9, atol=0):
         voxel = voxel[:1]
     if (
@@ -622,7 +622,7 @@ def volume_meta(dset: h5py.Dataset, path, anisotropic: bool = False) -> VolumeMe
             "allowed: one positive number in µm (cubic voxels; resample anisotropic images first)"
         )
     voxel_xyz = tuple(float(v) for v in np.broadcast_to(voxel, (3,)))
-    origin = np.asarray(attrs["origin_um"], dtype=np.float64).ravel()
+    origin = _numbers(attrs["origin_um"])
     periodic = np.asarray(attrs["periodic"]).ravel()
     if origin.size != 3 or not np.all(np.isfinite(origin)):
         raise PorepipeError(
@@ -637,6 +637,14 @@ def volume_meta(dset: h5py.Dataset, path, anisotropic: bool = False) -> VolumeMe
     return VolumeMeta(
         float(voxel[0]), tuple(float(o) for o in origin), tuple(bool(p) for p in periodic), attrs, voxel_xyz
     )
+
+
+def _numbers(value) -> np.ndarray:
+    """``value`` as a 1-D float array; NaN where it is not numeric (a string, a date), so the caller's check refuses it."""
+    try:
+        return np.atleast_1d(np.asarray(value, dtype=np.float64)).ravel()
+    except (TypeError, ValueError):
+        return np.full(1, np.nan)
 
 
 def read_binary_volume(path, name: str = "pore", anisotropic: bool = False) -> tuple[np.ndarray, VolumeMeta]:
