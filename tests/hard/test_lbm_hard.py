@@ -230,3 +230,35 @@ def test_narrow_throats_warn_with_the_expected_error():
     wide = np.zeros((4, 8, 8), dtype=bool)
     wide[:, 1:7, 1:7] = True
     assert permeability(wide, "x", progress=False).warning == ""
+
+
+def _grey_and_binary(tmp_path, shift: int):
+    """A 6³ grey volume (g = 0 pore, 216 matrix: a 3 × 3 duct along x) and the binary volume of it rolled by ``shift``
+    along y: ``shift = 0`` is its own segmentation, another shift a grey volume of some other sample."""
+    from porepipe._shared.store import ResultWriter
+
+    grey = np.full((6, 6, 6), 216, dtype=np.uint8)
+    grey[:, 1:4, 1:4] = 0
+    geometry = {"voxel_um": 1.0, "periodic": (True, True, True)}
+    with ResultWriter(tmp_path / "grey_a1.h5", stage="voxelize", scene="t") as w:
+        w.write_volume("grey", grey, **geometry)
+    with ResultWriter(tmp_path / "binary_a1.h5", stage="segment", scene="t") as w:
+        pore = np.roll(grey <= 108, shift, axis=1).astype(np.uint8)
+        w.write_volume("pore", pore, attrs={"threshold": 108}, **geometry)
+    return tmp_path / "grey_a1.h5", tmp_path / "binary_a1.h5"
+
+
+def test_a_grey_volume_that_is_not_the_binarys_is_refused_in_one_line(tmp_path, capsys):
+    """``--grey`` of another sample of the same shape gave a κ with walls from the wrong grey values (most links
+    without a level crossing fell back to halfway) silently; now one line naming the file, before any output."""
+    from porepipe.cli import main
+
+    grey, binary = _grey_and_binary(tmp_path, shift=2)
+    out = tmp_path / "perm.h5"
+    argv = ["permeability", str(binary), "--axis", "x", "--walls", "cli", "--grey", str(grey), "-o", str(out)]
+    assert main([*argv, "--max-steps", "200", "--accept-unconverged"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(grey) in err[0] and "differs from it in 72 of 216 voxels" in err[0]
+    assert not out.exists()
+    grey, binary = _grey_and_binary(tmp_path, shift=0)  # its own grey volume is accepted
+    assert main([*argv, "--max-steps", "200", "--accept-unconverged"]) == 0 and out.exists()

@@ -128,6 +128,7 @@ def run(
             threshold=meta.attrs.get("threshold"),
             periodic=meta.periodic,
             grains=grains,
+            pore=pore,
         )
     )
     written = []

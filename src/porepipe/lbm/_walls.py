@@ -556,6 +556,7 @@ def geometry_from_files(
     threshold: int | None = None,
     periodic=(True, True, True),
     grains=None,
+    pore=None,
 ):
     """The wall geometry of a binary volume from ``packing.h5`` (exact spheres), ``grains.h5`` (exact decorated
     grains) or ``grey_a{a}.h5`` (grey values).
@@ -568,6 +569,8 @@ def geometry_from_files(
         Voxel edge and the sample corner (µm) of the binary volume.
     threshold : int
         Segmentation threshold g_th of the binary volume (pore if g ≤ g_th); needed with ``grey``.
+    pore : (X, Y, Z) ndarray, optional
+        The binary volume (1 = pore); with ``grey``, the grey volume segmented at ``threshold`` must equal it.
     """
     from porepipe._shared.store import read_volume
     from porepipe.voxelize import read_packing_h5
@@ -595,5 +598,17 @@ def geometry_from_files(
             raise PorepipeError(
                 f"grey volume {grey} has shape {values.shape}, the binary volume {tuple(shape)}"
             )
+        if pore is not None:
+            _check_grey_segments_to(values, int(threshold), pore, grey)
         return GreyWalls.from_grey(values, int(threshold))
     return None
+
+
+def _check_grey_segments_to(values: np.ndarray, threshold: int, pore: np.ndarray, grey) -> None:
+    """Refuse a grey volume that is not the binary volume's: its walls would lie off the binary's pore voxels."""
+    differ = int(np.count_nonzero((values <= threshold) != pore.astype(bool)))
+    if differ:
+        raise PorepipeError(
+            f"grey volume {grey} segmented at the binary volume's threshold {threshold} differs from it in {differ} "
+            f"of {values.size} voxels; give the grey volume the binary volume was segmented from"
+        )
