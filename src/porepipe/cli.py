@@ -209,10 +209,15 @@ def _input_files(args) -> list[Path]:
 def _check_outputs(args) -> None:
     """Every subcommand's output names (``-o``, ``--xyzr``, ``--checkpoint``, ``--out-dir``) are checked before it
     computes anything. Refused: two of them naming one file (the last write, or the checkpoint's removal at the end,
-    would take the result), and one that is the command's own input file (its atomic write would replace it).
+    would take the result), one that is the command's own input file (its atomic write would replace it), and ``-o``
+    with ``--out-dir`` (one of them would be ignored).
     """
     from porepipe._shared.atomic import prepare_output, prepare_output_dir
 
+    if getattr(args, "out", None) and getattr(args, "out_dir", None):
+        raise PorepipeError(
+            f"-o {args.out} and --out-dir {args.out_dir} both name the output; give one of them"
+        )
     named, inputs = {}, None
     for option in _OUTPUTS:
         target = getattr(args, option, None)

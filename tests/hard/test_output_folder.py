@@ -91,3 +91,14 @@ def test_two_outputs_naming_one_file_are_refused_before_any_work(tmp_path, capsy
         assert len(err) == 1 and words in err[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["box.yaml"]
     assert scene.read_text() == (SCENES / "granular-box.yaml").read_text()
+
+
+def test_out_and_out_dir_together_are_refused_before_any_work(tmp_path, capsys):
+    """``-o`` won and ``--out-dir`` was created empty and ignored; now one line naming both, nothing made."""
+    folder = tmp_path / "perm"
+    argv = ["permeability", str(tmp_path / "missing.h5"), "--axis", "z", "-o", str(tmp_path / "p.h5")]
+    code = main([*argv, "--out-dir", str(folder)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and "-o" in err[0] and "--out-dir" in err[0] and str(folder) in err[0]
+    assert list(tmp_path.iterdir()) == []
