@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
+from porepipe._shared.errors import PorepipeError
 from porepipe.report import _labels
 from porepipe.sweep import FULL
 
@@ -25,8 +26,22 @@ class Reference:
     text: str
 
 
+def check_quantities(ds: xr.Dataset, quantities, what: str = "quantity") -> list[str]:
+    """``quantities`` (a list of names) if the sweep holds each; else one line naming those it lacks and what it has."""
+    names = [str(q) for q in ds.quantity.values]
+    missing = [str(q) for q in quantities if str(q) not in names]
+    if isinstance(quantities, str) or missing:
+        given = repr(quantities) if isinstance(quantities, str) else ", ".join(missing)
+        raise PorepipeError(
+            f"{what} {given}: {'give a list of names' if isinstance(quantities, str) else 'not in the sweep'}; "
+            f"allowed: {', '.join(names) or 'none (the sweep holds no quantity)'}"
+        )
+    return [str(q) for q in quantities]
+
+
 def reference_limit(ds: xr.Dataset, quantity: str, sample_um: float = FULL) -> Reference | None:
     """The supported limit of ``quantity`` (scene's power form first, then the linear form); None if neither."""
+    check_quantities(ds, [quantity])
     for form in ("power", "linear"):
         sel = ds.sel(quantity=quantity, form=form, sample_um=sample_um)
         if sel.status.item() == "ok":
@@ -60,6 +75,9 @@ def runs_of(ds: xr.Dataset, quantity: str, clock: str = "wall") -> dict[str, np.
     dict of str -> ndarray
         ``a_um``, ``sample_um``, ``value``, ``cost_s`` of every run with a finite value.
     """
+    if clock not in CLOCKS:
+        raise PorepipeError(f"clock = {clock!r}; allowed: {', '.join(CLOCKS)}")
+    check_quantities(ds, [quantity])
     own, bench, upstream = CLOCKS[clock]
     sel = ds.sel(quantity=quantity)
     a, s = np.meshgrid(ds.a_um.values, ds.sample_um.values, indexing="ij")
@@ -103,7 +121,7 @@ def error_cost_table(ds: xr.Dataset, quantities, clock: str = "wall") -> list[di
     ``resolved`` is 0.
     """
     rows = []
-    for q in quantities:
+    for q in check_quantities(ds, quantities):
         ref = reference_limit(ds, q)
         if ref is None or ref.value == 0:
             continue
@@ -136,7 +154,7 @@ def varying_quantities(ds: xr.Dataset, wanted, cap: int) -> list[str]:
     """
     names = [str(q) for q in ds.quantity.values]
     if wanted:
-        return [q for q in wanted if q in names]
+        return check_quantities(ds, wanted, "report.quantities")
     full = ds.value.sel(sample_um=FULL) if FULL in ds.sample_um.values else ds.value.isel(sample_um=0)
     candidates = _labels.distinct(names)
 

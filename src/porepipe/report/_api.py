@@ -451,13 +451,14 @@ def build_report(
         raise PorepipeError(f"{sweep_path} is not a sweep result (no q_inf); build it with `porepipe sweep`")
     out_html = Path(out_html)
     out_dir = out_html.parent
+    quantities = varying_quantities(ds, settings.quantities, settings.max_quantities)
     out_dir.mkdir(parents=True, exist_ok=True)
     scene_name = scene_name or str(read_attrs(sweep_path).get("scene", ""))
     ctx = Context(
         ds=ds,
         out_dir=out_dir,
         settings=settings,
-        quantities=varying_quantities(ds, settings.quantities, settings.max_quantities),
+        quantities=quantities,
         grey=_by_resolution(grey),
         binary=_by_resolution(binary),
         lpt=_by_resolution(lpt),

@@ -1,0 +1,66 @@
+"""Report hard cases: quantity names and clocks that are not in the sweep."""
+
+import pytest
+import xarray as xr
+
+from porepipe._shared.errors import PorepipeError
+from porepipe._shared.store import ResultWriter, read_table
+from porepipe.report import build_report, error_cost_table, reference_limit, runs_of, varying_quantities
+from porepipe.report._settings import Settings
+from porepipe.sweep import build_sweep
+
+A_UM = (4.0, 2.0, 1.0, 0.5)
+
+
+def _sweep(root, sample: str = ""):
+    """sweep.h5 of eng_a{a}{sample}.h5 with φ = 0.35 + 0.02 a (one quantity per phase), cost 2 s · a^-3."""
+    results = []
+    for a in A_UM:
+        phi = 0.35 + 0.02 * a
+        path = root / "eng" / f"eng_a{a:g}{sample}.h5"
+        with ResultWriter(path, stage="eng", scene="t", threads=1) as w:
+            w.write_table(
+                xr.Dataset({"phi": ("phase", [phi, 1 - phi])}, coords={"phase": ["pore", "matrix"]})
+            )
+        results.append(path)
+    with ResultWriter(root / "sweep" / "sweep.h5", stage="sweep", scene="t") as w:
+        w.write_table(build_sweep(results))
+    return root / "sweep" / "sweep.h5"
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    return _sweep(tmp_path_factory.mktemp("report"))
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda ds: reference_limit(ds, "eng.phi"),
+        lambda ds: runs_of(ds, "eng.phi"),
+        lambda ds: error_cost_table(ds, ["eng.phi[pore]", "eng.phi"]),
+        lambda ds: varying_quantities(ds, ["eng.phi"], 12),
+    ],
+    ids=["reference_limit", "runs_of", "error_cost_table", "varying_quantities"],
+)
+def test_a_quantity_not_in_the_sweep_is_one_line_naming_it_and_the_allowed(call, sweep):
+    """xarray's KeyError 'not all values found in index' before; varying_quantities dropped an unknown name silently
+    (the page then said 'No quantity changes with resolution')."""
+    with pytest.raises(
+        PorepipeError, match=r"eng\.phi: not in the sweep; allowed: eng\.phi\[matrix\], eng\.phi\[pore\]"
+    ):
+        call(read_table(sweep))
+
+
+def test_an_unknown_clock_and_a_bare_string_are_refused(sweep):
+    ds = read_table(sweep)
+    with pytest.raises(PorepipeError, match=r"clock = 'gpu'; allowed: wall, cpu"):  # KeyError 'gpu' before
+        error_cost_table(ds, ["eng.phi[pore]"], "gpu")
+    with pytest.raises(PorepipeError, match="give a list of names"):  # iterated letter by letter before
+        error_cost_table(ds, "eng.phi[pore]")
+
+
+def test_a_misspelt_report_quantity_writes_nothing(sweep, tmp_path):
+    with pytest.raises(PorepipeError, match="report.quantities eng.phi: not in the sweep"):
+        build_report(sweep, tmp_path / "report" / "index.html", settings=Settings(quantities=["eng.phi"]))
+    assert list(tmp_path.iterdir()) == []
