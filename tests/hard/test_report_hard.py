@@ -1,4 +1,4 @@
-"""Report hard cases: quantity names and clocks that are not in the sweep."""
+"""Report hard cases: quantity names and clocks that are not in the sweep, a sweep of sub-samples only."""
 
 import pytest
 import xarray as xr
@@ -13,7 +13,8 @@ A_UM = (4.0, 2.0, 1.0, 0.5)
 
 
 def _sweep(root, sample: str = ""):
-    """sweep.h5 of eng_a{a}{sample}.h5 with φ = 0.35 + 0.02 a (one quantity per phase), cost 2 s · a^-3."""
+    """sweep.h5 of eng_a{a}{sample}.h5 with φ = 0.35 + 0.02 a (one quantity per phase) and of
+    diffusion_a{a}_z{sample}.h5 with W = 0.5 + 0.1 a."""
     results = []
     for a in A_UM:
         phi = 0.35 + 0.02 * a
@@ -22,6 +23,10 @@ def _sweep(root, sample: str = ""):
             w.write_table(
                 xr.Dataset({"phi": ("phase", [phi, 1 - phi])}, coords={"phase": ["pore", "matrix"]})
             )
+        results.append(path)
+        path = root / "diffusion" / f"diffusion_a{a:g}_z{sample}.h5"
+        with ResultWriter(path, stage="diffusion", scene="t", threads=1) as w:
+            w.write_table(xr.Dataset({"W": ((), 0.5 + 0.1 * a)}))
         results.append(path)
     with ResultWriter(root / "sweep" / "sweep.h5", stage="sweep", scene="t") as w:
         w.write_table(build_sweep(results))
@@ -47,7 +52,8 @@ def test_a_quantity_not_in_the_sweep_is_one_line_naming_it_and_the_allowed(call,
     """xarray's KeyError 'not all values found in index' before; varying_quantities dropped an unknown name silently
     (the page then said 'No quantity changes with resolution')."""
     with pytest.raises(
-        PorepipeError, match=r"eng\.phi: not in the sweep; allowed: eng\.phi\[matrix\], eng\.phi\[pore\]"
+        PorepipeError,
+        match=r"eng\.phi: not in the sweep; allowed: diffusion_z\.W, eng\.phi\[matrix\], eng\.phi\[pore\]",
     ):
         call(read_table(sweep))
 
@@ -64,3 +70,16 @@ def test_a_misspelt_report_quantity_writes_nothing(sweep, tmp_path):
     with pytest.raises(PorepipeError, match="report.quantities eng.phi: not in the sweep"):
         build_report(sweep, tmp_path / "report" / "index.html", settings=Settings(quantities=["eng.phi"]))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_sweep_of_sub_samples_only_gets_its_report(tmp_path):
+    """A sweep of eng_a{a}_L20.h5 alone has no whole sample: xarray's KeyError on sample_um = inf escaped the report."""
+    sweep = _sweep(tmp_path, "_L20")
+    ds = read_table(sweep)
+    assert list(ds.sample_um.values) == [20.0]
+    assert reference_limit(ds, "eng.phi[pore]") is None  # no whole-sample limit
+    assert reference_limit(ds, "eng.phi[pore]", 20.0).value == pytest.approx(
+        0.35, rel=1e-9
+    )  # exact linear data
+    page = build_report(sweep, tmp_path / "report" / "index.html", settings=Settings(dpi=30, slices=False))
+    assert "<h2>Limits a → 0</h2>" in page.read_text()

@@ -40,8 +40,12 @@ def check_quantities(ds: xr.Dataset, quantities, what: str = "quantity") -> list
 
 
 def reference_limit(ds: xr.Dataset, quantity: str, sample_um: float = FULL) -> Reference | None:
-    """The supported limit of ``quantity`` (scene's power form first, then the linear form); None if neither."""
+    """The supported limit of ``quantity`` (scene's power form first, then the linear form); None if neither, or if
+    the sweep has no sample of edge ``sample_um`` (default: the whole sample; a sweep of sub-samples has none).
+    """
     check_quantities(ds, [quantity])
+    if sample_um not in ds.sample_um.values:
+        return None
     for form in ("power", "linear"):
         sel = ds.sel(quantity=quantity, form=form, sample_um=sample_um)
         if sel.status.item() == "ok":

@@ -173,9 +173,11 @@ def _figure(ds, groups, histories, path: Path, dpi: int) -> None:
 
 
 def section(ds: xr.Dataset, sweep_path, out_dir, dpi: int = 100) -> list[str]:
-    """HTML parts of the diffusion section (empty without diffusion quantities); writes its PNG and CSV files."""
+    """HTML parts of the diffusion section (empty without diffusion quantities of the whole sample); writes its PNG
+    and CSV files.
+    """
     groups = diffusion_groups(ds)
-    if not groups:
+    if not groups or FULL not in ds.sample_um.values:
         return []
     out_dir = Path(out_dir)
     histories = _histories(Path(sweep_path))

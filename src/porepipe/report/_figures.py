@@ -100,7 +100,11 @@ def quantities_figure(ds: xr.Dataset, quantities, path: Path, dpi: int) -> list[
             )
             ax.set_title(_labels.title(q, 44), fontsize=8)
         else:
-            why = str(ds.why.sel(quantity=q, form="linear", sample_um=FULL).item())
+            why = (
+                str(ds.why.sel(quantity=q, form="linear", sample_um=FULL).item())
+                if FULL in ds.sample_um.values
+                else "no whole-sample runs"
+            )
             short = why if len(why) <= 42 else why[:41] + "…"
             ax.set_title(f"{_labels.title(q, 52)}\nno limit: {short}", fontsize=7)
         ax.set_ylabel(_labels.axis_label(ds, q), fontsize=8)
