@@ -1,11 +1,21 @@
-"""Report hard cases: quantity names and clocks that are not in the sweep, a sweep of sub-samples only."""
+"""Report hard cases: quantity names and clocks that are not in the sweep, a sweep of sub-samples only, runs of
+unknown cost or error on the Pareto front."""
 
+import numpy as np
 import pytest
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, read_table
-from porepipe.report import build_report, error_cost_table, reference_limit, runs_of, varying_quantities
+from porepipe.report import (
+    build_report,
+    cost_per_digit,
+    error_cost_table,
+    pareto_front,
+    reference_limit,
+    runs_of,
+    varying_quantities,
+)
 from porepipe.report._settings import Settings
 from porepipe.sweep import build_sweep
 
@@ -83,3 +93,21 @@ def test_a_sweep_of_sub_samples_only_gets_its_report(tmp_path):
     )  # exact linear data
     page = build_report(sweep, tmp_path / "report" / "index.html", settings=Settings(dpi=30, slices=False))
     assert "<h2>Limits a → 0</h2>" in page.read_text()
+
+
+def test_runs_of_unknown_cost_or_error_stay_off_the_front_and_the_slope():
+    """A NaN cost was put on the Pareto front (first, cheapest); an infinite error raised numpy's 'invalid value
+    encountered in divide' in the fit (an error under pytest). Left out, the other runs give ×10 per digit (exact
+    data, rel 1e-9 for the fit's round-off)."""
+    cost = np.array([np.nan, 1.0, 10.0, 100.0, 5.0])
+    err = np.array([1e-9, 1e-1, 1e-2, 1e-3, np.inf])
+    assert pareto_front(cost, err).tolist() == [1, 2, 3]
+    assert cost_per_digit(cost, err) == pytest.approx(10.0, rel=1e-9)
+    assert cost_per_digit([1.0, 10.0, np.inf], [1e-1, 1e-2, 1e-3]) == pytest.approx(10.0, rel=1e-9)
+
+
+@pytest.mark.parametrize("call", [pareto_front, cost_per_digit])
+def test_cost_and_error_of_different_lengths_are_one_line(call):
+    """numpy's 'all keys need to be the same shape' or 'operands could not be broadcast' before."""
+    with pytest.raises(PorepipeError, match=r"got shapes \(3,\) and \(2,\)"):
+        call([1.0, 2.0, 3.0], [0.1, 0.01])

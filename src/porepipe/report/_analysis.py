@@ -91,13 +91,25 @@ def runs_of(ds: xr.Dataset, quantity: str, clock: str = "wall") -> dict[str, np.
     return {"a_um": a[keep], "sample_um": s[keep], "value": sel.value.values[keep], "cost_s": cost[keep]}
 
 
-def pareto_front(cost, err) -> np.ndarray:
-    """Indices of the runs no other run beats in both cost and error, ordered by cost."""
+def _cost_and_err(cost, err) -> tuple[np.ndarray, np.ndarray]:
+    """``cost`` and ``err`` as 1-D float arrays of one length; else one line naming their shapes."""
     cost = np.asarray(cost, dtype=np.float64)
     err = np.asarray(err, dtype=np.float64)
+    if cost.ndim != 1 or cost.shape != err.shape:
+        raise PorepipeError(
+            f"cost and err must be 1-D and of one length (one value per run), got shapes {cost.shape} and {err.shape}"
+        )
+    return cost, err
+
+
+def pareto_front(cost, err) -> np.ndarray:
+    """Indices of the runs no other run beats in both cost and error, ordered by cost; runs of unknown (NaN or
+    infinite) cost or NaN error are left out.
+    """
+    cost, err = _cost_and_err(cost, err)
     order = np.lexsort((err, cost))
     front, best = [], np.inf
-    for i in order:
+    for i in order[np.isfinite(cost[order])]:
         if err[i] < best:
             front.append(i)
             best = err[i]
@@ -107,11 +119,11 @@ def pareto_front(cost, err) -> np.ndarray:
 def cost_per_digit(cost, err) -> float:
     """Factor by which the cost grows for one more correct digit, from a log–log line through the Pareto front.
 
-    NaN with fewer than two front points or no decrease of the error.
+    NaN with fewer than two front points or no decrease of the error; points of zero, infinite or NaN cost or error
+    are left out.
     """
-    cost = np.asarray(cost, dtype=np.float64)
-    err = np.asarray(err, dtype=np.float64)
-    ok = (cost > 0) & (err > 0)
+    cost, err = _cost_and_err(cost, err)
+    ok = (cost > 0) & (err > 0) & np.isfinite(cost) & np.isfinite(err)
     if ok.sum() < 2 or np.ptp(np.log10(err[ok])) == 0:
         return float("nan")
     slope = np.polyfit(-np.log10(err[ok]), np.log10(cost[ok]), 1)[0]
