@@ -63,6 +63,10 @@ def test_all_pore_sample_is_unbounded_with_periodic_sides_and_a_duct_with_walls(
     pore = np.ones((4, 8, 8), dtype=bool)
     free = permeability(pore, "x", Settings(), progress=False)
     assert free.kappa_lu == np.inf and free.steps == 0 and "unbounded" in free.reason
+    # no wall: no throat either (a 1-voxel sample warned of a ~1-voxel throat beside κ = ∞ before)
+    for sample in (pore, np.ones((1, 1, 1), dtype=bool)):
+        res = permeability(sample, "x", Settings(), progress=False)
+        assert res.throat_voxels == np.inf and res.warning == ""
     walled = permeability(pore, "x", Settings(collision="trt", lateral="walls"), progress=False)
     assert walled.kappa_lu == pytest.approx(cal.square_duct_kappa(8), rel=0.02)  # B = 8 bounce-back: +1.4 %
 

@@ -24,9 +24,14 @@ HALFWAY_DUCT_RMS_ERROR = {2.0: 0.196, 3.0: 0.269, 4.0: 0.188, 5.0: 0.147, 6.0: 0
 
 
 def critical_throat(pore: np.ndarray, lateral_periodic: bool) -> float:
-    """Width w = 2 r_c − 1 (voxels) of the narrowest throat along axis 0; 0 if the pore space does not span."""
+    """Width w = 2 r_c − 1 (voxels) of the narrowest throat along axis 0; 0 if the pore space does not span, inf if
+    no solid bounds it (all pore, laterally periodic: there is no throat, and the distance map no wall to measure to).
+    """
     pad = [(0, 0)] + [(0, 0) if lateral_periodic else (1, 1)] * 2
-    edt = ndimage.distance_transform_edt(np.pad(pore, pad))
+    padded = np.pad(pore, pad)
+    if padded.all():
+        return float("inf")
+    edt = ndimage.distance_transform_edt(padded)
     edt = edt[:, 1:-1, 1:-1] if not lateral_periodic else edt
     values = np.unique(edt[pore])
     if values.size == 0 or flow_paths(pore, lateral_periodic, False)[1] == 0:
