@@ -111,3 +111,22 @@ def test_cost_and_error_of_different_lengths_are_one_line(call):
     """numpy's 'all keys need to be the same shape' or 'operands could not be broadcast' before."""
     with pytest.raises(PorepipeError, match=r"got shapes \(3,\) and \(2,\)"):
         call([1.0, 2.0, 3.0], [0.1, 0.01])
+
+
+def test_a_sweep_without_cost_columns_is_one_line_and_without_threads_still_a_report(sweep, tmp_path):
+    """A hand-made sweep without its cost columns raised AttributeError deep in the page ('numpy.int64' has no
+    'values': ``ds.threads`` fell back to the file's attribute); without the cost columns it is now refused in one line
+    naming them, without the per-run threads it gets its page ('not recorded')."""
+    ds = read_table(sweep)
+    for name, drop in (("nocost", ["wall_s", "cpu_s"]), ("nothreads", ["threads"])):
+        with ResultWriter(tmp_path / name / "sweep.h5", stage="sweep", scene="t") as w:
+            w.write_table(ds.drop_vars(drop))
+    with pytest.raises(PorepipeError, match=r"is not a sweep result \(no wall_s, cpu_s\)"):
+        build_report(tmp_path / "nocost" / "sweep.h5", tmp_path / "nocost" / "report" / "index.html")
+    assert not (tmp_path / "nocost" / "report").exists()
+    page = build_report(
+        tmp_path / "nothreads" / "sweep.h5",
+        tmp_path / "nothreads" / "report" / "index.html",
+        settings=Settings(dpi=30, slices=False),
+    )
+    assert "not recorded" in page.read_text()

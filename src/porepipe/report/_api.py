@@ -20,7 +20,7 @@ from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs, read_table
 from porepipe.report import _figures, _labels, _rev
-from porepipe.report._analysis import error_cost_table, startup_table, varying_quantities
+from porepipe.report._analysis import CLOCKS, error_cost_table, startup_table, varying_quantities
 from porepipe.report._diffusion import section as diffusion_section
 from porepipe.report._length_series import parts as length_series_parts
 from porepipe.report._permeability_cost import permeability_cost_parts
@@ -75,7 +75,9 @@ def _thesis_html(t: Table, out_dir: Path) -> str:
 
 
 def _machine(ds: xr.Dataset) -> str:
-    threads = sorted({int(t) for t in np.unique(ds.threads.values[np.isfinite(ds.threads.values)])})
+    # the variable, not the file's own ``threads`` attribute that ``ds.threads`` falls back to where it is missing
+    runs = ds["threads"].values if "threads" in ds.data_vars else np.zeros(0)
+    threads = sorted({int(t) for t in np.unique(runs[np.isfinite(runs)])})
     rows = [
         ["porepipe version", __version__],
         ["host", platform.node()],
@@ -447,8 +449,11 @@ def build_report(
     """
     settings = settings or Settings()
     ds = read_table(sweep_path)
-    if "q_inf" not in ds:
-        raise PorepipeError(f"{sweep_path} is not a sweep result (no q_inf); build it with `porepipe sweep`")
+    missing = [v for v in ("q_inf", "err", "value", *CLOCKS["wall"], *CLOCKS["cpu"]) if v not in ds]
+    if missing:
+        raise PorepipeError(
+            f"{sweep_path} is not a sweep result (no {', '.join(missing)}); build it with `porepipe sweep`"
+        )
     out_html = Path(out_html)
     out_dir = out_html.parent
     quantities = varying_quantities(ds, settings.quantities, settings.max_quantities)

@@ -155,7 +155,8 @@ def _figure(ds, groups, histories, path: Path, dpi: int) -> None:
         ax.set_xlabel("a [µm]")
         ax.set_title(title, fontsize=9)
         ax.set_xlim(left=-0.05 * float(ds.a_um.max()))
-    ax_d.legend(fontsize=7)
+    if ax_d.get_legend_handles_labels()[0]:  # results without D_eff (W only) draw no curve
+        ax_d.legend(fontsize=7)
     for h in histories:
         ok = np.isfinite(h["rel_err"]) & (h["rel_err"] > 0)
         ax_e.loglog(h["flights"][ok], h["rel_err"][ok], "o-", ms=3, label=h["file"])
