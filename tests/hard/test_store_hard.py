@@ -31,3 +31,16 @@ def test_a_text_geometry_attribute_is_one_line_naming_it(key, value, tmp_path):
     with pytest.raises(PorepipeError, match=f"attribute {key} = .*allowed") as err:
         read_binary_volume(path)
     assert "\n" not in str(err.value) and str(path) in str(err.value)
+
+
+def test_open_result_of_a_file_whose_volumes_is_not_a_group_is_one_line(tmp_path):
+    """A file whose ``volumes`` is a dataset, not a group, raised h5netcdf's raw OSError from open_result."""
+    from porepipe import open_result
+
+    path = tmp_path / "odd.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["stage"] = "segment"
+        f.create_dataset("volumes", data=np.ones(3))
+    with pytest.raises(PorepipeError, match="cannot read its groups") as err:
+        open_result(path)
+    assert "\n" not in str(err.value) and str(path) in str(err.value)

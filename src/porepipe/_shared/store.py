@@ -542,11 +542,17 @@ def open_result(path) -> xr.Dataset:
     attrs = read_attrs(path)
     with open_h5(path) as f:
         groups = [None] + [g for g in (VOLUME_GROUP, ARRAY_GROUP) if g in f]
-    parts = [
-        xr.open_dataset(path, engine="h5netcdf", group=g, phony_dims="sort", decode_timedelta=False)
-        for g in groups
-    ]
-    ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="drop_conflicts")
+    parts = []
+    try:
+        for g in groups:
+            parts.append(
+                xr.open_dataset(path, engine="h5netcdf", group=g, phony_dims="sort", decode_timedelta=False)
+            )
+        ds = xr.merge(parts, compat="no_conflicts", join="outer", combine_attrs="drop_conflicts")
+    except (OSError, RuntimeError, KeyError, TypeError, ValueError) as err:
+        for part in parts:
+            part.close()
+        raise _damaged(path, err, "groups") from None
     ds.attrs = {**ds.attrs, **attrs}
     ds.set_close(lambda: [part.close() for part in parts])  # `with open_result(p) as ds` closes the file
     return ds
