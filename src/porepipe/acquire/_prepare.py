@@ -57,8 +57,16 @@ def load_region(image: Image, crop: Crop | None) -> np.ndarray:
 
 
 def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
-    """Median (cube of ``size`` voxels) or non-local-means filter of an (X, Y, Z) image (a section: Z = 1);
-    ``none`` returns the input.
+    """Median (cube of ``size`` voxels) or non-local-means filter of an (X, Y, Z) image (a section: Z = 1).
+
+    Parameters
+    ----------
+    grey : (X, Y, Z) ndarray
+        The image; a section has Z = 1, an axis of one voxel is kept as it is.
+    method : Denoise
+        ``none`` (the input is returned), ``median`` or ``nl_means``.
+    size : int
+        Edge of the median filter's cube (a square on a section), voxels.
     """
     if np.ndim(grey) != 3:
         raise PorepipeError(

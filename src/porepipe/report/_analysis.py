@@ -40,8 +40,22 @@ def check_quantities(ds: xr.Dataset, quantities, what: str = "quantity") -> list
 
 
 def reference_limit(ds: xr.Dataset, quantity: str, sample_um: float = FULL) -> Reference | None:
-    """The supported limit of ``quantity`` (scene's power form first, then the linear form); None if neither, or if
-    the sweep has no sample of edge ``sample_um`` (default: the whole sample; a sweep of sub-samples has none).
+    """The supported limit of ``quantity`` (scene's power form first, then the linear form).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The sweep (``sweep.h5``).
+    quantity : str
+        A quantity of the sweep (``stage.name[phase]``); another is one line naming the allowed ones.
+    sample_um : float
+        Sample edge (default: the whole sample).
+
+    Returns
+    -------
+    Reference or None
+        None if neither form is supported, or the sweep has no sample of edge ``sample_um`` (a sweep of sub-samples
+        has no whole sample).
     """
     check_quantities(ds, [quantity])
     if sample_um not in ds.sample_um.values:
@@ -103,8 +117,13 @@ def _cost_and_err(cost, err) -> tuple[np.ndarray, np.ndarray]:
 
 
 def pareto_front(cost, err) -> np.ndarray:
-    """Indices of the runs no other run beats in both cost and error, ordered by cost; runs of unknown (NaN or
-    infinite) cost or NaN error are left out.
+    """Indices of the runs no other run beats in both cost and error, ordered by cost.
+
+    Parameters
+    ----------
+    cost, err : (N,) array_like
+        Cost and error of each run; runs of unknown (NaN or infinite) cost or NaN error are left out, arrays of
+        different shapes are one line.
     """
     cost, err = _cost_and_err(cost, err)
     order = np.lexsort((err, cost))
