@@ -11,7 +11,7 @@ from pydantic import BaseModel, ValidationError
 
 from porepipe._shared.errors import PorepipeError
 
-__all__ = ["add_threads_option", "given_options", "merge_settings", "whole_count"]
+__all__ = ["add_threads_option", "given_options", "merge_settings", "seed_number", "whole_count"]
 
 
 def given_options(args: Any, keys) -> dict:
@@ -87,6 +87,19 @@ def whole_count(option: str):
         return count
 
     return parse
+
+
+def seed_number(text: str) -> int:
+    """The argparse ``type`` of ``--seed``: a whole number >= 0, as the scene's ``seed:`` (a negative seed got past
+    the command line and ended in the random streams' raw ValueError once the stage had started).
+    """
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"{seed}: give a whole number >= 0, as the scene's seed")
+    return seed
 
 
 def add_threads_option(parser: argparse.ArgumentParser) -> None:

@@ -7,7 +7,7 @@ import re
 from pathlib import Path
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import add_threads_option
+from porepipe._shared.overrides import add_threads_option, seed_number
 from porepipe.diffusion._settings import Axis, InletLaw, Settings, Setup, SpeedDist, WallLaw, WallSpeed
 
 #: CLI option -> settings key, for the options that override the scene
@@ -167,7 +167,7 @@ def register(subparsers) -> None:
     p.add_argument("--axis", choices=[a.value for a in Axis], default="z", help="transport axis (default z)")
     p.add_argument("-o", "--out", help="result file; default diffusion_a{a}_{axis}.h5 beside the input")
     p.add_argument("--scene", help="scene YAML whose `diffusion` section and seed give the defaults")
-    p.add_argument("--seed", type=int, help="override the scene seed")
+    p.add_argument("--seed", type=seed_number, help="override the scene seed")
     add_threads_option(p)
     p.add_argument("--checkpoint", help="checkpoint file (default .{out}.checkpoint.npz)")
     p.add_argument(

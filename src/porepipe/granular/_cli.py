@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import add_threads_option
+from porepipe._shared.overrides import add_threads_option, seed_number
 
 
 def main(args) -> int:
@@ -52,7 +52,7 @@ def register(subparsers) -> None:
     add_threads_option(p)
     p.add_argument(
         "--seed",
-        type=int,
+        type=seed_number,
         default=None,
         help="seed instead of the scene's (one realisation of an ensemble, e.g. a heap's floor-pressure dip)",
     )

@@ -115,3 +115,25 @@ def test_run_refuses_fewer_than_one_core(capsys):
         build_parser().parse_args(["run", "mini", "--cores", "0"])
     assert stop.value.code == 2
     assert "argument --cores: 0: give 1 or more (leave --cores out for every core)" in capsys.readouterr().err
+
+
+def test_a_negative_seed_is_refused_by_every_subcommand(tmp_path, capsys):
+    """``--seed -1`` got past the command line and ended in the random streams' raw ValueError ('seed must be >= 0')
+    once diffusion or granular had started; the scene's ``seed:`` refuses it, and so does every ``--seed`` now."""
+    from porepipe.cli import main
+
+    taking = [(name, a) for name, a in _actions(build_parser()) if "--seed" in a.option_strings]
+    assert {name for name, _ in taking} >= {"porepipe diffusion", "porepipe granular"}
+    for name, action in taking:
+        assert action.type("0") == 0, name
+        for bad in ("-1", "1.5", "seven"):
+            with pytest.raises(argparse.ArgumentTypeError):
+                action.type(bad)
+    out = tmp_path / "d.h5"
+    with pytest.raises(SystemExit) as stop:
+        main(["diffusion", str(tmp_path / "binary_a1.h5"), "-o", str(out), "--seed", "-1"])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        "porepipe diffusion: error: argument --seed: -1: give a whole number >= 0, as the scene's seed"
+    )
+    assert not out.exists()
