@@ -204,3 +204,18 @@ def test_denoise_refuses_an_image_that_is_not_x_y_z():
 def test_grey_histogram_refuses_values_it_cannot_bin(grey, match):
     with pytest.raises(PorepipeError, match=match):
         grey_histogram(grey)
+
+
+@pytest.mark.parametrize("a", ["nan", "inf"])
+def test_acquire_binary_refuses_a_resolution_that_is_not_finite(tmp_path, capsys, a):
+    # before: int(round(a / voxel)) raised a raw ValueError (NaN) or OverflowError (inf) and exit code 1
+    rng = np.random.default_rng(3)
+    np.save(tmp_path / "v.npy", np.where(rng.random((8, 8, 8)) < 0.4, 30, 220).astype(np.uint8))
+    acquire(Settings(image=tmp_path / "v.npy", voxel_um=2.0), tmp_path / "s.h5")
+    capsys.readouterr()
+    out = tmp_path / "b.h5"
+    assert main(["acquire-binary", str(tmp_path / "s.h5"), "--a", a, "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"porepipe acquire-binary: error: resolution a = {a} µm requested")
+    assert line.endswith("allowed: whole multiples of 2 µm (e.g. resolutions_um: [2, 4])")
+    assert not out.exists()

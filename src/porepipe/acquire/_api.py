@@ -278,7 +278,8 @@ def coarsen_pore(pore: np.ndarray, factor: int) -> np.ndarray:
 
 
 def _factor(a_um: float, voxel: float, source: str) -> int:
-    factor = int(round(a_um / voxel))
+    ratio = a_um / voxel
+    factor = int(round(ratio)) if np.isfinite(ratio) else 0  # NaN or inf: no whole multiple (int() raised)
     if factor < 1 or not np.isclose(a_um, factor * voxel, rtol=1e-6):
         raise PorepipeError(
             f"resolution a = {a_um} µm requested, but the image {source} has voxels of {voxel} µm; "
