@@ -28,6 +28,7 @@ from pydantic import (
 from porepipe._registry import OPTIONAL_SECTIONS, stage_settings
 from porepipe._shared.budget import Resources, machine_bytes
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.naming import SCENE_NAME_RE
 from porepipe._shared.yaml_safe import load_yaml
 from porepipe.segment._settings import Segmentation, SegmentationMethod
 
@@ -124,7 +125,7 @@ def _index_list(indices: list, most: int = 20) -> str:
 
 
 class SceneBase(_Strict):
-    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", description="scene name = results folder")
+    name: str = Field(pattern=SCENE_NAME_RE, description="scene name = results folder")
     seed: int = Field(0, ge=0, strict=True, description="root of every random stream of the scene")
     domain: Domain | None = Field(None, description="the box; required unless the scene starts from an image")
     spheres: Spheres | None = Field(

@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TAG_RE", "res_tag"]
+__all__ = ["SCENE_NAME_RE", "TAG_RE", "res_tag"]
+
+#: a scene's ``name:`` (it names the results folder): a letter or digit, then letters, digits, ``_``, ``.`` or ``-``
+SCENE_NAME_RE = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
 
 #: every tag :func:`res_tag` makes matches this (the workflow's wildcard constraint for ``a`` and ``L``)
 TAG_RE = r"[0-9]+(\.[0-9]+)?"

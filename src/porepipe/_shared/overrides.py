@@ -5,13 +5,21 @@
 from __future__ import annotations
 
 import argparse
+import re
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
 from porepipe._shared.errors import PorepipeError
 
-__all__ = ["add_threads_option", "given_options", "merge_settings", "seed_number", "whole_count"]
+__all__ = [
+    "add_threads_option",
+    "given_options",
+    "merge_settings",
+    "scene_name",
+    "seed_number",
+    "whole_count",
+]
 
 
 def given_options(args: Any, keys) -> dict:
@@ -100,6 +108,20 @@ def seed_number(text: str) -> int:
     if seed < 0:
         raise argparse.ArgumentTypeError(f"{seed}: give a whole number >= 0, as the scene's seed")
     return seed
+
+
+def scene_name(text: str) -> str:
+    """The argparse ``type`` of an option that names a scene (``acquire-calibrate --name``): what a scene's ``name:``
+    allows (a name such as ``a/b`` or ``x y`` got through and the scene written with it was refused in a
+    multi-line scene error after the calibration had run).
+    """
+    from porepipe._shared.naming import SCENE_NAME_RE
+
+    if not re.fullmatch(SCENE_NAME_RE, text):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: a scene name is a letter or digit, then letters, digits, '_', '.' or '-'"
+        )
+    return text
 
 
 def add_threads_option(parser: argparse.ArgumentParser) -> None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from porepipe._shared.overrides import add_threads_option, merge_settings
+from porepipe._shared.overrides import add_threads_option, merge_settings, scene_name
 
 
 def _scene(path):
@@ -165,7 +165,9 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("acquire-calibrate", help="model scene YAML calibrated to image statistics")
     p.add_argument("statistics", help="statistics.h5 from `porepipe acquire`")
     p.add_argument("--scene", default=None, help="the image scene (its acquire.calibration settings)")
-    p.add_argument("--name", default=None, help="name of the model scene (default: <scene>-model)")
+    p.add_argument(
+        "--name", type=scene_name, default=None, help="name of the model scene (default: <scene>-model)"
+    )
     p.add_argument("-o", "--out", required=True, help="output YAML")
     p.set_defaults(func=_calibrate)
 

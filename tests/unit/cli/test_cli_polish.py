@@ -137,3 +137,24 @@ def test_a_negative_seed_is_refused_by_every_subcommand(tmp_path, capsys):
         "porepipe diffusion: error: argument --seed: -1: give a whole number >= 0, as the scene's seed"
     )
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name", ["a/b", "x y", "", "_model"])
+def test_acquire_calibrate_refuses_a_name_no_scene_may_have(tmp_path, capsys, name):
+    """``acquire-calibrate --name a/b`` ran the calibration, then the scene it wrote was refused in a multi-line scene
+    error; ``--name ''`` fell back to the default name without a word. A scene name is now checked on the command
+    line, against the pattern of the scene's ``name:``."""
+    from porepipe.cli import main
+
+    out = tmp_path / "model.yaml"
+    with pytest.raises(SystemExit) as stop:
+        main(["acquire-calibrate", str(tmp_path / "statistics.h5"), "--name", name, "-o", str(out)])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"porepipe acquire-calibrate: error: argument --name: {name!r}: a scene name is a letter or digit, "
+        "then letters, digits, '_', '.' or '-'"
+    )
+    assert not out.exists()
+    assert build_parser().parse_args(
+        ["acquire-calibrate", "s.h5", "--name", "rock-1.b_2", "-o", "m.yaml"]
+    ).name == ("rock-1.b_2")
