@@ -1,11 +1,13 @@
 """Degenerate and extreme inputs to the sweep: finite answers or a clear PorepipeError, never NaN as a number."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import ResultWriter
+from porepipe._shared.store import ResultWriter, read_attrs
 from porepipe.sweep import (
     Status,
     build_sweep,
@@ -140,3 +142,35 @@ def test_predict_cost_refuses_runs_it_cannot_scale_from(a_um, cost, next_a, matc
 def test_decide_without_runs_is_refused():
     with pytest.raises(PorepipeError, match="a_um need at least one"):  # before: numpy's zero-size ValueError
         decide([], [], [], target_rel_err=0.1, budget=10.0)
+
+
+def _limit_files(tmp_path):
+    paths = []
+    for a, v in zip(_A, _Q):
+        with ResultWriter(tmp_path / f"e_a{a:g}.h5", stage="e") as w:
+            w.write_table(xr.Dataset({"k": ((), v)}))
+        paths.append(str(tmp_path / f"e_a{a:g}.h5"))
+    return paths
+
+
+def test_sweep_options_win_over_the_scene_and_are_checked_as_its_keys(tmp_path, capsys):
+    # before: with --scene, --exponent and --confidence were dropped without a word (the file said free, 0.95), and
+    # without it --confidence 0.3 went through although a scene's sweep.confidence must be above 0.5
+    from porepipe.cli import main
+
+    scene = Path(__file__).resolve().parents[2] / "config" / "scenes" / "mini.yaml"
+    out = tmp_path / "sweep.h5"
+    argv = ["sweep", *_limit_files(tmp_path), "-o", str(out)]
+    assert main([*argv, "--scene", str(scene), "--exponent", "linear", "--confidence", "0.9"]) == 0
+    attrs = read_attrs(out)
+    assert (attrs["exponent"], np.ravel(attrs["confidence"]).tolist(), attrs["scene"]) == (
+        "linear",
+        [0.9],
+        "mini",
+    )
+    out.unlink()
+    capsys.readouterr()
+    assert main([*argv, "--confidence", "0.3"]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line == "porepipe sweep: error: sweep options: confidence = 0.3: Input should be greater than 0.5"
+    assert not out.exists()

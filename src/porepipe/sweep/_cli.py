@@ -9,7 +9,8 @@ import argparse
 import sys
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.sweep._settings import Exponent
+from porepipe._shared.overrides import given_options, merge_settings
+from porepipe.sweep._settings import Exponent, Settings
 
 
 def _sweep(args) -> int:
@@ -23,13 +24,17 @@ def _sweep(args) -> int:
         return 0 if dec.outcome is Outcome.target_met else 3
     if not args.inputs or not args.out:
         raise PorepipeError("sweep needs result files and -o OUT (or --adaptive SCENE)")
-    exponent, confidence = Exponent(args.exponent), args.confidence
-    scene_name = ""
+    base, scene_name = None, ""
     if args.scene:
         from porepipe.scene import load_scene
 
         scene = load_scene(args.scene)
-        exponent, confidence, scene_name = scene.sweep.exponent, scene.sweep.confidence, scene.name
+        base, scene_name = scene.sweep, scene.name
+    # the options given lie over the scene's (or the defaults) and are checked as the scene's keys are
+    settings = merge_settings(
+        Settings, base, given_options(args, ("exponent", "confidence")), "sweep options"
+    )
+    exponent, confidence = settings.exponent, settings.confidence
     from porepipe.sweep._run import run
 
     ds = run(
@@ -76,9 +81,11 @@ def register(subparsers) -> None:
         "--volumes", nargs="*", default=[], help="grey/binary volume files (upstream cost, voxel counts)"
     )
     p.add_argument("--cost-dir", help="directory of Snakemake benchmark TSVs (results/<scene>/cost)")
-    p.add_argument("--scene", help="scene file: takes sweep.exponent and sweep.confidence from it")
-    p.add_argument("--exponent", default="free", choices=[e.value for e in Exponent])
-    p.add_argument("--confidence", type=float, default=0.95)
+    p.add_argument(
+        "--scene", help="scene file: takes sweep.exponent and sweep.confidence from it (the options win)"
+    )
+    p.add_argument("--exponent", default=None, choices=[e.value for e in Exponent])
+    p.add_argument("--confidence", type=float, default=None)
     p.add_argument(
         "--adaptive",
         action=argparse.BooleanOptionalAction,
