@@ -80,9 +80,10 @@ def _reasons(err: ValidationError) -> str:
     )
 
 
-def whole_count(option: str):
+def whole_count(option: str, unset: str = "every core"):
     """The argparse ``type`` of a count option such as ``--threads`` or ``--cores``: a whole number >= 1 (0 or a
     negative count ran on one thread without a word, or, for Snakemake's ``--cores``, scheduled nothing for ever).
+    ``unset`` says what leaving the option out gives (the refusal names it).
     """
 
     def parse(text: str) -> int:
@@ -91,7 +92,7 @@ def whole_count(option: str):
         except ValueError:
             raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
         if count < 1:
-            raise argparse.ArgumentTypeError(f"{count}: give 1 or more (leave {option} out for every core)")
+            raise argparse.ArgumentTypeError(f"{count}: give 1 or more (leave {option} out for {unset})")
         return count
 
     return parse

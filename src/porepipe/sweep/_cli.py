@@ -9,7 +9,7 @@ import argparse
 import sys
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import given_options, merge_settings
+from porepipe._shared.overrides import given_options, merge_settings, whole_count
 from porepipe.sweep._settings import Exponent, Settings
 
 
@@ -92,7 +92,12 @@ def register(subparsers) -> None:
         default=False,
         help="run the scene's adaptive refinement (sweep.adaptive); exit 0 = target met, 3 = stopped first",
     )
-    p.add_argument("--cores", type=int, default=1, help="with --adaptive: cores for each workflow run")
+    p.add_argument(
+        "--cores",
+        type=whole_count("--cores", unset="one core"),
+        default=1,
+        help="with --adaptive: cores for each workflow run",
+    )
     p.set_defaults(func=_sweep)
     p = subparsers.add_parser("subsample", help="cut the corner cube of edge L µm from a binary volume")
     p.add_argument("binary", help="binary_a{a}.h5")

@@ -158,3 +158,17 @@ def test_acquire_calibrate_refuses_a_name_no_scene_may_have(tmp_path, capsys, na
     assert build_parser().parse_args(
         ["acquire-calibrate", "s.h5", "--name", "rock-1.b_2", "-o", "m.yaml"]
     ).name == ("rock-1.b_2")
+
+
+def test_sweep_adaptive_refuses_fewer_than_one_core(capsys):
+    """``porepipe sweep --adaptive S --cores 0`` wrote the round's scene copies and then handed Snakemake 0 cores,
+    which scheduled nothing and waited for ever (parsed here only: the old code would hang)."""
+    assert build_parser().parse_args(["sweep", "--adaptive", "s.yaml"]).cores == 1
+    assert build_parser().parse_args(["sweep", "--adaptive", "s.yaml", "--cores", "2"]).cores == 2
+    for bad in ("0", "-1"):
+        with pytest.raises(SystemExit) as stop:
+            build_parser().parse_args(["sweep", "--adaptive", "s.yaml", "--cores", bad])
+        assert stop.value.code == 2
+        assert capsys.readouterr().err.splitlines()[-1] == (
+            f"porepipe sweep: error: argument --cores: {bad}: give 1 or more (leave --cores out for one core)"
+        )
