@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
-from porepipe.segment._settings import SegmentationMethod
+from porepipe._shared.overrides import given_options, merge_settings
+from porepipe.segment._settings import Segmentation, SegmentationMethod
 
 
 def main(args) -> int:
     """Run the subcommand; returns the exit code."""
     from porepipe.segment._run import run
 
+    # checked as a scene's `segmentation:` is (--threshold with another method than fixed went unused without a word)
+    seg = merge_settings(Segmentation, None, given_options(args, ("method", "threshold")), "segment options")
     decision = run(
         args.grey,
         args.out,
-        SegmentationMethod(args.method),
-        args.threshold,
+        seg.method,
+        seg.threshold,
         memory_budget_mb=args.memory_budget_mb,
     )
     if decision.note:
