@@ -301,3 +301,27 @@ def test_capillary_at_a_resolution_it_cannot_have_is_one_line(tmp_path, a_um, wo
             CapillaryGeometry(kind="cylinder", radius_um=4.0, length_um=8.0), a_um, tmp_path / "b.h5"
         )
     assert list(tmp_path.iterdir()) == []
+
+
+def test_diffusion_options_that_do_not_validate_are_one_line_in_the_house_format(tmp_path, capsys):
+    """The diffusion CLI joined pydantic's text onto one line, with its '[type=…]' tags and 'For further information
+    visit https://…' links; it now lays its options over the scene as the other stages do: key = value: reason."""
+    from porepipe.cli import main
+
+    code = main(
+        [
+            "diffusion",
+            str(tmp_path / "missing.h5"),
+            "-o",
+            str(tmp_path / "d.h5"),
+            "--accommodation",
+            "2",
+            "--target-rel-error",
+            "-1",
+        ]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "accommodation = 2.0: Input should be less than or equal to 1" in err[0]
+    assert "target_rel_error = -1.0" in err[0] and "errors.pydantic.dev" not in err[0]
+    assert not (tmp_path / "d.h5").exists()

@@ -7,7 +7,7 @@ import re
 from pathlib import Path
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import add_threads_option, seed_number
+from porepipe._shared.overrides import add_threads_option, merge_settings, seed_number
 from porepipe.diffusion._settings import Axis, InletLaw, Settings, Setup, SpeedDist, WallLaw, WallSpeed
 
 #: CLI option -> settings key, for the options that override the scene
@@ -48,10 +48,7 @@ def _settings(args) -> tuple[Settings, int, str]:
     if args.seed is not None:
         seed = args.seed
     _nested_overrides(args, base)
-    try:
-        return Settings(**base), seed, name
-    except ValueError as err:
-        raise PorepipeError(f"diffusion settings: {err}".replace("\n", "; ")) from err
+    return merge_settings(Settings, base, {}, "diffusion settings"), seed, name
 
 
 #: CLI option -> (nested section, key) for the event-driven gas and the wall reactions
