@@ -102,3 +102,16 @@ def test_out_and_out_dir_together_are_refused_before_any_work(tmp_path, capsys):
     assert code == 2
     assert len(err) == 1 and "-o" in err[0] and "--out-dir" in err[0] and str(folder) in err[0]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_resume_without_a_checkpoint_is_refused_where_none_is_kept(tmp_path, capsys):
+    """``pack S -o p.h5 --resume`` (and granular's) started afresh without a word: these stages keep no checkpoint
+    unless --checkpoint names one."""
+    for argv in (
+        ["pack", str(SCENES / "mini.yaml"), "-o", str(tmp_path / "p.h5"), "--resume"],
+        ["granular", str(SCENES / "granular-box.yaml"), "-o", str(tmp_path / "g.h5"), "--resume"],
+    ):
+        code = main(argv)
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and len(err) == 1 and "--resume needs --checkpoint FILE" in err[0]
+    assert list(tmp_path.iterdir()) == []

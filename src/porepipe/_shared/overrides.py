@@ -14,6 +14,7 @@ from porepipe._shared.errors import PorepipeError
 
 __all__ = [
     "add_threads_option",
+    "check_resume_has_checkpoint",
     "given_options",
     "merge_settings",
     "scene_name",
@@ -133,3 +134,13 @@ def add_threads_option(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="threads for the kernels (default: every core; a count above the cores is capped)",
     )
+
+
+def check_resume_has_checkpoint(args) -> None:
+    """``--resume`` of a stage that keeps no checkpoint unless told where (pack, granular) needs ``--checkpoint``:
+    without it the run started afresh without a word.
+    """
+    if getattr(args, "resume", False) and not getattr(args, "checkpoint", None):
+        raise PorepipeError(
+            "--resume needs --checkpoint FILE: this stage keeps no checkpoint unless told where"
+        )

@@ -5,12 +5,13 @@ from __future__ import annotations
 import argparse
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import add_threads_option, seed_number
+from porepipe._shared.overrides import add_threads_option, check_resume_has_checkpoint, seed_number
 
 
 def main(args) -> int:
     from porepipe._shared.numba_config import openmp_wait_for_idle_cores, set_threads
 
+    check_resume_has_checkpoint(args)
     # before set_threads starts numba's thread pool: GNU OpenMP reads its waiting policy once
     openmp_wait_for_idle_cores(args.threads)
     from porepipe.granular._run import run

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import argparse
 
-from porepipe._shared.overrides import add_threads_option
+from porepipe._shared.overrides import add_threads_option, check_resume_has_checkpoint
 
 
 def main(args) -> int:
     """Run the subcommand; returns the exit code."""
     from porepipe.packing._run import run
 
+    check_resume_has_checkpoint(args)
     packing = run(
         args.scene,
         args.out,
