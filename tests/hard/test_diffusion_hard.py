@@ -325,3 +325,16 @@ def test_diffusion_options_that_do_not_validate_are_one_line_in_the_house_format
     assert "accommodation = 2.0: Input should be less than or equal to 1" in err[0]
     assert "target_rel_error = -1.0" in err[0] and "errors.pydantic.dev" not in err[0]
     assert not (tmp_path / "d.h5").exists()
+
+
+@pytest.mark.parametrize(
+    "update",
+    [{"profile_bins": 10**10}, {"hit_map_bins": 10**6}, {"orientation_bins": 10**8}, {"batches": 10**11}],
+)
+def test_tallies_beyond_the_machine_are_one_line(update):
+    """A hit map of 10⁶ bins a side (43.7 TiB) or 10¹¹ batches raised numpy's allocation error (exit code 1) after
+    the geometry was built; now one line naming the settings, before any work."""
+    with pytest.raises(PorepipeError, match="more than half this machine's"):
+        transport(square_capillary(4, 8), 2, Settings().model_copy(update=update))
+    with pytest.raises(PorepipeError, match="more than half this machine's"):
+        equilibrium(np.ones((4, 4, 4), np.uint8), Settings().model_copy(update={"batches": 10**11}))

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from porepipe._shared.atomic import atomic_path
+from porepipe._shared.budget import machine_bytes
 from porepipe._shared.cost import SpentClock, carried_by
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
@@ -282,6 +283,25 @@ def _run_rounds(settings, key, checkpoint, label, run_round, rel_error, shapes) 
     return tallies
 
 
+def _check_tally_memory(settings: Settings, msd: bool = False) -> None:
+    """Refuse tallies that cannot fit in memory (per batch: the counters, the axial profile, six hit maps, the
+    orientation histogram, the msd samples), one line naming the settings; numpy's allocation error before.
+    """
+    b = settings.batches
+    nb, mb, ob = (
+        max(v, 1) for v in (settings.profile_bins, settings.hit_map_bins, settings.orientation_bins)
+    )
+    per_batch = K.N_TALLY + (3 * settings.msd_samples if msd else nb + 6 * mb * mb + 2 * ob * ob)
+    need, memory = 8 * b * per_batch, machine_bytes()
+    if need > memory // 2:
+        raise PorepipeError(
+            f"diffusion tallies of {b} batches (profile_bins {settings.profile_bins}, hit_map_bins "
+            f"{settings.hit_map_bins}, orientation_bins {settings.orientation_bins}"
+            f"{f', msd_samples {settings.msd_samples}' if msd else ''}) need {need / 1e9:.3g} GB, more than half "
+            f"this machine's {memory / 1e9:.3g} GB; use fewer batches or bins"
+        )
+
+
 def _buffers(settings, geom, b):
     nb = max(settings.profile_bins, 1)
     mb = max(settings.hit_map_bins, 1)
@@ -327,6 +347,7 @@ def transport(
         ``values``: W, W_err, D_transmission (voxel²/jiffie and m²/s), ..., see the module docstring.
     """
     settings = settings or Settings()
+    _check_tally_memory(settings)
     geom = (
         pore if isinstance(pore, Geometry) and pore.axis == axis else prepare(pore, voxel_um, periodic, axis)
     )
@@ -598,6 +619,7 @@ def equilibrium(
     """
     settings = settings or Settings()
     per = np.array([bool(p) for p in np.broadcast_to(periodic, (3,))])
+    _check_tally_memory(settings, msd=True)
     if per.any():
         geom = prepare(pore, voxel_um, per, None)
     else:
