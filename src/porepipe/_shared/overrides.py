@@ -81,35 +81,36 @@ def _reasons(err: ValidationError) -> str:
     )
 
 
+def _whole_number(text: str, least: int, advice: str) -> int:
+    """``text`` as a whole number >= ``least``; else argparse's error with ``advice`` (what to give instead)."""
+    try:
+        number = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if number < least:
+        raise argparse.ArgumentTypeError(f"{number}: {advice}")
+    return number
+
+
 def whole_count(option: str, unset: str = "every core"):
     """The argparse ``type`` of a count option such as ``--threads`` or ``--cores``: a whole number >= 1 (0 or a
     negative count ran on one thread without a word, or, for Snakemake's ``--cores``, scheduled nothing for ever).
-    ``unset`` says what leaving the option out gives (the refusal names it).
+
+    Parameters
+    ----------
+    option : str
+        The option's flag, for the message (``"--cores"``).
+    unset : str
+        What leaving the option out gives (the refusal says so).
     """
-
-    def parse(text: str) -> int:
-        try:
-            count = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-        if count < 1:
-            raise argparse.ArgumentTypeError(f"{count}: give 1 or more (leave {option} out for {unset})")
-        return count
-
-    return parse
+    return lambda text: _whole_number(text, 1, f"give 1 or more (leave {option} out for {unset})")
 
 
 def seed_number(text: str) -> int:
     """The argparse ``type`` of ``--seed``: a whole number >= 0, as the scene's ``seed:`` (a negative seed got past
     the command line and ended in the random streams' raw ValueError once the stage had started).
     """
-    try:
-        seed = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if seed < 0:
-        raise argparse.ArgumentTypeError(f"{seed}: give a whole number >= 0, as the scene's seed")
-    return seed
+    return _whole_number(text, 0, "give a whole number >= 0, as the scene's seed")
 
 
 def scene_name(text: str) -> str:
