@@ -10,7 +10,7 @@ import sys
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.overrides import given_options, merge_settings, whole_count
-from porepipe.sweep._settings import Exponent, Settings
+from porepipe.sweep._settings import SUBSAMPLE_COUNTS, Exponent, Settings
 
 
 def _sweep(args) -> int:
@@ -103,6 +103,12 @@ def register(subparsers) -> None:
     p.add_argument("binary", help="binary_a{a}.h5")
     p.add_argument("--edge-um", type=float, required=True, help="edge L of the cube, µm")
     p.add_argument("-o", "--out", required=True, help="binary_a{a}_L{L}.h5 (binary_a{a}_L{L}_k{index}.h5)")
-    p.add_argument("--count", type=int, default=1, help="sub-samples per edge: 1 (origin corner), 8 or 64")
+    p.add_argument(
+        "--count",
+        type=int,
+        choices=SUBSAMPLE_COUNTS,
+        default=1,
+        help="sub-samples in all: 1 (origin corner), 8 or 64 (a 2³ / 4³ grid of cubes)",
+    )
     p.add_argument("--index", type=int, default=0, help="which of the --count cubes (x fastest)")
     p.set_defaults(func=_subsample)

@@ -9,6 +9,7 @@ import numpy as np
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, dataset_attrs, hash_of, open_volume, read_attrs
+from porepipe.sweep._settings import SUBSAMPLE_COUNTS
 
 #: relative tolerance for an edge to be a whole number of voxels
 _WHOLE_RTOL = 1e-9
@@ -32,10 +33,6 @@ def corner_voxels(edge_um: float, voxel_um: float, shape) -> int:
             f"sub-sample edge {edge_um} µm = {n} voxels exceeds the volume shape {tuple(shape)}"
         )
     return n
-
-
-#: sub-samples per edge the sweep can cut: the origin corner, or a 2³ / 4³ grid of cubes
-SUBSAMPLE_COUNTS = (1, 8, 64)
 
 
 def subsample_offsets(index: int, count: int, n: int, shape) -> tuple[int, int, int]:

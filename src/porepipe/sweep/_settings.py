@@ -47,6 +47,10 @@ class Adaptive(BaseModel):
         return self
 
 
+#: sub-samples a sweep can cut per size: the origin corner, or a 2³ / 4³ grid of cubes
+SUBSAMPLE_COUNTS = (1, 8, 64)
+
+
 class Settings(BaseModel):
     """Resolution and sample-size sweep gathered into ``sweep.h5``, with extrapolation to a → 0."""
 

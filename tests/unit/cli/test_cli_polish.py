@@ -172,3 +172,16 @@ def test_sweep_adaptive_refuses_fewer_than_one_core(capsys):
         assert capsys.readouterr().err.splitlines()[-1] == (
             f"porepipe sweep: error: argument --cores: {bad}: give 1 or more (leave --cores out for one core)"
         )
+
+
+def test_subsample_count_is_one_of_the_grids_on_the_command_line(capsys):
+    """``subsample --count 3`` was refused by the cutting code naming the scene key sweep.subsamples, not the
+    option; argparse now names --count and the choices."""
+    assert (
+        build_parser().parse_args(["subsample", "b.h5", "--edge-um", "8", "-o", "s.h5", "--count", "8"]).count
+        == 8
+    )
+    with pytest.raises(SystemExit) as stop:
+        build_parser().parse_args(["subsample", "b.h5", "--edge-um", "8", "-o", "s.h5", "--count", "3"])
+    assert stop.value.code == 2
+    assert "argument --count: invalid choice: 3 (choose from 1, 8, 64)" in capsys.readouterr().err
