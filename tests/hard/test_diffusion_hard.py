@@ -338,3 +338,23 @@ def test_tallies_beyond_the_machine_are_one_line(update):
         transport(square_capillary(4, 8), 2, Settings().model_copy(update=update))
     with pytest.raises(PorepipeError, match="more than half this machine's"):
         equilibrium(np.ones((4, 4, 4), np.uint8), Settings().model_copy(update={"batches": 10**11}))
+
+
+def test_an_empty_gas_on_the_command_line_is_refused(tmp_path, capsys):
+    """``--setup edmd --gas-particles ''`` was taken as not given and ran the default gas."""
+    from porepipe.cli import main
+
+    code = main(
+        [
+            "diffusion",
+            str(tmp_path / "b.h5"),
+            "-o",
+            str(tmp_path / "d.h5"),
+            "--setup",
+            "edmd",
+            "--gas-particles",
+            "",
+        ]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--gas-particles wants SPECIES=N" in err[0]

@@ -67,7 +67,7 @@ def _nested_overrides(args, base: dict) -> None:
         if value is not None:
             base.setdefault(section, {})
             base[section] = {**dict(base[section]), key: value}
-    if getattr(args, "gas_particles", None):
+    if getattr(args, "gas_particles", None) is not None:
         counts = {}
         for item in args.gas_particles.split(","):
             name, _, number = item.partition("=")
