@@ -358,3 +358,15 @@ def test_an_empty_gas_on_the_command_line_is_refused(tmp_path, capsys):
     )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "--gas-particles wants SPECIES=N" in err[0]
+
+
+def test_a_run_that_counted_nothing_has_not_met_its_target(capsys):
+    """A Wicke-Kallenbach run of 1e-300 jiffies counts 0 ± 0: its relative error read 0, so it stopped after two
+    rounds with 'target met'; it is now unknown (inf), and the run goes on to max_rounds and says it stopped by a
+    limit."""
+    settings = Settings(
+        setup="wicke_kallenbach", wk_time_jiffies=1e-300, max_rounds=4, batches=2, batch_particles=4
+    )
+    result = transport(square_capillary(4, 8).pore, 2, settings)
+    assert result.tallies.rounds == 4
+    assert "stopped by a limit before the target" in capsys.readouterr().err

@@ -235,10 +235,12 @@ def _wall(settings: Settings) -> tuple:
 
 
 def _rel(err: float, value: float) -> float:
-    """Relative error err/|value| (0 when err is 0, inf when only the value is 0)."""
-    if err == 0:
-        return 0.0
-    return float(err / abs(value)) if value != 0 else float("inf")
+    """Relative error err/|value|: 0 when err is 0 and the value is not (specular walls: W = 1 exactly), inf when the
+    value is 0 (nothing counted yet: a run with 0 ± 0 has not met any target; it had read as 'relative error 0').
+    """
+    if value == 0:
+        return float("inf")
+    return 0.0 if err == 0 else float(err / abs(value))
 
 
 def _run_rounds(settings, key, checkpoint, label, run_round, rel_error, shapes) -> Tallies:
