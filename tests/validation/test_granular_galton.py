@@ -440,9 +440,10 @@ def test_clogged_funnel_is_one_clear_error():
 
 
 def test_board_refuses_what_it_cannot_build():
-    with pytest.raises(ValueError, match="tip_shift_m needs hexagonal nails"):
+    """One kind of error for every check of the board (PorepipeError, one line): its first two raised ValueError."""
+    with pytest.raises(PorepipeError, match="tip_shift_m needs hexagonal nails"):
         GaltonBoard(tip_shift_m=-0.001)
-    with pytest.raises(ValueError, match="no gap wider than a ball"):
+    with pytest.raises(PorepipeError, match="no gap wider than a ball"):
         GaltonBoard(spacing_m=0.0075)
 
 

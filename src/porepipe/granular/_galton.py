@@ -79,11 +79,11 @@ class GaltonBoard:
 
     def __post_init__(self):
         if self.tip_shift_m and self.nail_corners != 6:
-            raise ValueError(
+            raise PorepipeError(
                 f"GaltonBoard: tip_shift_m needs hexagonal nails (nail_corners=6), got {self.nail_corners}"
             )
         if self.spacing_m - np.ptp(self.nail()[:, 0]) <= 2 * BALL_R:
-            raise ValueError(
+            raise PorepipeError(
                 f"GaltonBoard: spacing_m {self.spacing_m:g} leaves no gap wider than a ball ({2 * BALL_R:g} m) "
                 f"between nails of radius {self.nail_r_m:g}"
             )
