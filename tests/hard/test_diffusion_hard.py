@@ -223,9 +223,9 @@ def test_event_driven_gas_refuses_non_finite_start():
 
     box = np.ones((3, 3, 3), np.uint8)
     one = {"positions": [[1.0, 1.0, 1.0]], "species": ["N2"]}
-    with pytest.raises(PorepipeError, match="temperature_K must be finite and > 0, got inf"):
+    with pytest.raises(PorepipeError, match="temperature_K must be a positive finite number, got inf"):
         make_gas(box, 2.0, {"N2": 3}, temperature_K=math.inf)
-    with pytest.raises(PorepipeError, match="temperature_K must be finite and > 0, got inf"):
+    with pytest.raises(PorepipeError, match="temperature_K must be a positive finite number, got inf"):
         mean_speed("N2", math.inf)
     with pytest.raises(PorepipeError, match="particle velocities must be finite"):
         make_gas(box, 2.0, {"N2": 0}, velocities=[[math.nan, 0.0, 0.0]], **one)

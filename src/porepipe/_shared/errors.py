@@ -6,3 +6,11 @@ class PorepipeError(Exception):
 
     The CLI prints it without a traceback and exits with status 2.
     """
+
+
+def positive_number(name: str, value) -> float:
+    """``value`` as a float if it is positive and finite, else one line naming ``name`` (the check the stages share)."""
+    number = float(value)
+    if not 0.0 < number < float("inf"):
+        raise PorepipeError(f"{name} must be a positive finite number, got {number!r}")
+    return number

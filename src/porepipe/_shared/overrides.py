@@ -11,6 +11,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.naming import SCENE_NAME_RE
 
 __all__ = [
     "add_threads_option",
@@ -118,8 +119,6 @@ def scene_name(text: str) -> str:
     allows (a name such as ``a/b`` or ``x y`` got through and the scene written with it was refused in a
     multi-line scene error after the calibration had run).
     """
-    from porepipe._shared.naming import SCENE_NAME_RE
-
     if not re.fullmatch(SCENE_NAME_RE, text):
         raise argparse.ArgumentTypeError(
             f"{text!r}: a scene name is a letter or digit, then letters, digits, '_', '.' or '-'"

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from porepipe._shared.errors import PorepipeError
+from porepipe._shared.errors import PorepipeError, positive_number
 from porepipe._shared.rng import kernel_seed
 from porepipe.diffusion import _edmd_kernels as E
 from porepipe.diffusion import _kernels as K
@@ -163,8 +163,7 @@ def make_gas(
         )
     if not (voxel_nm > 0 and math.isfinite(voxel_nm)):
         raise PorepipeError(f"voxel_nm must be positive, got {voxel_nm!r}")
-    if not (temperature_K > 0 and math.isfinite(temperature_K)):
-        raise PorepipeError(f"temperature_K must be finite and > 0, got {temperature_K!r}")
+    positive_number("temperature_K", temperature_K)
     per = np.array([bool(p) for p in np.broadcast_to(periodic, (3,))])
     names, sp = _species_table(counts)
     if positions is not None:

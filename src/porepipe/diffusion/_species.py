@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from porepipe._shared.errors import PorepipeError
+from porepipe._shared.errors import PorepipeError, positive_number
 
 #: gas constant (thesis value, J K^-1 mol^-1)
 R_GAS = 8.31441
@@ -36,8 +36,7 @@ def mean_speed(species: str, temperature_K: float) -> float:
     """Mean thermal speed v̄ = sqrt(8RT / (pi M)) in m/s (thesis 3.1)."""
     if species not in SPECIES:
         raise PorepipeError(f"unknown species {species!r}; allowed: {', '.join(SPECIES)}")
-    if not (temperature_K > 0 and math.isfinite(temperature_K)):
-        raise PorepipeError(f"temperature_K must be finite and > 0, got {temperature_K!r}")
+    positive_number("temperature_K", temperature_K)
     molar_kg = SPECIES[species][1] * 1e-3
     return math.sqrt(8.0 * R_GAS * temperature_K / (math.pi * molar_kg))
 

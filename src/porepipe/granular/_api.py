@@ -40,7 +40,7 @@ import math
 import numba
 import numpy as np
 
-from porepipe._shared.errors import PorepipeError
+from porepipe._shared.errors import PorepipeError, positive_number
 from porepipe.granular import _kernels as K
 from porepipe.granular._contact import _contact_frame, _overlap_geometry
 from porepipe.granular._neighbours import SwapState, _carry_state, _transpose, candidate_pairs
@@ -54,7 +54,6 @@ from porepipe.granular._settings import (
 )
 from porepipe.granular._shapes import check_convex, inscribed_radius
 from porepipe.granular._system import collect_bodies, particle_properties, wall_polygons
-from porepipe.granular._theory import _positive
 
 #: fewest particles per thread worth a parallel region
 PARTICLES_PER_THREAD = 1000
@@ -120,8 +119,8 @@ def polygon_overlap(p, q, trim: bool = True):
 
 def time_step_rule(min_mass_kg: float, young_N_m: float) -> float:
     """The upper bound dt = (pi/10) sqrt(m_min / E) of Eq. 2.9 (1/10 of the contact half-period), in s."""
-    mass = _positive("time_step_rule: min_mass_kg", min_mass_kg)
-    return 0.1 * math.pi * math.sqrt(mass / _positive("time_step_rule: young_N_m", young_N_m))
+    mass = positive_number("time_step_rule: min_mass_kg", min_mass_kg)
+    return 0.1 * math.pi * math.sqrt(mass / positive_number("time_step_rule: young_N_m", young_N_m))
 
 
 def damping_rate(mass, radius, longest_edge, young_N_m: float, damping: float, pairs: bool) -> float:

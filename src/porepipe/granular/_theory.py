@@ -32,14 +32,7 @@ import math
 import numpy as np
 from scipy import integrate
 
-from porepipe._shared.errors import PorepipeError
-
-
-def _positive(name: str, value: float) -> float:
-    value = float(value)
-    if not value > 0 or not math.isfinite(value):
-        raise PorepipeError(f"{name} must be a positive finite number, got {value!r}")
-    return value
+from porepipe._shared.errors import PorepipeError, positive_number
 
 
 # -- lateral pressure coefficients ---------------------------------------------------------------------------------
@@ -56,7 +49,7 @@ def lateral_pressure_bounds(mu: float) -> dict[str, float]:
     dict
         ``rankine_active``, ``jaky``, ``rankine_passive`` and ``phi_rad``.
     """
-    phi = math.atan(_positive("friction mu", mu))
+    phi = math.atan(positive_number("friction mu", mu))
     s = math.sin(phi)
     return {
         "rankine_active": (1 - s) / (1 + s),
@@ -89,7 +82,7 @@ def janssen(z, r: float, k: float, mu_j: float, rho_g: float) -> tuple[np.ndarra
         Vertical stress and wall pressure; sigma_xx saturates at rho g r/mu_j.
     """
     z = np.asarray(z, dtype=np.float64)
-    r, k, mu_j = _positive("r", r), _positive("k", k), _positive("mu_j", mu_j)
+    r, k, mu_j = positive_number("r", r), positive_number("k", k), positive_number("mu_j", mu_j)
     szz = rho_g * r / (k * mu_j) * -np.expm1(-k * mu_j * z / r)
     return szz, k * szz
 
@@ -150,7 +143,7 @@ def stepped_silo(z, r1: float, r2: float, h0: float, k: float, mu_j: float, rho_
 
     The solution restarts Janssen at h0 with the stress reached there; valid for r1 > r2 only.
     """
-    r1, r2 = _positive("r1", r1), _positive("r2", r2)
+    r1, r2 = positive_number("r1", r1), positive_number("r2", r2)
     if r2 >= r1:
         raise PorepipeError(
             f"stepped silo: Eq. 3.15 holds only for a narrowing step, got r1 = {r1} <= r2 = {r2}"
@@ -179,7 +172,7 @@ def hopper_sigma_zz(z, a: float, b: float, k: float, mu_j: float, rho_g: float) 
     """
     if not a < 0:
         raise PorepipeError(f"hopper: the wall slope a must be negative (narrowing downwards), got {a}")
-    b = _positive("b", b)
+    b = positive_number("b", b)
     z = np.asarray(z, dtype=np.float64)
     if np.any(z >= -b / a):
         raise PorepipeError(f"hopper: depth must stay above the apex z = -b/a = {-b / a:.6g} m")
@@ -200,13 +193,13 @@ def parabolic_r_p(a: float, b: float, k: float) -> float:
 
     It is k/xi'(0): near the top the parabolic silo is a Janssen silo of half-width r_P (Eq. 3.24).
     """
-    a, b = _positive("a", a), _positive("b", b)
+    a, b = positive_number("a", a), positive_number("b", b)
     return k * (1 + 4 * a * b) ** 1.5 / (2 * a * (1 + 4 * k * a * b))
 
 
 def parabolic_sigma_zz(z, a: float, b: float, k: float, mu_j: float, rho_g: float) -> np.ndarray:
     """Vertical stress in the parabolic silo r = sqrt((b - z)/a) (Eq. 3.11 with the closed-form xi of Eq. 3.20)."""
-    a, b = _positive("a", a), _positive("b", b)
+    a, b = positive_number("a", a), positive_number("b", b)
 
     def r(u):
         return math.sqrt((b - u) / a)
