@@ -58,7 +58,7 @@ class Analysis(str, enum.Enum):
     minkowski = "minkowski"  # φ, S_V, K_V, T_V of the segmented volume
     lpt = "lpt"  # local porosity theory
     permeability = "permeability"  # lattice-Boltzmann permeability
-    diffusion = "diffusion"  # Knudsen diffusion (transmission, Wicke-Kallenbach, msd)
+    diffusion = "diffusion"  # gas in the pore space: Knudsen flights, event-driven gas, wall reactions
     acquire = "acquire"  # image statistics, calibrated model scene, model-vs-experiment comparison
     report = "report"  # resolution sweep, extrapolation and the accuracy-versus-cost report
     granular = "granular"  # 2-D frictional DEM of convex polygons (gc2d, Schinner 2001)

@@ -158,7 +158,9 @@ def main(args) -> int:
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "diffusion", help="Knudsen diffusion (transmission, Wicke-Kallenbach, msd) of a binary volume"
+        "diffusion",
+        help="gas in the pore space of a binary volume: Knudsen flights (transmission, Wicke-Kallenbach, msd), "
+        "event-driven gas (edmd), wall reactions (reaction, surface)",
     )
     p.add_argument("binary", help="binary_a{a}.h5 (volume 'pore', 1 = pore)")
     p.add_argument("--axis", choices=[a.value for a in Axis], default="z", help="transport axis (default z)")
