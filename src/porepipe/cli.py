@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import enum
 import os
+import signal
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 from porepipe import __version__
@@ -68,9 +71,18 @@ def _run(args) -> int:
     args.scene = str(scene_path(args.scene))
     scene = load_scene(args.scene)  # fail fast, with every problem listed
     extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
-    result = subprocess.run(
-        snakemake_command(args.scene, args.cores, args.dry_run, extra), check=False, env=_job_environment()
-    )
+    with _interrupts_left_to_snakemake() as interrupted:
+        result = subprocess.run(
+            snakemake_command(args.scene, args.cores, args.dry_run, extra),
+            check=False,
+            env=_job_environment(),
+        )
+    if interrupted and result.returncode != 0:
+        print(
+            f"porepipe run: interrupted; finished results are kept, `porepipe run {args.scene}` goes on from there",
+            file=sys.stderr,
+        )
+        return 130
     if result.returncode == 0 and not (args.dry_run or args.unlock):
         print(f"porepipe: results of scene {scene.name!r} are in {Path('results', scene.name).resolve()}")
     elif (
@@ -84,6 +96,26 @@ def _run(args) -> int:
             file=sys.stderr,
         )
     return result.returncode
+
+
+@contextlib.contextmanager
+def _interrupts_left_to_snakemake():
+    """While Snakemake runs, Ctrl-C does not stop ``porepipe run`` itself (yields a list that gets an entry per one).
+
+    The terminal sends Ctrl-C to Snakemake and its jobs as well; Snakemake then cancels the jobs and releases its lock
+    on the directory. Before, the KeyboardInterrupt in ``subprocess.run`` killed Snakemake (SIGKILL) in the middle of
+    that: a traceback, an orphaned job still running, and a lock that made the next run fail until ``--unlock``.
+    A handler (not SIG_IGN) is reset by exec, so Snakemake still gets SIGINT's default.
+    """
+    interrupted: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield interrupted
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: interrupted.append(signum))
+    try:
+        yield interrupted
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _job_environment() -> dict:

@@ -55,3 +55,25 @@ def test_arguments_after_dashes_may_look_like_porepipe_options(calls):
     cmd = calls[0]
     assert cmd[cmd.index("--cores") + 1] != "9"  # porepipe's own --cores default
     assert _tail(cmd) == ["--cores", "9", "-n"]
+
+
+def test_ctrl_c_leaves_snakemake_to_cancel_its_jobs_and_release_its_lock(monkeypatch, tmp_path, capsys):
+    """Ctrl-C reaches Snakemake and ``porepipe run`` alike. Before, the KeyboardInterrupt in ``porepipe run`` killed
+    Snakemake while it cancelled its jobs: a traceback, an orphaned job, and a lock the next run tripped over. Here a
+    stand-in for Snakemake interrupts its parent, then takes 0.5 s to clean up; ``porepipe run`` must wait for it."""
+    import sys
+
+    cleaned = tmp_path / "cleaned-up"
+    child = (
+        "import os, signal, sys, time; os.kill(os.getppid(), signal.SIGINT); time.sleep(0.5); "
+        f"open({str(cleaned)!r}, 'w').close(); sys.exit(1)"
+    )
+    monkeypatch.setattr(cli, "snakemake_command", lambda *args, **kwargs: [sys.executable, "-c", child])
+    try:
+        code = cli.main(["run", SCENE, "--cores", "1"])
+    except KeyboardInterrupt:
+        code = "KeyboardInterrupt"
+    assert code == 130
+    assert cleaned.is_file()  # Snakemake was not killed before it was done
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "interrupted" in err and "Traceback" not in err
