@@ -70,6 +70,7 @@ def _run(args) -> int:
 
     args.scene = str(scene_path(args.scene))
     scene = load_scene(args.scene)  # fail fast, with every problem listed
+    _check_run_folder(scene.name)
     extra = (["--unlock"] if args.unlock else []) + args.snakemake_args
     with _interrupts_left_to_snakemake() as interrupted:
         result = subprocess.run(
@@ -96,6 +97,23 @@ def _run(args) -> int:
             file=sys.stderr,
         )
     return result.returncode
+
+
+def _check_run_folder(scene_name: str) -> None:
+    """Before Snakemake starts: the folders a run writes in the current directory (``results/<scene>`` and Snakemake's
+    ``.snakemake``) can be made and written. Before, a read-only directory or a file named ``results`` gave Snakemake's
+    traceback of 45-65 lines, after it had made ``.snakemake`` and some of ``results/``.
+    """
+    from porepipe._shared.atomic import check_output_dir
+
+    for folder in (Path("results", scene_name), Path(".snakemake")):
+        try:
+            check_output_dir(folder)
+        except PorepipeError as err:
+            raise PorepipeError(
+                f"{err}; `porepipe run` writes results/{scene_name}/ and .snakemake/ in the current directory "
+                f"({Path.cwd()})"
+            ) from None
 
 
 @contextlib.contextmanager

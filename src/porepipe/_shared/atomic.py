@@ -19,6 +19,7 @@ from porepipe._shared.errors import PorepipeError
 __all__ = [
     "atomic_path",
     "check_identity",
+    "check_output_dir",
     "commit",
     "file_identity",
     "prepare_output",
@@ -109,6 +110,32 @@ def prepare_output_dir(directory) -> Path:
     if not os.access(directory, os.W_OK | os.X_OK):
         raise PorepipeError(f"output folder {directory} is not writable")
     return directory
+
+
+def check_output_dir(directory) -> None:
+    """Check, without creating anything, that ``directory`` can be made or written: no file in its way, and its
+    deepest existing folder writable (a read-only mount included).
+
+    Parameters
+    ----------
+    directory : path-like
+        A folder results will be written into, existing or not.
+
+    Raises
+    ------
+    PorepipeError
+        One line naming the file in the way or the folder that cannot be written.
+    """
+    directory = Path(directory)
+    existing = directory
+    for parent in [directory, *directory.parents]:
+        if os.path.lexists(parent):
+            existing = parent
+            break
+    if not existing.is_dir():
+        raise PorepipeError(f"output folder {directory}: a file is in the way ({_first_file(directory)})")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise PorepipeError(f"output folder {directory}: {existing.resolve()} is not writable")
 
 
 def _first_file(directory: Path) -> Path:

@@ -77,3 +77,35 @@ def test_ctrl_c_leaves_snakemake_to_cancel_its_jobs_and_release_its_lock(monkeyp
     assert cleaned.is_file()  # Snakemake was not killed before it was done
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "interrupted" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("in_the_way", ["results", "results/mini", ".snakemake"])
+def test_a_file_in_the_way_of_the_run_folders_is_one_line_before_snakemake(
+    in_the_way, calls, monkeypatch, tmp_path, capsys
+):
+    """Before: Snakemake's traceback (45-65 lines), after it had made .snakemake/ and part of results/."""
+    scene = str(cli.Path(SCENE).resolve())
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / in_the_way).parent.mkdir(parents=True, exist_ok=True)
+    (tmp_path / in_the_way).write_text("not a folder")
+    before = sorted(tmp_path.rglob("*"))
+    assert cli.main(["run", scene, "--cores", "1"]) == 2
+    assert calls == []  # Snakemake never started
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"a file is in the way ({in_the_way})" in err
+    assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_an_unwritable_run_folder_is_one_line_before_snakemake(calls, monkeypatch, tmp_path, capsys):
+    """A read-only directory (a read-only mount: root's os.access sees it too; faked here, the tests may run as
+    root): before, Snakemake's 45-line traceback."""
+    from porepipe._shared import atomic
+
+    scene = str(cli.Path(SCENE).resolve())
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(atomic.os, "access", lambda path, mode: cli.Path(path).resolve() != tmp_path)
+    assert cli.main(["run", scene, "--cores", "1"]) == 2
+    assert calls == []
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{tmp_path} is not writable" in err
+    assert list(tmp_path.iterdir()) == []
