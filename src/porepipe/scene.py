@@ -137,7 +137,11 @@ class SceneBase(_Strict):
         description="voxel sizes a in µm, coarse to fine (none: 2-D granular)",
     )
     segmentation: Segmentation = Segmentation()
-    analyses: list[Analysis] = Field(default_factory=lambda: [Analysis.estimate])
+    analyses: list[Analysis] = Field(
+        default_factory=lambda: [Analysis.estimate],
+        min_length=1,
+        description="what to measure (default: estimate); none would run nothing",
+    )
     resources: Resources = Field(
         Resources(), description="what one stage may use: memory_budget_mb (volumes over it go in chunks)"
     )
@@ -328,6 +332,46 @@ def _cross_problems(raw: dict, base_dir: Path) -> list[str]:
     sub_samples = isinstance(sweep, dict) and sweep.get("sample_um")
     if isinstance(perm, dict) and perm.get("whole_volume") is False and not sub_samples:
         problems.append("permeability.whole_volume = false: needs sub-samples to run on (sweep.sample_um)")
+    return problems + _analysis_problems(raw)
+
+
+def _analysis_problems(raw: dict) -> list[str]:
+    """What a listed analysis needs from the rest of the scene, which before only its workflow rule or job found out
+    (a Snakemake traceback, or a failed job after the others had run), while ``porepipe validate`` said ok.
+    """
+    analyses = raw.get("analyses")
+    listed = {a for a in analyses if isinstance(a, str)} if isinstance(analyses, list) else set()
+    problems = []
+    section = raw.get("granular")
+    if "granular" in listed and (
+        section is None
+        or (
+            isinstance(section, dict)
+            and not any(section.get(k) for k in ("particles", "blocks", "drop_sources"))
+        )
+    ):
+        problems.append(
+            f"analyses = {_short(analyses)}: lists granular, but the `granular:` section has no particles, blocks "
+            "or drop_sources (nothing to simulate)"
+        )
+    if "acquire" in listed and raw.get("acquire") is None and "domain" in raw and "spheres" in raw:
+        problems.append(
+            f"analyses = {_short(analyses)}: lists acquire, but the scene has no `acquire:` section (the image)"
+        )
+    res = raw.get("resolutions_um")
+    for key in ("permeability", "diffusion"):
+        chosen = _get(raw, (key, "resolutions_um"))
+        if key not in listed or not (isinstance(chosen, list) and isinstance(res, list)):
+            continue
+        try:
+            unknown = [a for a in chosen if a not in res]
+        except TypeError:  # an unhashable or odd entry: the field check names it
+            continue
+        if unknown:
+            problems.append(
+                f"{key}.resolutions_um = {_short(chosen)}: {_short(unknown)} not among resolutions_um = "
+                f"{_short(res)}; allowed: some of the scene's resolutions (empty: all)"
+            )
     return problems
 
 

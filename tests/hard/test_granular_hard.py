@@ -131,7 +131,10 @@ def test_bad_input_names_the_key():
 
 
 def test_granular_scene_needs_no_box_or_resolutions_but_others_still_do():
-    scene = parse_scene({"name": "g", "analyses": ["granular"], "granular": {"duration_s": 0.1}})
+    one = [{"position_m": (0.0, 0.0), "shape": {"size_m": (0.001, 0.001)}}]
+    scene = parse_scene(
+        {"name": "g", "analyses": ["granular"], "granular": {"duration_s": 0.1, "particles": one}}
+    )
     assert scene.granular.duration_s == 0.1 and scene.domain is None
     with pytest.raises(SceneError, match="resolutions_um"):
         parse_scene({"name": "x", "domain": {"size_um": [10, 10, 10]}, "spheres": {"inline": [[1, 1, 1, 1]]}})

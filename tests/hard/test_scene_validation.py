@@ -5,6 +5,7 @@ import textwrap
 import pytest
 
 from porepipe.cli import main
+from porepipe.scene import SceneError, parse_scene
 
 GOOD = """
 name: ok
@@ -94,3 +95,56 @@ def test_not_yaml_and_missing_file(tmp_path, capsys):
     assert main(["validate", str(bad), str(tmp_path / "absent.yaml")]) == 2
     err = capsys.readouterr().err
     assert "not valid YAML" in err and "absent.yaml does not exist" in err
+
+
+_SPHERES = {"name": "s", "domain": {"size_um": [8, 8, 8]}, "spheres": {"inline": [[4, 4, 4, 2]]}}
+
+
+@pytest.mark.parametrize(
+    "scene,match",
+    [
+        # before: `porepipe validate` said ok, and the granular job failed after the run had started
+        (
+            {"name": "g", "analyses": ["granular"]},
+            r"analyses = \['granular'\]: lists granular, but the `granular:`",
+        ),
+        (
+            {"name": "g", "analyses": ["granular"], "granular": {"duration_s": 1}},
+            "no particles, blocks or drop",
+        ),
+        # before: ok, then a Snakemake traceback while it built the DAG
+        ({**_SPHERES, "resolutions_um": [2], "analyses": ["acquire"]}, "lists acquire, but the scene has no"),
+        (
+            {
+                **_SPHERES,
+                "resolutions_um": [2],
+                "analyses": ["permeability"],
+                "permeability": {"resolutions_um": [4]},
+            },
+            r"permeability.resolutions_um = \[4\]: \[4\] not among resolutions_um = \[2\]",
+        ),
+        (
+            {
+                **_SPHERES,
+                "resolutions_um": [2, 1],
+                "analyses": ["diffusion"],
+                "diffusion": {"resolutions_um": [1, 3]},
+            },
+            r"diffusion.resolutions_um = \[1, 3\]: \[3\] not among",
+        ),
+        # before: ok, and the run ran nothing but said where its results were
+        (
+            {**_SPHERES, "resolutions_um": [2], "analyses": []},
+            r"analyses = \[\]: List should have at least 1 item",
+        ),
+    ],
+)
+def test_what_a_listed_analysis_needs_is_checked_with_the_scene(scene, match):
+    with pytest.raises(SceneError, match=match) as err:
+        parse_scene(scene)
+    assert len(err.value.problems) == 1
+
+
+def test_resolutions_of_an_analysis_not_listed_are_not_judged():
+    scene = {**_SPHERES, "resolutions_um": [2], "permeability": {"resolutions_um": [4]}}
+    assert parse_scene(scene).permeability.resolutions_um == [4.0]
