@@ -151,7 +151,10 @@ class SceneBase(_Strict):
         if Analysis.granular in self.analyses and set(self.analyses) <= {Analysis.granular, Analysis.report}:
             return self  # a 2-D granular scene has no box, spheres or voxels (its report reads granular.h5)
         if not self.resolutions_um:
-            raise ValueError("missing resolutions_um: give at least one voxel size in µm")
+            raise ValueError(
+                "missing resolutions_um: give at least one voxel size in µm (only a 2-D granular scene, analyses "
+                "[granular] or [granular, report], needs none)"
+            )
         if getattr(getattr(self, "diffusion", None), "geometry", None) is not None:
             other = sorted(a.value for a in set(self.analyses) - {Analysis.diffusion, Analysis.report})
             if other:  # a synthetic capillary (diffusion.geometry) has a binary volume only, no grey one
@@ -262,8 +265,41 @@ def _pydantic_problems(raw: dict, err: ValidationError) -> list[str]:
             msg = "unknown key (misspelt?)" + _did_you_mean(loc)
         elif e["type"] == "finite_number":
             msg = "NaN or inf; every setting must be a finite number"
+        elif e["type"] in _SHAPE_WANTED:
+            msg = f"{_SHAPE_WANTED[e['type']]}, not {_yaml_kind(_get(raw, loc))}"
+        if not loc:  # a check across keys: the whole scene is no value to show
+            problems.append(f"(top level): {msg[:300]}")
+            continue
         problems.append(f"{_loc(loc)} = {_short(_get(raw, loc))}: {msg[:300]}")
     return problems
+
+
+#: pydantic's error types for a value of the wrong YAML shape, in YAML's words ("instance of Box" named a class)
+_SHAPE_WANTED = {
+    "model_type": "should be a mapping of keys to values ({key: value, ...} or indented `key: value` lines)",
+    "dict_type": "should be a mapping of keys to values ({key: value, ...} or indented `key: value` lines)",
+    "list_type": "should be a list ([a, b, ...] or lines starting with `- `)",
+    "tuple_type": "should be a list ([a, b, ...] or lines starting with `- `)",
+}
+
+
+def _yaml_kind(value) -> str:
+    """What a YAML value is, in YAML's words."""
+    if value is None:
+        return "empty (null)"
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, (int, float)):
+        return "a number"
+    if isinstance(value, str):
+        return "a string"
+    return (
+        "a list"
+        if isinstance(value, list)
+        else "a mapping"
+        if isinstance(value, dict)
+        else type(value).__name__
+    )
 
 
 def _is_length(value) -> bool:

@@ -148,3 +148,45 @@ def test_what_a_listed_analysis_needs_is_checked_with_the_scene(scene, match):
 def test_resolutions_of_an_analysis_not_listed_are_not_judged():
     scene = {**_SPHERES, "resolutions_um": [2], "permeability": {"resolutions_um": [4]}}
     assert parse_scene(scene).permeability.resolutions_um == [4.0]
+
+
+_ONE = [{"position_m": (0.0, 0.0), "shape": {"size_m": (0.001, 0.001)}}]
+
+
+@pytest.mark.parametrize(
+    "scene,line",
+    [
+        # before: 'Input should be a valid dictionary or instance of Box' (a class name, not YAML)
+        (
+            {"name": "g", "analyses": ["granular"], "granular": {"box": [1, 2], "particles": _ONE}},
+            "granular.box = [1, 2]: should be a mapping of keys to values",
+        ),
+        (
+            {"name": "g", "analyses": ["granular"], "granular": {"drop_sources": {"x_m": 0}}},
+            "granular.drop_sources = {'x_m': 0}: should be a list ([a, b, ...] or lines starting with `- `), "
+            "not a mapping",
+        ),
+        # before: two problems, the second 'missing resolutions_um' judging the default analyses, with the whole
+        # scene printed as its value
+        (
+            {"name": "g", "analyses": "granular", "granular": {"duration_s": 1}},
+            "analyses = 'granular': should be a list",
+        ),
+    ],
+)
+def test_a_value_of_the_wrong_shape_is_named_in_yaml_words_once(scene, line):
+    with pytest.raises(SceneError) as err:
+        parse_scene(scene)
+    assert len(err.value.problems) == 1
+    assert err.value.problems[0].startswith(line)
+    assert err.value.problems[0].endswith(("not a list", "not a mapping", "not a string"))
+
+
+def test_a_problem_across_keys_does_not_print_the_whole_scene():
+    """A granular section without `analyses: [granular]` (the default is estimate): before, the line showed the whole
+    scene as its value and did not say why a granular scene would need resolutions."""
+    with pytest.raises(SceneError) as err:
+        parse_scene({"name": "g", "granular": {"duration_s": 1, "dt_s": 1e-5}})
+    (problem,) = err.value.problems
+    assert problem.startswith("(top level): missing resolutions_um")
+    assert "analyses [granular]" in problem and "dt_s" not in problem
