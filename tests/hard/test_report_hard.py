@@ -130,3 +130,25 @@ def test_a_sweep_without_cost_columns_is_one_line_and_without_threads_still_a_re
         settings=Settings(dpi=30, slices=False),
     )
     assert "not recorded" in page.read_text()
+
+
+def test_the_report_of_a_heap_too_small_to_measure_is_still_written(tmp_path):
+    """The CI heap shrunk to 21 grains (a user's first smaller scene): its report job failed on 'repose_angle_fit:
+    fewer than 2 occupied intervals', and the run with it; the page now says why the heap was not measured and shows
+    the rest (fabric, force network)."""
+    from pathlib import Path
+
+    import yaml
+
+    from porepipe.granular import run
+    from porepipe.report._granular import granular_report
+    from porepipe.scene import parse_scene
+
+    raw = yaml.safe_load((Path(__file__).parents[2] / "config/scenes/granular-heap-ci.yaml").read_text())
+    raw["granular"]["duration_s"] = 0.3
+    raw["granular"]["drop_sources"][0]["to_s"] = 0.2
+    scene = parse_scene(raw)
+    result = run(scene.granular, tmp_path / "granular.h5", seed=scene.seed, progress=False)
+    page = granular_report(result, tmp_path / "index.html", kind="heap").read_text()
+    assert "Heap not measured: repose_angle_fit: fewer than 2 occupied intervals" in page
+    assert "granular_network.png" in page and (tmp_path / "granular_network.png").is_file()

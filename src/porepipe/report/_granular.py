@@ -589,12 +589,17 @@ def granular_section(
     else:
         unload = unloading_frames(tables, gravity)
         frame = -1 if unload is None else unload[0]
-        h = analyse_heap(tables, frame)
-        parts += _heap_part(h, cost, out_dir, dpi)
-        parts += _stress_angle_part(tables, h, mu, out_dir, dpi, frame)
-        if unload is not None:
-            parts += _elastic_part(tables, unload, young, out_dir)
-        directions = h["directions"]
+        try:
+            h = analyse_heap(tables, frame)
+        except PorepipeError as err:  # a heap of a few grains: the page still shows its fabric and network
+            parts.append(f"<p class=note>Heap not measured: {html.escape(str(err))} (too few grains?).</p>")
+            directions = force_directions(frame_contacts(tables, frame))
+        else:
+            parts += _heap_part(h, cost, out_dir, dpi)
+            parts += _stress_angle_part(tables, h, mu, out_dir, dpi, frame)
+            if unload is not None:
+                parts += _elastic_part(tables, unload, young, out_dir)
+            directions = h["directions"]
     write_csv(
         out_dir / "granular_directions.csv",
         direction_figure(directions, out_dir / "granular_directions.png", dpi),
