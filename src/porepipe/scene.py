@@ -10,6 +10,7 @@ import copy
 import difflib
 import enum
 import math
+import re
 import reprlib
 import typing
 from pathlib import Path
@@ -48,6 +49,8 @@ __all__ = [
 
 #: relative tolerance when checking that a resolution divides the box
 _DIVIDES_RTOL = 1e-9
+#: longest scene name (it names the results folder, and Snakemake's lock and log paths carry it too)
+_NAME_MOST = 100
 
 
 class Analysis(str, enum.Enum):
@@ -170,6 +173,21 @@ class SceneBase(_Strict):
                     "starts from an image (`acquire:` section)"
                 )
         return self
+
+    @field_validator("name")
+    @classmethod
+    def _name_snakemake_can_run(cls, name):
+        if len(name) > _NAME_MOST:  # a file name (results/<name>/, the lock's paths) has at most 255 bytes
+            raise ValueError(f"{len(name)} characters; allowed: at most {_NAME_MOST}")
+        repeated = re.search(r"(.+?)\1{19,}$", name)
+        if (
+            repeated
+        ):  # Snakemake's PeriodicWildcardError (a 20-line traceback) takes it for an endless recursion
+            raise ValueError(
+                f"ends in {repeated.group(1)!r} repeated {len(repeated.group(0)) // len(repeated.group(1))} times, "
+                "which Snakemake refuses as a wildcard value; allowed: fewer than 20 repeats at the end"
+            )
+        return name
 
     @field_validator("resolutions_um")
     @classmethod

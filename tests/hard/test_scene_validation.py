@@ -190,3 +190,25 @@ def test_a_problem_across_keys_does_not_print_the_whole_scene():
     (problem,) = err.value.problems
     assert problem.startswith("(top level): missing resolutions_um")
     assert "analyses [granular]" in problem and "dt_s" not in problem
+
+
+@pytest.mark.parametrize(
+    "name,match",
+    [
+        (
+            "a" * 300,
+            "name = .*: 300 characters; allowed: at most 100",
+        ),  # before: OSError 'File name too long'
+        ("run-" + "0" * 20, "ends in '0' repeated 20 times"),  # before: Snakemake's PeriodicWildcardError
+        ("x" + "ab" * 20, "ends in 'ab' repeated 20 times"),
+    ],
+)
+def test_a_scene_name_snakemake_cannot_run_is_refused_with_the_scene(name, match):
+    with pytest.raises(SceneError, match=match) as err:
+        parse_scene({**_SPHERES, "name": name, "resolutions_um": [2]})
+    assert len(err.value.problems) == 1
+
+
+def test_names_near_the_limits_are_fine():
+    for name in ("0123456789" * 10, "run-" + "0" * 19, "mini-2026-01-01"):
+        assert parse_scene({**_SPHERES, "name": name, "resolutions_um": [2]}).name == name
