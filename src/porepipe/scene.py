@@ -179,10 +179,9 @@ class SceneBase(_Strict):
     def _name_snakemake_can_run(cls, name):
         if len(name) > _NAME_MOST:  # a file name (results/<name>/, the lock's paths) has at most 255 bytes
             raise ValueError(f"{len(name)} characters; allowed: at most {_NAME_MOST}")
+        # Snakemake's PeriodicWildcardError (a 20-line traceback) takes 20 repeats at the end for an endless recursion
         repeated = re.search(r"(.+?)\1{19,}$", name)
-        if (
-            repeated
-        ):  # Snakemake's PeriodicWildcardError (a 20-line traceback) takes it for an endless recursion
+        if repeated:
             raise ValueError(
                 f"ends in {repeated.group(1)!r} repeated {len(repeated.group(0)) // len(repeated.group(1))} times, "
                 "which Snakemake refuses as a wildcard value; allowed: fewer than 20 repeats at the end"
@@ -311,13 +310,9 @@ def _yaml_kind(value) -> str:
         return "a number"
     if isinstance(value, str):
         return "a string"
-    return (
-        "a list"
-        if isinstance(value, list)
-        else "a mapping"
-        if isinstance(value, dict)
-        else type(value).__name__
-    )
+    if isinstance(value, list):
+        return "a list"
+    return "a mapping" if isinstance(value, dict) else type(value).__name__
 
 
 def _is_length(value) -> bool:
