@@ -56,6 +56,14 @@ def snakemake_command(
         "--config",
         f"scene={Path(scene_path).resolve()}",
         "--rerun-incomplete",
+        # not Snakemake's `input` trigger (a changed set of input files): a job's warm-up marker (porepipe.warm) is
+        # its input only in the run that warms, so the next run found the set changed and redid every job after
+        # voxelize; what a job reads of the scene is its stamp (porepipe.scene_stamps), which mtime covers
+        "--rerun-triggers",
+        "mtime",
+        "params",
+        "code",
+        "software-env",
         "--printshellcmds",
         "--show-failed-logs",
     ]

@@ -48,6 +48,14 @@ _TWIN_RADIUS = 0.26
 
 #: scene sections of the twin taken unchanged from the scene (the others are dropped or rewritten)
 _KEPT = ("seed", "domain", "voxelize", "segmentation", "permeability", "minkowski", "lpt", "resources")
+#: stage -> the twin's sections its warm-up commands (_commands) do not read, left out of its twin key: an edit of the
+#: LPT settings must not plan a voxelize warm-up, whose marker, new to the voxelize jobs, would rerun every one of them
+_NOT_READ = {
+    "voxelize": frozenset({"segmentation", "permeability", "minkowski", "lpt"}),
+    "permeability": frozenset({"minkowski", "lpt"}),
+    "minkowski": frozenset({"permeability", "lpt"}),
+    "lpt": frozenset({"permeability", "minkowski"}),
+}
 
 
 def warmable(scene) -> bool:
@@ -107,7 +115,8 @@ def twin_key(scene_path: str | os.PathLike, stage: str, scene=None) -> str:
     h = hashlib.sha256(_sources_digest())
     h.update(stage.encode())
     for edge in twin_edges(scene, stage):
-        h.update(yaml.safe_dump(twin(scene_path, edge), sort_keys=True).encode())
+        read = {key: value for key, value in twin(scene_path, edge).items() if key not in _NOT_READ[stage]}
+        h.update(yaml.safe_dump(read, sort_keys=True).encode())
     return h.hexdigest()[:20]
 
 

@@ -10,7 +10,7 @@
 
 rule acquire:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("acquire"),
         image=acquire_image,
     output:
         "results/{scene}/acquire/statistics.h5",
@@ -27,8 +27,10 @@ rule acquire:
         cpus_per_task=cpus_per_task,
         mem_mb=8000,
         runtime=60,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe acquire --scene {input.scene:q} -o {output:q} --threads {threads} > {log:q} 2>&1"
+        "porepipe acquire --scene {params.scene:q} -o {output:q} --threads {threads} > {log:q} 2>&1"
 
 
 rule acquire_binary:
@@ -56,7 +58,7 @@ rule acquire_binary:
 rule acquire_calibrate:
     input:
         statistics="results/{scene}/acquire/statistics.h5",
-        scene=scene_file,
+        stamp=scene_stamp("acquire_calibrate"),
     output:
         "results/{scene}/acquire_calibrate/calibrated_scene.yaml",
     log:
@@ -72,14 +74,16 @@ rule acquire_calibrate:
         cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=30,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe acquire-calibrate {input.statistics:q} --scene {input.scene:q} -o {output:q} > {log:q} 2>&1"
+        "porepipe acquire-calibrate {input.statistics:q} --scene {params.scene:q} -o {output:q} > {log:q} 2>&1"
 
 
 rule acquire_model:
     input:
         model="results/{scene}/acquire_calibrate/calibrated_scene.yaml",
-        scene=scene_file,
+        stamp=scene_stamp("acquire_model"),
     output:
         "results/{scene}/acquire_model/model_statistics.h5",
     log:
@@ -95,8 +99,10 @@ rule acquire_model:
         cpus_per_task=cpus_per_task,
         mem_mb=8000,
         runtime=120,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe acquire-model {input.model:q} --scene {input.scene:q} -o {output:q} --threads {threads}"
+        "porepipe acquire-model {input.model:q} --scene {params.scene:q} -o {output:q} --threads {threads}"
         " > {log:q} 2>&1"
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from porepipe._shared.naming import TAG_RE, res_tag
 from porepipe.diffusion import check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
+from porepipe.scene_stamps import write_stamp
 from porepipe.warm import STAGES as WARM_STAGES
 from porepipe.warm import marker_of, twin_key, warmable
 
@@ -81,6 +82,26 @@ def scene_of(wildcards):
 
 def scene_file(wildcards):
     return SCENE_FILES[wildcards.scene]
+
+
+#: (scene name, rule) -> the rule's scene stamp, written once per workflow run (porepipe.scene_stamps)
+_scene_stamps = {}
+
+
+def scene_stamp(rule):
+    """An input function: `rule`'s stamp of the job's scene, its part of the scene in a file rewritten only where that
+    part changed (porepipe.scene_stamps), so the rule reruns when what it reads of the scene changes, not when a
+    comment does. The scene file itself goes in the rule's params.
+    """
+
+    def stamp(wildcards):
+        key = (wildcards.scene, rule)
+        if key not in _scene_stamps:
+            folder = Path("results", wildcards.scene, "scene")
+            _scene_stamps[key] = write_stamp(SCENES[wildcards.scene], rule, folder)
+        return _scene_stamps[key]
+
+    return stamp
 
 
 def is_acquire_scene(scene):
@@ -185,8 +206,8 @@ def segmentation_args(wildcards):
 
 
 def minkowski_inputs(wildcards):
-    """Binary volume (whole or sub-sample), scene, and the grey volume when threshold functions are asked for."""
-    inputs = {"binary": binary_volume(wildcards), "scene": scene_file(wildcards)}
+    """Binary volume (whole or sub-sample), the scene stamp, and the grey volume when threshold functions are asked for."""
+    inputs = {"binary": binary_volume(wildcards), "stamp": scene_stamp("minkowski")(wildcards)}
     if scene_of(wildcards).minkowski.threshold_functions and not wildcards.sub:
         inputs["grey"] = grey_volume(wildcards)
     return inputs
@@ -246,7 +267,7 @@ def report_inputs(wildcards):
     names = {a.value for a in scene.analyses}
     inputs = {
         "sweep": results(scene, "sweep", "sweep.h5"),
-        "scene": scene_file(wildcards),
+        "stamp": scene_stamp("report")(wildcards),
         "grey": grey_volumes(scene) if scene.report.slices and binary_stage(scene) != "capillary" else [],
         "binary": [],
         "lpt": per_resolution(scene, "lpt/lpt_a{a}.h5") if "lpt" in names else [],
@@ -339,10 +360,16 @@ def warm_marker(twin, stage):
     return str(Path("results", "_warm", twin, f"{stage}.done"))
 
 
-def warm_input(stage):
-    """An input function for `stage`'s jobs: the marker of its warm job, when the run plans one."""
+def warm_input(stage, output):
+    """An input function for `stage`'s jobs (whose output is the pattern `output`): the marker of its warm job, when
+    the run plans one and the job's result does not exist yet. A job that redoes a result takes none: a marker new to
+    its inputs would make Snakemake rerun every job of the stage (after a change to one job's settings, or the first
+    run on two cores after runs on one), where a redone job just loads or compiles its own kernels.
+    """
 
     def marker(wildcards):
+        if Path(output.format(**dict(wildcards.items()))).exists():
+            return []
         twin = warm_twin(scene_of(wildcards), stage)
         return [warm_marker(twin, stage)] if twin else []
 
@@ -400,11 +427,11 @@ def diffusion_resolutions(scene):
 
 
 def permeability_inputs(wildcards):
-    """The binary volume (whole or sub-sample) and scene, with the wall geometry for `walls: cli`: a decorated scene's
+    """The binary volume (whole or sub-sample) and the scene stamp, with the wall geometry for `walls: cli`: a decorated scene's
     grains.h5 (exact polyhedra); else for a whole model volume its grey volume (sub-voxel wall distances from grey
     values), for a sub-sample the packing.h5 it was cut from (the grey volume is the whole one's)."""
     scene = scene_of(wildcards)
-    inputs = {"binary": binary_volume(wildcards), "scene": scene_file(wildcards)}
+    inputs = {"binary": binary_volume(wildcards), "stamp": scene_stamp("permeability")(wildcards)}
     if getattr(scene, "decoration", None) is not None:
         inputs["grains"] = results(scene, "decorate", "grains.h5")
     elif getattr(wildcards, "sub", ""):

@@ -5,7 +5,7 @@
 
 rule decorate:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("decorate"),
         packing=packing_input,
     output:
         "results/{scene}/decorate/grains.h5",
@@ -21,14 +21,15 @@ rule decorate:
         mem_mb=4000,
         runtime=60,
     params:
+        scene=scene_file,
         packing=packing_arg,
     shell:
-        "porepipe decorate {input.scene:q} -o {output:q} {params.packing} --threads {threads} > {log:q} 2>&1"
+        "porepipe decorate {params.scene:q} -o {output:q} {params.packing} --threads {threads} > {log:q} 2>&1"
 
 
 rule voxelize_grains:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("voxelize_grains"),
         grains="results/{scene}/decorate/grains.h5",
     output:
         "results/{scene}/voxelize_grains/grey_a{a}.h5",
@@ -43,6 +44,8 @@ rule voxelize_grains:
         cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=8),
         runtime=120,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe voxelize-grains {input.scene:q} --grains {input.grains:q} --a {wildcards.a} -o {output:q}"
+        "porepipe voxelize-grains {params.scene:q} --grains {input.grains:q} --a {wildcards.a} -o {output:q}"
         " --threads {threads} > {log:q} 2>&1"

@@ -8,7 +8,7 @@
 rule diffusion:
     input:
         binary=binary_volume,
-        scene=scene_file,
+        stamp=scene_stamp("diffusion"),
     output:
         "results/{scene}/diffusion/diffusion_a{a}_{axis}.h5",
     log:
@@ -26,14 +26,16 @@ rule diffusion:
         # measured at 320^3 by benchmarks/diffusion_memory.py), plus slack
         mem_mb=mem_mb(bytes_per_voxel=3, base_mb=1000),
         runtime=240,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe diffusion {input.binary:q} --scene {input.scene:q} --axis {wildcards.axis} -o {output:q}"
+        "porepipe diffusion {input.binary:q} --scene {params.scene:q} --axis {wildcards.axis} -o {output:q}"
         " --threads {threads} --resume > {log:q} 2>&1"
 
 
 rule capillary:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("capillary"),
     output:
         "results/{scene}/capillary/binary_a{a}.h5",
     log:
@@ -45,8 +47,10 @@ rule capillary:
         cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=2),
         runtime=10,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe diffusion-capillary --scene {input.scene:q} --a {wildcards.a} -o {output:q} > {log:q} 2>&1"
+        "porepipe diffusion-capillary --scene {params.scene:q} --a {wildcards.a} -o {output:q} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["diffusion"] = lambda scene: [

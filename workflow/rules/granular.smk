@@ -4,7 +4,7 @@
 
 rule granular:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("granular"),
     output:
         "results/{scene}/granular/granular.h5",
     log:
@@ -19,16 +19,17 @@ rule granular:
         mem_mb=2000,
         runtime=240,
     params:
+        scene=scene_file,
         checkpoint="results/{scene}/granular/checkpoint.npz",
     shell:
-        "porepipe granular {input.scene:q} -o {output:q} --checkpoint {params.checkpoint:q} --resume"
+        "porepipe granular {params.scene:q} -o {output:q} --checkpoint {params.checkpoint:q} --resume"
         " --threads {threads} > {log:q} 2>&1"
 
 
 # the report page of a granular scene (`report` in its analyses): silo or heap read-out, figures and CSVs beside it
 rule granular_report:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("granular_report"),
         granular="results/{scene}/granular/granular.h5",
     output:
         page=report(
@@ -49,8 +50,10 @@ rule granular_report:
         cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=10,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe report {input.scene:q} --granular {input.granular:q} -o {output.page:q} > {log:q} 2>&1"
+        "porepipe report {params.scene:q} --granular {input.granular:q} -o {output.page:q} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["granular"] = lambda scene: [results(scene, "granular", "granular.h5")]

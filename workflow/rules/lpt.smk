@@ -6,8 +6,8 @@
 rule lpt:
     input:
         binary=binary_volume,
-        scene=scene_file,
-        warm=warm_input("lpt"),
+        stamp=scene_stamp("lpt"),
+        warm=warm_input("lpt", "results/{scene}/lpt/lpt_a{a}{sub}.h5"),
     output:
         "results/{scene}/lpt/lpt_a{a}{sub}.h5",
     log:
@@ -21,8 +21,10 @@ rule lpt:
         cpus_per_task=cpus_per_task,
         mem_mb=mem_mb(bytes_per_voxel=24),
         runtime=60,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe lpt {input.binary:q} --scene {input.scene:q} -o {output:q} --threads {threads} > {log:q} 2>&1"
+        "porepipe lpt {input.binary:q} --scene {params.scene:q} -o {output:q} --threads {threads} > {log:q} 2>&1"
 
 
 ANALYSIS_TARGETS["lpt"] = lambda scene: per_resolution(scene, "lpt/lpt_a{a}.h5")

@@ -6,7 +6,7 @@
 rule minkowski:
     input:
         unpack(minkowski_inputs),
-        warm=warm_input("minkowski"),
+        warm=warm_input("minkowski", "results/{scene}/minkowski/minkowski_a{a}{sub}.h5"),
     output:
         "results/{scene}/minkowski/minkowski_a{a}{sub}.h5",
     log:
@@ -21,9 +21,10 @@ rule minkowski:
         mem_mb=1000,
         runtime=30,
     params:
+        scene=scene_file,
         grey=minkowski_grey_arg,
     shell:
-        "porepipe minkowski {input.binary:q} --scene {input.scene:q} {params.grey} -o {output:q}"
+        "porepipe minkowski {input.binary:q} --scene {params.scene:q} {params.grey} -o {output:q}"
         " --threads {threads} > {log:q} 2>&1"
 
 

@@ -3,7 +3,7 @@
 
 rule pack:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("pack"),
     output:
         packing="results/{scene}/pack/packing.h5",
         xyzr="results/{scene}/pack/packing.xyzr",
@@ -19,7 +19,8 @@ rule pack:
         mem_mb=4000,
         runtime=240,
     params:
+        scene=scene_file,
         checkpoint="results/{scene}/pack/checkpoint.h5",
     shell:
-        "porepipe pack {input.scene:q} -o {output.packing:q} --xyzr {output.xyzr:q}"
+        "porepipe pack {params.scene:q} -o {output.packing:q} --xyzr {output.xyzr:q}"
         " --checkpoint {params.checkpoint:q} --resume --threads {threads} > {log:q} 2>&1"

@@ -6,7 +6,7 @@
 rule permeability:
     input:
         unpack(permeability_inputs),
-        warm=warm_input("permeability"),
+        warm=warm_input("permeability", "results/{scene}/permeability/perm_a{a}{sub}_{axis}.h5"),
     output:
         "results/{scene}/permeability/perm_a{a}{sub}_{axis}.h5",
     log:
@@ -26,11 +26,12 @@ rule permeability:
         tasks=permeability_ranks,  # MPI ranks (permeability.mpi_ranks; 1: one process)
         mpi=permeability_mpi,  # the MPI launcher; none for a one-process job
     params:
+        scene=scene_file,
         grey=permeability_grey_arg,
         launch=permeability_launch,
         ranks=permeability_rank_args,
     shell:
-        "{params.launch} porepipe permeability {input.binary:q} {params.grey} --scene {input.scene:q}"
+        "{params.launch} porepipe permeability {input.binary:q} {params.grey} --scene {params.scene:q}"
         " --axis {wildcards.axis} -o {output:q} --resume {params.ranks} > {log:q} 2>&1"
 
 

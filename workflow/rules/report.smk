@@ -39,8 +39,10 @@ rule report:
         cpus_per_task=cpus_per_task,
         mem_mb=2000,
         runtime=10,
+    params:
+        scene=scene_file,
     shell:
-        "porepipe report {input.scene:q} --sweep {input.sweep:q} --grey {input.grey:q} --binary {input.binary:q}"
+        "porepipe report {params.scene:q} --sweep {input.sweep:q} --grey {input.grey:q} --binary {input.binary:q}"
         " --lpt {input.lpt:q} -o {output.page:q} > {log:q} 2>&1"
 
 

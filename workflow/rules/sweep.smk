@@ -33,7 +33,7 @@ rule sweep:
     input:
         results=sweep_results,
         volumes=sweep_volumes,
-        scene=scene_file,
+        stamp=scene_stamp("sweep"),
     output:
         "results/{scene}/sweep/sweep.h5",
     log:
@@ -48,7 +48,8 @@ rule sweep:
         mem_mb=2000,
         runtime=10,
     params:
+        scene=scene_file,
         cost_dir=lambda wildcards: f"results/{wildcards.scene}/cost",
     shell:
-        "porepipe sweep {input.results:q} --volumes {input.volumes:q} --scene {input.scene:q}"
+        "porepipe sweep {input.results:q} --volumes {input.volumes:q} --scene {params.scene:q}"
         " --cost-dir {params.cost_dir:q} -o {output:q} > {log:q} 2>&1"

@@ -3,9 +3,9 @@
 
 rule voxelize:
     input:
-        scene=scene_file,
+        stamp=scene_stamp("voxelize"),
         packing=packing_input,
-        warm=warm_input("voxelize"),
+        warm=warm_input("voxelize", "results/{scene}/voxelize/grey_a{a}.h5"),
     output:
         "results/{scene}/voxelize/grey_a{a}.h5",
     log:
@@ -20,7 +20,8 @@ rule voxelize:
         mem_mb=mem_mb(bytes_per_voxel=4),
         runtime=60,
     params:
+        scene=scene_file,
         packing=packing_arg,
     shell:
-        "porepipe voxelize {input.scene:q} --a {wildcards.a} -o {output:q} {params.packing}"
+        "porepipe voxelize {params.scene:q} --a {wildcards.a} -o {output:q} {params.packing}"
         " --threads {threads} > {log:q} 2>&1"
