@@ -219,3 +219,32 @@ def test_acquire_binary_refuses_a_resolution_that_is_not_finite(tmp_path, capsys
     assert line.startswith(f"porepipe acquire-binary: error: resolution a = {a} µm requested")
     assert line.endswith("allowed: whole multiples of 2 µm (e.g. resolutions_um: [2, 4])")
     assert not out.exists()
+
+
+def test_acquire_binary_resolution_beyond_the_image_is_refused_compactly(tmp_path, capsys):
+    # before: coarsen_pore refused a = 1e300 µm but printed the coarsening factor as a 300-digit integer
+    rng = np.random.default_rng(3)
+    np.save(tmp_path / "v.npy", np.where(rng.random((8, 8, 8)) < 0.4, 30, 220).astype(np.uint8))
+    acquire(Settings(image=tmp_path / "v.npy", voxel_um=2.0), tmp_path / "s.h5")
+    capsys.readouterr()
+    out = tmp_path / "b.h5"
+    assert main(["acquire-binary", str(tmp_path / "s.h5"), "--a", "1e300", "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line == (
+        "porepipe acquire-binary: error: resolution a = 1e+300 µm is 5e+299 voxels of 2 µm, more than the "
+        "image's shortest edge of 8 voxels; allowed: whole multiples of 2 µm up to 16 µm"
+    )
+    assert not out.exists()
+
+
+def test_grain_marker_distance_far_beyond_the_image_is_named_compactly(tmp_path):
+    # before: the message gave the marker distance in voxels as a 300-digit integer
+    rng = np.random.default_rng(5)
+    np.save(tmp_path / "v.npy", np.where(rng.random((8, 8, 8)) < 0.4, 30, 220).astype(np.uint8))
+    settings = Settings.model_validate(
+        {"image": str(tmp_path / "v.npy"), "voxel_um": 1.0, "statistics": {"grain_min_distance_um": 1e300}}
+    )
+    with pytest.raises(PorepipeError) as err:
+        acquire(settings, tmp_path / "s.h5")
+    assert len(str(err.value)) < 200 and "is 1e+300 voxels" in str(err.value)
+    assert not (tmp_path / "s.h5").exists()

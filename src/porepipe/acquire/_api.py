@@ -203,7 +203,7 @@ def _grain_window(shape, stats, voxel_um: float) -> tuple[tuple[slice, slice, sl
     min_distance = _min_distance(stats.grain_min_distance_um, voxel_um)
     if min_distance > max(edges):
         raise PorepipeError(
-            f"acquire.statistics.grain_min_distance_um = {stats.grain_min_distance_um} µm is {min_distance} "
+            f"acquire.statistics.grain_min_distance_um = {stats.grain_min_distance_um} µm is {min_distance:.3g} "
             f"voxels, more than the grain window of {'x'.join(map(str, edges))} voxels; give at most "
             f"{max(edges) * voxel_um:g} µm"
         )
@@ -271,7 +271,7 @@ def coarsen_pore(pore: np.ndarray, factor: int) -> np.ndarray:
     """
     n = [s // factor for s in pore.shape]
     if min(n) < 1:
-        raise PorepipeError(f"coarsening by {factor} leaves no voxel of the image of shape {pore.shape}")
+        raise PorepipeError(f"coarsening by {factor:.3g} leaves no voxel of the image of shape {pore.shape}")
     view = pore[: n[0] * factor, : n[1] * factor, : n[2] * factor]
     counts = view.reshape(n[0], factor, n[1], factor, n[2], factor).sum(axis=(1, 3, 5), dtype=np.int64)
     return (2 * counts > factor**3).astype(np.uint8)
@@ -306,6 +306,12 @@ def write_binary(statistics_path, out, a_um: float | None = None) -> float:
     factor = 1 if a_um is None else _factor(float(a_um), voxel, str(attrs.get("source")))
     lut = np.zeros(len(str(vattrs["phases"]).split(",")), np.uint8)
     lut[np.atleast_1d(vattrs["pore_index"]).astype(np.int64)] = 1
+    if factor > min(labels.shape):  # before: coarsen_pore's message printed the factor in full (300 digits)
+        raise PorepipeError(
+            f"resolution a = {a_um:g} µm is {factor:.3g} voxels of {voxel:g} µm, more than the image's "
+            f"shortest edge of {min(labels.shape)} voxels; allowed: whole multiples of {voxel:g} µm up to "
+            f"{min(labels.shape) * voxel:g} µm"
+        )
     pore = lut[labels]
     del labels
     if factor > 1:
