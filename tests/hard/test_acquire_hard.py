@@ -248,3 +248,20 @@ def test_grain_marker_distance_far_beyond_the_image_is_named_compactly(tmp_path)
         acquire(settings, tmp_path / "s.h5")
     assert len(str(err.value)) < 200 and "is 1e+300 voxels" in str(err.value)
     assert not (tmp_path / "s.h5").exists()
+
+
+def test_two_point_lag_beyond_the_image_stops_at_the_longest_axis(tmp_path):
+    # before: max_lag_um = 1e300 asked numpy for a (3, 5e299) table: a raw ValueError, exit code 1
+    rng = np.random.default_rng(6)
+    np.save(tmp_path / "v.npy", np.where(rng.random((6, 8, 5)) < 0.4, 30, 220).astype(np.uint8))
+    settings = Settings.model_validate(
+        {
+            "image": str(tmp_path / "v.npy"),
+            "voxel_um": 2.0,
+            "statistics": {"max_lag_um": 1e300, "grains": False},
+        }
+    )
+    ds = acquire(settings, tmp_path / "s.h5")[None]
+    assert ds.sizes["lag"] == 8  # lags 0..7 along y, the longest axis
+    assert np.isfinite(float(ds.two_point.sel(axis="y").isel(lag=-1)))
+    np.testing.assert_allclose(float(ds.two_point.sel(axis="x", lag=0)), float(ds.porosity), rtol=1e-12)

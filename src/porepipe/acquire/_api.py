@@ -98,6 +98,8 @@ def image_statistics(
     porosity = float(pore.mean(dtype=np.float64))
     shape = pore.shape
     max_lag = int(round(stats.max_lag_um / voxel_um)) if stats.max_lag_um else max(1, max(shape) // 4)
+    # lags beyond the longest axis hold no pair (NaN); max_lag_um = 1e300 allocated a 5e299-column table before
+    max_lag = min(max_lag, max(shape) - 1)
     parts = [
         xr.Dataset(
             {
