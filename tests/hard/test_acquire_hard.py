@@ -265,3 +265,54 @@ def test_two_point_lag_beyond_the_image_stops_at_the_longest_axis(tmp_path):
     assert ds.sizes["lag"] == 8  # lags 0..7 along y, the longest axis
     assert np.isfinite(float(ds.two_point.sel(axis="y").isel(lag=-1)))
     np.testing.assert_allclose(float(ds.two_point.sel(axis="x", lag=0)), float(ds.porosity), rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("option", "kind"),
+    [
+        (["--dataset", "image"], "hdf5"),
+        (["--raw-dtype", "uint16"], "raw"),
+        (["--raw-byte-order", "big"], "raw"),
+        (["--raw-shape", "8", "8", "8"], "raw"),
+    ],
+)
+def test_hdf5_and_raw_options_for_a_npy_image_are_refused(tmp_path, capsys, option, kind):
+    # before: a .npy image was read as it is and these options were dropped without a word
+    np.save(
+        tmp_path / "v.npy",
+        np.where(np.random.default_rng(7).random((8, 8, 8)) < 0.4, 30, 220).astype(np.uint8),
+    )
+    out = tmp_path / "s.h5"
+    code = main(
+        ["acquire", str(tmp_path / "v.npy"), *option, "--voxel-um", "1", "--no-grains", "-o", str(out)]
+    )
+    assert code == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert f"{option[0]} applies to {kind} images, but {tmp_path / 'v.npy'} is read as npy" in line
+    assert not out.exists()
+
+
+def test_raw_options_on_the_command_line_keep_the_scenes_other_raw_keys(tmp_path, capsys):
+    # before: --raw-shape replaced the scene's whole acquire.raw, so its dtype uint16 fell back to uint8 and the
+    # file was refused as twice the expected size
+    grey = np.where(np.random.default_rng(8).random((6, 7, 8)) < 0.4, 3000, 60000).astype("<u2")
+    (tmp_path / "v.raw").write_bytes(grey.tobytes(order="F"))
+    (tmp_path / "scene.yaml").write_text(
+        "name: raw16\nresolutions_um: [1]\nacquire:\n  image: v.raw\n  voxel_um: 1\n"
+        "  raw: {dtype: uint16, shape: [1, 1, 1]}\n  statistics: {grains: false}\n"
+    )
+    out = tmp_path / "s.h5"
+    assert (
+        main(
+            ["acquire", "--scene", str(tmp_path / "scene.yaml"), "--raw-shape", "6", "7", "8", "-o", str(out)]
+        )
+        == 0
+    )
+    assert read_attrs(out)["porosity"] == pytest.approx(np.mean(grey == 3000), abs=1e-12)
+    capsys.readouterr()
+    # a RAW option without any shape read the file as 1 x 1 x 1 voxels (or was dropped): it now asks for one
+    code = main(
+        ["acquire", str(tmp_path / "v.raw"), "--raw-dtype", "uint16", "--voxel-um", "1", "-o", str(out) + "2"]
+    )
+    assert code == 2
+    assert "--raw-dtype needs the RAW image's shape: give --raw-shape NX NY NZ too" in capsys.readouterr().err

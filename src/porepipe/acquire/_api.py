@@ -32,13 +32,18 @@ class Prepared:
     spacing_um: tuple[float, float, float]
 
 
-def open_image(settings: Settings, base_dir: Path | str = ".", image_path=None) -> Image:
-    """Open the image a settings section names (``image_path`` overrides ``settings.image``)."""
+def image_file(settings: Settings, base_dir: Path | str = ".", image_path=None) -> Path:
+    """The image a settings section names (``image_path`` overrides ``settings.image``), relative to ``base_dir``."""
     path = image_path if image_path is not None else settings.image
     if path is None:
         raise PorepipeError("acquire.image: no image given (set acquire.image in the scene or pass IMAGE)")
     path = Path(path)
-    path = path if path.is_absolute() else Path(base_dir) / path
+    return path if path.is_absolute() else Path(base_dir) / path
+
+
+def open_image(settings: Settings, base_dir: Path | str = ".", image_path=None) -> Image:
+    """Open the image a settings section names (``image_path`` overrides ``settings.image``)."""
+    path = image_file(settings, base_dir, image_path)
     return read_image(
         path,
         settings.format,

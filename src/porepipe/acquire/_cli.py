@@ -7,7 +7,17 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from porepipe._shared.errors import PorepipeError
 from porepipe._shared.overrides import add_threads_option, merge_settings, scene_name
+
+#: the RAW options of ``porepipe acquire`` -> keys of acquire.raw
+_RAW_OPTIONS = {
+    "raw_dtype": "dtype",
+    "raw_shape": "shape",
+    "raw_byte_order": "byte_order",
+    "raw_header": "header_bytes",
+    "raw_order": "order",
+}
 
 
 def _scene(path):
@@ -28,14 +38,10 @@ def settings_from_args(args, scene=None):
         for k in ("voxel_um", "section_um", "format", "dataset", "denoise")
         if getattr(args, k) is not None
     }
-    if args.raw_shape is not None:
-        over["raw"] = {
-            "dtype": args.raw_dtype,
-            "shape": args.raw_shape,
-            "byte_order": args.raw_byte_order,
-            "header_bytes": args.raw_header,
-            "order": args.raw_order,
-        }
+    # only the RAW options given: the scene's acquire.raw keeps the others (--raw-shape reset them to the defaults)
+    raw = {key: getattr(args, opt) for opt, key in _RAW_OPTIONS.items() if getattr(args, opt) is not None}
+    if raw:
+        over["raw"] = raw
     if args.crop is not None:
         over["crop"] = {"size": args.crop, "centre": True}
     over["segmentation"] = {
@@ -48,17 +54,41 @@ def settings_from_args(args, scene=None):
     return merge_settings(Settings, base, over, "acquire settings")
 
 
+def _check_format_options(args, scene, settings, base_dir) -> None:
+    """Refuse --dataset for an image that is not HDF5 and the --raw-* options for one that is not RAW (a .npy image
+    took them without a word), and --raw-* options without a shape (the file was then read as 1 x 1 x 1 voxels).
+    """
+    raw = ["--" + o.replace("_", "-") for o in _RAW_OPTIONS if getattr(args, o) is not None]
+    if args.dataset is None and not raw:
+        return
+    from porepipe.acquire._api import image_file
+    from porepipe.acquire._io import detect_format
+    from porepipe.acquire._settings import ImageFormat
+
+    path = image_file(settings, base_dir, args.image)
+    fmt = detect_format(path, settings.format)
+    given = [("--dataset", ImageFormat.hdf5)] if args.dataset is not None else []
+    given += [(flag, ImageFormat.raw) for flag in raw]
+    for flag, applies in given:
+        if fmt is not applies:
+            raise PorepipeError(
+                f"{flag} applies to {applies.value} images, but {path} is read as {fmt.value}; leave "
+                f"{flag} out (or give --format {applies.value} if the file is one)"
+            )
+    scene_raw = scene.acquire.raw if scene is not None and scene.acquire is not None else None
+    if raw and args.raw_shape is None and scene_raw is None:
+        raise PorepipeError(f"{raw[0]} needs the RAW image's shape: give --raw-shape NX NY NZ too")
+
+
 def _main(args) -> int:
     from porepipe.acquire._run import run
 
     scene = _scene(args.scene)
+    settings = settings_from_args(args, scene)
+    base_dir = Path(args.scene).parent if args.scene else Path(".")
+    _check_format_options(args, scene, settings, base_dir)
     tables = run(
-        settings_from_args(args, scene),
-        args.out,
-        scene=scene,
-        image_path=args.image,
-        base_dir=Path(args.scene).parent if args.scene else Path("."),
-        threads=args.threads,
+        settings, args.out, scene=scene, image_path=args.image, base_dir=base_dir, threads=args.threads
     )
     root = tables[None]
     print(
@@ -116,7 +146,9 @@ def register(subparsers) -> None:
     p.add_argument("--section-um", type=float, default=None, help="serial-section spacing along z in µm")
     p.add_argument("--format", choices=["auto", "tiff", "raw", "hdf5", "npy"], default=None)
     p.add_argument("--dataset", default=None, help="dataset inside an HDF5 file")
-    p.add_argument("--raw-dtype", default="uint8", help="RAW element type (uint8, uint16, float32, ...)")
+    p.add_argument(
+        "--raw-dtype", default=None, help="RAW element type (uint8, uint16, float32, ...; default uint8)"
+    )
     p.add_argument(
         "--raw-shape",
         type=int,
@@ -126,10 +158,18 @@ def register(subparsers) -> None:
         help="RAW image: voxels along x, y, z",
     )
     p.add_argument(
-        "--raw-byte-order", choices=["little", "big"], default="little", help="RAW image byte order"
+        "--raw-byte-order",
+        choices=["little", "big"],
+        default=None,
+        help="RAW image byte order (default little)",
     )
-    p.add_argument("--raw-header", type=int, default=0, help="RAW header bytes to skip")
-    p.add_argument("--raw-order", choices=["F", "C"], default="F", help="F: x fastest in the file")
+    p.add_argument("--raw-header", type=int, default=None, help="RAW header bytes to skip (default 0)")
+    p.add_argument(
+        "--raw-order",
+        choices=["F", "C"],
+        default=None,
+        help="F (default): x fastest in the file; C: z fastest",
+    )
     p.add_argument("--crop", type=int, nargs=3, default=None, metavar=("NX", "NY", "NZ"), help="central crop")
     p.add_argument("--denoise", choices=["none", "median", "nl_means"], default=None)
     p.add_argument(
