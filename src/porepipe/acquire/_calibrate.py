@@ -25,6 +25,12 @@ from porepipe.acquire._settings import Calibration, Family
 _MIN_UNCUT = 10
 #: a parametric family is accepted if its Kolmogorov-Smirnov p-value exceeds this; else the discrete table is used
 _KS_ACCEPT_P = 0.01
+#: the calibrated stage's time step and damping where the grains are large enough: dt = 0.25, Xi = 4 (C- = 1/2)
+_DT, _DAMPING_DT = 0.25, 1.0
+#: largest stable time step per µm of the closest equilibrium distance dx_eq of two grains: the pair force
+#: (packing._kernels._pair_force, k = 400, m = 1) is stiffest just beyond contact, 32 k / dx_eq², so a pair
+#: oscillates at ω = sqrt(2 · 32 k) / dx_eq = 160 / dx_eq and the Verlet step is stable for ω dt < 2
+_DT_PER_UM = 1.0 / 80.0
 
 
 @dataclasses.dataclass
@@ -153,6 +159,19 @@ def _decoration(classes: list[dict]) -> dict | None:
     return section
 
 
+def time_step(radius_spec: dict, max_overlap: float) -> float:
+    """The calibrated stage's time step: 0.25, or less where the smallest grains make that unstable.
+
+    The packer's pair force scales as 1 / dx_eq, so its stiffness as 1 / dx_eq²: a fixed dt = 0.25 is stable for
+    grains of r >= 10.5 µm (max_overlap 0.1) and made grains of a few µm oscillate and overlap without end (an image
+    of 2 µm voxels whose grains had r = 4 µm). The damping goes with 1 / dt (``dt Xi`` = 1), so the packing of
+    small grains runs step by step as that of grains scaled up to r = 10.5 µm.
+    """
+    values = radius_spec.get("values_um") or [radius_spec["min_um"]]
+    closest = min(values) * (2.0 - max_overlap)  # dx_eq of two of the smallest grains at the largest overlap
+    return min(_DT, float(f"{_DT_PER_UM * closest:.3g}"))
+
+
 def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: str, seed: int = 0) -> dict:
     """The model scene (a plain dict, ready for YAML) calibrated to the image statistics."""
     voxel = float(stats_ds.attrs["voxel_um"])
@@ -165,13 +184,14 @@ def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: st
     count = int(round(density * np.prod(box) * 1e-9))
     if count < 1:
         raise PorepipeError(f"grain density {density:.4g} /mm³ gives no sphere in the model box {box} µm")
+    dt = time_step(fit.spec, calibration.max_overlap)
     stage = {
         "name": "calibrated",
         "insert": ["grain"],
         "steps": calibration.steps,
-        "dt": 0.25,
+        "dt": dt,
         "k": {"grain": 400.0},
-        "damping": {"grain": 4.0},
+        "damping": {"grain": float(f"{_DAMPING_DT / dt:.3g}")},
         "freezing": {"lock_step": 10},
         "stochastic_forces": {"step_size": 0.05},
     }
