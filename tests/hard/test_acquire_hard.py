@@ -350,3 +350,26 @@ def test_calibrated_packing_of_small_grains_settles():
     large = stats.assign(inscribed_radius_um=stats.inscribed_radius_um * 4)
     large_scene = calibrated_scene(large, Calibration(decoration=False), name="large")
     assert large_scene["packing"]["stages"][0]["dt"] == pytest.approx(0.25, rel=1e-12)
+
+
+def test_calibrating_an_image_looser_than_granular_media_warns_of_swapped_phases(tmp_path, capsys):
+    # before: an image whose pores are bright (porosity 0.2 read as 0.8) was calibrated without a word, its pore
+    # bodies taken for grains
+    rng = np.random.default_rng(9)
+    x = np.indices((32, 32, 32)).reshape(3, -1).T
+    solid = np.zeros(x.shape[0], bool)
+    for centre, radius in zip(rng.random((70, 3)) * 32, rng.uniform(4, 6, 70)):
+        d = np.abs(x - centre)
+        solid |= (np.minimum(d, 32 - d) ** 2).sum(axis=1) < radius**2
+    bright_pores = np.where(solid.reshape(32, 32, 32), 60, 190).astype(np.uint8)
+    np.save(tmp_path / "v.npy", bright_pores)
+    statistics = tmp_path / "s.h5"
+    acquire(Settings(image=tmp_path / "v.npy", voxel_um=10.0), statistics)
+    assert float(read_attrs(statistics)["porosity"]) > 0.6
+    capsys.readouterr()
+    out = tmp_path / "model.yaml"
+    assert main(["acquire-calibrate", str(statistics), "-o", str(out)]) == 0
+    (warning,) = capsys.readouterr().err.splitlines()
+    assert warning.startswith(f"porepipe acquire-calibrate: warning: {statistics} has porosity 0.")
+    assert warning.endswith("set acquire.segmentation.invert: true and rerun acquire")
+    assert out.exists()  # a warning, not a refusal: loose granular media exist

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import xarray as xr
@@ -13,6 +14,10 @@ from porepipe.acquire._calibrate import calibrated_scene, write_scene_yaml
 from porepipe.acquire._compare import write_comparison
 from porepipe.acquire._model import match_porosity, run_model
 from porepipe.acquire._settings import Settings
+
+#: porosity above which acquire-calibrate warns that the grey phases may be swapped (a rock of porosity 0.2 whose
+#: pores are bright reads as 0.8; the project's own loose-packing validation case has 0.54)
+_LOOSE_POROSITY = 0.6
 
 
 def _section(scene) -> Settings:
@@ -82,9 +87,15 @@ def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) 
     """
     settings = _section(scene)
     name = name or (f"{scene.name}-model" if scene else "calibrated-model")
-    model = calibrated_scene(
-        read_table(statistics_path), settings.calibration, name=name, seed=scene.seed if scene else 0
-    )
+    stats = read_table(statistics_path)
+    if float(stats.porosity) > _LOOSE_POROSITY:
+        print(
+            f"porepipe acquire-calibrate: warning: {statistics_path} has porosity {float(stats.porosity):.3g}, "
+            "looser than granular media usually are: if the pores are the bright phase, the grains calibrated "
+            "here are pores; set acquire.segmentation.invert: true and rerun acquire",
+            file=sys.stderr,
+        )
+    model = calibrated_scene(stats, settings.calibration, name=name, seed=scene.seed if scene else 0)
     history = match_porosity(
         model,
         model["_calibration"]["target_porosity"],
