@@ -8,8 +8,8 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import read_attrs
 from porepipe.acquire._api import acquire, write_binary
 from porepipe.acquire._calibrate import calibrated_scene, fit_radius_distribution
-from porepipe.acquire._prepare import denoise, grey_histogram
-from porepipe.acquire._settings import Calibration, Family, Settings
+from porepipe.acquire._prepare import denoise, grey_histogram, segment_phases
+from porepipe.acquire._settings import Calibration, Family, Segmentation, Settings
 from porepipe.cli import main
 
 
@@ -373,3 +373,16 @@ def test_calibrating_an_image_looser_than_granular_media_warns_of_swapped_phases
     assert warning.startswith(f"porepipe acquire-calibrate: warning: {statistics} has porosity 0.")
     assert warning.endswith("set acquire.segmentation.invert: true and rerun acquire")
     assert out.exists()  # a warning, not a refusal: loose granular media exist
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-200, 1e150, 1e300])
+def test_otsu_threshold_does_not_depend_on_the_grey_scale(scale):
+    # before: at 1e150 and more Otsu's between-class variance overflowed to inf and the first bin won: threshold
+    # 6.1 (x scale) instead of 19.6, the 15-grey phase counted as matrix
+    rng = np.random.default_rng(10)
+    grey = np.concatenate([rng.normal(10, 1, 3000), rng.normal(15, 1, 3000), rng.normal(100, 1, 4000)])
+    with np.errstate(over="raise", invalid="raise"):
+        phases = segment_phases((grey * scale).reshape(20, 50, 10), Segmentation())
+    # 18.5: the unscaled image's threshold (a bin centre between the 15 and 100 phases)
+    assert phases.thresholds[0] / scale == pytest.approx(18.51, abs=0.01)
+    assert phases.pore().mean() == pytest.approx(0.5997, abs=1e-12)  # 3 of the 15-grey voxels lie above it

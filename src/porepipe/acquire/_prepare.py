@@ -206,7 +206,11 @@ def choose_thresholds(hist: GreyHistogram, seg: Segmentation) -> np.ndarray:
 
     counts = hist.counts.astype(np.float64)
     if n == 2:
-        return np.array([float(threshold_otsu(hist=(counts, hist.centres)))])
+        # Otsu on bin numbers: the bins are equally spaced and Otsu's choice does not change under an affine map of
+        # the grey values (multi-Otsu works on bin numbers too); on the grey values themselves, values of 1e150
+        # and more overflowed its between-class variance to inf and the first bin won
+        index = int(threshold_otsu(hist=(counts, np.arange(counts.size, dtype=np.float64))))
+        return np.array([float(hist.centres[index])])
     return np.asarray(threshold_multiotsu(hist=(counts, hist.centres), classes=n), dtype=np.float64)
 
 
