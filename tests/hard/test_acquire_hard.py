@@ -199,6 +199,9 @@ def test_denoise_refuses_an_image_that_is_not_x_y_z():
         ),  # before: overflow, IndexError
         (np.array([np.nan, 1.0, 2.0]), "finite grey values"),  # before: numpy's "range of [nan, nan]"
         (np.zeros((0, 3, 3), np.float32), "non-empty image"),  # before: numpy's zero-size ValueError
+        # before: numpy's "Too many bins for data range. Cannot create 256 finite-sized bins."
+        (np.array([1.0, 1.0 + 1e-15]), r"span 1.0 to 1.000000000000001, too narrow for 256 bins at float64"),
+        (np.array([1.0, 1.0000003], np.float32), "too narrow for 256 bins at float32 precision"),
     ],
 )
 def test_grey_histogram_refuses_values_it_cannot_bin(grey, match):

@@ -160,7 +160,13 @@ def grey_histogram(grey: np.ndarray, bins: int = 256) -> GreyHistogram:
             np.subtract(grey.ravel(), grey.min(), dtype=wide).astype(np.int64), minlength=int(hi - lo) + 1
         )
         return GreyHistogram(counts.astype(np.int64), lo + np.arange(counts.size, dtype=np.float64))
-    counts, edges = np.histogram(grey, bins=bins, range=(lo, hi))
+    try:
+        counts, edges = np.histogram(grey, bins=bins, range=(lo, hi))
+    except ValueError as err:  # "Too many bins for data range" (a raw ValueError before)
+        raise PorepipeError(
+            f"grey values span {lo!r} to {hi!r}, too narrow for {bins} bins at {grey.dtype} precision; rescale "
+            "the image (subtract its minimum) or lower acquire.segmentation.bins"
+        ) from err
     return GreyHistogram(counts.astype(np.int64), 0.5 * (edges[:-1] + edges[1:]))
 
 
