@@ -389,3 +389,15 @@ def test_otsu_threshold_does_not_depend_on_the_grey_scale(scale):
     # 18.5: the unscaled image's threshold (a bin centre between the 15 and 100 phases)
     assert phases.thresholds[0] / scale == pytest.approx(18.51, abs=0.01)
     assert phases.pore().mean() == pytest.approx(0.5997, abs=1e-12)  # 3 of the 15-grey voxels lie above it
+
+
+@pytest.mark.parametrize("method", [[], ["--method", "thresholds", "--thresholds", "50"]])
+def test_image_without_voxels_is_refused_as_such(tmp_path, capsys, method):
+    # before: "the image has 0 populated grey value(s) []: otsu cannot split it", or with thresholds the
+    # Minkowski check's "(a 2-D section: stack serial sections ...)" after NaN warnings from the chord lengths
+    np.save(tmp_path / "v.npy", np.zeros((0, 20, 20), np.uint8))
+    out = tmp_path / "s.h5"
+    assert main(["acquire", str(tmp_path / "v.npy"), "--voxel-um", "1", *method, "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line == f"porepipe acquire: error: image {tmp_path / 'v.npy'} has shape (0, 20, 20): no voxels"
+    assert not out.exists()

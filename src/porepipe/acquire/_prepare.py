@@ -35,6 +35,8 @@ def crop_box(shape, crop: Crop | None) -> tuple[slice, slice, slice]:
 
 def load_region(image: Image, crop: Crop | None) -> np.ndarray:
     """Read the cropped region into memory (only that region is read from a memory map or HDF5 dataset)."""
+    if 0 in image.shape:  # before: "0 populated grey value(s): otsu cannot split it", or NaN statistics
+        raise PorepipeError(f"image {image.source} has shape {image.shape}: no voxels")
     region = np.ascontiguousarray(image.data[crop_box(image.shape, crop)])
     if region.dtype.byteorder not in "=|":
         region = region.astype(region.dtype.newbyteorder("="))
