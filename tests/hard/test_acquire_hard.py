@@ -401,3 +401,20 @@ def test_image_without_voxels_is_refused_as_such(tmp_path, capsys, method):
     (line,) = capsys.readouterr().err.splitlines()
     assert line == f"porepipe acquire: error: image {tmp_path / 'v.npy'} has shape (0, 20, 20): no voxels"
     assert not out.exists()
+
+
+def test_raw_image_one_voxel_thick_is_a_section(tmp_path):
+    # before: a RAW section (--raw-shape NX NY 1) was refused as a volume too thin for S_V/K_V/T_V, with the advice
+    # to stack serial sections, where the same pixels as a 2-D file were measured as a section
+    rng = np.random.default_rng(11)
+    section = np.where(rng.random((20, 16)) < 0.4, 10, 200).astype(np.uint8)
+    (tmp_path / "sec.raw").write_bytes(np.asfortranarray(section).tobytes(order="F"))
+    np.save(tmp_path / "sec.npy", section)
+    raw = Settings.model_validate(
+        {"image": str(tmp_path / "sec.raw"), "voxel_um": 0.5, "raw": {"shape": [20, 16, 1]}}
+    )
+    from_raw = acquire(raw, tmp_path / "raw.h5")[None]
+    from_npy = acquire(Settings(image=tmp_path / "sec.npy", voxel_um=0.5), tmp_path / "npy.h5")[None]
+    assert read_attrs(tmp_path / "raw.h5")["is_2d"] == 1
+    assert float(from_raw.porosity) == pytest.approx(np.mean(section == 10), abs=1e-12)
+    xr.testing.assert_identical(from_raw.drop_attrs(), from_npy.drop_attrs())

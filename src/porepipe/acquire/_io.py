@@ -360,6 +360,9 @@ def read_image(
         source = f"{path}:{dset.name}"
     else:
         data, file_spacing, is_2d = read_tiff(path)
+    # one voxel along z is a section whatever the file (a RAW of shape NX NY 1 was refused as a volume too thin for
+    # the 3-D statistics, with the advice to stack sections, where the same section as a 2-D TIFF was measured)
+    is_2d = is_2d or data.shape[2] == 1
     _warn_if_overridden(source, file_spacing, voxel_um)
     return Image(data, _spacing(file_spacing, voxel_um, section_um), source, is_2d)
 
