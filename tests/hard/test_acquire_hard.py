@@ -9,6 +9,7 @@ from porepipe._shared.store import read_attrs
 from porepipe.acquire._api import acquire, write_binary
 from porepipe.acquire._calibrate import calibrated_scene, fit_radius_distribution
 from porepipe.acquire._prepare import denoise, grey_histogram, segment_phases
+from porepipe.acquire._run import run_calibrate
 from porepipe.acquire._settings import Calibration, Family, Segmentation, Settings
 from porepipe.cli import main
 
@@ -78,6 +79,10 @@ def test_2d_section_where_3d_is_needed(tmp_path):
     assert np.isnan(float(ds.S_V_chord_per_mm.sel(axis="z")))  # no lines along z in a section
     with pytest.raises(PorepipeError, match="2-D section.*need a 3-D image"):
         write_binary(tmp_path / "s.h5", tmp_path / "b.h5", 0.5)
+    # before: "the statistics have no grains (image all pore, or acquire.statistics.grains: false)"
+    with pytest.raises(PorepipeError, match=r"s.h5 comes from a 2-D section; the calibration needs grains"):
+        run_calibrate(tmp_path / "s.h5", tmp_path / "model.yaml")
+    assert not (tmp_path / "model.yaml").exists()
 
 
 def test_nan_in_float_image(tmp_path):

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from porepipe._shared.errors import PorepipeError
 from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import read_table, result_hash
 from porepipe.acquire._api import acquire, write_binary
@@ -88,6 +89,11 @@ def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) 
     settings = _section(scene)
     name = name or (f"{scene.name}-model" if scene else "calibrated-model")
     stats = read_table(statistics_path)
+    if int(stats.attrs.get("is_2d", 0)):  # before: "the statistics have no grains (image all pore, or ...)"
+        raise PorepipeError(
+            f"{statistics_path} comes from a 2-D section; the calibration needs grains, which are measured on a "
+            "3-D image or a stack of serial sections"
+        )
     if float(stats.porosity) > _LOOSE_POROSITY:
         print(
             f"porepipe acquire-calibrate: warning: {statistics_path} has porosity {float(stats.porosity):.3g}, "
