@@ -69,3 +69,19 @@ def test_tiff_whose_shape_exceeds_free_memory_is_refused_before_reading(tmp_path
     with pytest.raises(PorepipeError, match=r"big.tif claims shape \(2, 64, 64\).*free memory"):
         read_image(path)
     assert os.path.exists(path)
+
+
+@pytest.mark.parametrize("content", ["tiff", "empty"])
+def test_npy_suffix_on_another_format_is_named_not_unpickled(tmp_path, content):
+    # before: numpy took a TIFF named .npy for a pickle and its message advised loading it with allow_pickle
+    path = tmp_path / "image.npy"
+    if content == "tiff":
+        tifffile.imwrite(path, np.zeros((2, 4, 4), np.uint8))
+    else:
+        path.write_bytes(b"")
+    with pytest.raises(PorepipeError) as err:
+        read_image(path, voxel_um=1.0)
+    assert str(err.value) == (
+        f"{path} is not a .npy file (no NumPy header); if it is an image of another format, set that format "
+        "(acquire.format, --format)"
+    )

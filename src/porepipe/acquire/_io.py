@@ -117,6 +117,16 @@ def read_raw(path, raw: Raw) -> np.ndarray:
 def read_npy(path) -> np.ndarray:
     """Memory-map a ``.npy`` file (axes taken as x, y[, z])."""
     try:
+        with open(path, "rb") as f:
+            magic = f.read(len(np.lib.format.MAGIC_PREFIX))
+    except OSError as err:
+        raise PorepipeError(f"{path} is not a readable .npy file: {err}") from err
+    if magic != np.lib.format.MAGIC_PREFIX:  # numpy took it for a pickle and advised allow_pickle
+        raise PorepipeError(
+            f"{path} is not a .npy file (no NumPy header); if it is an image of another format, set that format "
+            "(acquire.format, --format)"
+        )
+    try:
         return np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError, EOFError) as err:  # EOFError: an empty file
         raise PorepipeError(f"{path} is not a readable .npy file: {err}") from err
