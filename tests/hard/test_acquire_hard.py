@@ -423,3 +423,18 @@ def test_raw_image_one_voxel_thick_is_a_section(tmp_path):
     assert read_attrs(tmp_path / "raw.h5")["is_2d"] == 1
     assert float(from_raw.porosity) == pytest.approx(np.mean(section == 10), abs=1e-12)
     xr.testing.assert_identical(from_raw.drop_attrs(), from_npy.drop_attrs())
+
+
+def test_image_on_the_command_line_is_relative_to_the_working_directory(tmp_path, monkeypatch, capsys):
+    # before: IMAGE with --scene was looked for beside the scene file ("image file sub/v.npy does not exist")
+    np.save(
+        tmp_path / "v.npy",
+        np.where(np.random.default_rng(12).random((8, 8, 8)) < 0.4, 30, 220).astype(np.uint8),
+    )
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "scene.yaml").write_text(
+        "name: rel\nresolutions_um: [1]\nacquire:\n  voxel_um: 1\n  statistics: {grains: false}\n"
+    )
+    monkeypatch.chdir(tmp_path)
+    assert main(["acquire", "v.npy", "--scene", "sub/scene.yaml", "-o", "s.h5"]) == 0
+    assert read_attrs(tmp_path / "s.h5")["source"] == "v.npy"

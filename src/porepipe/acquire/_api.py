@@ -33,16 +33,21 @@ class Prepared:
 
 
 def image_file(settings: Settings, base_dir: Path | str = ".", image_path=None) -> Path:
-    """The image a settings section names (``image_path`` overrides ``settings.image``), relative to ``base_dir``."""
-    path = image_path if image_path is not None else settings.image
-    if path is None:
+    """The image to read: ``image_path`` as given (the command line's, relative to the working directory), else
+    ``settings.image`` relative to ``base_dir`` (the scene file's folder).
+    """
+    if (
+        image_path is not None
+    ):  # before: joined to base_dir too, so IMAGE with --scene was looked for beside the scene
+        return Path(image_path)
+    if settings.image is None:
         raise PorepipeError("acquire.image: no image given (set acquire.image in the scene or pass IMAGE)")
-    path = Path(path)
+    path = Path(settings.image)
     return path if path.is_absolute() else Path(base_dir) / path
 
 
 def open_image(settings: Settings, base_dir: Path | str = ".", image_path=None) -> Image:
-    """Open the image a settings section names (``image_path`` overrides ``settings.image``)."""
+    """Open the image (``image_path`` as given, else ``settings.image`` relative to ``base_dir``)."""
     path = image_file(settings, base_dir, image_path)
     return read_image(
         path,

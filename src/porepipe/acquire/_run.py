@@ -39,9 +39,9 @@ def run(
     scene : Scene, optional
         The image scene (its name, ``lpt`` and ``permeability`` sections).
     image_path : path-like, optional
-        The image (default: ``settings.image``).
+        The image, as given (relative to the working directory); default: ``settings.image``.
     base_dir : path-like
-        Directory relative image paths refer to (the scene file's).
+        Directory a relative ``settings.image`` refers to (the scene file's).
     threads : int, optional
         Numba threads (default: all).
 
