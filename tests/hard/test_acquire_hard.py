@@ -438,3 +438,20 @@ def test_image_on_the_command_line_is_relative_to_the_working_directory(tmp_path
     monkeypatch.chdir(tmp_path)
     assert main(["acquire", "v.npy", "--scene", "sub/scene.yaml", "-o", "s.h5"]) == 0
     assert read_attrs(tmp_path / "s.h5")["source"] == "v.npy"
+
+
+def test_section_spacing_whose_cubic_resampling_cannot_fit_is_refused(tmp_path):
+    # before: the resampled shape 20 x 20 x 2e301 overflowed int64 to a negative size ("negative dimensions are not
+    # allowed"), and smaller excesses died in numpy's allocation error
+    np.save(
+        tmp_path / "v.npy",
+        np.where(np.random.default_rng(13).random((20, 20, 20)) < 0.4, 30, 220).astype(np.uint8),
+    )
+    settings = Settings(image=tmp_path / "v.npy", voxel_um=1.0, section_um=1e300)
+    with pytest.raises(PorepipeError) as err:
+        acquire(settings, tmp_path / "s.h5")
+    assert str(err.value).startswith(
+        "voxels of 1 x 1 x 1e+300 µm resampled to cubes of 1 µm make 20 x 20 x 2e+301 voxels ("
+    )
+    assert str(err.value).endswith("check acquire.voxel_um and acquire.section_um (--voxel-um, --section-um)")
+    assert not (tmp_path / "s.h5").exists()

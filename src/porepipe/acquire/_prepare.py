@@ -13,6 +13,7 @@ import dataclasses
 import numpy as np
 from scipy import ndimage
 
+from porepipe._shared.budget import machine_bytes
 from porepipe._shared.errors import PorepipeError
 from porepipe.acquire._io import Image
 from porepipe.acquire._settings import Crop, Denoise, Method, Segmentation
@@ -120,7 +121,15 @@ def resample_cubic(grey: np.ndarray, spacing_um) -> tuple[np.ndarray, float]:
     if np.allclose(spacing, edge, rtol=1e-9):
         return grey, edge
     factors = spacing / edge
-    shape = np.maximum(1, np.floor(np.asarray(grey.shape) * factors + 1e-9)).astype(int)
+    wanted = np.maximum(1.0, np.floor(np.asarray(grey.shape) * factors + 1e-9))
+    need = float(np.prod(wanted)) * np.dtype(np.float32).itemsize
+    if need > machine_bytes():  # before: a negative shape (int overflow) or numpy's raw allocation error
+        raise PorepipeError(
+            f"voxels of {' x '.join(f'{s:g}' for s in spacing)} µm resampled to cubes of {edge:g} µm make "
+            f"{' x '.join(f'{n:.3g}' for n in wanted)} voxels ({need / 2**30:.3g} GiB), more than this machine's "
+            "memory; check acquire.voxel_um and acquire.section_um (--voxel-um, --section-um)"
+        )
+    shape = wanted.astype(int)
     out = ndimage.zoom(
         grey.astype(np.float32), shape / np.asarray(grey.shape), order=1, mode="nearest", grid_mode=True
     )
