@@ -9,6 +9,10 @@ from porepipe._shared.errors import PorepipeError
 from porepipe.decorate import (
     anisotropic_rotations,
     decorate,
+    grain_images,
+    mean_overlap_volume,
+    minimise_overlap,
+    neighbour_pairs,
     om_cells,
     pair_overlap_volume,
     points_in_grains,
@@ -18,6 +22,7 @@ from porepipe.decorate import (
     sphere_type,
     von_mises_fisher,
     voxelize_grains,
+    world_grains,
 )
 from porepipe.decorate._settings import Settings
 from tests.unit.decorate.naive_grains import naive_grey
@@ -199,9 +204,41 @@ def test_om_cells_refuse_a_cell_volume_that_is_not_positive_and_finite(volume):
         om_cells(np.array([[5.0, 5.0, 5.0], [8.0, 5.0, 5.0]]), np.array([10.0, 10.0, 10.0]), True, volume)
 
 
-@pytest.mark.parametrize("box", [(10.0, np.nan, 10.0), (10.0, 10.0)])
-def test_voxelize_grains_names_a_box_without_3_finite_edges(box):
-    # before: "cannot convert float NaN to integer" and numpy's broadcast ValueError
-    deco = decorate(np.array([[5.0, 5.0, 5.0]]), np.array([2.0]), Settings(), seed=0)
-    with pytest.raises(PorepipeError, match=r"box_um needs 3 finite edges"):
-        voxelize_grains(deco, box, 1.0)
+def _two_grains():
+    return decorate(np.array([[5.0, 5.0, 5.0], [8.0, 5.0, 5.0]]), np.array([2.0, 2.0]), Settings(), seed=0)
+
+
+_BOX_CALLS = {
+    "grain_images": lambda d, box, per: grain_images(d.centres_um, world_grains(d).half_um, box, per),
+    "neighbour_pairs": lambda d, box, per: neighbour_pairs(d, box, per),
+    "points_in_grains": lambda d, box, per: points_in_grains(np.full((1, 3), 5.0), d, box, per),
+    "pair_overlap_volume": lambda d, box, per: pair_overlap_volume(d, 0, 1, box, per),
+    "mean_overlap_volume": lambda d, box, per: mean_overlap_volume(d, box, per),
+    "voxelize_grains": lambda d, box, per: voxelize_grains(d, box, 1.0, per),
+    "om_cells": lambda d, box, per: om_cells(d.centres_um, box, per, 8.0),
+    "minimise_overlap": lambda d, box, per: minimise_overlap(d, box, per, trials=2, passes=1),
+    "decorate": lambda d, box, per: decorate(d.centres_um, np.array([2.0, 2.0]), Settings(), box_um=box),
+}
+
+
+@pytest.mark.parametrize("name", sorted(_BOX_CALLS))
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize(
+    "box",
+    [
+        (0.0, 10.0, 10.0),  # before: OverflowError / scipy's "data must be finite" / a divide-by-zero warning
+        (-10.0, 10.0, 10.0),  # before: no grain images and no pairs, silently
+        (
+            np.nan,
+            10.0,
+            10.0,
+        ),  # before: OverflowError, scipy's ValueError, or silently ignored without periodicity
+        (np.inf, 10.0, 10.0),  # before: invalid-value warnings
+        (10.0, 10.0),  # before: numpy's broadcast error
+    ],
+)
+def test_decorate_functions_refuse_a_box_without_3_positive_finite_edges(name, periodic, box):
+    deco = _two_grains()
+    arg = "box" if name == "om_cells" else "box_um"
+    with pytest.raises(PorepipeError, match=rf"^{name}: {arg} must be 3 positive finite edge lengths \(µm\)"):
+        _BOX_CALLS[name](deco, box, periodic)

@@ -35,6 +35,17 @@ def _rng(seed: int, stream: int) -> np.random.Generator:
     return rng_stream(seed, "decorate", stream)
 
 
+def _check_box(box_um, what: str, name: str = "box_um") -> np.ndarray:
+    """``box_um`` as a float64 (3,) array if it holds 3 positive finite edges, else one line naming the argument."""
+    try:
+        box = np.asarray(box_um, dtype=np.float64)
+    except (TypeError, ValueError):
+        box = None
+    if box is None or box.shape != (3,) or not np.all(np.isfinite(box)) or np.any(box <= 0):
+        raise PorepipeError(f"{what}: {name} must be 3 positive finite edge lengths (µm), got {box_um!r}")
+    return box
+
+
 @dataclasses.dataclass(frozen=True)
 class Decoration:
     """Grains on spheres: ``types[i]`` indexes ``library``; grain i is c_i + scales[i] · rotations[i] · (type body).
@@ -133,7 +144,7 @@ def grain_images(centres_um, half_um, box_um, periodic: bool) -> tuple[np.ndarra
     """Rows (cx, cy, cz, hx, hy, hz) of every periodic image of every grain box that reaches into the box, and the
     grain index of each row. Without periodicity, the grains themselves (those reaching into the box).
     """
-    box = np.asarray(box_um, dtype=np.float64)
+    box = _check_box(box_um, "grain_images")
     c = np.asarray(centres_um, dtype=np.float64)
     if not periodic:
         keep = np.flatnonzero(np.all((c + half_um >= 0) & (c - half_um <= box), axis=1))
@@ -167,7 +178,7 @@ def iter_grain_slabs(
     Same sample points and conventions as :func:`porepipe.voxelize.voxelize` (a grain boundary point is matrix);
     memory stays at one slab.
     """
-    shape = grid_shape(box_um, voxel_um)
+    shape = grid_shape(_check_box(box_um, "iter_grain_slabs"), voxel_um)
     world = world_grains(deco)
     img_pos, img_grain = grain_images(deco.centres_um, world.half_um, box_um, periodic)
     xmin = img_pos[:, 0] - img_pos[:, 3]
@@ -213,7 +224,7 @@ def voxelize_grains(
     method: VoxelizeMethod = VoxelizeMethod.boundary,
 ) -> np.ndarray:
     """Grey values (nx, ny, nz) uint8 0..216 of the union of the decorated grains (see :func:`iter_grain_slabs`)."""
-    shape = grid_shape(box_um, voxel_um)
+    shape = grid_shape(_check_box(box_um, "voxelize_grains"), voxel_um)
     out = np.empty(shape, dtype=np.uint8)
     for i0, slab in iter_grain_slabs(deco, box_um, voxel_um, periodic, method, slab_planes=shape[0]):
         out[i0 : i0 + len(slab)] = slab
@@ -227,8 +238,9 @@ def points_in_grains(points_um, deco: Decoration, box_um, periodic: bool = True)
         raise PorepipeError(
             f"points_in_grains: points need shape (M, 3) and finite values, got shape {pts.shape}"
         )
+    box = _check_box(box_um, "points_in_grains")
     world = world_grains(deco)
-    img_pos, img_grain = grain_images(deco.centres_um, world.half_um, box_um, periodic)
+    img_pos, img_grain = grain_images(deco.centres_um, world.half_um, box, periodic)
     hits = np.zeros(len(pts), dtype=np.int64)
     if len(img_pos):
         _points_inside(
@@ -251,8 +263,9 @@ def _wrap(centres, box, periodic):
 
 def neighbour_pairs(deco: Decoration, box_um, periodic: bool = True) -> np.ndarray:
     """(K, 2) pairs i < j whose circumscribed spheres overlap (nearest periodic image)."""
+    box = _check_box(box_um, "neighbour_pairs")
     circ = np.array([t.circumradius for t in deco.library])[deco.types] * deco.scales
-    return pairs_within(deco.centres_um, circ, np.asarray(box_um, dtype=np.float64), periodic)
+    return pairs_within(deco.centres_um, circ, box, periodic)
 
 
 def pairs_within(centres, reach, box, periodic: bool, subset=None) -> np.ndarray:
@@ -292,7 +305,7 @@ def pair_overlap_volume(deco: Decoration, i: int, j: int, box_um, periodic: bool
     """Exact volume of grain i ∩ grain j (nearest image of j), by vertex enumeration of the joint half-spaces."""
     if not (0 <= i < len(deco) and 0 <= j < len(deco)):
         raise PorepipeError(f"pair_overlap_volume: grains i = {i}, j = {j}; allowed: 0..{len(deco) - 1}")
-    box = np.asarray(box_um, dtype=np.float64)
+    box = _check_box(box_um, "pair_overlap_volume")
     d = _separation(deco.centres_um, np.array([i]), np.array([j]), box, periodic)[0]
     ni, oi = _halfspaces(deco, i, np.zeros(3))
     nj, oj = _halfspaces(deco, j, d)
@@ -312,8 +325,9 @@ def pair_overlap_volume(deco: Decoration, i: int, j: int, box_um, periodic: bool
 
 def mean_overlap_volume(deco: Decoration, box_um, periodic: bool = True) -> float:
     """Σ_{pairs} |G_i ∩ G_j| / N: mean exact pairwise overlap volume per grain (µm³)."""
-    pairs = neighbour_pairs(deco, box_um, periodic)
-    total = sum(pair_overlap_volume(deco, int(i), int(j), box_um, periodic) for i, j in pairs)
+    box = _check_box(box_um, "mean_overlap_volume")
+    pairs = neighbour_pairs(deco, box, periodic)
+    total = sum(pair_overlap_volume(deco, int(i), int(j), box, periodic) for i, j in pairs)
     return total / max(len(deco), 1)
 
 

@@ -11,6 +11,7 @@ from porepipe.decorate._api import (
     _STREAM_MINIMISER,
     _STREAM_ORIENT,
     Decoration,
+    _check_box,
     _rng,
     build_library,
 )
@@ -96,6 +97,8 @@ def decorate(
         A prebuilt library instead of generating one from ``settings``.
     """
     centres, radii = check_spheres(centres_um, radii_um)
+    if box_um is not None:
+        box_um = _check_box(box_um, "decorate")
     st = (
         np.zeros(len(radii), dtype=np.int64)
         if sphere_types is None

@@ -30,6 +30,7 @@ from porepipe._shared.progress import Progress
 from porepipe.decorate._api import (
     _STREAM_MINIMISER,
     Decoration,
+    _check_box,
     _grain_planes,
     _rng,
     _separation,
@@ -55,7 +56,7 @@ def om_cells(centres, box, periodic: bool, cell_volume_um3: float) -> list[np.nd
     """Grain indices of every cell of the two staggered grids of cells of volume ≈ ``cell_volume_um3``."""
     if not 0 < cell_volume_um3 < np.inf:
         raise PorepipeError(f"cell_volume_um3 must be positive and finite, got {cell_volume_um3}")
-    box = np.asarray(box, dtype=np.float64)
+    box = _check_box(box, "om_cells", "box")
     n = np.maximum(1, np.floor(box / cell_volume_um3 ** (1.0 / 3.0))).astype(np.int64)
     edge = box / n
     grids = [np.zeros(3)] if np.all(n == 1) and periodic else [np.zeros(3), 0.5 * edge]
@@ -98,8 +99,8 @@ def minimise_overlap(
     s_nom·[1 − w, 1 + w], with the total grain volume restored at the end. ``cell_volume_um3`` (V^OM) switches from
     exact neighbour lists to the thesis's overlapping cells.
     """
+    box = _check_box(box_um, "minimise_overlap")
     rng = _rng(0, _STREAM_MINIMISER) if rng is None else rng
-    box = np.asarray(box_um, dtype=np.float64)
     spec = Trials(trials, size_window, volume_weight)
     cur = dataclasses.replace(deco, rotations=deco.rotations.copy(), scales=deco.scales.copy())
     nominal = deco.scales.copy()
