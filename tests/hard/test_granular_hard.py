@@ -12,7 +12,7 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "unit" / "granular"))
 from naive_granular import floor, simulation, square
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.granular import Settings, Simulation
+from porepipe.granular import Settings, Simulation, run
 from porepipe.scene import SceneError, parse_scene
 
 SOFT = {"young_N_m": 1e6, "density_kg_m2": 1000.0}
@@ -243,3 +243,14 @@ def test_galton_funnel_outlet_between_a_ball_and_the_hopper_top(outlet):
         GaltonBoard(outlet_m=outlet)
     # inside the bounds the outlet is taken as given
     assert GaltonBoard(outlet_m=0.05).outlet[0] == pytest.approx(0.05, rel=1e-15)
+
+
+def test_a_run_of_more_steps_than_the_counter_holds_is_refused_and_leaves_no_file(tmp_path):
+    # 1e-30 m grains: dt = 1.3e-33 s, 8e31 steps in 0.1 s; before: numpy's casting error from linspace (traceback)
+    tiny = [(0.0, 0.0), (1e-30, 0.0), (1e-30, 1e-30), (0.0, 1e-30)]
+    settings = Settings.model_validate({"duration_s": 0.1, "particles": [{"vertices_m": tiny}]})
+    with pytest.raises(
+        PorepipeError, match=r"granular.duration_s = 0.1 s is 7.97e\+31 time steps .* \(2\^62\)"
+    ):
+        run(settings, tmp_path / "g.h5", progress=False)
+    assert list(tmp_path.iterdir()) == []

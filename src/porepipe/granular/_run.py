@@ -33,6 +33,8 @@ from porepipe.granular._api import Frame, Simulation
 from porepipe.granular._settings import Settings
 
 STAGE = "granular"
+#: most time steps a run can count (Simulation takes 2^62 as "never" for a particle that is not inserted)
+_MAX_STEPS = 2**62
 _CONTACT_KEYS = ("i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area_m2", "length_m")
 #: units of the contact and series columns (pint spellings); the rest (indices, counts, ratios) are "1"
 _UNITS = {
@@ -175,7 +177,14 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
     sim = Simulation(settings, seed)
     if (line := sim.damping_bound_notice()) is not None:
         notice(line)
-    total = round(settings.duration_s / sim.dt)
+    steps = settings.duration_s / sim.dt
+    if not steps < _MAX_STEPS:
+        raise PorepipeError(
+            f"granular.duration_s = {settings.duration_s:g} s is {steps:.3g} time steps of dt = {sim.dt:.3g} s, "
+            f"more than the step counter holds (2^62); shorten duration_s or raise dt_s (the default dt follows "
+            "the lightest grain, Eq. 2.9: are the sizes in metres?)"
+        )
+    total = round(steps)
     frame_steps = np.unique(np.round(np.linspace(0, total, settings.output.frames + 1)).astype(np.int64))
     frames: list[Frame] = []
     series: list[tuple] = []
