@@ -254,3 +254,21 @@ def test_a_run_of_more_steps_than_the_counter_holds_is_refused_and_leaves_no_fil
     ):
         run(settings, tmp_path / "g.h5", progress=False)
     assert list(tmp_path.iterdir()) == []
+
+
+# before: 1e80 m gave an infinite moment of inertia (a grain that never turns), 1e-100 m a zero one and dt = 0,
+# 1e150 m a NaN one (written to the result), 1e200 m overflow warnings and then "not a convex polygon"
+@pytest.mark.parametrize(
+    "edge, match",
+    [
+        (1e80, r"mass 5e\+163 kg and moment of inertia inf kg m² must be positive finite"),
+        (1e-100, r"mass 5e-197 kg and moment of inertia 0 kg m² must be positive finite"),
+        (1e150, r"corner coordinates reach 1e\+150 m; allowed: \|x\|, \|y\| <= 1e\+100 m"),
+        (1e200, r"corner coordinates reach 1e\+200 m"),
+    ],
+)
+def test_polygons_whose_mass_properties_overflow_or_underflow_are_refused(edge, match):
+    square_ = [(0.0, 0.0), (edge, 0.0), (edge, edge), (0.0, edge)]
+    settings = Settings.model_validate({"particles": [{"vertices_m": square_, "position_m": (0.0, edge)}]})
+    with pytest.raises(PorepipeError, match=rf"granular particle 0: {match}"):
+        Simulation(settings)

@@ -15,6 +15,8 @@ from porepipe._shared.errors import PorepipeError
 
 #: relative tolerance of the convexity test (cross products below it count as collinear)
 _CONVEX_RTOL = 1e-12
+#: largest corner coordinate (m): the convexity test's cross products (~ L²) stay finite
+_MAX_COORD_M = 1e100
 
 
 class AngleMode(str, enum.Enum):
@@ -66,14 +68,21 @@ def polygon_properties(vertices, density_kg_m2: float = 1.0, name: str = "polygo
     area = f.sum()
     tri_c = (a + b) / 3.0  # triangle centroids relative to c (third corner at c)
     centroid = (tri_c * f[:, None]).sum(axis=0) / area
-    # inertia of each triangle (0, a, b) about its own centroid, then Steiner to the polygon's centroid
-    own = f * ((a * a).sum(1) + (b * b).sum(1) - ((a + b) ** 2).sum(1) / 3.0) / 12.0
-    steiner = f * ((tri_c - centroid) ** 2).sum(1)
-    inertia = density_kg_m2 * (own + steiner).sum()
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # huge or tiny: refused below
+        # inertia of each triangle (0, a, b) about its own centroid, then Steiner to the polygon's centroid
+        own = f * ((a * a).sum(1) + (b * b).sum(1) - ((a + b) ** 2).sum(1) / 3.0) / 12.0
+        steiner = f * ((tri_c - centroid) ** 2).sum(1)
+        inertia = density_kg_m2 * (own + steiner).sum()
+    mass = density_kg_m2 * area
+    if not (0.0 < mass < math.inf and 0.0 < inertia < math.inf):
+        raise PorepipeError(
+            f"{name}: mass {mass:.3g} kg and moment of inertia {inertia:.3g} kg m² must be positive finite numbers "
+            f"(area {area:.3g} m², density {density_kg_m2:.3g} kg/m²: overflow or underflow); lengths are in metres"
+        )
     return {
         "area_m2": float(area),
         "centroid_m": c + centroid,
-        "mass_kg": float(density_kg_m2 * area),
+        "mass_kg": float(mass),
         "inertia_kg_m2": float(inertia),
         "vertices_m": v - (c + centroid),
     }
@@ -100,6 +109,11 @@ def check_convex(vertices, name: str = "polygon") -> np.ndarray:
         raise PorepipeError(f"{name}: needs at least 3 corners as an (N, 2) array, got shape {v.shape}")
     if not np.isfinite(v).all():
         raise PorepipeError(f"{name}: corner coordinates must be finite")
+    if np.abs(v).max() > _MAX_COORD_M:
+        raise PorepipeError(
+            f"{name}: corner coordinates reach {np.abs(v).max():.3g} m; allowed: |x|, |y| <= {_MAX_COORD_M:g} m "
+            "(corners are in metres)"
+        )
     area2 = float(np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1]))
     if area2 < 0:
         v = v[::-1].copy()
