@@ -272,3 +272,15 @@ def test_polygons_whose_mass_properties_overflow_or_underflow_are_refused(edge, 
     settings = Settings.model_validate({"particles": [{"vertices_m": square_, "position_m": (0.0, edge)}]})
     with pytest.raises(PorepipeError, match=rf"granular particle 0: {match}"):
         Simulation(settings)
+
+
+def test_a_grain_dropped_onto_the_last_one_is_named_as_an_insertion_overlap_not_an_unstable_dt():
+    # one grain per ms at the same point: the second goes in where the first has fallen 5 um; before: "unstable at
+    # step 121 ... rerun with granular.dt_s <= ...", which no time step cures
+    source = {"x_m": 0.0, "y_m": 0.05, "every_s": 0.001, "to_s": 0.003, "shape": {"size_m": (0.005, 0.005)}}
+    sim = Simulation(Settings.model_validate({"drop_sources": [source]}))
+    with pytest.raises(
+        PorepipeError,
+        match=r"one step after granular.drop_sources\[0\] inserted particle\(s\) \[1\] at t = 0.001 s: .*\(every_s\)",
+    ):
+        sim.advance(round(0.003 / sim.dt))

@@ -310,6 +310,8 @@ class Simulation:
         self.step = 0
         self.rebuilds = 0
         self.max_overlap_seen = 0.0
+        # the step of the last insertion and the particles it inserted (for the guard's message only)
+        self.last_insert = (-1, np.zeros(0, np.int64))
         self.wv = np.zeros_like(self.body)
         self.aabb = np.zeros((b, 4))
         self._place_all()
@@ -451,6 +453,8 @@ class Simulation:
                 top = float(self.G[0, : self.n_mob, 1][inside].max()) if inside.any() else 0.0
                 self.G[0, i, 1] += top
             self.active[i] = 1
+        if len(due):
+            self.last_insert = (self.step, due)
         return len(due) > 0
 
     def remove(self, which) -> None:
@@ -569,6 +573,16 @@ class Simulation:
             raise PorepipeError(
                 f"granular: particle {int(diag[1])} starts with {what}: the initial placement "
                 "overlaps (widen the block's grid_m or move the particle)"
+            )
+        at, new = self.last_insert
+        if code == K.GUARD_OVERLAP and self.step == at + 1:
+            sources = sorted({int(self.drop[i]) for i in new if self.drop[i] >= 0})
+            names = ", ".join(f"granular.drop_sources[{k}]" for k in sources) or "the scene"
+            raise PorepipeError(
+                f"granular: particle {int(diag[1])} shows {what} one step after {names} inserted particle(s) "
+                f"{new[:5].tolist()} at t = {self.insert_s[new].min():.6g} s: they went in on top of grains that "
+                "had not moved away (not an unstable dt); insert less often (every_s), over a wider width_m, "
+                "higher, or with a downward velocity_m_s"
             )
         raise PorepipeError(
             f"granular: unstable at step {self.step} (t = {self.time_s:.6g} s): particle {int(diag[1])} shows "
