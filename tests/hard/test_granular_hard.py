@@ -284,3 +284,18 @@ def test_a_grain_dropped_onto_the_last_one_is_named_as_an_insertion_overlap_not_
         match=r"one step after granular.drop_sources\[0\] inserted particle\(s\) \[1\] at t = 0.001 s: .*\(every_s\)",
     ):
         sim.advance(round(0.003 / sim.dt))
+
+
+def test_the_guard_advises_a_dt_within_the_damping_bound_when_the_run_is_past_it():
+    # damping 1e6 bounds dt at 2.7e-11 s (c dt <= 0.15, Gear); before: the guard advised dt/2 (2.2e-5 s), and every
+    # rerun with its advice failed again, halving the step each time
+    p = {"vertices_m": square(0.01), "position_m": (0.0, 0.0051), "velocity_m_s": (0.0, -0.5)}
+    material = {"young_N_m": 1e6, "density_kg_m2": 1000.0, "damping": 1e6}
+    bound = simulation([p], [floor()], material=material).dt_damping
+    with pytest.raises(PorepipeError, match=r"and the damping bound .* rerun with granular.dt_s <= ") as err:
+        simulation([p], [floor()], material=material, dt_s=4.4e-5).advance(100)
+    advised = float(str(err.value).rsplit("<= ", 1)[1])
+    assert advised == pytest.approx(bound, rel=1e-2)  # printed to 3 digits
+    sim = simulation([p], [floor()], material=material, dt_s=advised)
+    sim.advance(2000)
+    _finite(sim)

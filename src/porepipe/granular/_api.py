@@ -563,7 +563,12 @@ class Simulation:
         )
 
     def _guard_error(self, code, diag):
-        try_dt = min(0.5 * self.dt, 0.5 * self.dt_rule)
+        try_dt = min(0.5 * self.dt, 0.5 * self.dt_rule, self.dt_damping)
+        damped = (
+            f" and the damping bound {self.dt_damping:.3g} s (material.damping, tangential_damping)"
+            if self.dt > self.dt_damping * (1.0 + 1e-9)
+            else ""
+        )
         what = {
             K.GUARD_OVERLAP: f"overlap area {diag[2]:.3g} r_eq² (limit {self.mat[6]:g})",
             K.GUARD_NAN: "a non-finite position or velocity",
@@ -587,7 +592,7 @@ class Simulation:
         raise PorepipeError(
             f"granular: unstable at step {self.step} (t = {self.time_s:.6g} s): particle {int(diag[1])} shows "
             f"{what}; dt = {self.dt:.3g} s vs the rule (pi/10) sqrt(m_min/E) = {self.dt_rule:.3g} s "
-            f"(Eq. 2.9): rerun with granular.dt_s <= {try_dt:.3g}"
+            f"(Eq. 2.9){damped}: rerun with granular.dt_s <= {try_dt:.3g}"
         )
 
     # -- observables -------------------------------------------------------------------------------------------------
