@@ -1,6 +1,7 @@
 """`porepipe run` parses its own options wherever they stand and passes only what follows `--` to Snakemake."""
 
 import subprocess
+import sys
 
 import pytest
 
@@ -109,3 +110,18 @@ def test_an_unwritable_run_folder_is_one_line_before_snakemake(calls, monkeypatc
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"{tmp_path} is not writable" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_python_dash_m_porepipe_is_the_porepipe_command(tmp_path):
+    """`python -m porepipe` (a venv whose scripts folder is not on PATH) runs the same command, exit codes included."""
+    ok = subprocess.run(
+        [sys.executable, "-m", "porepipe", "--version"], capture_output=True, text=True, check=False
+    )
+    assert ok.returncode == 0 and ok.stdout.startswith("porepipe ")
+    bad = subprocess.run(
+        [sys.executable, "-m", "porepipe", "validate", str(tmp_path / "none.yaml")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert bad.returncode == 2 and "none.yaml" in bad.stderr
