@@ -8,6 +8,9 @@ decorated grains are polygons, one per face.
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import h5py
@@ -317,12 +320,83 @@ def _check_fluid(gradient_pa_m, viscosity_pa_s) -> None:
         raise PorepipeError(f"export: viscosity_pa_s must be positive and finite, got {viscosity_pa_s}")
 
 
+def granular_polygons(tables: dict, frame: int = -1) -> tuple[np.ndarray, list[np.ndarray], dict]:
+    """The grains and walls of one frame of a ``granular.h5`` as polygons in the plane z = 0 (metres).
+
+    Parameters
+    ----------
+    tables : dict
+        Output of :func:`porepipe.granular.read_granular`.
+    frame : int
+        Frame index (negative counts from the end).
+
+    Returns
+    -------
+    vertices_m : (V, 3) ndarray
+        Every corner, z = 0.
+    faces : list of int ndarray
+        One polygon per active grain, then one per wall.
+    cell_data : dict of str -> (len(faces),) ndarray
+        ``particle`` (the grain's index, -1 for a wall), ``wall`` (the wall's index, -1 for a grain),
+        ``speed_m_s`` and ``angular_velocity_rad_s`` (0 for walls).
+    """
+    from porepipe.granular import frame_particles
+
+    parts = frame_particles(tables, frame)
+    ds, f = tables["frames"], parts["index"]
+    grains = np.flatnonzero(parts["active"])
+    walls = [w[~np.isnan(w).any(axis=1)] for w in ds["wall_vertices_m"].values]
+    outlines = [parts["polygons"][k] for k in grains] + walls
+    starts = np.concatenate([[0], np.cumsum([len(o) for o in outlines])]).astype(np.int64)
+    faces = [np.arange(starts[i], starts[i + 1]) for i in range(len(outlines))]
+    xy = np.concatenate(outlines) if outlines else np.zeros((0, 2))
+    vertices = np.column_stack([xy, np.zeros(len(xy))])
+    no_wall, no_grain = np.full(len(grains), -1), np.full(len(walls), -1)
+    speed = np.linalg.norm(ds["velocity_m_s"].values[f][grains], axis=1)
+    cell_data = {
+        "particle": np.concatenate([grains, no_grain]),
+        "wall": np.concatenate([no_wall, np.arange(len(walls))]),
+        "speed_m_s": np.concatenate([speed, np.zeros(len(walls))]),
+        "angular_velocity_rad_s": np.concatenate(
+            [ds["angular_velocity_rad_s"].values[f][grains], np.zeros(len(walls))]
+        ),
+    }
+    return vertices, faces, cell_data
+
+
+def write_granular_series(path, tables: dict) -> Path:
+    """Every frame of a granular result as a ParaView time series: ``path`` (.pvd) names one .vtp per frame
+    (:func:`granular_polygons`), in the folder ``<stem>_frames`` beside it. The frames are written into a hidden
+    folder that replaces ``<stem>_frames`` only when all are written, so a failed export leaves none behind.
+    """
+    path = Path(path)
+    folder = path.with_name(f"{path.stem}_frames")
+    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=path.parent))
+    rows = []
+    try:
+        for k, time_s in enumerate(tables["frames"]["time_s"].values):
+            name = f"frame_{k:05d}.vtp"
+            write_polygons(tmp / name, *granular_polygons(tables, k))
+            rows.append(f'    <DataSet timestep="{float(time_s)!r}" file="{folder.name}/{name}"/>')
+        if folder.exists():
+            shutil.rmtree(folder)
+        os.replace(tmp, folder)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    lines = ['<?xml version="1.0"?>', '<VTKFile type="Collection" version="0.1">', "  <Collection>", *rows]
+    with atomic_path(path) as out:
+        out.write_text("\n".join([*lines, "  </Collection>", "</VTKFile>", ""]))
+    return path
+
+
 def export_result(
     path,
     out,
     *,
     gradient_pa_m: float = DEFAULT_GRADIENT_PA_M,
     viscosity_pa_s: float = WATER_VISCOSITY_PA_S,
+    frame: int | None = None,
 ) -> str:
     """Write a porepipe result as a ParaView file; returns a one-line summary of what was written.
 
@@ -331,12 +405,15 @@ def export_result(
     path : path-like
         A result: ``grey_a{a}.h5`` / ``binary_a{a}.h5`` (→ .vti), ``packing.h5`` (→ .vtp points with
         ``radius_um``), ``grains.h5`` (→ .vtp polygons), ``perm_a{a}_{axis}.h5`` written with fields
-        (→ .vti with ``velocity_m_s``, ``pressure_Pa``, ``solid``).
+        (→ .vti with ``velocity_m_s``, ``pressure_Pa``, ``solid``), ``granular.h5`` (→ .vtp: one frame's grains
+        and walls as polygons in metres; → .pvd: every frame, a ParaView time series).
     out : path-like
         The file to write; its suffix must be the one the result calls for.
     gradient_pa_m, viscosity_pa_s : float
         LBM results only: the applied pressure gradient (Pa/m) and the fluid's viscosity (Pa s) that turn the
         lattice fields into SI units (default 1e4 Pa/m, water).
+    frame : int, optional
+        Granular results written as .vtp only: the frame (negative counts from the end; default the last).
 
     Returns
     -------
@@ -358,17 +435,29 @@ def export_result(
         kind, suffix = "packing", ".vtp"
     elif table is not None and {"normal", "offset", "centre_um"} <= set(table.variables):
         kind, suffix = "grains", ".vtp"
+    elif attrs.get("stage") == "granular":
+        kind, suffix = "granular", ".pvd" if out.suffix == ".pvd" else ".vtp"
     elif attrs.get("stage") == "permeability":
         raise PorepipeError(f"{path} holds no flow fields; rerun permeability with --write-fields")
     else:
         raise PorepipeError(
             f"{path} (stage {attrs.get('stage', '?')!r}) has nothing to export: porepipe export takes volumes, "
-            "packings, grains and permeability results written with --write-fields"
+            "packings, grains, granular results and permeability results written with --write-fields"
         )
     if out.suffix != suffix:
+        allowed = ".vtp (one frame) or .pvd (every frame)" if kind == "granular" else suffix
         raise PorepipeError(
-            f"{path} is a {kind} result: write it as {suffix}, not {out.suffix or 'no suffix'}"
+            f"{path} is a {kind} result: write it as {allowed}, not {out.suffix or 'no suffix'}"
         )
+    if frame is not None and (kind != "granular" or suffix == ".pvd"):
+        holds = (
+            "time series, which holds every frame" if kind == "granular" else "export, which has no frames"
+        )
+        raise PorepipeError(
+            f"--frame {frame}: picks one frame of a granular result written as .vtp; {out.name} is a {kind} {holds}"
+        )
+    if kind == "granular":
+        return _export_granular(path, out, -1 if frame is None else frame)
     if kind == "flow":
         meta = volumes["velocity_x"]
         fields = _flow_fields(path, attrs, gradient_pa_m, viscosity_pa_s)
@@ -390,4 +479,28 @@ def export_result(
     return f"{len(np.unique(face_grain))} grains as {len(faces)} polygons{skipped} -> {out}"
 
 
-__all__ = ["export_result", "grain_polygons", "write_image", "write_points", "write_polygons"]
+def _export_granular(path, out: Path, frame: int) -> str:
+    from porepipe.granular import read_granular
+
+    tables = read_granular(path)
+    if out.suffix == ".pvd":
+        write_granular_series(out, tables)
+        frames = tables["frames"].sizes["frame"]
+        return f"{frames} frames (grains and walls as polygons, m) -> {out} and {out.stem}_frames/"
+    vertices, faces, cell_data = granular_polygons(tables, frame)
+    write_polygons(out, vertices, faces, cell_data)
+    grains, walls = int((cell_data["wall"] < 0).sum()), int((cell_data["wall"] >= 0).sum())
+    index = frame % tables["frames"].sizes["frame"]
+    time_s = float(tables["frames"]["time_s"].values[index])
+    return f"frame {index} (t = {time_s:.6g} s): {grains} grains and {walls} walls as polygons (m, z = 0) -> {out}"
+
+
+__all__ = [
+    "export_result",
+    "grain_polygons",
+    "granular_polygons",
+    "write_granular_series",
+    "write_image",
+    "write_points",
+    "write_polygons",
+]

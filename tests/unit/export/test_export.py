@@ -2,10 +2,13 @@
 centres and radii exactly, polyhedral grains at their analytic corners, and LBM fields in SI units that satisfy
 plane Poiseuille flow (u_max = G h² / 8μ) and Darcy's law (mean superficial velocity = κ G / μ)."""
 
+import re
+
 import h5py
 import numpy as np
 import pytest
 import xarray as xr
+import yaml
 
 vtk_numpy = pytest.importorskip("vtkmodules.util.numpy_support")
 from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLPolyDataReader  # noqa: E402
@@ -173,3 +176,106 @@ def test_wrong_suffix_and_fieldless_results_are_refused_in_one_line(tmp_path, ca
     assert not (tmp_path / "x.vtp").exists() and not (tmp_path / "p.vti").exists()
     with h5py.File(path) as f:
         assert f["volumes/pore"].dtype == bool
+
+
+GRANULAR_SCENE = {
+    "name": "g",
+    "analyses": ["granular"],
+    "granular": {
+        "duration_s": 0.02,
+        "dt_s": 2e-5,
+        "box": {"lower_m": [0, 0], "upper_m": [0.06, 0.1]},
+        "blocks": [
+            {
+                "lower_m": [0, 0],
+                "upper_m": [0.06, 0.05],
+                "grid_m": [0.012, 0.012],
+                "shape": {"size_m": [0.005, 0.005], "corners": 7, "angle_mode": "RAND1"},
+            }
+        ],
+        "output": {"frames": 3},
+    },
+}
+
+
+@pytest.fixture(scope="module")
+def granular_result(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("granular")
+    (folder / "g.yaml").write_text(yaml.safe_dump(GRANULAR_SCENE))
+    assert main(["granular", str(folder / "g.yaml"), "-o", str(folder / "g.h5"), "--quiet"]) == 0
+    return folder / "g.h5"
+
+
+def _polygon_area_centroid(xy):
+    x, y = xy[:, 0], xy[:, 1]
+    cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+    area = cross.sum() / 2
+    return area, np.array([((x + np.roll(x, -1)) * cross).sum(), ((y + np.roll(y, -1)) * cross).sum()]) / (
+        6 * area
+    )
+
+
+def test_a_granular_frame_becomes_its_grains_and_walls_at_the_stored_positions(granular_result, tmp_path):
+    from porepipe.granular import read_granular
+
+    frames = read_granular(granular_result)["frames"]
+    out = tmp_path / "frame.vtp"
+    assert main(["export", str(granular_result), "-o", str(out), "--frame", "1"]) == 0
+    poly = _read(out, vtkXMLPolyDataReader)
+    points = vtk_numpy.vtk_to_numpy(poly.GetPoints().GetData())
+    offsets = vtk_numpy.vtk_to_numpy(poly.GetPolys().GetOffsetsArray())
+    connectivity = vtk_numpy.vtk_to_numpy(poly.GetPolys().GetConnectivityArray())
+    particle = vtk_numpy.vtk_to_numpy(poly.GetCellData().GetArray("particle"))
+    wall = vtk_numpy.vtk_to_numpy(poly.GetCellData().GetArray("wall"))
+    active = frames["active"].values[1].astype(bool)
+    assert sorted(particle[particle >= 0]) == list(np.flatnonzero(active))
+    assert sorted(wall[wall >= 0]) == list(range(frames.sizes["wall"]))
+    assert np.all(points[:, 2] == 0.0)
+    corners = frames["n_corners"].values
+    for cell in np.flatnonzero(particle >= 0):
+        k = particle[cell]
+        xy = points[connectivity[offsets[cell] : offsets[cell + 1]], :2]
+        area, centroid = _polygon_area_centroid(xy)
+        body_area, _ = _polygon_area_centroid(frames["vertices_m"].values[k, : corners[k]])
+        # truth: the stored body outline (area unchanged by the rotation) and the stored centroid position of frame
+        # 1 (the outline is kept about its centroid); 1e-12 relative: the rotation's round-off
+        assert area == pytest.approx(body_area, rel=1e-12)
+        np.testing.assert_allclose(centroid, frames["position_m"].values[1, k], rtol=0, atol=1e-12 * 0.1)
+        # the corners themselves: the body outline turned counter-clockwise by the stored angle (the result's
+        # convention, attrs["angles"]), then moved to the stored position
+        c, s = np.cos(frames["angle_rad"].values[1, k]), np.sin(frames["angle_rad"].values[1, k])
+        turned = frames["vertices_m"].values[k, : corners[k]] @ np.array([[c, -s], [s, c]]).T
+        np.testing.assert_allclose(xy, turned + frames["position_m"].values[1, k], rtol=0, atol=1e-15)
+    speed = vtk_numpy.vtk_to_numpy(poly.GetCellData().GetArray("speed_m_s"))[particle >= 0]
+    expected = np.linalg.norm(frames["velocity_m_s"].values[1][particle[particle >= 0]], axis=1)
+    np.testing.assert_array_equal(speed, expected)
+
+
+def test_every_granular_frame_becomes_a_paraview_time_series(granular_result, tmp_path):
+    from porepipe.granular import read_granular
+
+    times = read_granular(granular_result)["frames"]["time_s"].values
+    out = tmp_path / "heap.pvd"
+    assert main(["export", str(granular_result), "-o", str(out)]) == 0
+    text = out.read_text()
+    files = [tmp_path / f for f in re.findall(r'file="([^"]+)"', text)]
+    steps = [float(s) for s in re.findall(r'timestep="([^"]+)"', text)]
+    assert steps == list(times) and len(files) == len(times)
+    assert [f.parent.name for f in files] == ["heap_frames"] * len(times)
+    for k, f in enumerate(files):
+        single = tmp_path / f"single_{k}.vtp"
+        assert main(["export", str(granular_result), "-o", str(single), "--frame", str(k)]) == 0
+        assert f.read_bytes() == single.read_bytes()  # the series' frame k is the one-frame export of frame k
+    assert (
+        sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+    )  # no temporary folder left
+
+
+def test_granular_export_refuses_other_suffixes_and_frames_in_one_line(granular_result, tmp_path, capsys):
+    assert main(["export", str(granular_result), "-o", str(tmp_path / "g.vti")]) == 2
+    assert "write it as .vtp (one frame) or .pvd (every frame)" in capsys.readouterr().err
+    assert main(["export", str(granular_result), "-o", str(tmp_path / "g.vtp"), "--frame", "99"]) == 2
+    assert "frame 99 out of range" in capsys.readouterr().err
+    assert main(["export", str(granular_result), "-o", str(tmp_path / "g.pvd"), "--frame", "0"]) == 2
+    assert "--frame" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
