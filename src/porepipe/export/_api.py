@@ -368,6 +368,18 @@ def write_granular_series(path, tables: dict) -> Path:
     """Every frame of a granular result as a ParaView time series: ``path`` (.pvd) names one .vtp per frame
     (:func:`granular_polygons`), in the folder ``<stem>_frames`` beside it. The frames are written into a hidden
     folder that replaces ``<stem>_frames`` only when all are written, so a failed export leaves none behind.
+
+    Parameters
+    ----------
+    path : path-like
+        The collection file (.pvd).
+    tables : dict
+        Output of :func:`porepipe.granular.read_granular`.
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     path = Path(path)
     folder = path.with_name(f"{path.stem}_frames")
