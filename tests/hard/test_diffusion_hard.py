@@ -7,6 +7,7 @@ import pytest
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.diffusion import Settings, equilibrium, prepare, square_capillary, transport
+from porepipe.diffusion._cli import _USED_BY
 from porepipe.scene import SceneError, parse_scene
 
 S = Settings(batches=16, batch_particles=500, max_rounds=1)
@@ -212,7 +213,7 @@ def test_length_series_fit_refuses_non_finite_points(x, d, d_err):
     two parameters with one of them weightless: LinAlgError 'Singular matrix'."""
     from porepipe.diffusion import fit_length_series
 
-    with pytest.raises(PorepipeError, match="the length series needs finite r/L, D > 0 and errors > 0"):
+    with pytest.raises(PorepipeError, match="the length series needs finite values, D > 0 and errors > 0"):
         fit_length_series(x, d, d_err)
 
 
@@ -370,3 +371,288 @@ def test_a_run_that_counted_nothing_has_not_met_its_target(capsys):
     result = transport(square_capillary(4, 8).pore, 2, settings)
     assert result.tallies.rounds == 4
     assert "stopped by a limit before the target" in capsys.readouterr().err
+
+
+def _exact_line_fit(x, d, d_err):
+    """The weighted fit of 1/D = c + s·x in exact rational arithmetic: (α, D₀, χ²/dof) as floats."""
+    from fractions import Fraction as F
+
+    xs, ys = [F(v) for v in x], [1 / F(v) for v in d]
+    ws = [(F(dv) ** 2 / F(ev)) ** 2 for dv, ev in zip(d, d_err)]  # 1/σ², σ = D_err/D²
+    s0, s1 = sum(ws), sum(w * v for w, v in zip(ws, xs))
+    s2 = sum(w * v * v for w, v in zip(ws, xs))
+    t0, t1 = sum(w * y for w, y in zip(ws, ys)), sum(w * v * y for w, v, y in zip(ws, xs, ys))
+    det = s0 * s2 - s1 * s1
+    c, s = (s2 * t0 - s1 * t1) / det, (s0 * t1 - s1 * t0) / det
+    chi2 = sum(w * (y - c - s * v) ** 2 for w, y, v in zip(ws, ys, xs)) / max(len(xs) - 2, 1)
+    return float(s / c), float(1 / c), float(chi2)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-200, 1e-300, 1e200, 1e300])
+def test_length_series_fit_is_the_same_for_any_common_error_scale(scale):
+    """Errors of 1e-200 overflowed the normal equations (weights 1/σ² = 1e400): α, D₀ and their errors came out
+    NaN. The fit is now solved in exactly rescaled units: α and D₀ equal the exact rational fit of the same points
+    (rel 1e-12) for any common factor on the errors, and the errors scale with it. χ²/dof scales as 1/factor²:
+    beyond the float range it is inf, its value."""
+    from porepipe.diffusion import fit_length_series
+
+    x = np.array([0.5, 0.2, 0.1, 0.05, 0.02])
+    d = 3.0 / (1.0 + 2.9 * x) * (1.0 + 1e-3 * np.array([1.0, -2.0, 0.5, 1.5, -1.0]))
+    err = 1e-3 * d * np.array([1.0, 2.0, 0.5, 3.0, 1.0])
+    alpha, d0, chi2 = _exact_line_fit(x, d, err)
+    base = fit_length_series(x, d, err)
+    fit = fit_length_series(x, d, err * scale)
+    assert fit["alpha"] == pytest.approx(alpha, rel=1e-12) and fit["D0"] == pytest.approx(d0, rel=1e-12)
+    assert base["chi2_per_dof"] == pytest.approx(chi2, rel=1e-9)
+    for key in ("alpha_err", "D0_err"):
+        assert fit[key] == pytest.approx(base[key] * scale, rel=1e-12)
+    with np.errstate(over="ignore"):
+        expected = chi2 / scale / scale
+    assert fit["chi2_per_dof"] == (pytest.approx(expected, rel=1e-9) if np.isfinite(expected) else math.inf)
+
+
+def test_length_series_fit_of_points_on_the_line_with_tiny_errors():
+    """Data on the model with errors of 1e-200 (relative to D 1e-200, 1e-10 at D ~ 1e-300, 1e-500 at D ~ 1e300:
+    σ of 1/D = 1e-800, below the float range): α and D₀ exact to rel 1e-12, their errors finite."""
+    from porepipe.diffusion import fit_length_series
+
+    x = np.array([0.5, 0.2, 0.1, 0.02])
+    for d0 in (3.0, 3e-300, 3e300):
+        d = d0 / (1.0 + 2.9 * x)
+        fit = fit_length_series(x, d, np.full(4, 1e-200) if d0 >= 1 else 1e-10 * d)
+        assert fit["alpha"] == pytest.approx(2.9, rel=1e-12) and fit["D0"] == pytest.approx(d0, rel=1e-12)
+        assert 0 <= fit["alpha_err"] < 1e-9 and math.isfinite(fit["D0_err"])
+
+
+def test_length_series_fit_refuses_errors_beyond_the_float_range_of_each_other():
+    """A point whose error is 1e320 times another's has no weight; with fewer than two weighted lengths left the
+    line is not determined, which is said in one line (it was a singular-matrix traceback or NaN)."""
+    from porepipe.diffusion import fit_length_series
+
+    with pytest.raises(PorepipeError, match="fewer than two distinct points keep a weight"):
+        fit_length_series([0.5, 0.1], [1.0, 2.0], [1.0, 1e-320])
+
+
+def test_bosanquet_fit_shares_the_rescaled_line():
+    """The Bosanquet line 1/D = a + b·N had the same normal equations (NaN at errors of 1e-200), took a NaN D without
+    a word and raised LinAlgError for two equal counts; it is now the length series' exactly rescaled fit."""
+    from porepipe.diffusion._edmd import bosanquet_fit
+
+    counts = np.array([200.0, 800.0, 2400.0, 4000.0])
+    d = 1.0 / (0.5 + 2e-4 * counts) * (1.0 + 1e-3 * np.array([1.0, -1.0, 2.0, -0.5]))
+    err = 1e-3 * d
+    base, tiny = bosanquet_fit(counts, d, err), bosanquet_fit(counts, d, err * 1e-200)
+    for key in ("intercept", "slope"):
+        assert tiny[key] == pytest.approx(base[key], rel=1e-12)
+        assert tiny[f"{key}_err"] == pytest.approx(base[f"{key}_err"] * 1e-200, rel=1e-12)
+    exact_slope = _exact_line_fit(counts, d, err)
+    assert base["slope"] / base["intercept"] == pytest.approx(exact_slope[0], rel=1e-12)
+    assert 1 / base["intercept"] == pytest.approx(exact_slope[1], rel=1e-12)
+    for bad in ((counts, np.where(counts > 300, d, np.nan), err), ([800.0, 800.0], d[:2], err[:2])):
+        with pytest.raises(PorepipeError, match="the Bosanquet fit needs"):
+            bosanquet_fit(*bad)
+
+
+#: a valid command-line value of each setup-specific option of ``porepipe diffusion``
+_SAMPLE = {
+    "wall_speed": ["--wall-speed", "thermal"],
+    "inlet_law": ["--inlet-law", "isotropic"],
+    "inlet_speed": ["--inlet-speed", "mean"],
+    "initial_speed": ["--initial-speed", "mean"],
+    "species": ["--species", "He"],
+    "gas_particles": ["--gas-particles", "N2=10"],
+    "collisions": ["--no-collisions"],
+    "checkpoint": ["--checkpoint", "c.npz"],
+}
+#: options every setup reads (or, --resume, that the workflow passes to every run): not in the table
+_EVERY_SETUP = {
+    "help",
+    "binary",
+    "axis",
+    "out",
+    "scene",
+    "seed",
+    "threads",
+    "resume",
+    "setup",
+    "wall_law",
+    "func",
+}
+
+
+def _diffusion_parser():
+    from porepipe.cli import build_parser
+
+    parser = build_parser()
+    return next(a for a in parser._actions if a.dest == "command").choices["diffusion"]
+
+
+def _mode_settings(mode: str) -> Settings:
+    if mode == "length_series":
+        return Settings(lengths=[4, 8])
+    if mode == "reaction_study":
+        return Settings(setup="reaction", reactions={"series": [{"w": 0.1}]})
+    return Settings(setup=mode)
+
+
+def test_every_diffusion_option_is_either_for_every_setup_or_in_the_one_table():
+    """A new option of ``porepipe diffusion`` must be classified: read by every setup, or listed with the setups
+    that read it (so the refusal below knows it)."""
+    from porepipe.diffusion._cli import _MODES
+
+    dests = {a.dest for a in _diffusion_parser()._actions}
+    assert set(_USED_BY) <= dests
+    assert dests - set(_USED_BY) - _EVERY_SETUP == set()
+    assert all(set(modes) <= set(_MODES) and modes for modes in _USED_BY.values())
+
+
+@pytest.mark.parametrize("dest", sorted(_USED_BY))
+def test_a_setup_specific_option_given_for_another_setup_is_refused(dest):
+    """``--reaction-w 0.5`` with setup transmission (and every other option a setup does not read) was ignored
+    without a word; now one line names the option, the setups that read it and this run's. Given for a setup that
+    reads it, or not given at all (its default), nothing is refused."""
+    from porepipe.diffusion._cli import _MODES, _option, _refuse_unused
+
+    parser = _diffusion_parser()
+    given = parser.parse_args(["b.h5", *_SAMPLE.get(dest, [_option(dest), "4"])])
+    assert getattr(given, dest) is not None
+    bare = parser.parse_args(["b.h5"])
+    for mode in _MODES:
+        settings = _mode_settings(mode)
+        _refuse_unused(bare, settings)
+        if mode in _USED_BY[dest]:
+            _refuse_unused(given, settings)
+            continue
+        with pytest.raises(PorepipeError) as err:
+            _refuse_unused(given, settings)
+        text = str(err.value)
+        assert "\n" not in text and text.startswith(f"{_option(dest)} is read only by ")
+        assert f"this run is {_MODES[mode]}" in text
+        assert all(_MODES[m] in text for m in _USED_BY[dest])
+
+
+def test_reaction_w_under_transmission_is_refused_before_any_work(tmp_path, capsys):
+    from porepipe.cli import main
+
+    out = tmp_path / "d.h5"
+    code = main(["diffusion", str(tmp_path / "b.h5"), "-o", str(out), "--reaction-w", "0.01"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and not out.exists()
+    assert "--reaction-w is read only by setup reaction; this run is setup transmission" in err[0]
+
+
+def test_mean_speed_at_the_top_of_the_float_range_is_finite():
+    """8·R·T overflowed above T ~ 1e307 K: v̄ = inf and every m²/s value of a finite setting inf; √T apart it is the
+    same law (v̄ ∝ √T, rel 1e-14)."""
+    from porepipe.diffusion import mean_speed
+    from porepipe.diffusion._edmd import mean_speed_nm_ps
+
+    assert mean_speed("N2", 1.7e308) == pytest.approx(mean_speed("N2", 1.7) * 1e154, rel=1e-14)
+    assert mean_speed_nm_ps("N2", 1.7e308) == pytest.approx(mean_speed("N2", 1.7e308) * 1e-3, rel=1e-14)
+    assert mean_speed("He", 298.15) == pytest.approx(math.sqrt(8 * 8.31441 * 298.15 / (math.pi * 4.0026e-3)))
+
+
+@pytest.mark.parametrize("setup", ["transmission", "wicke_kallenbach", "reaction"])
+def test_a_pore_space_without_wall_is_refused_in_one_line(setup):
+    """All pore with both lateral axes periodic: transmission and Wicke-Kallenbach raised ZeroDivisionError (4V/S
+    with S = 0), setup reaction gave η = NaN."""
+    from porepipe.diffusion import reactive_pore
+
+    pore = np.ones((3, 3, 5), np.uint8)
+    with pytest.raises(PorepipeError, match="has no wall"):
+        if setup == "reaction":
+            reactive_pore(pore, 2, 0.5, periodic=(1, 1, 0), particles=20, batches=2)
+        else:
+            transport(pore, 2, Settings(setup=setup, batches=2, batch_particles=4), periodic=(1, 1, 0))
+
+
+def test_voxel_edges_whose_ratio_overflows_are_refused():
+    """Edges 1e-150, 1 and 1e150 µm: the pore volume in units of the smallest edge was inf, W = 0 ± 0 silently; the
+    closed-pore path did not check the edges at all (NaN edges gave NaN results)."""
+    pore = square_capillary(4, 8).pore
+    with pytest.raises(PorepipeError, match="differ too much"):
+        transport(pore, 2, Settings(batches=2, batch_particles=4), voxel_um=(1e-150, 1.0, 1e150))
+    with pytest.raises(PorepipeError, match="differ too much"):
+        equilibrium(pore, Settings(batches=2, batch_particles=4), voxel_um=(1e-150, 1.0, 1e150))
+    with pytest.raises(PorepipeError, match="voxel_um must be positive and finite"):
+        equilibrium(pore, Settings(batches=2, batch_particles=4), voxel_um=math.nan)
+
+
+def test_nothing_transmitted_is_not_exact():
+    """Two particles that both return gave W = 0 ± 0; the error is now that of one particle more (1/N)."""
+    settings = Settings(batches=2, batch_particles=1, max_rounds=1)
+    v = transport(square_capillary(2, 64).pore, 2, settings, seed=3).values  # W ~ 0.04: both return
+    assert v["W"] == 0 and v["particles"] == 2 and v["W_err"] == 0.5 and v["D_err"] > 0
+
+
+def test_msd_over_a_time_its_positions_cannot_resolve_is_refused():
+    """An msd of 1e-300 jiffies gave D_zz = -8e252 (round-off over round-off; before, 0/0); 1e-10 jiffies still runs
+    (the ballistic D = <v²>t/3... small, finite)."""
+    pore, s = np.ones((1, 1, 4), np.uint8), Settings(setup="msd", batches=4, batch_particles=16, max_rounds=2)
+    with pytest.raises(PorepipeError, match="msd slope would be round-off"):
+        equilibrium(pore, s, periodic=(0, 0, 1), t_end=1e-300)
+    v = equilibrium(pore, s, periodic=(0, 0, 1), t_end=1e-10).values
+    assert (
+        0 < v["D_zz"] < 1e-9 and v["mean_free_flight"] == math.inf and v["mean_free_flight_err"] == math.inf
+    )
+
+
+def test_a_dilute_gas_in_a_small_periodic_box_gets_three_cells_per_axis():
+    """One N2 in a periodic 2³ box of 10 nm voxels was refused as 'spans 20 nm, less than 3 collision diameters'
+    (it is 50): the dilute gas's wide cells were 2 per axis. The cells are now split to 3 per periodic axis; a box
+    truly below 3 diameters is still refused, naming the diameter."""
+    from porepipe.diffusion._edmd import edmd_result, make_gas
+
+    settings = Settings(setup="edmd", gas={"particles": {"N2": 1}, "duration_ps": 20.0})
+    v = edmd_result(np.ones((2, 2, 2), np.uint8), settings, 0.01, (1, 1, 1), seed=1).values
+    assert math.isfinite(v["D_self_m2_s"]) and v["D_self_m2_s"] > 0
+    with pytest.raises(PorepipeError, match=r"less than 3 collision diameters \(0.3798 nm\)"):
+        make_gas(np.ones((2, 1, 1), np.uint8), 0.5, {"N2": 1}, periodic=(1, 0, 0))
+
+
+@pytest.mark.parametrize(
+    "gas,top,match",
+    [
+        ({"particles": {"N2": 100}, "duration_ps": 20.0}, {"temperature_K": 1e300}, "would need more than"),
+        ({"particles": {"N2": 10}, "duration_ps": 1e-300}, {}, "msd \\(D_self\\) would be round-off"),
+        ({"particles": {"N2": 10}, "duration_ps": 20.0}, {"temperature_K": 1e-300}, "would be round-off"),
+    ],
+)
+def test_edmd_runs_that_cannot_end_or_resolve_are_refused(gas, top, match):
+    """A 1e300 K gas (1e150 cell crossings per particle) hung for ever; 1e-300 ps or 1e-300 K gave D_self = NaN or
+    0, its particles' motion below the resolution of their positions."""
+    from porepipe.diffusion._edmd import edmd_result
+
+    with pytest.raises(PorepipeError, match=match):
+        edmd_result(np.ones((2, 2, 2), np.uint8), Settings(setup="edmd", gas=gas, **top), 0.01, (1, 1, 1))
+
+
+def test_edmd_without_a_single_event_has_an_infinite_free_path():
+    """One N2 alone in a closed 20 nm box for 20 ps hits nothing: λ_eff read 9.5 nm (the path it flew)."""
+    from porepipe.diffusion._edmd import edmd_result
+
+    settings = Settings(setup="edmd", gas={"particles": {"N2": 1}, "duration_ps": 20.0})
+    v = edmd_result(np.ones((2, 2, 2), np.uint8), settings, 0.01, (0, 0, 0), seed=1).values
+    assert v["events"] == 0 and v["lambda_eff_nm"] == math.inf
+
+
+def test_a_reaction_too_rare_to_count_is_not_eta_zero_exactly():
+    """w = 1e-300: no product is ever made, η read 0 ± 0 (η → 1 as w → 0); its error is now that of one product
+    more, 1/(w·hits), which says the run could not measure it."""
+    from porepipe.diffusion import reactive_pore
+
+    out = reactive_pore(square_capillary(4, 8).pore, 2, 1e-300, particles=64, batches=4)
+    assert out["products"] == 0 and out["eta"] == 0
+    assert out["eta_err"] == pytest.approx(1.0 / (1e-300 * out["wall_hits"])) and out["r_eff_err"] > 0
+
+
+def test_surface_hops_that_never_end_are_refused():
+    """Ten particles that adsorb for ever and hop 1e11 times a jiffie for 1000 jiffies (1e15 events, decades) ran
+    without end; a plain gas over 1e300 jiffies too."""
+    from porepipe.diffusion import Adsorbate, surface_run
+
+    pore = np.ones((3, 3, 3), np.uint8)
+    with pytest.raises(PorepipeError, match="would need more than 1e\\+15 events"):
+        surface_run(pore, [Adsorbate("A", gas=10, adsorption=1.0, hop_rate=1e11)], t_end=1e3, blocks=4)
+    with pytest.raises(PorepipeError, match="would need more than"):
+        surface_run(pore, [Adsorbate("A", gas=10)], t_end=1e300, blocks=4)

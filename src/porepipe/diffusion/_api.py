@@ -40,6 +40,10 @@ from porepipe.diffusion._settings import InletLaw, Settings, Setup, SpeedDist, W
 from porepipe.diffusion._species import mean_speed
 
 STAGE = "diffusion"
+#: events refused in one run of an event loop (setups edmd, surface): ~3 years at the engines' ~10⁶ events per CPU-s
+#: (README), and few enough per particle that float time still resolves their spacing (a 1e300 K gas, 1e150
+#: crossings per particle, never advanced in time; hops at 1e10 per jiffie ran for ever)
+MAX_EVENTS = 1e14
 _LAW = {
     WallLaw.specular: K.SPECULAR,
     WallLaw.lambert: K.LAMBERT,
@@ -106,9 +110,7 @@ def prepare(
     pore = np.asarray(pore)
     if pore.ndim != 3:
         raise PorepipeError(f"the pore volume must be 3-D, got shape {pore.shape}")
-    voxel = np.broadcast_to(np.asarray(voxel_um, dtype=float), (3,)).copy()
-    if not np.all(np.isfinite(voxel)) or np.any(voxel <= 0):
-        raise PorepipeError(f"voxel_um must be positive and finite, got {voxel.tolist()}")
+    voxel = _voxel(voxel_um)
     per = np.array([bool(p) for p in np.broadcast_to(periodic, (3,))])
     if axis is not None:
         per[axis] = False
@@ -118,19 +120,58 @@ def prepare(
     codes = accessible_pore(pore, axis, per, in_place=in_place)
     h = voxel / voxel.min()
     n_acc = int(np.count_nonzero(codes))
-    area = wall_area(codes, h, per, open_axis=axis)
+    with np.errstate(over="ignore"):  # an overflow here is refused by _checked
+        area = wall_area(codes, h, per, open_axis=axis)
+        volume = n_acc * float(np.prod(h))
     K._box_codes(codes, codes)
-    return Geometry(
-        codes=codes,
-        h=h,
-        periodic=per,
-        voxel_um=voxel,
-        axis=axis,
-        total_porosity=n_total / pore.size,
-        accessible_porosity=n_acc / pore.size,
-        pore_volume=n_acc * float(np.prod(h)),
-        wall_area=area,
+    return _checked(
+        Geometry(
+            codes=codes,
+            h=h,
+            periodic=per,
+            voxel_um=voxel,
+            axis=axis,
+            total_porosity=n_total / pore.size,
+            accessible_porosity=n_acc / pore.size,
+            pore_volume=volume,
+            wall_area=area,
+        )
     )
+
+
+def require_wall(geom: Geometry) -> None:
+    """Refuse a pore space without wall for a run between the faces of its axis (it was a ZeroDivisionError in
+    transmission and Wicke-Kallenbach, η = NaN in setup reaction).
+    """
+    if geom.wall_area == 0:
+        raise PorepipeError(
+            f"the pore space of shape {geom.codes.shape} has no wall (all pore, every lateral axis periodic): every "
+            "particle flies straight through (W = 1), no wall can react, and the Knudsen reference 4V/S is "
+            "infinite; give the volume some solid or a closed lateral axis"
+        )
+
+
+def _voxel(voxel_um) -> np.ndarray:
+    """The three voxel edges in µm, each positive and finite, else one line."""
+    voxel = np.broadcast_to(np.asarray(voxel_um, dtype=float), (3,)).copy()
+    if not np.all(np.isfinite(voxel)) or np.any(voxel <= 0):
+        raise PorepipeError(f"voxel_um must be positive and finite, got {voxel.tolist()}")
+    return voxel
+
+
+def _checked(geom: Geometry) -> Geometry:
+    """``geom``, unless its size in units of the smallest voxel edge overflows (voxel edges 1e-150 and 1e150 µm gave
+    an infinite pore volume and wall area, and W = 0 ± 0 with an infinite D_ref, without a word).
+    """
+    extent = np.array(geom.codes.shape) * geom.h
+    if not (
+        np.all(np.isfinite(extent)) and math.isfinite(geom.pore_volume) and math.isfinite(geom.wall_area)
+    ):
+        raise PorepipeError(
+            f"voxel edges {geom.voxel_um.tolist()} µm differ too much: the pore volume in units of the smallest "
+            f"edge ({geom.pore_volume:.3g}) or its wall area ({geom.wall_area:.3g}) is beyond the float range"
+        )
+    return geom
 
 
 # ---------------------------------------------------------------------------------------------------------------------
@@ -208,6 +249,10 @@ def _batch_mean(values: np.ndarray) -> tuple[float, float]:
 def _ratio(num: np.ndarray, den: np.ndarray) -> tuple[float, float]:
     """Ratio of sums and its delta-method standard error from per-batch sums."""
     num, den = np.asarray(num, float), np.asarray(den, float)
+    if (
+        den.sum() == 0
+    ):  # nothing to divide by (no wall hit: the mean flight is longer than all flown): unknown
+        return (math.inf if num.sum() > 0 else math.nan), math.inf
     r = num.sum() / den.sum()
     n = num.size
     if n < 2:
@@ -363,6 +408,7 @@ def transport(
         settings.hit_map_bins > 0,
         settings.orientation_bins > 0,
     )
+    require_wall(geom)
     inlet, outlet = geom.cells(0), geom.cells(-1)
     if outlet.shape[0] == 0:
         outlet = (
@@ -491,12 +537,21 @@ def _pore_hash(codes: np.ndarray) -> str:
 
 
 def _estimate(rows: np.ndarray, wk: bool) -> tuple[float, float]:
-    """Transmission: W = transmitted / particles. WK: FLUSS count of species 1 per unit species-1 residence."""
+    """Transmission: W = transmitted / particles. WK: FLUSS count of species 1 per unit species-1 residence.
+
+    Nothing counted is 0 ± (one count more), not 0 ± 0: every batch's 0 has no spread, and W = 0 ± 0 of two
+    particles read as exact (the pore spans the sample, so W > 0).
+    """
     if not wk:
-        return _ratio(rows[:, K.T_OUT_HIGH], rows[:, K.T_PARTICLES])
-    # species-1 time (profile total) is not per batch; use the symmetric estimate: FLUSS of both species over the
-    # total particle time, with N_1 = N/2 by symmetry (the measured split is reported separately)
-    return _ratio(rows[:, K.T_OUT_HIGH] + rows[:, K.T_OUT_LOW], rows[:, K.T_TIME])
+        num, den = rows[:, K.T_OUT_HIGH], rows[:, K.T_PARTICLES]
+    else:
+        # species-1 time (profile total) is not per batch; use the symmetric estimate: FLUSS of both species over
+        # the total particle time, with N_1 = N/2 by symmetry (the measured split is reported separately)
+        num, den = rows[:, K.T_OUT_HIGH] + rows[:, K.T_OUT_LOW], rows[:, K.T_TIME]
+    value, err = _ratio(num, den)
+    if num.sum() == 0 and den.sum() > 0:
+        err = max(err, 1.0 / float(den.sum()))
+    return value, err
 
 
 def _bin_volumes(geom: Geometry, nb: int) -> np.ndarray:
@@ -636,6 +691,12 @@ def equilibrium(
     ext = np.array(geom.codes.shape) * geom.h
     t_end = t_end or settings.msd_time_jiffies or 50.0 * float(ext.max())
     t_samples = np.linspace(t_end / settings.msd_samples, t_end, settings.msd_samples)
+    if msd and not t_end / settings.msd_samples >= 1e-12 * float(ext.max()):
+        raise PorepipeError(
+            f"msd flight time {t_end:.3g} jiffies: between two of its {settings.msd_samples} samples a particle "
+            f"moves about {t_end / settings.msd_samples:.3g} voxels, below 1e-12 of the {float(ext.max()):.4g}-voxel "
+            "box its position resolves; the msd slope would be round-off (it gave D of either sign up to 1e252)"
+        )
     cells = np.zeros(
         (0, 3), dtype=np.int64
     )  # start points by rejection over the codes: no 24-byte list per voxel
@@ -733,24 +794,16 @@ def _closed_geometry(pore, voxel_um) -> Geometry:
         raise PorepipeError(f"the pore volume must be 3-D, got shape {pore.shape}")
     if not pore.any():
         raise PorepipeError(f"the pore volume of shape {pore.shape} is all solid (no voxel is 1 = pore)")
-    voxel = np.broadcast_to(np.asarray(voxel_um, dtype=float), (3,)).copy()
+    voxel = _voxel(voxel_um)  # closed pores checked the voxel edges as prepare does (0 or NaN: NaN results)
     keep = (pore > 0).astype(np.uint8)
     codes = np.empty(keep.shape, dtype=np.uint8)
     K._box_codes(keep, codes)
     h = voxel / voxel.min()
     n = int(keep.sum())
     per = np.zeros(3, dtype=bool)
-    return Geometry(
-        codes,
-        h,
-        per,
-        voxel,
-        None,
-        n / pore.size,
-        n / pore.size,
-        n * float(np.prod(h)),
-        wall_area(keep, h, per, None),
-    )
+    with np.errstate(over="ignore"):  # an overflow here is refused by _checked
+        volume, area = n * float(np.prod(h)), wall_area(keep, h, per, None)
+    return _checked(Geometry(codes, h, per, voxel, None, n / pore.size, n / pore.size, volume, area))
 
 
 def _msd_fit(tallies, t_samples):
@@ -761,7 +814,11 @@ def _msd_fit(tallies, t_samples):
     half = slice(len(t_samples) // 4, None)
     t = t_samples[half]
     tc = t - t.mean()
-    slopes = np.einsum("s,bsd->bd", tc, curves[:, half, :]) / np.sum(tc * tc) / 2.0
+    scale = np.abs(
+        tc
+    ).max()  # tc in units of its largest: tc² of a 1e-300 jiffie run underflowed to 0 (D = 0/0)
+    tc = tc / scale
+    slopes = np.einsum("s,bsd->bd", tc, curves[:, half, :]) / np.sum(tc * tc) / (2.0 * scale)
     d = slopes.mean(axis=0)
     err = slopes.std(axis=0, ddof=1) / math.sqrt(slopes.shape[0])
     return d, err

@@ -48,7 +48,84 @@ def _settings(args) -> tuple[Settings, int, str]:
     if args.seed is not None:
         seed = args.seed
     _nested_overrides(args, base)
-    return merge_settings(Settings, base, {}, "diffusion settings"), seed, name
+    settings = merge_settings(Settings, base, {}, "diffusion settings")
+    _refuse_unused(args, settings)
+    return settings, seed, name
+
+
+#: what one run computes: the setup, with a transmission length series and a reaction study apart (they read fewer
+#: settings than a single run of their setup) -> how a message names it
+_MODES = {
+    "transmission": "setup transmission",
+    "length_series": "a length series (setup transmission with diffusion.lengths)",
+    "wicke_kallenbach": "setup wicke_kallenbach",
+    "msd": "setup msd",
+    "edmd": "setup edmd",
+    "reaction": "setup reaction",
+    "reaction_study": "a reaction study (setup reaction with diffusion.reactions.series)",
+    "surface": "setup surface",
+}
+_TRANSPORT = ("transmission", "length_series", "wicke_kallenbach", "msd")  # the rounds of batches of flights
+
+#: the one table of setup-specific options: option (its argparse dest) -> the modes that read it. An option given on
+#: the command line for a run of any other mode is refused: it would be ignored without a word. Options every mode
+#: reads (--setup, --wall-law, --seed, --scene, --threads, --axis, -o) are not listed, nor --resume, which the
+#: workflow passes to every run (a run without checkpoints has nothing to resume). A length series keeps W and D in
+#: voxel²/jiffie only (no m²/s: species and temperature have no effect), and its W does not depend on speeds; a
+#: reaction study takes w, w_reverse and w_follow from its series; setup surface's speeds are relative to the
+#: fastest species, so the temperature cancels; setup edmd takes its particles, speeds and histogram from
+#: diffusion.gas.
+_USED_BY = {
+    "accommodation": (*_TRANSPORT, "edmd"),
+    "wall_speed": ("transmission", "wicke_kallenbach", "msd", "edmd"),
+    "inlet_law": ("transmission", "length_series", "wicke_kallenbach", "reaction", "reaction_study"),
+    "inlet_speed": ("transmission", "wicke_kallenbach"),
+    "initial_speed": ("msd",),
+    "species": ("transmission", "wicke_kallenbach", "msd"),
+    "temperature_K": ("transmission", "wicke_kallenbach", "msd", "edmd"),
+    "target_rel_error": _TRANSPORT,
+    "max_wall_hits": _TRANSPORT,
+    "max_rounds": _TRANSPORT,
+    "batches": (*_TRANSPORT, "reaction", "reaction_study"),
+    "batch_particles": _TRANSPORT,
+    "profile_bins": ("transmission", "wicke_kallenbach"),
+    "hit_map_bins": ("transmission", "wicke_kallenbach"),
+    "orientation_bins": ("transmission", "wicke_kallenbach"),
+    "wk_time_jiffies": ("wicke_kallenbach",),
+    "msd_time_jiffies": ("msd",),
+    "checkpoint": ("transmission", "wicke_kallenbach", "msd"),
+    "gas_particles": ("edmd",),
+    "collisions": ("edmd",),
+    "duration_ps": ("edmd",),
+    "reaction_w": ("reaction",),
+    "reaction_w_reverse": ("reaction",),
+    "reaction_w_follow": ("reaction",),
+    "reaction_particles": ("reaction", "reaction_study"),
+}
+
+
+def _mode(settings: Settings) -> str:
+    if settings.setup is Setup.transmission and settings.lengths:
+        return "length_series"
+    if settings.setup is Setup.reaction and settings.reactions.series:
+        return "reaction_study"
+    return settings.setup.value
+
+
+def _option(dest: str) -> str:
+    return f"--{dest.replace('_', '-')}"
+
+
+def _refuse_unused(args, settings: Settings) -> None:
+    """One line naming the first option given on the command line that this run's mode does not read."""
+    mode = _mode(settings)
+    for dest, modes in _USED_BY.items():
+        if mode not in modes and getattr(args, dest, None) is not None:
+            users = " / ".join(_MODES[m] for m in modes)
+            raise PorepipeError(
+                f"{_option(dest)} is read only by {users}; this run is {_MODES[mode]}, which would ignore it "
+                "(leave it out, or choose a setup that uses it)"
+            )
 
 
 #: CLI option -> (nested section, key) for the event-driven gas and the wall reactions
@@ -219,6 +296,10 @@ def register(subparsers) -> None:
         ("reaction-particles", int, "setup reaction: reactant histories (each enters at the inlet face)"),
     ):
         p.add_argument(f"--{name}", dest=name.replace("-", "_"), type=kind, help=meaning)
+    p.epilog = (
+        "Options that only some setups read (given for another, they are refused; length_series = transmission "
+        "with diffusion.lengths, reaction_study = reaction with diffusion.reactions.series): "
+    ) + "; ".join(f"{_option(dest)}: {', '.join(modes)}" for dest, modes in _USED_BY.items())
     p.set_defaults(func=main)
     register_capillary(subparsers)
 

@@ -44,7 +44,9 @@ _LAW = {
 
 def speed_scale(species: str, temperature_K: float) -> float:
     """√(kT/m) in nm/ps (the standard deviation of one velocity component)."""
-    return math.sqrt(R_GAS * temperature_K / (SPECIES[species][1] * 1e-3)) * _M_S
+    return (
+        math.sqrt(R_GAS / (SPECIES[species][1] * 1e-3)) * math.sqrt(temperature_K) * _M_S
+    )  # no R·T overflow
 
 
 def mean_speed_nm_ps(species: str, temperature_K: float) -> float:
@@ -122,18 +124,25 @@ def _species_table(counts: dict) -> tuple[tuple, np.ndarray]:
 
 
 def _subdivision(
-    voxel_nm: float, n_voxels: int, n_particles: int, diameter: float, per_cell: float = 0.7
+    voxel_nm: float,
+    n_voxels: int,
+    n_particles: int,
+    diameter: float,
+    per_cell: float = 0.7,
+    at_least: int = 1,
 ) -> int:
-    """Sub-cells per voxel edge: cells hold about ``per_cell`` particles, never narrower than the largest diameter."""
+    """Sub-cells per voxel edge: cells hold about ``per_cell`` particles, never narrower than the largest diameter,
+    and at least ``at_least`` (where cells that wide allow it: a periodic axis needs 3 cells across).
+    """
     most = max(1, int(math.floor(voxel_nm / diameter * (1 - 1e-12))))
     if n_particles == 0:
-        return 1
+        return min(max(1, at_least), most)
     target = (per_cell * n_voxels * voxel_nm**3 / n_particles) ** (1.0 / 3.0)
     m = max(1, int(round(voxel_nm / target)))
     m = min(m, most)
     while m > 1 and n_voxels * m**3 > 5 * 10**7:  # memory guard: 50 M cells
         m -= 1
-    return m
+    return min(max(m, at_least), most)
 
 
 def make_gas(
@@ -173,7 +182,10 @@ def make_gas(
         sp = np.array([lookup[s] for s in species], dtype=np.int64)
     radius = np.array([SPECIES[s][0] for s in names])
     diameter = 2.0 * float(radius.max())
-    m = _subdivision(voxel_nm, int(np.count_nonzero(pore)), sp.size, diameter)
+    # a periodic axis needs 3 cells across (minimum image); a dilute gas's wide cells had fewer, and a 2-voxel box
+    # of 10 nm voxels was refused as 'less than 3 collision diameters' across (it is 50 of them)
+    wrap = [-(-3 // pore.shape[d]) for d in range(3) if per[d]]
+    m = _subdivision(voxel_nm, int(np.count_nonzero(pore)), sp.size, diameter, at_least=max(wrap, default=1))
     cells = np.repeat(np.repeat(np.repeat((pore > 0).astype(np.uint8), m, 0), m, 1), m, 2)
     h = voxel_nm / m
     if h < diameter:
@@ -183,7 +195,8 @@ def make_gas(
     for d in range(3):
         if per[d] and cells.shape[d] < 3:
             raise PorepipeError(
-                f"periodic axis {'xyz'[d]} spans {cells.shape[d] * h:.4g} nm, less than 3 collision diameters"
+                f"periodic axis {'xyz'[d]} spans {cells.shape[d] * h:.4g} nm, less than 3 collision diameters "
+                f"({diameter:.4g} nm)"
             )
     state = int(kernel_seed(seed, STAGE, 16))
     if positions is None:
@@ -289,8 +302,28 @@ class Physics:
     reactions: dict = field(default_factory=dict)  # species -> (product species, probability per wall hit)
 
 
+def check_events(gas: Gas, duration_ps: float) -> None:
+    """Refuse a run of ``gas`` for ``duration_ps`` whose cell crossings alone (each particle crosses about v̄/cell
+    faces per ps; collisions and wall hits come on top) exceed ``_api.MAX_EVENTS``, in one line with the estimate.
+    """
+    from porepipe.diffusion._api import MAX_EVENTS
+
+    if not 0.0 <= duration_ps < math.inf:
+        raise PorepipeError(f"duration_ps must be finite and >= 0, got {duration_ps!r}")
+    with np.errstate(over="ignore"):  # inf is refused below
+        rate = float(np.sum(gas.vmean[gas.species])) / gas.cell_nm  # crossings per ps, all particles
+    if rate * duration_ps > MAX_EVENTS:
+        raise PorepipeError(
+            f"the gas of {gas.pos.shape[0]} particles at {gas.temperature_K:.4g} K (v̄ up to "
+            f"{float(gas.vmean.max()):.3g} nm/ps) would need more than {rate * duration_ps:.3g} events for "
+            f"{duration_ps:.4g} ps in cells of {gas.cell_nm:.3g} nm (at most {MAX_EVENTS:.0e}: years at ~1e6 "
+            "events/s); shorten duration_ps or use fewer particles"
+        )
+
+
 def advance(gas: Gas, duration_ps: float, physics: Physics | None = None) -> Gas:
     """Run ``gas`` for ``duration_ps`` (in place); the counters in ``gas.tally`` etc. accumulate."""
+    check_events(gas, duration_ps)
     physics = physics or Physics()
     if physics.wall_law not in _LAW:
         raise PorepipeError(f"wall_law must be one of {', '.join(_LAW)}, got {physics.wall_law!r}")
@@ -393,6 +426,14 @@ def measure(
     """
     import time
 
+    check_events(gas, duration_ps)  # the whole run, before its first sample
+    step = float(gas.vmean.min()) * duration_ps / samples
+    if gas.periodic.any() and not step >= 1e-12 * float(gas.extent.max()):
+        raise PorepipeError(
+            f"between two of the {samples} sample times ({duration_ps / samples:.3g} ps) a particle at v̄ moves "
+            f"about {step:.3g} nm, below 1e-12 of the {float(gas.extent.max()):.4g} nm box its position resolves: "
+            "the msd (D_self) would be round-off (it read 0); lengthen duration_ps or raise the temperature"
+        )
     physics = physics or Physics()
     n = gas.pos.shape[0]
     groups = max(1, min(groups, n))  # no empty group: a gas of fewer particles has one per group
@@ -425,14 +466,20 @@ def measure(
         "events": int(gas.tally[E.E_EVENTS] - t0[E.E_EVENTS]),
         "stale_events": int(gas.tally[E.E_STALE] - t0[E.E_STALE]),
         "collision_rate": 2.0 * pairs / (n * duration_ps),
-        "lambda_eff_nm": n * vbar * duration_ps / max(2.0 * pairs + walls, 1.0),
+        # path flown per collision or wall hit; none in the whole run: longer than any path flown (it read as the
+        # path of one particle, e.g. 9.5 nm for 20 ps of N2 alone in a 20 nm box)
+        "lambda_eff_nm": n * vbar * duration_ps / (2.0 * pairs + walls)
+        if 2 * pairs + walls > 0
+        else math.inf,
         "wall_s": wall,
         "events_per_s": (gas.tally[E.E_EVENTS] - t0[E.E_EVENTS]) / max(wall, 1e-12),
         "number_density_nm3": n / gas.pore_volume,
     }
     half = slice(samples // 4, None)
     tc = times[half] - times[half].mean()
-    slopes = np.einsum("s,sgd->gd", tc, msd[half]) / np.sum(tc * tc) / 2.0  # (groups, 3)
+    scale = np.abs(tc).max()  # tc in units of its largest: tc² of a 1e-300 ps run underflowed to 0 (D = 0/0)
+    tc = tc / scale
+    slopes = np.einsum("s,sgd->gd", tc, msd[half]) / np.sum(tc * tc) / (2.0 * scale)  # (groups, 3)
     per = gas.periodic
     if per.any():
         dg = slopes[:, per].mean(axis=1)
@@ -489,7 +536,7 @@ def reactive_pore(
     (the thesis's inlet, an isotropic scatterer, §4.1 and §5.2).
     Lengths in units of the smallest voxel edge, times in jiffies (v̄ = 1 voxel/jiffie).
     """
-    from porepipe.diffusion._api import _ratio, prepare
+    from porepipe.diffusion._api import _ratio, prepare, require_wall
     from porepipe.diffusion._reactions import diffusion_under_reaction, phi_of_eta, profile_phi
 
     for name, value in (("w", w), ("w_reverse", w_reverse), ("w_follow", w_follow)):
@@ -500,6 +547,7 @@ def reactive_pore(
     if inlet_law not in ("lambert", "isotropic"):
         raise PorepipeError(f"inlet_law must be lambert or isotropic, got {inlet_law!r}")
     geom = prepare(pore, voxel_um, periodic, axis)
+    require_wall(geom)  # no wall: no reaction, η = 0/0
     if not 0.0 <= adsorption <= 1.0 or residence < 0 or residence_law not in ("fixed", "exponential"):
         raise PorepipeError(
             f"adsorption must lie in [0, 1], residence >= 0 and residence_law fixed or exponential; got "
@@ -588,6 +636,12 @@ def reactive_pore(
         out["sites"] = sites
     if w > 0:
         eta, eta_err = _ratio(products, w * tally[:, E.R_HITS])
+        if (
+            col[E.R_OUT_P] == 0
+        ):  # nothing counted: not η = 0 ± 0 (w = 1e-300 read so), one product more at least
+            eta_err = max(eta_err, 1.0 / (w * col[E.R_HITS])) if w * col[E.R_HITS] > 0 else math.inf
+            rate_err = max(rate_err, 1.0 / col[E.R_TIME]) if col[E.R_TIME] > 0 else math.inf
+            out["r_eff_err"] = rate_err
         out.update(eta=eta, eta_err=eta_err)
         if 0 < eta <= 1:
             phi = phi_of_eta(eta)
@@ -729,28 +783,17 @@ def bosanquet_fit(counts, d, d_err) -> dict:
     """Weighted straight line 1/D = a + b·N (3.50) through (N, D ± D_err): intercept a = 1/D_Kn, slope b (the gas
     resistance per particle), their standard errors, and χ²/dof of the fit.
     """
-    counts, d, d_err = (np.asarray(x, float) for x in (counts, d, d_err))
-    if (
-        counts.size < 2
-        or not (counts.shape == d.shape == d_err.shape)
-        or np.any(d <= 0)
-        or np.any(d_err <= 0)
-    ):
-        raise PorepipeError("the Bosanquet fit needs >= 2 points with D > 0 and D_err > 0")
-    y = 1.0 / d
-    sy = d_err / d**2  # error of 1/D
-    wgt = 1.0 / sy**2
-    a_mat = np.stack([np.ones_like(counts), counts], axis=1)
-    cov = np.linalg.inv(a_mat.T @ (wgt[:, None] * a_mat))
-    a, b = cov @ (a_mat.T @ (wgt * y))
-    resid = y - (a + b * counts)
-    dof = max(counts.size - 2, 1)
+    from porepipe.diffusion._length_series import weighted_line
+
+    fit = weighted_line(
+        counts, d, d_err, "the Bosanquet fit"
+    )  # exactly rescaled: any finite D > 0 and errors > 0
     return {
-        "intercept": float(a),
-        "intercept_err": float(math.sqrt(cov[0, 0])),
-        "slope": float(b),
-        "slope_err": float(math.sqrt(cov[1, 1])),
-        "chi2_dof": float(np.sum(wgt * resid**2) / dof),
+        "intercept": fit["c"],
+        "intercept_err": fit["c_err"],
+        "slope": fit["s"],
+        "slope_err": fit["s_err"],
+        "chi2_dof": fit["chi2_per_dof"],
     }
 
 

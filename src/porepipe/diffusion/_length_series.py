@@ -20,33 +20,90 @@ import numpy as np
 from porepipe._shared.errors import PorepipeError
 
 
+def weighted_line(x, d, d_err, what: str) -> dict:
+    """Weighted least squares of 1/D = c + s·x through (x, D ± D_err), the error of 1/D being σ = D_err/D².
+
+    Solved in exactly rescaled units, so any finite positive D and errors work, however small or large: 1/D, σ and x
+    are each divided by a power of two (exact in floating point) that brings them near 1 — the smallest σ to about
+    1 — and the solution is scaled back the same exact way. The parameters do not change under one common factor
+    on all the errors, and they do not here (the plain normal equations overflowed at errors of 1e-200: weights
+    1/σ² = 1e400, parameters NaN). A point whose σ is more than ~1e308 times the smallest has no weight (it
+    underflows to 0, its limit); fewer than two distinct x with weight are refused. Returns ``c``, ``s``, their
+    standard errors ``c_err``, ``s_err``, ``alpha`` = s/c with ``alpha_err`` (delta method), ``inv_c`` = 1/c with
+    ``inv_c_err``, and ``chi2_per_dof``: χ² grows as 1/σ², and where it exceeds the float range (residuals of 1e-16
+    of 1/D on errors of 1e-200 are 1e184 σ) it is inf — that is its value, not a failure of the fit. Every other
+    entry is the exact fit's, rounded once.
+
+    Parameters
+    ----------
+    x, d, d_err : (n,) array_like
+        Abscissae, D > 0 and its errors > 0, all finite.
+    what : str
+        Names the fit in the error message.
+    """
+    x, d, d_err = (np.asarray(v, dtype=float) for v in (x, d, d_err))
+    if x.ndim != 1 or x.size < 2 or not (x.shape == d.shape == d_err.shape):
+        raise PorepipeError(f"{what} needs >= 2 points with D and its error, got {x.size}")
+    finite = np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(d_err))
+    if not finite or np.any(d <= 0) or np.any(d_err <= 0) or np.unique(x).size < 2:
+        raise PorepipeError(
+            f"{what} needs finite values, D > 0 and errors > 0, and at least two distinct points"
+        )
+    # mantissa · 2**exponent of D and of its error: 1/D and σ = D_err/D² follow without overflow or underflow
+    md, ed = np.frexp(d)
+    me, ee = np.frexp(d_err)
+    ed, ee = ed.astype(np.int64), ee.astype(np.int64)
+    ey = int((-ed).max())  # 1/D = 2**ey · u, u in (0, 2]
+    u = np.ldexp(1.0 / md, -ed - ey)
+    sig_exp = ee - 2 * ed
+    k = int(sig_exp.min())  # σ = 2**k · t, t >= 1/2 (inf: no weight)
+    with np.errstate(over="ignore"):
+        t = np.ldexp(me / md**2, sig_exp - k)
+    ex = int(np.frexp(np.abs(x).max())[1])  # x = 2**ex · xn, |xn| < 1
+    xn = np.ldexp(x, -ex)
+    w = 1.0 / t
+    q, r = np.linalg.qr(np.column_stack([w, xn * w]))
+    if np.unique(x[w > 0]).size < 2 or abs(r[1, 1]) <= 1e-12 * abs(r[0, 0]):
+        raise PorepipeError(
+            f"{what}: fewer than two distinct points keep a weight (their errors span more than the float "
+            "range); give errors within 1e300 of each other"
+        )
+    cn, sn = np.linalg.solve(r, q.T @ (u * w))
+    r_inv = np.linalg.inv(r)
+    cov = r_inv @ r_inv.T  # of (cn, sn) for the errors t; that of (c, s) is 2**(2k) · diag(1, 2**-ex) · this
+    grad = np.array([-sn / cn**2, 1.0 / cn])  # of s/c in the scaled units
+    with np.errstate(over="ignore", divide="ignore"):
+        chi2 = np.ldexp(float(np.sum(((u - cn - sn * xn) * w) ** 2)) / max(x.size - 2, 1), 2 * (ey - k))
+        return {
+            key: float(value)
+            for key, value in (
+                ("c", np.ldexp(cn, ey)),
+                ("c_err", np.ldexp(math.sqrt(cov[0, 0]), k)),
+                ("s", np.ldexp(sn, ey - ex)),
+                ("s_err", np.ldexp(math.sqrt(cov[1, 1]), k - ex)),
+                ("alpha", np.ldexp(sn / cn, -ex)),
+                ("alpha_err", np.ldexp(math.sqrt(grad @ cov @ grad), k - ey - ex)),
+                ("inv_c", np.ldexp(1.0 / cn, -ey)),
+                ("inv_c_err", np.ldexp(math.sqrt(cov[0, 0]) / cn**2, k - 2 * ey)),
+                ("chi2_per_dof", chi2),
+            )
+        }
+
+
 def fit_length_series(r_over_l, d, d_err) -> dict:
     """Weighted least squares of 1/D = c + s·(r/L) (weights from the errors of D); α = s/c, D₀ = 1/c.
 
     Errors: the parameter covariance of the weighted fit (statistical errors of D only), propagated to α and D₀.
+    Any finite positive D and errors work (:func:`weighted_line`: exactly rescaled; χ²/dof beyond the float range
+    is inf).
     """
-    x, d, d_err = (np.asarray(v, dtype=float) for v in (r_over_l, d, d_err))
-    if x.size < 2 or not (x.shape == d.shape == d_err.shape):
-        raise PorepipeError(f"the length series needs >= 2 lengths with D and its error, got {x.size}")
-    finite = np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(d_err))
-    if not finite or np.any(d <= 0) or np.any(d_err <= 0) or np.unique(x).size < 2:
-        raise PorepipeError(
-            "the length series needs finite r/L, D > 0 and errors > 0, and at least two distinct lengths"
-        )
-    y = 1.0 / d
-    sy = d_err / d**2
-    a = np.column_stack([np.ones_like(x), x]) / sy[:, None]
-    cov = np.linalg.inv(a.T @ a)
-    c, s = cov @ (a.T @ (y / sy))
-    alpha = s / c
-    grad = np.array([-s / c**2, 1.0 / c])
-    chi2 = float(np.sum(((y - c - s * x) / sy) ** 2))
+    fit = weighted_line(r_over_l, d, d_err, "the length series")
     return {
-        "alpha": float(alpha),
-        "alpha_err": float(math.sqrt(grad @ cov @ grad)),
-        "D0": float(1.0 / c),
-        "D0_err": float(math.sqrt(cov[0, 0]) / c**2),
-        "chi2_per_dof": chi2 / max(x.size - 2, 1),
+        "alpha": fit["alpha"],
+        "alpha_err": fit["alpha_err"],
+        "D0": fit["inv_c"],
+        "D0_err": fit["inv_c_err"],
+        "chi2_per_dof": fit["chi2_per_dof"],
     }
 
 

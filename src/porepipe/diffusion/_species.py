@@ -38,7 +38,8 @@ def mean_speed(species: str, temperature_K: float) -> float:
         raise PorepipeError(f"unknown species {species!r}; allowed: {', '.join(SPECIES)}")
     positive_number("temperature_K", temperature_K)
     molar_kg = SPECIES[species][1] * 1e-3
-    return math.sqrt(8.0 * R_GAS * temperature_K / (math.pi * molar_kg))
+    # sqrt(T) apart: 8·R·T overflowed to inf (v̄ = inf m/s, D in m²/s inf) above T ~ 1e307 K, a finite setting
+    return math.sqrt(8.0 * R_GAS / (math.pi * molar_kg)) * math.sqrt(temperature_K)
 
 
 def jiffie_s(voxel_m: float, lightest_mean_speed: float) -> float:

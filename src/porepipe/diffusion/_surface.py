@@ -325,7 +325,7 @@ def surface_run(
     """
     from porepipe.diffusion._api import prepare
 
-    species = tuple(species)
+    species, mechanisms, side_reactions = tuple(species), tuple(mechanisms), tuple(side_reactions)
     names = [sp.name for sp in species]
     if not species or len(set(names)) != len(names):
         raise PorepipeError(f"species must be a non-empty list of distinct names, got {names}")
@@ -348,6 +348,7 @@ def surface_run(
         )
     s = int(sites_per_edge)
     n_sites, active = _sites_and_activity(site_face.shape[0], s, active_fraction, seed)
+    _check_events(species, mechanisms, side_reactions, geom, int(active.sum()), t_end)
     spare_of = {int(mech[k][2]) for k, rev in ((1, S.W_REV), (0, S.W_LH_REV)) if mech[2][rev] > 0.0}
     kinds, site0 = _start_sites(species, active, seed, sorted(spare_of))
     if kinds.size == 0:
@@ -377,6 +378,35 @@ def surface_run(
     return _summary(
         tally, rtally, series, final_sp, final_st, geom, n_sites, active, s, t_end - t_warm, events
     )
+
+
+def _check_events(species, mechanisms, side_reactions, geom, n_active, t_end) -> None:
+    """Refuse a run whose events exceed ``_api.MAX_EVENTS`` by the two rates that never stop: the wall hits of gas
+    particles that never adsorb (v̄·S/4V each per jiffie, exact for an equilibrium gas) and the hop tries of adsorbed
+    ones that never leave (those adsorbed at the start, and those of the gas that adsorbs, up to the active sites),
+    counting only species no reaction turns into another (the rest comes on top).
+    """
+    from porepipe.diffusion._api import MAX_EVENTS
+
+    reacting = {m.a for m in mechanisms} | {m.b for m in mechanisms} | {r.reactant for r in side_reactions}
+    reacting |= {m.product for m in mechanisms if m.w_reverse > 0}  # it splits back into a and b
+    hit_rate = geom.wall_area / (4.0 * geom.pore_volume)  # per unit speed
+    rate = sum(
+        (sp.gas * sp.vmean * hit_rate if sp.adsorption == 0 else 0.0)
+        + (
+            min(sp.adsorbed + (sp.gas if sp.adsorption > 0 else 0), n_active) * sp.hop_rate
+            if sp.residence == math.inf
+            else 0.0
+        )
+        for sp in species
+        if sp.name not in reacting
+    )
+    if rate * t_end > MAX_EVENTS:
+        raise PorepipeError(
+            f"the surface run would need more than {rate * t_end:.3g} events ({rate:.3g} wall hits and hop tries per "
+            f"jiffie for t_end = {t_end:.4g} jiffies; at most {MAX_EVENTS:.0e}: years at ~1e6 events/s); shorten "
+            "t_end (duration_jiffies) or lower the particle counts or hop rates"
+        )
 
 
 def _check_times(t_end, t_warm, blocks) -> None:
