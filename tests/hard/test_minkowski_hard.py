@@ -1,5 +1,7 @@
 """Degenerate volumes give finite, exact answers; bad input gives a PorepipeError naming the problem."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -10,6 +12,7 @@ from porepipe.minkowski import (
     configuration_histogram_slabs,
     minkowski_functionals,
     minkowski_functions_of_threshold,
+    specific_surface_from_histogram,
 )
 from porepipe.minkowski import _weights as W
 
@@ -168,3 +171,79 @@ def test_grey_volume_on_another_grid_is_refused(tmp_path, grey_shape, grey_voxel
     with pytest.raises(PorepipeError, match="is not on the grid of binary volume"):
         run(tmp_path / "binary.h5", tmp_path / "m.h5", grey_path=tmp_path / "grey.h5", threads=1)
     assert not (tmp_path / "m.h5").exists()
+
+
+# -- extreme voxel sizes ---------------------------------------------------------------------------------------------
+_POWERS = {"phi": 0, "S_V": -1, "K_V": -2, "T_V": -3, "chi": 0}
+
+
+@pytest.mark.parametrize("a", [1e-100, 1e-20, 1.0, 1e20, 1e100])
+@pytest.mark.parametrize("shape", [(1.0, 1.0, 1.0), (1.0, 2.0, 3.0)])
+def test_extreme_voxel_sizes_scale_exactly(a, shape):
+    """``voxel_um`` 1e100 died in SphericalVoronoi ('Rank of input points must be at least 3') and 1e-100 with 'SVD
+    did not converge': the Crofton weights were computed from the physical edge lengths. They are now computed in
+    voxel units and the functionals scaled afterwards: at voxel size a they are those at a = 1 times a^k."""
+    body = np.zeros((7, 8, 9), np.uint8)
+    body[1:5, 2:6, 2:7] = 1
+    body[2, 3, 3] = 0  # a cavity: χ = 2
+    ref = minkowski_functionals(body, shape, periodic=False)
+    ds = minkowski_functionals(body, tuple(a * s for s in shape), periodic=False)
+    assert float(ref.chi.sel(phase="pore")) == 2.0
+    for name, k in _POWERS.items():
+        np.testing.assert_allclose(ds[name].values, ref[name].values * a**k, rtol=1e-12, atol=0, err_msg=name)
+    assert float(ds.attrs["window_um3"]) == pytest.approx(float(ref.attrs["window_um3"]) * a**3, rel=1e-12)
+    hist = configuration_histogram(body, False)
+    assert specific_surface_from_histogram(hist, a) == pytest.approx(
+        specific_surface_from_histogram(hist, 1.0) / a, rel=1e-12
+    )
+
+
+@pytest.mark.parametrize(
+    ("a", "what"), [(1e-110, "T_V"), (1e110, "T_V"), (1e-200, "K_V"), (1e300, "K_V"), (1e-310, "S_V")]
+)
+def test_voxel_size_beyond_float64_is_refused(tmp_path, a, what):
+    """A functional that over- or underflows float64 in µm units is refused naming the voxel size (no inf, no 0,
+    no result file)."""
+    from porepipe._shared.store import ResultWriter
+    from porepipe.minkowski._run import run
+
+    body = np.zeros((6, 6, 6), np.uint8)
+    body[1:4, 1:4, 1:4] = 1
+    with pytest.raises(
+        PorepipeError, match=rf"voxel_um = {re.escape(repr(a))} µm: {what} = .* beyond the float64 range"
+    ):
+        minkowski_functionals(body, a, periodic=False)
+    with ResultWriter(tmp_path / "binary.h5", stage="segment", scene="t") as w:
+        w.write_volume("pore", body, voxel_um=a, periodic=(False, False, False))
+    with pytest.raises(PorepipeError, match=rf"voxel_um = {re.escape(repr(a))} µm"):
+        run(tmp_path / "binary.h5", tmp_path / "m.h5", threads=1)
+    assert not (tmp_path / "m.h5").exists()
+
+
+@pytest.mark.parametrize("a", [1e-100, 1e100])
+def test_extreme_voxel_size_with_grey_thresholds(tmp_path, a):
+    """The run with a grey volume at an extreme voxel size writes finite tables scaled like those at 1 µm."""
+    import xarray as xr
+
+    from porepipe._shared.store import ResultWriter
+    from porepipe.minkowski._run import THRESHOLD_GROUP, run
+
+    grey = np.random.default_rng(7).integers(0, 217, (6, 6, 6)).astype(np.uint8)
+    for size in (1.0, a):
+        with ResultWriter(tmp_path / f"binary{size!r}.h5", stage="segment", scene="t") as w:
+            w.write_volume("pore", (grey <= 108).astype(np.uint8), voxel_um=size)
+        with ResultWriter(tmp_path / f"grey{size!r}.h5", stage="voxelize", scene="t") as w:
+            w.write_volume("grey", grey, voxel_um=size)
+        run(
+            tmp_path / f"binary{size!r}.h5",
+            tmp_path / f"m{size!r}.h5",
+            grey_path=tmp_path / f"grey{size!r}.h5",
+        )
+    for group in (None, THRESHOLD_GROUP):
+        with (
+            xr.open_dataset(tmp_path / "m1.0.h5", engine="h5netcdf", group=group) as ref,
+            xr.open_dataset(tmp_path / f"m{a!r}.h5", engine="h5netcdf", group=group) as ds,
+        ):
+            for name, k in _POWERS.items():
+                assert np.all(np.isfinite(ds[name].values))
+                np.testing.assert_allclose(ds[name].values, ref[name].values * a**k, rtol=1e-12, atol=0)

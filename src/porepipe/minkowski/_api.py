@@ -180,6 +180,33 @@ def _check_histogram(histogram) -> np.ndarray:
     return hist.astype(np.int64, copy=False)
 
 
+def _voxel_text(geom: _weights.Geometry) -> str:
+    sizes = set(geom.voxel_um)
+    return f"{geom.voxel_um[0]!r}" if len(sizes) == 1 else f"{geom.voxel_um!r}"
+
+
+def _in_um(name: str, value, geom: _weights.Geometry, power: int) -> np.ndarray:
+    """``value`` (unit_um^power) in µm^power; a non-zero value that over- or underflows float64 there is refused."""
+    value = np.asarray(value, dtype=np.float64)
+    out = _weights.to_um(value, geom, power)
+    lost = (value != 0) & ~((np.abs(out) >= np.finfo(np.float64).tiny) & np.isfinite(out))
+    if np.any(lost):
+        example = float(value[lost].flat[0]) if value.ndim else float(value)
+        raise PorepipeError(
+            f"voxel_um = {_voxel_text(geom)} µm: {name} = {example:.6g} voxel^{power} is beyond the float64 range "
+            f"in µm^{power}; allowed: a voxel size at which {name} is representable"
+        )
+    return out
+
+
+def _surface_density(hist: np.ndarray, geom: _weights.Geometry) -> np.ndarray:
+    """S_V of histogram(s) ``hist`` (..., 256) in units of ``geom.unit_um``⁻¹."""
+    transitions = hist @ _weights.transition_table().T  # (..., 13) int64, exact
+    cells = hist.sum(axis=-1)[..., None]
+    line_density = transitions / (_weights.TRANSITION_DENOMINATOR * cells * geom.line_length)
+    return 2.0 * line_density @ geom.line_weight
+
+
 def specific_surface_from_histogram(histogram, voxel_um) -> np.ndarray | float:
     """Surface area per volume S_V (µm⁻¹) from configuration histogram(s); the same for both phases.
 
@@ -200,30 +227,32 @@ def specific_surface_from_histogram(histogram, voxel_um) -> np.ndarray | float:
     Crofton formula over the 13 directions of the 2x2x2 cell with spherical-Voronoi weights (Ohser & Mücklich
     2000; Schladitz, Ohser & Nagel 2006). Unbiased for isotropic structures as the resolution increases; for flat
     faces normal to an axis the 13-direction estimate is 7.4 % low (a property of every 13-direction Crofton sum).
+    Computed in voxel units and scaled by 1/a afterwards, so any voxel size whose S_V is representable works.
     """
     hist = _check_histogram(histogram)
     geom = _weights.geometry(voxel3(voxel_um))
-    transitions = hist @ _weights.transition_table().T  # (..., 13) int64, exact
-    cells = hist.sum(axis=-1)[..., None]
-    line_density = transitions / (_weights.TRANSITION_DENOMINATOR * cells * geom.line_length_um)
-    result = 2.0 * line_density @ geom.line_weight
+    result = _in_um("S_V", _surface_density(hist, geom), geom, -1)
     return float(result) if np.ndim(result) == 0 else result
 
 
 def _phase_values(hist: np.ndarray, geom: _weights.Geometry, adjacency: int) -> dict[str, np.ndarray]:
-    """φ, S_V, K_V, T_V and χ of the foreground of histogram(s) ``hist`` (..., 256)."""
+    """φ, S_V, K_V, T_V and χ of the foreground of histogram(s) ``hist`` (..., 256).
+
+    The densities are computed in units of the voxel edge and scaled by its powers afterwards (S_V ~ a⁻¹,
+    K_V ~ a⁻², T_V ~ a⁻³), so an extreme voxel size gives correct values wherever they are representable.
+    """
     cells = hist.sum(axis=-1)
     volume = hist @ _weights.volume_table()
     section = hist @ _weights.section_euler_table(adjacency).T  # (..., 13) int64, exact
     euler = hist @ _weights.euler_table(adjacency)
-    window_um3 = cells * geom.cell_volume_um3
-    chi_area = section * geom.plane_spacing_um / (_weights.SECTION_DENOMINATOR * window_um3[..., None])
+    window = cells * geom.cell_volume
+    chi_area = section * geom.plane_spacing / (_weights.SECTION_DENOMINATOR * window[..., None])
     chi = euler / _weights.EULER_DENOMINATOR
     return {
         "phi": volume / (_weights.VOLUME_DENOMINATOR * cells),
-        "S_V": np.asarray(specific_surface_from_histogram(hist, geom.voxel_um)),
-        "K_V": 2.0 * np.pi * chi_area @ geom.plane_weight,
-        "T_V": 4.0 * np.pi * chi / window_um3,
+        "S_V": _in_um("S_V", _surface_density(hist, geom), geom, -1),
+        "K_V": _in_um("K_V", 2.0 * np.pi * chi_area @ geom.plane_weight, geom, -2),
+        "T_V": _in_um("T_V", 4.0 * np.pi * chi / window, geom, -3),
         "chi": chi,
     }
 
@@ -298,7 +327,7 @@ def _boundary_attrs(geom: _weights.Geometry, flags, adjacency: Adjacency, cells:
         "boundary_rule": "periodic axes wrap; along non-periodic axes only complete 2x2x2 cells (minus sampling)",
         "adjacency_pair": adjacency.value,
         "n_cells": cells,
-        "window_um3": cells * geom.cell_volume_um3,
+        "window_um3": float(_in_um("the window volume", cells * geom.cell_volume, geom, 3)),
         "method": "2x2x2 configuration histogram; Crofton over 13 lattice directions with spherical-Voronoi weights "
         "(Ohser & Mücklich 2000; Schladitz, Ohser & Nagel 2006); Euler number of the cubical complex of "
         "the 6-adjacent phase and its dual for the 26-adjacent phase (Ohser, Nagel & Schladitz 2003)",

@@ -105,18 +105,18 @@ def run(
             _check_grey_grid(grey_path, binary_path, pore.shape, volume_meta(pore, binary_path))
     hist, shape, meta = _binary_histogram(binary_path, settings.slab_planes, memory_budget_mb, threads)
     table = minkowski_from_histogram(hist, meta.voxel_um, settings.adjacency, meta.periodic)
+    thresholds = None
+    if grey_path:  # before the result file: a threshold table out of the float64 range is refused without one
+        hists, gmeta = _grey_histograms(grey_path, settings.slab_planes, memory_budget_mb, threads)
+        all_pore = np.flatnonzero(hists[:, -1] == hists.sum(axis=1))  # thresholds at/above max(grey)
+        last = int(all_pore[0]) if len(all_pore) else len(hists) - 1
+        thresholds = threshold_dataset(hists[: last + 1], gmeta.voxel_um, gmeta.periodic, settings.adjacency)
     with ResultWriter(
         out, stage="minkowski", scene=src.get("scene", ""), scene_hash=digest, threads=threads
     ) as w:
         w.write_table(table)
-        if grey_path:
-            hists, gmeta = _grey_histograms(grey_path, settings.slab_planes, memory_budget_mb, threads)
-            all_pore = np.flatnonzero(hists[:, -1] == hists.sum(axis=1))  # thresholds at/above max(grey)
-            last = int(all_pore[0]) if len(all_pore) else len(hists) - 1
-            w.write_table(
-                threshold_dataset(hists[: last + 1], gmeta.voxel_um, gmeta.periodic, settings.adjacency),
-                group=THRESHOLD_GROUP,
-            )
+        if thresholds is not None:
+            w.write_table(thresholds, group=THRESHOLD_GROUP)
         pore_values = table.sel(phase="pore")
         w.attrs.update(
             voxel_um=meta.voxel_um,

@@ -215,34 +215,75 @@ def _plane_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class Geometry:
     """Direction weights and lengths of the 13 lattice directions for one voxel size (µm).
 
+    Lengths are stored in units of ``unit_um`` (the longest voxel edge), so that the weights and every length stay
+    O(1) for any voxel size; :func:`to_um` turns a quantity of length dimension k into µm^k afterwards (Crofton
+    weights are scale-free: V ~ a³, S ~ a², M ~ a, χ ~ 1).
+
     Attributes
     ----------
     voxel_um : (3,) float
         Voxel edge lengths along x, y, z.
-    cell_volume_um3 : float
-        Volume of one lattice cell.
-    line_length_um : (13,) float
-        Length of the lattice step in each line direction.
+    unit_um : float
+        Length unit of the fields below: the longest voxel edge.
+    cell_volume : float
+        Volume of one lattice cell (unit_um³).
+    line_length : (13,) float
+        Length of the lattice step in each line direction (unit_um).
     line_weight : (13,) float
         Crofton weight γ_i of each line direction (sums to 1).
-    plane_spacing_um : (13,) float
-        Distance between neighbouring lattice planes of each family.
+    plane_spacing : (13,) float
+        Distance between neighbouring lattice planes of each family (unit_um).
     plane_weight : (13,) float
         Crofton weight γ'_j of each plane family (sums to 1).
     """
 
     voxel_um: tuple[float, float, float]
-    cell_volume_um3: float
-    line_length_um: np.ndarray
+    unit_um: float
+    cell_volume: float
+    line_length: np.ndarray
     line_weight: np.ndarray
-    plane_spacing_um: np.ndarray
+    plane_spacing: np.ndarray
     plane_weight: np.ndarray
+
+    @property
+    def cell_volume_um3(self) -> float:
+        """Volume of one lattice cell in µm³ (inf beyond the float64 range)."""
+        return float(to_um(self.cell_volume, self, 3))
+
+    @property
+    def line_length_um(self) -> np.ndarray:
+        """(13,) lattice step of each line direction in µm."""
+        return to_um(self.line_length, self, 1)
+
+    @property
+    def plane_spacing_um(self) -> np.ndarray:
+        """(13,) distance between neighbouring lattice planes of each family in µm."""
+        return to_um(self.plane_spacing, self, 1)
+
+
+def to_um(value, geom: Geometry, power: int):
+    """``value`` in units of ``geom.unit_um``^power, in µm^power (``power`` may be negative).
+
+    One multiplication or division per power, so that no intermediate leaves the float64 range unless the result
+    does (then it is inf or 0; the caller decides what that means).
+    """
+    out = np.asarray(value, dtype=np.float64)
+    with np.errstate(over="ignore", under="ignore"):
+        for _ in range(abs(power)):
+            out = out * geom.unit_um if power > 0 else out / geom.unit_um
+    return out
 
 
 @functools.lru_cache(maxsize=64)
 def geometry(voxel_um: tuple[float, float, float]) -> Geometry:
-    """Crofton weights and lattice lengths for voxel edge lengths ``voxel_um`` (x, y, z) in µm."""
-    scale = np.asarray(voxel_um, dtype=np.float64)
+    """Crofton weights and lattice lengths for voxel edge lengths ``voxel_um`` (x, y, z) in µm.
+
+    Everything is computed for the voxel edges divided by the longest one (the weights are scale-free), so any
+    positive finite voxel size gives the same weights as its shape at unit size.
+    """
+    voxel = np.asarray(voxel_um, dtype=np.float64)
+    unit = float(voxel.max())
+    scale = voxel / unit
     lines = DIRECTIONS * scale
     normals, spacing = [], []
     cell_volume = float(np.prod(scale))
@@ -252,10 +293,11 @@ def geometry(voxel_um: tuple[float, float, float]) -> Geometry:
         normals.append(n_phys)
         spacing.append(cell_volume / np.linalg.norm(n_phys))
     return Geometry(
-        voxel_um=tuple(float(s) for s in scale),
-        cell_volume_um3=cell_volume,
-        line_length_um=np.linalg.norm(lines, axis=1),
+        voxel_um=tuple(float(s) for s in voxel),
+        unit_um=unit,
+        cell_volume=cell_volume,
+        line_length=np.linalg.norm(lines, axis=1),
         line_weight=_voronoi_weights(lines),
-        plane_spacing_um=np.asarray(spacing),
+        plane_spacing=np.asarray(spacing),
         plane_weight=_voronoi_weights(np.asarray(normals)),
     )
