@@ -52,3 +52,50 @@ def test_regression_refuses_non_finite_intercepts():
     """A NaN intercept made LAPACK print 'illegal value' and raise LinAlgError; now one line names the intercepts."""
     with pytest.raises(PorepipeError, match="finite intercepts"):
         regress_porosity_limit([0.3, np.nan], [0.35, 0.33])
+
+
+def _scaled_series(scale):
+    """A three-resolution series (2, 1, 0.5) × ``scale`` µm with partial voxels, and its estimate."""
+    rng = np.random.default_rng(11)
+    hists = np.zeros((3, 217), np.int64)
+    for row, voxels in enumerate((1000, 8000, 64000)):
+        mixed = voxels // (8 * (row + 1))
+        hists[row] = np.bincount(rng.integers(1, 216, mixed), minlength=217)
+        hists[row, 0] = (voxels - mixed) * 3 // 4 + row
+        hists[row, 216] = voxels - hists[row].sum()
+    return estimate_from_histograms([2.0 * scale, 1.0 * scale, 0.5 * scale], hists)
+
+
+# power of the voxel size in each variable (the rest are dimensionless)
+_POWERS = {"a_um": 1, "pair_coarse_um": 1, "pair_fine_um": 1, "S_min": -1, "S_mf": -1, "S_max": -1, "k_0": -1}
+_POWERS["k_215"] = -1
+
+
+@pytest.mark.parametrize("scale", [1e-20, 1e20, 1e100])
+def test_extreme_voxel_sizes_give_the_scaled_estimate(scale):
+    """At voxel sizes around 1e100 µm the three-point limit was silently wrong (0.718 for 0.427: a² overflowed in
+    numpy.polyfit's column scaling); the fit is now done in a / 2^e, so every limit is the one at ~1 µm and every
+    length-dependent value the 1 µm one times a^k (rel 1e-12: the voxel sizes themselves differ in rounding)."""
+    ref, ds = _scaled_series(1.0), _scaled_series(scale)
+    for name in ds.variables:
+        k = _POWERS.get(name, 0)
+        np.testing.assert_allclose(
+            ds[name].values, ref[name].values * scale**k, rtol=1e-12, atol=0, err_msg=name
+        )
+    assert float(ds.phi_limit) == pytest.approx(float(ref.phi_limit), rel=1e-12)  # the a_i differ in rounding
+
+
+def test_voxel_sizes_near_1e_minus_100_do_not_hang():
+    """At 1e-100 µm, a² underflowed in numpy.polyfit's column scaling (division by zero) and LAPACK never returned
+    ('DLASCL parameter number 4 had an illegal value', then a hang); now the estimate is the one at 1 µm scaled."""
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np, tests.hard.test_estimate_hard as t\n"
+        "ref, ds = t._scaled_series(1.0), t._scaled_series(1e-100)\n"
+        "np.testing.assert_allclose(float(ds.phi_limit), float(ref.phi_limit), rtol=1e-12)\n"
+        "np.testing.assert_allclose(ds.S_mf.values, ref.S_mf.values * 1e100, rtol=1e-12)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]

@@ -68,8 +68,12 @@ def richardson_limit(a, q) -> tuple[float, float]:
         )
     if not np.all(np.isfinite(q[idx])):
         raise PorepipeError(f"a three-point limit needs finite values, got {q[idx].tolist()}")
-    coef = np.polyfit(a[idx], q[idx], 2)
-    linear = np.polyfit(a[idx[:2]], q[idx[:2]], 1)
+    # fit in a / 2^e (2^e near the coarsest of the three): the limit at a = 0 does not depend on the unit of a, and
+    # a power of 2 divides exactly, so this gives the same bits as the fit in µm wherever that one is representable
+    # (a ~ 1e-100 µm: a² underflows in polyfit's column scaling, which then never converges; 1e100: a² overflows)
+    x = np.ldexp(a, -int(np.frexp(finest[-1])[1]))
+    coef = np.polyfit(x[idx], q[idx], 2)
+    linear = np.polyfit(x[idx[:2]], q[idx[:2]], 1)
     return float(coef[-1]), float(abs(coef[-1] - linear[-1]))
 
 
