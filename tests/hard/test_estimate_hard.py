@@ -99,3 +99,20 @@ def test_voxel_sizes_near_1e_minus_100_do_not_hang():
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
+
+
+@pytest.mark.parametrize("scale", [1e-110, 1e110, 1e-300, 1e300])
+def test_surface_estimates_scale_where_a_cubed_leaves_float64(scale):
+    """S_b(g, a) was area(a) / a³: at 1e-110 µm a³ underflowed (S = NaN, inf), at 1e110 µm it overflowed (S = 0),
+    though S ~ 1/a is representable; it is now S_b(g, 1) / a."""
+    ref, ds = _scaled_series(1.0), _scaled_series(scale)
+    for name in ("S_min", "S_mf", "S_max", "k_0", "k_215"):
+        np.testing.assert_allclose(
+            ds[name].values, ref[name].values / scale, rtol=1e-12, atol=0, err_msg=name
+        )
+
+
+@pytest.mark.parametrize("scale", [1e-310, 1e308])
+def test_surface_beyond_float64_is_refused(scale):
+    with pytest.raises(PorepipeError, match=r"voxel_um = .* µm: S_min = .* beyond the float64 range"):
+        _scaled_series(scale)

@@ -20,6 +20,8 @@ import re
 import numpy as np
 import xarray as xr
 
+from porepipe._shared.errors import PorepipeError
+
 #: dimensionless (fractions, counts, grey values, flags)
 DIMENSIONLESS = "1"
 MICROMETRE = "µm"
@@ -194,3 +196,46 @@ def annotate(ds: xr.Dataset) -> xr.Dataset:
 def centres_um(n: int, origin_um: float, voxel_um: float) -> np.ndarray:
     """Coordinates (µm) of the centres of ``n`` voxels along one axis whose first voxel's corner is ``origin_um``."""
     return float(origin_um) + (np.arange(int(n), dtype=np.float64) + 0.5) * float(voxel_um)
+
+
+def from_voxel_units(
+    value, voxel_um: float, power: int, name: str | None = None, voxel_text: str | None = None
+):
+    """``value``, given in units of (voxel edge)^power, in µm^power; ``power`` may be negative.
+
+    Quantities are best computed in voxel units and scaled once at the end: one multiplication (or division) by
+    ``voxel_um`` per power, so no intermediate leaves the float64 range unless the result does, and a voxel size
+    of 1e-100 or 1e100 µm gives the result at 1 µm times a^power.
+
+    Parameters
+    ----------
+    value : float or ndarray
+        The quantity in voxel units.
+    voxel_um : float
+        The voxel edge (the length unit of ``value``) in µm.
+    power : int
+        Length dimension of the quantity (S_V: -1, a volume: 3).
+    name : str, optional
+        The quantity's name: a non-zero value whose result over- or underflows float64 (inf, or below the normal
+        range) is then refused in one line naming ``voxel_um`` and it; without a name it becomes inf or (near) 0.
+    voxel_text : str, optional
+        How the message writes the voxel size (default ``repr(voxel_um)``; e.g. three edges of anisotropic voxels).
+
+    Returns
+    -------
+    float64 ndarray
+    """
+    value = np.asarray(value, dtype=np.float64)
+    out = value
+    with np.errstate(over="ignore", under="ignore"):
+        for _ in range(abs(int(power))):
+            out = out * voxel_um if power > 0 else out / voxel_um
+    if name is not None:
+        lost = (value != 0) & ~(np.isfinite(out) & (np.abs(out) >= np.finfo(np.float64).tiny))
+        if np.any(lost):
+            example = float(value[lost].flat[0]) if value.ndim else float(value)
+            raise PorepipeError(
+                f"voxel_um = {voxel_text or repr(float(voxel_um))} µm: {name} = {example:.6g} voxel^{power} is "
+                f"beyond the float64 range in µm^{power}; allowed: a voxel size at which {name} is representable"
+            )
+    return out

@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.units import from_voxel_units
 
 G_MAX = 216
 SQRT3 = np.sqrt(3.0)
@@ -180,27 +181,35 @@ def corner_cut(fraction, a: float = 1.0):
     return d * a, area * a * a
 
 
-def surface_per_grey(a: float) -> dict[str, np.ndarray]:
-    """S_min(g, a), S_mf(g, a), S_max(g, a) for g = 0..216 in 1/length (the unit of ``a``), Eqs. 7.3.1–7.3.8.
-
-    Mixed voxels only (g = 1..215); the mean-field value uses the cut-off fraction min(g, 216 − g)/216.
-    """
+def _surface_per_grey_unit() -> dict[str, np.ndarray]:
+    """S_min(g), S_mf(g), S_max(g) for g = 0..216 at voxel edge 1 (Eqs. 7.3.1–7.3.8): S_b(g, a) = S_b(g, 1) / a."""
     g = np.arange(G_MAX + 1, dtype=np.float64)
     psi = 1.0 - g / G_MAX
     mixed = (g >= 1) & (g <= G_MAX - 1)
-    s_max = np.where(mixed, cap_base_area(psi, SQRT3 * a / 2.0) / a**3, 0.0)
+    s_max = np.where(mixed, cap_base_area(psi, SQRT3 / 2.0), 0.0)
     lo, hi = S_MIN_G_RANGE
-    s_min = np.where((g >= lo) & (g <= hi), cap_base_area(psi, a / 2.0) / a**3, 0.0)
+    s_min = np.where((g >= lo) & (g <= hi), cap_base_area(psi, 0.5), 0.0)
     frac = np.minimum(g, G_MAX - g) / G_MAX
-    s_mf = np.where(mixed, corner_cut(frac, a)[1] / a**3, 0.0)
+    s_mf = np.where(mixed, corner_cut(frac)[1], 0.0)
     return {"S_min": s_min, "S_mf": s_mf, "S_max": s_max}
+
+
+def surface_per_grey(a: float) -> dict[str, np.ndarray]:
+    """S_min(g, a), S_mf(g, a), S_max(g, a) for g = 0..216 in 1/length (the unit of ``a``), Eqs. 7.3.1–7.3.8.
+
+    Mixed voxels only (g = 1..215); the mean-field value uses the cut-off fraction min(g, 216 − g)/216. Computed at
+    a = 1 and divided by a (the areas scale as a², the voxel volume as a³), so any representable a works.
+    """
+    return {name: from_voxel_units(values, a, -1, name) for name, values in _surface_per_grey_unit().items()}
 
 
 def surface_estimates(hist, a: float) -> dict[str, float]:
     """S_b(a) = (1/N) Σ_{g=1}^{215} M(g, a) S_b(g, a) for b in min, mf, max (Eq. 7.3.3)."""
     hist = _check_hist(hist)
-    per_g = surface_per_grey(a)
-    return {name: float(hist @ values / hist.sum()) for name, values in per_g.items()}
+    return {
+        name: float(from_voxel_units(hist @ values / hist.sum(), a, -1, name))
+        for name, values in _surface_per_grey_unit().items()
+    }
 
 
 # -- all estimators over a resolution series ----------------------------------------------------------------------------

@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.units import from_voxel_units
 from porepipe.minkowski import _kernels, _weights
 from porepipe.minkowski._settings import Adjacency
 
@@ -187,16 +188,7 @@ def _voxel_text(geom: _weights.Geometry) -> str:
 
 def _in_um(name: str, value, geom: _weights.Geometry, power: int) -> np.ndarray:
     """``value`` (unit_um^power) in µm^power; a non-zero value that over- or underflows float64 there is refused."""
-    value = np.asarray(value, dtype=np.float64)
-    out = _weights.to_um(value, geom, power)
-    lost = (value != 0) & ~((np.abs(out) >= np.finfo(np.float64).tiny) & np.isfinite(out))
-    if np.any(lost):
-        example = float(value[lost].flat[0]) if value.ndim else float(value)
-        raise PorepipeError(
-            f"voxel_um = {_voxel_text(geom)} µm: {name} = {example:.6g} voxel^{power} is beyond the float64 range "
-            f"in µm^{power}; allowed: a voxel size at which {name} is representable"
-        )
-    return out
+    return from_voxel_units(value, geom.unit_um, power, name, _voxel_text(geom))
 
 
 def _surface_density(hist: np.ndarray, geom: _weights.Geometry) -> np.ndarray:

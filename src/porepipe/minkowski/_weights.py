@@ -44,6 +44,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import SphericalVoronoi
 
+from porepipe._shared.units import from_voxel_units
+
 N_CODES = 256
 VOLUME_DENOMINATOR = 8
 TRANSITION_DENOMINATOR = 4
@@ -261,17 +263,9 @@ class Geometry:
         return to_um(self.plane_spacing, self, 1)
 
 
-def to_um(value, geom: Geometry, power: int):
-    """``value`` in units of ``geom.unit_um``^power, in µm^power (``power`` may be negative).
-
-    One multiplication or division per power, so that no intermediate leaves the float64 range unless the result
-    does (then it is inf or 0; the caller decides what that means).
-    """
-    out = np.asarray(value, dtype=np.float64)
-    with np.errstate(over="ignore", under="ignore"):
-        for _ in range(abs(power)):
-            out = out * geom.unit_um if power > 0 else out / geom.unit_um
-    return out
+def to_um(value, geom: Geometry, power: int) -> np.ndarray:
+    """``value`` in units of ``geom.unit_um``^power, in µm^power (inf or 0 beyond the float64 range)."""
+    return from_voxel_units(value, geom.unit_um, power)
 
 
 @functools.lru_cache(maxsize=64)
