@@ -247,3 +247,15 @@ def test_extreme_voxel_size_with_grey_thresholds(tmp_path, a):
             for name, k in _POWERS.items():
                 assert np.all(np.isfinite(ds[name].values))
                 np.testing.assert_allclose(ds[name].values, ref[name].values * a**k, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("voxel", [(1.0, 1.0, 1e-6), (1e-100, 1e-100, 1e-94), (2e6, 1.0, 1.0)])
+def test_voxel_edges_too_unequal_for_crofton_weights_are_refused(voxel):
+    """Edges a million times apart died in scipy's SphericalVoronoi ('Duplicate generators present'); now one line."""
+    with pytest.raises(PorepipeError, match=r"voxel_um = .* times the shortest; allowed: up to 100000"):
+        minkowski_functionals(np.zeros((3, 3, 3), np.uint8), voxel, True)
+
+
+def test_voxel_edges_1e5_apart_still_work():
+    ds = minkowski_functionals(np.eye(4, dtype=np.uint8)[:, :, None].repeat(3, 2), (1.0, 1.0, 1e-5), True)
+    _finite(ds)

@@ -20,6 +20,9 @@ from porepipe.minkowski import _kernels, _weights
 from porepipe.minkowski._settings import Adjacency
 
 PHASES = ("pore", "matrix")
+#: largest ratio of voxel edges: beyond ~8e5 two of the 13 lattice directions are closer than the spherical Voronoi
+#: tessellation of their weights can tell apart (scipy: 'Duplicate generators present')
+MAX_ANISOTROPY = 1e5
 UNITS = {"phi": "1", "S_V": "µm^-1", "K_V": "µm^-2", "T_V": "µm^-3", "chi": "1"}
 _DESCRIPTIONS = {
     "phi": "volume fraction of the phase (φ for the pore phase)",
@@ -49,6 +52,11 @@ def voxel3(voxel_um) -> tuple[float, float, float]:
     )
     if sizes.shape != (3,) or not np.all(np.isfinite(sizes)) or np.any(sizes <= 0):
         raise PorepipeError(f"voxel_um must be one positive number or 3 (x, y, z), got {voxel_um!r}")
+    if sizes.max() / sizes.min() > MAX_ANISOTROPY:
+        raise PorepipeError(
+            f"voxel_um = {voxel_um!r}: the longest edge is {sizes.max() / sizes.min():.3g} times the shortest; "
+            f"allowed: up to {MAX_ANISOTROPY:g} (beyond, lattice directions coincide and have no Crofton weights)"
+        )
     return tuple(float(s) for s in sizes)
 
 
