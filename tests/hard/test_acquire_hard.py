@@ -456,3 +456,28 @@ def test_section_spacing_whose_cubic_resampling_cannot_fit_is_refused(tmp_path):
     )
     assert str(err.value).endswith("check acquire.voxel_um and acquire.section_um (--voxel-um, --section-um)")
     assert not (tmp_path / "s.h5").exists()
+
+
+@pytest.mark.parametrize("voxel", [1e-100, 1e-20, 1e20, 1e100])
+def test_extreme_voxel_sizes_give_scaled_minkowski_numbers_or_one_line(tmp_path, capsys, voxel):
+    """``acquire --voxel-um 1e100`` died with scipy's 'Rank of input points must be at least 3' and 1e-100 with 'SVD
+    did not converge' (the Crofton weights); now S_V, K_V are those at 1 µm times a^-1, a^-2, and a T_V that is
+    representable per µm³ but not per mm³ (1e-100 µm: ~1e307 µm⁻³) is one line, with no file, instead of -inf."""
+    pore = (np.random.default_rng(1).random((12, 12, 12)) < 0.5).astype(np.uint8)
+    np.save(tmp_path / "v.npy", pore * 200)
+    assert main(["acquire", str(tmp_path / "v.npy"), "--voxel-um", "1", "-o", str(tmp_path / "ref.h5")]) == 0
+    capsys.readouterr()
+    out = tmp_path / "s.h5"
+    code = main(["acquire", str(tmp_path / "v.npy"), "--voxel-um", repr(voxel), "-o", str(out)])
+    if voxel == 1e-100:
+        assert code == 2 and not out.exists()
+        (line,) = capsys.readouterr().err.splitlines()
+        assert "voxel_um = 1e-100 µm: T_V_per_mm3 is beyond the float64 range" in line
+        return
+    assert code == 0
+    with (
+        xr.open_dataset(tmp_path / "ref.h5", engine="h5netcdf") as ref,
+        xr.open_dataset(out, engine="h5netcdf") as got,
+    ):
+        for name, k in (("phi_minkowski", 0), ("S_V_per_mm", -1), ("K_V_per_mm2", -2), ("T_V_per_mm3", -3)):
+            assert float(got[name]) == pytest.approx(float(ref[name]) * voxel**k, rel=1e-12), name

@@ -50,13 +50,20 @@ def minkowski_numbers(pore: np.ndarray, voxel_um: float, periodic: bool) -> dict
     from porepipe.minkowski import minkowski_functionals
 
     ds = minkowski_functionals(pore, voxel_um, periodic=periodic).sel(phase="pore")
-    return {
+    numbers = {
         "phi_minkowski": float(ds.phi),
         "S_V_per_mm": float(ds.S_V) * UM_PER_MM,
         "K_V_per_mm2": float(ds.K_V) * UM_PER_MM**2,
         "T_V_per_mm3": float(ds.T_V) * UM_PER_MM**3,
         "chi": float(ds.chi),
     }
+    beyond = [name for name, value in numbers.items() if not np.isfinite(value)]
+    if beyond:  # representable per µm³ (minkowski checks that), not per mm³: e.g. T_V at voxel_um 1e-100
+        raise PorepipeError(
+            f"voxel_um = {voxel_um!r} µm: {beyond[0]} is beyond the float64 range; allowed: a voxel size at which "
+            "the Minkowski densities per mm are representable"
+        )
+    return numbers
 
 
 # -- percolation ----------------------------------------------------------------------------------------------------
