@@ -174,3 +174,19 @@ def test_sweep_options_win_over_the_scene_and_are_checked_as_its_keys(tmp_path, 
     (line,) = capsys.readouterr().err.splitlines()
     assert line == "porepipe sweep: error: sweep options: confidence = 0.3: Input should be greater than 0.5"
     assert not out.exists()
+
+
+@pytest.mark.parametrize("scale", [1e-100, 1e100])
+def test_a_fit_coefficient_beyond_float64_is_refused_in_one_line(scale):
+    # before: Python's float power raised a bare ZeroDivisionError (1e-100) or OverflowError (1e100) out of the sweep
+    a = np.array([2.0, 1.0, 0.5, 0.25]) * scale
+    with pytest.raises(PorepipeError, match="beyond float64 in the data's own units"):
+        fit_power(a, 0.1 + 3.0 * (a / scale) ** 4, exponent=4)
+
+
+@pytest.mark.parametrize("scale", [1e-20, 1.0, 1e20])
+def test_the_fit_coefficient_of_exact_data_is_exact_at_any_representable_scale(scale):
+    a = np.array([2.0, 1.0, 0.5, 0.25]) * scale
+    limit = fit_power(a, 0.1 + 3.0 * (a / scale) ** 2, exponent=2)
+    assert limit.q_inf == pytest.approx(0.1, rel=1e-12)
+    assert limit.c == pytest.approx(3.0 / scale**2, rel=1e-12)  # q = q_inf + c a^2 exactly

@@ -172,6 +172,24 @@ def _monotonic(x, q, sigma):
     return significant.size == 0 or np.all(significant == significant[0])
 
 
+def _coefficient(c: float, p: float, q_scale: float, x_scale: float) -> float:
+    """The fit's c in the data's units, c q_scale / x_scale^p, from its value in the scaled units of the fit; one line
+    when it is beyond float64 (lengths near 1e-100 or 1e100 of their unit: Python's power raised a bare
+    ZeroDivisionError or OverflowError there).
+    """
+    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+        value = float(np.float64(c) * q_scale / np.float64(x_scale) ** p)
+    if np.isfinite(value) and (value != 0.0 or c == 0.0 or not np.isfinite(c)):
+        return value
+    if not (np.isfinite(c) and np.isfinite(p)):
+        return float("nan")
+    raise PorepipeError(
+        f"the fitted c of q_inf + c*a^p ({c:.3g} in units of the data's largest |q| {q_scale:.3g} and largest a "
+        f"{x_scale:.3g}, p = {p:.3g}) is beyond float64 in the data's own units; give the lengths in a unit near "
+        "their size"
+    )
+
+
 def fit_power(
     a,
     q,
@@ -230,7 +248,7 @@ def fit_power(
             float(err) * q_scale,
             float(err_fit) * q_scale,
             float(err_loo) * q_scale,
-            float(c) * q_scale / x_scale**p,
+            _coefficient(c, p, q_scale, x_scale),
             float(p),
             n,
             status,
