@@ -299,3 +299,15 @@ def test_the_guard_advises_a_dt_within_the_damping_bound_when_the_run_is_past_it
     sim = simulation([p], [floor()], material=material, dt_s=advised)
     sim.advance(2000)
     _finite(sim)
+
+
+@pytest.mark.parametrize("steps", [math.nan, math.inf, 2.7, -5, True, "4"])
+def test_advance_refuses_a_step_count_that_is_not_a_whole_number_at_least_0(steps):
+    # before: NaN and inf raised a raw ValueError/OverflowError, 2.7 ran 2 steps, -5 and True ran 0 and 1 silently
+    sim = simulation([{"vertices_m": square(0.01), "position_m": (0.0, 0.1)}])
+    with pytest.raises(PorepipeError, match=r"^Simulation.advance: steps must be a whole number >= 0, got "):
+        sim.advance(steps)
+    assert sim.step == 0
+    sim.advance(np.int64(2))
+    sim.advance(3.0)
+    assert sim.step == 5

@@ -149,6 +149,21 @@ def tangential_damping_rate(
     return float(tangential_damping * math.sqrt(2.0 / 7.0 * young_N_m * per.max() * (2.0 if pairs else 1.0)))
 
 
+def _step_count(steps) -> int:
+    """``steps`` as an int if it is a whole number >= 0 (an int, a NumPy integer or an integral float such as 3.0)."""
+    if isinstance(steps, bool | np.bool_):
+        ok = False
+    elif isinstance(steps, int | np.integer):
+        ok = steps >= 0
+    else:
+        ok = (
+            isinstance(steps, float | np.floating) and float(steps).is_integer() and steps >= 0
+        )  # no NaN, inf
+    if not ok:
+        raise PorepipeError(f"Simulation.advance: steps must be a whole number >= 0, got {steps!r}")
+    return int(steps)
+
+
 @dataclasses.dataclass
 class Frame:
     """Particle state and contacts at one time."""
@@ -478,9 +493,10 @@ class Simulation:
         Raises
         ------
         PorepipeError
-            The stability guard fired (overlap explosion, runaway speed, NaN); the message gives the dt to try.
+            ``steps`` is not a whole number >= 0 (2.7, -5, NaN, a string or a bool), or the stability guard fired
+            (overlap explosion, runaway speed, NaN); the message gives the dt to try.
         """
-        end = self.step + int(steps)
+        end = self.step + _step_count(steps)
         # a parallel region costs ~10 us (much more on a loaded machine): small systems run on one thread (the
         # result does not depend on the thread count)
         threads = numba.get_num_threads()
