@@ -311,3 +311,20 @@ def test_advance_refuses_a_step_count_that_is_not_a_whole_number_at_least_0(step
     sim.advance(np.int64(2))
     sim.advance(3.0)
     assert sim.step == 5
+
+
+def test_a_duration_shorter_than_half_a_step_is_refused_and_0_says_it_writes_the_start(tmp_path, capsys):
+    # before: duration_s = 1e-6 s at dt = 1.5e-5 s rounded to 0 steps and wrote the initial state without a word
+    grain = {"vertices_m": square(0.01), "position_m": (0.0, 0.1)}
+    short = Settings.model_validate({"particles": [grain], "duration_s": 1e-6, "dt_s": 1e-5})
+    with pytest.raises(
+        PorepipeError,
+        match=r"^granular.duration_s = 1e-06 s is shorter than half a time step \(dt = 1e-05 s\), so the run would",
+    ):
+        run(short, tmp_path / "g.h5", progress=False)
+    assert list(tmp_path.iterdir()) == []
+    run(short.model_copy(update={"duration_s": 0.0}), tmp_path / "g.h5", progress=False)
+    assert (
+        "granular.duration_s = 0: no time step; the result holds the initial state alone"
+        in capsys.readouterr().err
+    )

@@ -175,8 +175,6 @@ def run(
 def _simulate(settings, seed, checkpoint, resume, progress, key):
     """Step the simulation to the end, collecting frames and time series; checkpoint on the way."""
     sim = Simulation(settings, seed)
-    if (line := sim.damping_bound_notice()) is not None:
-        notice(line)
     steps = settings.duration_s / sim.dt
     if not steps < _MAX_STEPS:
         raise PorepipeError(
@@ -185,6 +183,15 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
             "the lightest grain, Eq. 2.9: are the sizes in metres?)"
         )
     total = round(steps)
+    if total == 0 and settings.duration_s > 0:
+        raise PorepipeError(
+            f"granular.duration_s = {settings.duration_s:g} s is shorter than half a time step (dt = {sim.dt:.3g} s), "
+            "so the run would make no step; give duration_s >= dt, or 0 to write the initial state alone"
+        )
+    if total == 0:
+        notice("granular.duration_s = 0: no time step; the result holds the initial state alone")
+    if (line := sim.damping_bound_notice()) is not None:
+        notice(line)
     frame_steps = np.unique(np.round(np.linspace(0, total, settings.output.frames + 1)).astype(np.int64))
     frames: list[Frame] = []
     series: list[tuple] = []
