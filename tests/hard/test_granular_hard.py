@@ -328,3 +328,18 @@ def test_a_duration_shorter_than_half_a_step_is_refused_and_0_says_it_writes_the
         "granular.duration_s = 0: no time step; the result holds the initial state alone"
         in capsys.readouterr().err
     )
+
+
+def test_a_grain_that_flies_too_fast_without_a_contact_is_named_as_such_not_as_an_unstable_dt():
+    # the guard allows 0.2 inscribed radii (1 mm) per step: 10 m/s at dt = 1e-4 s, reached after ~0.05 s of fall;
+    # before: "unstable at step N ... rerun with granular.dt_s <= dt/2", which only delays the stop
+    grain = {"vertices_m": square(0.01), "position_m": (5.0, -3.0), "velocity_m_s": (0.0, -9.5)}
+    sim = simulation([grain], [floor()], dt_s=1e-4, gravity_m_s2=(0.0, -9.81), material=SOFT)
+    with pytest.raises(
+        PorepipeError,
+        match=r"^granular: particle 0 moved 0.001 m in one step without a contact at step \d+ \(t = 0.05\d* s\): "
+        r"it flies at 10 m/s and 0 rad/s at \(5, -3.\d+\) m, outside every wall's reach, and "
+        r"granular.guard.max_move = 0.2 inscribed radii allows 0.001 m per step .* not an unstable dt .*"
+        r"raise granular.guard.max_move$",
+    ):
+        sim.advance(1000)

@@ -605,10 +605,41 @@ class Simulation:
                 "had not moved away (not an unstable dt); insert less often (every_s), over a wider width_m, "
                 "higher, or with a downward velocity_m_s"
             )
+        if code == K.GUARD_MOVE and not self._touches(int(diag[1])):
+            raise PorepipeError(self._free_flight(int(diag[1]), diag[2]))
         raise PorepipeError(
             f"granular: unstable at step {self.step} (t = {self.time_s:.6g} s): particle {int(diag[1])} shows "
             f"{what}; dt = {self.dt:.3g} s vs the rule (pi/10) sqrt(m_min/E) = {self.dt_rule:.3g} s "
             f"(Eq. 2.9){damped}: rerun with granular.dt_s <= {try_dt:.3g}"
+        )
+
+    def _touches(self, k: int) -> bool:
+        """Whether particle ``k`` had a contact (a grain or a wall) in the last step."""
+        c = self.contacts()
+        return bool(np.any(c["i"] == k) or np.any(c["j"] == k))
+
+    def _free_flight(self, k: int, moved: float) -> str:
+        """The guard's message for particle ``k`` that moved ``moved`` m in one step without a contact: a grain
+        that flew fast (a long fall, a launch), not an unstable time step.
+        """
+        n = self.n_mob
+        vx, vy, w = self.G[1, k] / self.dt
+        x, y = self.G[0, k, :2]
+        box = self.aabb[n:]
+        if not len(box):
+            where = " in a scene without walls"
+        elif x < box[:, 0].min() or x > box[:, 1].max() or y < box[:, 2].min() or y > box[:, 3].max():
+            where = ", outside every wall's reach"
+        else:
+            where = ""
+        limit = self.mat[7]
+        return (
+            f"granular: particle {k} moved {moved:.3g} m in one step without a contact at step {self.step} "
+            f"(t = {self.time_s:.6g} s): it flies at {math.hypot(vx, vy):.3g} m/s and {abs(w):.3g} rad/s at "
+            f"({x:.3g}, {y:.3g}) m{where}, and granular.guard.max_move = {self.settings.guard.max_move:g} inscribed "
+            f"radii allows {limit:.3g} m per step (a faster grain may pass through a wall or grain unseen); not an "
+            "unstable dt (a smaller dt_s only delays the stop for a falling grain): give it walls to land on or "
+            "shorten granular.duration_s, or, if the flight is meant, raise granular.guard.max_move"
         )
 
     # -- observables -------------------------------------------------------------------------------------------------
