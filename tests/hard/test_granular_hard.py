@@ -2,6 +2,7 @@
 zero gravity, a particle outside every wall, bad input."""
 
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from naive_granular import floor, simulation, square
 
 from porepipe._shared.errors import PorepipeError
 from porepipe.granular import Settings, Simulation, run
-from porepipe.scene import SceneError, parse_scene
+from porepipe.scene import SceneError, load_scene, parse_scene
 
 SOFT = {"young_N_m": 1e6, "density_kg_m2": 1000.0}
 
@@ -343,3 +344,41 @@ def test_a_grain_that_flies_too_fast_without_a_contact_is_named_as_such_not_as_a
         r"raise granular.guard.max_move$",
     ):
         sim.advance(1000)
+
+
+class _Stopped(Exception):
+    pass
+
+
+def _start_only(monkeypatch):
+    def stop(self, steps):
+        raise _Stopped
+
+    monkeypatch.setattr(Simulation, "advance", stop)
+
+
+def test_a_run_planned_longer_than_a_day_says_so_in_one_line_before_its_first_step(
+    tmp_path, monkeypatch, capsys
+):
+    # 1e-9 m grains: dt = 1.25e-12 s, 8e10 steps in 0.1 s (~60 h measured); before: the run started silently and only
+    # its progress line showed an ETA of ~117 h. No override exists, so it is a warning, not a refusal
+    _start_only(monkeypatch)
+    tiny = [(0.0, 0.0), (1e-9, 0.0), (1e-9, 1e-9), (0.0, 1e-9)]
+    settings = Settings.model_validate({"duration_s": 0.1, "particles": [{"vertices_m": tiny}]})
+    with pytest.raises(_Stopped):
+        run(settings, tmp_path / "g.h5", progress=False)
+    err = capsys.readouterr().err
+    assert re.search(
+        r"^porepipe: granular: 7.97e\+10 time steps of dt = 1.25e-12 s for duration_s = 0.1 s with 1 particle\(s\) "
+        r"would take about [\d.]+ h on one core .*dt comes from the lightest grain .* shorten granular.duration_s or set "
+        r"a larger granular.dt_s$",
+        err,
+        re.M,
+    )
+    # the longest shipped scene (1e4 grains, 1e6 steps, ~1 h) is not warned about
+    settings = load_scene(
+        Path(__file__).parents[2] / "config" / "scenes" / "granular-silo-stepped.yaml"
+    ).granular
+    with pytest.raises(_Stopped):
+        run(settings, tmp_path / "g.h5", progress=False)
+    assert "would take about" not in capsys.readouterr().err

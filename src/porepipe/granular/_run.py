@@ -35,6 +35,12 @@ from porepipe.granular._settings import Settings
 STAGE = "granular"
 #: most time steps a run can count (Simulation takes 2^62 as "never" for a particle that is not inserted)
 _MAX_STEPS = 2**62
+#: cost of a run on one core, to warn before one that would take days: ~3 us per step whatever the size (one grain
+#: stepped in chunks of 100: 2.7 us on a quiet machine, 5-7.5 us on a loaded one) plus 0.4 us per particle-step
+#: (2.5e6 polygon-steps per CPU-s on one thread: benchmarks/granular.py --smoke, benchmarks/granular_settled.py)
+_STEP_S, _PARTICLE_STEP_S = 3e-6, 4e-7
+#: a planned run estimated above this many seconds gets a warning line at the start (the shipped scenes: <= 1.1 h)
+_LONG_RUN_S = 86400.0
 _CONTACT_KEYS = ("i", "j", "fx_N", "fy_N", "sx_m", "sy_m", "fn_N", "ft_N", "area_m2", "length_m")
 #: units of the contact and series columns (pint spellings); the rest (indices, counts, ratios) are "1"
 _UNITS = {
@@ -190,6 +196,8 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
         )
     if total == 0:
         notice("granular.duration_s = 0: no time step; the result holds the initial state alone")
+    if (line := _long_run_notice(settings, sim, total)) is not None:
+        notice(line)
     if (line := sim.damping_bound_notice()) is not None:
         notice(line)
     frame_steps = np.unique(np.round(np.linspace(0, total, settings.output.frames + 1)).astype(np.int64))
@@ -227,6 +235,24 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
         particle_steps / wall if wall > 0 else 0.0
     )  # active count taken at the start of each chunk of steps
     return sim, frames, series, particle_steps, rate, carried
+
+
+def _long_run_notice(settings: Settings, sim: Simulation, total: int) -> str | None:
+    """A line warning that ``total`` steps would take longer than a day on one core (None where they would not)."""
+    estimate_s = total * (_STEP_S + _PARTICLE_STEP_S * sim.n_mob)
+    if estimate_s <= _LONG_RUN_S:
+        return None
+    dt_from = (
+        "granular.dt_s"
+        if settings.dt_s is not None
+        else "the lightest grain (Eq. 2.9: are the sizes in metres?)"
+    )
+    return (
+        f"granular: {total:.3g} time steps of dt = {sim.dt:.3g} s for duration_s = {settings.duration_s:g} s with "
+        f"{sim.n_mob} particle(s) would take about {estimate_s / 3600:.3g} h on one core (~3 us a step + 0.4 us a "
+        f"particle-step); dt comes from {dt_from}; if this is not meant, stop the run and shorten "
+        "granular.duration_s or set a larger granular.dt_s"
+    )
 
 
 def _write(w: ResultWriter, sim: Simulation, frames: list[Frame], series: list[tuple]) -> None:
