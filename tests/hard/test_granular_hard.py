@@ -382,3 +382,43 @@ def test_a_run_planned_longer_than_a_day_says_so_in_one_line_before_its_first_st
     with pytest.raises(_Stopped):
         run(settings, tmp_path / "g.h5", progress=False)
     assert "would take about" not in capsys.readouterr().err
+
+
+def test_grains_that_overlap_as_placed_are_counted_in_one_line_before_the_run(tmp_path, capsys):
+    # below the guard (0.3 r_eq²) a start overlap was accepted silently and pushed the grains apart: granular-box with
+    # g = 0 went from rest to 0.011 J/m. Blocks may overlap by construction (jittered FCC), so a line, not a refusal
+    a, b = square(0.01), square(0.01)
+    grains = [
+        {"vertices_m": a, "position_m": (0.0, 0.1)},
+        {"vertices_m": b, "position_m": (0.0098, 0.1)},  # 0.2 mm into the first: 2e-6 m² = 0.063 r_eq²
+        {"vertices_m": a, "position_m": (0.2, 0.005)},  # flush on the floor: touching is no overlap
+        {"vertices_m": a, "position_m": (0.4, 0.0049)},  # 0.1 mm into the floor
+    ]
+    settings = Settings.model_validate(
+        {
+            "particles": grains,
+            "walls": [floor()],
+            "gravity_m_s2": (0.0, 0.0),
+            "duration_s": 1e-3,
+            "material": SOFT,
+            "output": {"series_every": 5},
+        }
+    )
+    out = run(settings, tmp_path / "g.h5", progress=False)
+    lines = [x for x in capsys.readouterr().err.splitlines() if "overlap as placed" in x]
+    assert lines == [
+        "porepipe: granular: 1 grain-grain and 1 grain-wall pair(s) overlap as placed, the largest by 0.063 r_eq² "
+        "(particle 0 and particle 1; granular.guard.max_overlap 0.3): they push apart in the first steps, which adds "
+        "kinetic energy; to start without overlaps, widen the block's grid_m, lower its jitter_fraction or move the "
+        "particles"
+    ]
+    from porepipe.granular import read_granular
+
+    energy = read_granular(out)["series"].kinetic_energy_J.values
+    assert energy[0] == 0.0 and energy[-1] > 0.0  # the energy the line warns about
+    grains[1]["position_m"], grains[3]["position_m"] = (0.0101, 0.1), (0.4, 0.005)
+    run(
+        settings.model_copy(update={"particles": Settings.model_validate({"particles": grains}).particles}),
+        out,
+    )
+    assert "overlap as placed" not in capsys.readouterr().err

@@ -210,6 +210,8 @@ def _simulate(settings, seed, checkpoint, resume, progress, key):
         if loaded is not None:
             state, frames, series, carried = loaded
             sim.restore(state)
+    if sim.step == 0 and (line := _start_overlap_notice(sim)) is not None:
+        notice(line)
     clock = SpentClock(carried)
     prog = Progress("granular", total) if progress else None
     t0 = time.perf_counter()
@@ -252,6 +254,21 @@ def _long_run_notice(settings: Settings, sim: Simulation, total: int) -> str | N
         f"{sim.n_mob} particle(s) would take about {estimate_s / 3600:.3g} h on one core (~3 us a step + 0.4 us a "
         f"particle-step); dt comes from {dt_from}; if this is not meant, stop the run and shorten "
         "granular.duration_s or set a larger granular.dt_s"
+    )
+
+
+def _start_overlap_notice(sim: Simulation) -> str | None:
+    """A line saying how many pairs overlap as placed, and by how much (None where none does)."""
+    o = sim.start_overlaps()
+    if not o["grains"] + o["walls"]:
+        return None
+    i, j = o["pair"]
+    other = f"particle {j}" if j < sim.n_mob else f"wall {sim.wall_names[j - sim.n_mob]!r}"
+    return (
+        f"granular: {o['grains']} grain-grain and {o['walls']} grain-wall pair(s) overlap as placed, the largest by "
+        f"{o['largest']:.2g} r_eq² (particle {i} and {other}; granular.guard.max_overlap "
+        f"{sim.settings.guard.max_overlap:g}): they push apart in the first steps, which adds kinetic energy; to "
+        "start without overlaps, widen the block's grid_m, lower its jitter_fraction or move the particles"
     )
 
 
