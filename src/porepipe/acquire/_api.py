@@ -36,9 +36,8 @@ def image_file(settings: Settings, base_dir: Path | str = ".", image_path=None) 
     """The image to read: ``image_path`` as given (the command line's, relative to the working directory), else
     ``settings.image`` relative to ``base_dir`` (the scene file's folder).
     """
-    if (
-        image_path is not None
-    ):  # before: joined to base_dir too, so IMAGE with --scene was looked for beside the scene
+    # before: joined to base_dir too, so IMAGE with --scene was looked for beside the scene
+    if image_path is not None:
         return Path(image_path)
     if settings.image is None:
         raise PorepipeError("acquire.image: no image given (set acquire.image in the scene or pass IMAGE)")

@@ -249,9 +249,8 @@ def _batch_mean(values: np.ndarray) -> tuple[float, float]:
 def _ratio(num: np.ndarray, den: np.ndarray) -> tuple[float, float]:
     """Ratio of sums and its delta-method standard error from per-batch sums."""
     num, den = np.asarray(num, float), np.asarray(den, float)
-    if (
-        den.sum() == 0
-    ):  # nothing to divide by (no wall hit: the mean flight is longer than all flown): unknown
+    # nothing to divide by (no wall hit: the mean flight is longer than all flown): unknown
+    if den.sum() == 0:
         return (math.inf if num.sum() > 0 else math.nan), math.inf
     r = num.sum() / den.sum()
     n = num.size

@@ -636,9 +636,8 @@ def reactive_pore(
         out["sites"] = sites
     if w > 0:
         eta, eta_err = _ratio(products, w * tally[:, E.R_HITS])
-        if (
-            col[E.R_OUT_P] == 0
-        ):  # nothing counted: not η = 0 ± 0 (w = 1e-300 read so), one product more at least
+        # nothing counted: not η = 0 ± 0 (w = 1e-300 read so), one product more at least
+        if col[E.R_OUT_P] == 0:
             eta_err = max(eta_err, 1.0 / (w * col[E.R_HITS])) if w * col[E.R_HITS] > 0 else math.inf
             rate_err = max(rate_err, 1.0 / col[E.R_TIME]) if col[E.R_TIME] > 0 else math.inf
             out["r_eff_err"] = rate_err
