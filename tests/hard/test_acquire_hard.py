@@ -1,5 +1,6 @@
 """Hard cases of the acquisition stage: degenerate images give finite statistics or a clear PorepipeError."""
 
+import h5py
 import numpy as np
 import pytest
 import xarray as xr
@@ -225,7 +226,10 @@ def test_acquire_binary_refuses_a_resolution_that_is_not_finite(tmp_path, capsys
     assert main(["acquire-binary", str(tmp_path / "s.h5"), "--a", a, "-o", str(out)]) == 2
     (line,) = capsys.readouterr().err.splitlines()
     assert line.startswith(f"porepipe acquire-binary: error: resolution a = {a} µm requested")
-    assert line.endswith("allowed: whole multiples of 2 µm (e.g. resolutions_um: [2, 4])")
+    # the value came from --a (the workflow fills it from resolutions_um): both are named
+    assert line.endswith(
+        "allowed: whole multiples of 2 µm (e.g. --a 4, or the scene's resolutions_um: [2, 4])"
+    )
     assert not out.exists()
 
 
@@ -481,3 +485,58 @@ def test_extreme_voxel_sizes_give_scaled_minkowski_numbers_or_one_line(tmp_path,
     ):
         for name, k in (("phi_minkowski", 0), ("S_V_per_mm", -1), ("K_V_per_mm2", -2), ("T_V_per_mm3", -3)):
             assert float(got[name]) == pytest.approx(float(ref[name]) * voxel**k, rel=1e-12), name
+
+
+def _images(tmp_path):
+    grey = np.where(np.random.default_rng(9).random((8, 8, 8)) < 0.4, 30, 220).astype(np.uint8)
+    grey.tofile(tmp_path / "v.xyz")
+    grey.tofile(tmp_path / "v.raw")
+    np.save(tmp_path / "v.npy", grey)
+    np.save(tmp_path / "flat.npy", np.full((8, 8, 8), 7, np.uint8))
+    with h5py.File(tmp_path / "v.h5", "w") as f:
+        f["a"], f["b"] = grey, grey
+
+
+@pytest.mark.parametrize(
+    ("image", "options", "option_text", "key_text"),
+    [
+        ("v.xyz", [], "give it with --format (one of", "give it with acquire.format (one of"),
+        ("v.h5", [], "give the image's dataset with --dataset (one of", "with acquire.dataset (one of"),
+        (
+            "v.raw",
+            [],
+            "give --raw-shape NX NY NZ (and --raw-dtype",
+            "give acquire.raw (dtype, shape",
+        ),
+        ("v.raw", ["--raw-shape", "8", "8", "9"], "check --raw-shape, --raw-dtype, --raw-header", None),
+        ("v.raw", ["--raw-shape", "8", "8", "8", "--raw-dtype", "bad"], "--raw-dtype = 'bad' is not", None),
+        ("v.npy", ["--crop", "9", "2", "2"], "--crop = (9, 2, 2) exceeds the image shape", None),
+        (
+            "flat.npy",
+            [],
+            "use --method thresholds with --thresholds to say",
+            "use acquire.segmentation.method",
+        ),
+    ],
+)
+def test_messages_name_the_option_on_the_command_line_and_the_key_in_a_scene(
+    tmp_path, capsys, image, options, option_text, key_text
+):
+    # before: `porepipe acquire v.xyz` said "set acquire.format", a scene key, where the option is --format (and
+    # likewise acquire.dataset, acquire.raw, acquire.crop.size, acquire.segmentation.method for their options)
+    _images(tmp_path)
+    out = tmp_path / "s.h5"
+    assert main(["acquire", str(tmp_path / image), *options, "--voxel-um", "1", "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert option_text in line and "acquire." not in line.replace("porepipe acquire: error: ", "")
+    assert not out.exists()
+    if key_text is None:
+        return
+    # the same image named by a scene (the workflow's way) is told in scene keys
+    (tmp_path / "scene.yaml").write_text(
+        f"name: s\nresolutions_um: [1]\nacquire:\n  image: {image}\n  voxel_um: 1\n"
+    )
+    assert main(["acquire", "--scene", str(tmp_path / "scene.yaml"), "-o", str(out)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert key_text in line and " --" not in line
+    assert not out.exists()

@@ -15,7 +15,7 @@ from porepipe._shared.store import ResultWriter, read_attrs, read_volume
 from porepipe.acquire import _stats
 from porepipe.acquire._io import Image, read_image, require_spacing
 from porepipe.acquire._prepare import Phases, denoise, load_region, resample_cubic, segment_phases
-from porepipe.acquire._settings import Settings
+from porepipe.acquire._settings import SCENE_KEYS, SettingNames, Settings
 
 #: names of the volumes in statistics.h5
 PHASES_VOLUME = "phases"
@@ -45,8 +45,12 @@ def image_file(settings: Settings, base_dir: Path | str = ".", image_path=None) 
     return path if path.is_absolute() else Path(base_dir) / path
 
 
-def open_image(settings: Settings, base_dir: Path | str = ".", image_path=None) -> Image:
-    """Open the image (``image_path`` as given, else ``settings.image`` relative to ``base_dir``)."""
+def open_image(
+    settings: Settings, base_dir: Path | str = ".", image_path=None, names: SettingNames = SCENE_KEYS
+) -> Image:
+    """Open the image (``image_path`` as given, else ``settings.image`` relative to ``base_dir``); messages name the
+    settings as ``names`` says.
+    """
     path = image_file(settings, base_dir, image_path)
     return read_image(
         path,
@@ -55,13 +59,16 @@ def open_image(settings: Settings, base_dir: Path | str = ".", image_path=None) 
         dataset=settings.dataset,
         voxel_um=settings.voxel_um,
         section_um=settings.section_um,
+        names=names,
     )
 
 
-def prepare(image: Image, settings: Settings) -> Prepared:
-    """Crop, check finiteness, resample to cubic voxels (if asked and anisotropic) and denoise."""
+def prepare(image: Image, settings: Settings, names: SettingNames = SCENE_KEYS) -> Prepared:
+    """Crop, check finiteness, resample to cubic voxels (if asked and anisotropic) and denoise; messages name the
+    settings as ``names`` says.
+    """
     spacing = require_spacing(image)
-    grey = load_region(image, settings.crop)
+    grey = load_region(image, settings.crop, names)
     if image.is_2d:
         if not np.isclose(spacing[0], spacing[1], rtol=1e-9):
             raise PorepipeError(f"section {image.source}: pixels {spacing[:2]} µm are not square")
@@ -75,7 +82,7 @@ def prepare(image: Image, settings: Settings) -> Prepared:
         grey, voxel = resample_cubic(grey, spacing)
     else:
         voxel = spacing[0]
-    grey = denoise(grey, settings.denoise, settings.denoise_size)
+    grey = denoise(grey, settings.denoise, settings.denoise_size, names)
     return Prepared(grey, float(voxel), image.source, image.is_2d, spacing)
 
 
@@ -231,14 +238,17 @@ def acquire(
     scene_hash: str = "",
     lpt_settings=None,
     permeability_settings=None,
+    names: SettingNames = SCENE_KEYS,
 ) -> dict[str | None, xr.Dataset]:
-    """Read, prepare, segment and measure an image; write ``statistics.h5`` (with the phase volume) to ``out``."""
-    image = open_image(settings, base_dir, image_path)
+    """Read, prepare, segment and measure an image; write ``statistics.h5`` (with the phase volume) to ``out``
+    (messages name the settings as ``names`` says: scene keys, or ``porepipe acquire``'s options).
+    """
+    image = open_image(settings, base_dir, image_path, names)
     with ResultWriter(out, stage="acquire", scene=scene_name, scene_hash=scene_hash) as w:
         t0 = time.perf_counter()
-        prep = prepare(image, settings)
+        prep = prepare(image, settings, names)
         t1 = time.perf_counter()
-        phases = segment_phases(prep.grey, settings.segmentation)
+        phases = segment_phases(prep.grey, settings.segmentation, names)
         t2 = time.perf_counter()
         tables = image_statistics(
             phases,
@@ -294,8 +304,8 @@ def _factor(a_um: float, voxel: float, source: str) -> int:
     if factor < 1 or not np.isclose(a_um, factor * voxel, rtol=1e-6):
         raise PorepipeError(
             f"resolution a = {a_um} µm requested, but the image {source} has voxels of {voxel} µm; "
-            f"allowed: whole multiples of {voxel:g} µm (e.g. resolutions_um: [{voxel:g}, "
-            f"{2 * voxel:g}])"
+            f"allowed: whole multiples of {voxel:g} µm (e.g. --a {2 * voxel:g}, or the scene's resolutions_um: "
+            f"[{voxel:g}, {2 * voxel:g}])"
         )
     return factor
 

@@ -76,7 +76,8 @@ def fit_radius_distribution(radii_um, families: list[Family], discrete_bins: int
     if r.size < 2:
         raise PorepipeError(
             f"calibration needs at least 2 grain radii, got {r.size}: the image has (almost) no "
-            "grains; check the segmentation (acquire.segmentation) or the grain phase"
+            "grains; check the segmentation (acquire --method/--thresholds, or the scene's acquire.segmentation) "
+            "or the grain phase"
         )
     lo, hi = float(r.min()), float(r.max())
     if hi <= lo:
@@ -113,7 +114,8 @@ def grain_radii(stats_ds: xr.Dataset) -> np.ndarray:
     """Radii of the spheres the grains grew from; uncut grains only when there are enough of them."""
     if "inscribed_radius_um" not in stats_ds or stats_ds.sizes.get("grain", 0) == 0:
         raise PorepipeError(
-            "the statistics have no grains (image all pore, or acquire.statistics.grains: false); "
+            "the statistics have no grains (image all pore, or measured with acquire --no-grains or the scene's "
+            "acquire.statistics.grains: false); "
             "cannot calibrate a packing"
         )
     r = stats_ds.inscribed_radius_um.values

@@ -19,6 +19,45 @@ _RAW_OPTIONS = {
     "raw_order": "order",
 }
 
+#: settings (dotted keys below acquire) -> (option of ``porepipe acquire``, its argparse name), for the messages
+_OPTION_OF = {
+    "format": ("--format", "format"),
+    "dataset": ("--dataset", "dataset"),
+    **{f"raw.{key}": ("--" + opt.replace("_", "-"), opt) for opt, key in _RAW_OPTIONS.items()},
+    "crop": ("--crop", "crop"),
+    "crop.size": ("--crop", "crop"),
+    "denoise": ("--denoise", "denoise"),
+    **{
+        f"segmentation.{k}": ("--" + k.replace("_", "-"), k)
+        for k in ("method", "phases", "pore_phases", "thresholds")
+    },
+}
+
+
+def _scene_sets(section, key: str) -> bool:
+    """Whether the scene's ``acquire`` section sets ``key`` (dotted) itself (not by default)."""
+    for part in key.split("."):
+        if section is None or part not in section.model_fields_set:
+            return False
+        section = getattr(section, part)
+    return True
+
+
+def setting_names(args, scene):
+    """How messages name the settings: by the option where the command line gave it, or where it named the image
+    (IMAGE) and the scene does not set the key (the user is then on the command line); else by the scene key.
+    """
+    from porepipe.acquire._settings import SettingNames
+
+    section = scene.acquire if scene is not None else None
+    return SettingNames(
+        {
+            key: flag
+            for key, (flag, dest) in _OPTION_OF.items()
+            if getattr(args, dest) is not None or (args.image is not None and not _scene_sets(section, key))
+        }
+    )
+
 
 def _scene(path):
     from porepipe.scene import load_scene
@@ -54,7 +93,7 @@ def settings_from_args(args, scene=None):
     return merge_settings(Settings, base, over, "acquire settings")
 
 
-def _check_format_options(args, scene, settings, base_dir) -> None:
+def _check_format_options(args, scene, settings, base_dir, names) -> None:
     """Refuse --dataset for an image that is not HDF5 and the --raw-* options for one that is not RAW (a .npy image
     took them without a word), and --raw-* options without a shape (the file was then read as 1 x 1 x 1 voxels).
     """
@@ -66,7 +105,7 @@ def _check_format_options(args, scene, settings, base_dir) -> None:
     from porepipe.acquire._settings import ImageFormat
 
     path = image_file(settings, base_dir, args.image)
-    fmt = detect_format(path, settings.format)
+    fmt = detect_format(path, settings.format, names)
     given = [("--dataset", ImageFormat.hdf5)] if args.dataset is not None else []
     given += [(flag, ImageFormat.raw) for flag in raw]
     for flag, applies in given:
@@ -86,9 +125,16 @@ def _main(args) -> int:
     scene = _scene(args.scene)
     settings = settings_from_args(args, scene)
     base_dir = Path(args.scene).parent if args.scene else Path(".")
-    _check_format_options(args, scene, settings, base_dir)
+    names = setting_names(args, scene)
+    _check_format_options(args, scene, settings, base_dir, names)
     tables = run(
-        settings, args.out, scene=scene, image_path=args.image, base_dir=base_dir, threads=args.threads
+        settings,
+        args.out,
+        scene=scene,
+        image_path=args.image,
+        base_dir=base_dir,
+        threads=args.threads,
+        names=names,
     )
     root = tables[None]
     print(

@@ -22,7 +22,7 @@ import numpy as np
 import psutil
 
 from porepipe._shared.errors import PorepipeError
-from porepipe.acquire._settings import ByteOrder, ImageFormat, MemoryOrder, Raw
+from porepipe.acquire._settings import SCENE_KEYS, ByteOrder, ImageFormat, MemoryOrder, Raw, SettingNames
 
 #: µm per unit of the TIFF ResolutionUnit tag (2 = inch, 3 = centimetre) and of ImageJ's `unit` strings
 _TIFF_UNIT_UM = {2: 25400.0, 3: 10000.0}
@@ -58,8 +58,12 @@ class Image:
         return tuple(int(s) for s in self.data.shape)
 
 
-def detect_format(path: Path, fmt: ImageFormat = ImageFormat.auto) -> ImageFormat:
-    """The format of ``path``: ``fmt`` unless auto, else a directory/glob is a TIFF stack, else by suffix."""
+def detect_format(
+    path: Path, fmt: ImageFormat = ImageFormat.auto, names: SettingNames = SCENE_KEYS
+) -> ImageFormat:
+    """The format of ``path``: ``fmt`` unless auto, else a directory/glob is a TIFF stack, else by suffix (an unknown
+    suffix is an error naming the setting as ``names`` says).
+    """
     fmt = ImageFormat(fmt)
     if fmt is not ImageFormat.auto:
         return fmt
@@ -68,15 +72,17 @@ def detect_format(path: Path, fmt: ImageFormat = ImageFormat.auto) -> ImageForma
     suffix = Path(path).suffix.lower()
     if suffix not in _SUFFIX_FORMAT:
         raise PorepipeError(
-            f"image {path}: cannot tell the format from suffix {suffix!r}; set acquire.format to one "
-            f"of {[f.value for f in ImageFormat if f is not ImageFormat.auto]}"
+            f"image {path}: cannot tell the format from suffix {suffix!r}; give it with {names('format')} (one "
+            f"of {[f.value for f in ImageFormat if f is not ImageFormat.auto]})"
         )
     return _SUFFIX_FORMAT[suffix]
 
 
 # -- RAW -----------------------------------------------------------------------------------------------------------
-def read_raw(path, raw: Raw) -> np.ndarray:
+def read_raw(path, raw: Raw, names: SettingNames = SCENE_KEYS) -> np.ndarray:
     """Memory-map a RAW file as an (x, y, z) array of ``raw.dtype`` in native interpretation of ``raw.byte_order``.
+
+    Messages name the settings as ``names`` says (scene keys, or the options of ``porepipe acquire``).
 
     Raises
     ------
@@ -87,11 +93,11 @@ def read_raw(path, raw: Raw) -> np.ndarray:
     try:
         base = np.dtype(raw.dtype)
     except TypeError as err:
-        raise PorepipeError(f"acquire.raw.dtype = {raw.dtype!r} is not a NumPy dtype: {err}") from None
+        raise PorepipeError(f"{names('raw.dtype')} = {raw.dtype!r} is not a NumPy dtype: {err}") from None
     if base.kind not in "uif" or base.byteorder not in "=|":
         raise PorepipeError(
-            f"acquire.raw.dtype = {raw.dtype!r}: give a plain integer or float type without byte "
-            "order (set the order in acquire.raw.byte_order)"
+            f"{names('raw.dtype')} = {raw.dtype!r}: give a plain integer or float type without byte "
+            f"order (set the order with {names('raw.byte_order')})"
         )
     dtype = base.newbyteorder("<" if raw.byte_order is ByteOrder.little else ">")
     expected = (
@@ -101,7 +107,8 @@ def read_raw(path, raw: Raw) -> np.ndarray:
     if size != expected:
         raise PorepipeError(
             f"RAW file {path} has {size} bytes, but header {raw.header_bytes} + shape {tuple(raw.shape)} x "
-            f"{dtype.itemsize} bytes ({raw.dtype}) = {expected} bytes; check acquire.raw.shape/dtype/header_bytes"
+            f"{dtype.itemsize} bytes ({raw.dtype}) = {expected} bytes; check "
+            f"{', '.join(names(f'raw.{k}') for k in ('shape', 'dtype', 'header_bytes'))}"
         )
     return np.memmap(
         path,
@@ -137,7 +144,9 @@ def _spacing_from_attr(value) -> tuple[float, ...] | None:
     return tuple(float(v) for v in arr) if arr.size in (1, 2, 3) else None
 
 
-def read_hdf5(path, dataset: str | None) -> tuple[h5py.Dataset, tuple[float, ...] | None]:
+def read_hdf5(
+    path, dataset: str | None, names: SettingNames = SCENE_KEYS
+) -> tuple[h5py.Dataset, tuple[float, ...] | None]:
     """Open ``dataset`` of an HDF5 file lazily; the spacing from its ``voxel_um`` / ``element_size_um`` attribute.
 
     The file stays open as long as the returned dataset is referenced (h5py closes it with the last reference).
@@ -147,19 +156,24 @@ def read_hdf5(path, dataset: str | None) -> tuple[h5py.Dataset, tuple[float, ...
     except OSError as err:
         raise PorepipeError(f"{path} is not a readable HDF5 file: {err}") from err
     try:
-        return _hdf5_image(f, path, dataset)
+        return _hdf5_image(f, path, dataset, names)
     except (KeyError, RuntimeError, OSError, TypeError, ValueError) as err:  # damaged metadata
         raise PorepipeError(f"HDF5 file {path} is damaged: {type(err).__name__}: {err}") from None
 
 
-def _hdf5_image(f: h5py.File, path, dataset: str | None) -> tuple[h5py.Dataset, tuple[float, ...] | None]:
+def _hdf5_image(
+    f: h5py.File, path, dataset: str | None, names: SettingNames
+) -> tuple[h5py.Dataset, tuple[float, ...] | None]:
     if dataset is None:
         found = []
         f.visititems(
             lambda name, obj: found.append(name) if isinstance(obj, h5py.Dataset) and obj.ndim >= 2 else None
         )
         if len(found) != 1:
-            raise PorepipeError(f"HDF5 file {path}: set acquire.dataset to one of its image datasets {found}")
+            raise PorepipeError(
+                f"HDF5 file {path}: give the image's dataset with {names('dataset')} (one of its image datasets "
+                f"{found})"
+            )
         dataset = found[0]
     if dataset not in f or not isinstance(f[dataset], h5py.Dataset):
         raise PorepipeError(f"HDF5 file {path} has no dataset {dataset!r}")
@@ -326,6 +340,7 @@ def read_image(
     dataset: str | None = None,
     voxel_um: float | None = None,
     section_um: float | None = None,
+    names: SettingNames = SCENE_KEYS,
 ) -> Image:
     """Open an image of any supported format as (x, y, z) with its voxel edges.
 
@@ -343,6 +358,8 @@ def read_image(
         Voxel edge in µm; overrides the file's metadata for x and y (and z unless ``section_um`` is given).
     section_um : float, optional
         Spacing of serial sections along z in µm.
+    names : SettingNames
+        How messages name the settings (default: the scene keys; ``porepipe acquire``: its options).
 
     Returns
     -------
@@ -351,20 +368,24 @@ def read_image(
     """
     path = Path(path)
     source = str(path)
-    fmt = detect_format(path, fmt)
+    fmt = detect_format(path, fmt, names)
     if fmt is not ImageFormat.tiff and not path.is_file():
         raise PorepipeError(f"image file {path} does not exist")
     file_spacing = None
     if fmt is ImageFormat.raw:
         if raw is None:
-            raise PorepipeError(
-                f"RAW image {path}: give acquire.raw (dtype, shape, byte_order, header_bytes)"
+            layout = (
+                f"{names('raw.shape')} NX NY NZ (and {names('raw.dtype')}, {names('raw.byte_order')}, "
+                f"{names('raw.header_bytes')} unless uint8, little-endian, no header)"
+                if names.by_option("raw.shape")
+                else "acquire.raw (dtype, shape, byte_order, header_bytes)"
             )
-        data, is_2d = read_raw(path, raw), False
+            raise PorepipeError(f"RAW image {path}: give {layout}")
+        data, is_2d = read_raw(path, raw, names), False
     elif fmt is ImageFormat.npy:
         data, is_2d = _as_volume(read_npy(path), source)
     elif fmt is ImageFormat.hdf5:
-        dset, file_spacing = read_hdf5(path, dataset)
+        dset, file_spacing = read_hdf5(path, dataset, names)
         data, is_2d = (dset[...], True) if dset.ndim == 2 else (dset, False)
         data, is_2d = _as_volume(data, source)
         source = f"{path}:{dset.name}"

@@ -16,29 +16,33 @@ from scipy import ndimage
 from porepipe._shared.budget import machine_bytes
 from porepipe._shared.errors import PorepipeError
 from porepipe.acquire._io import Image
-from porepipe.acquire._settings import Crop, Denoise, Method, Segmentation
+from porepipe.acquire._settings import SCENE_KEYS, Crop, Denoise, Method, Segmentation, SettingNames
 
 
-def crop_box(shape, crop: Crop | None) -> tuple[slice, slice, slice]:
-    """Slices of ``crop`` in an image of ``shape``; an out-of-range box is an error naming both."""
+def crop_box(shape, crop: Crop | None, names: SettingNames = SCENE_KEYS) -> tuple[slice, slice, slice]:
+    """Slices of ``crop`` in an image of ``shape``; an out-of-range box is an error naming both (and the setting,
+    as ``names`` says).
+    """
     if crop is None:
         return tuple(slice(0, int(n)) for n in shape)
     size = tuple(int(s) for s in crop.size)
     if any(s > n for s, n in zip(size, shape)):
-        raise PorepipeError(f"acquire.crop.size = {size} exceeds the image shape {tuple(shape)}")
+        raise PorepipeError(f"{names('crop.size')} = {size} exceeds the image shape {tuple(shape)}")
     start = tuple((n - s) // 2 for n, s in zip(shape, size)) if crop.centre else tuple(crop.start)
     if any(b < 0 or b + s > n for b, s, n in zip(start, size, shape)):
         raise PorepipeError(
-            f"acquire.crop start {start} + size {size} lies outside the image shape {tuple(shape)}"
+            f"{names('crop.start')} {start} + size {size} lies outside the image shape {tuple(shape)}"
         )
     return tuple(slice(b, b + s) for b, s in zip(start, size))
 
 
-def load_region(image: Image, crop: Crop | None) -> np.ndarray:
-    """Read the cropped region into memory (only that region is read from a memory map or HDF5 dataset)."""
+def load_region(image: Image, crop: Crop | None, names: SettingNames = SCENE_KEYS) -> np.ndarray:
+    """Read the cropped region into memory (only that region is read from a memory map or HDF5 dataset); messages
+    name the crop as ``names`` says.
+    """
     if 0 in image.shape:  # before: "0 populated grey value(s): otsu cannot split it", or NaN statistics
         raise PorepipeError(f"image {image.source} has shape {image.shape}: no voxels")
-    region = np.ascontiguousarray(image.data[crop_box(image.shape, crop)])
+    region = np.ascontiguousarray(image.data[crop_box(image.shape, crop, names)])
     if region.dtype.byteorder not in "=|":
         region = region.astype(region.dtype.newbyteorder("="))
     if region.dtype.kind == "b":
@@ -54,12 +58,12 @@ def load_region(image: Image, crop: Crop | None) -> np.ndarray:
             first = tuple(int(i) for i in np.argwhere(bad)[0])
             raise PorepipeError(
                 f"image {image.source} has {n_bad} NaN/Inf voxel(s) in the region used (first at "
-                f"{first}); crop them away (acquire.crop) or fill them before acquisition"
+                f"{first}); crop them away ({names('crop')}) or fill them before acquisition"
             )
     return region
 
 
-def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
+def denoise(grey: np.ndarray, method: Denoise, size: int = 3, names: SettingNames = SCENE_KEYS) -> np.ndarray:
     """Median (cube of ``size`` voxels) or non-local-means filter of an (X, Y, Z) image (a section: Z = 1).
 
     Parameters
@@ -70,6 +74,8 @@ def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
         ``none`` (the input is returned), ``median`` or ``nl_means``.
     size : int
         Edge of the median filter's cube (a square on a section), voxels.
+    names : SettingNames
+        How a message names the ``denoise`` setting (default: its scene key).
     """
     if np.ndim(grey) != 3:
         raise PorepipeError(
@@ -85,7 +91,7 @@ def denoise(grey: np.ndarray, method: Denoise, size: int = 3) -> np.ndarray:
 
     if grey.size < 2:
         raise PorepipeError(
-            f"acquire.denoise nl_means needs an image of 2 voxels or more, got shape {grey.shape}"
+            f"{names('denoise')} nl_means needs an image of 2 voxels or more, got shape {grey.shape}"
         )
     work = grey.astype(np.float32)
     work = work[:, :, 0] if work.shape[2] == 1 else work
@@ -199,8 +205,9 @@ class Phases:
         return lut[self.labels]
 
 
-def choose_thresholds(hist: GreyHistogram, seg: Segmentation) -> np.ndarray:
-    """The n_phases - 1 ascending thresholds (grey units) of ``seg`` for this histogram.
+def choose_thresholds(hist: GreyHistogram, seg: Segmentation, names: SettingNames = SCENE_KEYS) -> np.ndarray:
+    """The n_phases - 1 ascending thresholds (grey units) of ``seg`` for this histogram; messages name the
+    settings as ``names`` says.
 
     Raises
     ------
@@ -216,8 +223,8 @@ def choose_thresholds(hist: GreyHistogram, seg: Segmentation) -> np.ndarray:
         values = hist.centres[hist.counts > 0]
         raise PorepipeError(
             f"the image has {populated} populated grey value(s) {values[:5].tolist()}: "
-            f"{seg.method.value} cannot split it into {n} phases; use acquire.segmentation.method "
-            "thresholds to say which phase it is"
+            f"{seg.method.value} cannot split it into {n} phases; use {names('segmentation.method')} thresholds "
+            f"with {names('segmentation.thresholds')} to say which phase it is"
         )
     from skimage.filters import threshold_multiotsu, threshold_otsu
 
@@ -231,10 +238,12 @@ def choose_thresholds(hist: GreyHistogram, seg: Segmentation) -> np.ndarray:
     return np.asarray(threshold_multiotsu(hist=(counts, hist.centres), classes=n), dtype=np.float64)
 
 
-def segment_phases(grey: np.ndarray, seg: Segmentation) -> Phases:
-    """Label every voxel with its phase (index into ``seg.phases``), keeping thresholds and histogram."""
+def segment_phases(grey: np.ndarray, seg: Segmentation, names: SettingNames = SCENE_KEYS) -> Phases:
+    """Label every voxel with its phase (index into ``seg.phases``), keeping thresholds and histogram; messages
+    name the settings as ``names`` says.
+    """
     hist = grey_histogram(grey, seg.bins)
-    thresholds = choose_thresholds(hist, seg)
+    thresholds = choose_thresholds(hist, seg, names)
     n = len(seg.phases)
     labels = np.zeros(grey.shape, np.uint8)
     # class k: t_{k-1} < g <= t_k (pore if g <= g_th)

@@ -14,7 +14,7 @@ from porepipe.acquire._api import acquire, write_binary
 from porepipe.acquire._calibrate import calibrated_scene, write_scene_yaml
 from porepipe.acquire._compare import write_comparison
 from porepipe.acquire._model import match_porosity, run_model
-from porepipe.acquire._settings import Settings
+from porepipe.acquire._settings import SCENE_KEYS, SettingNames, Settings
 
 #: porosity above which acquire-calibrate warns that the grey phases may be swapped (a rock of porosity 0.2 whose
 #: pores are bright reads as 0.8; the project's own loose-packing validation case has 0.54)
@@ -26,7 +26,14 @@ def _section(scene) -> Settings:
 
 
 def run(
-    settings: Settings, out, *, scene=None, image_path=None, base_dir=".", threads: int | None = None
+    settings: Settings,
+    out,
+    *,
+    scene=None,
+    image_path=None,
+    base_dir=".",
+    threads: int | None = None,
+    names: SettingNames = SCENE_KEYS,
 ) -> dict[str | None, xr.Dataset]:
     """Read, prepare, segment and measure an image; write ``statistics.h5``.
 
@@ -44,6 +51,8 @@ def run(
         Directory a relative ``settings.image`` refers to (the scene file's).
     threads : int, optional
         Numba threads (default: all).
+    names : SettingNames
+        How messages name the settings (default: the scene keys; the command line: its options).
 
     Returns
     -------
@@ -60,6 +69,7 @@ def run(
         scene_hash=result_hash("acquire", settings=settings, image=str(image_path or "")),
         lpt_settings=getattr(scene, "lpt", None),
         permeability_settings=getattr(scene, "permeability", None),
+        names=names,
     )
 
 

@@ -6,8 +6,10 @@ Its presence switches the acquisition stage on (Zauner 2020, §4.7 item 1 and ch
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import itertools
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated
 
@@ -19,6 +21,27 @@ PosInt = Annotated[int, Field(ge=1)]
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # no NaN/inf setting
+
+
+@dataclasses.dataclass(frozen=True)
+class SettingNames:
+    """How a message names an ``acquire`` setting: by its command-line option where ``options`` (dotted key below
+    ``acquire`` -> option) holds one (``porepipe acquire`` fills it with the options given, and with those its user
+    would give for keys the scene does not set), else by its scene key ``acquire.<key>``.
+    """
+
+    options: Mapping[str, str] = dataclasses.field(default_factory=dict)
+
+    def __call__(self, key: str) -> str:
+        return self.options.get(key, f"acquire.{key}")
+
+    def by_option(self, key: str) -> bool:
+        """Whether ``key`` is named by its command-line option."""
+        return key in self.options
+
+
+#: every setting named by its scene key (a scene run, and the Python API)
+SCENE_KEYS = SettingNames()
 
 
 class ImageFormat(str, enum.Enum):
