@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import enum
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -107,10 +108,45 @@ def _run(args) -> int:
     return result.returncode
 
 
+#: a folder the workflow writes directly inside results/<scene>/, as the rule files spell it
+_RESULTS_FOLDER_RE = re.compile(r"results/\{scene\}/(\w+)/")
+#: a rule of a rule file: its name, then its body up to the next unindented line
+_RULE_RE = re.compile(r"^rule (\w+):\n((?:[ \t].*\n|\n)*)", re.MULTILINE)
+
+
+def run_folder_names(rules_dir: Path | None = None) -> frozenset[str]:
+    """The folders a run writes directly inside ``results/<scene>/``, read from the workflow's rule files.
+
+    Parameters
+    ----------
+    rules_dir : Path, optional
+        The folder of the ``*.smk`` rule files (default: this installation's ``workflow/rules``).
+
+    Returns
+    -------
+    frozenset of str
+        Every rule whose own lines write ``results/{scene}/<rule>/`` (rule name = results folder), Snakemake's
+        ``log:`` and ``benchmark:`` folders (``logs``, ``cost``) and the scene stamps' folder
+        (:data:`porepipe.scene_stamps.STAMP_FOLDER`).
+    """
+    from porepipe._shared.resources import workflow_root
+    from porepipe.scene_stamps import STAMP_FOLDER
+
+    rules_dir = workflow_root() / "workflow" / "rules" if rules_dir is None else Path(rules_dir)
+    names = {"logs", "cost", STAMP_FOLDER}
+    for smk in sorted(rules_dir.glob("*.smk")):
+        for rule, body in _RULE_RE.findall(smk.read_text(encoding="utf-8")):
+            if rule in _RESULTS_FOLDER_RE.findall(body):
+                names.add(rule)
+    return frozenset(names)
+
+
 def _check_run_folder(scene_name: str) -> None:
     """Before Snakemake starts: the folders a run writes in the current directory (``results/<scene>`` and Snakemake's
-    ``.snakemake``) can be made and written. Before, a read-only directory or a file named ``results`` gave Snakemake's
-    traceback of 45-65 lines, after it had made ``.snakemake`` and some of ``results/``.
+    ``.snakemake``) can be made and written, and no file in ``results/<scene>/`` has the name of a folder the workflow
+    writes there (:func:`run_folder_names`). Before, a read-only directory or a file named ``results`` (or
+    ``results/<scene>/segment``, ``.../logs``) gave Snakemake's traceback of 45-65 lines, after it had made
+    ``.snakemake`` and some of ``results/``.
     """
     from porepipe._shared.atomic import check_output_dir
 
@@ -122,6 +158,17 @@ def _check_run_folder(scene_name: str) -> None:
                 f"{err}; `porepipe run` writes results/{scene_name}/ and .snakemake/ in the current directory "
                 f"({Path.cwd()})"
             ) from None
+    scene_dir = Path("results", scene_name)
+    if not scene_dir.is_dir():
+        return
+    with os.scandir(scene_dir) as entries:  # one listing; a folder (or a link to one) is fine
+        files = sorted(e.name for e in entries if not e.is_dir())
+    in_the_way = [name for name in files if name in run_folder_names()] if files else []
+    if in_the_way:
+        raise PorepipeError(
+            f"{scene_dir / in_the_way[0]} is a file where `porepipe run` writes the folder "
+            f"{scene_dir / in_the_way[0]}/; move or remove it (current directory {Path.cwd()})"
+        )
 
 
 @contextlib.contextmanager

@@ -17,7 +17,10 @@ from pathlib import Path
 
 from porepipe._shared.atomic import atomic_path
 
-__all__ = ["IGNORED", "STAMPED_RULES", "stamp_text", "write_stamp"]
+__all__ = ["IGNORED", "STAMPED_RULES", "STAMP_FOLDER", "stamp_text", "write_stamp"]
+
+#: the folder of a scene's stamps, ``results/<scene>/<STAMP_FOLDER>/<rule>.json`` (common.smk's ``scene_stamp``)
+STAMP_FOLDER = "scene"
 
 #: the scene sections of the measuring engines and of what gathers their results
 _ENGINES = frozenset({"minkowski", "lpt", "permeability", "diffusion", "sweep", "report", "granular"})

@@ -11,7 +11,7 @@ from pathlib import Path
 from porepipe._shared.naming import TAG_RE, res_tag
 from porepipe.diffusion import check_capillary_resolutions
 from porepipe.scene import grey_stage, load_scene
-from porepipe.scene_stamps import write_stamp
+from porepipe.scene_stamps import STAMP_FOLDER, write_stamp
 from porepipe.warm import STAGES as WARM_STAGES
 from porepipe.warm import marker_of, twin_key, warmable
 
@@ -97,7 +97,7 @@ def scene_stamp(rule):
     def stamp(wildcards):
         key = (wildcards.scene, rule)
         if key not in _scene_stamps:
-            folder = Path("results", wildcards.scene, "scene")
+            folder = Path("results", wildcards.scene, STAMP_FOLDER)
             _scene_stamps[key] = write_stamp(SCENES[wildcards.scene], rule, folder)
         return _scene_stamps[key]
 

@@ -125,3 +125,56 @@ def test_python_dash_m_porepipe_is_the_porepipe_command(tmp_path):
         check=False,
     )
     assert bad.returncode == 2 and "none.yaml" in bad.stderr
+
+
+@pytest.mark.parametrize("name", ["segment", "logs", "scene", "cost", "voxelize_grains"])
+def test_a_file_where_the_workflow_writes_a_folder_in_the_scene_folder_is_one_line_before_snakemake(
+    name, calls, monkeypatch, tmp_path, capsys
+):
+    """Before: Snakemake's traceback ending in NotADirectoryError: 'results/mini/segment' (a dry run too), after it
+    had written the scene stamps."""
+    scene = str(cli.Path(SCENE).resolve())
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results/mini").mkdir(parents=True)
+    (tmp_path / "results/mini" / name).write_text("not a folder")
+    before = sorted(tmp_path.rglob("*"))
+    assert cli.main(["run", scene, "--cores", "1"]) == 2
+    assert calls == []
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert f"results/mini/{name} is a file where `porepipe run` writes the folder results/mini/{name}/" in err
+    assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_files_of_other_names_and_linked_folders_in_the_scene_folder_are_left_alone(
+    calls, monkeypatch, tmp_path, capsys
+):
+    scene = str(cli.Path(SCENE).resolve())
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results/mini").mkdir(parents=True)
+    (tmp_path / "results/mini/notes.txt").write_text("mine")
+    (tmp_path / "results/mini/all").write_text("a rule that writes no folder here")
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "results/mini/segment").symlink_to(tmp_path / "elsewhere")
+    assert cli.main(["run", scene, "--cores", "1"]) == 0
+    assert len(calls) == 1
+
+
+def test_the_run_folder_names_cover_every_folder_the_rule_files_write_in_a_scene_folder():
+    """The names are read from the rule files (rule name = results folder, plus logs, cost and the stamps' folder);
+    every `results/{scene}/<x>/` (and `results/{wildcards.scene}/<x>`) the rule files spell must be among them."""
+    import re
+
+    from porepipe._shared.resources import workflow_root
+
+    names = cli.run_folder_names()
+    rules = sorted((workflow_root() / "workflow" / "rules").glob("*.smk"))
+    assert len(rules) >= 10
+    written = set()
+    for smk in rules:
+        written |= set(re.findall(r"results/\{(?:wildcards\.)?scene\}/(\w+)", smk.read_text()))
+    assert {"segment", "logs", "cost", "report", "acquire_compare"} <= written
+    assert written <= names, sorted(written - names)
+    assert "all" not in names and "warm" not in names  # rules that write no folder there
+    # the stamps' folder: common.smk writes results/<scene>/<STAMP_FOLDER>/
+    assert "STAMP_FOLDER" in (workflow_root() / "workflow/rules/common.smk").read_text() and "scene" in names
