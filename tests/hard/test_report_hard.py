@@ -152,3 +152,59 @@ def test_the_report_of_a_heap_too_small_to_measure_is_still_written(tmp_path):
     page = granular_report(result, tmp_path / "index.html", kind="heap").read_text()
     assert "Heap not measured: repose_angle_fit: fewer than 2 occupied intervals" in page
     assert "granular_network.png" in page and (tmp_path / "granular_network.png").is_file()
+
+
+@pytest.mark.parametrize("a_max", [1.0, 1e20])
+@pytest.mark.parametrize("p", [0.2, 1.0, 2.5, 6.0])
+def test_the_fitted_curve_is_c_a_to_the_p_to_round_off_where_nothing_overflows(a_max, p):
+    from porepipe.report._figures import power_term
+
+    grid = np.linspace(0.0, a_max, 100)
+    c = 0.02 / a_max**p  # the term is 0.02 at the largest a, whatever the unit
+    got = power_term(grid, c, p)
+    np.testing.assert_allclose(got, c * grid**p, rtol=1e-13, atol=0)  # a few ulps of reordering
+    assert got[0] == 0.0 and got[-1] == pytest.approx(0.02, rel=1e-13)
+    assert np.all(power_term(grid, 0.0, p) == 0.0)
+
+
+@pytest.mark.parametrize(
+    ("a_max", "p", "c"), [(4e60, 5.5, 1e-306), (4e60, 6.0, -1e-300), (1e-60, 6.0, 1e300)]
+)
+def test_the_fitted_curve_does_not_overflow_where_c_a_to_the_p_is_representable(a_max, p, c):
+    # before: c * grid**p took grid**p first, inf beyond 1e308 (a curve of inf with numpy's overflow warning), or 0
+    # below 1e-308 (a flat curve) where c * grid**p is ~1e28 (~1e-60)
+    from porepipe.report._figures import power_term
+
+    grid = np.linspace(0.0, a_max, 100)
+    truth = np.sign(c) * np.exp(
+        np.log(abs(c)) + p * np.log(grid[1:])
+    )  # logarithms: no overflow; rtol ~ 700 eps
+    got = power_term(grid, c, p)
+    assert got[0] == 0.0
+    np.testing.assert_allclose(got[1:], truth, rtol=1e-12, atol=0)
+
+
+def test_the_quantities_figure_of_a_quantity_fitted_over_shorter_lengths_than_the_sweep_draws(tmp_path):
+    # the sweep's a reaches 4e60 µm (engine "wide"), quantity "short.q" is measured up to 1e55 µm only, with p = 5.5:
+    # its fit is representable (c ~ 1e-305), but the figure's grid runs to 4e60 µm, where grid**p is 1e333
+    from porepipe._shared.naming import res_tag
+    from porepipe.report._figures import quantities_figure
+
+    results = []
+    for engine, scale, a_list in (
+        ("wide", 1e60, (4.0, 2.0, 1.0)),
+        ("short", 1e55, (1.0, 0.8, 0.6, 0.4, 0.3)),
+    ):
+        for a in a_list:
+            path = tmp_path / engine / f"{engine}_a{res_tag(a * scale)}.h5"
+            with ResultWriter(path, stage=engine, scene="t", threads=1) as w:
+                w.write_table(
+                    xr.Dataset({"q": ((), 0.35 + 0.001 * a ** (5.5 if engine == "short" else 1.0))})
+                )
+            results.append(path)
+    ds = build_sweep(results)
+    assert reference_limit(ds, "short.q").form == "power"
+    rows = quantities_figure(
+        ds, ["short.q"], tmp_path / "f.png", 40
+    )  # pytest turns numpy's warning into an error
+    assert (tmp_path / "f.png").is_file() and rows[-1]["a_um"] == 0.0

@@ -48,6 +48,41 @@ def write_csv(path: Path, rows: list[dict]) -> Path:
     return path
 
 
+def power_term(grid, c: float, p: float) -> np.ndarray:
+    """``c * grid**p`` (the fitted curve's a-dependent term) without an intermediate overflow or underflow.
+
+    Computed as ``(grid / s)**p * (c * s**p)`` with ``s`` the largest ``|grid|``: the first factor lies in [0, 1], and
+    ``c * s**p``, the term at the largest length, goes through logarithms where ``s**p`` alone is beyond float64.
+    Before, ``grid**p`` was taken first: lengths of 1e60 µm with p = 5.5 gave inf (a curve of inf and NaN, and
+    numpy's overflow warning) where ``c * grid**p`` is ~1e28. Where nothing overflowed the values are the same to
+    round-off.
+
+    Parameters
+    ----------
+    grid : array_like
+        Lengths (µm), >= 0.
+    c, p : float
+        The fit's coefficient and exponent (q = q_inf + c a^p).
+
+    Returns
+    -------
+    ndarray
+        ``c * grid**p``; inf only where that itself is beyond float64.
+    """
+    grid = np.asarray(grid, dtype=np.float64)
+    scale = np.max(np.abs(grid)) if grid.size else np.float64(0.0)  # numpy scalars: inf, not OverflowError
+    if c == 0.0 or scale == 0.0:
+        return np.zeros_like(grid)
+    if not (np.isfinite(scale) and np.isfinite(c) and np.isfinite(p)):
+        with np.errstate(all="ignore"):
+            return c * grid**p
+    with np.errstate(over="ignore", under="ignore"):
+        at_scale = c * scale**p
+        if not np.isfinite(at_scale) or at_scale == 0.0:  # scale**p (or the product) out of float64's range
+            at_scale = np.copysign(np.exp(np.log(abs(c)) + p * np.log(scale)), c)
+        return (grid / scale) ** p * at_scale
+
+
 def _sample_label(s: float) -> str:
     return "whole sample" if s == FULL else f"sample L = {s:g} µm"
 
@@ -75,7 +110,7 @@ def quantities_figure(ds: xr.Dataset, quantities, path: Path, dpi: int) -> list[
             grid = np.linspace(0.0, a_max, 100)
             ax.plot(
                 grid,
-                ref.value + float(sel.c) * grid ** float(sel.p),
+                ref.value + power_term(grid, float(sel.c), float(sel.p)),
                 "-",
                 lw=1,
                 label=f"fit p = {float(sel.p):.2g}",
