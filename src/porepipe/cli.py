@@ -1,4 +1,4 @@
-"""The ``porepipe`` command: one subcommand per stage, plus ``validate`` and ``run``."""
+"""The ``porepipe`` command: one subcommand per stage, plus ``validate``, ``run`` and ``warm``."""
 
 from __future__ import annotations
 
@@ -212,9 +212,17 @@ def _warm(args) -> int:
     return 0
 
 
+#: ``porepipe --help``'s text (the module docstring printed its reST markup, ``porepipe``, and left out ``warm``)
+_DESCRIPTION = (
+    "porepipe: one subcommand per stage of the workflow, plus validate (check scene files), run (a scene's whole "
+    "workflow with Snakemake) and warm (compile a stage's kernels ahead of its jobs). `porepipe COMMAND --help` "
+    "describes each."
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``porepipe`` argument parser with every stage's subcommands."""
-    parser = argparse.ArgumentParser(prog="porepipe", description=__doc__)
+    parser = argparse.ArgumentParser(prog="porepipe", description=_DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"porepipe {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("validate", help="check scene files; list every problem")

@@ -185,3 +185,13 @@ def test_subsample_count_is_one_of_the_grids_on_the_command_line(capsys):
         build_parser().parse_args(["subsample", "b.h5", "--edge-um", "8", "-o", "s.h5", "--count", "3"])
     assert stop.value.code == 2
     assert "argument --count: invalid choice: 3 (choose from 1, 8, 64)" in capsys.readouterr().err
+
+
+def test_the_top_level_help_is_plain_text_and_names_every_command_beside_the_stages(capsys):
+    # before: the module docstring, with its reST markup (``porepipe``) and without `warm`
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["--help"])
+    text = capsys.readouterr().out
+    assert "``" not in text
+    description = text.split("positional arguments")[0]
+    assert all(name in description for name in ("validate", "run", "warm"))
