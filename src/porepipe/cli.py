@@ -278,12 +278,15 @@ def _help_from_settings(parser: argparse.ArgumentParser, model) -> None:
             action.help = _COMMON_HELP[action.dest]
         field = model.model_fields.get(action.dest) if model is not None else None
         if action.help is None and field is not None and field.description:
-            default = _shown(field.get_default(call_default_factory=True))
-            action.help = f"{field.description} (default: the scene's, else {default!r})"
+            default = field.get_default(call_default_factory=True)
+            shown = str(default).lower() if isinstance(default, bool) else repr(_shown(default))
+            action.help = f"{field.description} (default: the scene's, else {shown})"
 
 
 def _shown(value):
-    """A setting's default as a scene writes it: an Enum by its value, a list element by element."""
+    """A setting's default as a scene writes it: an Enum by its value, a list element by element (a bool is shown
+    as YAML's true/false by the caller: its repr False is Python's).
+    """
     if isinstance(value, enum.Enum):
         return value.value
     if isinstance(value, list | tuple):

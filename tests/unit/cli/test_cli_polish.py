@@ -195,3 +195,12 @@ def test_the_top_level_help_is_plain_text_and_names_every_command_beside_the_sta
     assert "``" not in text
     description = text.split("positional arguments")[0]
     assert all(name in description for name in ("validate", "run", "warm"))
+
+
+def test_a_boolean_settings_default_is_shown_as_a_scene_writes_it(capsys):
+    # before: "(default: the scene's, else False)", Python's spelling
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["permeability", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "else False" not in text and "else True" not in text
+    assert "(default: the scene's, else false)" in text
