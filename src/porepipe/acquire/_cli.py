@@ -243,7 +243,11 @@ def register(subparsers) -> None:
     )
     p.add_argument("statistics", help="statistics.h5 from `porepipe acquire`")
     p.add_argument(
-        "--a", type=float, default=None, help="resolution asked for (must be the image's voxel size)"
+        "--a",
+        type=float,
+        default=None,
+        help="voxel size in µm: the image's (default) or a whole multiple of it (blocks of voxels, pore where "
+        "less than half is matrix)",
     )
     p.add_argument("-o", "--out", required=True, help="output binary_a{a}.h5")
     p.set_defaults(func=_binary)
