@@ -36,7 +36,11 @@ def register(subparsers) -> None:
     p.add_argument("scene", help="scene YAML with a `packing:` section")
     p.add_argument("-o", "--out", required=True, help="output packing.h5")
     p.add_argument("--xyzr", help="also write the spheres as an 'x y z r' text file (µm)")
-    p.add_argument("--checkpoint", help="checkpoint file, written every packing.checkpoint_every steps")
+    p.add_argument(
+        "--checkpoint",
+        help="checkpoint file, written every packing.checkpoint_every steps of the scene (0, the default: "
+        "never)",
+    )
     p.add_argument(
         "--resume",
         action=argparse.BooleanOptionalAction,
