@@ -39,6 +39,7 @@ def register(subparsers) -> None:
     p.add_argument(
         "--memory-budget-mb",
         type=int,
-        help="resources.memory_budget_mb of the scene: sets how many planes are held at once",
+        help="memory budget in MB: fewer than 64 x planes are held at once where they exceed it (default: no "
+        "budget; the workflow passes the scene's resources.memory_budget_mb)",
     )
     p.set_defaults(func=main)
