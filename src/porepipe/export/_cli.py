@@ -37,7 +37,10 @@ def register(subparsers) -> None:
         help="output file: .vti for volumes and flow, .vtp for the rest; .pvd for every frame of a granular result",
     )
     p.add_argument(
-        "--gradient-pa-m", type=float, default=1.0e4, help="LBM fields: applied pressure gradient in Pa/m"
+        "--gradient-pa-m",
+        type=float,
+        default=1.0e4,
+        help="LBM fields: applied pressure gradient in Pa/m (default 1e4)",
     )
     p.add_argument(
         "--viscosity-pa-s",
