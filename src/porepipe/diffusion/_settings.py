@@ -292,7 +292,7 @@ class Settings(BaseModel):
     species: str = Field("N2", description="gas (thesis Table 3.1 name, or 'butene' of §4.2.3)")
     temperature_K: float = Field(298.15, gt=0, description="gas and wall temperature in K")
     target_rel_error: float = Field(
-        0.01, gt=0, description="stop when the relative 1-σ error of W / D is below"
+        0.01, gt=0, description="stop when the relative 1-σ error of W / D is below this"
     )
     max_wall_hits: int = Field(10**9, ge=1, description="stop after this many wall hits in total")
     max_rounds: int = Field(200, ge=1, description="stop after this many rounds")
