@@ -265,17 +265,11 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: help of options many commands share, where a command gives none
-_COMMON_HELP = {"threads": "numba threads (default: every core numba sees; NUMBA_NUM_THREADS caps it)"}
-
-
 def _help_from_settings(parser: argparse.ArgumentParser, model) -> None:
     """Give each option of a stage command that overrides a scene setting (of ``model``, a stage's Settings or None)
-    that setting's description as help, and shared options their common help.
+    that setting's description as help (``--threads`` brings its own: ``_shared.overrides.add_threads_option``).
     """
     for action in parser._actions:
-        if action.help is None and action.dest in _COMMON_HELP:
-            action.help = _COMMON_HELP[action.dest]
         field = model.model_fields.get(action.dest) if model is not None else None
         if action.help is None and field is not None and field.description:
             default = field.get_default(call_default_factory=True)
