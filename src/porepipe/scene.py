@@ -47,6 +47,9 @@ __all__ = [
     "scene_part",
 ]
 
+#: the validation context of a scene file: a stage's settings may then refuse what a scene sets explicitly to no
+#: effect (diffusion: a key its setup does not read; see porepipe.diffusion._settings.SCENE_CONTEXT)
+_CONTEXT = {"scene_file": True}
 #: relative tolerance when checking that a resolution divides the box
 _DIVIDES_RTOL = 1e-9
 #: longest scene name (it names the results folder, and Snakemake's lock and log paths carry it too)
@@ -473,7 +476,7 @@ def _checks_hidden_by(raw: dict, err: ValidationError) -> list[str]:
     if not removed:
         return []
     try:
-        Scene.model_validate(_without(raw, sorted(removed, key=len)))
+        Scene.model_validate(_without(raw, sorted(removed, key=len)), context=_CONTEXT)
     except ValidationError as again:
         hidden = [e for e in again.errors() if not any(_about_removed(raw, e, p) for p in removed)]
         seen = set(_pydantic_problems(raw, err))
@@ -482,11 +485,16 @@ def _checks_hidden_by(raw: dict, err: ValidationError) -> list[str]:
 
 
 def _about_removed(raw, error: dict, path: tuple) -> bool:
-    """Whether a second-pass error concerns the removed key ``path``: it lies below it, or names it from above."""
+    """Whether a second-pass error concerns the removed key ``path``: it lies below it, or names it from above or
+    from a key beside it (``diffusion.gas``, set for another setup than a misspelt ``diffusion.setup``'s default).
+    """
     loc = _raw_path(raw, error["loc"])
     if loc[: len(path)] == path:
         return True
-    return path[: len(loc)] == loc and str(path[-1]) in error["msg"]
+    if path[: len(loc)] == loc and str(path[-1]) in error["msg"]:
+        return True
+    beside = len(path) > 1 and loc[: len(path) - 1] == path[:-1]  # inside one section, not the top level
+    return beside and re.search(rf"\b{re.escape(str(path[-1]))}\b", error["msg"]) is not None
 
 
 class _Errors:
@@ -507,7 +515,7 @@ def parse_scene(raw: Any, base_dir: Path | str = ".", source: str = "scene") -> 
     problems = _cross_problems(raw, base_dir)
     scene = None
     try:
-        scene = Scene.model_validate(raw)
+        scene = Scene.model_validate(raw, context=_CONTEXT)
     except ValidationError as err:
         problems = _pydantic_problems(raw, err) + _checks_hidden_by(raw, err) + problems
     if problems:

@@ -1,6 +1,7 @@
 """Hard cases of the Knudsen engine: degenerate geometry, bad input, no NaN."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -498,7 +499,7 @@ def _mode_settings(mode: str) -> Settings:
 def test_every_diffusion_option_is_either_for_every_setup_or_in_the_one_table():
     """A new option of ``porepipe diffusion`` must be classified: read by every setup, or listed with the setups
     that read it (so the refusal below knows it)."""
-    from porepipe.diffusion._cli import _MODES
+    from porepipe.diffusion._settings import MODES as _MODES
 
     dests = {a.dest for a in _diffusion_parser()._actions}
     assert set(_USED_BY) <= dests
@@ -511,7 +512,8 @@ def test_a_setup_specific_option_given_for_another_setup_is_refused(dest):
     """``--reaction-w 0.5`` with setup transmission (and every other option a setup does not read) was ignored
     without a word; now one line names the option, the setups that read it and this run's. Given for a setup that
     reads it, or not given at all (its default), nothing is refused."""
-    from porepipe.diffusion._cli import _MODES, _option, _refuse_unused
+    from porepipe.diffusion._cli import _option, _refuse_unused
+    from porepipe.diffusion._settings import MODES as _MODES
 
     parser = _diffusion_parser()
     given = parser.parse_args(["b.h5", *_SAMPLE.get(dest, [_option(dest), "4"])])
@@ -656,3 +658,118 @@ def test_surface_hops_that_never_end_are_refused():
         surface_run(pore, [Adsorbate("A", gas=10, adsorption=1.0, hop_rate=1e11)], t_end=1e3, blocks=4)
     with pytest.raises(PorepipeError, match="would need more than"):
         surface_run(pore, [Adsorbate("A", gas=10)], t_end=1e300, blocks=4)
+
+
+#: a scene whose diffusion section is filled in per test (analyses: diffusion on a segmented sphere)
+_SCENE = {
+    "name": "t",
+    "domain": {"size_um": [10, 10, 10]},
+    "spheres": {"inline": [[5, 5, 5, 2]]},
+    "resolutions_um": [1.0],
+    "analyses": ["segment", "diffusion"],
+}
+
+
+def _problems(section: dict) -> list[str]:
+    with pytest.raises(SceneError) as err:
+        parse_scene({**_SCENE, "diffusion": section})
+    return err.value.problems
+
+
+@pytest.mark.parametrize(
+    "key,value,readers",
+    [
+        ("reactions", {"w": 0.1}, "setup reaction / a reaction study"),
+        ("gas", {"duration_ps": 5.0}, "setup edmd"),
+        ("surface", {"duration_jiffies": 5.0}, "setup surface"),
+        ("wk_time_jiffies", 3.0, "setup wicke_kallenbach"),
+        ("msd_samples", 8, "setup msd"),
+        ("initial_speed", "mean", "setup msd"),
+    ],
+)
+def test_a_scene_key_its_setup_ignores_is_one_problem_naming_it(key, value, readers):
+    """``setup: transmission`` with ``reactions: {w: 0.1}`` (or gas, wk_time_jiffies, ...) was accepted and the key
+    ignored without a word; now one problem line names the key, the setups that read it and the scene's."""
+    (problem,) = _problems({"setup": "transmission", key: value})
+    assert problem.startswith(f"diffusion.{key} = ")
+    assert f": read only by {readers}" in problem
+    assert "this scene's setup is transmission, which ignores it" in problem and "\n" not in problem
+
+
+def test_a_scene_key_is_judged_only_when_given_and_for_the_run_it_makes():
+    """Defaults are not given (``model_fields_set``): a bare section passes; a key given for the setup that reads it
+    passes; inside a section the run's mode counts (a reaction study takes w from its series, so reactions.w set
+    beside the series is ignored) and every ignored key is listed, the section once (not also its keys)."""
+    ok = [
+        {"setup": "transmission"},
+        {"setup": "reaction", "reactions": {"w": 0.1, "z_bins": 4}, "batches": 4, "inlet_law": "isotropic"},
+        {"setup": "edmd", "gas": {"duration_ps": 5.0}, "temperature_K": 300.0},
+        {"setup": "wicke_kallenbach", "wk_time_jiffies": 3.0, "profile_bins": 4},
+        {"setup": "reaction", "reactions": {"particles": 100, "series": [{"w": 0.1}]}},
+        {"lengths": [2, 4], "target_rel_error": 0.1, "inlet_law": "isotropic"},
+    ]
+    for section in ok:
+        parse_scene({**_SCENE, "diffusion": section})
+    (study,) = _problems({"setup": "reaction", "reactions": {"w": 0.2, "series": [{"w": 0.1}]}})
+    assert study.startswith(
+        "diffusion.reactions.w = 0.2: read only by setup reaction; this scene's setup is "
+        "reaction with diffusion.reactions.series (a reaction study), which ignores it"
+    )
+    problems = _problems({"setup": "msd", "gas": {"samples": 8}, "reactions": {"w": 0.2}, "profile_bins": 4})
+    assert [p.split(" = ")[0] for p in problems] == [
+        "diffusion.profile_bins",
+        "diffusion.gas",
+        "diffusion.reactions",
+    ]
+    (series,) = _problems({"lengths": [2, 4], "species": "He"})
+    assert "this scene's setup is transmission with diffusion.lengths (a length series)" in series
+
+
+def test_a_misspelt_setup_is_not_judged_as_its_default():
+    """The second pass that finds checks hidden by a bad value validates with the bad key removed: a misspelt
+    setup then read as transmission, and reactions set for setup reaction would be called ignored."""
+    problems = _problems({"setup": "reacton", "reactions": {"w": 0.1}})
+    assert len(problems) == 1 and problems[0].startswith("diffusion.setup = 'reacton'")
+
+
+def test_the_scene_and_the_command_line_share_one_table_of_settings():
+    """Every setting of the table exists, and each setup-specific option of ``porepipe diffusion`` takes its setups
+    from the table (by its setting's name), so the two checks cannot disagree."""
+    from porepipe.diffusion._cli import _SETTING
+    from porepipe.diffusion._settings import USED_BY, used_by
+
+    for setting in USED_BY:
+        model = Settings
+        for part in setting.split("."):
+            assert part in model.model_fields, setting
+            model = model.model_fields[part].annotation
+    for dest, modes in _USED_BY.items():
+        if dest != "checkpoint":
+            assert modes == used_by(_SETTING.get(dest, dest)), dest
+
+
+def test_the_command_line_may_change_a_scenes_setup(tmp_path):
+    """The scene's keys are judged against the scene's setup when it loads; ``--setup`` over it runs the other
+    setup (those keys unread, as before), while the options given on the command line are still judged."""
+    import yaml
+
+    from porepipe.diffusion._cli import _settings
+
+    scene = tmp_path / "s.yaml"
+    scene.write_text(yaml.safe_dump({**_SCENE, "diffusion": {"setup": "transmission", "profile_bins": 4}}))
+    parser = _diffusion_parser()
+    settings, _, _ = _settings(parser.parse_args(["b.h5", "--scene", str(scene), "--setup", "msd"]))
+    assert settings.setup.value == "msd"
+    with pytest.raises(PorepipeError, match="--hit-map-bins is read only by"):
+        _settings(parser.parse_args(["b.h5", "--scene", str(scene), "--setup", "msd", "--hit-map-bins", "4"]))
+
+
+@pytest.mark.parametrize(
+    "path", sorted(Path(__file__).parents[2].glob("config/scenes/*.yaml")), ids=lambda p: p.stem
+)
+def test_every_shipped_scene_validates(path):
+    """The shipped scenes set no key their setup ignores (the reaction studies and length series named a species,
+    which does not enter them)."""
+    from porepipe.scene import load_scene
+
+    load_scene(path)

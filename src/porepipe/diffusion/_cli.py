@@ -8,7 +8,19 @@ from pathlib import Path
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.overrides import add_threads_option, merge_settings, seed_number
-from porepipe.diffusion._settings import Axis, InletLaw, Settings, Setup, SpeedDist, WallLaw, WallSpeed
+from porepipe.diffusion._settings import (
+    MODES,
+    Axis,
+    InletLaw,
+    Settings,
+    Setup,
+    SpeedDist,
+    WallLaw,
+    WallSpeed,
+    readers_text,
+    run_mode,
+    used_by,
+)
 
 #: CLI option -> settings key, for the options that override the scene
 _OVERRIDES = (
@@ -53,63 +65,27 @@ def _settings(args) -> tuple[Settings, int, str]:
     return settings, seed, name
 
 
-#: what one run computes: the setup, with a transmission length series and a reaction study apart (they read fewer
-#: settings than a single run of their setup) -> how a message names it
-_MODES = {
-    "transmission": "setup transmission",
-    "length_series": "a length series (setup transmission with diffusion.lengths)",
-    "wicke_kallenbach": "setup wicke_kallenbach",
-    "msd": "setup msd",
-    "edmd": "setup edmd",
-    "reaction": "setup reaction",
-    "reaction_study": "a reaction study (setup reaction with diffusion.reactions.series)",
-    "surface": "setup surface",
+#: options that set a nested setting: argparse dest -> its name in the settings (the others are named as the setting)
+_SETTING = {
+    "gas_particles": "gas.particles",
+    "collisions": "gas.collisions",
+    "duration_ps": "gas.duration_ps",
+    "reaction_w": "reactions.w",
+    "reaction_w_reverse": "reactions.w_reverse",
+    "reaction_w_follow": "reactions.w_follow",
+    "reaction_particles": "reactions.particles",
 }
-_TRANSPORT = ("transmission", "length_series", "wicke_kallenbach", "msd")  # the rounds of batches of flights
-
-#: the one table of setup-specific options: option (its argparse dest) -> the modes that read it. An option given on
-#: the command line for a run of any other mode is refused: it would be ignored without a word. Options every mode
-#: reads (--setup, --wall-law, --seed, --scene, --threads, --axis, -o) are not listed, nor --resume, which the
-#: workflow passes to every run (a run without checkpoints has nothing to resume). A length series keeps W and D in
-#: voxel²/jiffie only (no m²/s: species and temperature have no effect), and its W does not depend on speeds; a
-#: reaction study takes w, w_reverse and w_follow from its series; setup surface's speeds are relative to the
-#: fastest species, so the temperature cancels; setup edmd takes its particles, speeds and histogram from
-#: diffusion.gas.
+_CHECKPOINTED = ("transmission", "wicke_kallenbach", "msd")  # the runs that save their tallies (--checkpoint)
+#: the setup-specific options, each with the modes that read it, from the settings' one table (_settings.USED_BY)
+#: plus --checkpoint, which is no setting. An option given on the command line for a run of any other mode is
+#: refused: it would be ignored without a word. Options every mode reads (--setup, --wall-law, --seed, --scene,
+#: --threads, --axis, -o) are not listed, nor --resume, which the workflow passes to every run (a run without
+#: checkpoints has nothing to resume).
 _USED_BY = {
-    "accommodation": (*_TRANSPORT, "edmd"),
-    "wall_speed": ("transmission", "wicke_kallenbach", "msd", "edmd"),
-    "inlet_law": ("transmission", "length_series", "wicke_kallenbach", "reaction", "reaction_study"),
-    "inlet_speed": ("transmission", "wicke_kallenbach"),
-    "initial_speed": ("msd",),
-    "species": ("transmission", "wicke_kallenbach", "msd"),
-    "temperature_K": ("transmission", "wicke_kallenbach", "msd", "edmd"),
-    "target_rel_error": _TRANSPORT,
-    "max_wall_hits": _TRANSPORT,
-    "max_rounds": _TRANSPORT,
-    "batches": (*_TRANSPORT, "reaction", "reaction_study"),
-    "batch_particles": _TRANSPORT,
-    "profile_bins": ("transmission", "wicke_kallenbach"),
-    "hit_map_bins": ("transmission", "wicke_kallenbach"),
-    "orientation_bins": ("transmission", "wicke_kallenbach"),
-    "wk_time_jiffies": ("wicke_kallenbach",),
-    "msd_time_jiffies": ("msd",),
-    "checkpoint": ("transmission", "wicke_kallenbach", "msd"),
-    "gas_particles": ("edmd",),
-    "collisions": ("edmd",),
-    "duration_ps": ("edmd",),
-    "reaction_w": ("reaction",),
-    "reaction_w_reverse": ("reaction",),
-    "reaction_w_follow": ("reaction",),
-    "reaction_particles": ("reaction", "reaction_study"),
+    dest: modes
+    for dest in (*_OVERRIDES, "checkpoint", *_SETTING)
+    if (modes := _CHECKPOINTED if dest == "checkpoint" else used_by(_SETTING.get(dest, dest)))
 }
-
-
-def _mode(settings: Settings) -> str:
-    if settings.setup is Setup.transmission and settings.lengths:
-        return "length_series"
-    if settings.setup is Setup.reaction and settings.reactions.series:
-        return "reaction_study"
-    return settings.setup.value
 
 
 def _option(dest: str) -> str:
@@ -118,46 +94,34 @@ def _option(dest: str) -> str:
 
 def _refuse_unused(args, settings: Settings) -> None:
     """One line naming the first option given on the command line that this run's mode does not read."""
-    mode = _mode(settings)
+    mode = run_mode(settings)
     for dest, modes in _USED_BY.items():
         if mode not in modes and getattr(args, dest, None) is not None:
-            users = " / ".join(_MODES[m] for m in modes)
+            users = readers_text(modes)
             raise PorepipeError(
-                f"{_option(dest)} is read only by {users}; this run is {_MODES[mode]}, which would ignore it "
+                f"{_option(dest)} is read only by {users}; this run is {MODES[mode]}, which would ignore it "
                 "(leave it out, or choose a setup that uses it)"
             )
 
 
-#: CLI option -> (nested section, key) for the event-driven gas and the wall reactions
-_NESTED = (
-    ("duration_ps", "gas", "duration_ps"),
-    ("reaction_w", "reactions", "w"),
-    ("reaction_w_reverse", "reactions", "w_reverse"),
-    ("reaction_w_follow", "reactions", "w_follow"),
-    ("reaction_particles", "reactions", "particles"),
-)
+def _gas_particles(text: str) -> dict:
+    counts = {}
+    for item in text.split(","):
+        name, _, number = item.partition("=")
+        if not number.strip().isdigit():
+            raise PorepipeError(f"--gas-particles wants SPECIES=N[,SPECIES=N], got {text!r}")
+        counts[name.strip()] = int(number)
+    return counts
 
 
 def _nested_overrides(args, base: dict) -> None:
-    for option, section, key in _NESTED:
+    """The options of nested settings (:data:`_SETTING`) laid over their sections of ``base``."""
+    for option, setting in _SETTING.items():
         value = getattr(args, option, None)
         if value is not None:
-            base.setdefault(section, {})
-            base[section] = {**dict(base[section]), key: value}
-    if getattr(args, "gas_particles", None) is not None:
-        counts = {}
-        for item in args.gas_particles.split(","):
-            name, _, number = item.partition("=")
-            if not number.strip().isdigit():
-                raise PorepipeError(
-                    f"--gas-particles wants SPECIES=N[,SPECIES=N], got {args.gas_particles!r}"
-                )
-            counts[name.strip()] = int(number)
-        base.setdefault("gas", {})
-        base["gas"] = {**dict(base["gas"]), "particles": counts}
-    if getattr(args, "collisions", None) is not None:
-        base.setdefault("gas", {})
-        base["gas"] = {**dict(base["gas"]), "collisions": args.collisions}
+            section, _, key = setting.partition(".")
+            value = _gas_particles(value) if option == "gas_particles" else value
+            base[section] = {**dict(base.get(section) or {}), key: value}
 
 
 def _summary(v, settings: Settings) -> str:

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import enum
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
+from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from porepipe.diffusion._capillary import CapillaryGeometry
 
@@ -265,6 +274,91 @@ class ReactionSettings(BaseModel):
     )
 
 
+#: what one run computes: the setup, with a transmission length series and a reaction study apart (they read fewer
+#: settings than a single run of their setup) -> how a message names it
+MODES = {
+    "transmission": "setup transmission",
+    "length_series": "a length series (setup transmission with diffusion.lengths)",
+    "wicke_kallenbach": "setup wicke_kallenbach",
+    "msd": "setup msd",
+    "edmd": "setup edmd",
+    "reaction": "setup reaction",
+    "reaction_study": "a reaction study (setup reaction with diffusion.reactions.series)",
+    "surface": "setup surface",
+}
+_TRANSPORT = ("transmission", "length_series", "wicke_kallenbach", "msd")  # the rounds of batches of flights
+
+#: the one table of setup-specific settings: setting (``section.key`` inside a nested section) -> the modes that read
+#: it. A scene that sets one explicitly for a run of any other mode is refused (``porepipe validate``), and so is the
+#: command-line option of a listed setting (``porepipe diffusion``): either would be ignored without a word. A key of
+#: a nested section not listed itself is read wherever its section is. Settings every mode reads (setup, axes,
+#: resolutions_um, wall_law, geometry) are not listed, nor lengths (checked below: it needs setup transmission). A
+#: length series keeps W and D in voxel²/jiffie only (no m²/s: species and temperature have no effect), and its W
+#: does not depend on speeds; a reaction study takes w, w_reverse and w_follow from its series and has no z_R(z)
+#: map, adsorption or poisoning rounds; setups reaction and surface work in voxels and jiffies (surface's
+#: speeds are relative to the fastest species, so the temperature cancels); setup edmd takes its particles, speeds and
+#: histogram from diffusion.gas.
+USED_BY = {
+    "accommodation": (*_TRANSPORT, "edmd"),
+    "wall_speed": ("transmission", "wicke_kallenbach", "msd", "edmd"),
+    "inlet_law": ("transmission", "length_series", "wicke_kallenbach", "reaction", "reaction_study"),
+    "inlet_speed": ("transmission", "wicke_kallenbach"),
+    "initial_speed": ("msd",),
+    "species": ("transmission", "wicke_kallenbach", "msd"),
+    "temperature_K": ("transmission", "wicke_kallenbach", "msd", "edmd"),
+    "target_rel_error": _TRANSPORT,
+    "max_wall_hits": _TRANSPORT,
+    "max_rounds": _TRANSPORT,
+    "batches": (*_TRANSPORT, "reaction", "reaction_study"),
+    "batch_particles": _TRANSPORT,
+    "max_hits_per_particle": (*_TRANSPORT, "reaction", "reaction_study"),
+    "profile_bins": ("transmission", "wicke_kallenbach"),
+    "hit_map_bins": ("transmission", "wicke_kallenbach"),
+    "orientation_bins": ("transmission", "wicke_kallenbach"),
+    "wk_time_jiffies": ("wicke_kallenbach",),
+    "msd_time_jiffies": ("msd",),
+    "msd_samples": ("msd",),
+    "gas": ("edmd",),
+    "surface": ("surface",),
+    "reactions": ("reaction", "reaction_study"),
+    "reactions.w": ("reaction",),
+    "reactions.w_reverse": ("reaction",),
+    "reactions.w_follow": ("reaction",),
+    "reactions.z_bins": ("reaction",),
+    "reactions.adsorption": ("reaction",),
+    "reactions.residence_jiffies": ("reaction",),
+    "reactions.residence_law": ("reaction",),
+    "reactions.poisoning": ("reaction",),
+    "reactions.rounds": ("reaction",),
+}
+
+
+def used_by(setting: str) -> tuple[str, ...] | None:
+    """The modes that read ``setting`` (``key`` or ``section.key``; see :data:`USED_BY`); None = every mode."""
+    while setting not in USED_BY and "." in setting:
+        setting = setting.rpartition(".")[0]
+    return USED_BY.get(setting)
+
+
+def run_mode(settings: Settings) -> str:
+    """The key of :data:`MODES` that ``settings`` run: the setup, or a length series / reaction study."""
+    if settings.setup is Setup.transmission and settings.lengths:
+        return "length_series"
+    if settings.setup is Setup.reaction and settings.reactions.series:
+        return "reaction_study"
+    return settings.setup.value
+
+
+def readers_text(modes) -> str:
+    """The modes ``modes`` as a message names them."""
+    return " / ".join(MODES[m] for m in modes)
+
+
+#: key of the validation context that porepipe.scene sets when it validates a scene file: only then are settings
+#: given for another setup refused (the command line lays its options over a scene's whole section, all of it set)
+SCENE_CONTEXT = "scene_file"
+
+
 class Settings(BaseModel):
     """Knudsen (free-molecular) diffusion: point particles, exact voxel flights, diffuse or specular walls."""
 
@@ -351,6 +445,40 @@ class Settings(BaseModel):
             raise ValueError(
                 f"lengths (a length series) needs setup transmission, got setup {self.setup.value}"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _keys_its_setup_reads(self, info: ValidationInfo):
+        """In a scene file, a setting given explicitly (``model_fields_set``, not a default) that this run's mode does
+        not read (:data:`USED_BY`): one error at its key each; it was ignored without a word.
+        """
+        if not (info.context or {}).get(SCENE_CONTEXT):
+            return self
+        mode = run_mode(self)
+        setup = {
+            "length_series": "transmission with diffusion.lengths (a length series)",
+            "reaction_study": "reaction with diffusion.reactions.series (a reaction study)",
+        }.get(mode, mode)
+        errors, ignored = [], []
+        for setting, modes in USED_BY.items():
+            section, _, key = setting.rpartition(".")
+            model = getattr(self, section) if section else self
+            if mode in modes or key not in model.model_fields_set or section in ignored:
+                continue
+            ignored.append(setting)
+            message = (
+                f"read only by {readers_text(modes)}; this scene's setup is {setup}, which ignores it (leave it out, "
+                "or choose a setup that reads it)"
+            )
+            errors.append(
+                InitErrorDetails(
+                    type=PydanticCustomError("ignored_by_setup", message),
+                    loc=tuple(setting.split(".")),
+                    input=getattr(model, key),
+                )
+            )
+        if errors:
+            raise ValidationError.from_exception_data(type(self).__name__, errors)
         return self
 
     @field_validator("axes")
