@@ -16,6 +16,10 @@ Definitions (also written into every result)
   inlet and flux-weighted speeds this convention equals v̄·L·W/4 exactly. ``D_wk_profile`` divides the flux by the
   gradient of the measured species-1 profile fitted over the middle 60 % of the channel.
 - Mean free flight = path length / number of flights ending at a wall; hit rate = wall hits per particle and time.
+- Stop (root attributes of a transmission, Wicke-Kallenbach or msd result): ``rel_error`` = the relative 1-σ error that
+  the rounds compared with ``target_rel_error`` (of W; WK: of D; msd: the largest of the D_dd; inf before 2 rounds);
+  ``target_met`` = 1 if it fell to the target, else 0; ``stopped_by`` = what ended the rounds: target_rel_error, or
+  the limit reached first, max_rounds or max_wall_hits (a length series: one per length, comma-separated).
 """
 
 from __future__ import annotations
@@ -188,6 +192,9 @@ class Tallies:
     round_cpu_s: dict = field(default_factory=dict)  # round -> CPU s of its kernel call (not checkpointed)
     #: (wall s, CPU s) that earlier processes of a resumed run spent up to its checkpoint (NaN: not recorded there)
     carried: tuple[float, float] = (0.0, 0.0)
+    #: what ended the rounds (see STOPS) and the relative error then; set by _run_rounds, not checkpointed
+    stopped_by: str = ""
+    rel_error: float = math.inf
 
     def add(self, rows, profile, hitmap, orientation, msd):
         self.rows = np.concatenate([self.rows, rows])
@@ -270,6 +277,8 @@ class DiffusionResult:
     values: dict = field(default_factory=dict)
     arrays: dict = field(default_factory=dict)
     tallies: Tallies | None = None
+    #: root attributes of the result file beyond those every run writes (the stop of a run of rounds)
+    attrs: dict = field(default_factory=dict)
 
 
 def _wall(settings: Settings) -> tuple:
@@ -322,11 +331,37 @@ def _run_rounds(settings, key, checkpoint, label, run_round, rel_error, shapes) 
             residual=rel,
         )
     rel = rel_error(tallies) if tallies.rounds >= 2 else float("inf")
+    if rel <= settings.target_rel_error:
+        tallies.stopped_by = "target_rel_error"
+    elif tallies.rows[:, K.T_HITS].sum() >= settings.max_wall_hits:
+        tallies.stopped_by = "max_wall_hits"
+    else:
+        tallies.stopped_by = "max_rounds"
+    tallies.rel_error = float(rel)
     progress.close(
         f"{tallies.rounds} rounds, {tallies.rows[:, K.T_HITS].sum():.3g} wall hits, relative error {rel:.2g} "
-        + ("(target met)" if rel <= settings.target_rel_error else "(stopped by a limit before the target)")
+        + (
+            "(target met)"
+            if tallies.stopped_by == "target_rel_error"
+            else f"(stopped by a limit before the target: {tallies.stopped_by})"
+        )
     )
     return tallies
+
+
+#: what can end the rounds of a transmission, Wicke-Kallenbach or msd run (result attribute ``stopped_by``)
+STOPS = ("target_rel_error", "max_rounds", "max_wall_hits")
+
+
+def stop_attrs(tallies: list[Tallies]) -> dict:
+    """The result attributes that say whether the rounds met ``target_rel_error`` and what stopped them (see the
+    definitions): of one run, or of a length series' runs (one entry per length in ``stopped_by``).
+    """
+    return {
+        "target_met": int(all(t.stopped_by == "target_rel_error" for t in tallies)),
+        "stopped_by": ",".join(t.stopped_by for t in tallies),
+        "rel_error": max(t.rel_error for t in tallies),
+    }
 
 
 def _check_tally_memory(settings: Settings, msd: bool = False) -> None:
@@ -475,7 +510,7 @@ def transport(
             (0,),
         ],
     )
-    res = DiffusionResult(settings.setup.value, "xyz"[axis], tallies=tallies)
+    res = DiffusionResult(settings.setup.value, "xyz"[axis], tallies=tallies, attrs=stop_attrs([tallies]))
     v = res.values
     rows = tallies.rows
     _common_values(v, geom, settings, rows)
@@ -753,7 +788,10 @@ def equilibrium(
         [(1,), (6, 1, 1), (1, 2), (settings.msd_samples, 3)],
     )
     res = DiffusionResult(
-        "msd" if msd else "closed", "".join("xyz"[d] for d in range(3) if per[d]) or "-", tallies=tallies
+        "msd" if msd else "closed",
+        "".join("xyz"[d] for d in range(3) if per[d]) or "-",
+        tallies=tallies,
+        attrs=stop_attrs([tallies]),
     )
     v = res.values
     _common_values(v, geom, settings, tallies.rows)

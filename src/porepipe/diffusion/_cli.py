@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from pathlib import Path
 
@@ -141,6 +142,23 @@ def _summary(v, settings: Settings) -> str:
     return f"{eta}{phi}{int(v['products'])} products, {int(v['wall_hits'])} wall hits"
 
 
+def _unmet(attrs, settings: Settings) -> str:
+    """``; target NOT met: ...`` for a run of rounds that a limit stopped before ``target_rel_error``, else ``""``."""
+    if "target_met" not in attrs or int(attrs["target_met"]):
+        return ""
+    rel = float(attrs["rel_error"])
+    error = (
+        f"relative error {rel:.2g} > target_rel_error {settings.target_rel_error:g}"
+        if math.isfinite(rel)
+        else f"no relative error to compare with target_rel_error {settings.target_rel_error:g} (it needs 2 rounds "
+        "and a nonzero estimate)"
+    )
+    limits = dict.fromkeys(by for by in str(attrs["stopped_by"]).split(",") if by != "target_rel_error")
+    return f"; target NOT met: {error}, stopped by " + ", ".join(
+        f"{by} = {getattr(settings, by)}" for by in limits
+    )
+
+
 def _output(args, binary: Path, axis: str) -> Path:
     if args.out:
         return Path(args.out)
@@ -169,9 +187,10 @@ def main(args) -> int:
         checkpoint=args.checkpoint,
         resume=args.resume,
     )
-    from porepipe._shared.store import read_table
+    from porepipe._shared.store import read_attrs, read_table
 
     v = read_table(out)
+    unmet = _unmet(read_attrs(out), settings)
     if settings.setup is Setup.surface:
         cov = ", ".join(
             f"{k[: -len('_coverage')]} {float(v[k]):.4g}" for k in v.data_vars if k.endswith("_coverage")
@@ -186,13 +205,13 @@ def main(args) -> int:
     if settings.lengths:
         print(
             f"diffusion {args.axis} (length series, {len(settings.lengths)} lengths): alpha = "
-            f"{float(v['alpha']):.4g} ± {float(v['alpha_err']):.2g}, chi2/dof = {float(v['chi2_per_dof']):.3g} -> {out}"
+            f"{float(v['alpha']):.4g} ± {float(v['alpha_err']):.2g}, chi2/dof = {float(v['chi2_per_dof']):.3g}{unmet} -> {out}"
         )
         return 0
     head = f"W = {float(v['W']):.5g} ± {float(v['W_err']):.2g}, " if "W" in v else ""
     print(
         f"diffusion {args.axis} ({settings.setup.value}): {head}D = {float(v['D_m2_s']):.5g} "
-        f"± {float(v['D_err_m2_s']):.2g} m^2/s, {int(v['wall_hits'])} wall hits -> {out}"
+        f"± {float(v['D_err_m2_s']):.2g} m^2/s, {int(v['wall_hits'])} wall hits{unmet} -> {out}"
     )
     return 0
 

@@ -113,7 +113,19 @@ def length_series(
     """Transmission (``settings`` with setup transmission) through ``pore[..., :L]`` along ``axis`` for each L.
 
     Returns ``series_length`` (voxels), ``series_W``/``series_W_err``, ``series_D``/``series_D_err`` (D = v̄LW/4
-    in the transport's units), ``series_r_over_L`` and the fit of :func:`fit_length_series` with ``r_equal_area``.
+    in the transport's units), ``series_r_over_L``, ``series_target_met`` (1/0: W's relative error reached
+    ``target_rel_error``) and ``series_rel_error`` per length, and the fit of :func:`fit_length_series` with
+    ``r_equal_area``.
+    """
+    return series_runs(pore, axis, lengths, settings, voxel_um, periodic, seed)[0]
+
+
+def series_runs(pore, axis: int, lengths, settings, voxel_um=1.0, periodic=(False, False, False), seed=0):
+    """:func:`length_series` and the tallies of its runs, one per length (what stopped each: the result records it).
+
+    Returns
+    -------
+    (dict, list of porepipe.diffusion._api.Tallies)
     """
     from porepipe.diffusion._api import transport
 
@@ -124,12 +136,13 @@ def length_series(
         raise PorepipeError(
             f"diffusion.lengths must hold >= 2 lengths in [1, {n}] voxels along the axis, got {lengths}"
         )
-    rows = []
+    rows, runs = [], []
     for length in lengths:
         cut = [slice(None)] * 3
         cut[axis] = slice(0, length)
         res = transport(np.ascontiguousarray(pore[tuple(cut)]), axis, settings, voxel_um, periodic, seed=seed)
         v = res.values
+        runs.append(res.tallies)
         rows.append((length, v["W"], v["W_err"], v["D"], v["D_err"], v["open_area"], v["length"]))
     arr = np.array(rows, dtype=float)
     r = math.sqrt(arr[0, 5] / math.pi)
@@ -141,7 +154,9 @@ def length_series(
         "series_D": arr[:, 3],
         "series_D_err": arr[:, 4],
         "series_r_over_L": x,
+        "series_target_met": np.array([t.stopped_by == "target_rel_error" for t in runs], dtype=float),
+        "series_rel_error": np.array([t.rel_error for t in runs], dtype=float),
         "r_equal_area": r,
     }
     out.update(fit_length_series(x, arr[:, 3], arr[:, 4]))
-    return out
+    return out, runs

@@ -17,7 +17,7 @@ import xarray as xr
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.store import ResultWriter, read_attrs, read_binary_volume, result_hash
 from porepipe.diffusion import _api, _edmd
-from porepipe.diffusion._length_series import length_series
+from porepipe.diffusion._length_series import series_runs
 from porepipe.diffusion._reaction_study import study_result
 from porepipe.diffusion._settings import Axis, Settings, Setup
 from porepipe.diffusion._surface import surface_result
@@ -162,11 +162,12 @@ def run(
                 result.values["D"] = result.values[f"D_{name}"]
                 result.values["D_err"] = result.values[f"D_{name}_err"]
         elif settings.lengths:  # a length series (setup transmission; checked by Settings)
-            series = length_series(
+            series, runs = series_runs(
                 pore, axis.index, settings.lengths, settings, voxel_um, periodic, seed=seed
             )
             arrays = {k: series.pop(k) for k in list(series) if k.startswith("series_")}
-            result = _api.DiffusionResult("length_series", axis.value, series, arrays)
+            stop = _api.stop_attrs(runs)
+            result = _api.DiffusionResult("length_series", axis.value, series, arrays, attrs=stop)
         else:
             # the volume read here is ours: it becomes the distance codes in place (1 byte per voxel in all)
             pore = _api.prepare(
@@ -187,6 +188,7 @@ def run(
             species=settings.species,
             temperature_K=settings.temperature_K,
             source=str(binary),
+            **result.attrs,
         )
     checkpoint.unlink(missing_ok=True)
     return out

@@ -131,3 +131,45 @@ def test_cli_end_to_end_and_bad_input(tmp_path, capsys):
     assert not list(tmp_path.glob("x.h5*")) and not list(tmp_path.glob(".x.h5*"))
     rc = cli_main(["diffusion", str(binary), "--accommodation", "1.5", "-o", str(tmp_path / "y.h5")])
     assert rc == 2 and "accommodation" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "setup,pore,periodic",
+    [
+        ("transmission", square_capillary(4, 12).pore, (0, 0, 0)),
+        ("wicke_kallenbach", square_capillary(4, 12).pore, (0, 0, 0)),
+        ("msd", np.pad(np.ones((4, 4, 4), np.uint8), ((1, 1), (1, 1), (0, 0))), (0, 0, 1)),
+    ],
+)
+def test_a_run_stopped_by_max_rounds_says_the_target_was_not_met(tmp_path, capsys, setup, pore, periodic):
+    """Two rounds against a target of 1e-6: the progress line said 'stopped by a limit', but the summary line on
+    stdout and the result file did not; now both say the target was not met and that max_rounds stopped it."""
+    binary = _binary(tmp_path / "binary_a0.01.h5", pore, periodic=periodic)
+    out = tmp_path / "d.h5"
+    tiny = ["--setup", setup, "--batches", "4", "--batch-particles", "20", "-o", str(out)]
+    assert cli_main(["diffusion", str(binary), *tiny, "--max-rounds", "2", "--target-rel-error", "1e-6"]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    attrs = read_attrs(out)
+    assert attrs["target_met"] == 0 and attrs["stopped_by"] == "max_rounds"
+    assert attrs["rel_error"] > 1e-6 and math.isfinite(attrs["rel_error"])
+    assert f"target NOT met: relative error {attrs['rel_error']:.2g} > target_rel_error 1e-06" in line
+    assert "stopped by max_rounds = 2 -> " in line
+    # a target the two rounds meet: said by the attributes, and no word on the line
+    assert cli_main(["diffusion", str(binary), *tiny, "--target-rel-error", "0.9"]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    attrs = read_attrs(out)
+    assert attrs["target_met"] == 1 and attrs["stopped_by"] == "target_rel_error" and "NOT met" not in line
+
+
+def test_a_length_series_records_the_stop_of_each_length(tmp_path, capsys):
+    """A length series runs one transmission per length: the result's attributes list what stopped each, and the
+    table holds series_target_met and series_rel_error per length."""
+    binary = _binary(tmp_path / "binary_a0.01.h5", square_capillary(3, 12).pore)
+    settings = Settings(lengths=[3, 12], batches=4, batch_particles=20, max_rounds=2, target_rel_error=1e-6)
+    out = run(settings, binary, tmp_path / "d.h5", "z", seed=1)
+    attrs = read_attrs(out)
+    assert attrs["target_met"] == 0 and attrs["stopped_by"] == "max_rounds,max_rounds"
+    ds = xr.open_dataset(out, engine="h5netcdf")
+    assert ds["series_target_met"].values.tolist() == [0.0, 0.0]
+    assert float(ds["series_rel_error"].max()) == pytest.approx(attrs["rel_error"], rel=1e-12)
+    ds.close()
