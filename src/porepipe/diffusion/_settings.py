@@ -354,6 +354,11 @@ def readers_text(modes) -> str:
     return " / ".join(MODES[m] for m in modes)
 
 
+#: settings a scene may name where its run does not read them: the gas of a length series or a reaction study (W, α,
+#: η and Φ are dimensionless, the same for every species) documents the study, and the result records it; only the
+#: command line's --species is refused there
+SCENE_MAY_NAME = frozenset({"species"})
+
 #: key of the validation context that porepipe.scene sets when it validates a scene file: only then are settings
 #: given for another setup refused (the command line lays its options over a scene's whole section, all of it set)
 SCENE_CONTEXT = "scene_file"
@@ -463,7 +468,12 @@ class Settings(BaseModel):
         for setting, modes in USED_BY.items():
             section, _, key = setting.rpartition(".")
             model = getattr(self, section) if section else self
-            if mode in modes or key not in model.model_fields_set or section in ignored:
+            if (
+                mode in modes
+                or key not in model.model_fields_set
+                or section in ignored
+                or setting in SCENE_MAY_NAME
+            ):
                 continue
             ignored.append(setting)
             message = (
