@@ -724,7 +724,9 @@ def test_a_scene_key_is_judged_only_when_given_and_for_the_run_it_makes():
     (series,) = _problems({"lengths": [2, 4], "profile_bins": 4})
     assert "this scene's setup is transmission with diffusion.lengths (a length series)" in series
     # a scene may name the gas of a study whose numbers do not depend on it (documentation; the result records it)
-    assert parse_scene({**_SCENE, "diffusion": {"lengths": [2, 4], "species": "He"}}).diffusion.species == "He"
+    assert (
+        parse_scene({**_SCENE, "diffusion": {"lengths": [2, 4], "species": "He"}}).diffusion.species == "He"
+    )
 
 
 def test_a_misspelt_setup_is_not_judged_as_its_default():
