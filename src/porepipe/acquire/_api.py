@@ -48,8 +48,23 @@ def image_file(settings: Settings, base_dir: Path | str = ".", image_path=None) 
 def open_image(
     settings: Settings, base_dir: Path | str = ".", image_path=None, names: SettingNames = SCENE_KEYS
 ) -> Image:
-    """Open the image (``image_path`` as given, else ``settings.image`` relative to ``base_dir``); messages name the
-    settings as ``names`` says.
+    """Open the image (``image_path`` as given, else ``settings.image`` relative to ``base_dir``).
+
+    Parameters
+    ----------
+    settings : Settings
+        The ``acquire`` settings (format, RAW layout, dataset, voxel size).
+    base_dir : path-like
+        The scene file's folder, for a relative ``settings.image``.
+    image_path : path-like, optional
+        The command line's IMAGE, relative to the working directory.
+    names : SettingNames
+        How messages name the settings: scene keys (the default) or ``porepipe acquire``'s options.
+
+    Returns
+    -------
+    Image
+        The opened image (read lazily where its format allows).
     """
     path = image_file(settings, base_dir, image_path)
     return read_image(
@@ -64,8 +79,21 @@ def open_image(
 
 
 def prepare(image: Image, settings: Settings, names: SettingNames = SCENE_KEYS) -> Prepared:
-    """Crop, check finiteness, resample to cubic voxels (if asked and anisotropic) and denoise; messages name the
-    settings as ``names`` says.
+    """Crop, check finiteness, resample to cubic voxels (if asked and anisotropic) and denoise.
+
+    Parameters
+    ----------
+    image : Image
+        From :func:`open_image`.
+    settings : Settings
+        The ``acquire`` settings.
+    names : SettingNames
+        How messages name the settings: scene keys (the default) or ``porepipe acquire``'s options.
+
+    Returns
+    -------
+    Prepared
+        The grey volume or section ready to segment, with its voxel size.
     """
     spacing = require_spacing(image)
     grey = load_region(image, settings.crop, names)
@@ -240,8 +268,29 @@ def acquire(
     permeability_settings=None,
     names: SettingNames = SCENE_KEYS,
 ) -> dict[str | None, xr.Dataset]:
-    """Read, prepare, segment and measure an image; write ``statistics.h5`` (with the phase volume) to ``out``
-    (messages name the settings as ``names`` says: scene keys, or ``porepipe acquire``'s options).
+    """Read, prepare, segment and measure an image; write ``statistics.h5`` (with the phase volume) to ``out``.
+
+    Parameters
+    ----------
+    settings : Settings
+        The ``acquire`` settings.
+    out : path-like
+        The statistics file to write.
+    base_dir : path-like
+        The scene file's folder, for a relative ``settings.image``.
+    image_path : path-like, optional
+        The command line's IMAGE, relative to the working directory.
+    scene_name, scene_hash : str
+        Recorded in the result's attributes.
+    lpt_settings, permeability_settings : optional
+        The scene's ``lpt`` and ``permeability`` sections, for the measurements that use them.
+    names : SettingNames
+        How messages name the settings: scene keys (the default) or ``porepipe acquire``'s options.
+
+    Returns
+    -------
+    dict
+        The result's tables by group (None: the root).
     """
     image = open_image(settings, base_dir, image_path, names)
     with ResultWriter(out, stage="acquire", scene=scene_name, scene_hash=scene_hash) as w:

@@ -239,8 +239,21 @@ def choose_thresholds(hist: GreyHistogram, seg: Segmentation, names: SettingName
 
 
 def segment_phases(grey: np.ndarray, seg: Segmentation, names: SettingNames = SCENE_KEYS) -> Phases:
-    """Label every voxel with its phase (index into ``seg.phases``), keeping thresholds and histogram; messages
-    name the settings as ``names`` says.
+    """Label every voxel with its phase (index into ``seg.phases``), keeping thresholds and histogram.
+
+    Parameters
+    ----------
+    grey : ndarray
+        The prepared grey image.
+    seg : Segmentation
+        The ``acquire.segmentation`` settings.
+    names : SettingNames
+        How messages name the settings: scene keys (the default) or ``porepipe acquire``'s options.
+
+    Returns
+    -------
+    Phases
+        Labels, thresholds and histogram.
     """
     hist = grey_histogram(grey, seg.bins)
     thresholds = choose_thresholds(hist, seg, names)
