@@ -163,7 +163,11 @@ def _check_run_folder(scene_name: str) -> None:
         return
     with os.scandir(scene_dir) as entries:  # one listing; a folder (or a link to one) is fine
         files = sorted(e.name for e in entries if not e.is_dir())
-    in_the_way = [name for name in files if name in run_folder_names()] if files else []
+    if not files:
+        return
+    # the rule files are read once, and only where a file sits in the scene's folder
+    folders = run_folder_names()
+    in_the_way = [name for name in files if name in folders]
     if in_the_way:
         raise PorepipeError(
             f"{scene_dir / in_the_way[0]} is a file where `porepipe run` writes the folder "

@@ -44,7 +44,7 @@ IGNORED: dict[str, frozenset[str]] = {
     "permeability": _BUILT | (_ENGINES - {"permeability"}),
     "diffusion": _BUILT | (_ENGINES - {"diffusion"}),
     "capillary": _MODEL - {"diffusion", "resolutions_um"},
-    "granular": _MODEL - {"granular"} | {"packing", "decoration", "voxelize", "spheres", "domain", "acquire"},
+    "granular": (_MODEL - {"granular"}) | _BUILT | {"domain", "acquire"},
 }
 #: the workflow's rules that take a stamp (the others take no scene at all; a test checks the rule files agree)
 STAMPED_RULES = (
