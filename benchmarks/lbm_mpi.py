@@ -23,7 +23,9 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -43,8 +45,12 @@ def _prepare(size: int, comm=None):
     ).lattice
 
 
-def worker(size: int, steps: int, repeats: int) -> None:
-    """One rank: step its slab ``steps`` times per repeat; rank 0 prints the JSON row."""
+def worker(size: int, steps: int, repeats: int, row_file: str) -> None:
+    """One rank: step its slab ``steps`` times per repeat; rank 0 writes the JSON row into ``row_file``.
+
+    A file, not stdout: mpirun interleaves the ranks' output, and a library may write to stdout as a rank exits
+    (numba's error highlighting via colorama writes a terminal reset at exit), which once landed inside the row.
+    """
     from mpi4py import MPI
 
     from porepipe.lbm._mpi import Slabs
@@ -68,7 +74,7 @@ def worker(size: int, steps: int, repeats: int) -> None:
     if comm.root:
         row = {"ranks": comm.size, "nodes": nodes, "slabs": comm.bounds.tolist()}
         row.update(mlups=nodes * steps / best / 1e6, mlups_cpu=nodes * steps / cpu / 1e6)
-        print(json.dumps(row))
+        Path(row_file).write_text(json.dumps(row))
     MPI.COMM_WORLD.Barrier()
 
 
@@ -95,12 +101,14 @@ def mpi_row(ranks: int, size: int, steps: int, repeats: int) -> dict | None:
     env = dict(
         os.environ, NUMBA_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1"
     )
-    done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600, check=False)
-    rows = [line for line in done.stdout.splitlines() if line.startswith("{")]
-    if done.returncode != 0 or not rows:
-        print(f"P = {ranks}: failed ({done.returncode}): {done.stderr.strip()[-500:]}")
-        return None
-    return json.loads(rows[-1])
+    with tempfile.TemporaryDirectory() as tmp:
+        row_file = Path(tmp) / "row.json"
+        cmd += ["--row-file", str(row_file)]
+        done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600, check=False)
+        if done.returncode != 0 or not row_file.is_file():
+            print(f"P = {ranks}: failed ({done.returncode}): {done.stderr.strip()[-500:]}")
+            return None
+        return json.loads(row_file.read_text())
 
 
 def main(argv=None) -> int:
@@ -109,13 +117,14 @@ def main(argv=None) -> int:
     p.add_argument("--steps", type=int, default=20)
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("--row-file", help=argparse.SUPPRESS)
     add_out_argument(p)
     p.add_argument("--smoke", action="store_true", help="24^3, 2 steps (CI smoke; no figures to quote)")
     args = p.parse_args(argv)
     if args.smoke:
         args.size, args.steps, args.repeats = 24, 2, 1
     if args.worker:
-        worker(args.size, args.steps, args.repeats)
+        worker(args.size, args.steps, args.repeats, args.row_file)
         return 0
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores", flush=True)
     lat = _prepare(args.size)

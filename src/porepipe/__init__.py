@@ -1,6 +1,13 @@
 """porepipe: digital models of granular porous rock, built and measured."""
 
+import os
+
 from porepipe._version import __version__ as __version__
+
+# numba colours its error texts with colorama where colorama is installed (mkdocs-material pulls it in), and colorama
+# then writes a terminal reset to stdout as the process exits: a stray escape after every command's output, which
+# once landed inside a line another program parsed. Read by numba when it is first imported; a user's own value wins.
+os.environ.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
 
 
 def open_result(path):
