@@ -3,12 +3,15 @@ the limit a → 0, and what each further digit of D_eff costs (statistical error
 
 The values and limits come from ``sweep.h5`` (quantities ``diffusion_<axis>.<name>``, errors ``stat_err``); the
 error-against-cost curves from the ``history_*`` arrays of the diffusion result files the sweep gathered (found in
-the scene's ``diffusion`` folder beside ``sweep/``).
+the scene's ``diffusion`` folder beside ``sweep/``), and from their root attributes whether each run's rounds met
+``diffusion.target_rel_error`` (``target_met``, ``rel_error``, ``stopped_by``; a result written before these has none,
+and its row shows nothing about it).
 """
 
 from __future__ import annotations
 
 import html
+import json
 from pathlib import Path
 
 import numpy as np
@@ -16,13 +19,15 @@ import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from porepipe._shared.store import read_table
+from porepipe._shared.store import read_attrs, read_table
 from porepipe.report._figures import write_csv
-from porepipe.sweep import FULL
+from porepipe.sweep import FULL, parse_name
 
 #: the section's quantities per transport axis, in table order
 NAMES = ("W", "D_eff_m2_s", "tortuosity")
 PREFIX = "diffusion"
+#: what the report writes before the limit(s) on a row whose rounds stopped before ``target_rel_error``
+CUT_MARK = "⚠ stopped by "
 
 
 def diffusion_groups(ds: xr.Dataset) -> list[str]:
@@ -95,6 +100,69 @@ def _histories(sweep_path: Path) -> list[dict]:
                 **digit_cost(flights, rel),
             }
         )
+    return out
+
+
+def stop_record(attrs: dict) -> dict:
+    """Whether a diffusion run's rounds met ``target_rel_error``, from its result's root attributes.
+
+    Returns
+    -------
+    dict
+        ``target_met`` (1/0), ``stopped_by`` (what ended the rounds; comma-separated for a length series),
+        ``rel_error`` (the relative 1-σ error the rounds reached; inf before 2 rounds) and ``target_rel_error`` (NaN
+        if the settings are not recorded); empty for a result written before these attributes existed.
+    """
+    if "target_met" not in attrs:
+        return {}
+    settings = json.loads(attrs.get("settings") or "{}")
+    return {
+        "target_met": int(attrs["target_met"]),
+        "stopped_by": str(attrs.get("stopped_by", "")),
+        "rel_error": float(attrs.get("rel_error", np.nan)),
+        "target_rel_error": float(settings.get("target_rel_error", np.nan)),
+    }
+
+
+def cut_mark(target_met: int, stopped_by: str) -> str:
+    """``⚠ stopped by <limit>[, <limit>]`` for rounds that a limit ended before the target, "" for met ones.
+
+    Parameters
+    ----------
+    target_met : int
+        The result's ``target_met`` (1/0).
+    stopped_by : str
+        The result's ``stopped_by`` (comma-separated for a length series).
+    """
+    if target_met:
+        return ""
+    limits = dict.fromkeys(by for by in stopped_by.split(",") if by and by != "target_rel_error")
+    return CUT_MARK + (", ".join(limits) or "a limit")
+
+
+def rel_error_cell(rel_error: float, target: float) -> str:
+    """The relative error a run reached beside its target (∞: fewer than 2 rounds or a zero estimate).
+
+    Parameters
+    ----------
+    rel_error : float
+        The result's ``rel_error``, printed to 2 significant digits.
+    target : float
+        ``target_rel_error`` of its settings (NaN: not shown).
+    """
+    reached = f"{rel_error:.2g}" if np.isfinite(rel_error) else "∞"
+    return f"{reached} (target {target:g})" if np.isfinite(target) else reached
+
+
+def _stops(sweep_path: Path) -> dict[tuple[str, float], dict]:
+    """(group, a_um) -> :func:`stop_record` of each whole-sample diffusion result of the scene that has one."""
+    folder = Path(sweep_path).parent.parent / PREFIX
+    out = {}
+    for path in sorted(folder.glob(f"{PREFIX}_a*.h5")) if folder.is_dir() else []:
+        _, a, sample, tag = parse_name(path.stem)
+        record = stop_record(read_attrs(path))
+        if record and a is not None and sample == FULL:
+            out[(PREFIX + (f"_{tag}" if tag else ""), a)] = record
     return out
 
 
@@ -183,7 +251,10 @@ def section(ds: xr.Dataset, sweep_path, out_dir, dpi: int = 100) -> list[str]:
     out_dir = Path(out_dir)
     histories = _histories(Path(sweep_path))
     _figure(ds, groups, histories, out_dir / "diffusion.png", dpi)
+    stops = _stops(Path(sweep_path))
     rows = [r for g in groups for r in (*_value_rows(ds, g), _limit_row(ds, g))]
+    for r in rows:  # the limit rows (a_um 0) match no run
+        r.update(stops.get((r["group"], r["a_um"]), {}))
     write_csv(out_dir / "diffusion.csv", [{k: r.get(k, "") for k in _csv_keys(rows)} for r in rows])
     cost = [
         {
@@ -199,20 +270,10 @@ def section(ds: xr.Dataset, sweep_path, out_dir, dpi: int = 100) -> list[str]:
         for h in histories
     ]
     write_csv(out_dir / "diffusion_cost.csv", cost)
-    table = []
-    for r in rows:
-        a = "a → 0" if r["a_um"] == 0.0 else f"{r['a_um']:g}"
-        cells = [_pm(r.get(n, np.nan), r.get(f"{n}_err", np.nan)) for n in NAMES]
-        if r["a_um"] == 0.0:
-            cells = [
-                c if np.isfinite(r.get(n, np.nan)) else str(r.get(f"{n}_status", "–"))
-                for c, n in zip(cells, NAMES)
-            ]
-        table.append([r["group"], a, *cells])
     parts = [
         "<h2>Knudsen diffusion</h2>",
         "<img src='diffusion.png' alt='diffusion'>",
-        _html_table(["", "a [um]", "W", "D_eff [m²/s]", "τ"], table),
+        *_value_table(rows, with_stops=bool(stops)),
         (
             "<p class=note>Error bars: 1 σ statistical (batch means over independent particle streams); the limit "
             "a → 0 is the sweep's power-law fit weighted by them (95 % interval). Data: "
@@ -249,6 +310,48 @@ def section(ds: xr.Dataset, sweep_path, out_dir, dpi: int = 100) -> list[str]:
             ),
         ]
     return parts
+
+
+def _value_table(rows: list[dict], with_stops: bool) -> list[str]:
+    """The values table; ``with_stops``: two more columns, the relative error against the target and the limit
+    that stopped a run before it, and a warning line above the table naming the runs a limit stopped.
+    """
+    table = []
+    for r in rows:
+        a = "a → 0" if r["a_um"] == 0.0 else f"{r['a_um']:g}"
+        cells = [_pm(r.get(n, np.nan), r.get(f"{n}_err", np.nan)) for n in NAMES]
+        if r["a_um"] == 0.0:
+            cells = [
+                c if np.isfinite(r.get(n, np.nan)) else str(r.get(f"{n}_status", "–"))
+                for c, n in zip(cells, NAMES)
+            ]
+        if with_stops:
+            has = "target_met" in r
+            cells += [
+                rel_error_cell(r["rel_error"], r["target_rel_error"]) if has else "",
+                cut_mark(r["target_met"], r["stopped_by"]) if has else "",
+            ]
+        table.append([r["group"], a, *cells])
+    columns = ["", "a [um]", "W", "D_eff [m²/s]", "τ"]
+    if not with_stops:
+        return [_html_table(columns, table)]
+    cut = [f"{r['group']} a = {r['a_um']:g} µm" for r in rows if "target_met" in r and not r["target_met"]]
+    warning = (
+        [
+            f"<p><b>⚠ {len(cut)} diffusion run(s) ended before diffusion.target_rel_error</b> "
+            f"({html.escape('; '.join(cut))}): a limit stopped their rounds, so their error bars are wider than "
+            "asked.</p>"
+        ]
+        if cut
+        else []
+    )
+    note = (
+        "<p class=note>rel. error: the relative 1-σ error the run's rounds reached (of W; Wicke-Kallenbach: of D; "
+        "msd: the largest D_dd) beside diffusion.target_rel_error (∞: fewer than 2 rounds, none to compare); ⚠: a "
+        "limit (max_rounds, max_wall_hits) ended the rounds first. A result written before porepipe recorded this "
+        "shows neither.</p>"
+    )
+    return [*warning, _html_table([*columns, "rel. error (target)", "stopped before target"], table), note]
 
 
 def _csv_keys(rows: list[dict]) -> list[str]:
