@@ -147,3 +147,85 @@ def rect_channel_w_naive(a, b, length, wall="lambert", inlet="lambert", n=100000
         u[wall_i] = new
     w = through.mean()
     return w, np.sqrt(w * (1 - w) / n)
+
+
+def _disk_to_disk(z):
+    """View factor between two coaxial unit disks a distance z apart (fraction of a Lambert inlet flux that passes)."""
+    return 1 + z * z / 2 - z * np.sqrt(z * z + 4) / 2
+
+
+def _first_wall_hit(z):
+    """Density in z of the first wall hits of a Lambert flux entering a unit tube at z = 0 (= -d/dz of the above)."""
+    return (z * z + 2) / np.sqrt(z * z + 4) - z
+
+
+def _ring_to_ring(x):
+    """Density of the wall hits at axial distance x of a Lambert emission from a wall ring of a unit tube."""
+    x = np.abs(x)
+    return 0.5 * (1 - (x**3 + 6 * x) / (x * x + 4) ** 1.5)
+
+
+def clausing_w(length_over_radius, panels=100, order=8):
+    """Clausing's W of a circular tube (Lambert walls and inlet) from his integral equation, solved numerically.
+
+    The wall-emission density n(z) of a unit tube of length L solves n(z) = h(z) + ∫ K(z - z') n(z') dz' (h: first
+    hits from the inlet, K: ring-to-ring hits), and W = F(L) + ½ ∫ n(z) h(L - z) dz (F: disk-to-disk view factor);
+    Clausing 1932, in the form of Berman 1965 (J. Appl. Phys. 36, 3365). Nyström on ``panels`` Gauss-Legendre panels
+    with the kernel's kink at z = z' subtracted (∫ K is exact): W changes by < 1e-6 from 25 to 100 panels for L/R <= 40.
+    """
+    length = float(length_over_radius)
+    g, gw = np.polynomial.legendre.leggauss(order)
+    edges = np.linspace(0.0, length, panels + 1)
+    half = (edges[1:, None] - edges[:-1, None]) / 2
+    z = ((edges[:-1, None] + edges[1:, None]) / 2 + half * g).ravel()
+    w = (half * gw).ravel()
+    kw = _ring_to_ring(z[:, None] - z[None, :]) * w[None, :]
+    exact_row = 1 - (_first_wall_hit(z) + _first_wall_hit(length - z)) / 2  # ∫_0^L K(z - z') dz'
+    n = np.linalg.solve(np.diag(1 - exact_row + kw.sum(axis=1)) - kw, _first_wall_hit(z))
+    return float(_disk_to_disk(length) + 0.5 * np.sum(w * n * _first_wall_hit(length - z)))
+
+
+def cylinder_w_naive(radius, length, n=100000, seed=0, max_hits=100000):
+    """Transmission probability of a continuous circular tube (no voxels): Lambert inlet over the disk, Lambert
+    walls, analytic ray-cylinder intersections, vectorised numpy. Returns (W, binomial standard error)."""
+    rng = np.random.default_rng(seed)
+    r0, a0 = radius * np.sqrt(rng.random(n)), 2 * np.pi * rng.random(n)
+    pos = np.column_stack([r0 * np.cos(a0), r0 * np.sin(a0), np.zeros(n)])
+    c = _cos_theta_naive("lambert", rng.random(n))
+    s, phi = np.sqrt(1 - c * c), 2 * np.pi * rng.random(n)
+    u = np.column_stack([s * np.cos(phi), s * np.sin(phi), c])
+    alive = np.ones(n, bool)
+    through = np.zeros(n, bool)
+    for _ in range(max_hits):
+        idx = np.nonzero(alive)[0]
+        if idx.size == 0:
+            break
+        p, v = pos[idx], u[idx]
+        a = v[:, 0] ** 2 + v[:, 1] ** 2
+        b = 2 * (p[:, 0] * v[:, 0] + p[:, 1] * v[:, 1])
+        cc = np.minimum(p[:, 0] ** 2 + p[:, 1] ** 2 - radius * radius, 0.0)
+        root = np.sqrt(b * b - 4 * a * cc)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            # the positive root of a t² + b t + cc = 0 (cc <= 0), in the form without cancellation
+            t_wall = np.where(a > 0, np.where(b <= 0, (-b + root) / (2 * a), 2 * cc / (-b - root)), np.inf)
+            t_z = np.where(
+                v[:, 2] > 0, (length - p[:, 2]) / v[:, 2], np.where(v[:, 2] < 0, -p[:, 2] / v[:, 2], np.inf)
+            )
+        ends = t_z <= t_wall
+        through[idx[ends & (v[:, 2] > 0)]] = True
+        alive[idx[ends]] = False
+        wall_i, hit = idx[~ends], ~ends
+        q = p[hit] + t_wall[hit, None] * v[hit]
+        m = wall_i.size
+        inward = -q[:, :2] / np.hypot(q[:, 0], q[:, 1])[:, None]
+        along = np.column_stack([-inward[:, 1], inward[:, 0]])
+        cw = _cos_theta_naive("lambert", rng.random(m))
+        sw, pw = np.sqrt(1 - cw * cw), 2 * np.pi * rng.random(m)
+        new = np.empty((m, 3))
+        new[:, :2] = cw[:, None] * inward + (sw * np.cos(pw))[:, None] * along
+        new[:, 2] = sw * np.sin(pw)
+        q[:, :2] = -inward * radius  # back onto the circle (round-off)
+        pos[wall_i] = q
+        u[wall_i] = new
+    w = through.mean()
+    return w, np.sqrt(w * (1 - w) / n)
