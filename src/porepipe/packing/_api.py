@@ -461,7 +461,13 @@ def _integrate(
                 force=converged,
                 residual=n - nconv,  # unconverged spheres: the run stops when none is left
             )
-        if checkpoint is not None and settings.checkpoint_every and s % settings.checkpoint_every == 0:
+        # not at the step that found convergence: a resume from it would run one step more than this run does
+        if (
+            checkpoint is not None
+            and not converged
+            and settings.checkpoint_every
+            and s % settings.checkpoint_every == 0
+        ):
             checkpoint(state)
     n_before = len(state.r)
     _finish_stage(state, stage, tables, box, periodic, conv)
