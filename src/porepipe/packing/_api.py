@@ -462,13 +462,8 @@ def _integrate(
                 residual=n - nconv,  # unconverged spheres: the run stops when none is left
             )
         # not at the step that found convergence: a resume from it would run one step more than this run does
-        if (
-            checkpoint is not None
-            and not converged
-            and settings.checkpoint_every
-            and s % settings.checkpoint_every == 0
-        ):
-            checkpoint(state)
+        if checkpoint is not None and not converged and checkpoint.due(s):
+            checkpoint.write(state)
     n_before = len(state.r)
     _finish_stage(state, stage, tables, box, periodic, conv)
     if prog is not None:
@@ -598,8 +593,35 @@ def _as_box(box_um, periodic) -> tuple[np.ndarray, np.ndarray]:
     return box, per
 
 
-#: settings that change how a run is watched or spread over threads, never its result
-_RUN_CONTROL = ("checkpoint_every", "progress_every_s", "parallel_min_spheres")
+#: settings that change how a run is watched, saved or spread over threads, never its result: not in the checkpoint key
+_RUN_CONTROL = ("checkpoint_every", "checkpoint_every_s", "progress_every_s", "parallel_min_spheres")
+
+#: the wall clock (seconds) that times checkpoints; a test replaces it to advance time without sleeping
+_checkpoint_clock = time.monotonic
+
+
+class _Checkpoints:
+    """Where and when a run saves its state: after a step that is a multiple of ``every_steps``, or once
+    ``every_s`` wall seconds have passed since the last checkpoint (or the start); 0 switches an interval off.
+
+    The clock is read once when the run starts and once per step (in :meth:`due`).
+    """
+
+    def __init__(self, path, key: str, spent: SpentClock, every_steps: int, every_s: float, clock):
+        self.path, self.key, self.spent = Path(path), key, spent
+        self.every_steps, self.every_s, self.clock = every_steps, every_s, clock
+        self.last_s = self.now_s = clock()
+
+    def due(self, step: int) -> bool:
+        """Whether a checkpoint is due after stage step ``step``."""
+        self.now_s = self.clock()
+        by_steps = self.every_steps > 0 and step % self.every_steps == 0
+        return by_steps or (self.every_s > 0 and self.now_s - self.last_s >= self.every_s)
+
+    def write(self, state: State) -> None:
+        """Save ``state`` (atomically); the wall-time interval starts again."""
+        save_checkpoint(self.path, state, self.key, self.spent)
+        self.last_s = self.now_s
 
 
 def checkpoint_key(settings: Settings, box, periodic, seed: int, base_dir: Path) -> str:
@@ -668,7 +690,9 @@ def pack_spheres(
     base_dir : path
         Directory that relative file names in ``settings`` refer to.
     checkpoint_path : path, optional
-        Where checkpoints are written every ``settings.checkpoint_every`` steps.
+        Where the run's state is saved every ``settings.checkpoint_every_s`` wall seconds and every
+        ``settings.checkpoint_every`` steps, whichever comes first (0 switches an interval off); deleted when the
+        packing is complete. Without it nothing is saved.
     resume : bool
         Continue from ``checkpoint_path`` if it exists (bit-identical to an uninterrupted run).
     progress : bool
@@ -684,10 +708,16 @@ def pack_spheres(
     base_dir = Path(base_dir)
     key = checkpoint_key(settings, box, per, seed, base_dir)
     state = _resumed_state(checkpoint_path, key) if resume and checkpoint_path is not None else State.empty()
-    clock = SpentClock(state.carried)
-    saver = (
-        (lambda st: save_checkpoint(checkpoint_path, st, key, clock)) if checkpoint_path is not None else None
-    )
+    saver = None
+    if checkpoint_path is not None:
+        every = (settings.checkpoint_every, settings.checkpoint_every_s)
+        if not any(every):
+            print(
+                f"pack: packing.checkpoint_every and checkpoint_every_s are both 0: no checkpoint is written to "
+                f"{checkpoint_path}",
+                file=sys.stderr,
+            )
+        saver = _Checkpoints(checkpoint_path, key, SpentClock(state.carried), *every, _checkpoint_clock)
     while state.stage < len(settings.stages):
         _run_stage(state, settings, settings.stages[state.stage], box, per, seed, base_dir, saver, progress)
     if checkpoint_path is not None:

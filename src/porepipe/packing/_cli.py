@@ -38,14 +38,17 @@ def register(subparsers) -> None:
     p.add_argument("--xyzr", help="also write the spheres as an 'x y z r' text file (µm)")
     p.add_argument(
         "--checkpoint",
-        help="checkpoint file, written every packing.checkpoint_every steps of the scene (0, the default: "
-        "never)",
+        help="checkpoint file: the run's state is saved there every packing.checkpoint_every_s wall seconds "
+        "(default 300) and every packing.checkpoint_every steps (default 0: off), whichever comes first, and "
+        "deleted when the packing is complete (a run that ends before an interval has passed writes none); "
+        "without it nothing is saved",
     )
     p.add_argument(
         "--resume",
         action=argparse.BooleanOptionalAction,
         default=False,
-        help="continue from --checkpoint if it exists",
+        help="continue from --checkpoint if it exists and was written for the same packing (settings less run "
+        "control, box, seed, input files); one written for another is discarded with a message",
     )
     add_threads_option(p)
     p.set_defaults(func=main)

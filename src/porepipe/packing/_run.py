@@ -36,7 +36,8 @@ def run(
     threads : int, optional
         Numba threads (default: all); the packing does not depend on it.
     checkpoint : path-like, optional
-        Checkpoint file, written every ``packing.checkpoint_every`` steps.
+        Checkpoint file, written every ``packing.checkpoint_every_s`` wall seconds (default 300) and every
+        ``packing.checkpoint_every`` steps (default 0: off), whichever comes first; deleted on success.
     resume : bool
         Continue from ``checkpoint`` if it exists (bit-identical to an uninterrupted run).
     progress : bool

@@ -276,7 +276,17 @@ class Settings(_Strict):
         description="stability guard: a sphere moving more than this fraction of the smallest box "
         "edge in one step stops the run",
     )
-    checkpoint_every: int = Field(0, ge=0, description="write a checkpoint every n steps (0: never)")
+    checkpoint_every: int = Field(
+        0,
+        ge=0,
+        description="with a checkpoint file: also write it every n steps (0: by wall time only); run control, "
+        "the packing does not depend on it",
+    )
+    checkpoint_every_s: NonNegFloat = Field(
+        300.0,
+        description="with a checkpoint file: write it once this many wall seconds have passed since the last one "
+        "(or the start), besides every checkpoint_every steps (0: by steps only); run control",
+    )
     parallel_min_spheres: int = Field(
         20000,
         ge=0,

@@ -1,17 +1,36 @@
-"""Checkpoints of the packing: a run resumed from any of its checkpoints ends bit for bit where an uninterrupted one
-ends (stage steps and history included)."""
+"""Checkpoints of the packing by wall time and by steps: `porepipe pack --checkpoint F` saves the run's state with the
+default settings, and a run resumed from any of its checkpoints ends bit for bit where an uninterrupted one ends.
+
+Time is a fake clock (``_checkpoint_clock``, read once at the start and once per step) that advances a fixed amount per
+read, so when a wall-time checkpoint falls is exact arithmetic, not a race with the machine's speed.
+"""
 
 from __future__ import annotations
 
+import itertools
+from pathlib import Path
+
+import h5py
 import numpy as np
 import pytest
+import yaml
 
-import porepipe.packing._api as engine  # the name the engine calls: save_checkpoint
+import porepipe.packing._api as engine  # the names the engine calls: save_checkpoint and the checkpoint clock
+from porepipe.cli import main as cli_main
 from porepipe.packing import Settings, pack_spheres
 from porepipe.packing._api import HISTORY_TIMING
 
+TINY = (
+    Path(__file__).parents[2] / "hard" / "data" / "tiny" / "tiny.yaml"
+)  # 40 spheres, 60 steps, not converged
 SPHERE_KEYS = ("centres_um", "radii_um", "types", "max_overlap", "converged")
 BOX = [600.0, 600.0, 600.0]
+
+
+def _fake_clock(step_s: float):
+    """A clock that advances ``step_s`` seconds per read, starting at 0."""
+    counter = itertools.count()
+    return lambda: step_s * next(counter)
 
 
 def _record_saves(monkeypatch, die_at: int | None = None) -> list[int]:
@@ -26,6 +45,63 @@ def _record_saves(monkeypatch, die_at: int | None = None) -> list[int]:
 
     monkeypatch.setattr(engine, "save_checkpoint", save)
     return steps
+
+
+def _scene(tmp_path: Path, name: str = "tiny.yaml", **packing) -> Path:
+    """The tiny scene with its packing section's keys updated (the shipped one sets no checkpoint interval)."""
+    tree = yaml.safe_load(TINY.read_text())
+    tree["packing"].update(packing)
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(tree))
+    return path
+
+
+def _read(path: Path) -> dict:
+    with h5py.File(path, "r") as f:
+        arrays = {k: f[k][...] for k in SPHERE_KEYS}
+        history = {k: f["history"][k][...] for k in f["history"] if k not in HISTORY_TIMING}
+        return {"arrays": arrays, "history": history, "attrs": dict(f.attrs)}
+
+
+def test_pack_with_a_checkpoint_file_saves_by_wall_time_with_the_default_settings(tmp_path, monkeypatch):
+    # before: packing.checkpoint_every defaults to 0 and was the only interval, so `--checkpoint F` (which the pack
+    # rule always passes) never wrote F and a killed pack job started again from step 0
+    scene, ck = _scene(tmp_path), tmp_path / "ck.h5"
+    assert "checkpoint_every" not in yaml.safe_load(scene.read_text())["packing"]
+    # 200 s per read: the start reads 0 and step s reads 200 s; with the default interval of 300 s a checkpoint is
+    # due at the first step read >= 300 s after the last one: step 2 (400 s), then step 4 (800 s), ...
+    # (raising=False: an engine without the clock runs on, and the test fails on what it checks, not on the patch)
+    monkeypatch.setattr(engine, "_checkpoint_clock", _fake_clock(200.0), raising=False)
+    saved = _record_saves(monkeypatch, die_at=4)
+    with pytest.raises(KeyboardInterrupt):
+        cli_main(["pack", str(scene), "-o", str(tmp_path / "packing.h5"), "--checkpoint", str(ck)])
+    assert saved == [2, 4]
+    assert Settings().checkpoint_every_s == 300.0  # the default the steps above follow from
+    with h5py.File(ck, "r") as f:
+        assert f.attrs["step"] == 4 and f.attrs["stage"] == 0
+    assert not (tmp_path / "packing.h5").exists()  # a killed run leaves no result
+
+
+def test_a_run_killed_after_a_wall_time_checkpoint_resumes_to_the_same_packing(tmp_path, monkeypatch):
+    scene, ck = _scene(tmp_path), tmp_path / "ck.h5"
+    ref_out, out = tmp_path / "ref.h5", tmp_path / "packing.h5"
+    assert cli_main(["pack", str(scene), "-o", str(ref_out)]) == 0
+    monkeypatch.setattr(engine, "_checkpoint_clock", _fake_clock(1e6))  # 1e6 s per step: every step is due
+    _record_saves(monkeypatch, die_at=37)
+    args = ["pack", str(scene), "-o", str(out), "--checkpoint", str(ck)]
+    with pytest.raises(KeyboardInterrupt):
+        cli_main(args)
+    monkeypatch.undo()
+    assert cli_main([*args, "--resume"]) == 0
+    assert not ck.exists()  # a complete run deletes its checkpoint
+    ref, got = _read(ref_out), _read(out)
+    for key in SPHERE_KEYS:
+        np.testing.assert_array_equal(got["arrays"][key], ref["arrays"][key], err_msg=key)  # bit for bit
+    assert sorted(got["history"]) == sorted(ref["history"])
+    for key in ref["history"]:
+        np.testing.assert_array_equal(got["history"][key], ref["history"][key], err_msg=key)
+    np.testing.assert_array_equal(got["attrs"]["stage_steps"], ref["attrs"]["stage_steps"])
+    assert got["attrs"]["scene_hash"] == ref["attrs"]["scene_hash"]
 
 
 def _converging(**extra) -> Settings:
@@ -76,3 +152,10 @@ def test_resume_from_any_checkpoint_ends_where_the_uninterrupted_run_ends(
         np.testing.assert_array_equal(getattr(resumed, key), getattr(ref, key), err_msg=key)  # bit for bit
     for key in set(ref.history) - set(HISTORY_TIMING):
         np.testing.assert_array_equal(resumed.history[key], ref.history[key], err_msg=key)
+
+
+def test_no_interval_at_all_says_that_nothing_is_saved(tmp_path, capsys):
+    scene, ck = _scene(tmp_path, checkpoint_every=0, checkpoint_every_s=0.0), tmp_path / "ck.h5"
+    assert cli_main(["pack", str(scene), "-o", str(tmp_path / "p.h5"), "--checkpoint", str(ck)]) == 0
+    assert "both 0: no checkpoint is written" in capsys.readouterr().err
+    assert not ck.exists()
