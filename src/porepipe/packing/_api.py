@@ -593,7 +593,8 @@ def _as_box(box_um, periodic) -> tuple[np.ndarray, np.ndarray]:
     return box, per
 
 
-#: settings that change how a run is watched, saved or spread over threads, never its result: not in the checkpoint key
+#: settings that change how a run is watched, saved or spread over threads, never its result: they enter neither the
+#: checkpoint key nor the result's hash
 _RUN_CONTROL = ("checkpoint_every", "checkpoint_every_s", "progress_every_s", "parallel_min_spheres")
 
 #: the wall clock (seconds) that times checkpoints; a test replaces it to advance time without sleeping

@@ -7,7 +7,7 @@ from pathlib import Path
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.numba_config import set_threads
 from porepipe._shared.store import ResultWriter, result_hash
-from porepipe.packing._api import pack_spheres
+from porepipe.packing._api import _RUN_CONTROL, pack_spheres
 from porepipe.packing._io import write_packing, write_xyzr_file
 from porepipe.packing._types import Packing
 from porepipe.scene import load_scene, scene_part
@@ -52,7 +52,9 @@ def run(
     if settings is None or not settings.types or not settings.stages:
         raise PorepipeError(f"{scene_path}: the scene has no `packing:` section with types and stages to run")
     threads = set_threads(threads)
-    digest = result_hash("pack", scene_part=scene_part(scene, "seed", "domain", "packing"))
+    part = scene_part(scene, "seed", "domain")  # and the packing less its run control, as the checkpoint key
+    part["packing"] = settings.model_dump(mode="json", exclude=set(_RUN_CONTROL))
+    digest = result_hash("pack", scene_part=part)
     with ResultWriter(out, stage="pack", scene=scene.name, scene_hash=digest, threads=threads) as w:
         packing = pack_spheres(
             settings,

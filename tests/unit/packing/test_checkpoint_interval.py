@@ -1,5 +1,6 @@
 """Checkpoints of the packing by wall time and by steps: `porepipe pack --checkpoint F` saves the run's state with the
-default settings, and a run resumed from any of its checkpoints ends bit for bit where an uninterrupted one ends.
+default settings, a run resumed from any of its checkpoints ends bit for bit where an uninterrupted one ends, and the
+checkpoint intervals (run control) change neither the packing nor its result hash.
 
 Time is a fake clock (``_checkpoint_clock``, read once at the start and once per step) that advances a fixed amount per
 read, so when a wall-time checkpoint falls is exact arithmetic, not a race with the machine's speed.
@@ -152,6 +153,31 @@ def test_resume_from_any_checkpoint_ends_where_the_uninterrupted_run_ends(
         np.testing.assert_array_equal(getattr(resumed, key), getattr(ref, key), err_msg=key)  # bit for bit
     for key in set(ref.history) - set(HISTORY_TIMING):
         np.testing.assert_array_equal(resumed.history[key], ref.history[key], err_msg=key)
+
+
+def test_checkpoint_intervals_change_neither_the_packing_nor_its_result_hash(tmp_path):
+    # the result hash is the packing's provenance (voxelize and the rest include it in theirs); before, every key of
+    # `packing:` entered it, run control included, so a new checkpoint interval changed the hash of an equal packing
+    runs = {
+        "default": {},
+        "by wall time": {"checkpoint_every_s": 0.5},
+        "by steps": {"checkpoint_every": 3, "checkpoint_every_s": 0.0},
+        "watched": {"progress_every_s": 1.0, "parallel_min_spheres": 10**6},
+        "other packing": {"cutoff": 1.25},  # the control: a setting the packing depends on
+    }
+    results = {}
+    for i, (name, packing) in enumerate(runs.items()):
+        out = tmp_path / f"{i}.h5"
+        assert cli_main(["pack", str(_scene(tmp_path, f"s{i}.yaml", **packing)), "-o", str(out)]) == 0
+        results[name] = _read(out)
+    hashes = {name: r["attrs"]["scene_hash"] for name, r in results.items()}
+    assert len(set(hashes.values())) == 2 and hashes["other packing"] != hashes["default"], hashes
+    for name in ("by wall time", "by steps", "watched"):
+        for key in SPHERE_KEYS:
+            np.testing.assert_array_equal(results[name]["arrays"][key], results["default"]["arrays"][key])
+    assert not np.array_equal(
+        results["other packing"]["arrays"]["centres_um"], results["default"]["arrays"]["centres_um"]
+    )
 
 
 def test_no_interval_at_all_says_that_nothing_is_saved(tmp_path, capsys):
