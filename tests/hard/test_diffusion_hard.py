@@ -9,6 +9,7 @@ import pytest
 from porepipe._shared.errors import PorepipeError
 from porepipe.diffusion import Settings, equilibrium, prepare, square_capillary, transport
 from porepipe.diffusion._cli import _USED_BY
+from porepipe.diffusion._settings import USED_BY
 from porepipe.scene import SceneError, parse_scene
 
 S = Settings(batches=16, batch_particles=500, max_rounds=1)
@@ -750,6 +751,61 @@ def test_the_scene_and_the_command_line_share_one_table_of_settings():
     for dest, modes in _USED_BY.items():
         if dest != "checkpoint":
             assert modes == used_by(_SETTING.get(dest, dest)), dest
+
+
+#: a section per mode of the one table (porepipe.diffusion._settings.MODES), as a scene or Settings(...) gives it
+_MODE_SECTIONS = {
+    "length_series": {"lengths": [4, 8]},
+    "reaction_study": {"setup": "reaction", "reactions": {"series": [{"w": 0.1}]}},
+}
+
+
+def _with_setting(section: dict, setting: str, value) -> dict:
+    """``section`` with ``setting`` (``key`` or ``section.key``) given explicitly as ``value``."""
+    outer, _, key = setting.rpartition(".")
+    if not outer:
+        return {**section, key: value}
+    return {**section, outer: {**section.get(outer, {}), key: value}}
+
+
+@pytest.mark.parametrize("setting", sorted(USED_BY))
+def test_settings_built_in_python_refuse_a_setting_their_setup_ignores_as_a_scene_does(setting):
+    """``Settings(setup="transmission", reactions={"w": 0.5})`` was accepted in Python and the reactions ignored
+    without a word, while a scene with the same section was refused. Now, for every setting of the one table and every
+    mode, Python refuses exactly where the table says the mode does not read it (the scene's verdict too, and the
+    command line's options take their modes from the same table): a ValueError naming the key and the setup. Its
+    default, given explicitly, counts as given (as in a scene); merge_settings, whose merged dump sets every key,
+    does not judge (the command line checks its own options)."""
+    from pydantic import ValidationError
+
+    from porepipe._shared.overrides import merge_settings
+    from porepipe.diffusion._settings import MODES as _MODES
+    from porepipe.diffusion._settings import SCENE_MAY_NAME, readers_text, used_by
+
+    defaults = Settings().model_dump(mode="json")
+    value = defaults
+    for part in setting.split("."):
+        value = value[part]
+    for mode in _MODES:
+        section = _with_setting(_MODE_SECTIONS.get(mode, {"setup": mode}), setting, value)
+        ignored = mode not in used_by(setting) and setting not in SCENE_MAY_NAME
+        if not ignored:
+            Settings(**section)
+            parse_scene({**_SCENE, "diffusion": section})
+            continue
+        with pytest.raises(ValueError) as err:
+            Settings(**section)
+        assert isinstance(err.value, ValidationError)
+        ((loc, message),) = [(".".join(e["loc"]), e["msg"]) for e in err.value.errors()]
+        assert setting.startswith(loc)  # the key, or its section where the whole section is unread
+        setup = _mode_settings(mode).setup.value
+        assert f"read only by {readers_text(USED_BY[loc])}; the setup is {setup}" in message
+        (problem,) = _problems(section)
+        assert problem.startswith(f"diffusion.{loc} = ") and f"this scene's setup is {setup}" in problem
+        merged = merge_settings(
+            Settings, section, {}, "diffusion settings"
+        )  # the CLI's merge: not judged here
+        assert merged.setup.value == setup
 
 
 def test_the_command_line_may_change_a_scenes_setup(tmp_path):

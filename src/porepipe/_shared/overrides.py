@@ -14,6 +14,7 @@ from porepipe._shared.errors import PorepipeError
 from porepipe._shared.naming import SCENE_NAME_RE
 
 __all__ = [
+    "MERGED_CONTEXT",
     "add_threads_option",
     "check_resume_has_checkpoint",
     "given_options",
@@ -22,6 +23,11 @@ __all__ = [
     "seed_number",
     "whole_count",
 ]
+
+
+#: key of the validation context merge_settings validates with: the merged dump sets every key of the base, so a
+#: check of what its user gave explicitly (``model_fields_set``) cannot tell there and is left to the caller
+MERGED_CONTEXT = "merged_settings"
 
 
 def given_options(args: Any, keys) -> dict:
@@ -68,7 +74,7 @@ def merge_settings(
     if isinstance(base, BaseModel):
         base = base.model_dump()
     try:
-        return model.model_validate(_deep_merge(base or {}, overrides))
+        return model.model_validate(_deep_merge(base or {}, overrides), context={MERGED_CONTEXT: True})
     except ValidationError as err:
         raise PorepipeError(f"{what}: {_reasons(err)}") from None
 

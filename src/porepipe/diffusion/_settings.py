@@ -15,6 +15,7 @@ from pydantic import (
 )
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
+from porepipe._shared.overrides import MERGED_CONTEXT
 from porepipe.diffusion._capillary import CapillaryGeometry
 
 
@@ -289,9 +290,10 @@ MODES = {
 _TRANSPORT = ("transmission", "length_series", "wicke_kallenbach", "msd")  # the rounds of batches of flights
 
 #: the one table of setup-specific settings: setting (``section.key`` inside a nested section) -> the modes that read
-#: it. A scene that sets one explicitly for a run of any other mode is refused (``porepipe validate``), and so is the
-#: command-line option of a listed setting (``porepipe diffusion``): either would be ignored without a word. A key of
-#: a nested section not listed itself is read wherever its section is. Settings every mode reads (setup, axes,
+#: it. A scene that sets one explicitly for a run of any other mode is refused (``porepipe validate``), so is
+#: ``Settings(...)`` given one in Python (a ValidationError, a ValueError), and so is the command-line option of a
+#: listed setting (``porepipe diffusion``): each would be ignored without a word. A key of a nested section not listed
+#: itself is read wherever its section is. Settings every mode reads (setup, axes,
 #: resolutions_um, wall_law, geometry) are not listed, nor lengths (checked below: it needs setup transmission). A
 #: length series keeps W and D in voxel²/jiffie only (no m²/s: species and temperature have no effect), and its W
 #: does not depend on speeds; a reaction study takes w, w_reverse and w_follow from its series and has no z_R(z)
@@ -354,18 +356,24 @@ def readers_text(modes) -> str:
     return " / ".join(MODES[m] for m in modes)
 
 
-#: settings a scene may name where its run does not read them: the gas of a length series or a reaction study (W, α,
-#: η and Φ are dimensionless, the same for every species) documents the study, and the result records it; only the
-#: command line's --species is refused there
+#: settings a scene (or ``Settings(...)``) may name where its run does not read them: the gas of a length series or
+#: a reaction study (W, α, η and Φ are dimensionless, the same for every species) documents the study, and the result
+#: records it; only the command line's --species is refused there
 SCENE_MAY_NAME = frozenset({"species"})
 
-#: key of the validation context that porepipe.scene sets when it validates a scene file: only then are settings
-#: given for another setup refused (the command line lays its options over a scene's whole section, all of it set)
+#: key of the validation context that porepipe.scene sets when it validates a scene file (a refusal then speaks of
+#: the scene's setup). Settings given for another setup are refused for a scene and for ``Settings(...)`` alike, but
+#: not where merge_settings validates (context MERGED_CONTEXT): the command line lays its options over a scene's
+#: whole section, every key of it then reads as given, and porepipe diffusion judges its options itself
 SCENE_CONTEXT = "scene_file"
 
 
 class Settings(BaseModel):
-    """Knudsen (free-molecular) diffusion: point particles, exact voxel flights, diffuse or specular walls."""
+    """Knudsen (free-molecular) diffusion: point particles, exact voxel flights, diffuse or specular walls.
+
+    A setting given explicitly that the chosen setup does not read (:data:`USED_BY`, e.g. ``reactions`` with setup
+    transmission) is refused with a ValidationError (a ValueError) naming it and the setup, here as in a scene file.
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True, use_enum_values=False, allow_inf_nan=False)
 
@@ -454,11 +462,14 @@ class Settings(BaseModel):
 
     @model_validator(mode="after")
     def _keys_its_setup_reads(self, info: ValidationInfo):
-        """In a scene file, a setting given explicitly (``model_fields_set``, not a default) that this run's mode does
-        not read (:data:`USED_BY`): one error at its key each; it was ignored without a word.
+        """A setting given explicitly (``model_fields_set``, not a default) in a scene file or to ``Settings(...)``
+        that this run's mode does not read (:data:`USED_BY`): one error at its key each; it was ignored without a
+        word. Settings merged by merge_settings are not judged here (every key of the merged dump reads as given).
         """
-        if not (info.context or {}).get(SCENE_CONTEXT):
+        context = info.context or {}
+        if context.get(MERGED_CONTEXT):
             return self
+        whose = "this scene's setup" if context.get(SCENE_CONTEXT) else "the setup"
         mode = run_mode(self)
         setup = {
             "length_series": "transmission with diffusion.lengths (a length series)",
@@ -477,7 +488,7 @@ class Settings(BaseModel):
                 continue
             ignored.append(setting)
             message = (
-                f"read only by {readers_text(modes)}; this scene's setup is {setup}, which ignores it (leave it out, "
+                f"read only by {readers_text(modes)}; {whose} is {setup}, which ignores it (leave it out, "
                 "or choose a setup that reads it)"
             )
             errors.append(
