@@ -325,8 +325,8 @@ def test_diffusion_options_that_do_not_validate_are_one_line_in_the_house_format
     )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
-    assert "accommodation = 2.0: Input should be less than or equal to 1" in err[0]
-    assert "target_rel_error = -1.0" in err[0] and "errors.pydantic.dev" not in err[0]
+    assert "--accommodation = 2.0: Input should be less than or equal to 1" in err[0]
+    assert "--target-rel-error = -1.0" in err[0] and "errors.pydantic.dev" not in err[0]
     assert not (tmp_path / "d.h5").exists()
 
 

@@ -67,7 +67,7 @@ def test_a_bad_command_line_option_is_one_line_naming_each_value(tmp_path, capsy
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(err) == 1
-    assert "cell_um.0 = 0.0: Input should be greater than 0" in err[0] and "cell_um.1 = -5.0" in err[0]
+    assert "--cell-um[0] = 0.0: Input should be greater than 0" in err[0] and "--cell-um[1] = -5.0" in err[0]
 
 
 def test_two_outputs_naming_one_file_are_refused_before_any_work(tmp_path, capsys):

@@ -172,7 +172,9 @@ def test_sweep_options_win_over_the_scene_and_are_checked_as_its_keys(tmp_path, 
     capsys.readouterr()
     assert main([*argv, "--confidence", "0.3"]) == 2
     (line,) = capsys.readouterr().err.splitlines()
-    assert line == "porepipe sweep: error: sweep options: confidence = 0.3: Input should be greater than 0.5"
+    assert (
+        line == "porepipe sweep: error: sweep options: --confidence = 0.3: Input should be greater than 0.5"
+    )
     assert not out.exists()
 
 

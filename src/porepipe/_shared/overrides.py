@@ -19,6 +19,7 @@ __all__ = [
     "check_resume_has_checkpoint",
     "given_options",
     "merge_settings",
+    "option_names",
     "scene_name",
     "seed_number",
     "whole_count",
@@ -46,8 +47,17 @@ def _deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
+def option_names(keys) -> dict[str, str]:
+    """``{key: "--key-with-dashes"}``: the options of settings keys named as the command line spells them."""
+    return {key: "--" + key.replace("_", "-") for key in keys}
+
+
 def merge_settings(
-    model: type[BaseModel], base: BaseModel | dict | None, overrides: dict, what: str
+    model: type[BaseModel],
+    base: BaseModel | dict | None,
+    overrides: dict,
+    what: str,
+    options: dict[str, str] | None = None,
 ) -> BaseModel:
     """``base`` (a scene section, or None for the defaults) with ``overrides`` laid over it, validated as ``model``.
 
@@ -61,6 +71,11 @@ def merge_settings(
         Options from the command line (only those given); nested dicts merge into nested sections key by key.
     what : str
         Names the settings in the error message (``"lpt options"``).
+    options : dict, optional
+        Settings key (dotted below the section) -> the command-line option that gave it, for the options given. A
+        problem at or below such a key is named by its option (``--phases``), one that a check across keys finds in
+        a section holding some by the options there that its message names (all of them where it names none), any
+        other by its settings key. Default: :func:`option_names` of the top-level keys of ``overrides``.
 
     Returns
     -------
@@ -69,23 +84,60 @@ def merge_settings(
     Raises
     ------
     PorepipeError
-        The merged settings are invalid; the message names ``what`` and pydantic's reasons.
+        The merged settings are invalid; the message names ``what`` and, per problem, the option or key, its value
+        and pydantic's reason, on one line.
     """
     if isinstance(base, BaseModel):
         base = base.model_dump()
+    if options is None:
+        options = option_names(k for k, v in overrides.items() if not isinstance(v, dict))
+    merged = _deep_merge(base or {}, overrides)
     try:
-        return model.model_validate(_deep_merge(base or {}, overrides), context={MERGED_CONTEXT: True})
+        return model.model_validate(merged, context={MERGED_CONTEXT: True})
     except ValidationError as err:
-        raise PorepipeError(f"{what}: {_reasons(err)}") from None
+        raise PorepipeError(f"{what}: {_reasons(err, merged, options)}") from None
 
 
-def _reasons(err: ValidationError) -> str:
-    """The validation's reasons on one line, one ``key = value: reason`` per problem (its own text spans 4 lines each)."""
+def _reasons(err: ValidationError, merged: dict, options: dict[str, str]) -> str:
+    """The validation's reasons on one line, one ``name = value: reason`` per problem (its own text spans 4 lines each)."""
     return "; ".join(
-        f"{'.'.join(map(str, e['loc'])) or 'settings'} = {repr(e['input'])[:80]}: "
-        f"{e['msg'].removeprefix('Value error, ')}"
-        for e in err.errors()
+        f"{_named(e, merged, options)}: {e['msg'].removeprefix('Value error, ')}" for e in err.errors()
     )
+
+
+def _named(error: dict, merged: dict, options: dict[str, str]) -> str:
+    """``name = value`` of one problem: by the option that gave its key, or the options a check across keys names,
+    else by its settings key (see :func:`merge_settings`).
+    """
+    loc = tuple(str(part) for part in error["loc"])
+    keys = {key: tuple(key.split(".")) for key in options}
+    above = [key for key, parts in keys.items() if loc[: len(parts)] == parts]
+    if above:
+        key = max(above, key=lambda k: len(keys[k]))
+        rest = _path(error["loc"][len(keys[key]) :], inner=True)
+        return f"{options[key]}{rest} = {repr(error['input'])[:80]}"
+    below = [key for key, parts in keys.items() if parts[: len(loc)] == loc]
+    named = [key for key in below if re.search(rf"\b{re.escape(keys[key][-1])}\b", error["msg"])]
+    if below:
+        return ", ".join(f"{options[key]} = {repr(_at(merged, key))[:80]}" for key in named or below)
+    return f"{_path(error['loc']) or 'settings'} = {repr(error['input'])[:80]}"
+
+
+def _path(loc, inner: bool = False) -> str:
+    """``a.b[0]``: a settings key as the scene writes it (list items in brackets); ``inner``: the rest of a key
+    below an option (``[0]`` or ``.b``).
+    """
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text or inner else str(part))
+    return text
+
+
+def _at(merged: dict, key: str):
+    """The merged value at the dotted ``key`` (None where it is missing)."""
+    for part in key.split("."):
+        merged = merged.get(part) if isinstance(merged, dict) else None
+    return merged
 
 
 def _whole_number(text: str, least: int, advice: str) -> int:

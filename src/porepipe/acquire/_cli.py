@@ -19,8 +19,11 @@ _RAW_OPTIONS = {
     "raw_order": "order",
 }
 
-#: settings (dotted keys below acquire) -> (option of ``porepipe acquire``, its argparse name), for the messages
+#: settings (dotted keys below acquire) -> (option of ``porepipe acquire``, its argparse name), for the messages:
+#: every option laid over the settings but --no-grains (a switch, never invalid, and on by default)
 _OPTION_OF = {
+    "voxel_um": ("--voxel-um", "voxel_um"),
+    "section_um": ("--section-um", "section_um"),
     "format": ("--format", "format"),
     "dataset": ("--dataset", "dataset"),
     **{f"raw.{key}": ("--" + opt.replace("_", "-"), opt) for opt, key in _RAW_OPTIONS.items()},
@@ -90,7 +93,8 @@ def settings_from_args(args, scene=None):
     }
     if not args.grains:
         over["statistics"] = {"grains": False}
-    return merge_settings(Settings, base, over, "acquire settings")
+    given = {key: flag for key, (flag, dest) in _OPTION_OF.items() if getattr(args, dest) is not None}
+    return merge_settings(Settings, base, over, "acquire settings", options=given)
 
 
 def _check_format_options(args, scene, settings, base_dir, names) -> None:

@@ -61,7 +61,12 @@ def _settings(args) -> tuple[Settings, int, str]:
     if args.seed is not None:
         seed = args.seed
     _nested_overrides(args, base)
-    settings = merge_settings(Settings, base, {}, "diffusion settings")
+    given = {
+        _SETTING.get(dest, dest): _option(dest)
+        for dest in (*_OVERRIDES, *_SETTING)
+        if getattr(args, dest, None) is not None
+    }
+    settings = merge_settings(Settings, base, {}, "diffusion settings", options=given)
     _refuse_unused(args, settings)
     return settings, seed, name
 

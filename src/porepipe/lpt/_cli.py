@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 
-from porepipe._shared.overrides import add_threads_option, given_options, merge_settings
+from porepipe._shared.overrides import add_threads_option, given_options, merge_settings, option_names
 from porepipe.lpt._settings import Connectivity, Direction, Placement, Settings
 
 #: command-line options that override the scene's ``lpt`` section (flag name = settings key)
@@ -38,11 +38,12 @@ def settings_from_args(args) -> tuple[Settings, int | None]:
     if getattr(args, "memory_budget_mb", None) is not None:
         budget = args.memory_budget_mb
     given = given_options(args, _OVERRIDES)
+    options = option_names(given)  # the options given, not the emptied other cell list below
     if "cell_um" in given:  # cells given one way replace the scene's cells given the other way
         given.setdefault("cell_voxels", [])
     if "cell_voxels" in given:
         given.setdefault("cell_um", [])
-    return merge_settings(Settings, base, given, "lpt options"), budget
+    return merge_settings(Settings, base, given, "lpt options", options=options), budget
 
 
 def main(args) -> int:

@@ -66,5 +66,5 @@ def test_cli_reaction_writes_eta_and_refuses_bad_probability(tmp_path, capsys):
     assert ds["z_react"].values.sum() == int(ds["reactions"])
     bad = tmp_path / "bad.h5"
     assert cli_main([*args[:-4], "--reaction-w", "1.5", "-o", str(bad)]) == 2
-    assert "reactions.w" in capsys.readouterr().err
+    assert "--reaction-w = 1.5" in capsys.readouterr().err  # the option typed, not the key reactions.w
     assert not bad.exists()
