@@ -185,3 +185,29 @@ def test_merge_settings_names_a_key_by_its_option_only_where_the_option_gave_it(
     assert str(err.value) == (
         "acquire settings: --phases = ['a', 'a']: phases must name at least two distinct phases, got ['a', 'a']"
     )
+
+
+def test_a_memory_budget_below_one_mb_is_named_by_the_option_and_in_a_scene_by_its_key(tmp_path, capsys):
+    """``lpt B --memory-budget-mb 0`` said ``resources.memory_budget_mb = 0; allowed: ...`` (the scene key the option
+    overrides); each subcommand taking the option now refuses it there, by its name. A scene's 0 names the key."""
+    from porepipe.cli import build_parser
+
+    commands = next(a for a in build_parser()._actions if a.dest == "command").choices
+    taking = sorted(name for name, p in commands.items() if "--memory-budget-mb" in p._option_string_actions)
+    assert taking == ["lpt", "minkowski", "segment"]
+    for name in taking:
+        for bad in ("0", "-5"):
+            with pytest.raises(SystemExit) as stop:  # argparse's refusal, before any work
+                main([name, "b.h5", "-o", str(tmp_path / "o.h5"), "--memory-budget-mb", bad])
+            line = capsys.readouterr().err.strip().splitlines()[-1]
+            assert stop.value.code == 2
+            assert (
+                f"error: argument --memory-budget-mb: {bad}: give 1 or more (leave --memory-budget-mb out"
+                in line
+            )
+            assert "resources" not in line
+    scene = tmp_path / "s.yaml"
+    scene.write_text(yaml.safe_dump({**_SCENE, "resources": {"memory_budget_mb": 0}}))
+    lines = _error_lines(["lpt", "b.h5", "--scene", str(scene), "-o", str(tmp_path / "o.h5")], capsys)
+    assert any(text.startswith("  - resources.memory_budget_mb = 0") for text in lines), lines
+    assert not any("--memory-budget-mb" in text for text in lines), lines

@@ -7,7 +7,13 @@ from __future__ import annotations
 
 import argparse
 
-from porepipe._shared.overrides import add_threads_option, given_options, merge_settings, option_names
+from porepipe._shared.overrides import (
+    add_threads_option,
+    given_options,
+    merge_settings,
+    option_names,
+    whole_count,
+)
 from porepipe.lpt._settings import Connectivity, Direction, Placement, Settings
 
 #: command-line options that override the scene's ``lpt`` section (flag name = settings key)
@@ -99,7 +105,9 @@ def register(subparsers) -> None:
         "it are left out; the workflow's sample-size sweep uses `porepipe subsample` files instead)",
     )
     p.add_argument(
-        "--memory-budget-mb", type=int, help="a volume larger than this goes box by box (overrides the scene)"
+        "--memory-budget-mb",
+        type=whole_count("--memory-budget-mb", "the scene's budget, or none"),
+        help="a volume larger than this goes box by box (overrides the scene)",
     )
     add_threads_option(p)
     p.set_defaults(func=main)

@@ -5,7 +5,7 @@ volume at every threshold), written to ``minkowski_a{a}.h5``. Argparse only; the
 from __future__ import annotations
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.overrides import add_threads_option, given_options, merge_settings
+from porepipe._shared.overrides import add_threads_option, given_options, merge_settings, whole_count
 from porepipe.minkowski._settings import Adjacency, Settings
 
 
@@ -46,7 +46,9 @@ def register(subparsers) -> None:
     p.add_argument("--adjacency", choices=[a.value for a in Adjacency], help="overrides the scene")
     p.add_argument("--slab-planes", type=int, help="x planes read at once (overrides the scene)")
     p.add_argument(
-        "--memory-budget-mb", type=int, help="volumes larger than this go box by box (overrides the scene)"
+        "--memory-budget-mb",
+        type=whole_count("--memory-budget-mb", "the scene's budget, or none"),
+        help="volumes larger than this go box by box (overrides the scene)",
     )
     add_threads_option(p)
     p.set_defaults(func=main)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from porepipe._shared.overrides import given_options, merge_settings
+from porepipe._shared.overrides import given_options, merge_settings, whole_count
 from porepipe.segment._settings import Segmentation, SegmentationMethod
 
 
@@ -38,7 +38,7 @@ def register(subparsers) -> None:
     p.add_argument("--threshold", type=int, default=None, help="g_th for --method fixed (0..215)")
     p.add_argument(
         "--memory-budget-mb",
-        type=int,
+        type=whole_count("--memory-budget-mb", "no budget"),
         help="memory budget in MB: fewer than 64 x planes are held at once where they exceed it (default: no "
         "budget; the workflow passes the scene's resources.memory_budget_mb)",
     )
