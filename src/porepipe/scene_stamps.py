@@ -4,7 +4,8 @@ A rule that took the scene file itself as input reran whenever the file's time c
 of the scene, and a change to ``permeability:`` reran the packing. A file copied back with an older time (``cp -p``)
 reran nothing, so its results were stale. A rule now takes its stamp, ``results/<scene>/scene/<rule>.json``, as input:
 the scene's settings as porepipe reads them (defaults filled in, comments and layout gone), less the keys that rule
-cannot depend on (:data:`IGNORED`). The workflow writes a rule's stamp when it plans the rule's jobs, and only if its
+cannot depend on (:data:`IGNORED`) and less run control (checkpoint and progress intervals, ranks:
+:mod:`porepipe._shared.run_control`). The workflow writes a rule's stamp when it plans the rule's jobs, and only if its
 text changed, so Snakemake reruns a rule exactly when its part of the scene changed. Rules not listed in :data:`IGNORED`
 stamp the whole scene. ``tests/unit/warm/test_scene_stamps.py`` records which scene keys each stage's command reads
 and checks that none of them is ignored for its rule.
@@ -16,6 +17,7 @@ import json
 from pathlib import Path
 
 from porepipe._shared.atomic import atomic_path
+from porepipe._shared.run_control import without_run_control
 
 __all__ = ["IGNORED", "STAMPED_RULES", "STAMP_FOLDER", "stamp_text", "write_stamp"]
 
@@ -60,10 +62,10 @@ STAMPED_RULES = (
 
 def stamp_text(scene, rule: str) -> str:
     """The stamp of ``rule`` for ``scene`` (a loaded :class:`porepipe.scene.Scene`): the scene's settings as JSON, sorted
-    keys, less :data:`IGNORED`'s keys of that rule.
+    keys, less :data:`IGNORED`'s keys of that rule and less run control.
     """
     ignored = IGNORED.get(rule, frozenset())
-    kept = {key: value for key, value in scene.model_dump(mode="json").items() if key not in ignored}
+    kept = {key: value for key, value in without_run_control(scene).items() if key not in ignored}
     return json.dumps(kept, sort_keys=True, indent=1) + "\n"
 
 

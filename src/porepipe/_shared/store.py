@@ -42,6 +42,7 @@ import xarray as xr
 from porepipe._shared import cost as _cost
 from porepipe._shared.atomic import check_identity, commit, file_identity, prepare_output, temporary_path
 from porepipe._shared.errors import PorepipeError
+from porepipe._shared.run_control import without_run_control
 from porepipe._shared.units import DIMENSIONLESS, MICROMETRE, annotate, canonical, centres_um, units_of
 from porepipe._version import __version__
 
@@ -71,7 +72,8 @@ def result_hash(
     scene_part : JSON-able, optional
         The parts of the scene the result depends on (:func:`porepipe.scene.scene_part`).
     settings : pydantic model or JSON-able, optional
-        The stage's settings after command-line overrides.
+        The stage's settings after command-line overrides; a model enters less its run-control fields
+        (:mod:`porepipe._shared.run_control`: checkpoint and progress intervals, ranks), which change no result.
     inputs : sequence of path-like
         Result files it is computed from; each enters by its own ``scene_hash``, so a change upstream changes the
         hash downstream. Order matters (sort it where the inputs are a set).
@@ -84,7 +86,7 @@ def result_hash(
         16 hex digits (:func:`hash_of` of the record).
     """
     if hasattr(settings, "model_dump"):
-        settings = settings.model_dump(mode="json")
+        settings = without_run_control(settings)
     record = {
         "stage": stage,
         "scene": scene_part,

@@ -15,6 +15,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from porepipe._shared.run_control import RUN_CONTROL
 from porepipe.granular._shapes import AngleMode, Dist
 
 PosFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -406,7 +407,9 @@ class Settings(_Strict):
     size_change: SizeChange | None = Field(None, description="global particle size s(t) (effect size_change)")
     guard: Guard = Guard()
     output: Output = Output()
-    checkpoint_every_steps: int = Field(20000, ge=1, description="checkpoint interval of long runs")
+    checkpoint_every_steps: int = Field(
+        20000, ge=1, json_schema_extra=RUN_CONTROL, description="checkpoint interval of long runs"
+    )
 
     @model_validator(mode="after")
     def _sources_inside_silo(self):

@@ -139,8 +139,7 @@ def run(
             pore.astype(bool), axis, settings, meta.voxel_um, checkpoint=ckpt, geometry=geometry, comm=comm
         )
         sources = [binary] + ([p for p in (packing, grey, grains) if p] if interpolated else [])
-        physics = settings.model_dump(mode="json", exclude={"mpi_ranks"})  # the ranks do not change κ
-        digest = result_hash("permeability", settings=physics, inputs=sources, axis=axis.value)
+        digest = result_hash("permeability", settings=settings, inputs=sources, axis=axis.value)
         if comm.root:
             write_result(
                 path, result, scene=scene, scene_hash=digest, threads=threads, origin_um=meta.origin_um

@@ -6,6 +6,8 @@ import enum
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from porepipe._shared.run_control import RUN_CONTROL
+
 
 class Collision(str, enum.Enum):
     """Collision operator."""
@@ -202,10 +204,13 @@ class Settings(BaseModel):
     mach_max: float = Field(0.1, gt=0, le=0.3, description="stop if max |v|/c_s exceeds this")
     write_fields: bool = Field(False, description="store velocity and pressure fields in the result")
     write_vti: bool = Field(False, description="also export the fields as VTK ImageData (.vti) for ParaView")
-    checkpoint_every_s: float = Field(600.0, gt=0, description="wall seconds between checkpoints")
+    checkpoint_every_s: float = Field(
+        600.0, gt=0, json_schema_extra=RUN_CONTROL, description="wall seconds between checkpoints"
+    )
     mpi_ranks: int = Field(
         0,
         ge=0,
+        json_schema_extra=RUN_CONTROL,
         description="workflow: run each permeability job as `mpirun -n mpi_ranks porepipe permeability --mpi` "
         "(slabs along the flow; halfway walls; 0 = one process)",
     )

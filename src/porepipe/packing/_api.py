@@ -40,6 +40,7 @@ from porepipe._shared import rng
 from porepipe._shared.cost import SpentClock
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.progress import Progress
+from porepipe._shared.run_control import without_run_control
 from porepipe._shared.spheres import check_spheres
 from porepipe._shared.store import hash_of
 from porepipe.packing import _kernels as K
@@ -593,10 +594,6 @@ def _as_box(box_um, periodic) -> tuple[np.ndarray, np.ndarray]:
     return box, per
 
 
-#: settings that change how a run is watched, saved or spread over threads, never its result: they enter neither the
-#: checkpoint key nor the result's hash
-_RUN_CONTROL = ("checkpoint_every", "checkpoint_every_s", "progress_every_s", "parallel_min_spheres")
-
 #: the wall clock (seconds) that times checkpoints; a test replaces it to advance time without sleeping
 _checkpoint_clock = time.monotonic
 
@@ -630,7 +627,7 @@ def checkpoint_key(settings: Settings, box, periodic, seed: int, base_dir: Path)
 
     Files named by ``insert_file`` enter by their size and modification time, so an edited file invalidates the key.
     """
-    dumped = settings.model_dump(mode="json", exclude=set(_RUN_CONTROL))
+    dumped = without_run_control(settings)
     files = sorted({str(st.insert_file.path) for st in settings.stages if st.insert_file is not None})
     stamps = []
     for name in files:

@@ -6,8 +6,9 @@ from pathlib import Path
 
 from porepipe._shared.errors import PorepipeError
 from porepipe._shared.numba_config import set_threads
+from porepipe._shared.run_control import without_run_control
 from porepipe._shared.store import ResultWriter, result_hash
-from porepipe.packing._api import _RUN_CONTROL, pack_spheres
+from porepipe.packing._api import pack_spheres
 from porepipe.packing._io import write_packing, write_xyzr_file
 from porepipe.packing._types import Packing
 from porepipe.scene import load_scene, scene_part
@@ -53,7 +54,7 @@ def run(
         raise PorepipeError(f"{scene_path}: the scene has no `packing:` section with types and stages to run")
     threads = set_threads(threads)
     part = scene_part(scene, "seed", "domain")  # and the packing less its run control, as the checkpoint key
-    part["packing"] = settings.model_dump(mode="json", exclude=set(_RUN_CONTROL))
+    part["packing"] = without_run_control(settings)
     digest = result_hash("pack", scene_part=part)
     with ResultWriter(out, stage="pack", scene=scene.name, scene_hash=digest, threads=threads) as w:
         packing = pack_spheres(

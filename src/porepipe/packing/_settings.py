@@ -13,6 +13,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from porepipe._shared.run_control import RUN_CONTROL
+
 PosFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 NonNegFloat = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 
@@ -279,21 +281,26 @@ class Settings(_Strict):
     checkpoint_every: int = Field(
         0,
         ge=0,
+        json_schema_extra=RUN_CONTROL,
         description="with a checkpoint file: also write it every n steps (0: by wall time only); run control, "
         "the packing does not depend on it",
     )
     checkpoint_every_s: NonNegFloat = Field(
         300.0,
+        json_schema_extra=RUN_CONTROL,
         description="with a checkpoint file: write it once this many wall seconds have passed since the last one "
         "(or the start), besides every checkpoint_every steps (0: by steps only); run control",
     )
     parallel_min_spheres: int = Field(
         20000,
         ge=0,
+        json_schema_extra=RUN_CONTROL,
         description="stages with fewer spheres run on one thread (thread start-up costs more than it "
         "saves; results are identical for any thread count)",
     )
-    progress_every_s: PosFloat = Field(10.0, description="seconds between progress lines")
+    progress_every_s: PosFloat = Field(
+        10.0, json_schema_extra=RUN_CONTROL, description="seconds between progress lines"
+    )
 
     @model_validator(mode="after")
     def _names(self):
