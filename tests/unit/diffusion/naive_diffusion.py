@@ -100,15 +100,20 @@ def _cos_theta_naive(law, u):
     return {"lambert": np.sqrt(u), "isotropic": u, "cosine_dtheta": np.sqrt(1 - (1 - u) ** 2)}[law]
 
 
+def _inlet_directions(rng, n, law):
+    """``n`` unit directions into the duct (+z), cos θ drawn by ``law``, azimuth uniform."""
+    c = _cos_theta_naive(law, rng.random(n))
+    s, phi = np.sqrt(1 - c * c), 2 * np.pi * rng.random(n)
+    return np.column_stack([s * np.cos(phi), s * np.sin(phi), c])
+
+
 def rect_channel_w_naive(a, b, length, wall="lambert", inlet="lambert", n=100000, seed=0, max_hits=100000):
     """Transmission probability of a continuous a x b x length duct (no voxels): vectorised numpy Monte Carlo with
     analytic ray-plane intersections, particles entering at z = 0. Returns (W, binomial standard error)."""
     rng = np.random.default_rng(seed)
     box = np.array([a, b])
     pos = np.column_stack([rng.random(n) * a, rng.random(n) * b, np.zeros(n)])
-    c = _cos_theta_naive(inlet, rng.random(n))
-    s, phi = np.sqrt(1 - c * c), 2 * np.pi * rng.random(n)
-    u = np.column_stack([s * np.cos(phi), s * np.sin(phi), c])
+    u = _inlet_directions(rng, n, inlet)
     alive = np.ones(n, bool)
     through = np.zeros(n, bool)
     for _ in range(max_hits):
@@ -191,9 +196,7 @@ def cylinder_w_naive(radius, length, n=100000, seed=0, max_hits=100000):
     rng = np.random.default_rng(seed)
     r0, a0 = radius * np.sqrt(rng.random(n)), 2 * np.pi * rng.random(n)
     pos = np.column_stack([r0 * np.cos(a0), r0 * np.sin(a0), np.zeros(n)])
-    c = _cos_theta_naive("lambert", rng.random(n))
-    s, phi = np.sqrt(1 - c * c), 2 * np.pi * rng.random(n)
-    u = np.column_stack([s * np.cos(phi), s * np.sin(phi), c])
+    u = _inlet_directions(rng, n, "lambert")
     alive = np.ones(n, bool)
     through = np.zeros(n, bool)
     for _ in range(max_hits):
