@@ -3,8 +3,11 @@
 The packer needs a sphere count, a radius distribution from the families it supports (packing.RadiusDist: uniform,
 truncated exponential, discrete), and a maximum overlap; the decoration needs grain families with elongation ranges.
 From the statistics: count = grain number density x model box volume; radii = radii of the spheres the grains grew
-from (distance-transform peaks, grains cut by the image boundary left out); elongation classes = quantile classes of
-the grains' inertia-tensor elongation. The target porosity is recorded with the scene so the comparison can check it.
+from (distance-transform peaks of the grains centred in the image, :func:`grain_radii`); elongation classes = quantile
+classes of the grains' inertia-tensor elongation. The DEM stage's interaction constant k is chosen from the maximum
+overlap so that the packing can converge (:func:`interaction_constant`), its time step and damping from k. The
+porosity is then matched by packing the model (:func:`porepipe.acquire.match_porosity`: sphere count, and the maximum
+overlap raised where the image is too dense to pack at the one set) and the scene records what was matched.
 """
 
 from __future__ import annotations
@@ -21,16 +24,99 @@ from porepipe._shared.atomic import write_text_atomic
 from porepipe._shared.errors import PorepipeError
 from porepipe.acquire._settings import Calibration, Family
 
-#: smallest number of uncut grains for which the radius fit uses only uncut grains
-_MIN_UNCUT = 10
+#: smallest number of grains centred in the image for which the radius fit uses only those
+_MIN_CENTRED = 10
 #: a parametric family is accepted if its Kolmogorov-Smirnov p-value exceeds this; else the discrete table is used
 _KS_ACCEPT_P = 0.01
-#: the calibrated stage's time step and damping where the grains are large enough: dt = 0.25, Xi = 4 (C- = 1/2)
-_DT, _DAMPING_DT = 0.25, 1.0
-#: largest stable time step per µm of the closest equilibrium distance dx_eq of two grains: the pair force
-#: (packing._kernels._pair_force, k = 400, m = 1) is stiffest just beyond contact, 32 k / dx_eq², so a pair
-#: oscillates at ω = sqrt(2 · 32 k) / dx_eq = 160 / dx_eq and the Verlet step is stable for ω dt < 2
+#: the calibrated stage's time step at k = 400 where the grains are large enough (smaller for stiffer k, below)
+_DT = 0.25
+#: dt Xi of the calibrated stage (C- = 1 - dt Xi / 2 = 0.975): light damping. Measured (150 spheres, r 40-80 µm,
+#: sigma_max 0.1, k from interaction_constant, 400 steps, seeds 1-3): dt Xi = 0.05 converged 145-150 of 150 spheres,
+#: dt Xi = 0.25 132-137, dt Xi = 1 (C- = 1/2, the earlier choice) 123-125; the heavily damped spheres freeze in
+#: place where a lightly damped one still slides out of a too deep overlap
+_DAMPING_DT = 0.05
+#: largest stable time step per µm of the closest equilibrium distance dx_eq of two grains at k = 400: the pair force
+#: (packing._kernels._pair_force, m = 1) is stiffest just beyond contact, 32 k / dx_eq², so a pair oscillates at
+#: ω = sqrt(2 · 32 k) / dx_eq = 160 / dx_eq and the Verlet step is stable for ω dt < 2; ω scales as sqrt(k)
 _DT_PER_UM = 1.0 / 80.0
+#: the thesis's interaction constant (§5.6.1 phase 1: k = 400, sigma_max = 0.3, converged in 20 steps)
+_K_THESIS = 400.0
+#: largest attraction of the pair force in units of k / dx_eq: at dx = (17/9)^(1/8) dx_eq, |f| = (288/289) (9/17)^(1/8)
+_ATTRACTION_PEAK = 288.0 / 289.0 * (9.0 / 17.0) ** 0.125
+
+
+def _radius_range(radius_spec: dict) -> tuple[float, float]:
+    values = radius_spec.get("values_um")
+    if values:
+        return float(min(values)), float(max(values))
+    return float(radius_spec["min_um"]), float(radius_spec["max_um"])
+
+
+def interaction_constant(radius_spec: dict, max_overlap: float) -> float:
+    """The calibrated stage's k: a pair pressed to ``max_overlap`` repels at least as hard as a neighbour can pull.
+
+    The pair force (Zauner 2020 §5.2) is a harmonic core, sqrt(k) (1 + k/4) / dx_eq (1 - dx / dx_eq), inside the
+    equilibrium distance dx_eq (overlap sigma_max / 2) and a Lennard-Jones tail whose attraction peaks at
+    0.9204 k / dx_eq. At the largest allowed overlap, 1 - dx_min / dx_eq = sigma_max r_s / dx_eq (r_s the smaller
+    radius), so the core's push there against the peak pull is R = (1 + k/4) sigma_max r_s / (0.9204 sqrt(k) dx_eq).
+    With R < 1 one attracting neighbour presses a contact past sigma_max, and the packing cannot converge: k = 400 at
+    sigma_max = 0.1 gives R = 0.29 (equal spheres) and 42-60 of 150 spheres converged however long it ran. The
+    thesis's k = 400 at sigma_max = 0.3 (§5.6.1, converged in 20 steps) has R = 0.97 for equal spheres: the k
+    returned keeps R >= 1 for the least favourable pair (smallest radius against largest), and is at least 400.
+
+    Parameters
+    ----------
+    radius_spec : dict
+        The packer's ``radius_um`` block (uniform, exponential or discrete).
+    max_overlap : float
+        sigma_max of the grains.
+
+    Returns
+    -------
+    float
+        k, to 3 significant digits.
+    """
+    r_s, r_l = _radius_range(radius_spec)
+    a = _ATTRACTION_PEAK * (r_s + r_l - max_overlap * r_s) / (max_overlap * r_s)
+    # (1 + k/4) / sqrt(k) >= a; with x = sqrt(k): x^2 - 4 a x + 4 >= 0, whose larger root is 2 (a + sqrt(a^2 - 1))
+    root = 2.0 * (a + np.sqrt(a * a - 1.0)) if a > 1.0 else 0.0
+    return max(_K_THESIS, float(f"{np.ceil(root * root):.3g}"))
+
+
+def stage_dynamics(radius_spec: dict, max_overlap: float) -> dict:
+    """The calibrated stage's ``k``, ``dt`` and ``damping`` (``dt Xi`` = 0.05) for a radius law and sigma_max."""
+    k = interaction_constant(radius_spec, max_overlap)
+    dt = time_step(radius_spec, max_overlap, k)
+    return {"k": {"grain": k}, "dt": dt, "damping": {"grain": float(f"{_DAMPING_DT / dt:.3g}")}}
+
+
+def radius_moments(radius_spec: dict) -> tuple[float, float]:
+    """Mean and standard deviation of the sphere volume 4/3 π r³ (µm³) under the packer's radius law."""
+    values = radius_spec.get("values_um")
+    if values:
+        r, p = (
+            np.asarray(values, dtype=np.float64),
+            np.asarray(radius_spec["probabilities"], dtype=np.float64),
+        )
+    else:
+        lo, hi = _radius_range(radius_spec)
+        r = np.linspace(lo, hi, 4001)
+        p = np.exp(-float(radius_spec.get("alpha_per_um", 0.0)) * (r - lo))
+    p = p / p.sum()
+    v = 4.0 / 3.0 * np.pi * r**3
+    mean = float(np.sum(p * v))
+    return mean, float(np.sqrt(np.sum(p * (v - mean) ** 2)))
+
+
+def porosity_tolerance(radius_spec: dict, count: int, box_um) -> float:
+    """Realisation scatter of a model's porosity: sqrt(N) sd(v) / V for N spheres of random volume v in the box V.
+
+    A model packed with other positions and other radii drawn from the same law differs by about this much (the sum
+    of N independent sphere volumes dominates; overlaps bounded by sigma_max change it little), so matching the
+    image's porosity closer than this fits one realisation, not the law.
+    """
+    _, sd = radius_moments(radius_spec)
+    return float(np.sqrt(count) * sd / np.prod(np.asarray(box_um, dtype=np.float64)))
 
 
 @dataclasses.dataclass
@@ -111,7 +197,16 @@ def fit_radius_distribution(radii_um, families: list[Family], discrete_bins: int
 
 
 def grain_radii(stats_ds: xr.Dataset) -> np.ndarray:
-    """Radii of the spheres the grains grew from; uncut grains only when there are enough of them."""
+    """Radii of the spheres the grains grew from: those whose centre lies in the image, when there are enough of them.
+
+    A grain counts (``counted``) when its marker, the distance-transform peak at the sphere's centre, is not on the
+    image boundary. Whether a sphere's centre lies in the box does not depend on its size, so these radii are a
+    sample of the radius law; the distance transform does not see past the image boundary, so a sphere cut by it
+    still peaks at its radius. Grains not touching the boundary (``cut`` = 0), the earlier choice, are kept with a
+    probability that falls with size, about (L - 2r)³ / L³ in a box of edge L: 83 uncut grains of an image of 150
+    spheres of r 40-80 µm, alpha 0.05/µm in a 600 µm box fitted alpha 0.074 (their true radii 0.090), the 132
+    counted ones 0.045. Statistics without ``counted`` (older files) fall back to the uncut grains.
+    """
     if "inscribed_radius_um" not in stats_ds or stats_ds.sizes.get("grain", 0) == 0:
         raise PorepipeError(
             "the statistics have no grains (image all pore, or measured with acquire --no-grains or the scene's "
@@ -119,8 +214,8 @@ def grain_radii(stats_ds: xr.Dataset) -> np.ndarray:
             "cannot calibrate a packing"
         )
     r = stats_ds.inscribed_radius_um.values
-    uncut = stats_ds.cut.values == 0
-    return r[uncut] if uncut.sum() >= _MIN_UNCUT else r
+    centred = stats_ds.counted.values == 1 if "counted" in stats_ds else stats_ds.cut.values == 0
+    return r[centred] if centred.sum() >= _MIN_CENTRED else r
 
 
 def elongation_classes(stats_ds: xr.Dataset, n_classes: int) -> list[dict]:
@@ -161,17 +256,17 @@ def _decoration(classes: list[dict]) -> dict | None:
     return section
 
 
-def time_step(radius_spec: dict, max_overlap: float) -> float:
-    """The calibrated stage's time step: 0.25, or less where the smallest grains make that unstable.
+def time_step(radius_spec: dict, max_overlap: float, k: float = _K_THESIS) -> float:
+    """The calibrated stage's time step: 0.25 sqrt(400 / k), or less where the smallest grains make that unstable.
 
-    The packer's pair force scales as 1 / dx_eq, so its stiffness as 1 / dx_eq²: a fixed dt = 0.25 is stable for
-    grains of r >= 10.5 µm (max_overlap 0.1) and made grains of a few µm oscillate and overlap without end (an image
-    of 2 µm voxels whose grains had r = 4 µm). The damping goes with 1 / dt (``dt Xi`` = 1), so the packing of
-    small grains runs step by step as that of grains scaled up to r = 10.5 µm.
+    The packer's pair force scales as 1 / dx_eq, so its stiffness as k / dx_eq²: at k = 400 a fixed dt = 0.25 is
+    stable for grains of r >= 10.5 µm (max_overlap 0.1) and made grains of a few µm oscillate and overlap without end
+    (an image of 2 µm voxels whose grains had r = 4 µm). A stiffer k (:func:`interaction_constant`) shortens the
+    step by sqrt(400 / k), so that ω dt stays what it is at k = 400.
     """
-    values = radius_spec.get("values_um") or [radius_spec["min_um"]]
-    closest = min(values) * (2.0 - max_overlap)  # dx_eq of two of the smallest grains at the largest overlap
-    return min(_DT, float(f"{_DT_PER_UM * closest:.3g}"))
+    r_s, _ = _radius_range(radius_spec)
+    closest = r_s * (2.0 - max_overlap)  # dx_eq of two of the smallest grains at the largest overlap
+    return float(f"{min(_DT, _DT_PER_UM * closest) * np.sqrt(_K_THESIS / k):.3g}")
 
 
 def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: str, seed: int = 0) -> dict:
@@ -186,16 +281,16 @@ def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: st
     count = int(round(density * np.prod(box) * 1e-9))
     if count < 1:
         raise PorepipeError(f"grain density {density:.4g} /mm³ gives no sphere in the model box {box} µm")
-    dt = time_step(fit.spec, calibration.max_overlap)
     stage = {
         "name": "calibrated",
         "insert": ["grain"],
         "steps": calibration.steps,
-        "dt": dt,
-        "k": {"grain": 400.0},
-        "damping": {"grain": float(f"{_DAMPING_DT / dt:.3g}")},
+        **stage_dynamics(fit.spec, calibration.max_overlap),
         "freezing": {"lock_step": 10},
         "stochastic_forces": {"step_size": 0.05},
+        # the few spheres still overlapping too much at the step limit are deleted, so the model packing is converged
+        # (§5.1); porosity matching refuses a packing that loses more than 5 % this way (match_porosity)
+        "delete_unconverged": ["grain"],
     }
     scene = {
         "name": name,

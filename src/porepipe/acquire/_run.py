@@ -112,13 +112,13 @@ def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) 
             file=sys.stderr,
         )
     model = calibrated_scene(stats, settings.calibration, name=name, seed=scene.seed if scene else 0)
-    history = match_porosity(
+    match_porosity(  # records its rounds and what was matched in model["_calibration"]
         model,
         model["_calibration"]["target_porosity"],
         settings.calibration.porosity_iterations,
         Path(out).parent,
+        max_overlap_limit=settings.calibration.max_overlap_limit,
     )
-    model["_calibration"]["porosity_matching"] = [{"count": n, "porosity": phi} for n, phi in history]
     return write_scene_yaml(model, out)
 
 

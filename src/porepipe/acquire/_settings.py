@@ -191,7 +191,17 @@ class Calibration(_Strict):
     )
     discrete_bins: int = Field(12, ge=2, le=200, description="radius classes of the discrete family")
     max_overlap: float = Field(
-        0.1, gt=0, le=1, description="sigma_max of the calibrated type (Table 8.3: 0.1)"
+        0.1,
+        gt=0,
+        le=1,
+        description="sigma_max of the calibrated type (Table 8.3: 0.1); porosity matching raises it, up to "
+        "max_overlap_limit, where the image is too dense to pack at this overlap",
+    )
+    max_overlap_limit: float = Field(
+        0.4,
+        gt=0,
+        le=1,
+        description="largest sigma_max porosity matching may raise max_overlap to (§5.6.2 packs at 0.35)",
     )
     box_um: tuple[PosFloat, PosFloat, PosFloat] | None = Field(
         None, description="model box (default: the image's)"
@@ -205,11 +215,20 @@ class Calibration(_Strict):
     )
     steps: int = Field(400, ge=1, description="DEM step limit of the calibrated packing")
     porosity_iterations: int = Field(
-        2,
+        6,
         ge=0,
         le=10,
-        description="pack-and-measure rounds that adjust the sphere count to the image's porosity",
+        description="pack-and-measure rounds (at most) that adjust the sphere count, and raise max_overlap, until "
+        "the packing converges and its porosity is within the realisation scatter of the image's",
     )
+
+    @model_validator(mode="after")
+    def _overlap_limit(self):
+        if self.max_overlap_limit < self.max_overlap:
+            raise ValueError(
+                f"max_overlap_limit = {self.max_overlap_limit} is below max_overlap = {self.max_overlap}"
+            )
+        return self
 
 
 class Settings(_Strict):

@@ -301,8 +301,10 @@ def grain_statistics(
     """Grain count per mm³, equivalent and inscribed radii, elongation and orientation of watershed grains.
 
     Elongation = 1 - sqrt(λ_min / λ_max) of the inertia (second-moment) tensor (0 for a ball); orientation = unit
-    vector of the long axis (x, y, z). Grains cut by the image boundary count for the number density but are
-    flagged (``cut``) and left out of the radius distribution by the calibration.
+    vector of the long axis (x, y, z). Grains cut by the image boundary are flagged (``cut``: their shapes are
+    truncated, and the calibration's elongation classes leave them out); grains whose marker lies on the boundary (a
+    piece of a sphere centred outside) are not ``counted``: left out of the number density and, by the calibration,
+    of the radius distribution.
     """
     _require_3d(solid, "grain segmentation")
     labels, peak_dist, peaks = grain_labels(solid, min_distance, periodic)
