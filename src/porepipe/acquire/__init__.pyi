@@ -58,7 +58,7 @@ from porepipe.acquire._io import (
     require_spacing as require_spacing,
 )
 from porepipe.acquire._model import (
-    match_porosity as match_porosity,
+    match_statistics as match_statistics,
 )
 from porepipe.acquire._model import (
     model_grey as model_grey,
@@ -101,7 +101,7 @@ __all__ = [
     "fit_radius_distribution",
     "grey_histogram",
     "image_statistics",
-    "match_porosity",
+    "match_statistics",
     "model_grey",
     "open_image",
     "plot_comparison",

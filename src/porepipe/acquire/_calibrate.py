@@ -5,9 +5,9 @@ truncated exponential, discrete), and a maximum overlap; the decoration needs gr
 From the statistics: count = grain number density x model box volume; radii = radii of the spheres the grains grew
 from (distance-transform peaks of the grains centred in the image, :func:`grain_radii`); elongation classes = quantile
 classes of the grains' inertia-tensor elongation. The DEM stage's interaction constant k is chosen from the maximum
-overlap so that the packing can converge (:func:`interaction_constant`), its time step and damping from k. The
-porosity is then matched by packing the model (:func:`porepipe.acquire.match_porosity`: sphere count, and the maximum
-overlap raised where the image is too dense to pack at the one set) and the scene records what was matched.
+overlap so that the packing can converge (:func:`interaction_constant`), its time step and damping from k. Sphere
+count and maximum overlap are then matched to the image's porosity and specific surface S_V by packing the model
+(:func:`porepipe.acquire.match_statistics`), and the scene records what was matched.
 """
 
 from __future__ import annotations
@@ -90,22 +90,25 @@ def stage_dynamics(radius_spec: dict, max_overlap: float) -> dict:
     return {"k": {"grain": k}, "dt": dt, "damping": {"grain": float(f"{_DAMPING_DT / dt:.3g}")}}
 
 
-def radius_moments(radius_spec: dict) -> tuple[float, float]:
-    """Mean and standard deviation of the sphere volume 4/3 π r³ (µm³) under the packer's radius law."""
+def _law_points(radius_spec: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Radii and their probabilities (summing to 1) under the packer's radius law, on a fine grid if continuous."""
     values = radius_spec.get("values_um")
     if values:
-        r, p = (
-            np.asarray(values, dtype=np.float64),
-            np.asarray(radius_spec["probabilities"], dtype=np.float64),
-        )
+        r = np.asarray(values, dtype=np.float64)
+        p = np.asarray(radius_spec["probabilities"], dtype=np.float64)
     else:
         lo, hi = _radius_range(radius_spec)
         r = np.linspace(lo, hi, 4001)
         p = np.exp(-float(radius_spec.get("alpha_per_um", 0.0)) * (r - lo))
-    p = p / p.sum()
-    v = 4.0 / 3.0 * np.pi * r**3
-    mean = float(np.sum(p * v))
-    return mean, float(np.sqrt(np.sum(p * (v - mean) ** 2)))
+    return r, p / p.sum()
+
+
+def radius_moments(radius_spec: dict, power: int = 3) -> tuple[float, float]:
+    """Mean and standard deviation of r**power (µm**power) under the packer's radius law."""
+    r, p = _law_points(radius_spec)
+    x = r**power
+    mean = float(np.sum(p * x))
+    return mean, float(np.sqrt(np.sum(p * (x - mean) ** 2)))
 
 
 def porosity_tolerance(radius_spec: dict, count: int, box_um) -> float:
@@ -115,8 +118,22 @@ def porosity_tolerance(radius_spec: dict, count: int, box_um) -> float:
     of N independent sphere volumes dominates; overlaps bounded by sigma_max change it little), so matching the
     image's porosity closer than this fits one realisation, not the law.
     """
-    _, sd = radius_moments(radius_spec)
-    return float(np.sqrt(count) * sd / np.prod(np.asarray(box_um, dtype=np.float64)))
+    _, sd = radius_moments(radius_spec, 3)
+    return float(np.sqrt(count) * 4.0 / 3.0 * np.pi * sd / np.prod(np.asarray(box_um, dtype=np.float64)))
+
+
+def surface_tolerance(radius_spec: dict, count: int, s_v_per_mm: float) -> float:
+    """Realisation scatter of a model's specific surface S_V: S_V sd(r²) / (mean(r²) sqrt(N)), per mm.
+
+    The pore-solid surface is the sum of the N spheres' exposed surfaces e 4π r²; with the exposed fraction e the
+    same for every sphere, the sum's standard deviation is e 4π sqrt(N) sd(r²), a fraction sd(r²) / (mean(r²)
+    sqrt(N)) of S_V (the law's coefficient of variation of the sphere surface over sqrt(N)). Measured: 20 packings
+    of 157 spheres (exponential radii 40-80 µm, alpha 0.05/µm, 600 µm box, 6 µm voxels, seeds 1-20) scatter by 3.7 %
+    at sigma_max 0.4 and 2.9 % at 0.3 (2.4-3.0 % about their trend with porosity), against 3.2 % from this formula.
+    A model closer to the image's S_V than this fits one realisation, not the law.
+    """
+    mean, sd = radius_moments(radius_spec, 2)
+    return float(s_v_per_mm * sd / (mean * np.sqrt(max(count, 1))))
 
 
 @dataclasses.dataclass
@@ -295,7 +312,7 @@ def calibrated_scene(stats_ds: xr.Dataset, calibration: Calibration, *, name: st
         "freezing": {"lock_step": 10},
         "stochastic_forces": {"step_size": 0.05},
         # the few spheres still overlapping too much at the step limit are deleted, so the model packing is converged
-        # (§5.1); porosity matching refuses a packing that loses more than 5 % this way (match_porosity)
+        # (§5.1); matching refuses a packing that loses more than 5 % this way (match_statistics)
         "delete_unconverged": ["grain"],
     }
     scene = {

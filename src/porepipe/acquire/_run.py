@@ -13,7 +13,7 @@ from porepipe._shared.store import read_table, result_hash
 from porepipe.acquire._api import acquire, write_binary
 from porepipe.acquire._calibrate import calibrated_scene, write_scene_yaml
 from porepipe.acquire._compare import write_comparison
-from porepipe.acquire._model import match_porosity, run_model
+from porepipe.acquire._model import match_statistics, run_model
 from porepipe.acquire._settings import SCENE_KEYS, SettingNames, Settings
 
 #: porosity above which acquire-calibrate warns that the grey phases may be swapped (a rock of porosity 0.2 whose
@@ -79,7 +79,7 @@ def run_binary(statistics_path, out, a_um: float | None = None) -> float:
 
 
 def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) -> Path:
-    """Write a model scene YAML calibrated to the image statistics (packing + decoration, porosity matched).
+    """Write a model scene YAML calibrated to the image statistics (packing + decoration; porosity and S_V matched).
 
     Parameters
     ----------
@@ -112,12 +112,14 @@ def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) 
             file=sys.stderr,
         )
     model = calibrated_scene(stats, settings.calibration, name=name, seed=scene.seed if scene else 0)
-    match_porosity(  # records its rounds and what was matched in model["_calibration"]
+    match_statistics(  # records its rounds and what was matched in model["_calibration"]
         model,
         model["_calibration"]["target_porosity"],
+        model["_calibration"]["S_V_per_mm"],
         settings.calibration.porosity_iterations,
         Path(out).parent,
         max_overlap_limit=settings.calibration.max_overlap_limit,
+        periodic=settings.periodic,
     )
     return write_scene_yaml(model, out)
 

@@ -194,14 +194,15 @@ class Calibration(_Strict):
         0.1,
         gt=0,
         le=1,
-        description="sigma_max of the calibrated type (Table 8.3: 0.1); porosity matching raises it, up to "
-        "max_overlap_limit, where the image is too dense to pack at this overlap",
+        description="sigma_max of the calibrated type (Table 8.3: 0.1), where matching starts and the least it "
+        "uses: matching moves it up to max_overlap_limit to fit the image's S_V, and where the packing does not "
+        "converge",
     )
     max_overlap_limit: float = Field(
         0.4,
         gt=0,
         le=1,
-        description="largest sigma_max porosity matching may raise max_overlap to (§5.6.2 packs at 0.35)",
+        description="largest sigma_max matching may move max_overlap to (§5.6.2 packs at 0.35)",
     )
     box_um: tuple[PosFloat, PosFloat, PosFloat] | None = Field(
         None, description="model box (default: the image's)"
@@ -218,8 +219,9 @@ class Calibration(_Strict):
         6,
         ge=0,
         le=10,
-        description="pack-and-measure rounds (at most) that adjust the sphere count, and raise max_overlap, until "
-        "the packing converges and its porosity is within the realisation scatter of the image's",
+        description="pack-and-measure rounds (at most) that adjust the sphere count and max_overlap until the "
+        "packing converges and its porosity and S_V are within the realisation scatter of the image's (0: neither "
+        "is matched)",
     )
 
     @model_validator(mode="after")

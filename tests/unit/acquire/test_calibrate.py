@@ -1,5 +1,8 @@
 """Radius-distribution fits against samples of known law; the calibrated scene validates; comparison identities."""
 
+import copy
+import itertools
+
 import numpy as np
 import pytest
 import yaml
@@ -12,6 +15,7 @@ from porepipe.acquire._calibrate import (
     write_scene_yaml,
 )
 from porepipe.acquire._compare import comparison_markdown, write_comparison
+from porepipe.acquire._model import match_statistics
 from porepipe.acquire._settings import Calibration, Family, Settings
 from porepipe.scene import load_scene
 
@@ -93,3 +97,52 @@ def test_comparison_of_an_image_with_itself(statistics, tmp_path):
     np.testing.assert_array_equal(ds.p3_difference.values, 0.0)  # LPT overlays on common L
     assert (tmp_path / "cmp.png").stat().st_size > 10_000
     assert comparison_markdown(ds).count("\n") == ds.sizes["quantity"] + 1
+
+
+def test_realisation_tolerances_of_a_two_radius_law():
+    from porepipe.acquire._calibrate import porosity_tolerance, surface_tolerance
+
+    # radii 1 and 2 µm, equally likely: r² is 1 or 4 (mean 2.5, sd 1.5), r³ is 1 or 8 (mean 4.5, sd 3.5), exactly
+    law = {"dist": "discrete", "values_um": [1.0, 2.0], "probabilities": [0.5, 0.5]}
+    assert surface_tolerance(law, 100, 20.0) == pytest.approx(20.0 * 1.5 / (2.5 * 10.0), rel=1e-12)
+    box = [10.0, 20.0, 5.0]
+    assert porosity_tolerance(law, 100, box) == pytest.approx(
+        10.0 * 4.0 / 3.0 * np.pi * 3.5 / 1000.0, rel=1e-12
+    )
+
+
+@pytest.fixture(scope="module")
+def sphere_model(statistics):
+    from porepipe._shared.store import read_table
+
+    ds = read_table(statistics / "statistics.h5")
+    return ds, calibrated_scene(ds, Calibration(decoration=False), name="m", seed=3)
+
+
+def test_matching_without_s_v_matches_the_porosity_alone(sphere_model):
+    ds, scene = sphere_model
+    scene = copy.deepcopy(scene)
+    # a denser target than the image's 0.79 takes more than one round (27 spheres to ~40)
+    rounds = match_statistics(scene, 0.7, None, 3)
+    assert len(rounds) >= 2 and rounds[1]["count"] > rounds[0]["count"]
+    # sigma_max moves only where the round before did not converge (porosity alone does not need it)
+    for before, after in itertools.pairwise(rounds):
+        assert after["max_overlap"] == before["max_overlap"] or not before["packed"]
+    matched = scene["_calibration"]["matched"]
+    assert matched["S_V_target_per_mm"] is None and "S_V_within_tolerance" not in matched
+    assert matched["note"].startswith("the statistics carry no S_V_per_mm: the porosity is matched alone")
+
+
+def test_matching_an_s_v_below_reach_raises_sigma_max_to_its_limit_and_says_so(sphere_model):
+    ds, scene = sphere_model
+    scene = copy.deepcopy(scene)
+    s_v = float(ds.S_V_per_mm) / 4.0  # far below any packing of these spheres at this porosity
+    rounds = match_statistics(scene, float(ds.porosity), s_v, 6, max_overlap_limit=0.3)
+    sigmas = [r["max_overlap"] for r in rounds]
+    # S_V too high: every round deepens the overlaps, by at most 0.1, up to the limit and no further
+    assert sigmas[0] == 0.1 and sigmas[-1] == pytest.approx(0.3)
+    assert all(0.0 <= b - a <= 0.1 + 1e-12 for a, b in itertools.pairwise(sigmas))
+    matched = scene["_calibration"]["matched"]
+    assert matched["S_V_target_per_mm"] == s_v and matched["S_V_within_tolerance"] is False
+    assert "S_V not within its tolerance" in matched["note"]
+    assert len(scene["_calibration"]["matching_rounds"]) == len(rounds) == matched["rounds"]
