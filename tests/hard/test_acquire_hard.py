@@ -576,3 +576,31 @@ def test_messages_name_the_option_on_the_command_line_and_the_key_in_a_scene(
     (line,) = capsys.readouterr().err.splitlines()
     assert key_text in line and " --" not in line
     assert not out.exists()
+
+
+def test_matching_a_dense_image_whose_first_packing_runs_away_raises_sigma_max():
+    # before: a dense image (solid fraction 0.75: 280 spheres of r 4-7 µm in a 64 µm box) asked the first round for
+    # more spheres than sigma_max 0.1 holds; inserted onto each other at k = 9 000 they were pushed apart so hard that
+    # the packer stopped ("runaway sphere ... dt too large for k", seed 1) and acquire-calibrate ended with that error,
+    # naming a dt and k the user never set. A run that runs away is a round that did not converge: sigma_max goes up.
+    from porepipe.acquire._model import match_statistics
+
+    rng = np.random.default_rng(2)
+    n = 80
+    stats = xr.Dataset(
+        {
+            "inscribed_radius_um": ("grain", rng.uniform(4.0, 7.0, n)),
+            "cut": ("grain", np.zeros(n, np.int8)),
+            "elongation": ("grain", rng.uniform(0.1, 0.5, n)),
+            "grains_per_mm3": ((), 280 / 0.064**3),
+            "porosity": ((), 0.25),
+        },
+        attrs={"voxel_um": 2.0, "shape": np.array([32, 32, 32])},
+    )
+    scene = calibrated_scene(stats, Calibration(decoration=False), name="dense", seed=1)
+    rounds = match_statistics(scene, 0.25, None, 3)
+    assert rounds[0]["packed"] is False and "runaway sphere" in rounds[0]["ran_away"]
+    assert rounds[1]["max_overlap"] == pytest.approx(
+        0.2
+    )  # raised by one step of 0.1, as for a round not converged
+    assert any(r["packed"] for r in rounds) and scene["_calibration"]["matched"]["converged"] is True

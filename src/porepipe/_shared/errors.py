@@ -8,6 +8,12 @@ class PorepipeError(Exception):
     """
 
 
+class UnstableRunError(PorepipeError):
+    """A simulation went numerically unstable (a runaway or non-finite state): its parameters, not its input, are at
+    fault, so a caller that chose them (acquire-calibrate's matching) can choose others.
+    """
+
+
 def positive_number(name: str, value) -> float:
     """``value`` as a float if it is positive and finite, else one line naming ``name`` (the check the stages share)."""
     number = float(value)

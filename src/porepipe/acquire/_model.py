@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from porepipe._shared.errors import PorepipeError
+from porepipe._shared.errors import PorepipeError, UnstableRunError
 from porepipe._shared.store import ResultWriter, hash_of
 from porepipe.acquire._api import PHASES_VOLUME, image_statistics
 from porepipe.acquire._prepare import GreyHistogram, Phases
@@ -122,11 +122,18 @@ def _round(scene_dict: dict, targets: _Targets, base_dir, periodic: bool) -> dic
 
     packing = scene_dict["packing"]
     ptype = packing["types"][0]
-    phi, s_v, kept = _measure(scene_dict, base_dir, periodic)
     rec = {
         "count": int(ptype["count"]),
         "max_overlap": float(ptype["max_overlap"]),
         "k": float(packing["stages"][0]["k"]["grain"]),
+    }
+    try:
+        phi, s_v, kept = _measure(scene_dict, base_dir, periodic)
+    except (
+        UnstableRunError
+    ) as err:  # spheres packed past what sigma_max holds are pushed apart too hard: not packed
+        return {**rec, "spheres_kept": 0, "packed": False, "ran_away": str(err)}
+    rec |= {
         "spheres_kept": kept,
         "packed": kept >= MIN_KEPT * ptype["count"],
         "porosity": phi,
@@ -178,8 +185,8 @@ def _next_parameters(scene_dict: dict, history: list[dict], targets: _Targets, b
     if not last["packed"]:  # more spheres than sigma_max lets converge
         if ptype["max_overlap"] < bounds[1]:
             _set_overlap(scene_dict, min(bounds[1], ptype["max_overlap"] + _OVERLAP_STEP))
-        else:
-            ptype["count"] = max(1, last["spheres_kept"])  # at the limit: no more spheres than did converge
+        else:  # at the limit: no more spheres than did converge (of a run that ran away: MIN_KEPT of them)
+            ptype["count"] = max(1, last["spheres_kept"] or int(MIN_KEPT * ptype["count"]))
         return
     if last["porosity"] < 1.0:  # solid fraction in proportion to the count (bounded overlap)
         ptype["count"] = max(
@@ -214,7 +221,8 @@ def match_statistics(
     overlap level sigma_max, which at a given porosity sets the specific surface S_V (deeper overlaps hide more
     surface). Each round packs, voxelises, segments and measures the model exactly as ``acquire-model`` will (same
     seed, so the same packing). A round that keeps fewer than 95 % of its spheres converged (``MIN_KEPT``; the
-    stage deletes the rest) has more spheres than sigma_max lets converge: sigma_max is raised by 0.1. Otherwise
+    stage deletes the rest), or whose packing ran away (spheres inserted deeper than sigma_max pushed apart too
+    hard, ``UnstableRunError``), has more spheres than sigma_max lets converge: sigma_max is raised by 0.1. Otherwise
     both parameters take a step: the count n (1 - φ_t) / (1 - φ), exact where the solid fraction grows in
     proportion to the count, as in a packing of bounded overlap; sigma_max a secant step of ln S_V (slope from the
     last two rounds at different sigma_max, -1 before; steps of at most 0.1). sigma_max stays between the scene's
@@ -246,7 +254,8 @@ def match_statistics(
     Returns
     -------
     list of dict
-        One record per round: count, max_overlap, k, spheres_kept, packed, porosity, S_V_per_mm, tolerances, misfit.
+        One record per round: count, max_overlap, k, spheres_kept, packed, porosity, S_V_per_mm, tolerances, misfit;
+        a round whose packing ran away has ``ran_away`` (the packer's message) in place of the measured values.
     """
     history: list[dict] = []
     if not 0.0 < porosity < 1.0:

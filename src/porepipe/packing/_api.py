@@ -38,7 +38,7 @@ import numpy as np
 
 from porepipe._shared import rng
 from porepipe._shared.cost import SpentClock
-from porepipe._shared.errors import PorepipeError
+from porepipe._shared.errors import PorepipeError, UnstableRunError
 from porepipe._shared.progress import Progress
 from porepipe._shared.run_control import without_run_control
 from porepipe._shared.spheres import check_spheres
@@ -223,7 +223,7 @@ def _guard(
     if bad >= 0 or not np.isfinite(ke):
         i = int(bad if bad >= 0 else darg)
         t = tables.names[int(state.types[i])] if i >= 0 else "?"
-        raise PorepipeError(
+        raise UnstableRunError(
             f"{where}: non-finite position or velocity of sphere {_sphere_no(state, i)} (type {t!r}); "
             f"the time step dt = {stage.dt} is too large for the interaction constant k[{t}] or the "
             "damping"
@@ -232,7 +232,7 @@ def _guard(
     if dmax > limit:
         i = int(darg)
         t = tables.names[int(state.types[i])]
-        raise PorepipeError(
+        raise UnstableRunError(
             f"{where}: runaway sphere {_sphere_no(state, i)} (type {t!r}, r = {state.r[i]:.4g} µm) moved {dmax:.4g} µm "
             "in one step "
             f"(limit max_step_fraction * box = {limit:.4g} µm, kinetic energy {ke:.4g}); likely cause: dt = {stage.dt} "
