@@ -199,6 +199,13 @@ def _next_parameters(scene_dict: dict, history: list[dict], targets: _Targets, b
         _set_overlap(scene_dict, sigma)
 
 
+def _rank(rec: dict, targets: _Targets) -> tuple[bool, float]:
+    """How a packed round ranks for the scene left (smaller is better): one whose porosity is within its tolerance
+    before any other, then by misfit, so that an S_V out of reach never costs the porosity matched by the count.
+    """
+    return abs(rec["porosity"] - targets.porosity) > rec["porosity_tolerance"], rec["misfit"]
+
+
 def _repeats(scene_dict: dict, history: list[dict]) -> bool:
     """Whether the scene's sphere count and sigma_max are those of a round already measured."""
     ptype = scene_dict["packing"]["types"][0]
@@ -229,7 +236,8 @@ def match_statistics(
     starting value and ``max_overlap_limit``, and the stage's k, dt and damping follow it (``stage_dynamics``).
     The rounds stop when porosity and S_V are within their realisation scatter (``porosity_tolerance``,
     ``surface_tolerance``), or when the next round would repeat one already measured. The scene left is the
-    converged round of the smallest misfit (the larger of |φ - φ_t| / tolerance and |S_V - S_V,t| / tolerance);
+    converged round of the smallest misfit (the larger of |φ - φ_t| / tolerance and |S_V - S_V,t| / tolerance) among
+    those whose porosity is within its tolerance, where there are any (an S_V out of reach never costs the porosity);
     without S_V (``s_v_per_mm`` None) the porosity is matched alone and sigma_max is raised only where the packing
     does not converge.
 
@@ -268,7 +276,7 @@ def match_statistics(
     for _ in range(iterations):
         history.append(_round(scene_dict, targets, base_dir, periodic))
         last = history[-1]
-        if last["packed"] and (best is None or last["misfit"] < best[0]["misfit"]):
+        if last["packed"] and (best is None or _rank(last, targets) < _rank(best[0], targets)):
             best = (last, copy.deepcopy(scene_dict["packing"]))
         if (last["packed"] and last["misfit"] <= 1.0) or len(history) == iterations:
             break
