@@ -288,6 +288,8 @@ def match_statistics(
     record = scene_dict.setdefault("_calibration", {})
     record["matching_rounds"] = history
     record["matched"] = _matched(targets, best, history, scene_dict)
+    if best is not None and targets.s_v_per_mm is not None and not record["matched"]["S_V_within_tolerance"]:
+        record["matched"]["note"] += _surface_advice(best[0], targets, bounds, len(history) == iterations)
     return history
 
 
@@ -334,13 +336,30 @@ def _matched(targets: _Targets, best, history: list[dict], scene_dict: dict) -> 
         "and S_V, measured as acquire-model measures them, are matched to the image's by the sphere count and "
         "max_overlap (tolerances: the realisation scatter of a box of this many spheres)"
     )
-    if not out["S_V_within_tolerance"]:
-        out["note"] += (
-            f"; S_V not within its tolerance after {len(history)} rounds (max_overlap {out['max_overlap']}, "
-            f"bounds {history[0]['max_overlap']} to max_overlap_limit): raise porosity_iterations or "
-            "max_overlap_limit, or the image's S_V is beyond what converged packings of this radius law reach"
-        )
     return out
+
+
+def _surface_advice(rec: dict, targets: _Targets, bounds: tuple[float, float], rounds_ran_out: bool) -> str:
+    """Why the S_V of the round kept missed its tolerance, and the setting that can help: the bound of sigma_max it
+    pressed against (a lower max_overlap exposes more surface, a higher max_overlap_limit hides more), else the rounds.
+    """
+    sigma, below = rec["max_overlap"], rec["S_V_per_mm"] < targets.s_v_per_mm
+    text = (
+        f"; S_V not within its tolerance (model {rec['S_V_per_mm']:.4g}, image {targets.s_v_per_mm:.4g} /mm) "
+    )
+    if below and sigma <= bounds[0]:
+        return text + (
+            f"at the smallest max_overlap matching uses ({bounds[0]:g}): lower acquire.calibration.max_overlap "
+            "(shallower overlaps expose more surface)"
+        )
+    if not below and sigma >= bounds[1] and bounds[1] < 1.0:
+        return text + (
+            f"at the largest max_overlap matching may use ({bounds[1]:g}): raise "
+            "acquire.calibration.max_overlap_limit (deeper overlaps hide more surface)"
+        )
+    if rounds_ran_out:
+        return text + "when the rounds ran out: raise acquire.calibration.porosity_iterations"
+    return text + "and no further round would differ: converged packings of this radius law do not reach it"
 
 
 def run_model(

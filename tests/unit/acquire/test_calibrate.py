@@ -149,10 +149,22 @@ def test_matching_an_s_v_below_reach_raises_sigma_max_to_its_limit_and_says_so(s
 
 
 def _linear_packing(scene_dict, base_dir, periodic):
-    """A stand-in for pack-and-measure whose truth is exact: each sphere fills 0.002 of the box and adds 0.5 /mm of
-    S_V, whatever sigma_max; every sphere converges."""
-    n = scene_dict["packing"]["types"][0]["count"]
-    return 1.0 - 0.002 * n, 0.5 * n, n
+    """A stand-in for pack-and-measure whose truth is exact: each sphere fills 0.002 of the box, whatever sigma_max,
+    and adds 0.5 (1 - sigma_max) /mm of S_V (deeper overlaps hide surface); every sphere converges."""
+    ptype = scene_dict["packing"]["types"][0]
+    n = ptype["count"]
+    return 1.0 - 0.002 * n, 0.5 * n * (1.0 - ptype["max_overlap"]), n
+
+
+def _stand_in_scene():
+    law = {"dist": "uniform", "min_um": 40.0, "max_um": 80.0}
+    return {
+        "domain": {"size_um": [1000.0, 1000.0, 1000.0]},
+        "packing": {
+            "types": [{"count": 230, "radius_um": law, "max_overlap": 0.1}],
+            "stages": [{"k": {"grain": 1.0}}],
+        },
+    }
 
 
 def test_matching_keeps_the_matched_porosity_where_the_s_v_is_out_of_reach(monkeypatch):
@@ -162,18 +174,41 @@ def test_matching_keeps_the_matched_porosity_where_the_s_v_is_out_of_reach(monke
     from porepipe.acquire import _model
 
     monkeypatch.setattr(_model, "_measure", _linear_packing)
-    law = {"dist": "uniform", "min_um": 40.0, "max_um": 80.0}
-    scene = {
-        "domain": {"size_um": [1000.0, 1000.0, 1000.0]},
-        "packing": {
-            "types": [{"count": 230, "radius_um": law, "max_overlap": 0.1}],
-            "stages": [{"k": {"grain": 1.0}}],
-        },
-    }
-    # porosity 0.6 is 200 spheres exactly (solid in proportion to the count); S_V 172.5 needs 345, out of reach there
+    scene = _stand_in_scene()
+    # porosity 0.6 is 200 spheres exactly (solid in proportion to the count); S_V 172.5 needs 383, out of reach there
     rounds = match_statistics(scene, 0.6, 172.5, 6)
     assert [r["count"] for r in rounds[:2]] == [230, 200]
     matched = scene["_calibration"]["matched"]
     assert matched["sphere_count"] == 200 and matched["porosity_within_tolerance"] is True
     assert matched["porosity_model"] == pytest.approx(0.6, abs=1e-12)  # exact arithmetic of the stand-in
     assert matched["S_V_within_tolerance"] is False
+
+
+@pytest.mark.parametrize(
+    ("s_v", "sigma", "advice"),
+    [
+        (
+            172.5,
+            0.1,
+            "lower acquire.calibration.max_overlap",
+        ),  # 90 /mm at most (sigma 0.1): shallower overlaps needed
+        (
+            20.0,
+            0.4,
+            "raise acquire.calibration.max_overlap_limit",
+        ),  # 60 /mm at least (sigma 0.4): deeper needed
+    ],
+)
+def test_matching_that_misses_the_s_v_at_a_bound_names_the_bound_to_move(monkeypatch, s_v, sigma, advice):
+    # before: every miss advised "raise porosity_iterations or max_overlap_limit", also where the model's S_V was
+    # below the image's at the floor max_overlap (image-to-model: 102.3 against 107.1 at sigma_max 0.1, the rounds
+    # stopped after 5 of 6), which only a lower max_overlap can help
+    from porepipe.acquire import _model
+
+    monkeypatch.setattr(_model, "_measure", _linear_packing)
+    scene = _stand_in_scene()
+    match_statistics(scene, 0.6, s_v, 6, max_overlap_limit=0.4)
+    matched = scene["_calibration"]["matched"]
+    assert matched["max_overlap"] == pytest.approx(sigma) and matched["S_V_within_tolerance"] is False
+    assert advice in matched["note"]
+    assert "porosity_iterations" not in matched["note"]  # the rounds were not what ran out
