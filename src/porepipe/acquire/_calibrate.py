@@ -116,10 +116,14 @@ def porosity_tolerance(radius_spec: dict, count: int, box_um) -> float:
 
     A model packed with other positions and other radii drawn from the same law differs by about this much (the sum
     of N independent sphere volumes dominates; overlaps bounded by sigma_max change it little), so matching the
-    image's porosity closer than this fits one realisation, not the law.
+    image's porosity closer than this fits one realisation, not the law. It is at least half a sphere's volume
+    mean(v) / (2 V): the count cannot set the porosity finer.
     """
-    _, sd = radius_moments(radius_spec, 3)
-    return float(np.sqrt(count) * 4.0 / 3.0 * np.pi * sd / np.prod(np.asarray(box_um, dtype=np.float64)))
+    mean, sd = radius_moments(radius_spec, 3)
+    volume = float(np.prod(np.asarray(box_um, dtype=np.float64)))
+    # never below half a sphere: the count, the only control of the porosity, moves it by mean(v) / V per sphere (and
+    # a law without radius scatter, equal grains, had a tolerance of 0, which no packing meets)
+    return float(4.0 / 3.0 * np.pi * max(np.sqrt(count) * sd, 0.5 * mean) / volume)
 
 
 def surface_tolerance(radius_spec: dict, count: int, s_v_per_mm: float) -> float:
@@ -130,10 +134,13 @@ def surface_tolerance(radius_spec: dict, count: int, s_v_per_mm: float) -> float
     sqrt(N)) of S_V (the law's coefficient of variation of the sphere surface over sqrt(N)). Measured: 20 packings
     of 157 spheres (exponential radii 40-80 µm, alpha 0.05/µm, 600 µm box, 6 µm voxels, seeds 1-20) scatter by 3.7 %
     at sigma_max 0.4 and 2.9 % at 0.3 (2.4-3.0 % about their trend with porosity), against 3.2 % from this formula.
-    A model closer to the image's S_V than this fits one realisation, not the law.
+    A model closer to the image's S_V than this fits one realisation, not the law. It is at least half a sphere's
+    share, S_V / (2 N).
     """
     mean, sd = radius_moments(radius_spec, 2)
-    return float(s_v_per_mm * sd / (mean * np.sqrt(max(count, 1))))
+    count = max(count, 1)
+    # never below half a sphere's share S_V / (2 N): equal grains (sd 0) had a tolerance of 0 and a misfit of x / 0
+    return float(s_v_per_mm * max(sd / (mean * np.sqrt(count)), 0.5 / count))
 
 
 @dataclasses.dataclass

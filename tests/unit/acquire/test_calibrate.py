@@ -212,3 +212,23 @@ def test_matching_that_misses_the_s_v_at_a_bound_names_the_bound_to_move(monkeyp
     assert matched["max_overlap"] == pytest.approx(sigma) and matched["S_V_within_tolerance"] is False
     assert advice in matched["note"]
     assert "porosity_iterations" not in matched["note"]  # the rounds were not what ran out
+
+
+def test_matching_equal_grains_has_tolerances_of_half_a_sphere(monkeypatch):
+    # before: a radius fit of equal grains (uniform, min = max) gave S_V tolerance 0 (and porosity tolerance 1e-18),
+    # and the first round ended in ZeroDivisionError. The count moves porosity by one sphere's volume and S_V by
+    # one sphere's share, so half of those is the finest match there is.
+    from porepipe.acquire import _model
+    from porepipe.acquire._calibrate import porosity_tolerance, surface_tolerance
+
+    law = {"dist": "uniform", "min_um": 50.0, "max_um": 50.0}
+    box = [1000.0, 1000.0, 1000.0]
+    half_sphere = 0.5 * 4.0 / 3.0 * np.pi * 50.0**3 / 1e9  # exact arithmetic, up to rounding
+    assert porosity_tolerance(law, 200, box) == pytest.approx(half_sphere, rel=1e-12)
+    assert surface_tolerance(law, 200, 80.0) == pytest.approx(80.0 / 400.0, rel=1e-12)
+    monkeypatch.setattr(_model, "_measure", _linear_packing)
+    scene = _stand_in_scene()
+    scene["packing"]["types"][0]["radius_um"] = law
+    rounds = match_statistics(scene, 0.6, 80.0, 6)
+    assert all(np.isfinite(r["misfit"]) for r in rounds)
+    assert scene["_calibration"]["matched"]["porosity_within_tolerance"] is True
