@@ -118,7 +118,7 @@ def run_calibrate(statistics_path, out, *, scene=None, name: str | None = None) 
         model["_calibration"]["S_V_per_mm"],
         settings.calibration.porosity_iterations,
         Path(out).parent,
-        max_overlap_limit=settings.calibration.max_overlap_limit,
+        max_overlap_limit=settings.calibration.overlap_limit,
         periodic=settings.periodic,
     )
     return write_scene_yaml(model, out)

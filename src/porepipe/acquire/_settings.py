@@ -182,6 +182,10 @@ class Family(str, enum.Enum):
     discrete = "discrete"
 
 
+#: largest sigma_max the calibration's matching moves to unless the scene says otherwise (§5.6.2 packs at 0.35)
+_DEFAULT_OVERLAP_LIMIT = 0.4
+
+
 class Calibration(_Strict):
     """How statistics become a model scene (packing + decoration) that the user can edit and run."""
 
@@ -198,11 +202,12 @@ class Calibration(_Strict):
         "uses: matching moves it up to max_overlap_limit to fit the image's S_V, and where the packing does not "
         "converge",
     )
-    max_overlap_limit: float = Field(
-        0.4,
+    max_overlap_limit: float | None = Field(
+        None,
         gt=0,
         le=1,
-        description="largest sigma_max matching may move max_overlap to (§5.6.2 packs at 0.35)",
+        description="largest sigma_max matching may move max_overlap to (default: 0.4, §5.6.2 packs at 0.35, or "
+        "max_overlap where that is larger)",
     )
     box_um: tuple[PosFloat, PosFloat, PosFloat] | None = Field(
         None, description="model box (default: the image's)"
@@ -226,11 +231,18 @@ class Calibration(_Strict):
 
     @model_validator(mode="after")
     def _overlap_limit(self):
-        if self.max_overlap_limit < self.max_overlap:
+        if self.max_overlap_limit is not None and self.max_overlap_limit < self.max_overlap:
             raise ValueError(
                 f"max_overlap_limit = {self.max_overlap_limit} is below max_overlap = {self.max_overlap}"
             )
         return self
+
+    @property
+    def overlap_limit(self) -> float:
+        """The largest sigma_max matching may use: ``max_overlap_limit``, else 0.4 or ``max_overlap`` if larger."""
+        if self.max_overlap_limit is not None:
+            return self.max_overlap_limit
+        return max(_DEFAULT_OVERLAP_LIMIT, self.max_overlap)
 
 
 class Settings(_Strict):

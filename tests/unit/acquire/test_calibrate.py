@@ -232,3 +232,18 @@ def test_matching_equal_grains_has_tolerances_of_half_a_sphere(monkeypatch):
     rounds = match_statistics(scene, 0.6, 80.0, 6)
     assert all(np.isfinite(r["misfit"]) for r in rounds)
     assert scene["_calibration"]["matched"]["porosity_within_tolerance"] is True
+
+
+@pytest.mark.parametrize(
+    ("given", "limit"),
+    [({}, 0.4), ({"max_overlap": 0.2}, 0.4), ({"max_overlap": 0.7}, 0.7), ({"max_overlap_limit": 0.3}, 0.3)],
+)
+def test_overlap_limit_defaults_to_0_4_or_max_overlap(given, limit):
+    # a scene that sets only max_overlap above 0.4 (accepted before matching had a limit) keeps working: the limit
+    # follows it; one that sets a limit below max_overlap is refused, naming both
+    assert Calibration(**given).overlap_limit == limit
+
+
+def test_overlap_limit_below_max_overlap_is_refused():
+    with pytest.raises(ValueError, match="max_overlap_limit = 0.2 is below max_overlap = 0.5"):
+        Calibration(max_overlap=0.5, max_overlap_limit=0.2)
