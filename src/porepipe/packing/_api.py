@@ -646,20 +646,27 @@ def checkpoint_key(settings: Settings, box, periodic, seed: int, base_dir: Path)
 
 
 def _resumed_state(checkpoint_path, key: str) -> State:
-    """The checkpoint's state if it was written for the same packing; otherwise a fresh start (and say why)."""
+    """The checkpoint's state if it was written for the same packing and can be read; otherwise a fresh start (and
+    say why: a damaged checkpoint would stop every rerun of the pack rule, which always resumes).
+    """
     path = Path(checkpoint_path)
     if not path.is_file():
         return State.empty()
-    found = read_checkpoint_key(path)
-    if found != key:
-        print(
-            f"pack: discarding checkpoint {path}: it was written for other settings, box or seed (key "
-            f"{found or 'none'}, this run {key}); starting afresh",
-            file=sys.stderr,
+    try:
+        found = read_checkpoint_key(path)
+        if found == key:
+            return load_checkpoint(path)
+    except PorepipeError as err:  # damaged, truncated, not HDF5: it names the file and what failed
+        print(f"pack: {err}: discarding it, starting afresh", file=sys.stderr)
+    else:
+        why = (
+            f"it was written for other settings, box or seed (key {found}, this run {key})"
+            if found
+            else "it carries no key (not written by this version of porepipe pack, or damaged)"
         )
-        path.unlink()
-        return State.empty()
-    return load_checkpoint(path)
+        print(f"pack: discarding checkpoint {path}: {why}; starting afresh", file=sys.stderr)
+    path.unlink()
+    return State.empty()
 
 
 def pack_spheres(

@@ -48,7 +48,8 @@ def register(subparsers) -> None:
         action=argparse.BooleanOptionalAction,
         default=False,
         help="continue from --checkpoint if it exists and was written for the same packing (settings less run "
-        "control, box, seed, input files); one written for another is discarded with a message",
+        "control, box, seed, input files); one written for another, or damaged (its checksums), is discarded with a "
+        "message",
     )
     add_threads_option(p)
     p.set_defaults(func=main)

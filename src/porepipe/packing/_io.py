@@ -116,14 +116,16 @@ def save_checkpoint(path, state: State, key: str = "", clock: SpentClock | None 
 
     ``key`` is the hash of everything that determines the packing (:func:`porepipe.packing._api.checkpoint_key`);
     a resume refuses a checkpoint whose key differs. ``clock``: what the run has spent so far, recorded so that a
-    resumed run's cost includes it.
+    resumed run's cost includes it. Every part of the file is checksummed (the datasets by HDF5's Fletcher-32
+    filter, the metadata and attributes by the newest file format), so :func:`load_checkpoint` refuses a damaged
+    file instead of resuming from garbage.
     """
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+    with atomic_path(path) as tmp, h5py.File(tmp, "w", libver="latest") as f:
         f.attrs["key"] = key
         if clock is not None:
             clock.record(f.attrs)
         for key in _STATE_ARRAYS:
-            f.create_dataset(key, data=getattr(state, key))
+            f.create_dataset(key, data=getattr(state, key), fletcher32=True)
         for key in _STATE_INTS:
             f.attrs[key] = int(getattr(state, key))
         f.attrs["need_rebuild"] = int(state.need_rebuild)
@@ -131,49 +133,69 @@ def save_checkpoint(path, state: State, key: str = "", clock: SpentClock | None 
         f.attrs["stage_steps"] = np.asarray(state.stage_steps, dtype=np.int64)
         h = f.create_group("history")
         for key in HISTORY_KEYS:
-            h.create_dataset(key, data=np.asarray(state.history[key]))
+            h.create_dataset(key, data=np.asarray(state.history[key]), fletcher32=True)
         for i, snap in enumerate(state.snapshots):
             g = f.create_group(f"snapshots/{i}")
             g.attrs["name"] = snap["name"]
             for key in _SPHERE_KEYS:
-                g.create_dataset(key, data=snap[key])
+                g.create_dataset(key, data=snap[key], fletcher32=True)
+
+
+#: what h5py raises on a damaged file (a checksum that fails, a broken structure, a missing or malformed part)
+_DAMAGED = (OSError, RuntimeError, KeyError, ValueError, TypeError)
 
 
 def read_checkpoint_key(path) -> str:
-    """The key a checkpoint was written with ('' for a checkpoint written before keys existed, or an unreadable one)."""
+    """The key a checkpoint was written with ('' for a checkpoint written before keys existed).
+
+    Raises
+    ------
+    PorepipeError
+        ``path`` cannot be read as an HDF5 file (damaged, truncated, not HDF5).
+    """
     try:
         with h5py.File(path, "r") as f:
             value = f.attrs.get("key", "")
-    except OSError:
-        return ""
+    except _DAMAGED as err:
+        raise PorepipeError(f"checkpoint {path} cannot be read ({type(err).__name__}: {err})") from None
     return value.decode() if isinstance(value, bytes) else str(value)
 
 
 def load_checkpoint(path) -> State:
-    """Read a checkpoint written by :func:`save_checkpoint`."""
+    """Read a checkpoint written by :func:`save_checkpoint`.
+
+    Raises
+    ------
+    PorepipeError
+        ``path`` is not a packing checkpoint, or a part of it cannot be read (damaged, truncated: its checksums).
+    """
     path = Path(path)
     try:
-        f = h5py.File(path, "r")
-    except OSError as err:
-        raise PorepipeError(f"checkpoint {path} is not a readable HDF5 file: {err}") from err
-    with f:
-        missing = [k for k in _STATE_ARRAYS if k not in f]
-        if missing:
-            raise PorepipeError(f"checkpoint {path} lacks {missing}; was it written by porepipe pack?")
-        arrays = {k: f[k][...] for k in _STATE_ARRAYS}
-        ints = {k: int(f.attrs[k]) for k in _STATE_INTS}
-        history = {k: f["history"][k][...].tolist() for k in HISTORY_KEYS}
-        snaps = []
-        for i in range(len(f["snapshots"]) if "snapshots" in f else 0):
-            g = f[f"snapshots/{i}"]
-            snaps.append({"name": str(g.attrs["name"]), **{k: g[k][...] for k in _SPHERE_KEYS}})
-        return State(
-            **arrays,
-            **ints,
-            need_rebuild=bool(f.attrs["need_rebuild"]),
-            history=history,
-            stage_converged=[bool(b) for b in f.attrs["stage_converged"]],
-            stage_steps=[int(s) for s in f.attrs["stage_steps"]],
-            snapshots=snaps,
-            carried=carried_by(f.attrs),
-        )
+        with h5py.File(path, "r") as f:
+            missing = [k for k in _STATE_ARRAYS if k not in f]
+            if missing:
+                raise PorepipeError(f"checkpoint {path} lacks {missing}; was it written by porepipe pack?")
+            return _read_state(f)
+    except _DAMAGED as err:
+        raise PorepipeError(f"checkpoint {path} cannot be read ({type(err).__name__}: {err})") from None
+
+
+def _read_state(f) -> State:
+    """The :class:`State` stored in the open checkpoint ``f``."""
+    arrays = {k: f[k][...] for k in _STATE_ARRAYS}
+    ints = {k: int(f.attrs[k]) for k in _STATE_INTS}
+    history = {k: f["history"][k][...].tolist() for k in HISTORY_KEYS}
+    snaps = []
+    for i in range(len(f["snapshots"]) if "snapshots" in f else 0):
+        g = f[f"snapshots/{i}"]
+        snaps.append({"name": str(g.attrs["name"]), **{k: g[k][...] for k in _SPHERE_KEYS}})
+    return State(
+        **arrays,
+        **ints,
+        need_rebuild=bool(f.attrs["need_rebuild"]),
+        history=history,
+        stage_converged=[bool(b) for b in f.attrs["stage_converged"]],
+        stage_steps=[int(s) for s in f.attrs["stage_steps"]],
+        snapshots=snaps,
+        carried=carried_by(f.attrs),
+    )
