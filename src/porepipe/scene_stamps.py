@@ -35,18 +35,22 @@ _BUILT = frozenset(
     {"analyses", "segmentation", "resolutions_um", "packing", "decoration", "voxelize", "spheres"}
 )
 
+#: the memory budget (``resources.memory_budget_mb``): only the volume stages that chunk by it read it (voxelize,
+#: minkowski, lpt; segment gets it as a command-line option)
+_BUDGET = frozenset({"resources"})
+
 #: rule -> the top-level scene keys its results cannot depend on
 IGNORED: dict[str, frozenset[str]] = {
-    "pack": _MODEL | {"decoration", "voxelize"},
-    "decorate": _MODEL | {"voxelize"},
-    "voxelize_grains": _MODEL,
+    "pack": _MODEL | _BUDGET | {"decoration", "voxelize"},
+    "decorate": _MODEL | _BUDGET | {"voxelize"},
+    "voxelize_grains": _MODEL | _BUDGET,
     "voxelize": _MODEL | {"decoration"},
     "minkowski": _BUILT | (_ENGINES - {"minkowski"}),
     "lpt": _BUILT | (_ENGINES - {"lpt"}),
-    "permeability": _BUILT | (_ENGINES - {"permeability"}),
-    "diffusion": _BUILT | (_ENGINES - {"diffusion"}),
-    "capillary": _MODEL - {"diffusion", "resolutions_um"},
-    "granular": (_MODEL - {"granular"}) | _BUILT | {"domain", "acquire"},
+    "permeability": _BUILT | _BUDGET | (_ENGINES - {"permeability"}),
+    "diffusion": _BUILT | _BUDGET | (_ENGINES - {"diffusion"}),
+    "capillary": (_MODEL | _BUDGET) - {"diffusion", "resolutions_um"},
+    "granular": (_MODEL - {"granular"}) | _BUILT | _BUDGET | {"domain", "acquire"},
 }
 #: the workflow's rules that take a stamp (the others take no scene at all; a test checks the rule files agree)
 STAMPED_RULES = (

@@ -180,6 +180,26 @@ def test_a_stamp_ignores_comments_layout_and_the_keys_its_rule_does_not_read(tmp
         assert stamp_text(a, rule) != stamp_text(b, rule), rule
 
 
+#: the rules whose commands read ``resources.memory_budget_mb`` (test_no_stage_reads_a_key_its_stamp_leaves_out
+#: checks that the others do not): voxelize, minkowski and lpt chunk their volumes by it (segment gets it on its
+#: command line, which is a rule parameter, not a stamp)
+READS_THE_BUDGET = {"voxelize", "minkowski", "lpt"}
+
+
+def test_a_memory_budget_edit_reruns_only_the_rules_that_read_it(tmp_path):
+    # before: every stamp kept `resources`, so setting resources.memory_budget_mb (say, after lpt ran out of memory
+    # at a fine resolution) also reran pack, which never reads it (runtime up to 240 min); the volumes are rebuilt
+    # (voxelize reads it), so the engines after them rerun through their input files, not through their stamps
+    base = yaml.safe_load((TINY / "tiny.yaml").read_text())
+    first, second = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    first.write_text(yaml.safe_dump(base))
+    second.write_text(yaml.safe_dump({**base, "resources": {"memory_budget_mb": 4000}}))
+    a, b = load_scene(first), load_scene(second)
+    for rule in IGNORED:
+        changed = stamp_text(a, rule) != stamp_text(b, rule)
+        assert changed == (rule in READS_THE_BUDGET), rule
+
+
 def test_write_stamp_keeps_an_unchanged_stamp_and_rewrites_a_changed_one(tmp_path):
     scene = load_scene(TINY / "tiny.yaml")
     path = Path(write_stamp(scene, "pack", tmp_path / "scene"))
