@@ -373,6 +373,19 @@ def main(argv: list[str] | None = None) -> int:
     except PorepipeError as err:
         print(f"porepipe {args.command}: error: {err}", file=sys.stderr)
         return 2
+    except (
+        KeyboardInterrupt
+    ):  # Ctrl-C: one line, not a traceback; results are written atomically, so none is half there
+        print(f"porepipe {args.command}: interrupted; no result written{_resume_hint(args)}", file=sys.stderr)
+        return 130
+
+
+def _resume_hint(args) -> str:
+    """Where an interrupted stage command can continue from (its ``--checkpoint``, if it took one)."""
+    checkpoint = getattr(args, "checkpoint", None)
+    if not checkpoint:
+        return ""
+    return f" (rerun with --checkpoint {checkpoint} --resume to continue from its last checkpoint, if one was written)"
 
 
 if __name__ == "__main__":

@@ -204,3 +204,24 @@ def test_a_boolean_settings_default_is_shown_as_a_scene_writes_it(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "else False" not in text and "else True" not in text
     assert "(default: the scene's, else false)" in text
+
+
+@pytest.mark.parametrize(
+    ("extra", "hint"), [([], ""), (["--checkpoint", "ck.h5"], " (rerun with --checkpoint ck.h5 --resume")]
+)
+def test_ctrl_c_in_a_stage_command_is_one_line_and_exit_130(monkeypatch, tmp_path, capsys, extra, hint):
+    # before: Ctrl-C in `porepipe pack` printed the whole KeyboardInterrupt traceback
+    import porepipe.packing._cli as pack_cli
+    from porepipe.cli import main
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pack_cli, "main", interrupted)
+    monkeypatch.chdir(tmp_path)
+    scene = tmp_path / "s.yaml"
+    scene.write_text("name: s\n")
+    assert main(["pack", str(scene), "-o", "out.h5", *extra]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("porepipe pack: interrupted; no result written" + hint)
+    assert not (tmp_path / "out.h5").exists()
