@@ -330,6 +330,23 @@ def test_raw_options_on_the_command_line_keep_the_scenes_other_raw_keys(tmp_path
     assert "--raw-dtype needs the RAW image's shape: give --raw-shape NX NY NZ too" in capsys.readouterr().err
 
 
+def _small_grain_statistics(r_lo: float, r_hi: float, spheres: int, porosity: float) -> xr.Dataset:
+    """Statistics of a 32³ image of 2 µm voxels: 80 uncut grains of radii uniform in [r_lo, r_hi] µm, ``spheres``
+    grains per (64 µm)³ box and the given porosity (what calibrated_scene reads)."""
+    rng = np.random.default_rng(2)
+    n = 80
+    return xr.Dataset(
+        {
+            "inscribed_radius_um": ("grain", rng.uniform(r_lo, r_hi, n)),
+            "cut": ("grain", np.zeros(n, np.int8)),
+            "elongation": ("grain", rng.uniform(0.1, 0.5, n)),
+            "grains_per_mm3": ((), spheres / 0.064**3),
+            "porosity": ((), porosity),
+        },
+        attrs={"voxel_um": 2.0, "shape": np.array([32, 32, 32])},
+    )
+
+
 def test_calibrated_packing_of_small_grains_settles():
     # before: the calibrated stage had dt = 0.25 for grains of any size, unstable below r ~ 10 µm: grains of 3-6 µm
     # (an image of 2 µm voxels, or one whose grey phases were swapped so that the pores became the "grains")
@@ -337,18 +354,7 @@ def test_calibrated_packing_of_small_grains_settles():
     from porepipe.packing import pack_spheres
     from porepipe.scene import parse_scene
 
-    rng = np.random.default_rng(2)
-    n = 80
-    stats = xr.Dataset(
-        {
-            "inscribed_radius_um": ("grain", rng.uniform(3.0, 6.0, n)),
-            "cut": ("grain", np.zeros(n, np.int8)),
-            "elongation": ("grain", rng.uniform(0.1, 0.5, n)),
-            "grains_per_mm3": ((), 150 / 0.064**3),
-            "porosity": ((), 0.4),
-        },
-        attrs={"voxel_um": 2.0, "shape": np.array([32, 32, 32])},
-    )
+    stats = _small_grain_statistics(3.0, 6.0, spheres=150, porosity=0.4)
     scene = calibrated_scene(stats, Calibration(decoration=False), name="small")
     stage = scene["packing"]["stages"][0]
     assert stage["dt"] * stage["damping"]["grain"] == pytest.approx(0.05, rel=1e-2)  # C- = 0.975 at any dt
@@ -585,18 +591,7 @@ def test_matching_a_dense_image_whose_first_packing_runs_away_raises_sigma_max()
     # naming a dt and k the user never set. A run that runs away is a round that did not converge: sigma_max goes up.
     from porepipe.acquire._model import match_statistics
 
-    rng = np.random.default_rng(2)
-    n = 80
-    stats = xr.Dataset(
-        {
-            "inscribed_radius_um": ("grain", rng.uniform(4.0, 7.0, n)),
-            "cut": ("grain", np.zeros(n, np.int8)),
-            "elongation": ("grain", rng.uniform(0.1, 0.5, n)),
-            "grains_per_mm3": ((), 280 / 0.064**3),
-            "porosity": ((), 0.25),
-        },
-        attrs={"voxel_um": 2.0, "shape": np.array([32, 32, 32])},
-    )
+    stats = _small_grain_statistics(4.0, 7.0, spheres=280, porosity=0.25)
     scene = calibrated_scene(stats, Calibration(decoration=False), name="dense", seed=1)
     rounds = match_statistics(scene, 0.25, None, 3)
     assert rounds[0]["packed"] is False and "runaway sphere" in rounds[0]["ran_away"]
