@@ -589,7 +589,7 @@ def test_matching_a_dense_image_whose_first_packing_runs_away_raises_sigma_max()
     # more spheres than sigma_max 0.1 holds; inserted onto each other at k = 9 000 they were pushed apart so hard that
     # the packer stopped ("runaway sphere ... dt too large for k", seed 1) and acquire-calibrate ended with that error,
     # naming a dt and k the user never set. A run that runs away is a round that did not converge: sigma_max goes up.
-    from porepipe.acquire._model import match_statistics
+    from porepipe.acquire._matching import match_statistics
 
     stats = _small_grain_statistics(4.0, 7.0, spheres=280, porosity=0.25)
     scene = calibrated_scene(stats, Calibration(decoration=False), name="dense", seed=1)

@@ -19,7 +19,8 @@ from scipy import stats
 
 from porepipe.acquire._api import image_statistics
 from porepipe.acquire._calibrate import calibrated_scene
-from porepipe.acquire._model import match_statistics, run_model
+from porepipe.acquire._matching import match_statistics
+from porepipe.acquire._model import run_model
 from porepipe.acquire._prepare import segment_phases
 from porepipe.acquire._settings import Calibration, Settings
 from porepipe.packing import Settings as PackingSettings

@@ -20,7 +20,8 @@ _EXPORTS = {
     ),
     **dict.fromkeys(["compare", "comparison_markdown", "plot_comparison", "write_comparison"], "_compare"),
     **dict.fromkeys(["Image", "read_image", "require_spacing"], "_io"),
-    **dict.fromkeys(["match_statistics", "model_grey", "run_model"], "_model"),
+    **dict.fromkeys(["model_grey", "run_model"], "_model"),
+    "match_statistics": "_matching",
     **dict.fromkeys(["GreyHistogram", "Phases", "denoise", "grey_histogram", "segment_phases"], "_prepare"),
     "Settings": "_settings",
 }

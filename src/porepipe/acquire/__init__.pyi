@@ -57,7 +57,7 @@ from porepipe.acquire._io import (
 from porepipe.acquire._io import (
     require_spacing as require_spacing,
 )
-from porepipe.acquire._model import (
+from porepipe.acquire._matching import (
     match_statistics as match_statistics,
 )
 from porepipe.acquire._model import (

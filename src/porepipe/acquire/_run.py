@@ -13,7 +13,8 @@ from porepipe._shared.store import read_table, result_hash
 from porepipe.acquire._api import acquire, write_binary
 from porepipe.acquire._calibrate import calibrated_scene, write_scene_yaml
 from porepipe.acquire._compare import write_comparison
-from porepipe.acquire._model import match_statistics, run_model
+from porepipe.acquire._matching import match_statistics
+from porepipe.acquire._model import run_model
 from porepipe.acquire._settings import SCENE_KEYS, SettingNames, Settings
 
 #: porosity above which acquire-calibrate warns that the grey phases may be swapped (a rock of porosity 0.2 whose

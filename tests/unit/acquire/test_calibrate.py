@@ -15,7 +15,7 @@ from porepipe.acquire._calibrate import (
     write_scene_yaml,
 )
 from porepipe.acquire._compare import comparison_markdown, write_comparison
-from porepipe.acquire._model import match_statistics
+from porepipe.acquire._matching import match_statistics
 from porepipe.acquire._settings import Calibration, Family, Settings
 from porepipe.scene import load_scene
 
@@ -171,9 +171,9 @@ def test_matching_keeps_the_matched_porosity_where_the_s_v_is_out_of_reach(monke
     # before: the scene left was the round of the smaller larger-misfit, so a round that met the porosity exactly but
     # missed an unreachable S_V a little more lost to one that missed both: an image of small grains (r 2-3 voxels)
     # got a model of porosity 0.431 for its 0.593 although two rounds had matched it to 1e-4
-    from porepipe.acquire import _model
+    from porepipe.acquire import _matching
 
-    monkeypatch.setattr(_model, "_measure", _linear_packing)
+    monkeypatch.setattr(_matching, "_measure", _linear_packing)
     scene = _stand_in_scene()
     # porosity 0.6 is 200 spheres exactly (solid in proportion to the count); S_V 172.5 needs 383, out of reach there
     rounds = match_statistics(scene, 0.6, 172.5, 6)
@@ -203,9 +203,9 @@ def test_matching_that_misses_the_s_v_at_a_bound_names_the_bound_to_move(monkeyp
     # before: every miss advised "raise porosity_iterations or max_overlap_limit", also where the model's S_V was
     # below the image's at the floor max_overlap (image-to-model: 102.3 against 107.1 at sigma_max 0.1, the rounds
     # stopped after 5 of 6), which only a lower max_overlap can help
-    from porepipe.acquire import _model
+    from porepipe.acquire import _matching
 
-    monkeypatch.setattr(_model, "_measure", _linear_packing)
+    monkeypatch.setattr(_matching, "_measure", _linear_packing)
     scene = _stand_in_scene()
     match_statistics(scene, 0.6, s_v, 6, max_overlap_limit=0.4)
     matched = scene["_calibration"]["matched"]
@@ -218,7 +218,7 @@ def test_matching_equal_grains_has_tolerances_of_half_a_sphere(monkeypatch):
     # before: a radius fit of equal grains (uniform, min = max) gave S_V tolerance 0 (and porosity tolerance 1e-18),
     # and the first round ended in ZeroDivisionError. The count moves porosity by one sphere's volume and S_V by
     # one sphere's share, so half of those is the finest match there is.
-    from porepipe.acquire import _model
+    from porepipe.acquire import _matching
     from porepipe.acquire._calibrate import porosity_tolerance, surface_tolerance
 
     law = {"dist": "uniform", "min_um": 50.0, "max_um": 50.0}
@@ -226,7 +226,7 @@ def test_matching_equal_grains_has_tolerances_of_half_a_sphere(monkeypatch):
     half_sphere = 0.5 * 4.0 / 3.0 * np.pi * 50.0**3 / 1e9  # exact arithmetic, up to rounding
     assert porosity_tolerance(law, 200, box) == pytest.approx(half_sphere, rel=1e-12)
     assert surface_tolerance(law, 200, 80.0) == pytest.approx(80.0 / 400.0, rel=1e-12)
-    monkeypatch.setattr(_model, "_measure", _linear_packing)
+    monkeypatch.setattr(_matching, "_measure", _linear_packing)
     scene = _stand_in_scene()
     scene["packing"]["types"][0]["radius_um"] = law
     rounds = match_statistics(scene, 0.6, 80.0, 6)
