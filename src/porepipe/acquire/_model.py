@@ -12,7 +12,8 @@ import numpy as np
 import xarray as xr
 
 from porepipe._shared.errors import PorepipeError
-from porepipe._shared.store import ResultWriter, hash_of
+from porepipe._shared.run_control import without_run_control
+from porepipe._shared.store import ResultWriter, result_hash
 from porepipe.acquire._api import PHASES_VOLUME, image_statistics
 from porepipe.acquire._prepare import GreyHistogram, Phases
 from porepipe.acquire._settings import Method, Settings
@@ -89,9 +90,14 @@ def run_model(
     """
     # measured like the image (same boundary treatment), so that model and experiment are compared like for like
     settings = acquire_settings
-    with ResultWriter(
-        out, stage="acquire-model", scene=scene.name, scene_hash=hash_of(scene.model_dump(mode="json"))
-    ) as w:
+    digest = result_hash(  # the model scene and every setting it is measured with, less run control
+        "acquire-model",
+        scene_part=without_run_control(scene),
+        settings=settings,
+        lpt=without_run_control(lpt_settings) if lpt_settings is not None else None,
+        permeability=without_run_control(permeability_settings) if permeability_settings is not None else None,
+    )
+    with ResultWriter(out, stage="acquire-model", scene=scene.name, scene_hash=digest) as w:
         grey, packing, a = model_grey(scene, base_dir)
         phases = model_phases(grey)
         del grey

@@ -247,3 +247,34 @@ def test_overlap_limit_defaults_to_0_4_or_max_overlap(given, limit):
 def test_overlap_limit_below_max_overlap_is_refused():
     with pytest.raises(ValueError, match="max_overlap_limit = 0.2 is below max_overlap = 0.5"):
         Calibration(max_overlap=0.5, max_overlap_limit=0.2)
+
+
+def test_model_result_hash_follows_the_measuring_settings_not_run_control(
+    sphere_model, tmp_path, monkeypatch
+):
+    # before: acquire-model hashed the model scene alone (hash_of(scene.model_dump())), so a model measured with
+    # other acquire settings (another Otsu split, no grains) kept the same scene_hash, while a new progress interval
+    # of its packing changed it. The packing and voxelisation are stood in for: the hash is what is checked here.
+    from types import SimpleNamespace
+
+    from porepipe._shared.store import read_attrs
+    from porepipe.acquire import _model
+    from porepipe.acquire._model import run_model
+    from porepipe.scene import parse_scene
+
+    rng = np.random.default_rng(1)
+    grey = np.where(rng.random((24, 24, 24)) < 0.4, 40, 200).astype(np.uint8)
+    packed = SimpleNamespace(radii_um=np.ones(3), all_converged=True)
+    monkeypatch.setattr(_model, "model_grey", lambda scene, base_dir=".": (grey, packed, 2.0))
+    _, calibrated = sphere_model
+    tree = {k: v for k, v in copy.deepcopy(calibrated).items() if not k.startswith("_")}
+
+    def digest(name, acquire, progress_every_s=10.0):
+        tree["packing"]["progress_every_s"] = progress_every_s
+        run_model(parse_scene(tree, tmp_path), acquire, tmp_path / name)
+        return read_attrs(tmp_path / name)["scene_hash"]
+
+    plain = Settings(voxel_um=2.0, statistics={"grains": False})
+    base = digest("a.h5", plain)
+    assert digest("b.h5", plain, progress_every_s=1.0) == base  # run control of the packing: same result
+    assert digest("c.h5", Settings(voxel_um=2.0, statistics={"grains": False}, periodic=True)) != base
