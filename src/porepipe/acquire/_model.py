@@ -90,13 +90,10 @@ def run_model(
     """
     # measured like the image (same boundary treatment), so that model and experiment are compared like for like
     settings = acquire_settings
-    digest = result_hash(  # the model scene and every setting it is measured with, less run control
-        "acquire-model",
-        scene_part=without_run_control(scene),
-        settings=settings,
-        lpt=without_run_control(lpt_settings) if lpt_settings is not None else None,
-        permeability=without_run_control(permeability_settings) if permeability_settings is not None else None,
-    )
+    # the hash: the model scene and every setting it is measured with, less run control
+    measuring = {"lpt": lpt_settings, "permeability": permeability_settings}
+    extra = {name: without_run_control(given) for name, given in measuring.items() if given is not None}
+    digest = result_hash("acquire-model", scene_part=without_run_control(scene), settings=settings, **extra)
     with ResultWriter(out, stage="acquire-model", scene=scene.name, scene_hash=digest) as w:
         grey, packing, a = model_grey(scene, base_dir)
         phases = model_phases(grey)
